@@ -1,0 +1,54 @@
+#include "cli_common.h"
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <iterator>
+#include <sstream>
+
+#include "absl/strings/str_cat.h"
+
+namespace tactforce::cli {
+
+absl::StatusOr<std::string> ReadInput(const std::string& path) {
+  if (path == "-") {
+    std::ostringstream text;
+    text << std::cin.rdbuf();
+    if (std::cin.bad()) {
+      return absl::InvalidArgumentError("--request -: cannot read standard input");
+    }
+    return text.str();
+  }
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--request: cannot read '", path, "': is a directory"));
+  }
+  std::ifstream file(path, std::ios::binary);
+  if (!file) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--request: cannot read '", path, "': ", std::strerror(errno)));
+  }
+  std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  if (file.bad()) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("--request: error while reading '", path, "'"));
+  }
+  return text;
+}
+
+int ReportError(const absl::Status& status) {
+  std::string message(status.message());
+  for (char& c : message) {
+    if (c == '\n' || c == '\r') c = ' ';
+  }
+  if (status.code() != absl::StatusCode::kInvalidArgument) {
+    message = absl::StrCat(absl::StatusCodeToString(status.code()), ": ", message);
+  }
+  std::cerr << "error: " << message << std::endl;
+  return status.code() == absl::StatusCode::kInvalidArgument ? kExitBadInput : kExitFailure;
+}
+
+}  // namespace tactforce::cli

@@ -1,0 +1,108 @@
+// The geometry shared by every backend, derived once per request
+// (GeoDEx Sec. III): the equilibrium equations G f = b, the force-equilibrium
+// plane (FE-plane) f = f0 + B x, the trusted measurement ellipsoid and the
+// robustly tightened linear constraint rows A f <= d.
+//
+// f stacks the n contact forces (3n, object frame, N) in request order.
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "tactforce/planner/types.h"
+
+namespace tactforce::planner {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+
+// Equilibrium of the contact forces with gravity and the external wrench.
+struct ForceEquilibrium {
+  MatrixXd grasp_matrix;  // G = [I ... I; [p_1]x ... [p_n]x], 6 x 3n
+  Vector6d wrench;        // b = -(w_g + w_ext), w_g = (m g, c x m g)
+  MatrixXd null_basis;    // B: orthonormal basis of null(G), 3n x d
+  VectorXd particular;    // f0 = G^+ b (minimum norm; orthogonal to B)
+  int rank = 0;           // numerical rank of G
+  double residual = 0.0;  // |G f0 - b| (N, N m)
+  bool consistent = false;  // b in range(G) within tolerance
+  // Independent equilibrium rows U_r^T G f = U_r^T b (r = rank): the same
+  // affine set as G f = b when consistent, without redundant rows.
+  MatrixXd independent_rows;
+  VectorXd independent_rhs;
+};
+
+// Builds G and b; SVD with relative tolerance `rank_tolerance`.
+ForceEquilibrium ComputeForceEquilibrium(const PlanProblem& problem,
+                                         double rank_tolerance);
+
+// Trusted measurement ellipsoid (GeoDEx Def. 5, Prop. 3) in force space:
+// S_f = B E diag(sigma^2) E^T B^T with E = B^T N_I, stored as the factor
+// L = B E diag(sigma) (3n x n_I), so S_f = L L^T.
+struct MeasurementEllipsoid {
+  MatrixXd factor;
+  // sqrt(a^T S_f a): the support function of the unit ellipsoid along a.
+  double Support(const VectorXd& a) const;
+  MatrixXd ForceCovariance() const { return factor * factor.transpose(); }
+  // 3x3 block S_ii of contact i.
+  Eigen::Matrix3d ContactCovariance(int contact) const;
+};
+
+MeasurementEllipsoid ComputeMeasurementEllipsoid(const PlanProblem& problem,
+                                                 const ForceEquilibrium& eq);
+
+// Fixed tangent basis: e = coordinate axis with the smallest |e . n| (first
+// on ties), t1 = normalize(e - (e . n) n), t2 = n x t1.
+std::pair<Vec3, Vec3> TangentBasis(const Vec3& normal);
+
+enum class RowKind { kFrictionFacet, kMinNormal, kMaxNormal };
+
+struct RowInfo {
+  int contact = 0;
+  RowKind kind = RowKind::kFrictionFacet;
+  int facet = 0;  // friction facets only
+};
+
+// Linear rows a^T f <= d. `nominal_rhs` is d; `rhs` is the robust
+// d - kappa sqrt(a^T S_f a).
+struct ConstraintRows {
+  MatrixXd matrix;  // m x 3n
+  VectorXd rhs;
+  VectorXd nominal_rhs;
+  std::vector<RowInfo> info;
+  // "contact 2 (index) friction facet 5", for messages.
+  std::string Describe(int row, const PlanProblem& problem) const;
+};
+
+// Pyramid facets (when `with_friction_facets`) and normal-force bounds of
+// every contact, tightened by `confidence` times the ellipsoid support.
+ConstraintRows BuildConstraintRows(const PlanProblem& problem,
+                                   const MeasurementEllipsoid& ellipsoid,
+                                   int cone_sides, double confidence,
+                                   bool with_friction_facets);
+
+// Per-contact normal-force std. dev. rho_n,i = sqrt(n_i^T S_ii n_i) (N).
+std::vector<double> NormalForceSigma(const PlanProblem& problem,
+                                     const MeasurementEllipsoid& ellipsoid);
+
+// Tangential spread rho_t,i = sqrt(lambda_max(P_t S_ii P_t)) (N).
+std::vector<double> TangentialForceSigma(const PlanProblem& problem,
+                                         const MeasurementEllipsoid& ellipsoid);
+
+// Everything a backend needs, derived once from a validated request.
+struct PreparedProblem {
+  PlanProblem problem;  // validated, normals of unit length
+  ForceEquilibrium equilibrium;
+  MeasurementEllipsoid ellipsoid;
+  ConstraintRows rows;  // PYRAMID: facets + bounds; EXACT: bounds only
+  std::vector<double> normal_sigma;      // rho_n,i
+  std::vector<double> tangential_sigma;  // rho_t,i
+  int num_contacts() const { return static_cast<int>(problem.contacts.size()); }
+};
+
+PreparedProblem Prepare(const PlanProblem& validated, const PlanOptions& options);
+
+}  // namespace tactforce::planner

@@ -1,0 +1,54 @@
+// One interface, several backends (modelled on Drake's SolverBase):
+// the non-virtual Solve() validates the request, prepares the shared
+// geometry, times the work, calls the backend's DoSolve() and fills the
+// reported quantities (normal forces, margins, sigmas) the same way for all.
+//
+//   auto solver = MakeSolver(SolverKind::kGeometric);
+//   absl::StatusOr<PlanResult> r = solver->Solve(problem, options);
+//   // !r.ok(): bad input (InvalidArgument naming the field)
+//   // r->status: kOptimal, kInfeasible (with a message), kSolverFailure
+#pragma once
+
+#include <memory>
+
+#include "absl/status/statusor.h"
+#include "tactforce/planner/force_model.h"
+#include "tactforce/planner/types.h"
+
+namespace tactforce::planner {
+
+class ForceSolver {
+ public:
+  virtual ~ForceSolver() = default;
+  ForceSolver(const ForceSolver&) = delete;
+  ForceSolver& operator=(const ForceSolver&) = delete;
+
+  SolverKind kind() const { return kind_; }
+
+  absl::StatusOr<PlanResult> Solve(const PlanProblem& problem,
+                                   const PlanOptions& options) const;
+
+ protected:
+  explicit ForceSolver(SolverKind kind) : kind_(kind) {}
+
+  // Rejects options this backend cannot honour (InvalidArgument).
+  virtual absl::Status CheckSupported(const PlanOptions& options) const {
+    return absl::OkStatus();
+  }
+  // Fills status, message, forces (one per contact; empty unless optimal),
+  // iterations and, where meaningful, active_set / cross_check.
+  virtual PlanResult DoSolve(const PreparedProblem& prepared,
+                             const PlanOptions& options) const = 0;
+
+ private:
+  SolverKind kind_;
+};
+
+// Backends. All are stateless and safe to share between threads.
+std::unique_ptr<ForceSolver> MakeSolver(SolverKind kind);
+
+// Convenience: MakeSolver(kind)->Solve(problem, options) with a cached solver.
+absl::StatusOr<PlanResult> Plan(const PlanProblem& problem,
+                                const PlanOptions& options, SolverKind kind);
+
+}  // namespace tactforce::planner

@@ -1,0 +1,96 @@
+// GEOMETRIC backend (GeoDEx fast path): forces on the FE-plane f = f0 + B x.
+// Because B is orthonormal and f0 is orthogonal to it, sum |f_i|^2 =
+// |f0|^2 + |x|^2, so the plan is the minimum-norm x of a small polytope:
+// a dense strictly convex QP in d = dim null(G) variables.
+#include <string>
+
+#include "absl/strings/str_cat.h"
+#include "planner/src/backends.h"
+#include "tactforce/planner/dense_qp.h"
+
+namespace tactforce::planner::internal {
+namespace {
+
+std::string DescribeActive(const PreparedProblem& prepared, const std::vector<int>& rows) {
+  std::string out;
+  const int shown = std::min<int>(static_cast<int>(rows.size()), 4);
+  for (int i = 0; i < shown; ++i) {
+    absl::StrAppend(&out, i ? "; " : "", prepared.rows.Describe(rows[i], prepared.problem));
+  }
+  if (static_cast<int>(rows.size()) > shown) absl::StrAppend(&out, "; ...");
+  return out;
+}
+
+class GeometricSolver final : public ForceSolver {
+ public:
+  GeometricSolver() : ForceSolver(SolverKind::kGeometric) {}
+
+ protected:
+  absl::Status CheckSupported(const PlanOptions& options) const override {
+    if (options.cone == ConeModel::kExact) {
+      return absl::InvalidArgumentError(
+          "cone: CONE_MODEL_EXACT is only solved by SOLVER_IPOPT; the geometric backend "
+          "plans with the pyramidal cone (CONE_MODEL_PYRAMID)");
+    }
+    return absl::OkStatus();
+  }
+
+  PlanResult DoSolve(const PreparedProblem& prepared, const PlanOptions& options) const override {
+    PlanResult result;
+    const ForceEquilibrium& eq = prepared.equilibrium;
+    if (!eq.consistent) {
+      result.status = PlanStatus::kInfeasible;
+      result.message = absl::StrCat(
+          "the contacts cannot resist this wrench: G has rank ", eq.rank,
+          " and the required wrench leaves a residual of ", eq.residual);
+      return result;
+    }
+    const ConstraintRows& rows = prepared.rows;
+    DenseQp qp;
+    const int d = static_cast<int>(eq.null_basis.cols());
+    qp.hessian = Eigen::MatrixXd::Identity(d, d);
+    qp.gradient = eq.null_basis.transpose() * eq.particular;  // zero up to round-off
+    qp.eq_matrix.resize(0, d);
+    qp.eq_rhs.resize(0);
+    qp.in_matrix = rows.matrix * eq.null_basis;
+    qp.in_rhs = rows.rhs - rows.matrix * eq.particular;
+
+    DenseQpSettings settings;
+    settings.warm_start = options.warm_start;
+    const DenseQpResult qp_result = SolveDenseQp(qp, settings);
+    result.iterations = qp_result.iterations;
+    result.active_set = qp_result.active_set;
+    switch (qp_result.status) {
+      case DenseQpStatus::kOptimal: {
+        result.status = PlanStatus::kOptimal;
+        const Eigen::VectorXd f = eq.particular + eq.null_basis * qp_result.x;
+        for (int i = 0; i < prepared.num_contacts(); ++i) result.forces.push_back(f.segment<3>(3 * i));
+        break;
+      }
+      case DenseQpStatus::kInfeasible:
+        result.status = PlanStatus::kInfeasible;
+        result.message = absl::StrCat(
+            "no equilibrium force satisfies ", rows.Describe(qp_result.blocking_row, prepared.problem),
+            qp_result.active_set.empty()
+                ? std::string()
+                : absl::StrCat(" together with ", DescribeActive(prepared, qp_result.active_set)));
+        break;
+      case DenseQpStatus::kIterationLimit:
+        result.status = PlanStatus::kSolverFailure;
+        result.message = absl::StrCat("active-set iteration limit reached after ",
+                                      qp_result.iterations, " iterations");
+        break;
+      case DenseQpStatus::kNumericalError:
+        result.status = PlanStatus::kSolverFailure;
+        result.message = "numerical failure in the active-set QP";
+        break;
+    }
+    return result;
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<ForceSolver> MakeGeometricSolver() { return std::make_unique<GeometricSolver>(); }
+
+}  // namespace tactforce::planner::internal

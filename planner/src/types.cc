@@ -1,0 +1,46 @@
+#include "tactforce/planner/types.h"
+
+#include <cmath>
+
+namespace tactforce::planner {
+
+bool PlanOptions::IsValid(std::string* error) const {
+  auto fail = [&](const char* what) {
+    if (error != nullptr) *error = what;
+    return false;
+  };
+  if (cone_sides < 3 || cone_sides > 64) return fail("cone_sides: must be in 3..64");
+  if (!std::isfinite(confidence) || confidence < 0.0)
+    return fail("confidence: must be finite and >= 0");
+  if (!std::isfinite(rank_tolerance) || rank_tolerance <= 0.0 || rank_tolerance >= 1e-2)
+    return fail("rank_tolerance: must be in (0, 1e-2)");
+  if (max_contacts < 1) return fail("max_contacts: must be >= 1");
+  if (!(ipopt_tolerance > 0.0) || !std::isfinite(ipopt_tolerance))
+    return fail("ipopt_tolerance: must be finite and > 0");
+  if (ipopt_max_iterations < 1) return fail("ipopt_max_iterations: must be >= 1");
+  if (!std::isfinite(ipopt_max_cpu_seconds) || ipopt_max_cpu_seconds < 0.0)
+    return fail("ipopt_max_cpu_seconds: must be finite and >= 0");
+  if (!(agreement_tolerance > 0.0) || !std::isfinite(agreement_tolerance))
+    return fail("agreement_tolerance: must be finite and > 0");
+  return true;
+}
+
+const char* ToString(PlanStatus status) {
+  switch (status) {
+    case PlanStatus::kOptimal: return "OPTIMAL";
+    case PlanStatus::kInfeasible: return "INFEASIBLE";
+    case PlanStatus::kSolverFailure: return "SOLVER_FAILURE";
+  }
+  return "UNKNOWN";
+}
+
+const char* ToString(SolverKind solver) {
+  switch (solver) {
+    case SolverKind::kGeometric: return "GEOMETRIC";
+    case SolverKind::kIpopt: return "IPOPT";
+    case SolverKind::kCrossCheck: return "CROSS_CHECK";
+  }
+  return "UNKNOWN";
+}
+
+}  // namespace tactforce::planner

@@ -1,0 +1,46 @@
+// Conversions between the wire API (tactforce.v1 messages) and the planner
+// types.
+//
+// Only the mapping is done here: enum defaults (UNSPECIFIED -> INTRINSIC /
+// PYRAMID / GEOMETRIC), cone_sides 0 -> 12, confidence absent -> 1.0,
+// gravity absent -> (0, 0, -9.81), and unknown numeric enum values are
+// rejected naming the field ("contacts[1].kind: unknown value 7"). Numeric
+// range checks (NaN, zero normals, negative friction, ...) are the planner's
+// ValidateProblem, which every Solve() runs with the same field paths.
+#pragma once
+
+#include "absl/status/statusor.h"
+#include "tactforce/planner/types.h"
+#include "tactforce/v1/planner.pb.h"
+
+namespace tactforce::api {
+
+// Everything needed for one planner call.
+struct PlanCall {
+  planner::PlanProblem problem;
+  planner::PlanOptions options;
+  planner::SolverKind solver = planner::SolverKind::kGeometric;
+};
+
+// Errors: InvalidArgument("<field path>: unknown value N").
+absl::StatusOr<PlanCall> FromProto(const v1::PlanRequest& request);
+absl::StatusOr<planner::PlanProblem> ToProblem(const v1::PlanRequest& request);
+absl::StatusOr<planner::PlanOptions> ToOptions(const v1::PlanRequest& request);
+absl::StatusOr<planner::SolverKind> ToSolverKind(const v1::PlanRequest& request);
+
+// Planner -> wire. Every field is written explicitly (UNSPECIFIED enums are
+// never produced), so a request round-trips through FromProto unchanged.
+v1::PlanRequest ToRequest(const planner::PlanProblem& problem,
+                          const planner::PlanOptions& options,
+                          planner::SolverKind solver);
+v1::PlanResponse ToProto(const planner::PlanResult& result);
+
+// Single-value mappings.
+v1::Vec3 ToProto(const planner::Vec3& v);
+planner::Vec3 FromProto(const v1::Vec3& v);
+v1::PlanStatus ToProto(planner::PlanStatus status);
+v1::Solver ToProto(planner::SolverKind solver);
+v1::ContactKind ToProto(planner::ContactKind kind);
+v1::ConeModel ToProto(planner::ConeModel cone);
+
+}  // namespace tactforce::api

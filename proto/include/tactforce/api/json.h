@@ -1,0 +1,31 @@
+// JSON form of the API messages (protobuf's canonical proto3 JSON mapping).
+//
+// Parsing accepts both the proto field names (snake_case) and their
+// lowerCamelCase JSON names; unknown fields are errors so that a typo is
+// reported instead of silently ignored. Printing keeps the proto field names
+// and prints every scalar field, zeros included.
+#pragma once
+
+#include <string>
+#include <string_view>
+
+#include "absl/status/statusor.h"
+#include "google/protobuf/message.h"
+#include "tactforce/v1/planner.pb.h"
+
+namespace tactforce::api {
+
+// InvalidArgument("<label>: <what protobuf reports>") on bad input; the
+// label defaults to "<MessageName> JSON" ("request JSON" for PlanRequest).
+absl::Status ParseJson(std::string_view json, google::protobuf::Message* message,
+                       std::string_view label = {});
+absl::StatusOr<v1::PlanRequest> ParsePlanRequestJson(std::string_view json);
+
+// Pretty-printed (two-space indent) unless `compact`; ends with a newline
+// when pretty-printed.
+std::string ToJson(const google::protobuf::Message& message, bool compact = false);
+
+// `text` as a JSON string literal, quotes included.
+std::string JsonQuote(std::string_view text);
+
+}  // namespace tactforce::api

@@ -1,0 +1,238 @@
+#include "tactforce/api/convert.h"
+
+#include <limits>
+#include <string>
+
+#include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
+
+namespace tactforce::api {
+namespace {
+
+constexpr int kDefaultConeSides = 12;
+constexpr double kDefaultConfidence = 1.0;
+
+absl::Status UnknownValue(const std::string& field, int value) {
+  return absl::InvalidArgumentError(absl::StrCat(field, ": unknown value ", value));
+}
+
+absl::StatusOr<planner::ContactKind> ContactKindFromProto(v1::ContactKind kind,
+                                                          const std::string& field) {
+  switch (kind) {
+    case v1::CONTACT_KIND_UNSPECIFIED:
+    case v1::CONTACT_KIND_INTRINSIC:
+      return planner::ContactKind::kIntrinsic;
+    case v1::CONTACT_KIND_EXTRINSIC:
+      return planner::ContactKind::kExtrinsic;
+    default:
+      return UnknownValue(field, static_cast<int>(kind));
+  }
+}
+
+absl::StatusOr<planner::ConeModel> ConeFromProto(v1::ConeModel cone) {
+  switch (cone) {
+    case v1::CONE_MODEL_UNSPECIFIED:
+    case v1::CONE_MODEL_PYRAMID:
+      return planner::ConeModel::kPyramid;
+    case v1::CONE_MODEL_EXACT:
+      return planner::ConeModel::kExact;
+    default:
+      return UnknownValue("cone", static_cast<int>(cone));
+  }
+}
+
+absl::StatusOr<planner::SolverKind> SolverFromProto(v1::Solver solver) {
+  switch (solver) {
+    case v1::SOLVER_UNSPECIFIED:
+    case v1::SOLVER_GEOMETRIC:
+      return planner::SolverKind::kGeometric;
+    case v1::SOLVER_IPOPT:
+      return planner::SolverKind::kIpopt;
+    case v1::SOLVER_CROSS_CHECK:
+      return planner::SolverKind::kCrossCheck;
+    default:
+      return UnknownValue("solver", static_cast<int>(solver));
+  }
+}
+
+}  // namespace
+
+planner::Vec3 FromProto(const v1::Vec3& v) { return planner::Vec3(v.x(), v.y(), v.z()); }
+
+v1::Vec3 ToProto(const planner::Vec3& v) {
+  v1::Vec3 out;
+  out.set_x(v.x());
+  out.set_y(v.y());
+  out.set_z(v.z());
+  return out;
+}
+
+absl::StatusOr<planner::PlanProblem> ToProblem(const v1::PlanRequest& request) {
+  planner::PlanProblem problem;
+  const v1::ObjectModel& object = request.object();
+  problem.object.mass = object.mass();
+  problem.object.com = FromProto(object.com());
+  if (object.has_gravity()) problem.object.gravity = FromProto(object.gravity());
+  // else: the planner's default (0, 0, -9.81).
+
+  problem.contacts.reserve(request.contacts_size());
+  for (int i = 0; i < request.contacts_size(); ++i) {
+    const v1::Contact& in = request.contacts(i);
+    planner::Contact c;
+    c.name = in.name();
+    c.position = FromProto(in.position());
+    c.normal = FromProto(in.normal());
+    c.friction = in.friction();
+    absl::StatusOr<planner::ContactKind> kind =
+        ContactKindFromProto(in.kind(), absl::StrCat("contacts[", i, "].kind"));
+    if (!kind.ok()) return kind.status();
+    c.kind = *kind;
+    c.sigma = in.sigma();
+    c.min_normal_force = in.min_normal_force();
+    c.max_normal_force = in.max_normal_force();
+    problem.contacts.push_back(std::move(c));
+  }
+
+  problem.external_wrench.force = FromProto(request.external_wrench().force());
+  problem.external_wrench.torque = FromProto(request.external_wrench().torque());
+  return problem;
+}
+
+absl::StatusOr<planner::PlanOptions> ToOptions(const v1::PlanRequest& request) {
+  planner::PlanOptions options;
+  absl::StatusOr<planner::ConeModel> cone = ConeFromProto(request.cone());
+  if (!cone.ok()) return cone.status();
+  options.cone = *cone;
+  if (request.cone_sides() == 0) {
+    options.cone_sides = kDefaultConeSides;
+  } else if (request.cone_sides() > static_cast<uint32_t>(std::numeric_limits<int>::max())) {
+    // Would wrap to a negative int; the planner's range check sees the rest.
+    return absl::InvalidArgumentError(
+        absl::StrCat("cone_sides: must be in 3..64, got ", request.cone_sides()));
+  } else {
+    options.cone_sides = static_cast<int>(request.cone_sides());
+  }
+  options.confidence = request.has_confidence() ? request.confidence() : kDefaultConfidence;
+  return options;
+}
+
+absl::StatusOr<planner::SolverKind> ToSolverKind(const v1::PlanRequest& request) {
+  return SolverFromProto(request.solver());
+}
+
+absl::StatusOr<PlanCall> FromProto(const v1::PlanRequest& request) {
+  PlanCall call;
+  // Field order of the message, so the first bad field is reported.
+  absl::StatusOr<planner::PlanProblem> problem = ToProblem(request);
+  if (!problem.ok()) return problem.status();
+  call.problem = *std::move(problem);
+  absl::StatusOr<planner::PlanOptions> options = ToOptions(request);
+  if (!options.ok()) return options.status();
+  call.options = *options;
+  absl::StatusOr<planner::SolverKind> solver = ToSolverKind(request);
+  if (!solver.ok()) return solver.status();
+  call.solver = *solver;
+  return call;
+}
+
+v1::PlanStatus ToProto(planner::PlanStatus status) {
+  switch (status) {
+    case planner::PlanStatus::kOptimal:
+      return v1::PLAN_STATUS_OPTIMAL;
+    case planner::PlanStatus::kInfeasible:
+      return v1::PLAN_STATUS_INFEASIBLE;
+    case planner::PlanStatus::kSolverFailure:
+      return v1::PLAN_STATUS_SOLVER_FAILURE;
+  }
+  return v1::PLAN_STATUS_UNSPECIFIED;
+}
+
+v1::Solver ToProto(planner::SolverKind solver) {
+  switch (solver) {
+    case planner::SolverKind::kGeometric:
+      return v1::SOLVER_GEOMETRIC;
+    case planner::SolverKind::kIpopt:
+      return v1::SOLVER_IPOPT;
+    case planner::SolverKind::kCrossCheck:
+      return v1::SOLVER_CROSS_CHECK;
+  }
+  return v1::SOLVER_UNSPECIFIED;
+}
+
+v1::ContactKind ToProto(planner::ContactKind kind) {
+  switch (kind) {
+    case planner::ContactKind::kIntrinsic:
+      return v1::CONTACT_KIND_INTRINSIC;
+    case planner::ContactKind::kExtrinsic:
+      return v1::CONTACT_KIND_EXTRINSIC;
+  }
+  return v1::CONTACT_KIND_UNSPECIFIED;
+}
+
+v1::ConeModel ToProto(planner::ConeModel cone) {
+  switch (cone) {
+    case planner::ConeModel::kPyramid:
+      return v1::CONE_MODEL_PYRAMID;
+    case planner::ConeModel::kExact:
+      return v1::CONE_MODEL_EXACT;
+  }
+  return v1::CONE_MODEL_UNSPECIFIED;
+}
+
+v1::PlanRequest ToRequest(const planner::PlanProblem& problem,
+                          const planner::PlanOptions& options,
+                          planner::SolverKind solver) {
+  v1::PlanRequest request;
+  v1::ObjectModel* object = request.mutable_object();
+  object->set_mass(problem.object.mass);
+  *object->mutable_com() = ToProto(problem.object.com);
+  *object->mutable_gravity() = ToProto(problem.object.gravity);
+  for (const planner::Contact& c : problem.contacts) {
+    v1::Contact* out = request.add_contacts();
+    out->set_name(c.name);
+    *out->mutable_position() = ToProto(c.position);
+    *out->mutable_normal() = ToProto(c.normal);
+    out->set_friction(c.friction);
+    out->set_kind(ToProto(c.kind));
+    out->set_sigma(c.sigma);
+    out->set_min_normal_force(c.min_normal_force);
+    out->set_max_normal_force(c.max_normal_force);
+  }
+  *request.mutable_external_wrench()->mutable_force() = ToProto(problem.external_wrench.force);
+  *request.mutable_external_wrench()->mutable_torque() = ToProto(problem.external_wrench.torque);
+  request.set_cone(ToProto(options.cone));
+  // A negative count cannot be sent; 0 asks for the default, which the
+  // planner's range check would not have accepted either way.
+  request.set_cone_sides(options.cone_sides > 0 ? static_cast<uint32_t>(options.cone_sides) : 0u);
+  request.set_confidence(options.confidence);
+  request.set_solver(ToProto(solver));
+  return request;
+}
+
+v1::PlanResponse ToProto(const planner::PlanResult& result) {
+  v1::PlanResponse response;
+  response.set_status(ToProto(result.status));
+  response.set_message(result.message);
+  for (const planner::Vec3& f : result.forces) *response.add_forces() = ToProto(f);
+  for (double fn : result.normal_forces) response.add_normal_forces(fn);
+  for (double s : result.normal_force_sigma) response.add_normal_force_sigma(s);
+  response.set_objective(result.objective);
+  response.set_min_margin(result.min_margin);
+  response.set_solver(ToProto(result.solver));
+  response.set_solve_time_us(result.solve_time_us);
+  response.set_iterations(result.iterations);
+  if (result.cross_check.has_value()) {
+    const planner::CrossCheckReport& in = *result.cross_check;
+    v1::CrossCheck* out = response.mutable_cross_check();
+    out->set_agree(in.agree);
+    out->set_max_force_diff(in.max_force_diff);
+    out->set_objective_rel_diff(in.objective_rel_diff);
+    out->set_geometric_time_us(in.geometric_time_us);
+    out->set_ipopt_time_us(in.ipopt_time_us);
+    out->set_ipopt_status(ToProto(in.ipopt_status));
+    // in.ipopt_message has no field in v1.CrossCheck.
+  }
+  return response;
+}
+
+}  // namespace tactforce::api

@@ -1,0 +1,84 @@
+// The full request -> response path through the planner.
+#include "tactforce/api/handler.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "tactforce/api/convert.h"
+#include "tactforce/planner/examples.h"
+
+namespace tactforce::api {
+namespace {
+
+using ::testing::HasSubstr;
+
+TEST(HandlerTest, BuiltInGraspsAreOptimal) {
+  for (const planner::ExampleGrasp& grasp : planner::BuiltInGrasps()) {
+    SCOPED_TRACE(grasp.name);
+    const v1::PlanRequest request =
+        ToRequest(grasp.problem, grasp.options, planner::SolverKind::kGeometric);
+    absl::StatusOr<v1::PlanResponse> response = HandlePlan(request);
+    ASSERT_TRUE(response.ok()) << response.status();
+    EXPECT_EQ(response->status(), v1::PLAN_STATUS_OPTIMAL) << response->message();
+    EXPECT_EQ(response->forces_size(), request.contacts_size());
+    EXPECT_EQ(response->normal_forces_size(), request.contacts_size());
+    EXPECT_EQ(response->solver(), v1::SOLVER_GEOMETRIC);
+    EXPECT_FALSE(response->has_cross_check());
+  }
+}
+
+TEST(HandlerTest, CrossCheckFillsTheReport) {
+  const planner::ExampleGrasp grasp = planner::BuiltInGrasps().front();
+  const v1::PlanRequest request =
+      ToRequest(grasp.problem, grasp.options, planner::SolverKind::kCrossCheck);
+  absl::StatusOr<v1::PlanResponse> response = HandlePlan(request);
+  ASSERT_TRUE(response.ok()) << response.status();
+  ASSERT_TRUE(response->has_cross_check());
+  EXPECT_TRUE(response->cross_check().agree());
+  EXPECT_EQ(response->cross_check().ipopt_status(), v1::PLAN_STATUS_OPTIMAL);
+}
+
+v1::PlanRequest Lift(double max_normal_force) {
+  // One fingertip under a 1 kg object's centre of mass, pushing up.
+  v1::PlanRequest request;
+  request.mutable_object()->set_mass(1.0);
+  v1::Contact* c = request.add_contacts();
+  c->set_name("palm");
+  c->mutable_normal()->set_z(1.0);
+  c->set_friction(0.5);
+  c->set_max_normal_force(max_normal_force);
+  return request;
+}
+
+TEST(HandlerTest, ZeroNormalIsRejectedNamingTheField) {
+  v1::PlanRequest request = Lift(0.0);
+  request.mutable_contacts(0)->clear_normal();
+  absl::StatusOr<v1::PlanResponse> response = HandlePlan(request);
+  ASSERT_FALSE(response.ok());
+  EXPECT_EQ(response.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(response.status().message()), HasSubstr("contacts[0].normal"));
+}
+
+TEST(HandlerTest, UnknownEnumIsRejectedBeforePlanning) {
+  v1::PlanRequest request = Lift(0.0);
+  request.set_solver(static_cast<v1::Solver>(9));
+  absl::StatusOr<v1::PlanResponse> response = HandlePlan(request);
+  ASSERT_FALSE(response.ok());
+  EXPECT_EQ(response.status().message(), "solver: unknown value 9");
+}
+
+TEST(HandlerTest, InfeasibilityIsAnAnswerNotAnError) {
+  absl::StatusOr<v1::PlanResponse> response = HandlePlan(Lift(1.0));  // needs 9.81 N
+  ASSERT_TRUE(response.ok()) << response.status();
+  EXPECT_EQ(response->status(), v1::PLAN_STATUS_INFEASIBLE);
+  EXPECT_FALSE(response->message().empty());
+
+  response = HandlePlan(Lift(0.0));  // unbounded: feasible
+  ASSERT_TRUE(response.ok()) << response.status();
+  EXPECT_EQ(response->status(), v1::PLAN_STATUS_OPTIMAL) << response->message();
+  ASSERT_EQ(response->forces_size(), 1);
+  EXPECT_NEAR(response->forces(0).z(), 9.81, 1e-6);
+}
+
+}  // namespace
+}  // namespace tactforce::api

@@ -1,0 +1,151 @@
+#include "tactforce/api/json.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "google/protobuf/util/message_differencer.h"
+#include "tactforce/api/convert.h"
+
+namespace tactforce::api {
+namespace {
+
+using google::protobuf::util::MessageDifferencer;
+using ::testing::HasSubstr;
+using ::testing::Not;
+
+constexpr char kSnakeCase[] = R"({
+  "object": {"mass": 0.082, "com": {"x": 0, "y": 0, "z": 0.001},
+             "gravity": {"x": 0, "y": 0, "z": -9.81}},
+  "contacts": [
+    {"name": "thumb", "position": {"x": 0.03}, "normal": {"x": -1},
+     "friction": 0.8, "kind": "CONTACT_KIND_INTRINSIC", "sigma": 0.2,
+     "min_normal_force": 0.1, "max_normal_force": 10},
+    {"name": "index", "position": {"x": -0.03}, "normal": {"x": 1},
+     "friction": 0.8, "kind": "CONTACT_KIND_EXTRINSIC"}
+  ],
+  "external_wrench": {"force": {"z": -0.5}, "torque": {"y": 0.01}},
+  "cone": "CONE_MODEL_PYRAMID",
+  "cone_sides": 16,
+  "confidence": 2,
+  "solver": "SOLVER_CROSS_CHECK"
+})";
+
+constexpr char kCamelCase[] = R"({
+  "object": {"mass": 0.082, "com": {"x": 0, "y": 0, "z": 0.001},
+             "gravity": {"x": 0, "y": 0, "z": -9.81}},
+  "contacts": [
+    {"name": "thumb", "position": {"x": 0.03}, "normal": {"x": -1},
+     "friction": 0.8, "kind": "CONTACT_KIND_INTRINSIC", "sigma": 0.2,
+     "minNormalForce": 0.1, "maxNormalForce": 10},
+    {"name": "index", "position": {"x": -0.03}, "normal": {"x": 1},
+     "friction": 0.8, "kind": "CONTACT_KIND_EXTRINSIC"}
+  ],
+  "externalWrench": {"force": {"z": -0.5}, "torque": {"y": 0.01}},
+  "cone": "CONE_MODEL_PYRAMID",
+  "coneSides": 16,
+  "confidence": 2,
+  "solver": "SOLVER_CROSS_CHECK"
+})";
+
+TEST(JsonTest, SnakeCaseAndCamelCaseGiveTheSameRequest) {
+  absl::StatusOr<v1::PlanRequest> snake = ParsePlanRequestJson(kSnakeCase);
+  absl::StatusOr<v1::PlanRequest> camel = ParsePlanRequestJson(kCamelCase);
+  ASSERT_TRUE(snake.ok()) << snake.status();
+  ASSERT_TRUE(camel.ok()) << camel.status();
+  EXPECT_TRUE(MessageDifferencer::Equals(*snake, *camel))
+      << snake->DebugString() << "\nvs\n" << camel->DebugString();
+
+  EXPECT_EQ(snake->contacts_size(), 2);
+  EXPECT_EQ(snake->contacts(0).min_normal_force(), 0.1);
+  EXPECT_EQ(snake->contacts(0).max_normal_force(), 10);
+  EXPECT_EQ(snake->external_wrench().force().z(), -0.5);
+  EXPECT_EQ(snake->cone_sides(), 16u);
+  EXPECT_TRUE(snake->has_confidence());
+  EXPECT_EQ(snake->confidence(), 2.0);
+  EXPECT_TRUE(snake->object().has_gravity());
+  EXPECT_EQ(snake->solver(), v1::SOLVER_CROSS_CHECK);
+}
+
+TEST(JsonTest, AbsentOptionalFieldsStayAbsent) {
+  absl::StatusOr<v1::PlanRequest> r = ParsePlanRequestJson(R"({"object": {"mass": 1}})");
+  ASSERT_TRUE(r.ok()) << r.status();
+  EXPECT_FALSE(r->has_confidence());
+  EXPECT_FALSE(r->object().has_gravity());
+}
+
+TEST(JsonTest, UnknownFieldIsAnErrorNamingIt) {
+  absl::StatusOr<v1::PlanRequest> r =
+      ParsePlanRequestJson(R"({"contacts": [{"name": "a", "frictoin": 0.5}]})");
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(r.status().message()), HasSubstr("frictoin"));
+}
+
+TEST(JsonTest, UnknownEnumNameIsAnError) {
+  absl::StatusOr<v1::PlanRequest> r =
+      ParsePlanRequestJson(R"({"contacts": [{"kind": "CONTACT_KIND_MAGNETIC"}]})");
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(r.status().message()), HasSubstr("contacts[0].kind"));
+}
+
+TEST(JsonTest, UnknownNumericEnumIsCaughtByTheConversion) {
+  // proto3 enums are open: protobuf keeps the number, FromProto rejects it.
+  absl::StatusOr<v1::PlanRequest> r =
+      ParsePlanRequestJson(R"({"contacts": [{}, {"kind": 7}], "solver": 1})");
+  ASSERT_TRUE(r.ok()) << r.status();
+  absl::StatusOr<PlanCall> call = FromProto(*r);
+  ASSERT_FALSE(call.ok());
+  EXPECT_EQ(call.status().message(), "contacts[1].kind: unknown value 7");
+}
+
+TEST(JsonTest, MalformedJsonIsAnErrorOnOneLine) {
+  for (const char* text : {R"({"contacts": [ {"name": "a"})", "{", "not json", "[1, 2]",
+                           R"({"cone_sides": -1})", ""}) {
+    SCOPED_TRACE(text);
+    absl::StatusOr<v1::PlanRequest> r = ParsePlanRequestJson(text);
+    ASSERT_FALSE(r.ok());
+    EXPECT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument);
+    const std::string message(r.status().message());
+    EXPECT_THAT(message, HasSubstr("request JSON: "));
+    EXPECT_THAT(message, Not(HasSubstr("\n")));
+  }
+}
+
+TEST(JsonTest, RequestJsonRoundTrip) {
+  absl::StatusOr<v1::PlanRequest> first = ParsePlanRequestJson(kCamelCase);
+  ASSERT_TRUE(first.ok()) << first.status();
+  for (bool compact : {false, true}) {
+    const std::string json = ToJson(*first, compact);
+    absl::StatusOr<v1::PlanRequest> second = ParsePlanRequestJson(json);
+    ASSERT_TRUE(second.ok()) << second.status() << "\n" << json;
+    EXPECT_TRUE(MessageDifferencer::Equals(*first, *second)) << json;
+  }
+}
+
+TEST(JsonTest, ResponseJsonKeepsProtoNamesAndPrintsZeros) {
+  v1::PlanResponse response;
+  response.set_status(v1::PLAN_STATUS_OPTIMAL);
+  response.add_normal_forces(1.5);
+  const std::string json = ToJson(response);
+  EXPECT_THAT(json, HasSubstr(R"("status": "PLAN_STATUS_OPTIMAL")"));
+  EXPECT_THAT(json, HasSubstr(R"("normal_forces")"));
+  EXPECT_THAT(json, HasSubstr(R"("min_margin": 0)"));
+  EXPECT_THAT(json, HasSubstr(R"("iterations": 0)"));
+  EXPECT_THAT(json, HasSubstr(R"("solve_time_us")"));
+  EXPECT_THAT(json, HasSubstr(R"("message": "")"));
+  EXPECT_THAT(json, Not(HasSubstr("minMargin")));
+  EXPECT_THAT(json, Not(HasSubstr("cross_check")));  // absent message field
+  EXPECT_EQ(json.back(), '\n');
+
+  response.mutable_cross_check()->set_agree(true);
+  EXPECT_THAT(ToJson(response, /*compact=*/true), HasSubstr(R"("cross_check":{"agree":true)"));
+}
+
+TEST(JsonTest, JsonQuoteEscapes) {
+  EXPECT_EQ(JsonQuote("plain"), "\"plain\"");
+  EXPECT_EQ(JsonQuote("a\"b\\c\nd\x01"), "\"a\\\"b\\\\c\\nd\\u0001\"");
+}
+
+}  // namespace
+}  // namespace tactforce::api
