@@ -16,6 +16,7 @@ PACKAGES=(
   libcli11-dev
   libspdlog-dev libfmt-dev
   python3 python3-grpcio python3-protobuf
+  grpc-proto
 )
 
 missing=()

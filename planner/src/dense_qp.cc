@@ -42,12 +42,13 @@ class ActiveSetSolver {
   DenseQpResult Run();
 
  private:
-  // Row `k` of the stacked constraint set: equalities first, then inequalities.
-  Eigen::Ref<const VectorXd> Normal(int k) const;
-  double Rhs(int k) const { return k < p_ ? qp_.eq_rhs(k) : qp_.in_rhs(k - p_); }
-  double Slack(int k) const { return Rhs(k) - Normal(k).dot(x_); }
+  // Constraint k of the stacked set (equalities first, then inequalities),
+  // as a contiguous column of normals_.
+  auto Normal(int k) const { return normals_.col(k); }
+  double Rhs(int k) const { return rhs_(k); }
+  double Slack(int k) const { return rhs_(k) - normals_.col(k).dot(x_); }
   double Scale(int k) const {
-    return std::max({1.0, std::abs(Rhs(k)), Normal(k).norm() * x_.norm()});
+    return std::max({1.0, std::abs(rhs_(k)), normal_norms_(k) * x_.norm()});
   }
   // Direction in primal (z) and dual (r) spaces for adding constraint k.
   void Directions(int k);
@@ -59,6 +60,8 @@ class ActiveSetSolver {
   const DenseQp& qp_;
   const DenseQpSettings& settings_;
   const int n_, p_, m_;
+  MatrixXd normals_;  // n x (p + m): constraint normals as columns
+  VectorXd rhs_, normal_norms_;
 
   VectorXd x_;
   MatrixXd J_;  // n x n
@@ -69,12 +72,6 @@ class ActiveSetSolver {
   std::vector<char> is_active_;
   int iterations_ = 0;
 };
-
-Eigen::Ref<const VectorXd> ActiveSetSolver::Normal(int k) const {
-  // Rows are returned as column vectors (a copy-free transpose view).
-  if (k < p_) return qp_.eq_matrix.row(k).transpose();
-  return qp_.in_matrix.row(k - p_).transpose();
-}
 
 void ActiveSetSolver::Directions(int k) {
   const int q = static_cast<int>(active_.size());
@@ -129,17 +126,26 @@ void ActiveSetSolver::DropFromFactorization(int position) {
 }
 
 int ActiveSetSolver::MostViolated() const {
+  // Relative violation: slack / max(1, |b|, |a| |x|).
+  const double x_norm = x_.norm();
+  auto violation = [&](int k, double slack) {
+    return slack / std::max({1.0, std::abs(rhs_(k)), normal_norms_(k) * x_norm});
+  };
   for (int row : settings_.warm_start) {
     const int k = p_ + row;
-    if (row >= 0 && row < m_ && !is_active_[k] && Slack(k) < -settings_.tolerance * Scale(k))
+    if (row >= 0 && row < m_ && !is_active_[k] &&
+        violation(k, Slack(k)) < -settings_.tolerance)
       return k;
   }
+  if (m_ == 0) return -1;
+  const VectorXd slack = rhs_.tail(m_) - normals_.rightCols(m_).transpose() * x_;
   int worst = -1;
-  double worst_ratio = 0.0;
-  for (int k = p_; k < p_ + m_; ++k) {
-    if (is_active_[k]) continue;
-    const double ratio = Slack(k) / Scale(k);
-    if (ratio < -settings_.tolerance && ratio < worst_ratio) {
+  double worst_ratio = -settings_.tolerance;
+  for (int i = 0; i < m_; ++i) {
+    const int k = p_ + i;
+    if (is_active_[k] || slack(i) >= 0.0) continue;
+    const double ratio = violation(k, slack(i));
+    if (ratio < worst_ratio) {
       worst_ratio = ratio;
       worst = k;
     }
@@ -170,6 +176,12 @@ DenseQpResult ActiveSetSolver::Finish(DenseQpStatus status, int blocking) {
 DenseQpResult ActiveSetSolver::Run() {
   is_active_.assign(p_ + m_, 0);
   u_.resize(0);
+  normals_.resize(n_, p_ + m_);
+  if (p_ > 0) normals_.leftCols(p_) = qp_.eq_matrix.transpose();
+  if (m_ > 0) normals_.rightCols(m_) = qp_.in_matrix.transpose();
+  rhs_.resize(p_ + m_);
+  rhs_ << qp_.eq_rhs, qp_.in_rhs;
+  normal_norms_ = normals_.colwise().norm().transpose();
   Eigen::LLT<MatrixXd> llt(qp_.hessian);
   if (llt.info() != Eigen::Success) {
     x_ = VectorXd::Zero(n_);

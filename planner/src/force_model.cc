@@ -131,16 +131,17 @@ ConstraintRows BuildConstraintRows(const PlanProblem& problem,
 
   const double cos_half = std::cos(std::numbers::pi / cone_sides);
   int r = 0;
+  Eigen::Matrix3d s_ii;  // covariance block of the contact being added
   auto add = [&](int contact, const Vec3& a, double d, RowKind kind, int facet) {
     rows.matrix.block<1, 3>(r, 3 * contact) = a.transpose();
     rows.nominal_rhs(r) = d;
-    const Eigen::Matrix3d s_ii = ellipsoid.ContactCovariance(contact);
     rows.rhs(r) = d - confidence * std::sqrt(std::max(0.0, a.dot(s_ii * a)));
     rows.info.push_back({contact, kind, facet});
     ++r;
   };
   for (int i = 0; i < n; ++i) {
     const Contact& c = problem.contacts[i];
+    s_ii = ellipsoid.ContactCovariance(i);
     if (with_friction_facets) {
       const auto [t1, t2] = TangentBasis(c.normal);
       for (int j = 0; j < cone_sides; ++j) {
@@ -178,9 +179,9 @@ std::vector<double> TangentialForceSigma(const PlanProblem& problem,
   return out;
 }
 
-PreparedProblem Prepare(const PlanProblem& validated, const PlanOptions& options) {
+PreparedProblem Prepare(PlanProblem validated, const PlanOptions& options) {
   PreparedProblem p;
-  p.problem = validated;
+  p.problem = std::move(validated);
   p.equilibrium = ComputeForceEquilibrium(p.problem, options.rank_tolerance);
   p.ellipsoid = ComputeMeasurementEllipsoid(p.problem, p.equilibrium);
   p.rows = BuildConstraintRows(p.problem, p.ellipsoid, options.cone_sides, options.confidence,

@@ -86,6 +86,9 @@ constexpr double kInfinity = 1e20;
 constexpr double kFeasibilityTolerance = 1e-8;
 // Relative residual accepted for the re-reduced equilibrium rows.
 constexpr double kEquilibriumTolerance = 1e-9;
+// The problem is declared infeasible when no point violates the tightened
+// constraints by less than this times max(1, largest bound) (N).
+constexpr double kInfeasibilityTolerance = 1e-7;
 
 double ThreadCpuSeconds() {
   timespec ts{};
@@ -140,34 +143,32 @@ struct Entry {
   double value = 0.0;
 };
 
-// |P_t f|^2 - s^2 <= 0 for one contact with friction, s = mu n.f - shift.
+// Exact friction cone of one contact with friction, in the unknowns
+// (f_i, s_i): s_i is an extra unknown bounded below by zero and tied to the
+// forces by the linear equality s_i - mu n.f_i = -shift. The cone itself is
+//   r(f, s) = |P_t f|^2 / s - s <= 0   (s > 0),
+// i.e. |P_t f| <= s. Unlike |P_t f|^2 - s^2 <= 0 its gradient never vanishes
+// (dr/ds <= -1), so the constraint stays qualified at the apex f_i = 0 where
+// unloaded contacts end up; and a violation of r by eps means |P_t f|
+// exceeds s by about eps/2, not by sqrt(eps).
 struct ConeConstraint {
   int contact = 0;
-  int offset = 0;  // first of the contact's three unknowns
+  int offset = 0;   // first of the contact's three force unknowns
+  int s_index = 0;  // the slack unknown s
   Vec3 normal = Vec3::UnitZ();
   double mu = 0.0;
-  double shift = 0.0;  // kappa (mu rho_n + rho_t)
+  double shift = 0.0;  // kappa (mu rho_n + rho_t): s = mu n.f - shift
 
-  double Slack(const Number* z) const {
-    const Vec3 f(z[offset], z[offset + 1], z[offset + 2]);
-    return mu * normal.dot(f) - shift;
+  Vec3 Force(const Number* x) const {
+    return Vec3(x[offset], x[offset + 1], x[offset + 2]);
   }
-  double Value(const Number* z) const {
-    const Vec3 f(z[offset], z[offset + 1], z[offset + 2]);
-    const double fn = normal.dot(f);
-    const double s = mu * fn - shift;
-    return (f - fn * normal).squaredNorm() - s * s;
+  Vec3 Tangential(const Number* x) const {
+    const Vec3 f = Force(x);
+    return f - normal.dot(f) * normal;
   }
-  Vec3 Gradient(const Number* z) const {
-    const Vec3 f(z[offset], z[offset + 1], z[offset + 2]);
-    const double fn = normal.dot(f);
-    const double s = mu * fn - shift;
-    return 2.0 * (f - fn * normal) - 2.0 * s * mu * normal;
-  }
-  // 2 P_t - 2 mu^2 n n^T.
-  Eigen::Matrix3d Hessian() const {
-    return 2.0 * Eigen::Matrix3d::Identity() -
-           2.0 * (1.0 + mu * mu) * normal * normal.transpose();
+  double Value(const Number* x) const {
+    const double s = x[s_index];
+    return Tangential(x).squaredNorm() / s - s;
   }
 };
 
@@ -177,41 +178,43 @@ struct RowOrigin {
   int index = 0;  // row of prepared.rows, or contact
 };
 
-// The NLP in the reduced unknowns z: f_i = z_i (3 unknowns) for contacts
-// with friction, f_i = n_i z_i (1 unknown) for frictionless ones. The
-// columns of this map are orthonormal, so |f|^2 = |z|^2.
+// The NLP. Unknowns x = (z, s): z are the reduced force unknowns
+// (f_i = z_i, 3 unknowns, for contacts with friction; f_i = n_i z_i, one
+// unknown, for frictionless ones; the map has orthonormal columns so
+// |f|^2 = |z|^2), s the cone slacks (EXACT only).
 struct Formulation {
-  int num_vars = 0;
-  std::vector<int> offset;          // per contact
+  int num_forces = 0;               // unknowns in z
+  std::vector<int> offset;          // per contact, into z
   std::vector<bool> frictionless;   // per contact
   std::vector<Vec3> normal;         // per contact
-  // Linear constraints lower <= L z <= upper; equalities come first.
-  int num_equalities = 0;
+  int num_equilibrium = 0;          // equilibrium rows (the first rows)
+  // Linear constraints lower <= L x <= upper.
   int num_linear = 0;
-  std::vector<Entry> linear;  // L, sorted by row
+  std::vector<Entry> linear;
   std::vector<double> lower;
   std::vector<double> upper;
   std::vector<RowOrigin> origin;
   std::vector<ConeConstraint> cones;
-  VectorXd start;  // satisfies the equalities
+  VectorXd start;  // (z0, s0); z0 satisfies the equilibrium rows
 
+  int num_vars() const { return num_forces + static_cast<int>(cones.size()); }
   int num_constraints() const {
     return num_linear + static_cast<int>(cones.size());
   }
 
-  std::vector<Vec3> Forces(const VectorXd& z) const {
+  std::vector<Vec3> Forces(const VectorXd& x) const {
     std::vector<Vec3> forces(offset.size());
     for (size_t i = 0; i < offset.size(); ++i) {
-      forces[i] = frictionless[i] ? Vec3(normal[i] * z(offset[i]))
-                                  : Vec3(z.segment<3>(offset[i]));
+      forces[i] = frictionless[i] ? Vec3(normal[i] * x(offset[i]))
+                                  : Vec3(x.segment<3>(offset[i]));
     }
     return forces;
   }
 
-  // Row values L z.
-  VectorXd LinearValues(const Number* z) const {
+  // Row values L x.
+  VectorXd LinearValues(const Number* x) const {
     VectorXd values = VectorXd::Zero(num_linear);
-    for (const Entry& e : linear) values(e.row) += e.value * z[e.col];
+    for (const Entry& e : linear) values(e.row) += e.value * x[e.col];
     return values;
   }
 };
@@ -245,26 +248,26 @@ BuildOutcome BuildFormulation(const PreparedProblem& prepared,
   const bool exact = options.cone == ConeModel::kExact;
   const double kappa = options.confidence;
 
-  // Unknowns.
+  // Force unknowns.
   form->offset.resize(static_cast<size_t>(n));
   form->frictionless.resize(static_cast<size_t>(n));
   form->normal.resize(static_cast<size_t>(n));
   bool reduced = false;
-  int num_vars = 0;
+  int num_forces = 0;
   for (int i = 0; i < n; ++i) {
     const Contact& c = problem.contacts[static_cast<size_t>(i)];
-    form->offset[i] = num_vars;
+    form->offset[i] = num_forces;
     form->frictionless[i] = c.friction == 0.0;
     form->normal[i] = c.normal;
-    num_vars += form->frictionless[i] ? 1 : 3;
+    num_forces += form->frictionless[i] ? 1 : 3;
     reduced = reduced || form->frictionless[i];
   }
-  form->num_vars = num_vars;
+  form->num_forces = num_forces;
 
-  // T: f = T z (3n x num_vars), only needed when some contact is reduced.
+  // T: f = T z (3n x num_forces), only needed when some contact is reduced.
   MatrixXd map;
   if (reduced) {
-    map = MatrixXd::Zero(3 * n, num_vars);
+    map = MatrixXd::Zero(3 * n, num_forces);
     for (int i = 0; i < n; ++i) {
       if (form->frictionless[i]) {
         map.block<3, 1>(3 * i, form->offset[i]) = form->normal[i];
@@ -274,13 +277,14 @@ BuildOutcome BuildFormulation(const PreparedProblem& prepared,
     }
   }
 
-  // Equalities.
+  // Equilibrium rows, full row rank in z.
   MatrixXd eq_rows;
   VectorXd eq_rhs;
+  VectorXd z0;
   if (!reduced) {
     eq_rows = eq.independent_rows;
     eq_rhs = eq.independent_rhs;
-    form->start = eq.particular;
+    z0 = eq.particular;
   } else {
     const MatrixXd e = eq.independent_rows * map;
     const VectorXd& b = eq.independent_rhs;
@@ -292,9 +296,9 @@ BuildOutcome BuildFormulation(const PreparedProblem& prepared,
     const MatrixXd u = svd.matrixU().leftCols(rank);
     eq_rhs = u.transpose() * b;
     eq_rows = u.transpose() * e;
-    form->start = svd.matrixV().leftCols(rank) *
-                  (eq_rhs.array() / sv.head(rank).array()).matrix();
-    const double residual = (e * form->start - b).norm();
+    z0 = svd.matrixV().leftCols(rank) *
+         (eq_rhs.array() / sv.head(rank).array()).matrix();
+    const double residual = (e * z0 - b).norm();
     if (!(residual <= kEquilibriumTolerance * std::max(1.0, b.norm()))) {
       return {true,
               Infeasible("the contacts cannot resist this wrench with the "
@@ -304,24 +308,29 @@ BuildOutcome BuildFormulation(const PreparedProblem& prepared,
                          FormatNumber(residual) + ")")};
     }
   }
-  const int num_eq = static_cast<int>(eq_rows.rows());
 
   std::vector<Entry>& lin = form->linear;
-  auto add_row = [&](const Eigen::Ref<const Eigen::RowVectorXd>& row,
+  auto add_row = [&](const std::vector<std::pair<int, double>>& terms,
                      double lo, double hi, RowOrigin origin) {
     const int r = static_cast<int>(form->lower.size());
-    for (int j = 0; j < row.size(); ++j) {
-      if (row(j) != 0.0) lin.push_back({r, j, row(j)});
+    for (const auto& [col, value] : terms) {
+      if (value != 0.0) lin.push_back({r, col, value});
     }
     form->lower.push_back(lo);
     form->upper.push_back(hi);
     form->origin.push_back(origin);
   };
+  auto dense_terms = [](const Eigen::RowVectorXd& row) {
+    std::vector<std::pair<int, double>> terms;
+    for (int j = 0; j < row.size(); ++j) terms.emplace_back(j, row(j));
+    return terms;
+  };
 
-  for (int k = 0; k < num_eq; ++k) {
-    add_row(eq_rows.row(k), eq_rhs(k), eq_rhs(k), {RowOrigin::kEquality, k});
+  for (int k = 0; k < eq_rows.rows(); ++k) {
+    add_row(dense_terms(eq_rows.row(k)), eq_rhs(k), eq_rhs(k),
+            {RowOrigin::kEquality, k});
   }
-  form->num_equalities = num_eq;
+  form->num_equilibrium = static_cast<int>(eq_rows.rows());
 
   // Tightened linear rows A f <= d.
   const ConstraintRows& rows = prepared.rows;
@@ -337,15 +346,14 @@ BuildOutcome BuildFormulation(const PreparedProblem& prepared,
       if (rows.rhs(k) < -slack_tol) {
         return {true, Infeasible(rows.Describe(k, problem) +
                                  " cannot be met: its robust bound is " +
-                                 FormatNumber(rows.rhs(k)) +
-                                 " N below zero")};
+                                 FormatNumber(rows.rhs(k)) + " N below zero")};
       }
       continue;
     }
-    add_row(a, -kInfinity, rows.rhs(k), {RowOrigin::kPlanRow, k});
+    add_row(dense_terms(a), -kInfinity, rows.rhs(k), {RowOrigin::kPlanRow, k});
   }
 
-  // Exact friction cones.
+  // Exact friction cones: s_i - mu n.f_i = -shift, s_i >= 0, r_i <= 0.
   if (exact) {
     for (int i = 0; i < n; ++i) {
       const Contact& c = problem.contacts[static_cast<size_t>(i)];
@@ -366,48 +374,57 @@ BuildOutcome BuildFormulation(const PreparedProblem& prepared,
       ConeConstraint cone;
       cone.contact = i;
       cone.offset = form->offset[i];
+      cone.s_index = num_forces + static_cast<int>(form->cones.size());
       cone.normal = c.normal;
       cone.mu = c.friction;
       cone.shift = kappa * (c.friction * rho_n + rho_t);
-      Eigen::RowVectorXd a = Eigen::RowVectorXd::Zero(num_vars);
-      a.segment<3>(cone.offset) = cone.mu * c.normal.transpose();
-      add_row(a, cone.shift, kInfinity, {RowOrigin::kConeSlack, i});
+      std::vector<std::pair<int, double>> terms = {{cone.s_index, 1.0}};
+      for (int a = 0; a < 3; ++a) {
+        terms.emplace_back(cone.offset + a, -cone.mu * c.normal(a));
+      }
+      add_row(terms, -cone.shift, -cone.shift, {RowOrigin::kConeSlack, i});
       form->cones.push_back(cone);
     }
   }
   form->num_linear = static_cast<int>(form->lower.size());
+
+  // Start: the minimum-norm equilibrium and its cone slacks (clipped at the
+  // bound; Ipopt pushes them inside).
+  form->start = VectorXd::Zero(form->num_vars());
+  form->start.head(num_forces) = z0;
+  for (const ConeConstraint& cone : form->cones) {
+    const double s = cone.mu * cone.normal.dot(cone.Force(form->start.data())) -
+                     cone.shift;
+    form->start(cone.s_index) = std::max(s, 0.0);
+  }
   return {};
 }
 
-// When the equalities determine z completely there is nothing to optimise:
-// the unique equilibrium is the answer if it meets every constraint.
+// When the equilibrium rows determine the forces completely there is nothing
+// to optimise: the unique equilibrium is the answer if it meets every
+// constraint.
 PlanResult CheckUniqueEquilibrium(const Formulation& form,
                                   const PreparedProblem& prepared) {
-  const Number* z = form.start.data();
-  const VectorXd values = form.LinearValues(z);
-  for (int r = form.num_equalities; r < form.num_linear; ++r) {
-    const double tol = kFeasibilityTolerance *
-                       std::max({1.0, std::abs(form.lower[r]) < kInfinity
-                                          ? std::abs(form.lower[r]) : 0.0,
-                                 std::abs(form.upper[r]) < kInfinity
-                                     ? std::abs(form.upper[r]) : 0.0});
-    if (values(r) > form.upper[r] + tol || values(r) < form.lower[r] - tol) {
-      const RowOrigin& o = form.origin[r];
-      const std::string what =
-          o.kind == RowOrigin::kPlanRow
-              ? prepared.rows.Describe(o.index, prepared.problem)
-              : ContactLabel(prepared.problem, o.index) + " friction cone";
-      return Infeasible("the equilibrium forces are unique and violate " + what);
+  const Number* x = form.start.data();
+  const VectorXd values = form.LinearValues(x);
+  for (int r = form.num_equilibrium; r < form.num_linear; ++r) {
+    const RowOrigin& o = form.origin[r];
+    if (o.kind != RowOrigin::kPlanRow) continue;  // cone slacks: below
+    const double tol =
+        kFeasibilityTolerance * std::max(1.0, std::abs(form.upper[r]));
+    if (values(r) > form.upper[r] + tol) {
+      return Infeasible("the equilibrium forces are unique and violate " +
+                        prepared.rows.Describe(o.index, prepared.problem));
     }
   }
   for (const ConeConstraint& cone : form.cones) {
-    const Vec3 f(z[cone.offset], z[cone.offset + 1], z[cone.offset + 2]);
-    const double tangential = (f - cone.normal.dot(f) * cone.normal).norm();
-    const double s = cone.Slack(z);
-    if (tangential > s + kFeasibilityTolerance * std::max(1.0, f.norm())) {
-      return Infeasible("the equilibrium forces are unique and violate " +
-                        ContactLabel(prepared.problem, cone.contact) +
-                        " friction cone");
+    const Vec3 f = cone.Force(x);
+    const double s = cone.mu * cone.normal.dot(f) - cone.shift;
+    if (cone.Tangential(x).norm() >
+        s + kFeasibilityTolerance * std::max(1.0, f.norm())) {
+      return Infeasible("the equilibrium forces are unique and violate the "
+                        "friction cone of " +
+                        ContactLabel(prepared.problem, cone.contact));
     }
   }
   PlanResult result;
@@ -417,49 +434,80 @@ PlanResult CheckUniqueEquilibrium(const Formulation& form,
   return result;
 }
 
-// The TNLP handed to Ipopt. Owned by one solve; not shared.
+// Which problem the TNLP poses.
+enum class Phase {
+  // min |f|^2 over the constraints (the answer).
+  kMinimumNorm,
+  // Feasibility: min t >= 0 with every inequality relaxed by t (plan rows
+  // a.f <= d + t, cone slacks s = s(f) + t); the equilibrium stays exact.
+  // Always feasible; optimal t > 0 proves the problem infeasible.
+  kFeasibility,
+};
+
+// CPU-time budget shared by the Ipopt runs of one solve.
+struct Deadline {
+  double limit_seconds = 0.0;  // <= 0: none
+  double start_seconds = 0.0;  // thread CPU clock at the start of the solve
+  bool Passed() const {
+    return limit_seconds > 0.0 &&
+           ThreadCpuSeconds() - start_seconds > limit_seconds;
+  }
+};
+
+// The TNLP handed to Ipopt. Owned by one run; not shared.
 class ForceNlp final : public Ipopt::TNLP {
  public:
-  ForceNlp(const Formulation& form, double cpu_limit_seconds)
+  ForceNlp(const Formulation& form, Phase phase, VectorXd start,
+           const Deadline& deadline)
       : form_(form),
-        cpu_limit_seconds_(cpu_limit_seconds),
-        cpu_start_seconds_(ThreadCpuSeconds()) {
-    // Lower triangle of the Lagrangian Hessian: 2 I from the objective on
-    // every unknown, plus the full 3x3 block of every cone.
-    std::vector<bool> has_cone(form_.offset.size(), false);
-    for (const ConeConstraint& c : form_.cones) {
-      has_cone[static_cast<size_t>(c.contact)] = true;
+        phase_(phase),
+        start_(std::move(start)),
+        deadline_(deadline),
+        num_vars_(form.num_vars() + (phase == Phase::kFeasibility ? 1 : 0)),
+        t_index_(form.num_vars()),
+        linear_(form.linear) {
+    if (phase_ == Phase::kFeasibility) {
+      for (int r = 0; r < form_.num_linear; ++r) {
+        if (form_.origin[r].kind != RowOrigin::kEquality) {
+          linear_.push_back({r, t_index_, -1.0});
+        }
+      }
     }
+    // Lower triangle of the Lagrangian Hessian: the diagonal of every force
+    // unknown (2 I from the objective); for a cone the 3x3 force block, the
+    // (s, f) row and (s, s).
+    std::vector<int> cone_of(form_.offset.size(), -1);
+    for (size_t k = 0; k < form_.cones.size(); ++k) {
+      cone_of[static_cast<size_t>(form_.cones[k].contact)] = static_cast<int>(k);
+    }
+    cone_hess_start_.resize(form_.cones.size());
     for (size_t i = 0; i < form_.offset.size(); ++i) {
       const int o = form_.offset[i];
       if (form_.frictionless[i]) {
         hess_.push_back({o, o, 0.0});
-      } else if (!has_cone[i]) {
+      } else if (cone_of[i] < 0) {
         for (int a = 0; a < 3; ++a) hess_.push_back({o + a, o + a, 0.0});
       } else {
+        cone_hess_start_[static_cast<size_t>(cone_of[i])] =
+            static_cast<int>(hess_.size());
         for (int a = 0; a < 3; ++a) {
           for (int b = 0; b <= a; ++b) hess_.push_back({o + a, o + b, 0.0});
         }
       }
     }
-    // Position of each cone's 3x3 block (6 entries, row-major lower) in hess_.
-    cone_hess_start_.resize(form_.cones.size());
     for (size_t k = 0; k < form_.cones.size(); ++k) {
-      for (size_t e = 0; e < hess_.size(); ++e) {
-        if (hess_[e].row == form_.cones[k].offset &&
-            hess_[e].col == form_.cones[k].offset) {
-          cone_hess_start_[k] = static_cast<int>(e);
-          break;
-        }
-      }
+      const ConeConstraint& c = form_.cones[k];
+      cone_hess_s_start_.push_back(static_cast<int>(hess_.size()));
+      for (int a = 0; a < 3; ++a) hess_.push_back({c.s_index, c.offset + a, 0.0});
+      hess_.push_back({c.s_index, c.s_index, 0.0});
     }
   }
 
   bool get_nlp_info(Index& n, Index& m, Index& nnz_jac_g, Index& nnz_h_lag,
                     IndexStyleEnum& index_style) override {
-    n = form_.num_vars;
+    n = num_vars_;
     m = form_.num_constraints();
-    nnz_jac_g = static_cast<Index>(form_.linear.size() + 3 * form_.cones.size());
+    nnz_jac_g = static_cast<Index>(linear_.size() + 4 * form_.cones.size());
     nnz_h_lag = static_cast<Index>(hess_.size());
     index_style = C_STYLE;
     return true;
@@ -468,7 +516,7 @@ class ForceNlp final : public Ipopt::TNLP {
   bool get_bounds_info(Index n, Number* x_l, Number* x_u, Index m, Number* g_l,
                        Number* g_u) override {
     for (Index j = 0; j < n; ++j) {
-      x_l[j] = -kInfinity;
+      x_l[j] = j < form_.num_forces ? -kInfinity : 0.0;  // s >= 0, t >= 0
       x_u[j] = kInfinity;
     }
     for (int r = 0; r < form_.num_linear; ++r) {
@@ -494,25 +542,34 @@ class ForceNlp final : public Ipopt::TNLP {
                           Number* lambda) override {
     if (init_z || init_lambda) return false;  // no warm start offered
     if (init_x) {
-      for (Index j = 0; j < n; ++j) x[j] = form_.start(j);
+      for (Index j = 0; j < n; ++j) x[j] = start_(j);
     }
     return true;
   }
 
   bool eval_f(Index n, const Number* x, bool new_x, Number& obj) override {
-    obj = Eigen::Map<const VectorXd>(x, n).squaredNorm();
+    obj = phase_ == Phase::kFeasibility
+              ? x[t_index_]
+              : Eigen::Map<const VectorXd>(x, form_.num_forces).squaredNorm();
     return true;
   }
 
   bool eval_grad_f(Index n, const Number* x, bool new_x, Number* grad) override {
-    for (Index j = 0; j < n; ++j) grad[j] = 2.0 * x[j];
+    for (Index j = 0; j < n; ++j) {
+      if (phase_ == Phase::kFeasibility) {
+        grad[j] = j == t_index_ ? 1.0 : 0.0;
+      } else {
+        grad[j] = j < form_.num_forces ? 2.0 * x[j] : 0.0;
+      }
+    }
     return true;
   }
 
   bool eval_g(Index n, const Number* x, bool new_x, Index m, Number* g) override {
     for (int r = 0; r < form_.num_linear; ++r) g[r] = 0.0;
-    for (const Entry& e : form_.linear) g[e.row] += e.value * x[e.col];
+    for (const Entry& e : linear_) g[e.row] += e.value * x[e.col];
     for (size_t k = 0; k < form_.cones.size(); ++k) {
+      if (!(x[form_.cones[k].s_index] > 0.0)) return false;  // outside domain
       g[form_.num_linear + k] = form_.cones[k].Value(x);
     }
     return true;
@@ -520,24 +577,33 @@ class ForceNlp final : public Ipopt::TNLP {
 
   bool eval_jac_g(Index n, const Number* x, bool new_x, Index m, Index nele_jac,
                   Index* i_row, Index* j_col, Number* values) override {
-    const size_t nl = form_.linear.size();
+    const size_t nl = linear_.size();
     if (values == nullptr) {
       for (size_t e = 0; e < nl; ++e) {
-        i_row[e] = form_.linear[e].row;
-        j_col[e] = form_.linear[e].col;
+        i_row[e] = linear_[e].row;
+        j_col[e] = linear_[e].col;
       }
       for (size_t k = 0; k < form_.cones.size(); ++k) {
+        const ConeConstraint& c = form_.cones[k];
+        const Index row = form_.num_linear + static_cast<Index>(k);
         for (int a = 0; a < 3; ++a) {
-          i_row[nl + 3 * k + a] = form_.num_linear + static_cast<Index>(k);
-          j_col[nl + 3 * k + a] = form_.cones[k].offset + a;
+          i_row[nl + 4 * k + a] = row;
+          j_col[nl + 4 * k + a] = c.offset + a;
         }
+        i_row[nl + 4 * k + 3] = row;
+        j_col[nl + 4 * k + 3] = c.s_index;
       }
       return true;
     }
-    for (size_t e = 0; e < nl; ++e) values[e] = form_.linear[e].value;
+    for (size_t e = 0; e < nl; ++e) values[e] = linear_[e].value;
     for (size_t k = 0; k < form_.cones.size(); ++k) {
-      const Vec3 grad = form_.cones[k].Gradient(x);
-      for (int a = 0; a < 3; ++a) values[nl + 3 * k + a] = grad(a);
+      const ConeConstraint& c = form_.cones[k];
+      const double s = x[c.s_index];
+      if (!(s > 0.0)) return false;
+      const Vec3 w = c.Tangential(x);
+      // dr/df = 2 P_t f / s, dr/ds = -|P_t f|^2 / s^2 - 1.
+      for (int a = 0; a < 3; ++a) values[nl + 4 * k + a] = 2.0 * w(a) / s;
+      values[nl + 4 * k + 3] = -w.squaredNorm() / (s * s) - 1.0;
     }
     return true;
   }
@@ -552,16 +618,30 @@ class ForceNlp final : public Ipopt::TNLP {
       }
       return true;
     }
+    const double diagonal =
+        phase_ == Phase::kFeasibility ? 0.0 : 2.0 * obj_factor;
     for (size_t e = 0; e < hess_.size(); ++e) {
-      values[e] = hess_[e].row == hess_[e].col ? 2.0 * obj_factor : 0.0;
+      values[e] = hess_[e].row == hess_[e].col && hess_[e].row < form_.num_forces
+                      ? diagonal
+                      : 0.0;
     }
     for (size_t k = 0; k < form_.cones.size(); ++k) {
+      const ConeConstraint& c = form_.cones[k];
+      const double s = x[c.s_index];
+      if (!(s > 0.0)) return false;
       const double weight = lambda[form_.num_linear + k];
-      const Eigen::Matrix3d h = form_.cones[k].Hessian();
+      const Vec3 w = c.Tangential(x);
+      // d2r/df2 = 2 P_t / s, d2r/dsdf = -2 P_t f / s^2,
+      // d2r/ds2 = 2 |P_t f|^2 / s^3.
+      const Eigen::Matrix3d p =
+          Eigen::Matrix3d::Identity() - c.normal * c.normal.transpose();
       int e = cone_hess_start_[k];
       for (int a = 0; a < 3; ++a) {
-        for (int b = 0; b <= a; ++b) values[e++] += weight * h(a, b);
+        for (int b = 0; b <= a; ++b) values[e++] += weight * 2.0 * p(a, b) / s;
       }
+      e = cone_hess_s_start_[k];
+      for (int a = 0; a < 3; ++a) values[e++] += weight * -2.0 * w(a) / (s * s);
+      values[e] += weight * 2.0 * w.squaredNorm() / (s * s * s);
     }
     return true;
   }
@@ -582,8 +662,7 @@ class ForceNlp final : public Ipopt::TNLP {
                              const Ipopt::IpoptData* ip_data,
                              Ipopt::IpoptCalculatedQuantities* ip_cq) override {
     last_iteration_ = iter;
-    if (cpu_limit_seconds_ > 0.0 &&
-        ThreadCpuSeconds() - cpu_start_seconds_ > cpu_limit_seconds_) {
+    if (deadline_.Passed()) {
       time_limit_reached_ = true;
       return false;
     }
@@ -596,10 +675,15 @@ class ForceNlp final : public Ipopt::TNLP {
 
  private:
   const Formulation& form_;
-  const double cpu_limit_seconds_;
-  const double cpu_start_seconds_;
-  std::vector<Entry> hess_;  // structure (values unused)
-  std::vector<int> cone_hess_start_;
+  const Phase phase_;
+  const VectorXd start_;
+  const Deadline deadline_;
+  const int num_vars_;
+  const int t_index_;           // feasibility phase only
+  std::vector<Entry> linear_;   // L, plus the t column in the feasibility phase
+  std::vector<Entry> hess_;     // structure (values unused)
+  std::vector<int> cone_hess_start_;    // 3x3 force block, per cone
+  std::vector<int> cone_hess_s_start_;  // (s, f) row and (s, s), per cone
   VectorXd solution_;
   bool time_limit_reached_ = false;
   int last_iteration_ = 0;
@@ -607,7 +691,8 @@ class ForceNlp final : public Ipopt::TNLP {
 
 // Sets every option explicitly; returns the names of rejected ones.
 std::string ConfigureIpopt(Ipopt::IpoptApplication& app,
-                           const PlanOptions& options, bool has_cones) {
+                           const PlanOptions& options, bool has_cones,
+                           bool expect_infeasible) {
   Ipopt::OptionsList& o = *app.Options();
   std::string rejected;
   auto check = [&](bool ok, const char* name) {
@@ -621,11 +706,69 @@ std::string ConfigureIpopt(Ipopt::IpoptApplication& app,
   check(o.SetStringValue("linear_solver", "mumps"), "linear_solver");
   check(o.SetIntegerValue("mumps_pivot_order", 0), "mumps_pivot_order");
   check(o.SetStringValue("jac_c_constant", "yes"), "jac_c_constant");
+  check(o.SetStringValue("expect_infeasible_problem",
+                         expect_infeasible ? "yes" : "no"),
+        "expect_infeasible_problem");
   if (!has_cones) {
     check(o.SetStringValue("jac_d_constant", "yes"), "jac_d_constant");
     check(o.SetStringValue("hessian_constant", "yes"), "hessian_constant");
+  } else {
+    // The cone slacks s must stay strictly positive (r divides by s).
+    check(o.SetNumericValue("bound_relax_factor", 0.0), "bound_relax_factor");
   }
   return rejected;
+}
+
+// One Ipopt run.
+struct IpoptRun {
+  Ipopt::ApplicationReturnStatus status = Ipopt::Internal_Error;
+  std::string setup_error;  // non-empty: Ipopt did not run
+  int iterations = 0;
+  bool time_limit_reached = false;
+  VectorXd solution;  // valid when status is a success
+
+  bool succeeded() const {
+    return setup_error.empty() &&
+           (status == Ipopt::Solve_Succeeded ||
+            status == Ipopt::Solved_To_Acceptable_Level) &&
+           solution.allFinite();
+  }
+};
+
+IpoptRun RunIpopt(const Formulation& form, Phase phase, VectorXd start,
+                  bool expect_infeasible, const PlanOptions& options,
+                  const Deadline& deadline) {
+  IpoptRun run;
+  const int num_vars =
+      form.num_vars() + (phase == Phase::kFeasibility ? 1 : 0);
+  Ipopt::SmartPtr<ForceNlp> nlp =
+      new ForceNlp(form, phase, std::move(start), deadline);
+  // No console journal: nothing is ever written to stdout.
+  Ipopt::SmartPtr<Ipopt::IpoptApplication> app =
+      new Ipopt::IpoptApplication(/*create_console_out=*/false);
+  const std::string rejected =
+      ConfigureIpopt(*app, options, !form.cones.empty(), expect_infeasible);
+  if (!rejected.empty()) {
+    run.setup_error = "Ipopt rejected the options: " + rejected;
+    return run;
+  }
+  // "" = do not read an ipopt.opt file from the working directory.
+  run.status = app->Initialize(std::string());
+  if (run.status != Ipopt::Solve_Succeeded) {
+    run.setup_error =
+        std::string("Ipopt failed to initialise: ") + StatusName(run.status);
+    return run;
+  }
+  run.status = app->OptimizeTNLP(Ipopt::GetRawPtr(nlp));
+  run.iterations = nlp->last_iteration();
+  if (Ipopt::SmartPtr<Ipopt::SolveStatistics> stats = app->Statistics();
+      Ipopt::IsValid(stats)) {
+    run.iterations = stats->IterationCount();
+  }
+  run.time_limit_reached = nlp->time_limit_reached() ||
+                           run.status == Ipopt::Maximum_CpuTime_Exceeded;
+  if (nlp->solution().size() == num_vars) run.solution = nlp->solution();
+  return run;
 }
 
 class IpoptSolver final : public ForceSolver {
@@ -649,6 +792,7 @@ class IpoptSolver final : public ForceSolver {
  private:
   static PlanResult SolveOrThrow(const PreparedProblem& prepared,
                                  const PlanOptions& options) {
+    const Deadline deadline{options.ipopt_max_cpu_seconds, ThreadCpuSeconds()};
     const ForceEquilibrium& eq = prepared.equilibrium;
     if (!eq.consistent) {
       return Infeasible("the contacts cannot resist this wrench (rank " +
@@ -659,78 +803,109 @@ class IpoptSolver final : public ForceSolver {
     Formulation form;
     BuildOutcome built = BuildFormulation(prepared, options, &form);
     if (built.decided) return built.result;
-    if (form.num_equalities >= form.num_vars) {
+    if (form.num_equilibrium >= form.num_forces) {
       return CheckUniqueEquilibrium(form, prepared);
     }
 
-    Ipopt::SmartPtr<ForceNlp> nlp =
-        new ForceNlp(form, options.ipopt_max_cpu_seconds);
-    // No console journal: nothing is ever written to stdout.
-    Ipopt::SmartPtr<Ipopt::IpoptApplication> app =
-        new Ipopt::IpoptApplication(/*create_console_out=*/false);
-    const std::string rejected =
-        ConfigureIpopt(*app, options, !form.cones.empty());
-    if (!rejected.empty()) {
-      return Failure("Ipopt rejected the options: " + rejected);
-    }
-    // "" = do not read an ipopt.opt file from the working directory.
-    Ipopt::ApplicationReturnStatus status = app->Initialize(std::string());
-    if (status != Ipopt::Solve_Succeeded) {
-      return Failure(std::string("Ipopt failed to initialise: ") +
-                     StatusName(status));
-    }
-    status = app->OptimizeTNLP(Ipopt::GetRawPtr(nlp));
+    int iterations = 0;
+    auto finish = [&](PlanResult result) {
+      result.iterations = iterations;
+      return result;
+    };
+    auto time_limit = [&]() {
+      return Failure("Ipopt stopped at the time limit (" +
+                     FormatNumber(options.ipopt_max_cpu_seconds) +
+                     " s CPU) after " + std::to_string(iterations) +
+                     " iterations");
+    };
+    auto optimal = [&](const IpoptRun& run) {
+      PlanResult result;
+      result.status = PlanStatus::kOptimal;
+      if (run.status == Ipopt::Solved_To_Acceptable_Level) {
+        result.message = "Ipopt: Solved_To_Acceptable_Level";
+      }
+      result.forces = form.Forces(run.solution);
+      return result;
+    };
 
-    PlanResult result;
-    result.iterations = nlp->last_iteration();
-    if (Ipopt::SmartPtr<Ipopt::SolveStatistics> stats = app->Statistics();
-        Ipopt::IsValid(stats)) {
-      result.iterations = stats->IterationCount();
-    }
-    const std::string after =
-        " after " + std::to_string(result.iterations) + " iterations";
+    // 1. The minimum-norm problem, with Ipopt's heuristic for infeasible
+    //    problems on (without it Ipopt can spend thousands of iterations
+    //    before giving up on an infeasible EXACT problem).
+    IpoptRun main = RunIpopt(form, Phase::kMinimumNorm, form.start,
+                             /*expect_infeasible=*/true, options, deadline);
+    iterations += main.iterations;
+    if (!main.setup_error.empty()) return finish(Failure(main.setup_error));
+    if (main.succeeded()) return finish(optimal(main));
+    if (main.time_limit_reached) return finish(time_limit());
 
-    switch (status) {
-      case Ipopt::Solve_Succeeded:
-      case Ipopt::Solved_To_Acceptable_Level:
-        if (nlp->solution().size() != form.num_vars ||
-            !nlp->solution().allFinite()) {
-          return Failure(std::string("Ipopt reported ") + StatusName(status) +
-                         " without a finite solution");
-        }
-        result.status = PlanStatus::kOptimal;
-        if (status == Ipopt::Solved_To_Acceptable_Level) {
-          result.message =
-              "Ipopt: Solved_To_Acceptable_Level (accuracy below tol)";
-        }
-        result.forces = form.Forces(nlp->solution());
-        return result;
-      case Ipopt::Infeasible_Problem_Detected:
-        result.status = PlanStatus::kInfeasible;
-        result.message =
-            "Ipopt: Infeasible_Problem_Detected (converged to a point of "
-            "minimal constraint violation)" + after;
-        return result;
-      case Ipopt::Maximum_CpuTime_Exceeded:
-        result.status = PlanStatus::kSolverFailure;
-        result.message = "Ipopt stopped at the time limit (" +
-                         FormatNumber(options.ipopt_max_cpu_seconds) +
-                         " s CPU)" + after;
-        return result;
-      case Ipopt::User_Requested_Stop:
-        if (nlp->time_limit_reached()) {
-          result.status = PlanStatus::kSolverFailure;
-          result.message = "Ipopt stopped at the time limit (" +
-                           FormatNumber(options.ipopt_max_cpu_seconds) +
-                           " s CPU)" + after;
-          return result;
-        }
-        [[fallthrough]];
-      default:
-        result.status = PlanStatus::kSolverFailure;
-        result.message = std::string("Ipopt failed: ") + StatusName(status) + after;
-        return result;
+    // 2. No optimum: decide feasibility with the always-feasible phase-one
+    //    problem, started from the minimum-norm equilibrium with t large
+    //    enough for every relaxed constraint to hold.
+    VectorXd start1 = VectorXd::Zero(form.num_vars() + 1);
+    start1.head(form.num_vars()) = form.start;
+    const VectorXd row_values = form.LinearValues(form.start.data());
+    double t0 = 0.0;
+    for (int r = 0; r < form.num_linear; ++r) {
+      if (form.origin[r].kind == RowOrigin::kPlanRow) {
+        t0 = std::max(t0, row_values(r) - form.upper[r]);
+      }
     }
+    for (const ConeConstraint& cone : form.cones) {
+      const Vec3 f = cone.Force(form.start.data());
+      const double s = cone.mu * cone.normal.dot(f) - cone.shift;
+      t0 = std::max(t0, cone.Tangential(form.start.data()).norm() - s);
+    }
+    double scale = 1.0;
+    for (int r = 0; r < form.num_linear; ++r) {
+      if (std::abs(form.upper[r]) < kInfinity) {
+        scale = std::max(scale, std::abs(form.upper[r]));
+      }
+      if (std::abs(form.lower[r]) < kInfinity) {
+        scale = std::max(scale, std::abs(form.lower[r]));
+      }
+    }
+    t0 += 1e-2 * scale;
+    start1(form.num_vars()) = t0;
+    for (const ConeConstraint& cone : form.cones) {
+      const Vec3 f = cone.Force(form.start.data());
+      start1(cone.s_index) = cone.mu * cone.normal.dot(f) - cone.shift + t0;
+    }
+    IpoptRun phase1 = RunIpopt(form, Phase::kFeasibility, start1,
+                               /*expect_infeasible=*/false, options, deadline);
+    iterations += phase1.iterations;
+    if (phase1.time_limit_reached) return finish(time_limit());
+    if (!phase1.succeeded()) {
+      // Fall back on the verdict of the main run.
+      if (main.status == Ipopt::Infeasible_Problem_Detected) {
+        return finish(Infeasible(
+            "Ipopt: Infeasible_Problem_Detected (not confirmed: the "
+            "feasibility problem ended with " +
+            std::string(StatusName(phase1.status)) + ")"));
+      }
+      return finish(Failure(std::string("Ipopt failed: ") +
+                            StatusName(main.status) + " after " +
+                            std::to_string(iterations) + " iterations"));
+    }
+    const double violation = phase1.solution(form.num_vars());
+    if (violation > kInfeasibilityTolerance * scale) {
+      return finish(Infeasible(
+          std::string("Ipopt: ") + StatusName(main.status) +
+          "; the feasibility problem shows the tightened constraints are "
+          "violated by at least " + FormatNumber(violation) + " N"));
+    }
+
+    // 3. Feasible after all: solve again from the feasible point, without the
+    //    infeasibility heuristic.
+    IpoptRun retry = RunIpopt(form, Phase::kMinimumNorm,
+                              phase1.solution.head(form.num_vars()),
+                              /*expect_infeasible=*/false, options, deadline);
+    iterations += retry.iterations;
+    if (!retry.setup_error.empty()) return finish(Failure(retry.setup_error));
+    if (retry.succeeded()) return finish(optimal(retry));
+    if (retry.time_limit_reached) return finish(time_limit());
+    return finish(Failure(std::string("Ipopt failed: ") +
+                          StatusName(retry.status) + " after " +
+                          std::to_string(iterations) + " iterations"));
   }
 };
 

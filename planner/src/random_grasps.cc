@@ -86,6 +86,16 @@ RandomGrasp MakeRandomGrasp(std::mt19937_64& rng, const RandomGraspOptions& o) {
     p.contacts.push_back(c);
   }
 
+  // Two point contacts cannot resist a torque about the line through them,
+  // so a pinch is only feasible with the CoM on that line: make most
+  // 2-contact grasps such pinches (mirrored contact, CoM on the axis).
+  if (n == 2 && s.Chance(0.8)) {
+    Contact& second = p.contacts[1];
+    second.position = -p.contacts[0].position;
+    second.normal = -p.contacts[0].normal;
+    p.object.com = s.Uniform(-0.5, 0.5) * p.contacts[0].position;
+  }
+
   if (s.Chance(o.infeasible_fraction)) {
     out.infeasible_by_construction = true;
     if (s.Chance(0.5)) {

@@ -64,7 +64,7 @@ absl::StatusOr<PlanResult> ForceSolver::Solve(const PlanProblem& problem,
   if (!validated.ok()) return validated.status();
   if (absl::Status supported = CheckSupported(options); !supported.ok()) return supported;
 
-  const PreparedProblem prepared = Prepare(*validated, options);
+  const PreparedProblem prepared = Prepare(*std::move(validated), options);
   PlanResult result = DoSolve(prepared, options);
   result.solver = kind_;
   FinishResult(prepared, options, &result);

@@ -31,7 +31,13 @@ constexpr char kPinch[] = R"({
   ]
 })";
 
-struct Run {
+// $name when set and not empty, else `fallback`.
+std::string EnvOr(const char* name, const char* fallback) {
+  const char* value = std::getenv(name);
+  return value != nullptr && *value != '\0' ? value : fallback;
+}
+
+struct CliRun {
   int exit_code = -1;
   std::string out;
   std::string err;
@@ -70,9 +76,7 @@ std::vector<std::string> Lines(const std::string& text) {
 class CliTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    const char* bin = std::getenv("TACTFORCE_BIN_DIR");
-    ASSERT_NE(bin, nullptr) << "TACTFORCE_BIN_DIR is not set (run through ctest)";
-    binary_ = fs::path(bin) / "tactforce";
+    binary_ = fs::path(EnvOr("TACTFORCE_BIN_DIR", TACTFORCE_DEFAULT_BIN_DIR)) / "tactforce";
     ASSERT_TRUE(fs::exists(binary_)) << binary_;
     std::string pattern = (fs::temp_directory_path() / "tactforce_cli_test.XXXXXX").string();
     ASSERT_NE(mkdtemp(pattern.data()), nullptr);
@@ -89,7 +93,7 @@ class CliTest : public ::testing::Test {
   }
 
   // Runs tactforce with `args`; `stdin_text` is its standard input.
-  Run Tactforce(const std::vector<std::string>& args, const std::string& stdin_text = "") {
+  CliRun Tactforce(const std::vector<std::string>& args, const std::string& stdin_text = "") {
     const fs::path in = Write("stdin.txt", stdin_text);
     const fs::path out = dir_ / "stdout.txt";
     const fs::path err = dir_ / "stderr.txt";
@@ -98,7 +102,7 @@ class CliTest : public ::testing::Test {
     command += " <" + Quote(in.string()) + " >" + Quote(out.string()) + " 2>" +
                Quote(err.string());
     const int status = std::system(command.c_str());
-    Run run;
+    CliRun run;
     if (status != -1 && WIFEXITED(status)) run.exit_code = WEXITSTATUS(status);
     run.out = ReadFile(out);
     run.err = ReadFile(err);
@@ -106,7 +110,7 @@ class CliTest : public ::testing::Test {
   }
 
   // A bad-input run: exit 2, nothing on stdout, one "error: " line on stderr.
-  static void ExpectBadInput(const Run& run) {
+  static void ExpectBadInput(const CliRun& run) {
     EXPECT_EQ(run.exit_code, 2) << run.err;
     EXPECT_EQ(run.out, "");
     ASSERT_EQ(Lines(run.err).size(), 1u) << run.err;
@@ -125,7 +129,7 @@ class CliTest : public ::testing::Test {
 };
 
 TEST_F(CliTest, PlanFromFilePrintsJson) {
-  const Run run = Tactforce({"plan", "--local", "--request", Write("pinch.json", kPinch).string()});
+  const CliRun run = Tactforce({"plan", "--local", "--request", Write("pinch.json", kPinch).string()});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_EQ(run.err, "");
   EXPECT_THAT(run.out, HasSubstr(R"("status": "PLAN_STATUS_OPTIMAL")"));
@@ -137,22 +141,21 @@ TEST_F(CliTest, PlanFromFilePrintsJson) {
 }
 
 TEST_F(CliTest, PlanFromStdin) {
-  const Run run = Tactforce({"plan", "--local", "--request", "-", "--format", "json"}, kPinch);
+  const CliRun run = Tactforce({"plan", "--local", "--request", "-", "--format", "json"}, kPinch);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_EQ(ParseResponse(run.out).status(), v1::PLAN_STATUS_OPTIMAL);
 }
 
 TEST_F(CliTest, ShippedExampleRequestPlans) {
-  const char* source = std::getenv("TACTFORCE_SOURCE_DIR");
-  ASSERT_NE(source, nullptr);
-  const fs::path example = fs::path(source) / "client" / "examples" / "sphere_pinch.json";
-  const Run run = Tactforce({"plan", "--local", "--request", example.string()});
+  const fs::path example = fs::path(EnvOr("TACTFORCE_SOURCE_DIR", TACTFORCE_DEFAULT_SOURCE_DIR)) /
+                           "client" / "examples" / "sphere_pinch.json";
+  const CliRun run = Tactforce({"plan", "--local", "--request", example.string()});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_EQ(ParseResponse(run.out).status(), v1::PLAN_STATUS_OPTIMAL);
 }
 
 TEST_F(CliTest, TableFormat) {
-  const Run run = Tactforce({"plan", "--local", "--request", "-", "--format", "table"}, kPinch);
+  const CliRun run = Tactforce({"plan", "--local", "--request", "-", "--format", "table"}, kPinch);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_THAT(run.out, HasSubstr("status:      OPTIMAL"));
   EXPECT_THAT(run.out, HasSubstr("thumb"));
@@ -163,7 +166,7 @@ TEST_F(CliTest, TableFormat) {
 TEST_F(CliTest, CrossCheckRequestReportsComparison) {
   std::string request = kPinch;
   request.insert(request.rfind('}'), R"(, "solver": "SOLVER_CROSS_CHECK")");
-  const Run run = Tactforce({"plan", "--local", "--request", "-"}, request);
+  const CliRun run = Tactforce({"plan", "--local", "--request", "-"}, request);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const v1::PlanResponse response = ParseResponse(run.out);
   EXPECT_TRUE(response.has_cross_check()) << run.out;
@@ -171,7 +174,7 @@ TEST_F(CliTest, CrossCheckRequestReportsComparison) {
 }
 
 TEST_F(CliTest, InfeasibleIsAnAnswer) {
-  const Run run = Tactforce({"plan", "--local", "--request", "-"}, R"({
+  const CliRun run = Tactforce({"plan", "--local", "--request", "-"}, R"({
     "object": {"mass": 1.0},
     "contacts": [{"name": "palm", "normal": {"z": 1}, "friction": 0.5,
                   "max_normal_force": 1.0}]})");
@@ -180,7 +183,7 @@ TEST_F(CliTest, InfeasibleIsAnAnswer) {
 }
 
 TEST_F(CliTest, ZeroNormalIsBadInputNamingTheField) {
-  const Run run = Tactforce({"plan", "--local", "--request", "-"}, R"({
+  const CliRun run = Tactforce({"plan", "--local", "--request", "-"}, R"({
     "object": {"mass": 0.1},
     "contacts": [{"name": "thumb", "position": {"x": 0.03}, "normal": {"x": 0},
                   "friction": 0.8}]})");
@@ -189,7 +192,7 @@ TEST_F(CliTest, ZeroNormalIsBadInputNamingTheField) {
 }
 
 TEST_F(CliTest, UnknownEnumValueIsBadInputNamingTheField) {
-  const Run run = Tactforce({"plan", "--local", "--request", "-"},
+  const CliRun run = Tactforce({"plan", "--local", "--request", "-"},
                             R"({"contacts": [{"normal": {"z": 1}, "kind": 7}]})");
   ExpectBadInput(run);
   EXPECT_THAT(run.err, HasSubstr("contacts[0].kind: unknown value 7"));
@@ -201,21 +204,21 @@ TEST_F(CliTest, MalformedJsonIsBadInput) {
 }
 
 TEST_F(CliTest, MisspeltFieldIsBadInputNamingIt) {
-  const Run run = Tactforce({"plan", "--local", "--request", "-"},
+  const CliRun run = Tactforce({"plan", "--local", "--request", "-"},
                             R"({"contacts": [{"normal": {"z": 1}, "frictoin": 0.5}]})");
   ExpectBadInput(run);
   EXPECT_THAT(run.err, HasSubstr("frictoin"));
 }
 
 TEST_F(CliTest, MissingFileIsBadInput) {
-  const Run run =
+  const CliRun run =
       Tactforce({"plan", "--local", "--request", (dir_ / "no_such_file.json").string()});
   ExpectBadInput(run);
   EXPECT_THAT(run.err, HasSubstr("no_such_file.json"));
 }
 
 TEST_F(CliTest, ServerModeIsNotThereYet) {
-  const Run run = Tactforce({"plan", "--request", "-"}, kPinch);
+  const CliRun run = Tactforce({"plan", "--request", "-"}, kPinch);
   ExpectBadInput(run);
   EXPECT_THAT(run.err, HasSubstr("--local"));
 }
@@ -228,7 +231,7 @@ TEST_F(CliTest, BadCommandLineIsBadInput) {
 }
 
 TEST_F(CliTest, Demo) {
-  const Run run = Tactforce({"demo", "--repeat", "1"});
+  const CliRun run = Tactforce({"demo", "--repeat", "1"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   for (const char* grasp : {"sphere-pinch", "wrench-3f", "cylinder-4f"}) {
     EXPECT_THAT(run.out, HasSubstr(grasp));
@@ -237,7 +240,7 @@ TEST_F(CliTest, Demo) {
 }
 
 TEST_F(CliTest, DemoJson) {
-  const Run run = Tactforce({"demo", "--repeat", "1", "--format", "json"});
+  const CliRun run = Tactforce({"demo", "--repeat", "1", "--format", "json"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_THAT(run.out, HasSubstr(R"("grasps")"));
   EXPECT_THAT(run.out, HasSubstr(R"("speed_ratio")"));
@@ -245,7 +248,7 @@ TEST_F(CliTest, DemoJson) {
 }
 
 TEST_F(CliTest, HelpAndVersion) {
-  Run run = Tactforce({"--help"});
+  CliRun run = Tactforce({"--help"});
   EXPECT_EQ(run.exit_code, 0);
   EXPECT_THAT(run.out, HasSubstr("plan"));
   EXPECT_THAT(run.out, HasSubstr("demo"));

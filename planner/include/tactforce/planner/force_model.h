@@ -103,6 +103,6 @@ struct PreparedProblem {
   int num_contacts() const { return static_cast<int>(problem.contacts.size()); }
 };
 
-PreparedProblem Prepare(const PlanProblem& validated, const PlanOptions& options);
+PreparedProblem Prepare(PlanProblem validated, const PlanOptions& options);
 
 }  // namespace tactforce::planner

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -73,6 +74,11 @@ struct PlanOptions {
   // Geometric backend: constraint rows active at a previous, similar solve
   // (PlanResult::active_set). Only speeds things up; never changes the answer.
   std::vector<int> warm_start;
+
+  // Polled between iterations by iterative backends (Ipopt); returning true
+  // stops the solve with kSolverFailure and a message starting
+  // "interrupted". Used for RPC deadlines and cancellation. May be empty.
+  std::function<bool()> interrupt;
 
   bool IsValid(std::string* error) const;
 };

@@ -1,0 +1,34 @@
+// Command-line configuration of tactforce-server (CLI11).
+#pragma once
+
+#include <string>
+
+#include "CLI/CLI.hpp"
+#include "tactforce/server/planner_service.h"
+#include "tactforce/server/server_host.h"
+
+namespace tactforce::server {
+
+struct ServerConfig {
+  std::string listen = "127.0.0.1:50051";
+  int workers = 0;  // 0 = std::thread::hardware_concurrency()
+  int queue = 64;   // solves waiting for a worker, beyond which RESOURCE_EXHAUSTED
+  int max_message_bytes = 4 << 20;
+  int max_contacts = 64;
+  int solve_timeout_ms = 10'000;
+  int inline_max_contacts = 8;
+  std::string tls_cert;
+  std::string tls_key;
+  std::string tls_client_ca;
+  std::string log_level = "warn";
+  int grace_ms = 10'000;
+
+  int EffectiveWorkers() const;
+  ServerOptions ToServerOptions() const;
+  PlannerServiceOptions ToPlannerOptions() const;
+};
+
+// Adds every flag (with its documentation and range checks) to `app`.
+void RegisterFlags(CLI::App& app, ServerConfig* config);
+
+}  // namespace tactforce::server

@@ -1,0 +1,65 @@
+// A fixed-size pool of worker threads with a bounded FIFO queue, for the
+// CPU-heavy solves that must not run on gRPC's callback threads.
+//
+// Overload policy: TrySubmit() never blocks and never grows the queue past
+// `max_queued` waiting tasks; it returns false instead and the caller turns
+// that into RESOURCE_EXHAUSTED. Tasks that are already running do not count
+// against the queue.
+#pragma once
+
+#include <condition_variable>
+#include <cstddef>
+#include <deque>
+#include <functional>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace tactforce::server {
+
+class WorkerPool {
+ public:
+  // workers >= 1, max_queued >= 0 (0: a task is accepted only when a worker
+  // is idle and would pick it up at once).
+  WorkerPool(int workers, int max_queued);
+  ~WorkerPool();  // Shutdown()
+
+  WorkerPool(const WorkerPool&) = delete;
+  WorkerPool& operator=(const WorkerPool&) = delete;
+
+  // Queues `task`; false (task dropped) when the queue is full or the pool
+  // is shut down. Thread-safe.
+  bool TrySubmit(std::function<void()> task);
+
+  // Stops accepting tasks, runs every task already queued, joins the
+  // threads. Idempotent; must not be called from a worker.
+  void Shutdown();
+
+  int workers() const { return workers_; }
+  int max_queued() const { return max_queued_; }
+
+  struct Stats {
+    int queued = 0;  // waiting for a worker
+    int busy = 0;    // workers running a task
+    long long completed = 0;
+    long long rejected = 0;
+  };
+  Stats stats() const;
+
+ private:
+  void Run();
+
+  const int workers_;
+  const int max_queued_;
+  mutable std::mutex mu_;
+  std::condition_variable ready_;
+  std::deque<std::function<void()>> queue_;
+  int busy_ = 0;
+  int idle_ = 0;
+  long long completed_ = 0;
+  long long rejected_ = 0;
+  bool stopping_ = false;
+  std::vector<std::thread> threads_;
+};
+
+}  // namespace tactforce::server

@@ -1,0 +1,111 @@
+// tactforce-server: the gRPC front end of the tactforce planner.
+// See server/README.md (flags: --help).
+#include <pthread.h>
+#include <signal.h>
+
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include "CLI/CLI.hpp"
+#include "spdlog/sinks/stdout_sinks.h"
+#include "spdlog/spdlog.h"
+#include "tactforce/server/planner_service.h"
+#include "tactforce/server/server_config.h"
+#include "tactforce/server/server_host.h"
+#include "tactforce/server/worker_pool.h"
+
+namespace {
+
+using tactforce::server::ServerConfig;
+
+spdlog::level::level_enum ParseLevel(const std::string& name) {
+  if (name == "off") return spdlog::level::off;
+  if (name == "error") return spdlog::level::err;
+  if (name == "info") return spdlog::level::info;
+  if (name == "debug") return spdlog::level::debug;
+  return spdlog::level::warn;
+}
+
+void SetUpLogging(const std::string& level) {
+  // stdout carries only the "listening on" line; logs go to stderr.
+  auto logger = spdlog::stderr_logger_mt("tactforce-server");
+  spdlog::set_default_logger(logger);
+  spdlog::set_pattern("ts=%Y-%m-%dT%H:%M:%S.%fZ level=%l %v", spdlog::pattern_time_type::utc);
+  spdlog::set_level(ParseLevel(level));
+  spdlog::flush_on(spdlog::level::trace);
+}
+
+bool AllInterfaces(const std::string& address) {
+  return address.rfind("0.0.0.0:", 0) == 0 || address.rfind("[::]:", 0) == 0 ||
+         address.rfind(":", 0) == 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ServerConfig config;
+  CLI::App app{
+      "tactforce-server: gRPC service tactforce.v1.Planner (Plan, PlanStream) with the "
+      "standard health service and server reflection.\n"
+      "SIGINT/SIGTERM drain in-flight calls (--grace-ms) and exit 0; a second signal "
+      "exits at once.",
+      "tactforce-server"};
+  app.set_version_flag("--version", std::string("tactforce-server ") + TACTFORCE_VERSION);
+  tactforce::server::RegisterFlags(app, &config);
+  CLI11_PARSE(app, argc, argv);
+
+  // Block the shutdown signals before any thread exists, so every thread
+  // (gRPC's included) inherits the mask and only sigwait() below sees them.
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);
+
+  SetUpLogging(config.log_level);
+
+  tactforce::server::WorkerPool pool(config.EffectiveWorkers(), config.queue);
+  tactforce::server::ServerHost host(config.ToServerOptions());
+  host.AddService(std::make_unique<tactforce::server::PlannerService>(
+      &pool, config.ToPlannerOptions()));
+  // Later: host.AddService(std::make_unique<EstimatorService>(...)), AuditService, ...
+
+  if (absl::Status started = host.Start(); !started.ok()) {
+    std::fprintf(stderr, "tactforce-server: %s\n", std::string(started.message()).c_str());
+    return 1;
+  }
+  std::printf("tactforce-server listening on %s\n", host.bound_address().c_str());
+  std::fflush(stdout);
+  spdlog::info("event=start address={} tls={} mtls={} workers={} queue={} max_contacts={} "
+               "solve_timeout_ms={} inline_max_contacts={} max_message_bytes={}",
+               host.bound_address(), host.tls(), !config.tls_client_ca.empty(), pool.workers(),
+               pool.max_queued(), config.max_contacts, config.solve_timeout_ms,
+               config.inline_max_contacts, config.max_message_bytes);
+  if (AllInterfaces(config.listen) && !host.tls()) {
+    spdlog::warn("event=plaintext_all_interfaces address={} note=\"listening on every "
+                 "interface without TLS\"",
+                 host.bound_address());
+  }
+
+  int signal_number = 0;
+  sigwait(&stop_signals, &signal_number);
+  spdlog::info("event=shutdown signal={} grace_ms={}", strsignal(signal_number), config.grace_ms);
+  // A second SIGINT/SIGTERM while draining: give up at once.
+  std::thread([stop_signals]() {
+    int again = 0;
+    sigwait(&stop_signals, &again);
+    std::fprintf(stderr, "tactforce-server: second signal, exiting without draining\n");
+    std::_Exit(128 + again);
+  }).detach();
+
+  host.Shutdown(std::chrono::milliseconds(config.grace_ms));
+  pool.Shutdown();
+  spdlog::info("event=stopped");
+  return 0;
+}

@@ -1,0 +1,82 @@
+#include "tactforce/server/server_config.h"
+
+#include <algorithm>
+#include <thread>
+
+namespace tactforce::server {
+
+int ServerConfig::EffectiveWorkers() const {
+  if (workers > 0) return workers;
+  return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+}
+
+ServerOptions ServerConfig::ToServerOptions() const {
+  ServerOptions options;
+  options.listen = listen;
+  options.max_message_bytes = max_message_bytes;
+  options.tls.cert = tls_cert;
+  options.tls.key = tls_key;
+  options.tls.client_ca = tls_client_ca;
+  return options;
+}
+
+PlannerServiceOptions ServerConfig::ToPlannerOptions() const {
+  PlannerServiceOptions options;
+  options.max_contacts = max_contacts;
+  options.solve_timeout_ms = solve_timeout_ms;
+  options.inline_max_contacts = inline_max_contacts;
+  return options;
+}
+
+void RegisterFlags(CLI::App& app, ServerConfig* c) {
+  app.option_defaults()->always_capture_default();
+  app.add_option("--listen", c->listen,
+                 "Address to listen on, host:port. Port 0 picks a free port; the bound "
+                 "address is printed on stdout as 'tactforce-server listening on HOST:PORT'. "
+                 "Listening on every interface must be asked for: 0.0.0.0:50051 or [::]:50051")
+      ->type_name("HOST:PORT");
+  app.add_option("--workers", c->workers,
+                 "Solver threads for Ipopt, cross-check and large geometric solves "
+                 "(0 = hardware threads)")
+      ->check(CLI::Range(0, 1024));
+  app.add_option("--queue", c->queue,
+                 "Solves that may wait for a worker; beyond that requests fail with "
+                 "RESOURCE_EXHAUSTED")
+      ->check(CLI::Range(0, 1'000'000));
+  app.add_option("--max-message-bytes", c->max_message_bytes,
+                 "Largest request or response message; bigger ones fail with RESOURCE_EXHAUSTED")
+      ->check(CLI::Range(1024, 1 << 30));
+  app.add_option("--max-contacts", c->max_contacts,
+                 "Most contacts a request may have (INVALID_ARGUMENT 'contacts: ...' beyond)")
+      ->check(CLI::Range(1, 100'000));
+  app.add_option("--solve-timeout-ms", c->solve_timeout_ms,
+                 "CPU-time cap of one Ipopt solve in ms (0 = none); a solve that hits it "
+                 "returns PLAN_STATUS_SOLVER_FAILURE")
+      ->check(CLI::Range(0, 3'600'000));
+  app.add_option("--inline-max-contacts", c->inline_max_contacts,
+                 "Geometric requests with at most this many contacts are solved on the gRPC "
+                 "thread instead of the worker pool (0 = always use the pool)")
+      ->check(CLI::Range(0, 100'000));
+  auto* cert = app.add_option("--tls-cert", c->tls_cert,
+                              "PEM certificate chain; enables TLS (needs --tls-key)")
+                   ->check(CLI::ExistingFile);
+  auto* key = app.add_option("--tls-key", c->tls_key, "PEM private key of --tls-cert")
+                  ->check(CLI::ExistingFile);
+  auto* ca = app.add_option("--tls-client-ca", c->tls_client_ca,
+                            "PEM CA bundle; enables mutual TLS: clients must present a "
+                            "certificate signed by it")
+                 ->check(CLI::ExistingFile);
+  cert->needs(key);
+  key->needs(cert);
+  ca->needs(cert);
+  app.add_option("--log-level", c->log_level,
+                 "Log level on stderr; 'info' logs one line per request "
+                 "(rpc, code, solver, contacts, time)")
+      ->check(CLI::IsMember({"off", "error", "warn", "info", "debug"}));
+  app.add_option("--grace-ms", c->grace_ms,
+                 "On SIGINT/SIGTERM: health goes NOT_SERVING, new calls are refused and "
+                 "in-flight calls get this long to finish before they are cancelled")
+      ->check(CLI::Range(0, 3'600'000));
+}
+
+}  // namespace tactforce::server

@@ -1,0 +1,83 @@
+// client/python/plan_client.py (python3 + the stubs generated into
+// <build>/python) against the live server.
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "tactforce/api/json.h"
+#include "test_support.h"
+
+namespace tactforce::testing {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+class PythonClientTest : public ServerTest {
+ protected:
+  Run Python(std::vector<std::string> args) {
+    const char* source = std::getenv("TACTFORCE_SOURCE_DIR");
+    EXPECT_NE(source, nullptr);
+    std::vector<std::string> argv = {
+        TACTFORCE_PYTHON3, (fs::path(source) / "client/python/plan_client.py").string()};
+    argv.insert(argv.end(), args.begin(), args.end());
+    return RunProcess(argv, {std::string("PYTHONPATH=") + TACTFORCE_PYTHON_STUB_DIR});
+  }
+};
+
+TEST_F(PythonClientTest, PlansTheWrenchGraspLikeTheCppClient) {
+  ASSERT_TRUE(fs::exists(fs::path(TACTFORCE_PYTHON_STUB_DIR) / "tactforce/v1/planner_pb2_grpc.py"))
+      << "Python stubs not generated (target tactforce_python_stubs)";
+  Run run = Python({"--server", server_->address(), "--json"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  v1::PlanResponse from_python;
+  absl::Status parsed = api::ParseJson(run.out, &from_python);
+  ASSERT_TRUE(parsed.ok()) << parsed << "\n" << run.out;
+
+  v1::PlanResponse from_cpp;
+  ASSERT_TRUE(CallPlan(*stub_, WrenchRequest(), &from_cpp).ok());
+  EXPECT_EQ(from_python.status(), v1::PLAN_STATUS_OPTIMAL);
+  ASSERT_EQ(from_python.forces_size(), 3);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_DOUBLE_EQ(from_python.forces(i).x(), from_cpp.forces(i).x());
+    EXPECT_DOUBLE_EQ(from_python.forces(i).y(), from_cpp.forces(i).y());
+    EXPECT_DOUBLE_EQ(from_python.forces(i).z(), from_cpp.forces(i).z());
+  }
+}
+
+TEST_F(PythonClientTest, PlansAJsonFileOverAStreamAndPrintsATable) {
+  const fs::path example =
+      fs::path(std::getenv("TACTFORCE_SOURCE_DIR")) / "client/examples/sphere_pinch.json";
+  Run run = Python({"--server", server_->address(), "--request", example.string(), "--solver",
+                    "ipopt", "--stream"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_THAT(run.out, HasSubstr("status: OPTIMAL"));
+  EXPECT_THAT(run.out, HasSubstr("solver: IPOPT"));
+  EXPECT_THAT(run.out, HasSubstr("\nthumb "));
+  EXPECT_THAT(run.out, HasSubstr("\nindex "));
+}
+
+TEST_F(PythonClientTest, ReportsInvalidRequestsAndUnreachableServers) {
+  std::string pattern = (fs::temp_directory_path() / "tactforce_py.XXXXXX").string();
+  ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+  const fs::path bad = fs::path(pattern) / "bad.json";
+  std::ofstream(bad) << R"({"object": {"mass": 0.1}, "contacts": [{"normal": {}}]})";
+  Run run = Python({"--server", server_->address(), "--request", bad.string()});
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_THAT(run.err, HasSubstr("INVALID_ARGUMENT: contacts[0].normal: zero length"));
+  fs::remove_all(pattern);
+
+  const std::string address = server_->address();
+  ASSERT_EQ(server_->Stop(), 0);
+  server_.reset();
+  run = Python({"--server", address, "--timeout", "2"});
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_THAT(run.err, HasSubstr("UNAVAILABLE"));
+}
+
+}  // namespace
+}  // namespace tactforce::testing
