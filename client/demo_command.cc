@@ -144,6 +144,10 @@ CLI::App* AddDemoCommand(CLI::App& app, DemoArgs& args) {
   cmd->add_option("--repeat", args.repeat, "Solves per grasp; the fastest times are shown")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
+  cmd->footer(
+      "Solves every built-in grasp with the cross-check backend (geometric answer +\n"
+      "Ipopt reference). Exit status: 0 when every grasp was planned (agreement is\n"
+      "reported, not enforced), 1 on an internal error.");
   return cmd;
 }
 

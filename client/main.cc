@@ -20,6 +20,12 @@ int Main(int argc, char** argv) {
   CLI::App app{"tactforce: robust fingertip contact-force planning (GeoDEx)", "tactforce"};
   app.set_version_flag("--version", std::string("tactforce ") + TACTFORCE_VERSION);
   app.require_subcommand(1);
+  app.footer(
+      "Examples:\n"
+      "  tactforce plan --local --request client/examples/sphere_pinch.json --format table\n"
+      "  cat request.json | tactforce plan --local --request -\n"
+      "  tactforce demo\n"
+      "Run 'tactforce COMMAND --help' for the options of a command.");
 
   PlanArgs plan_args;
   CLI::App* plan = AddPlanCommand(app, plan_args);

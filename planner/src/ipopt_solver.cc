@@ -51,10 +51,13 @@
 #include <time.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <exception>
+#include <functional>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -84,8 +87,9 @@ constexpr double kInfinity = 1e20;
 // square roots inside rho_t and the row tightening make smaller round-off
 // levels unreliable.
 constexpr double kFeasibilityTolerance = 1e-8;
-// Relative residual accepted for the re-reduced equilibrium rows.
-constexpr double kEquilibriumTolerance = 1e-9;
+// Relative residual accepted for the re-reduced equilibrium rows (the same
+// test ComputeForceEquilibrium applies to G f = b).
+constexpr double kEquilibriumTolerance = 1e-8;
 // The problem is declared infeasible when no point violates the tightened
 // constraints by less than this times max(1, largest bound) (N).
 constexpr double kInfeasibilityTolerance = 1e-7;
@@ -290,7 +294,8 @@ BuildOutcome BuildFormulation(const PreparedProblem& prepared,
     const VectorXd& b = eq.independent_rhs;
     Eigen::JacobiSVD<MatrixXd> svd(e, Eigen::ComputeThinU | Eigen::ComputeThinV);
     const VectorXd& sv = svd.singularValues();
-    const double cutoff = sv.size() > 0 ? options.rank_tolerance * sv(0) : 0.0;
+    const double cutoff =
+        sv.size() > 0 ? options.rank_tolerance * std::max(1.0, sv(0)) : 0.0;
     int rank = 0;
     while (rank < sv.size() && sv(rank) > cutoff && sv(rank) > 0.0) ++rank;
     const MatrixXd u = svd.matrixU().leftCols(rank);
@@ -444,13 +449,20 @@ enum class Phase {
   kFeasibility,
 };
 
-// CPU-time budget shared by the Ipopt runs of one solve.
-struct Deadline {
-  double limit_seconds = 0.0;  // <= 0: none
+// Why a solve must stop early; shared by the Ipopt runs of one solve.
+struct StopConditions {
+  double limit_seconds = 0.0;  // CPU budget; <= 0: none
   double start_seconds = 0.0;  // thread CPU clock at the start of the solve
-  bool Passed() const {
-    return limit_seconds > 0.0 &&
-           ThreadCpuSeconds() - start_seconds > limit_seconds;
+  const std::function<bool()>* interrupt = nullptr;  // options.interrupt
+
+  enum Reason { kNone, kTimeLimit, kInterrupted };
+  Reason Check() const {
+    if (interrupt != nullptr && *interrupt && (*interrupt)()) return kInterrupted;
+    if (limit_seconds > 0.0 &&
+        ThreadCpuSeconds() - start_seconds > limit_seconds) {
+      return kTimeLimit;
+    }
+    return kNone;
   }
 };
 
@@ -458,11 +470,11 @@ struct Deadline {
 class ForceNlp final : public Ipopt::TNLP {
  public:
   ForceNlp(const Formulation& form, Phase phase, VectorXd start,
-           const Deadline& deadline)
+           const StopConditions& stop)
       : form_(form),
         phase_(phase),
         start_(std::move(start)),
-        deadline_(deadline),
+        stop_(stop),
         num_vars_(form.num_vars() + (phase == Phase::kFeasibility ? 1 : 0)),
         t_index_(form.num_vars()),
         linear_(form.linear) {
@@ -662,22 +674,19 @@ class ForceNlp final : public Ipopt::TNLP {
                              const Ipopt::IpoptData* ip_data,
                              Ipopt::IpoptCalculatedQuantities* ip_cq) override {
     last_iteration_ = iter;
-    if (deadline_.Passed()) {
-      time_limit_reached_ = true;
-      return false;
-    }
-    return true;
+    stop_reason_ = stop_.Check();
+    return stop_reason_ == StopConditions::kNone;
   }
 
   const VectorXd& solution() const { return solution_; }
-  bool time_limit_reached() const { return time_limit_reached_; }
+  StopConditions::Reason stop_reason() const { return stop_reason_; }
   int last_iteration() const { return last_iteration_; }
 
  private:
   const Formulation& form_;
   const Phase phase_;
   const VectorXd start_;
-  const Deadline deadline_;
+  const StopConditions stop_;
   const int num_vars_;
   const int t_index_;           // feasibility phase only
   std::vector<Entry> linear_;   // L, plus the t column in the feasibility phase
@@ -685,7 +694,7 @@ class ForceNlp final : public Ipopt::TNLP {
   std::vector<int> cone_hess_start_;    // 3x3 force block, per cone
   std::vector<int> cone_hess_s_start_;  // (s, f) row and (s, s), per cone
   VectorXd solution_;
-  bool time_limit_reached_ = false;
+  StopConditions::Reason stop_reason_ = StopConditions::kNone;
   int last_iteration_ = 0;
 };
 
@@ -724,7 +733,7 @@ struct IpoptRun {
   Ipopt::ApplicationReturnStatus status = Ipopt::Internal_Error;
   std::string setup_error;  // non-empty: Ipopt did not run
   int iterations = 0;
-  bool time_limit_reached = false;
+  StopConditions::Reason stopped = StopConditions::kNone;
   VectorXd solution;  // valid when status is a success
 
   bool succeeded() const {
@@ -735,14 +744,27 @@ struct IpoptRun {
   }
 };
 
-IpoptRun RunIpopt(const Formulation& form, Phase phase, VectorXd start,
-                  bool expect_infeasible, const PlanOptions& options,
-                  const Deadline& deadline) {
+// Debian's sequential MUMPS (libdmumps_seq 5.5) keeps Fortran module state
+// and is not thread-safe: two Ipopt solves at once abort the process
+// ("PB allocation in DMUMPS_LOAD_INIT ... MPI_ABORT"). Each IpoptApplication
+// therefore lives, from construction to destruction (MUMPS is initialised
+// and terminated with it), under this process-wide lock. Only the Ipopt run
+// itself is serialised; building the formulation is not.
+std::timed_mutex& MumpsMutex() {
+  static std::timed_mutex mutex;
+  return mutex;
+}
+
+// One Ipopt run; the caller holds MumpsMutex(). Everything Ipopt allocates
+// is released before this returns.
+IpoptRun RunIpoptLocked(const Formulation& form, Phase phase, VectorXd start,
+                        bool expect_infeasible, const PlanOptions& options,
+                        const StopConditions& stop) {
   IpoptRun run;
   const int num_vars =
       form.num_vars() + (phase == Phase::kFeasibility ? 1 : 0);
   Ipopt::SmartPtr<ForceNlp> nlp =
-      new ForceNlp(form, phase, std::move(start), deadline);
+      new ForceNlp(form, phase, std::move(start), stop);
   // No console journal: nothing is ever written to stdout.
   Ipopt::SmartPtr<Ipopt::IpoptApplication> app =
       new Ipopt::IpoptApplication(/*create_console_out=*/false);
@@ -765,10 +787,30 @@ IpoptRun RunIpopt(const Formulation& form, Phase phase, VectorXd start,
       Ipopt::IsValid(stats)) {
     run.iterations = stats->IterationCount();
   }
-  run.time_limit_reached = nlp->time_limit_reached() ||
-                           run.status == Ipopt::Maximum_CpuTime_Exceeded;
+  run.stopped = nlp->stop_reason();
+  if (run.status == Ipopt::Maximum_CpuTime_Exceeded) {
+    run.stopped = StopConditions::kTimeLimit;  // not set by us; kept for safety
+  }
   if (nlp->solution().size() == num_vars) run.solution = nlp->solution();
   return run;
+}
+
+IpoptRun RunIpopt(const Formulation& form, Phase phase, VectorXd start,
+                  bool expect_infeasible, const PlanOptions& options,
+                  const StopConditions& stop) {
+  // Wait for the lock, still honouring an interrupt (the CPU-time budget
+  // does not run down while blocked).
+  std::unique_lock<std::timed_mutex> lock(MumpsMutex(), std::defer_lock);
+  do {
+    if (StopConditions::Reason reason = stop.Check();
+        reason != StopConditions::kNone) {
+      IpoptRun run;
+      run.stopped = reason;
+      return run;
+    }
+  } while (!lock.try_lock_for(std::chrono::milliseconds(2)));
+  return RunIpoptLocked(form, phase, std::move(start), expect_infeasible,
+                        options, stop);
 }
 
 class IpoptSolver final : public ForceSolver {
@@ -792,7 +834,8 @@ class IpoptSolver final : public ForceSolver {
  private:
   static PlanResult SolveOrThrow(const PreparedProblem& prepared,
                                  const PlanOptions& options) {
-    const Deadline deadline{options.ipopt_max_cpu_seconds, ThreadCpuSeconds()};
+    const StopConditions stop{options.ipopt_max_cpu_seconds, ThreadCpuSeconds(),
+                              &options.interrupt};
     const ForceEquilibrium& eq = prepared.equilibrium;
     if (!eq.consistent) {
       return Infeasible("the contacts cannot resist this wrench (rank " +
@@ -812,11 +855,15 @@ class IpoptSolver final : public ForceSolver {
       result.iterations = iterations;
       return result;
     };
-    auto time_limit = [&]() {
+    auto stopped = [&](StopConditions::Reason reason) {
+      const std::string after =
+          " after " + std::to_string(iterations) + " Ipopt iterations";
+      if (reason == StopConditions::kInterrupted) {
+        return Failure("interrupted" + after);
+      }
       return Failure("Ipopt stopped at the time limit (" +
                      FormatNumber(options.ipopt_max_cpu_seconds) +
-                     " s CPU) after " + std::to_string(iterations) +
-                     " iterations");
+                     " s CPU)" + after);
     };
     auto optimal = [&](const IpoptRun& run) {
       PlanResult result;
@@ -832,11 +879,11 @@ class IpoptSolver final : public ForceSolver {
     //    problems on (without it Ipopt can spend thousands of iterations
     //    before giving up on an infeasible EXACT problem).
     IpoptRun main = RunIpopt(form, Phase::kMinimumNorm, form.start,
-                             /*expect_infeasible=*/true, options, deadline);
+                             /*expect_infeasible=*/true, options, stop);
     iterations += main.iterations;
     if (!main.setup_error.empty()) return finish(Failure(main.setup_error));
     if (main.succeeded()) return finish(optimal(main));
-    if (main.time_limit_reached) return finish(time_limit());
+    if (main.stopped != StopConditions::kNone) return finish(stopped(main.stopped));
 
     // 2. No optimum: decide feasibility with the always-feasible phase-one
     //    problem, started from the minimum-norm equilibrium with t large
@@ -871,9 +918,11 @@ class IpoptSolver final : public ForceSolver {
       start1(cone.s_index) = cone.mu * cone.normal.dot(f) - cone.shift + t0;
     }
     IpoptRun phase1 = RunIpopt(form, Phase::kFeasibility, start1,
-                               /*expect_infeasible=*/false, options, deadline);
+                               /*expect_infeasible=*/false, options, stop);
     iterations += phase1.iterations;
-    if (phase1.time_limit_reached) return finish(time_limit());
+    if (phase1.stopped != StopConditions::kNone) {
+      return finish(stopped(phase1.stopped));
+    }
     if (!phase1.succeeded()) {
       // Fall back on the verdict of the main run.
       if (main.status == Ipopt::Infeasible_Problem_Detected) {
@@ -898,11 +947,13 @@ class IpoptSolver final : public ForceSolver {
     //    infeasibility heuristic.
     IpoptRun retry = RunIpopt(form, Phase::kMinimumNorm,
                               phase1.solution.head(form.num_vars()),
-                              /*expect_infeasible=*/false, options, deadline);
+                              /*expect_infeasible=*/false, options, stop);
     iterations += retry.iterations;
     if (!retry.setup_error.empty()) return finish(Failure(retry.setup_error));
     if (retry.succeeded()) return finish(optimal(retry));
-    if (retry.time_limit_reached) return finish(time_limit());
+    if (retry.stopped != StopConditions::kNone) {
+      return finish(stopped(retry.stopped));
+    }
     return finish(Failure(std::string("Ipopt failed: ") +
                           StatusName(retry.status) + " after " +
                           std::to_string(iterations) + " iterations"));

@@ -82,6 +82,7 @@ class PlanStreamReactor final
  public:
   PlanStreamReactor(const PlannerService* service, grpc::CallbackServerContext* context)
       : service_(service), context_(context), guard_(context, &cancelled_) {
+    if (spdlog::should_log(spdlog::level::info)) peer_ = context->peer();
     StartRead(&request_);
   }
 
@@ -170,8 +171,10 @@ class PlanStreamReactor final
       if (finished_) return;
       finished_ = true;
     }
-    spdlog::debug("rpc=PlanStream event=end code={} responses={}",
-                  StatusCodeName(status.error_code()), index_);
+    // One line per stream besides the per-request ones.
+    spdlog::info("rpc=PlanStream event=end code={} responses={} total_us={} peer={}",
+                 StatusCodeName(status.error_code()), index_, MicrosSince(start_),
+                 LogValue(peer_));
     Finish(status);
   }
 
@@ -188,7 +191,9 @@ class PlanStreamReactor final
   std::atomic<int> refs_{1};
   std::mutex finish_mu_;
   bool finished_ = false;
-  int64_t index_ = 0;
+  int64_t index_ = 0;  // requests answered so far = index of the current one
+  std::string peer_;
+  const Clock::time_point start_ = Clock::now();
   v1::PlanRequest request_;
   v1::PlanResponse response_;
 };

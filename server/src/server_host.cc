@@ -115,7 +115,11 @@ void ServerHost::Shutdown(std::chrono::milliseconds grace) {
   }
   const auto start = std::chrono::steady_clock::now();
   // Stops accepting, waits for in-flight calls until the deadline, then
-  // cancels the rest and waits for their reactors to finish.
+  // cancels the rest and waits for their reactors to finish. gRPC also waits
+  // for clients to acknowledge its GOAWAY: an idle C-core client does so at
+  // its next backup poll (GRPC_CLIENT_CHANNEL_BACKUP_POLL_INTERVAL_MS, 5 s by
+  // default), so with idle clients connected the drain can take that long
+  // (never longer than `grace`).
   server_->Shutdown(std::chrono::system_clock::now() + grace);
   server_->Wait();
   spdlog::info("event=drained elapsed_ms={}",

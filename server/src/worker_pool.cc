@@ -16,10 +16,11 @@ WorkerPool::~WorkerPool() { Shutdown(); }
 bool WorkerPool::TrySubmit(std::function<void()> task) {
   {
     std::lock_guard<std::mutex> lock(mu_);
-    // Tasks already queued will be taken by idle workers first; the excess
-    // over the idle workers is what really waits.
-    const int waiting = static_cast<int>(queue_.size()) - idle_;
-    if (stopping_ || waiting >= max_queued_) {
+    // Capacity: one running task per worker plus max_queued_ waiting ones.
+    // (Counted from tasks, not from idle threads, so it does not depend on
+    // how far the worker threads have got.)
+    const int accepted = static_cast<int>(queue_.size()) + busy_;
+    if (stopping_ || accepted >= workers_ + max_queued_) {
       ++rejected_;
       return false;
     }
@@ -32,9 +33,7 @@ bool WorkerPool::TrySubmit(std::function<void()> task) {
 void WorkerPool::Run() {
   std::unique_lock<std::mutex> lock(mu_);
   for (;;) {
-    ++idle_;
     ready_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
-    --idle_;
     if (queue_.empty()) return;  // stopping and drained
     std::function<void()> task = std::move(queue_.front());
     queue_.pop_front();
@@ -65,7 +64,7 @@ void WorkerPool::Shutdown() {
 WorkerPool::Stats WorkerPool::stats() const {
   std::lock_guard<std::mutex> lock(mu_);
   Stats s;
-  s.queued = std::max(0, static_cast<int>(queue_.size()) - idle_);
+  s.queued = std::max(0, static_cast<int>(queue_.size()) + busy_ - workers_);
   s.busy = busy_;
   s.completed = completed_;
   s.rejected = rejected_;

@@ -29,7 +29,7 @@ int CountOccurrences(const std::string& text, const std::string& needle) {
 }
 
 TEST(ServerCliTest, HelpDocumentsEveryFlag) {
-  Run run = RunProcess({Server(), "--help"});
+  ProcessResult run = RunProcess({Server(), "--help"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   for (const char* flag :
        {"--listen", "--workers", "--queue", "--max-message-bytes", "--max-contacts",
@@ -54,7 +54,7 @@ TEST(ServerCliTest, BadFlagsAreRejected) {
            {"--no-such-flag"}}) {
     std::vector<std::string> argv = {Server()};
     argv.insert(argv.end(), args.begin(), args.end());
-    Run run = RunProcess(argv);
+    ProcessResult run = RunProcess(argv);
     EXPECT_NE(run.exit_code, 0) << args[0];
     EXPECT_FALSE(run.err.empty()) << args[0];
     EXPECT_TRUE(run.out.empty()) << args[0] << ": " << run.out;
@@ -63,7 +63,7 @@ TEST(ServerCliTest, BadFlagsAreRejected) {
 
 TEST(ServerCliTest, StartupErrorsExitOne) {
   // Not PEM.
-  Run run = RunProcess({Server(), "--listen", "127.0.0.1:0", "--tls-cert", "/etc/hostname",
+  ProcessResult run = RunProcess({Server(), "--listen", "127.0.0.1:0", "--tls-cert", "/etc/hostname",
                         "--tls-key", "/etc/hostname"});
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_THAT(run.err, HasSubstr("--tls-cert: /etc/hostname is not PEM"));

@@ -19,7 +19,7 @@ using ::testing::HasSubstr;
 
 class PythonClientTest : public ServerTest {
  protected:
-  Run Python(std::vector<std::string> args) {
+  ProcessResult Python(std::vector<std::string> args) {
     const char* source = std::getenv("TACTFORCE_SOURCE_DIR");
     EXPECT_NE(source, nullptr);
     std::vector<std::string> argv = {
@@ -32,7 +32,7 @@ class PythonClientTest : public ServerTest {
 TEST_F(PythonClientTest, PlansTheWrenchGraspLikeTheCppClient) {
   ASSERT_TRUE(fs::exists(fs::path(TACTFORCE_PYTHON_STUB_DIR) / "tactforce/v1/planner_pb2_grpc.py"))
       << "Python stubs not generated (target tactforce_python_stubs)";
-  Run run = Python({"--server", server_->address(), "--json"});
+  ProcessResult run = Python({"--server", server_->address(), "--json"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   v1::PlanResponse from_python;
   absl::Status parsed = api::ParseJson(run.out, &from_python);
@@ -52,7 +52,7 @@ TEST_F(PythonClientTest, PlansTheWrenchGraspLikeTheCppClient) {
 TEST_F(PythonClientTest, PlansAJsonFileOverAStreamAndPrintsATable) {
   const fs::path example =
       fs::path(std::getenv("TACTFORCE_SOURCE_DIR")) / "client/examples/sphere_pinch.json";
-  Run run = Python({"--server", server_->address(), "--request", example.string(), "--solver",
+  ProcessResult run = Python({"--server", server_->address(), "--request", example.string(), "--solver",
                     "ipopt", "--stream"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_THAT(run.out, HasSubstr("status: OPTIMAL"));
@@ -66,12 +66,17 @@ TEST_F(PythonClientTest, ReportsInvalidRequestsAndUnreachableServers) {
   ASSERT_NE(mkdtemp(pattern.data()), nullptr);
   const fs::path bad = fs::path(pattern) / "bad.json";
   std::ofstream(bad) << R"({"object": {"mass": 0.1}, "contacts": [{"normal": {}}]})";
-  Run run = Python({"--server", server_->address(), "--request", bad.string()});
+  ProcessResult run = Python({"--server", server_->address(), "--request", bad.string()});
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_THAT(run.err, HasSubstr("INVALID_ARGUMENT: contacts[0].normal: zero length"));
   fs::remove_all(pattern);
 
   const std::string address = server_->address();
+  // Close our idle connection first: an idle C-core client answers the
+  // server's GOAWAY ping only at its next backup poll (up to 5 s), which the
+  // drain would wait for.
+  stub_.reset();
+  channel_.reset();
   ASSERT_EQ(server_->Stop(), 0);
   server_.reset();
   run = Python({"--server", address, "--timeout", "2"});

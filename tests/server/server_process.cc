@@ -84,9 +84,9 @@ fs::path BinaryPath(const std::string& name) {
   return fs::path(dir != nullptr ? dir : "") / name;
 }
 
-Run RunProcess(const std::vector<std::string>& argv_in, const std::vector<std::string>& env_extra,
+ProcessResult RunProcess(const std::vector<std::string>& argv_in, const std::vector<std::string>& env_extra,
                std::chrono::milliseconds timeout) {
-  Run run;
+  ProcessResult run;
   const fs::path dir = MakeTempDir("tactforce_run");
   const fs::path out = dir / "stdout", err = dir / "stderr";
   posix_spawn_file_actions_t actions;

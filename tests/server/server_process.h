@@ -15,7 +15,7 @@
 
 namespace tactforce::testing {
 
-struct Run {
+struct ProcessResult {
   int exit_code = -1;  // 128 + signal when killed by a signal
   std::string out;
   std::string err;
@@ -26,7 +26,7 @@ std::filesystem::path BinaryPath(const std::string& name);
 
 // Runs `argv` to completion (stdin /dev/null), capturing output; `env`
 // entries ("K=V") are added to the environment. Kills it after `timeout`.
-Run RunProcess(const std::vector<std::string>& argv, const std::vector<std::string>& env = {},
+ProcessResult RunProcess(const std::vector<std::string>& argv, const std::vector<std::string>& env = {},
                std::chrono::milliseconds timeout = std::chrono::seconds(30));
 
 class ServerProcess {

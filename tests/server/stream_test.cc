@@ -60,6 +60,8 @@ TEST_F(StreamTest, ResponsesComeInRequestOrder) {
   ASSERT_TRUE(status.ok()) << Describe(status);
 
   ASSERT_EQ(responses.size(), requests.size());
+  EXPECT_TRUE(server_->WaitForStderr("rpc=PlanStream event=end code=OK responses=36 ",
+                                     std::chrono::seconds(5)));
   for (size_t i = 0; i < responses.size(); ++i) {
     SCOPED_TRACE("response " + std::to_string(i));
     EXPECT_EQ(responses[i].status(), expected[i].status());
@@ -125,13 +127,14 @@ TEST_F(StreamTest, ClientCancellationStopsTheWork) {
   grpc::Status status = stream->Finish();
   EXPECT_EQ(status.error_code(), grpc::StatusCode::CANCELLED) << Describe(status);
 
-  // The server logs the cancelled request and then nothing more of it.
-  ASSERT_TRUE(server_->WaitForStderr("rpc=PlanStream index=", std::chrono::seconds(5)));
-  ASSERT_TRUE(server_->WaitForStderr("code=CANCELLED", std::chrono::seconds(10)))
-      << server_->StderrText();
+  // The server ends the stream as cancelled, having solved only the few
+  // requests before the cancellation (plus at most the one in progress).
+  ASSERT_TRUE(server_->WaitForStderr("rpc=PlanStream event=end code=CANCELLED",
+                                     std::chrono::seconds(10)))
+      << server_->StderrText().substr(0, 3000);
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   const std::string log = server_->StderrText();
-  EXPECT_LE(CountOccurrences(log, "rpc=PlanStream index="), 5) << log;
+  EXPECT_LE(CountOccurrences(log, "rpc=PlanStream index="), 5) << log.substr(0, 3000);
 
   // ... and keeps serving.
   grpc::Status ok = CallPlan(*stub_, WrenchRequest(), &response);

@@ -79,7 +79,7 @@ class Certificates {
  private:
   std::string Openssl(std::vector<std::string> args) {
     args.insert(args.begin(), "/usr/bin/openssl");
-    Run run = RunProcess(args);
+    ProcessResult run = RunProcess(args);
     if (run.exit_code != 0) return "openssl " + args[1] + " failed: " + run.err;
     return "";
   }
@@ -132,7 +132,7 @@ TEST(TlsTest, MutualTlsAcceptsOnlyClientsSignedByTheCa) {
   EXPECT_EQ(status.error_code(), grpc::StatusCode::UNAVAILABLE) << Describe(status);
 
   // The Python client speaks mutual TLS too.
-  Run python = RunProcess(
+  ProcessResult python = RunProcess(
       {TACTFORCE_PYTHON3, (fs::path(std::getenv("TACTFORCE_SOURCE_DIR")) / "client/python/plan_client.py").string(),
        "--server", server->address(), "--tls-ca", certs.Path("ca.crt"), "--tls-cert",
        certs.Path("client.crt"), "--tls-key", certs.Path("client.key"), "--tls-server-name",

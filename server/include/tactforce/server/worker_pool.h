@@ -1,10 +1,10 @@
 // A fixed-size pool of worker threads with a bounded FIFO queue, for the
 // CPU-heavy solves that must not run on gRPC's callback threads.
 //
-// Overload policy: TrySubmit() never blocks and never grows the queue past
-// `max_queued` waiting tasks; it returns false instead and the caller turns
-// that into RESOURCE_EXHAUSTED. Tasks that are already running do not count
-// against the queue.
+// Overload policy: TrySubmit() never blocks; it accepts a task while fewer
+// than `workers + max_queued` accepted tasks are unfinished (one running per
+// worker, up to `max_queued` waiting) and returns false otherwise; the
+// caller turns that into RESOURCE_EXHAUSTED.
 #pragma once
 
 #include <condition_variable>
@@ -19,8 +19,8 @@ namespace tactforce::server {
 
 class WorkerPool {
  public:
-  // workers >= 1, max_queued >= 0 (0: a task is accepted only when a worker
-  // is idle and would pick it up at once).
+  // workers >= 1 (smaller values mean 1), max_queued >= 0 (0: a task is
+  // accepted only while a worker is free for it).
   WorkerPool(int workers, int max_queued);
   ~WorkerPool();  // Shutdown()
 
@@ -39,7 +39,7 @@ class WorkerPool {
   int max_queued() const { return max_queued_; }
 
   struct Stats {
-    int queued = 0;  // waiting for a worker
+    int queued = 0;  // accepted tasks beyond one per worker (waiting)
     int busy = 0;    // workers running a task
     long long completed = 0;
     long long rejected = 0;
@@ -54,8 +54,7 @@ class WorkerPool {
   mutable std::mutex mu_;
   std::condition_variable ready_;
   std::deque<std::function<void()>> queue_;
-  int busy_ = 0;
-  int idle_ = 0;
+  int busy_ = 0;  // tasks running
   long long completed_ = 0;
   long long rejected_ = 0;
   bool stopping_ = false;

@@ -1,0 +1,65 @@
+// Contact-force estimation from inaccurate tactile readings (GeoDEx
+// Problems 1-2, and a normal-only least-squares estimator of ours).
+//
+// Inputs are the planner's problem (object, contacts, external wrench; all
+// in the object frame, SI units) plus one normal-force reading (N) per
+// INTRINSIC contact, in request order. Extrinsic contacts have no reading.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "tactforce/planner/types.h"
+
+namespace tactforce::estimator {
+
+using planner::Vec3;
+
+enum class EstimateMethod {
+  // GeoDEx: orthogonal projection of the measured force onto the FE-plane
+  // (Problem 1); with extrinsic contacts the small QP of Problem 2.
+  kProjection,
+  // Ours: readings measure only normal components; fit them (weighted by
+  // 1/sigma^2) on the FE-plane with a small pull to zero force, subject to
+  // every contact inside its pyramidal cone with n . f >= 0.
+  kNormalLsq,
+};
+
+struct EstimateOptions {
+  EstimateMethod method = EstimateMethod::kProjection;
+  double origin_weight = 1e-2;  // lambda >= 0
+  int cone_sides = 12;          // NORMAL_LSQ cone pyramid, 3..64
+  double rank_tolerance = 1e-9;
+  int max_contacts = 64;
+  // NORMAL_LSQ: sigma below this floor (N) is raised to it (a perfect
+  // sensor would otherwise get an infinite weight).
+  double min_sigma = 1e-3;
+};
+
+enum class EstimateStatus { kOk, kInfeasible, kSolverFailure };
+const char* ToString(EstimateStatus status);
+const char* ToString(EstimateMethod method);
+
+struct ForceEstimate {
+  EstimateStatus status = EstimateStatus::kSolverFailure;
+  std::string message;  // also notes flagged readings (e.g. negative values)
+  EstimateMethod method = EstimateMethod::kProjection;
+  std::vector<Vec3> forces;          // per contact, request order (N)
+  std::vector<double> normal_forces; // n_i . f_i (N)
+  std::vector<double> residuals;     // per reading: n_j . f_j - reading_j (N)
+  std::vector<int> negative_readings;  // indices (into readings) below zero
+  int iterations = 0;
+  int64_t solve_time_us = 0;
+};
+
+// Errors (InvalidArgument naming the field): anything ValidateProblem
+// rejects, "readings: expected N values (one per intrinsic contact), got M",
+// "readings[j]: not a finite number", bad options. Negative readings are
+// allowed (a miscalibrated sensor can report them) and flagged.
+absl::StatusOr<ForceEstimate> EstimateForces(const planner::PlanProblem& problem,
+                                             const std::vector<double>& readings,
+                                             const EstimateOptions& options = {});
+
+}  // namespace tactforce::estimator

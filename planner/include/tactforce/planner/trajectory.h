@@ -1,0 +1,58 @@
+// Force planning along a motion (GeoDEx Problem 4): at every step the
+// contacts must supply the Newton-Euler wrench of the moving object
+// (Sundaralingam & Hermans eq. 6-7), all in the object frame:
+//   sum f     = m (a - g) + m (dw x c + w x (w x c))
+//   sum p x f = I_o dw + w x (I_o w) + m c x (a - g)
+// with I_o the inertia about the object origin (parallel axis from I_c).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "tactforce/planner/types.h"
+
+namespace tactforce::planner {
+
+// Inertia about the CoM in object axes (kg m^2).
+struct Inertia {
+  double ixx = 0, iyy = 0, izz = 0, ixy = 0, ixz = 0, iyz = 0;
+  Eigen::Matrix3d Matrix() const;
+};
+
+struct TrajectoryStep {
+  Vec3 gravity = Vec3(0, 0, -9.81);       // in the (rotating) object frame
+  Vec3 linear_acceleration = Vec3::Zero();   // a of the object origin (m/s^2)
+  Vec3 angular_velocity = Vec3::Zero();      // w (rad/s)
+  Vec3 angular_acceleration = Vec3::Zero();  // dw (rad/s^2)
+  std::optional<std::vector<Contact>> contacts;  // overrides the base contacts
+};
+
+struct TrajectoryProblem {
+  PlanProblem base;                 // object, contacts, constant external wrench
+  std::optional<Inertia> inertia;   // required when any step rotates
+  std::vector<TrajectoryStep> steps;
+};
+
+struct TrajectoryResult {
+  std::vector<PlanResult> steps;
+  int optimal = 0, infeasible = 0, failed = 0;
+  int64_t total_time_us = 0;
+};
+
+// The wrench (force, torque about the origin) the contacts must supply.
+Wrench RequiredContactWrench(const ObjectModel& object, const Eigen::Matrix3d& inertia_com,
+                             const TrajectoryStep& step);
+
+// The single-step problem whose equilibrium equals the Newton-Euler step.
+PlanProblem StepProblem(const TrajectoryProblem& trajectory, int step);
+
+// Plans every step with `kind`. With `warm_start` the geometric backend
+// starts each step from the previous step's active set. Errors name the
+// field ("steps[3].angular_velocity: ...", "steps[3].contacts[1].normal: ...").
+absl::StatusOr<TrajectoryResult> PlanTrajectory(const TrajectoryProblem& trajectory,
+                                                const PlanOptions& options, SolverKind kind,
+                                                bool warm_start = true);
+
+}  // namespace tactforce::planner

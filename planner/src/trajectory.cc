@@ -1,0 +1,107 @@
+#include "tactforce/planner/trajectory.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "absl/strings/str_cat.h"
+#include "tactforce/planner/solver.h"
+
+namespace tactforce::planner {
+
+Eigen::Matrix3d Inertia::Matrix() const {
+  Eigen::Matrix3d m;
+  m << ixx, ixy, ixz, ixy, iyy, iyz, ixz, iyz, izz;
+  return m;
+}
+
+Wrench RequiredContactWrench(const ObjectModel& o, const Eigen::Matrix3d& inertia_com,
+                             const TrajectoryStep& s) {
+  const Vec3& c = o.com;
+  const Vec3& w = s.angular_velocity;
+  const Vec3& dw = s.angular_acceleration;
+  const Vec3 a_minus_g = s.linear_acceleration - s.gravity;
+  // Parallel axis: I_o = I_c + m (|c|^2 I - c c^T).
+  const Eigen::Matrix3d inertia_origin =
+      inertia_com + o.mass * (c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose());
+  Wrench out;
+  out.force = o.mass * a_minus_g + o.mass * (dw.cross(c) + w.cross(w.cross(c)));
+  out.torque = inertia_origin * dw + w.cross(inertia_origin * w) + o.mass * c.cross(a_minus_g);
+  return out;
+}
+
+PlanProblem StepProblem(const TrajectoryProblem& t, int step) {
+  const TrajectoryStep& s = t.steps[step];
+  PlanProblem p = t.base;
+  p.object.gravity = s.gravity;
+  if (s.contacts.has_value()) p.contacts = *s.contacts;
+  const Eigen::Matrix3d inertia = t.inertia ? t.inertia->Matrix() : Eigen::Matrix3d::Zero();
+  const Wrench need = RequiredContactWrench(p.object, inertia, s);
+  // The planner balances b = -(w_g + w_ext) with w_g = (m g, c x m g); pick
+  // w_ext so that b equals the Newton-Euler wrench (plus the base wrench).
+  const Vec3 weight = p.object.mass * s.gravity;
+  p.external_wrench.force += -need.force - weight;
+  p.external_wrench.torque += -need.torque - p.object.com.cross(weight);
+  return p;
+}
+
+namespace {
+
+absl::Status CheckStep(const TrajectoryProblem& t, int i) {
+  const TrajectoryStep& s = t.steps[i];
+  const std::string path = absl::StrCat("steps[", i, "]");
+  const std::pair<const char*, const Vec3*> fields[] = {
+      {".gravity", &s.gravity}, {".linear_acceleration", &s.linear_acceleration},
+      {".angular_velocity", &s.angular_velocity}, {".angular_acceleration", &s.angular_acceleration}};
+  for (const auto& [name, v] : fields) {
+    if (!v->allFinite()) return absl::InvalidArgumentError(absl::StrCat(path, name, ": not a finite vector"));
+  }
+  if (!t.inertia && (s.angular_velocity.squaredNorm() > 0 || s.angular_acceleration.squaredNorm() > 0)) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("object.inertia: required because ", path, " rotates the object"));
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::StatusOr<TrajectoryResult> PlanTrajectory(const TrajectoryProblem& t,
+                                                const PlanOptions& options, SolverKind kind,
+                                                bool warm_start) {
+  const auto start = std::chrono::steady_clock::now();
+  if (t.steps.empty()) return absl::InvalidArgumentError("steps: at least one step is required");
+  if (t.inertia) {
+    const Inertia& in = *t.inertia;
+    for (double v : {in.ixx, in.iyy, in.izz, in.ixy, in.ixz, in.iyz}) {
+      if (!std::isfinite(v)) return absl::InvalidArgumentError("object.inertia: not finite");
+    }
+  }
+  const std::unique_ptr<ForceSolver> solver = MakeSolver(kind);
+  TrajectoryResult out;
+  out.steps.reserve(t.steps.size());
+  PlanOptions step_options = options;
+  for (int i = 0; i < static_cast<int>(t.steps.size()); ++i) {
+    if (absl::Status s = CheckStep(t, i); !s.ok()) return s;
+    absl::StatusOr<PlanResult> r = solver->Solve(StepProblem(t, i), step_options);
+    if (!r.ok()) {
+      const std::string msg(r.status().message());
+      // Field paths of a step's own contacts are reported under the step.
+      const bool own_contacts = t.steps[i].contacts.has_value() && msg.rfind("contacts", 0) == 0;
+      return absl::Status(r.status().code(),
+                          own_contacts ? absl::StrCat("steps[", i, "].", msg)
+                                       : absl::StrCat(msg, " (at steps[", i, "])"));
+    }
+    if (warm_start && r->status == PlanStatus::kOptimal) step_options.warm_start = r->active_set;
+    switch (r->status) {
+      case PlanStatus::kOptimal: ++out.optimal; break;
+      case PlanStatus::kInfeasible: ++out.infeasible; break;
+      case PlanStatus::kSolverFailure: ++out.failed; break;
+    }
+    out.steps.push_back(*std::move(r));
+  }
+  out.total_time_us = std::chrono::duration_cast<std::chrono::microseconds>(
+                          std::chrono::steady_clock::now() - start)
+                          .count();
+  return out;
+}
+
+}  // namespace tactforce::planner

@@ -1,0 +1,104 @@
+#include "tactforce/planner/trajectory.h"
+
+#include <cmath>
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include "tactforce/planner/examples.h"
+
+namespace tactforce::planner {
+namespace {
+
+// The 3-finger wrench grasp lifted and rotated about the grasp's x axis.
+TrajectoryProblem LiftAndRotate(int steps) {
+  TrajectoryProblem t;
+  for (const auto& g : BuiltInGrasps()) {
+    if (g.name == "wrench-3f") t.base = g.problem;
+  }
+  t.inertia = Inertia{4e-4, 2.5e-3, 2.7e-3, 1e-5, -2e-5, 0};
+  const double duration = 2.0;
+  for (int k = 0; k < steps; ++k) {
+    const double s = duration * k / (steps - 1);
+    // Smooth rotation angle th(s) = A (1 - cos(pi s / T)) / 2 about x.
+    const double A = 0.6, w0 = M_PI / duration;
+    const double th = A * (1 - std::cos(w0 * s)) / 2;
+    const double dth = A * w0 * std::sin(w0 * s) / 2;
+    const double ddth = A * w0 * w0 * std::cos(w0 * s) / 2;
+    TrajectoryStep step;
+    const Eigen::Matrix3d r_world_object = Eigen::AngleAxisd(th, Vec3::UnitX()).toRotationMatrix();
+    step.gravity = r_world_object.transpose() * Vec3(0, 0, -9.81);
+    step.linear_acceleration = r_world_object.transpose() * Vec3(0, 0, 0.5 * std::sin(2 * w0 * s));
+    step.angular_velocity = Vec3(dth, 0, 0);
+    step.angular_acceleration = Vec3(ddth, 0, 0);
+    t.steps.push_back(step);
+  }
+  return t;
+}
+
+TEST(Trajectory, EveryStepSatisfiesNewtonEuler) {
+  const TrajectoryProblem t = LiftAndRotate(50);
+  for (SolverKind kind : {SolverKind::kGeometric, SolverKind::kIpopt}) {
+    absl::StatusOr<TrajectoryResult> r = PlanTrajectory(t, PlanOptions{}, kind);
+    ASSERT_TRUE(r.ok()) << r.status();
+    ASSERT_EQ(r->optimal, 50) << ToString(kind);
+    const ObjectModel& o = t.base.object;
+    const Eigen::Matrix3d ic = t.inertia->Matrix();
+    const Eigen::Matrix3d io =
+        ic + o.mass * (o.com.squaredNorm() * Eigen::Matrix3d::Identity() - o.com * o.com.transpose());
+    for (size_t k = 0; k < t.steps.size(); ++k) {
+      const TrajectoryStep& s = t.steps[k];
+      Vec3 force = Vec3::Zero(), torque = Vec3::Zero();
+      for (size_t i = 0; i < r->steps[k].forces.size(); ++i) {
+        force += r->steps[k].forces[i];
+        torque += t.base.contacts[i].position.cross(r->steps[k].forces[i]);
+      }
+      const Vec3& w = s.angular_velocity;
+      const Vec3& dw = s.angular_acceleration;
+      const Vec3 a_g = s.linear_acceleration - s.gravity;
+      const Vec3 want_f = o.mass * a_g + o.mass * (dw.cross(o.com) + w.cross(w.cross(o.com)));
+      const Vec3 want_t = io * dw + w.cross(io * w) + o.mass * o.com.cross(a_g);
+      const double tol = kind == SolverKind::kGeometric ? 1e-8 : 1e-7;
+      EXPECT_LE((force - want_f).norm(), tol) << "step " << k;
+      EXPECT_LE((torque - want_t).norm(), tol) << "step " << k;
+    }
+  }
+}
+
+TEST(Trajectory, WarmStartChangesNothingButWork) {
+  const TrajectoryProblem t = LiftAndRotate(100);
+  absl::StatusOr<TrajectoryResult> warm = PlanTrajectory(t, PlanOptions{}, SolverKind::kGeometric, true);
+  absl::StatusOr<TrajectoryResult> cold = PlanTrajectory(t, PlanOptions{}, SolverKind::kGeometric, false);
+  ASSERT_TRUE(warm.ok() && cold.ok());
+  int warm_iters = 0, cold_iters = 0;
+  for (int k = 0; k < 100; ++k) {
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_LE((warm->steps[k].forces[i] - cold->steps[k].forces[i]).norm(), 1e-9);
+    }
+    warm_iters += warm->steps[k].iterations;
+    cold_iters += cold->steps[k].iterations;
+  }
+  EXPECT_LT(warm_iters, cold_iters);
+}
+
+TEST(Trajectory, ErrorsNameTheStep) {
+  TrajectoryProblem t = LiftAndRotate(5);
+  TrajectoryProblem no_inertia = t;
+  no_inertia.inertia.reset();
+  EXPECT_NE(PlanTrajectory(no_inertia, PlanOptions{}, SolverKind::kGeometric)
+                .status().message().find("object.inertia: required because steps[0]"),
+            std::string::npos);
+  t.steps[3].angular_velocity.x() = NAN;
+  EXPECT_EQ(PlanTrajectory(t, PlanOptions{}, SolverKind::kGeometric).status().message(),
+            "steps[3].angular_velocity: not a finite vector");
+  t = LiftAndRotate(5);
+  t.steps[2].contacts = t.base.contacts;
+  (*t.steps[2].contacts)[1].normal.setZero();
+  EXPECT_EQ(PlanTrajectory(t, PlanOptions{}, SolverKind::kGeometric).status().message(),
+            "steps[2].contacts[1].normal: zero length");
+  t.steps.clear();
+  EXPECT_FALSE(PlanTrajectory(t, PlanOptions{}, SolverKind::kGeometric).ok());
+}
+
+}  // namespace
+}  // namespace tactforce::planner
