@@ -3,6 +3,8 @@
 #include <cmath>
 #include <numbers>
 
+#include <Eigen/Geometry>
+
 namespace tactforce::planner {
 namespace {
 
@@ -61,6 +63,28 @@ std::vector<ExampleGrasp> BuiltInGrasps() {
     out.push_back(std::move(g));
   }
   return out;
+}
+
+TrajectoryProblem WrenchLiftAndRotate(int steps) {
+  TrajectoryProblem t;
+  for (const ExampleGrasp& g : BuiltInGrasps()) {
+    if (g.name == "wrench-3f") t.base = g.problem;
+  }
+  t.inertia = Inertia{4e-4, 2.5e-3, 2.7e-3, 1e-5, -2e-5, 0};
+  const double duration = 2.0, amplitude = 0.6, w0 = std::numbers::pi / duration;
+  for (int k = 0; k < steps; ++k) {
+    const double s = steps > 1 ? duration * k / (steps - 1) : 0.0;
+    const double angle = amplitude * (1 - std::cos(w0 * s)) / 2;
+    TrajectoryStep step;
+    const Eigen::Matrix3d world_from_object = Eigen::AngleAxisd(angle, Vec3::UnitX()).toRotationMatrix();
+    step.gravity = world_from_object.transpose() * Vec3(0, 0, -9.81);
+    step.linear_acceleration =
+        world_from_object.transpose() * Vec3(0, 0, 0.5 * std::sin(2 * w0 * s));
+    step.angular_velocity = Vec3(amplitude * w0 * std::sin(w0 * s) / 2, 0, 0);
+    step.angular_acceleration = Vec3(amplitude * w0 * w0 * std::cos(w0 * s) / 2, 0, 0);
+    t.steps.push_back(step);
+  }
+  return t;
 }
 
 }  // namespace tactforce::planner

@@ -1,53 +1,76 @@
 // Ipopt reference backend (SolverKind::kIpopt).
 //
 // Solves the force-planning problem directly with a general interior-point
-// NLP solver, as an independent check of the geometric backend:
+// NLP solver (Ipopt 3.11, MUMPS), as an independent check of the geometric
+// backend:
 //
-//   minimise   sum_i |f_i|^2                       (f in R^{3n})
-//   subject to U_r^T G f = U_r^T b                  (independent equilibrium rows)
-//              A f <= d                             (tightened linear rows)
-//   EXACT cone, per contact i with mu_i > 0:
-//              s_i(f) = mu_i (n_i . f_i - kappa rho_n,i) - kappa rho_t,i >= 0
-//              |P_t f_i|^2 - s_i(f)^2 <= 0,      P_t = I - n_i n_i^T
+//   minimise   sum_i |f_i|^2                              (f in R^{3n})
+//   subject to U_r^T G f = U_r^T b         (independent equilibrium rows)
+//              A f <= d                    (robustly tightened linear rows)
+//   EXACT, per contact i with mu_i > 0 (P = I - n_i n_i^T):
+//              |P f_i| + kappa rho_t,i <= mu_i (n_i . f_i - kappa rho_n,i)
 //
-// i.e. |P_t f_i| + kappa rho_t,i <= mu_i (n_i . f_i - kappa rho_n,i) in a
-// smooth form, with exact first and second derivatives.
+// The exact cone is posed as one smooth convex constraint per contact,
+//   c_i(f) = sqrt(|P f_i|^2 + eps^2) - eps - s_i(f) <= 0,
+//   s_i(f) = mu_i (n_i . f_i - kappa rho_n,i) - kappa rho_t,i   (affine),
+// with exact gradients and Hessians. It holds exactly at the apex (P f = 0,
+// s = 0) and lets |P f_i| exceed s_i by at most eps elsewhere; eps is 1e-9
+// times the force scale (max(1 N, |f0|_inf)). Why not the textbook
+// |P f|^2 - s^2 <= 0 with s >= 0: its gradient vanishes at the apex, which is
+// exactly where the minimum-norm plan puts every contact it does not need,
+// so the constraint is unqualified there. On such grasps Ipopt needed ~850
+// iterations and still left 1e-4 N of tangential force at a contact that
+// should carry none (a violation eps of the squared form allows sqrt(eps) of
+// force). The quotient form |P f|^2 / s - s <= 0 with a bounded slack s
+// fixes the gradient but is degenerate against s >= 0 at the apex and ended
+// in Search_Direction_Becomes_Too_Small. The smoothed form needs no slack
+// and no s >= 0 row (it implies s >= 0), and is qualified everywhere
+// (its gradient at the apex is -mu n).
 //
-// Frictionless contacts (mu_i == 0) have a degenerate cone (a ray): their
-// force is parametrised as f_i = n_i z_i with a single unknown z_i, for both
-// cone models, instead of asking Ipopt to find the interior of a set that
-// has none. The equilibrium rows are then re-reduced to full row rank in the
-// reduced unknowns. When the equalities leave no freedom at all (e.g. a
-// single contact) the unique equilibrium is checked directly.
+// Frictionless contacts (mu_i == 0) have a cone with no interior (a ray):
+// their force is parametrised as f_i = n_i z_i, for both cone models. The
+// equilibrium rows are then re-reduced to full row rank in the reduced
+// unknowns, and friction facets of such a contact become bound checks.
+// When the equilibrium leaves no freedom at all (e.g. a single contact) the
+// unique equilibrium is checked directly, without Ipopt.
 //
-// Ipopt settings (all set explicitly; no ipopt.opt file is read):
+// Infeasible problems: Ipopt's own verdict (Infeasible_Problem_Detected) is
+// heuristic and, without expect_infeasible_problem, can take thousands of
+// iterations on an infeasible EXACT problem. So: (1) solve the problem with
+// expect_infeasible_problem = yes; if that does not end optimal, (2) solve
+// the always-feasible phase-one problem min t >= 0 with every inequality
+// relaxed by t (equilibrium exact). t* > 1e-7 max(1, largest bound) N proves
+// infeasibility; otherwise (3) solve again from the phase-one point with the
+// heuristic off. Feasible problems only ever pay for (1).
+//
+// Ipopt settings (all explicit; no ipopt.opt file is read):
 //   tol                 options.ipopt_tolerance (scaled overall NLP error)
-//   max_iter            options.ipopt_max_iterations
+//   max_iter            options.ipopt_max_iterations (per Ipopt run)
 //   print_level 0, sb yes, and no console journal: Ipopt never prints.
-//   linear_solver       mumps (the only one in Debian's build)
-//   mumps_pivot_order   0 (AMD): deterministic, and keeps SCOTCH/METIS
-//                       orderings out of the multi-threaded server.
-//   mu_strategy         monotone (Fiacco-McCormick). Compared with adaptive
-//                       on the test grasps it needed a similar number of
-//                       iterations and was the more reliable on degenerate
-//                       and infeasible instances (see ipopt_solver_test).
-//   hessian_constant, jac_d_constant  yes when there are no cone
-//                       constraints (PYRAMID: a convex QP); jac_c_constant
-//                       yes always (the equalities are always linear).
-//   bound_relax_factor  left at Ipopt's 1e-8: rows may be violated by at
-//                       most ~1e-8 max(1, |d|) N at the returned point.
-// Time limit: options.ipopt_max_cpu_seconds > 0 is enforced on the CPU time
-// of the calling thread (CLOCK_THREAD_CPUTIME_ID), checked by the
-// intermediate callback after every iteration. Ipopt's own max_cpu_time is
-// NOT used because Ipopt 3.11 measures it with getrusage(RUSAGE_SELF), the
-// CPU time of the whole process: with several solves running concurrently
-// in the server it would stop every solve far too early. (Ipopt, MUMPS-seq
-// and the reference BLAS run single-threaded in the caller's thread, so the
-// thread clock sees all of the work.)
+//   linear_solver       mumps (the only one in Debian's build); with
+//   mumps_pivot_order   0 (AMD): fixed, so runs are reproducible.
+//   mu_strategy         monotone (Fiacco-McCormick): on random 3-5 contact
+//                       grasps adaptive was faster on PYRAMID but failed more
+//                       often (iteration limit) on EXACT; monotone never did.
+//   hessian_constant, jac_d_constant   yes for PYRAMID (a convex QP: nothing
+//                       is re-evaluated); jac_c_constant yes always (the
+//                       equalities are linear in both models).
+//   expect_infeasible_problem   see above.
+//   bound_relax_factor  Ipopt's default 1e-8: the returned forces may
+//                       violate a row by ~1e-8 max(1, |d|) N.
 //
-// Thread safety: every call builds its own IpoptApplication, NLP and data;
-// this file has no static mutable state. Ipopt 3.11.9 keeps its only global
-// counter (TaggedObject) thread-local.
+// Time limit: options.ipopt_max_cpu_seconds > 0 is a budget on the CPU time
+// of the calling thread (CLOCK_THREAD_CPUTIME_ID) for the whole solve,
+// checked after every Ipopt iteration. Ipopt's own max_cpu_time is not used:
+// Ipopt 3.11 measures it with getrusage(RUSAGE_SELF), the CPU time of the
+// whole process, so with concurrent solves in the server it would stop them
+// far too early. (Ipopt, sequential MUMPS and the reference BLAS run in the
+// calling thread, so its clock sees all of the work.) options.interrupt is
+// polled at the same points.
+//
+// Thread safety: every solve has its own IpoptApplication, NLP and data.
+// The one shared object is a process-wide mutex around each Ipopt run,
+// because Debian's sequential MUMPS is not thread-safe (see MumpsMutex()).
 #include <time.h>
 
 #include <algorithm>
@@ -55,7 +78,6 @@
 #include <cmath>
 #include <exception>
 #include <functional>
-#include <limits>
 #include <memory>
 #include <mutex>
 #include <sstream>
@@ -82,16 +104,18 @@ using Ipopt::Number;
 
 // Any bound beyond Ipopt's nlp_{lower,upper}_bound_inf (1e19) is infinite.
 constexpr double kInfinity = 1e20;
-// Absolute feasibility slack (N) for the checks made without Ipopt (dropped
-// rows of frictionless contacts, uniquely determined equilibria); the
-// square roots inside rho_t and the row tightening make smaller round-off
-// levels unreliable.
+// Smoothing of the exact cone, relative to the force scale: |P f| may exceed
+// the cone radius by at most this much.
+constexpr double kConeSmoothing = 1e-9;
+// Absolute slack (N) for the checks made without Ipopt (facets of
+// frictionless contacts, uniquely determined equilibria): rho_t and the row
+// tightening take square roots, so round-off can reach ~1e-9 N.
 constexpr double kFeasibilityTolerance = 1e-8;
 // Relative residual accepted for the re-reduced equilibrium rows (the same
 // test ComputeForceEquilibrium applies to G f = b).
 constexpr double kEquilibriumTolerance = 1e-8;
-// The problem is declared infeasible when no point violates the tightened
-// constraints by less than this times max(1, largest bound) (N).
+// The phase-one optimum t* (N) proves infeasibility above this times
+// max(1, largest bound).
 constexpr double kInfeasibilityTolerance = 1e-7;
 
 double ThreadCpuSeconds() {
@@ -140,96 +164,6 @@ const char* StatusName(Ipopt::ApplicationReturnStatus status) {
   return "Unknown_Ipopt_Status";
 }
 
-// One entry of a sparse matrix.
-struct Entry {
-  int row = 0;
-  int col = 0;
-  double value = 0.0;
-};
-
-// Exact friction cone of one contact with friction, in the unknowns
-// (f_i, s_i): s_i is an extra unknown bounded below by zero and tied to the
-// forces by the linear equality s_i - mu n.f_i = -shift. The cone itself is
-//   r(f, s) = |P_t f|^2 / s - s <= 0   (s > 0),
-// i.e. |P_t f| <= s. Unlike |P_t f|^2 - s^2 <= 0 its gradient never vanishes
-// (dr/ds <= -1), so the constraint stays qualified at the apex f_i = 0 where
-// unloaded contacts end up; and a violation of r by eps means |P_t f|
-// exceeds s by about eps/2, not by sqrt(eps).
-struct ConeConstraint {
-  int contact = 0;
-  int offset = 0;   // first of the contact's three force unknowns
-  int s_index = 0;  // the slack unknown s
-  Vec3 normal = Vec3::UnitZ();
-  double mu = 0.0;
-  double shift = 0.0;  // kappa (mu rho_n + rho_t): s = mu n.f - shift
-
-  Vec3 Force(const Number* x) const {
-    return Vec3(x[offset], x[offset + 1], x[offset + 2]);
-  }
-  Vec3 Tangential(const Number* x) const {
-    const Vec3 f = Force(x);
-    return f - normal.dot(f) * normal;
-  }
-  double Value(const Number* x) const {
-    const double s = x[s_index];
-    return Tangential(x).squaredNorm() / s - s;
-  }
-};
-
-// Where a linear row came from, for messages.
-struct RowOrigin {
-  enum Kind { kEquality, kPlanRow, kConeSlack } kind = kEquality;
-  int index = 0;  // row of prepared.rows, or contact
-};
-
-// The NLP. Unknowns x = (z, s): z are the reduced force unknowns
-// (f_i = z_i, 3 unknowns, for contacts with friction; f_i = n_i z_i, one
-// unknown, for frictionless ones; the map has orthonormal columns so
-// |f|^2 = |z|^2), s the cone slacks (EXACT only).
-struct Formulation {
-  int num_forces = 0;               // unknowns in z
-  std::vector<int> offset;          // per contact, into z
-  std::vector<bool> frictionless;   // per contact
-  std::vector<Vec3> normal;         // per contact
-  int num_equilibrium = 0;          // equilibrium rows (the first rows)
-  // Linear constraints lower <= L x <= upper.
-  int num_linear = 0;
-  std::vector<Entry> linear;
-  std::vector<double> lower;
-  std::vector<double> upper;
-  std::vector<RowOrigin> origin;
-  std::vector<ConeConstraint> cones;
-  VectorXd start;  // (z0, s0); z0 satisfies the equilibrium rows
-
-  int num_vars() const { return num_forces + static_cast<int>(cones.size()); }
-  int num_constraints() const {
-    return num_linear + static_cast<int>(cones.size());
-  }
-
-  std::vector<Vec3> Forces(const VectorXd& x) const {
-    std::vector<Vec3> forces(offset.size());
-    for (size_t i = 0; i < offset.size(); ++i) {
-      forces[i] = frictionless[i] ? Vec3(normal[i] * x(offset[i]))
-                                  : Vec3(x.segment<3>(offset[i]));
-    }
-    return forces;
-  }
-
-  // Row values L x.
-  VectorXd LinearValues(const Number* x) const {
-    VectorXd values = VectorXd::Zero(num_linear);
-    for (const Entry& e : linear) values(e.row) += e.value * x[e.col];
-    return values;
-  }
-};
-
-// Outcome of building the formulation: either a formulation to solve or a
-// final answer found on the way.
-struct BuildOutcome {
-  bool decided = false;
-  PlanResult result;
-};
-
 PlanResult Infeasible(std::string message) {
   PlanResult result;
   result.status = PlanStatus::kInfeasible;
@@ -244,34 +178,142 @@ PlanResult Failure(std::string message) {
   return result;
 }
 
+// One entry of a sparse matrix.
+struct Entry {
+  int row = 0;
+  int col = 0;
+  double value = 0.0;
+};
+
+// c(f) = sqrt(|P f|^2 + eps^2) - eps - (mu n.f - shift) <= 0 for one contact
+// with friction (shift = kappa (mu rho_n + rho_t)).
+struct ConeConstraint {
+  int contact = 0;
+  int offset = 0;  // first of the contact's three unknowns
+  Vec3 normal = Vec3::UnitZ();
+  double mu = 0.0;
+  double shift = 0.0;
+  double eps = 0.0;
+
+  Vec3 Force(const Number* x) const {
+    return Vec3(x[offset], x[offset + 1], x[offset + 2]);
+  }
+  Vec3 Tangential(const Number* x) const {
+    const Vec3 f = Force(x);
+    return f - normal.dot(f) * normal;
+  }
+  // s(f): the cone radius available at this force.
+  double Radius(const Number* x) const {
+    return mu * normal.dot(Force(x)) - shift;
+  }
+  double Value(const Number* x) const {
+    return std::sqrt(Tangential(x).squaredNorm() + eps * eps) - eps - Radius(x);
+  }
+  // P f / q - mu n, q = sqrt(|P f|^2 + eps^2).
+  Vec3 Gradient(const Number* x) const {
+    const Vec3 w = Tangential(x);
+    return w / std::sqrt(w.squaredNorm() + eps * eps) - mu * normal;
+  }
+  // P / q - w w^T / q^3 (w = P f).
+  Eigen::Matrix3d Hessian(const Number* x) const {
+    const Vec3 w = Tangential(x);
+    const double q = std::sqrt(w.squaredNorm() + eps * eps);
+    const Eigen::Matrix3d p = Eigen::Matrix3d::Identity() - normal * normal.transpose();
+    return p / q - w * w.transpose() / (q * q * q);
+  }
+};
+
+// Where a linear row came from, for messages.
+struct RowOrigin {
+  enum Kind { kEquilibrium, kPlanRow } kind = kEquilibrium;
+  int index = 0;  // row of prepared.rows
+};
+
+// The NLP in the reduced unknowns z: f_i = z_i (3 unknowns) for contacts with
+// friction, f_i = n_i z_i (1 unknown) for frictionless ones. The map has
+// orthonormal columns, so |f|^2 = |z|^2.
+struct Formulation {
+  int num_vars = 0;
+  std::vector<int> offset;         // per contact
+  std::vector<bool> frictionless;  // per contact
+  std::vector<Vec3> normal;        // per contact
+  // Linear constraints lower <= L z <= upper; the equilibrium rows first.
+  int num_equilibrium = 0;
+  int num_linear = 0;
+  std::vector<Entry> linear;
+  std::vector<double> lower;
+  std::vector<double> upper;
+  std::vector<RowOrigin> origin;
+  std::vector<ConeConstraint> cones;  // constraints num_linear, ...
+  VectorXd start;      // minimum-norm equilibrium
+  double scale = 1.0;  // max(1, largest finite bound), N
+
+  int num_constraints() const {
+    return num_linear + static_cast<int>(cones.size());
+  }
+
+  std::vector<Vec3> Forces(const VectorXd& z) const {
+    std::vector<Vec3> forces(offset.size());
+    for (size_t i = 0; i < offset.size(); ++i) {
+      forces[i] = frictionless[i] ? Vec3(normal[i] * z(offset[i]))
+                                  : Vec3(z.segment<3>(offset[i]));
+    }
+    return forces;
+  }
+
+  VectorXd LinearValues(const Number* z) const {
+    VectorXd values = VectorXd::Zero(num_linear);
+    for (const Entry& e : linear) values(e.row) += e.value * z[e.col];
+    return values;
+  }
+
+  // Largest violation of the inequalities (plan rows and cones) at z.
+  double MaxViolation(const VectorXd& z) const {
+    const VectorXd values = LinearValues(z.data());
+    double violation = 0.0;
+    for (int r = num_equilibrium; r < num_linear; ++r) {
+      violation = std::max(violation, values(r) - upper[r]);
+    }
+    for (const ConeConstraint& cone : cones) {
+      violation = std::max(violation, cone.Value(z.data()));
+    }
+    return violation;
+  }
+};
+
+// Either a formulation to solve, or an answer found while building it.
+struct BuildOutcome {
+  bool decided = false;
+  PlanResult result;
+};
+
 BuildOutcome BuildFormulation(const PreparedProblem& prepared,
                               const PlanOptions& options, Formulation* form) {
   const PlanProblem& problem = prepared.problem;
   const ForceEquilibrium& eq = prepared.equilibrium;
   const int n = prepared.num_contacts();
-  const bool exact = options.cone == ConeModel::kExact;
   const double kappa = options.confidence;
 
-  // Force unknowns.
+  // Unknowns.
   form->offset.resize(static_cast<size_t>(n));
   form->frictionless.resize(static_cast<size_t>(n));
   form->normal.resize(static_cast<size_t>(n));
   bool reduced = false;
-  int num_forces = 0;
+  int num_vars = 0;
   for (int i = 0; i < n; ++i) {
     const Contact& c = problem.contacts[static_cast<size_t>(i)];
-    form->offset[i] = num_forces;
+    form->offset[i] = num_vars;
     form->frictionless[i] = c.friction == 0.0;
     form->normal[i] = c.normal;
-    num_forces += form->frictionless[i] ? 1 : 3;
+    num_vars += form->frictionless[i] ? 1 : 3;
     reduced = reduced || form->frictionless[i];
   }
-  form->num_forces = num_forces;
+  form->num_vars = num_vars;
 
-  // T: f = T z (3n x num_forces), only needed when some contact is reduced.
+  // T: f = T z (3n x num_vars), only needed when some contact is reduced.
   MatrixXd map;
   if (reduced) {
-    map = MatrixXd::Zero(3 * n, num_forces);
+    map = MatrixXd::Zero(3 * n, num_vars);
     for (int i = 0; i < n; ++i) {
       if (form->frictionless[i]) {
         map.block<3, 1>(3 * i, form->offset[i]) = form->normal[i];
@@ -281,14 +323,13 @@ BuildOutcome BuildFormulation(const PreparedProblem& prepared,
     }
   }
 
-  // Equilibrium rows, full row rank in z.
+  // Equilibrium rows of full row rank in z, and the minimum-norm solution.
   MatrixXd eq_rows;
   VectorXd eq_rhs;
-  VectorXd z0;
   if (!reduced) {
     eq_rows = eq.independent_rows;
     eq_rhs = eq.independent_rhs;
-    z0 = eq.particular;
+    form->start = eq.particular;
   } else {
     const MatrixXd e = eq.independent_rows * map;
     const VectorXd& b = eq.independent_rhs;
@@ -297,13 +338,13 @@ BuildOutcome BuildFormulation(const PreparedProblem& prepared,
     const double cutoff =
         sv.size() > 0 ? options.rank_tolerance * std::max(1.0, sv(0)) : 0.0;
     int rank = 0;
-    while (rank < sv.size() && sv(rank) > cutoff && sv(rank) > 0.0) ++rank;
+    while (rank < sv.size() && sv(rank) > cutoff) ++rank;
     const MatrixXd u = svd.matrixU().leftCols(rank);
     eq_rhs = u.transpose() * b;
     eq_rows = u.transpose() * e;
-    z0 = svd.matrixV().leftCols(rank) *
-         (eq_rhs.array() / sv.head(rank).array()).matrix();
-    const double residual = (e * z0 - b).norm();
+    form->start = svd.matrixV().leftCols(rank) *
+                  (eq_rhs.array() / sv.head(rank).array()).matrix();
+    const double residual = (e * form->start - b).norm();
     if (!(residual <= kEquilibriumTolerance * std::max(1.0, b.norm()))) {
       return {true,
               Infeasible("the contacts cannot resist this wrench with the "
@@ -314,26 +355,21 @@ BuildOutcome BuildFormulation(const PreparedProblem& prepared,
     }
   }
 
-  std::vector<Entry>& lin = form->linear;
-  auto add_row = [&](const std::vector<std::pair<int, double>>& terms,
-                     double lo, double hi, RowOrigin origin) {
+  auto add_row = [&](const Eigen::RowVectorXd& row, double lo, double hi,
+                     RowOrigin origin) {
     const int r = static_cast<int>(form->lower.size());
-    for (const auto& [col, value] : terms) {
-      if (value != 0.0) lin.push_back({r, col, value});
+    for (int j = 0; j < row.size(); ++j) {
+      if (row(j) != 0.0) form->linear.push_back({r, j, row(j)});
     }
     form->lower.push_back(lo);
     form->upper.push_back(hi);
     form->origin.push_back(origin);
-  };
-  auto dense_terms = [](const Eigen::RowVectorXd& row) {
-    std::vector<std::pair<int, double>> terms;
-    for (int j = 0; j < row.size(); ++j) terms.emplace_back(j, row(j));
-    return terms;
+    if (std::abs(lo) < kInfinity) form->scale = std::max(form->scale, std::abs(lo));
+    if (std::abs(hi) < kInfinity) form->scale = std::max(form->scale, std::abs(hi));
   };
 
   for (int k = 0; k < eq_rows.rows(); ++k) {
-    add_row(dense_terms(eq_rows.row(k)), eq_rhs(k), eq_rhs(k),
-            {RowOrigin::kEquality, k});
+    add_row(eq_rows.row(k), eq_rhs(k), eq_rhs(k), {RowOrigin::kEquilibrium, k});
   }
   form->num_equilibrium = static_cast<int>(eq_rows.rows());
 
@@ -342,91 +378,74 @@ BuildOutcome BuildFormulation(const PreparedProblem& prepared,
   for (int k = 0; k < rows.matrix.rows(); ++k) {
     Eigen::RowVectorXd a = rows.matrix.row(k);
     if (reduced) a = a * map;
-    const double scale = rows.matrix.row(k).cwiseAbs().maxCoeff();
-    if (a.cwiseAbs().maxCoeff() <= 1e-12 * scale) {
-      // The row does not depend on the unknowns left (a friction facet of a
-      // frictionless contact): 0 <= d must hold by itself.
-      const double slack_tol =
-          kFeasibilityTolerance * std::max(1.0, std::abs(rows.nominal_rhs(k)));
-      if (rows.rhs(k) < -slack_tol) {
+    const double size = rows.matrix.row(k).cwiseAbs().maxCoeff();
+    if (a.cwiseAbs().maxCoeff() <= 1e-12 * size) {
+      // Independent of the unknowns left (a friction facet of a frictionless
+      // contact): 0 <= d must hold by itself.
+      if (rows.rhs(k) < -kFeasibilityTolerance *
+                            std::max(1.0, std::abs(rows.nominal_rhs(k)))) {
         return {true, Infeasible(rows.Describe(k, problem) +
                                  " cannot be met: its robust bound is " +
-                                 FormatNumber(rows.rhs(k)) + " N below zero")};
+                                 FormatNumber(rows.rhs(k)) + " N")};
       }
       continue;
     }
-    add_row(dense_terms(a), -kInfinity, rows.rhs(k), {RowOrigin::kPlanRow, k});
+    add_row(a, -kInfinity, rows.rhs(k), {RowOrigin::kPlanRow, k});
   }
+  form->num_linear = static_cast<int>(form->lower.size());
 
-  // Exact friction cones: s_i - mu n.f_i = -shift, s_i >= 0, r_i <= 0.
-  if (exact) {
+  // Exact friction cones.
+  if (options.cone == ConeModel::kExact) {
+    const double eps =
+        kConeSmoothing *
+        std::max(1.0, form->start.size() ? form->start.cwiseAbs().maxCoeff() : 0.0);
     for (int i = 0; i < n; ++i) {
       const Contact& c = problem.contacts[static_cast<size_t>(i)];
       const double rho_n = prepared.normal_sigma[static_cast<size_t>(i)];
       const double rho_t = prepared.tangential_sigma[static_cast<size_t>(i)];
       if (form->frictionless[i]) {
-        // |P_t f| + kappa rho_t <= 0: only the tangential uncertainty matters.
+        // |P f| + kappa rho_t <= 0 with P f = 0: only the uncertainty is left.
         if (kappa * rho_t > kFeasibilityTolerance) {
           return {true,
                   Infeasible(ContactLabel(problem, i) +
-                             " is frictionless but its tangential force "
-                             "uncertainty kappa*rho_t = " +
-                             FormatNumber(kappa * rho_t) +
-                             " N cannot be resisted")};
+                             " is frictionless but must resist a tangential "
+                             "force uncertainty kappa*rho_t = " +
+                             FormatNumber(kappa * rho_t) + " N")};
         }
         continue;
       }
       ConeConstraint cone;
       cone.contact = i;
       cone.offset = form->offset[i];
-      cone.s_index = num_forces + static_cast<int>(form->cones.size());
       cone.normal = c.normal;
       cone.mu = c.friction;
       cone.shift = kappa * (c.friction * rho_n + rho_t);
-      std::vector<std::pair<int, double>> terms = {{cone.s_index, 1.0}};
-      for (int a = 0; a < 3; ++a) {
-        terms.emplace_back(cone.offset + a, -cone.mu * c.normal(a));
-      }
-      add_row(terms, -cone.shift, -cone.shift, {RowOrigin::kConeSlack, i});
+      cone.eps = eps;
+      form->scale = std::max(form->scale, cone.shift);
       form->cones.push_back(cone);
     }
-  }
-  form->num_linear = static_cast<int>(form->lower.size());
-
-  // Start: the minimum-norm equilibrium and its cone slacks (clipped at the
-  // bound; Ipopt pushes them inside).
-  form->start = VectorXd::Zero(form->num_vars());
-  form->start.head(num_forces) = z0;
-  for (const ConeConstraint& cone : form->cones) {
-    const double s = cone.mu * cone.normal.dot(cone.Force(form->start.data())) -
-                     cone.shift;
-    form->start(cone.s_index) = std::max(s, 0.0);
   }
   return {};
 }
 
-// When the equilibrium rows determine the forces completely there is nothing
-// to optimise: the unique equilibrium is the answer if it meets every
-// constraint.
+// The equilibrium rows determine the forces completely: the unique
+// equilibrium is the answer if it meets every constraint.
 PlanResult CheckUniqueEquilibrium(const Formulation& form,
                                   const PreparedProblem& prepared) {
-  const Number* x = form.start.data();
-  const VectorXd values = form.LinearValues(x);
+  const Number* z = form.start.data();
+  const VectorXd values = form.LinearValues(z);
   for (int r = form.num_equilibrium; r < form.num_linear; ++r) {
-    const RowOrigin& o = form.origin[r];
-    if (o.kind != RowOrigin::kPlanRow) continue;  // cone slacks: below
-    const double tol =
-        kFeasibilityTolerance * std::max(1.0, std::abs(form.upper[r]));
-    if (values(r) > form.upper[r] + tol) {
-      return Infeasible("the equilibrium forces are unique and violate " +
-                        prepared.rows.Describe(o.index, prepared.problem));
+    if (values(r) > form.upper[r] + kFeasibilityTolerance *
+                                        std::max(1.0, std::abs(form.upper[r]))) {
+      return Infeasible(
+          "the equilibrium forces are unique and violate " +
+          prepared.rows.Describe(form.origin[r].index, prepared.problem));
     }
   }
   for (const ConeConstraint& cone : form.cones) {
-    const Vec3 f = cone.Force(x);
-    const double s = cone.mu * cone.normal.dot(f) - cone.shift;
-    if (cone.Tangential(x).norm() >
-        s + kFeasibilityTolerance * std::max(1.0, f.norm())) {
+    if (cone.Tangential(z).norm() >
+        cone.Radius(z) +
+            kFeasibilityTolerance * std::max(1.0, cone.Force(z).norm())) {
       return Infeasible("the equilibrium forces are unique and violate the "
                         "friction cone of " +
                         ContactLabel(prepared.problem, cone.contact));
@@ -435,19 +454,8 @@ PlanResult CheckUniqueEquilibrium(const Formulation& form,
   PlanResult result;
   result.status = PlanStatus::kOptimal;
   result.forces = form.Forces(form.start);
-  result.iterations = 0;
   return result;
 }
-
-// Which problem the TNLP poses.
-enum class Phase {
-  // min |f|^2 over the constraints (the answer).
-  kMinimumNorm,
-  // Feasibility: min t >= 0 with every inequality relaxed by t (plan rows
-  // a.f <= d + t, cone slacks s = s(f) + t); the equilibrium stays exact.
-  // Always feasible; optimal t > 0 proves the problem infeasible.
-  kFeasibility,
-};
 
 // Why a solve must stop early; shared by the Ipopt runs of one solve.
 struct StopConditions {
@@ -466,6 +474,16 @@ struct StopConditions {
   }
 };
 
+// Which problem the TNLP poses.
+enum class Phase {
+  // min |f|^2 subject to everything: the answer.
+  kMinimumNorm,
+  // min t >= 0 with every inequality relaxed by t (rows a.f <= d + t, cones
+  // c(f) <= t); the equilibrium stays exact. Always feasible; t* > 0 proves
+  // the problem infeasible.
+  kFeasibility,
+};
+
 // The TNLP handed to Ipopt. Owned by one run; not shared.
 class ForceNlp final : public Ipopt::TNLP {
  public:
@@ -475,19 +493,24 @@ class ForceNlp final : public Ipopt::TNLP {
         phase_(phase),
         start_(std::move(start)),
         stop_(stop),
-        num_vars_(form.num_vars() + (phase == Phase::kFeasibility ? 1 : 0)),
-        t_index_(form.num_vars()),
+        t_index_(form.num_vars),
+        num_vars_(form.num_vars + (phase == Phase::kFeasibility ? 1 : 0)),
         linear_(form.linear) {
-    if (phase_ == Phase::kFeasibility) {
-      for (int r = 0; r < form_.num_linear; ++r) {
-        if (form_.origin[r].kind != RowOrigin::kEquality) {
-          linear_.push_back({r, t_index_, -1.0});
-        }
+    const bool relax = phase_ == Phase::kFeasibility;
+    if (relax) {
+      for (int r = form_.num_equilibrium; r < form_.num_linear; ++r) {
+        linear_.push_back({r, t_index_, -1.0});
       }
     }
+    // Jacobian of the cone rows: the contact's three unknowns (and t).
+    for (size_t k = 0; k < form_.cones.size(); ++k) {
+      const int row = form_.num_linear + static_cast<int>(k);
+      for (int a = 0; a < 3; ++a) cone_jac_.push_back({row, form_.cones[k].offset + a, 0.0});
+      if (relax) cone_jac_.push_back({row, t_index_, -1.0});
+    }
     // Lower triangle of the Lagrangian Hessian: the diagonal of every force
-    // unknown (2 I from the objective); for a cone the 3x3 force block, the
-    // (s, f) row and (s, s).
+    // unknown (the objective 2 I), the full 3x3 block of a contact with a
+    // cone.
     std::vector<int> cone_of(form_.offset.size(), -1);
     for (size_t k = 0; k < form_.cones.size(); ++k) {
       cone_of[static_cast<size_t>(form_.cones[k].contact)] = static_cast<int>(k);
@@ -507,19 +530,13 @@ class ForceNlp final : public Ipopt::TNLP {
         }
       }
     }
-    for (size_t k = 0; k < form_.cones.size(); ++k) {
-      const ConeConstraint& c = form_.cones[k];
-      cone_hess_s_start_.push_back(static_cast<int>(hess_.size()));
-      for (int a = 0; a < 3; ++a) hess_.push_back({c.s_index, c.offset + a, 0.0});
-      hess_.push_back({c.s_index, c.s_index, 0.0});
-    }
   }
 
   bool get_nlp_info(Index& n, Index& m, Index& nnz_jac_g, Index& nnz_h_lag,
                     IndexStyleEnum& index_style) override {
     n = num_vars_;
     m = form_.num_constraints();
-    nnz_jac_g = static_cast<Index>(linear_.size() + 4 * form_.cones.size());
+    nnz_jac_g = static_cast<Index>(linear_.size() + cone_jac_.size());
     nnz_h_lag = static_cast<Index>(hess_.size());
     index_style = C_STYLE;
     return true;
@@ -528,7 +545,7 @@ class ForceNlp final : public Ipopt::TNLP {
   bool get_bounds_info(Index n, Number* x_l, Number* x_u, Index m, Number* g_l,
                        Number* g_u) override {
     for (Index j = 0; j < n; ++j) {
-      x_l[j] = j < form_.num_forces ? -kInfinity : 0.0;  // s >= 0, t >= 0
+      x_l[j] = j == t_index_ ? 0.0 : -kInfinity;  // t >= 0 (phase one only)
       x_u[j] = kInfinity;
     }
     for (int r = 0; r < form_.num_linear; ++r) {
@@ -562,7 +579,7 @@ class ForceNlp final : public Ipopt::TNLP {
   bool eval_f(Index n, const Number* x, bool new_x, Number& obj) override {
     obj = phase_ == Phase::kFeasibility
               ? x[t_index_]
-              : Eigen::Map<const VectorXd>(x, form_.num_forces).squaredNorm();
+              : Eigen::Map<const VectorXd>(x, form_.num_vars).squaredNorm();
     return true;
   }
 
@@ -571,18 +588,18 @@ class ForceNlp final : public Ipopt::TNLP {
       if (phase_ == Phase::kFeasibility) {
         grad[j] = j == t_index_ ? 1.0 : 0.0;
       } else {
-        grad[j] = j < form_.num_forces ? 2.0 * x[j] : 0.0;
+        grad[j] = 2.0 * x[j];
       }
     }
     return true;
   }
 
   bool eval_g(Index n, const Number* x, bool new_x, Index m, Number* g) override {
-    for (int r = 0; r < form_.num_linear; ++r) g[r] = 0.0;
+    for (Index r = 0; r < m; ++r) g[r] = 0.0;
     for (const Entry& e : linear_) g[e.row] += e.value * x[e.col];
+    const double t = phase_ == Phase::kFeasibility ? x[t_index_] : 0.0;
     for (size_t k = 0; k < form_.cones.size(); ++k) {
-      if (!(x[form_.cones[k].s_index] > 0.0)) return false;  // outside domain
-      g[form_.num_linear + k] = form_.cones[k].Value(x);
+      g[form_.num_linear + k] = form_.cones[k].Value(x) - t;
     }
     return true;
   }
@@ -595,27 +612,18 @@ class ForceNlp final : public Ipopt::TNLP {
         i_row[e] = linear_[e].row;
         j_col[e] = linear_[e].col;
       }
-      for (size_t k = 0; k < form_.cones.size(); ++k) {
-        const ConeConstraint& c = form_.cones[k];
-        const Index row = form_.num_linear + static_cast<Index>(k);
-        for (int a = 0; a < 3; ++a) {
-          i_row[nl + 4 * k + a] = row;
-          j_col[nl + 4 * k + a] = c.offset + a;
-        }
-        i_row[nl + 4 * k + 3] = row;
-        j_col[nl + 4 * k + 3] = c.s_index;
+      for (size_t e = 0; e < cone_jac_.size(); ++e) {
+        i_row[nl + e] = cone_jac_[e].row;
+        j_col[nl + e] = cone_jac_[e].col;
       }
       return true;
     }
     for (size_t e = 0; e < nl; ++e) values[e] = linear_[e].value;
-    for (size_t k = 0; k < form_.cones.size(); ++k) {
-      const ConeConstraint& c = form_.cones[k];
-      const double s = x[c.s_index];
-      if (!(s > 0.0)) return false;
-      const Vec3 w = c.Tangential(x);
-      // dr/df = 2 P_t f / s, dr/ds = -|P_t f|^2 / s^2 - 1.
-      for (int a = 0; a < 3; ++a) values[nl + 4 * k + a] = 2.0 * w(a) / s;
-      values[nl + 4 * k + 3] = -w.squaredNorm() / (s * s) - 1.0;
+    size_t e = nl;
+    for (const ConeConstraint& cone : form_.cones) {
+      const Vec3 grad = cone.Gradient(x);
+      for (int a = 0; a < 3; ++a) values[e++] = grad(a);
+      if (phase_ == Phase::kFeasibility) values[e++] = -1.0;
     }
     return true;
   }
@@ -633,27 +641,15 @@ class ForceNlp final : public Ipopt::TNLP {
     const double diagonal =
         phase_ == Phase::kFeasibility ? 0.0 : 2.0 * obj_factor;
     for (size_t e = 0; e < hess_.size(); ++e) {
-      values[e] = hess_[e].row == hess_[e].col && hess_[e].row < form_.num_forces
-                      ? diagonal
-                      : 0.0;
+      values[e] = hess_[e].row == hess_[e].col ? diagonal : 0.0;
     }
     for (size_t k = 0; k < form_.cones.size(); ++k) {
-      const ConeConstraint& c = form_.cones[k];
-      const double s = x[c.s_index];
-      if (!(s > 0.0)) return false;
       const double weight = lambda[form_.num_linear + k];
-      const Vec3 w = c.Tangential(x);
-      // d2r/df2 = 2 P_t / s, d2r/dsdf = -2 P_t f / s^2,
-      // d2r/ds2 = 2 |P_t f|^2 / s^3.
-      const Eigen::Matrix3d p =
-          Eigen::Matrix3d::Identity() - c.normal * c.normal.transpose();
+      const Eigen::Matrix3d h = form_.cones[k].Hessian(x);
       int e = cone_hess_start_[k];
       for (int a = 0; a < 3; ++a) {
-        for (int b = 0; b <= a; ++b) values[e++] += weight * 2.0 * p(a, b) / s;
+        for (int b = 0; b <= a; ++b) values[e++] += weight * h(a, b);
       }
-      e = cone_hess_s_start_[k];
-      for (int a = 0; a < 3; ++a) values[e++] += weight * -2.0 * w(a) / (s * s);
-      values[e] += weight * 2.0 * w.squaredNorm() / (s * s * s);
     }
     return true;
   }
@@ -687,12 +683,12 @@ class ForceNlp final : public Ipopt::TNLP {
   const Phase phase_;
   const VectorXd start_;
   const StopConditions stop_;
+  const int t_index_;  // the relaxation t (phase one only)
   const int num_vars_;
-  const int t_index_;           // feasibility phase only
-  std::vector<Entry> linear_;   // L, plus the t column in the feasibility phase
-  std::vector<Entry> hess_;     // structure (values unused)
-  std::vector<int> cone_hess_start_;    // 3x3 force block, per cone
-  std::vector<int> cone_hess_s_start_;  // (s, f) row and (s, s), per cone
+  std::vector<Entry> linear_;    // L, with the t column in phase one
+  std::vector<Entry> cone_jac_;  // structure of the cone rows
+  std::vector<Entry> hess_;      // structure of the Hessian
+  std::vector<int> cone_hess_start_;  // first 3x3 entry, per cone
   VectorXd solution_;
   StopConditions::Reason stop_reason_ = StopConditions::kNone;
   int last_iteration_ = 0;
@@ -715,56 +711,50 @@ std::string ConfigureIpopt(Ipopt::IpoptApplication& app,
   check(o.SetStringValue("linear_solver", "mumps"), "linear_solver");
   check(o.SetIntegerValue("mumps_pivot_order", 0), "mumps_pivot_order");
   check(o.SetStringValue("jac_c_constant", "yes"), "jac_c_constant");
-  check(o.SetStringValue("expect_infeasible_problem",
-                         expect_infeasible ? "yes" : "no"),
-        "expect_infeasible_problem");
   if (!has_cones) {
     check(o.SetStringValue("jac_d_constant", "yes"), "jac_d_constant");
     check(o.SetStringValue("hessian_constant", "yes"), "hessian_constant");
-  } else {
-    // The cone slacks s must stay strictly positive (r divides by s).
-    check(o.SetNumericValue("bound_relax_factor", 0.0), "bound_relax_factor");
   }
+  check(o.SetStringValue("expect_infeasible_problem",
+                         expect_infeasible ? "yes" : "no"),
+        "expect_infeasible_problem");
   return rejected;
 }
 
-// One Ipopt run.
+// The outcome of one Ipopt run.
 struct IpoptRun {
   Ipopt::ApplicationReturnStatus status = Ipopt::Internal_Error;
   std::string setup_error;  // non-empty: Ipopt did not run
   int iterations = 0;
   StopConditions::Reason stopped = StopConditions::kNone;
-  VectorXd solution;  // valid when status is a success
+  VectorXd solution;
 
   bool succeeded() const {
-    return setup_error.empty() &&
+    return setup_error.empty() && stopped == StopConditions::kNone &&
            (status == Ipopt::Solve_Succeeded ||
             status == Ipopt::Solved_To_Acceptable_Level) &&
-           solution.allFinite();
+           solution.size() > 0 && solution.allFinite();
   }
 };
 
 // Debian's sequential MUMPS (libdmumps_seq 5.5) keeps Fortran module state
-// and is not thread-safe: two Ipopt solves at once abort the process
+// and is not thread-safe: two Ipopt runs at once abort the process
 // ("PB allocation in DMUMPS_LOAD_INIT ... MPI_ABORT"). Each IpoptApplication
-// therefore lives, from construction to destruction (MUMPS is initialised
-// and terminated with it), under this process-wide lock. Only the Ipopt run
-// itself is serialised; building the formulation is not.
+// therefore lives, from construction to destruction (MUMPS is set up and
+// torn down with it), under this process-wide lock. Only the Ipopt runs are
+// serialised; everything else in a solve runs concurrently.
 std::timed_mutex& MumpsMutex() {
   static std::timed_mutex mutex;
   return mutex;
 }
 
-// One Ipopt run; the caller holds MumpsMutex(). Everything Ipopt allocates
+// One Ipopt run; the caller holds MumpsMutex(). Everything Ipopt allocated
 // is released before this returns.
 IpoptRun RunIpoptLocked(const Formulation& form, Phase phase, VectorXd start,
                         bool expect_infeasible, const PlanOptions& options,
                         const StopConditions& stop) {
   IpoptRun run;
-  const int num_vars =
-      form.num_vars() + (phase == Phase::kFeasibility ? 1 : 0);
-  Ipopt::SmartPtr<ForceNlp> nlp =
-      new ForceNlp(form, phase, std::move(start), stop);
+  Ipopt::SmartPtr<ForceNlp> nlp = new ForceNlp(form, phase, std::move(start), stop);
   // No console journal: nothing is ever written to stdout.
   Ipopt::SmartPtr<Ipopt::IpoptApplication> app =
       new Ipopt::IpoptApplication(/*create_console_out=*/false);
@@ -789,20 +779,20 @@ IpoptRun RunIpoptLocked(const Formulation& form, Phase phase, VectorXd start,
   }
   run.stopped = nlp->stop_reason();
   if (run.status == Ipopt::Maximum_CpuTime_Exceeded) {
-    run.stopped = StopConditions::kTimeLimit;  // not set by us; kept for safety
+    run.stopped = StopConditions::kTimeLimit;  // max_cpu_time is not set
   }
-  if (nlp->solution().size() == num_vars) run.solution = nlp->solution();
+  run.solution = nlp->solution();
   return run;
 }
 
 IpoptRun RunIpopt(const Formulation& form, Phase phase, VectorXd start,
                   bool expect_infeasible, const PlanOptions& options,
                   const StopConditions& stop) {
-  // Wait for the lock, still honouring an interrupt (the CPU-time budget
-  // does not run down while blocked).
+  // Wait for the lock, still honouring an interrupt (the CPU budget does not
+  // run down while blocked).
   std::unique_lock<std::timed_mutex> lock(MumpsMutex(), std::defer_lock);
   do {
-    if (StopConditions::Reason reason = stop.Check();
+    if (const StopConditions::Reason reason = stop.Check();
         reason != StopConditions::kNone) {
       IpoptRun run;
       run.stopped = reason;
@@ -846,7 +836,7 @@ class IpoptSolver final : public ForceSolver {
     Formulation form;
     BuildOutcome built = BuildFormulation(prepared, options, &form);
     if (built.decided) return built.result;
-    if (form.num_equilibrium >= form.num_forces) {
+    if (form.num_equilibrium >= form.num_vars) {
       return CheckUniqueEquilibrium(form, prepared);
     }
 
@@ -859,11 +849,17 @@ class IpoptSolver final : public ForceSolver {
       const std::string after =
           " after " + std::to_string(iterations) + " Ipopt iterations";
       if (reason == StopConditions::kInterrupted) {
-        return Failure("interrupted" + after);
+        return finish(Failure("interrupted" + after));
       }
-      return Failure("Ipopt stopped at the time limit (" +
-                     FormatNumber(options.ipopt_max_cpu_seconds) +
-                     " s CPU)" + after);
+      return finish(Failure("Ipopt stopped at the time limit (" +
+                            FormatNumber(options.ipopt_max_cpu_seconds) +
+                            " s CPU)" + after));
+    };
+    auto failed = [&](const IpoptRun& run) {
+      if (!run.setup_error.empty()) return finish(Failure(run.setup_error));
+      return finish(Failure(std::string("Ipopt failed: ") +
+                            StatusName(run.status) + " after " +
+                            std::to_string(iterations) + " iterations"));
     };
     auto optimal = [&](const IpoptRun& run) {
       PlanResult result;
@@ -871,92 +867,52 @@ class IpoptSolver final : public ForceSolver {
       if (run.status == Ipopt::Solved_To_Acceptable_Level) {
         result.message = "Ipopt: Solved_To_Acceptable_Level";
       }
-      result.forces = form.Forces(run.solution);
-      return result;
+      result.forces = form.Forces(run.solution.head(form.num_vars));
+      return finish(result);
     };
 
-    // 1. The minimum-norm problem, with Ipopt's heuristic for infeasible
-    //    problems on (without it Ipopt can spend thousands of iterations
-    //    before giving up on an infeasible EXACT problem).
-    IpoptRun main = RunIpopt(form, Phase::kMinimumNorm, form.start,
-                             /*expect_infeasible=*/true, options, stop);
+    // 1. The minimum-norm problem, with Ipopt's quick infeasibility heuristic.
+    const IpoptRun main = RunIpopt(form, Phase::kMinimumNorm, form.start,
+                                   /*expect_infeasible=*/true, options, stop);
     iterations += main.iterations;
-    if (!main.setup_error.empty()) return finish(Failure(main.setup_error));
-    if (main.succeeded()) return finish(optimal(main));
-    if (main.stopped != StopConditions::kNone) return finish(stopped(main.stopped));
+    if (main.stopped != StopConditions::kNone) return stopped(main.stopped);
+    if (main.succeeded()) return optimal(main);
+    if (!main.setup_error.empty()) return failed(main);
 
-    // 2. No optimum: decide feasibility with the always-feasible phase-one
-    //    problem, started from the minimum-norm equilibrium with t large
-    //    enough for every relaxed constraint to hold.
-    VectorXd start1 = VectorXd::Zero(form.num_vars() + 1);
-    start1.head(form.num_vars()) = form.start;
-    const VectorXd row_values = form.LinearValues(form.start.data());
-    double t0 = 0.0;
-    for (int r = 0; r < form.num_linear; ++r) {
-      if (form.origin[r].kind == RowOrigin::kPlanRow) {
-        t0 = std::max(t0, row_values(r) - form.upper[r]);
-      }
-    }
-    for (const ConeConstraint& cone : form.cones) {
-      const Vec3 f = cone.Force(form.start.data());
-      const double s = cone.mu * cone.normal.dot(f) - cone.shift;
-      t0 = std::max(t0, cone.Tangential(form.start.data()).norm() - s);
-    }
-    double scale = 1.0;
-    for (int r = 0; r < form.num_linear; ++r) {
-      if (std::abs(form.upper[r]) < kInfinity) {
-        scale = std::max(scale, std::abs(form.upper[r]));
-      }
-      if (std::abs(form.lower[r]) < kInfinity) {
-        scale = std::max(scale, std::abs(form.lower[r]));
-      }
-    }
-    t0 += 1e-2 * scale;
-    start1(form.num_vars()) = t0;
-    for (const ConeConstraint& cone : form.cones) {
-      const Vec3 f = cone.Force(form.start.data());
-      start1(cone.s_index) = cone.mu * cone.normal.dot(f) - cone.shift + t0;
-    }
-    IpoptRun phase1 = RunIpopt(form, Phase::kFeasibility, start1,
-                               /*expect_infeasible=*/false, options, stop);
+    // 2. Decide feasibility with the phase-one problem, started from the
+    //    minimum-norm equilibrium with t above every violation.
+    VectorXd start1(form.num_vars + 1);
+    start1.head(form.num_vars) = form.start;
+    start1(form.num_vars) =
+        std::max(0.0, form.MaxViolation(form.start)) + 1e-2 * form.scale;
+    const IpoptRun phase1 = RunIpopt(form, Phase::kFeasibility, start1,
+                                     /*expect_infeasible=*/false, options, stop);
     iterations += phase1.iterations;
-    if (phase1.stopped != StopConditions::kNone) {
-      return finish(stopped(phase1.stopped));
-    }
+    if (phase1.stopped != StopConditions::kNone) return stopped(phase1.stopped);
     if (!phase1.succeeded()) {
-      // Fall back on the verdict of the main run.
       if (main.status == Ipopt::Infeasible_Problem_Detected) {
         return finish(Infeasible(
-            "Ipopt: Infeasible_Problem_Detected (not confirmed: the "
-            "feasibility problem ended with " +
-            std::string(StatusName(phase1.status)) + ")"));
+            "Ipopt: Infeasible_Problem_Detected (unconfirmed: the feasibility "
+            "problem ended with " + std::string(StatusName(phase1.status)) + ")"));
       }
-      return finish(Failure(std::string("Ipopt failed: ") +
-                            StatusName(main.status) + " after " +
-                            std::to_string(iterations) + " iterations"));
+      return failed(main);
     }
-    const double violation = phase1.solution(form.num_vars());
-    if (violation > kInfeasibilityTolerance * scale) {
+    const VectorXd z1 = phase1.solution.head(form.num_vars);
+    const double violation = form.MaxViolation(z1);
+    if (violation > kInfeasibilityTolerance * form.scale) {
       return finish(Infeasible(
           std::string("Ipopt: ") + StatusName(main.status) +
-          "; the feasibility problem shows the tightened constraints are "
-          "violated by at least " + FormatNumber(violation) + " N"));
+          "; no equilibrium meets the tightened constraints (the least "
+          "violation found is " + FormatNumber(violation) + " N)"));
     }
 
-    // 3. Feasible after all: solve again from the feasible point, without the
-    //    infeasibility heuristic.
-    IpoptRun retry = RunIpopt(form, Phase::kMinimumNorm,
-                              phase1.solution.head(form.num_vars()),
-                              /*expect_infeasible=*/false, options, stop);
+    // 3. Feasible after all: solve again from the feasible point, heuristic off.
+    const IpoptRun retry = RunIpopt(form, Phase::kMinimumNorm, z1,
+                                    /*expect_infeasible=*/false, options, stop);
     iterations += retry.iterations;
-    if (!retry.setup_error.empty()) return finish(Failure(retry.setup_error));
-    if (retry.succeeded()) return finish(optimal(retry));
-    if (retry.stopped != StopConditions::kNone) {
-      return finish(stopped(retry.stopped));
-    }
-    return finish(Failure(std::string("Ipopt failed: ") +
-                          StatusName(retry.status) + " after " +
-                          std::to_string(iterations) + " iterations"));
+    if (retry.stopped != StopConditions::kNone) return stopped(retry.stopped);
+    if (retry.succeeded()) return optimal(retry);
+    return failed(retry);
   }
 };
 

@@ -10,31 +10,7 @@
 namespace tactforce::planner {
 namespace {
 
-// The 3-finger wrench grasp lifted and rotated about the grasp's x axis.
-TrajectoryProblem LiftAndRotate(int steps) {
-  TrajectoryProblem t;
-  for (const auto& g : BuiltInGrasps()) {
-    if (g.name == "wrench-3f") t.base = g.problem;
-  }
-  t.inertia = Inertia{4e-4, 2.5e-3, 2.7e-3, 1e-5, -2e-5, 0};
-  const double duration = 2.0;
-  for (int k = 0; k < steps; ++k) {
-    const double s = duration * k / (steps - 1);
-    // Smooth rotation angle th(s) = A (1 - cos(pi s / T)) / 2 about x.
-    const double A = 0.6, w0 = M_PI / duration;
-    const double th = A * (1 - std::cos(w0 * s)) / 2;
-    const double dth = A * w0 * std::sin(w0 * s) / 2;
-    const double ddth = A * w0 * w0 * std::cos(w0 * s) / 2;
-    TrajectoryStep step;
-    const Eigen::Matrix3d r_world_object = Eigen::AngleAxisd(th, Vec3::UnitX()).toRotationMatrix();
-    step.gravity = r_world_object.transpose() * Vec3(0, 0, -9.81);
-    step.linear_acceleration = r_world_object.transpose() * Vec3(0, 0, 0.5 * std::sin(2 * w0 * s));
-    step.angular_velocity = Vec3(dth, 0, 0);
-    step.angular_acceleration = Vec3(ddth, 0, 0);
-    t.steps.push_back(step);
-  }
-  return t;
-}
+TrajectoryProblem LiftAndRotate(int steps) { return WrenchLiftAndRotate(steps); }
 
 TEST(Trajectory, EveryStepSatisfiesNewtonEuler) {
   const TrajectoryProblem t = LiftAndRotate(50);

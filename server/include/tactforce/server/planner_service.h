@@ -6,17 +6,23 @@
 // own threads, which must not be blocked by CPU-heavy work. A request runs
 // in one of two places:
 //   * inline, on the gRPC thread: SOLVER_GEOMETRIC with at most
-//     `inline_max_contacts` contacts (default 8). Measured on the 2-core
-//     dev box (Release): sphere-pinch 6.5 us, wrench-3f 61 us, 8 random
-//     contacts p50 160 us / p90 230 us. Queueing such a solve costs two
-//     thread hand-offs (~10-30 us each, more under contention) and buys
-//     nothing; with 8 clients x 2,000 wrench-3f plans inline was faster
-//     than pooled (see the report in tests/server/server_load_test.cc).
-//   * on the WorkerPool: IPOPT and CROSS_CHECK (~20-200 ms per solve) and
-//     larger geometric problems (grows ~n^3: 16 contacts p50 2 ms, 64
-//     contacts ~66 ms). The pool has a fixed number of threads and a
+//     `inline_max_contacts` contacts (default 8). Solver time, measured on
+//     the 2-core dev box (Release): sphere-pinch 6.5 us, wrench-3f 61 us,
+//     8 random contacts p50 160 us / p90 230 us, i.e. no worse than the
+//     gRPC work around it. A pool hand-off costs more than it saves: one
+//     client, 2,000 sequential Plans, 3 alternating runs each,
+//       wrench-3f   p50 104-123 us inline vs 129-141 us pooled
+//       8 contacts  p50 181-210 us inline vs 213-297 us pooled
+//     and with 8 clients x 2,000 plans throughput was the same within the
+//     noise of the shared box (median 5,400 vs 5,100 plans/s).
+//   * on the WorkerPool: SOLVER_IPOPT and SOLVER_CROSS_CHECK (~20-200 ms)
+//     and larger geometric problems (cost grows ~n^3: 16 contacts p50 2 ms,
+//     64 contacts ~66 ms). The pool has a fixed number of threads and a
 //     bounded queue; when it is full the RPC fails with RESOURCE_EXHAUSTED
-//     instead of queueing more.
+//     instead of queueing more. Note that the Ipopt backend serialises its
+//     runs process-wide (Debian's sequential MUMPS is not thread-safe), so
+//     Ipopt throughput is one solve at a time per server process whatever
+//     --workers is; scale Ipopt-heavy load with replicas.
 // Requests bound for the pool are validated first (planner::ValidateProblem,
 // a few microseconds), so a bad request is INVALID_ARGUMENT even under
 // overload and never takes a queue slot.
