@@ -39,8 +39,8 @@ PlanProblem StepProblem(const TrajectoryProblem& t, int step) {
   // The planner balances b = -(w_g + w_ext) with w_g = (m g, c x m g); pick
   // w_ext so that b equals the Newton-Euler wrench (plus the base wrench).
   const Vec3 weight = p.object.mass * s.gravity;
-  p.external_wrench.force += -need.force - weight;
-  p.external_wrench.torque += -need.torque - p.object.com.cross(weight);
+  p.external_wrench.force += s.external_wrench.force - need.force - weight;
+  p.external_wrench.torque += s.external_wrench.torque - need.torque - p.object.com.cross(weight);
   return p;
 }
 
@@ -102,6 +102,50 @@ absl::StatusOr<TrajectoryResult> PlanTrajectory(const TrajectoryProblem& t,
                           std::chrono::steady_clock::now() - start)
                           .count();
   return out;
+}
+
+absl::StatusOr<ProbePlan> PlanFrictionProbe(const PlanProblem& holding_grasp,
+                                            const FrictionProbe& probe,
+                                            const PlanOptions& options, SolverKind kind) {
+  auto invalid = [](const char* what) { return absl::InvalidArgumentError(what); };
+  if (!probe.position.allFinite()) return invalid("probe.position: not a finite vector");
+  if (!probe.normal.allFinite() || probe.normal.norm() < 1e-9) return invalid("probe.normal: zero length");
+  const Vec3 n = probe.normal.normalized();
+  const Vec3 t_raw = probe.tangent - probe.tangent.dot(n) * n;
+  if (!t_raw.allFinite() || t_raw.norm() < 1e-9)
+    return invalid("probe.tangent: zero length after projection onto the tangent plane");
+  const Vec3 t = t_raw.normalized();
+  for (const auto& [name, v] : {std::pair{"probe.tangential_force", probe.tangential_force},
+                                std::pair{"probe.initial_normal_force", probe.initial_normal_force},
+                                std::pair{"probe.final_normal_force", probe.final_normal_force}}) {
+    if (!std::isfinite(v) || v < 0) return absl::InvalidArgumentError(absl::StrCat(name, ": must be finite and >= 0"));
+  }
+  if (!(probe.initial_normal_force > probe.final_normal_force))
+    return invalid("probe.final_normal_force: must be below initial_normal_force");
+  if (!std::isfinite(probe.ramp_rate) || probe.ramp_rate <= 0) return invalid("probe.ramp_rate: must be > 0");
+  if (!std::isfinite(probe.sample_rate) || probe.sample_rate <= 0) return invalid("probe.sample_rate: must be > 0");
+  const double duration = (probe.initial_normal_force - probe.final_normal_force) / probe.ramp_rate;
+  const int steps = static_cast<int>(std::floor(duration * probe.sample_rate)) + 1;
+  if (steps > 100000) return invalid("probe.sample_rate: more than 100000 steps; ramp faster or sample slower");
+
+  ProbePlan plan;
+  TrajectoryProblem trajectory;
+  trajectory.base = holding_grasp;
+  for (int k = 0; k < steps; ++k) {
+    const double time = k / probe.sample_rate;
+    const double fn = std::max(probe.final_normal_force, probe.initial_normal_force - probe.ramp_rate * time);
+    const Vec3 f = fn * n + probe.tangential_force * t;
+    plan.times.push_back(time);
+    plan.probe_forces.push_back(f);
+    TrajectoryStep step;
+    step.gravity = holding_grasp.object.gravity;
+    step.external_wrench = {f, probe.position.cross(f)};
+    trajectory.steps.push_back(step);
+  }
+  absl::StatusOr<TrajectoryResult> holding = PlanTrajectory(trajectory, options, kind, true);
+  if (!holding.ok()) return holding.status();
+  plan.holding = *std::move(holding);
+  return plan;
 }
 
 }  // namespace tactforce::planner

@@ -1,5 +1,5 @@
 // tactforce-server: the gRPC front end of the tactforce planner.
-// See server/README.md (flags: --help).
+// See server/README.md; every flag is documented by --help.
 #include <pthread.h>
 #include <signal.h>
 

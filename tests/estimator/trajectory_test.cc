@@ -78,3 +78,46 @@ TEST(Trajectory, ErrorsNameTheStep) {
 
 }  // namespace
 }  // namespace tactforce::planner
+
+namespace tactforce::planner {
+namespace {
+
+TEST(FrictionProbe, HoldingFingersBalanceTheProbe) {
+  PlanProblem hold;
+  for (const auto& g : BuiltInGrasps()) {
+    if (g.name == "cylinder-4f") hold = g.problem;
+  }
+  FrictionProbe probe;
+  probe.position = Vec3(0, 0, 0.06);  // on the top face
+  probe.normal = Vec3(0, 0, -1);
+  probe.tangent = Vec3(1, 0, 0.3);    // projected onto the face
+  probe.tangential_force = 1.0;
+  probe.initial_normal_force = 3.0;
+  probe.final_normal_force = 0.5;
+  probe.ramp_rate = 1.0;
+  probe.sample_rate = 20.0;
+  absl::StatusOr<ProbePlan> plan = PlanFrictionProbe(hold, probe, PlanOptions{}, SolverKind::kGeometric);
+  ASSERT_TRUE(plan.ok()) << plan.status();
+  ASSERT_EQ(plan->times.size(), 51u);
+  EXPECT_EQ(plan->holding.optimal, 51);
+  for (size_t k = 0; k < plan->times.size(); ++k) {
+    const Vec3& fp = plan->probe_forces[k];
+    EXPECT_NEAR(fp.z(), -std::max(0.5, 3.0 - plan->times[k]), 1e-12);
+    EXPECT_NEAR(Vec3(fp.x(), fp.y(), 0).norm(), 1.0, 1e-12);
+    // Holding forces + probe + weight balance.
+    Vec3 force = fp + hold.object.mass * hold.object.gravity;
+    Vec3 torque = probe.position.cross(fp);
+    for (size_t i = 0; i < hold.contacts.size(); ++i) {
+      force += plan->holding.steps[k].forces[i];
+      torque += hold.contacts[i].position.cross(plan->holding.steps[k].forces[i]);
+    }
+    EXPECT_LE(force.norm(), 1e-8);
+    EXPECT_LE(torque.norm(), 1e-8);
+  }
+  probe.tangent = probe.normal;
+  EXPECT_EQ(PlanFrictionProbe(hold, probe, PlanOptions{}, SolverKind::kGeometric).status().message(),
+            "probe.tangent: zero length after projection onto the tangent plane");
+}
+
+}  // namespace
+}  // namespace tactforce::planner

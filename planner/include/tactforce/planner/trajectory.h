@@ -27,6 +27,7 @@ struct TrajectoryStep {
   Vec3 angular_velocity = Vec3::Zero();      // w (rad/s)
   Vec3 angular_acceleration = Vec3::Zero();  // dw (rad/s^2)
   std::optional<std::vector<Contact>> contacts;  // overrides the base contacts
+  Wrench external_wrench;  // added to the base's external wrench at this step
 };
 
 struct TrajectoryProblem {
@@ -54,5 +55,31 @@ PlanProblem StepProblem(const TrajectoryProblem& trajectory, int step);
 absl::StatusOr<TrajectoryResult> PlanTrajectory(const TrajectoryProblem& trajectory,
                                                 const PlanOptions& options, SolverKind kind,
                                                 bool warm_start = true);
+
+// Friction probing (Sundaralingam & Hermans III-A): a probe finger pushes at
+// `position` with a constant tangential force along `tangent` while its
+// normal force ramps down from `initial_normal_force` at `ramp_rate` until
+// `final_normal_force`; the holding grasp must keep the object still.
+struct FrictionProbe {
+  Vec3 position = Vec3::Zero();
+  Vec3 normal = Vec3::UnitZ();   // into the object
+  Vec3 tangent = Vec3::UnitX();  // projected onto the tangent plane
+  double tangential_force = 1.0;      // N
+  double initial_normal_force = 4.0;  // N
+  double final_normal_force = 0.0;    // N
+  double ramp_rate = 0.5;             // N/s
+  double sample_rate = 50.0;          // Hz
+};
+
+struct ProbePlan {
+  std::vector<double> times;        // s
+  std::vector<Vec3> probe_forces;   // N, applied by the probe to the object
+  TrajectoryResult holding;         // the holding fingers' plan per step
+};
+
+// Errors name the field ("probe.normal: zero length", ...).
+absl::StatusOr<ProbePlan> PlanFrictionProbe(const PlanProblem& holding_grasp,
+                                            const FrictionProbe& probe,
+                                            const PlanOptions& options, SolverKind kind);
 
 }  // namespace tactforce::planner
