@@ -230,6 +230,7 @@ v1::PlanResponse ToProto(const planner::PlanResult& result) {
     out->set_geometric_time_us(in.geometric_time_us);
     out->set_ipopt_time_us(in.ipopt_time_us);
     out->set_ipopt_status(ToProto(in.ipopt_status));
+    out->set_ipopt_message(in.ipopt_message);
     // in.ipopt_message has no field in v1.CrossCheck.
   }
   return response;

@@ -20,10 +20,8 @@ using ::testing::HasSubstr;
 class PythonClientTest : public ServerTest {
  protected:
   ProcessResult Python(std::vector<std::string> args) {
-    const char* source = std::getenv("TACTFORCE_SOURCE_DIR");
-    EXPECT_NE(source, nullptr);
-    std::vector<std::string> argv = {
-        TACTFORCE_PYTHON3, (fs::path(source) / "client/python/plan_client.py").string()};
+    std::vector<std::string> argv = {TACTFORCE_PYTHON3,
+                                     (SourceDir() / "client/python/plan_client.py").string()};
     argv.insert(argv.end(), args.begin(), args.end());
     return RunProcess(argv, {std::string("PYTHONPATH=") + TACTFORCE_PYTHON_STUB_DIR});
   }
@@ -50,8 +48,7 @@ TEST_F(PythonClientTest, PlansTheWrenchGraspLikeTheCppClient) {
 }
 
 TEST_F(PythonClientTest, PlansAJsonFileOverAStreamAndPrintsATable) {
-  const fs::path example =
-      fs::path(std::getenv("TACTFORCE_SOURCE_DIR")) / "client/examples/sphere_pinch.json";
+  const fs::path example = SourceDir() / "client/examples/sphere_pinch.json";
   ProcessResult run = Python({"--server", server_->address(), "--request", example.string(), "--solver",
                     "ipopt", "--stream"});
   ASSERT_EQ(run.exit_code, 0) << run.err;

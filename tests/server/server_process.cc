@@ -81,7 +81,12 @@ std::vector<std::string> Environment(const std::vector<std::string>& extra) {
 
 fs::path BinaryPath(const std::string& name) {
   const char* dir = std::getenv("TACTFORCE_BIN_DIR");
-  return fs::path(dir != nullptr ? dir : "") / name;
+  return fs::path(dir != nullptr && *dir != '\0' ? dir : TACTFORCE_DEFAULT_BIN_DIR) / name;
+}
+
+fs::path SourceDir() {
+  const char* dir = std::getenv("TACTFORCE_SOURCE_DIR");
+  return dir != nullptr && *dir != '\0' ? dir : TACTFORCE_DEFAULT_SOURCE_DIR;
 }
 
 ProcessResult RunProcess(const std::vector<std::string>& argv_in, const std::vector<std::string>& env_extra,
@@ -124,7 +129,7 @@ std::unique_ptr<ServerProcess> ServerProcess::Start(const std::vector<std::strin
   server->dir_ = MakeTempDir("tactforce_server");
   const fs::path binary = BinaryPath("tactforce-server");
   if (!fs::exists(binary)) {
-    *error = "no server binary at " + binary.string() + " (run through ctest)";
+    *error = "no server binary at " + binary.string();
     return nullptr;
   }
   int pipe_fds[2];

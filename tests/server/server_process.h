@@ -21,8 +21,10 @@ struct ProcessResult {
   std::string err;
 };
 
-// $TACTFORCE_BIN_DIR/<name>.
+// $TACTFORCE_BIN_DIR/<name>; the build's bin/ when the variable is unset.
 std::filesystem::path BinaryPath(const std::string& name);
+// $TACTFORCE_SOURCE_DIR, or the source tree this was built from.
+std::filesystem::path SourceDir();
 
 // Runs `argv` to completion (stdin /dev/null), capturing output; `env`
 // entries ("K=V") are added to the environment. Kills it after `timeout`.

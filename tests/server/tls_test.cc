@@ -133,7 +133,7 @@ TEST(TlsTest, MutualTlsAcceptsOnlyClientsSignedByTheCa) {
 
   // The Python client speaks mutual TLS too.
   ProcessResult python = RunProcess(
-      {TACTFORCE_PYTHON3, (fs::path(std::getenv("TACTFORCE_SOURCE_DIR")) / "client/python/plan_client.py").string(),
+      {TACTFORCE_PYTHON3, (SourceDir() / "client/python/plan_client.py").string(),
        "--server", server->address(), "--tls-ca", certs.Path("ca.crt"), "--tls-cert",
        certs.Path("client.crt"), "--tls-key", certs.Path("client.key"), "--tls-server-name",
        "localhost", "--timeout", "10"},

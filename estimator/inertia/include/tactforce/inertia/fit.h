@@ -1,0 +1,157 @@
+// Fitting mass, CoM and inertia to poses and forces (Sundaralingam & Hermans
+// III-B and beyond). Three methods, one entry point:
+//
+//   BASELINE_LS   Atkeson, An & Hollerbach 1986: kinematics from three-point
+//                 finite differences of the poses (or the measured columns),
+//                 optional Savitzky-Golay smoothing (cubic, window 51) of the
+//                 wrench and kinematics, ordinary least squares on the 10
+//                 standard parameters. Rank-deficient data give the
+//                 minimum-norm solution (scaled parameters).
+//   FACTOR_GRAPH  the paper: w = [m, c, Lx, Ly, Lz, R in SO(3)] with the
+//                 inertia about the object origin R diag(Ly+Lz, Lx+Lz, Lx+Ly) R^T,
+//                 dynamics factors from three consecutive poses (eq. 8-19, the
+//                 forces of the first of the three), measurement factors on
+//                 poses and forces, constraint factors m > 0, c in the hull,
+//                 L >= 0 that are costs active only when violated (eq. 35-37),
+//                 optional trace prior Tr(P0^-1 P) (eq. 20-21); batch
+//                 Levenberg-Marquardt on the sparse problem. Its known
+//                 weaknesses are reproduced on purpose (see README).
+//   CONSTRAINED   ours: the pseudo-inertia P = U U^T in log-Cholesky
+//                 coordinates (Rucker & Wensing 2022), so every estimate is
+//                 physically consistent by construction; kinematics from a
+//                 local-polynomial smoothing fit; generalised least squares
+//                 whose per-sample covariance holds the force noise and the
+//                 pose/kinematics noise propagated through the model
+//                 (iteratively re-weighted); optional entropic (Bregman) prior;
+//                 CoM-in-hull rows as hard constraints (NLopt SLSQP); exact
+//                 derivatives, damped Newton.
+//
+// No exceptions: bad input is absl::InvalidArgument naming the field, line
+// or column. Insufficient excitation is not an error: the result names the
+// poorly excited parameter directions.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "tactforce/inertia/types.h"
+
+namespace tactforce::inertia {
+
+enum class InertiaMethod { kBaselineLs, kFactorGraph, kConstrained };
+
+// "baseline-ls", "factor-graph", "constrained" (CLI spelling).
+const char* ToString(InertiaMethod method);
+// "INERTIA_METHOD_BASELINE_LS", ... (proto enum names).
+const char* ProtoName(InertiaMethod method);
+// Accepts either spelling, case-insensitive, '_' or '-'.
+absl::StatusOr<InertiaMethod> ParseInertiaMethod(std::string_view text);
+
+struct InertiaPrior {
+  InertialParameters params;
+  double weight = 1.0;  // >= 0; relative to the data term (in units of chi^2)
+};
+
+// Noise levels (standard deviations). 0 means "unknown": the fit then
+// estimates the wrench noise from its own residuals.
+struct InertiaNoise {
+  double force_sigma = 0.0;         // N per component: each contact force (contacts) or the wrench force
+  double torque_sigma = 0.0;        // N m per component, wrench source only
+  double position_sigma = 0.0;      // m, object position
+  double orientation_sigma = 0.0;   // rad, object orientation (per axis)
+  double angular_velocity_sigma = 0.0;      // rad/s, measured kinematics
+  double linear_acceleration_sigma = 0.0;   // m/s^2, measured kinematics
+  double angular_acceleration_sigma = 0.0;  // rad/s^2, measured kinematics
+};
+
+struct InertiaOptions {
+  InertiaMethod method = InertiaMethod::kConstrained;
+  Vec3 gravity = Vec3(0, 0, -9.81);  // world frame (m/s^2)
+  // Convex-hull vertices of the object (object frame, m), e.g. a mesh's
+  // vertices. Empty: no CoM constraint. Needs 4 non-coplanar points.
+  std::vector<Vec3> hull;
+  std::optional<InertiaPrior> prior;
+  InertiaNoise noise;
+
+  // BASELINE_LS: Savitzky-Golay smoothing of the wrench and kinematics.
+  bool savitzky_golay = false;
+  int savitzky_golay_window = 51;  // odd, >= 5 (cubic); clipped to the data
+
+  // CONSTRAINED: local-polynomial window (samples, odd) for kinematics from
+  // poses or for smoothing noisy measured kinematics. 0 = automatic.
+  int smoothing_window = 0;
+  int reweighting_rounds = 3;  // GLS re-weighting rounds (>= 1)
+
+  // FACTOR_GRAPH: factor noise (the paper tuned these once on noise-free
+  // simulation and kept them fixed). Measurement-factor sigmas come from
+  // `noise` (floored at the values below when 0/unknown).
+  double fg_dynamics_force_sigma = 0.01;   // N
+  double fg_dynamics_torque_sigma = 0.01;  // N m
+  double fg_min_force_sigma = 0.01;        // N
+  double fg_min_torque_sigma = 0.001;      // N m
+  double fg_min_position_sigma = 1e-6;     // m
+  double fg_min_orientation_sigma = 1e-6;  // rad
+  double fg_constraint_sigma = 1e-4;       // relative: active constraint factors
+
+  int max_iterations = 100;  // FACTOR_GRAPH LM / CONSTRAINED Newton iterations
+  // Directions whose relative singular value (scaled regressor) is below
+  // this are reported as poorly excited.
+  double excitation_threshold = 1e-3;
+
+  // Called with the fraction done (0..1) during long fits. May be empty.
+  std::function<void(double fraction)> progress;
+  // Polled between iterations; returning true ends the fit with
+  // absl::Cancelled("interrupted"). May be empty.
+  std::function<bool()> interrupt;
+};
+
+// Checks the options (InvalidArgument naming the field, e.g. "hull: ...",
+// "prior.com ... is outside the hull", "noise.force_sigma: negative").
+absl::Status ValidateInertiaOptions(const InertiaOptions& options);
+
+struct InertiaFit {
+  InertiaMethod method = InertiaMethod::kConstrained;
+  InertialParameters params;       // mass, CoM, inertia about the CoM
+  Vector10d standard = Vector10d::Zero();  // standard parameters (about the origin)
+  Vec3 principal_moments = Vec3::Zero();   // ascending (kg m^2)
+  Eigen::Matrix3d principal_axes = Eigen::Matrix3d::Identity();  // columns, right-handed
+  bool physically_consistent = false;      // 4x4 pseudo-inertia positive definite
+  double pseudo_inertia_min_eigenvalue = 0.0;  // of P scaled to unit mass and size
+  bool com_in_hull = true;                 // true when no hull was given
+
+  double residual_rms_force = 0.0;   // N, Newton-Euler residual per component
+  double residual_rms_torque = 0.0;  // N m
+
+  // Standard errors (1 sigma) of the reported quantities.
+  double mass_se = 0.0;
+  Vec3 com_se = Vec3::Zero();
+  InertiaTensor inertia_se;
+
+  // Singular values of the column-scaled, whitened regressor, descending,
+  // relative to the largest; directions below options.excitation_threshold
+  // are described in `poorly_excited` ("0.71 Ixx - 0.71 Iyy", standard
+  // parameters about the origin).
+  std::vector<double> singular_values;
+  std::vector<std::string> poorly_excited;
+
+  int iterations = 0;
+  double time_seconds = 0.0;
+  int samples_used = 0;        // samples that produced an equation
+  std::vector<std::string> notes;  // e.g. "prior ignored by baseline-ls"
+};
+
+// Validates samples and options, then fits with options.method.
+absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples, const InertiaOptions& options);
+
+// Minimum number of samples a fit with `method` needs: 2 with measured
+// kinematics (12 equations for 10 parameters); from poses 4 for
+// BASELINE_LS and FACTOR_GRAPH (two three-point differences) and 5 for
+// CONSTRAINED (a cubic smoothing fit).
+int MinimumSamples(const InertiaSamples& samples, InertiaMethod method);
+
+}  // namespace tactforce::inertia

@@ -1,0 +1,383 @@
+#include "tactforce/inertia/samples.h"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <set>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
+#include "tactforce/inertia/fit.h"
+
+namespace tactforce::inertia {
+namespace {
+
+constexpr double kMinQuaternionNorm = 1e-3;
+
+const std::vector<std::string> kPoseColumns = {"t", "px", "py", "pz", "qw", "qx", "qy", "qz"};
+const std::vector<std::string> kWrenchColumns = {"fx", "fy", "fz", "tx", "ty", "tz"};
+const std::vector<std::string> kKinematicsRequired = {"wx", "wy", "wz", "dwx", "dwy",
+                                                      "dwz", "ax", "ay", "az"};
+const std::vector<std::string> kVelocityColumns = {"vx", "vy", "vz"};
+
+std::vector<std::string> ContactColumns(int i) {
+  std::vector<std::string> out;
+  for (const char* s : {"px", "py", "pz", "fx", "fy", "fz"}) out.push_back(absl::StrCat("c", i, "_", s));
+  return out;
+}
+
+// Location of sample i for messages.
+struct Locator {
+  const InertiaSamples& s;
+  std::string Sample(int i) const {
+    if (i < static_cast<int>(s.line_numbers.size()))
+      return absl::StrCat(s.source_name, ":", s.line_numbers[i]);
+    return absl::StrCat(s.source_name.empty() ? "" : s.source_name + ": ", "samples[", i, "]");
+  }
+  bool csv() const { return !s.line_numbers.empty(); }
+  // field: CSV column names, or the struct path.
+  std::string At(int i, const std::string& csv_columns, const std::string& field) const {
+    if (csv()) return absl::StrCat(Sample(i), ": column", csv_columns.find(',') == std::string::npos ? " '" : "s '",
+                                   csv_columns, "'");
+    return absl::StrCat(Sample(i), ".", field);
+  }
+};
+
+bool Finite(const Vec3& v) { return v.allFinite(); }
+
+std::string Fmt(double v) { return absl::StrFormat("%.6g", v); }
+
+}  // namespace
+
+absl::Status ValidateInertiaSamples(const InertiaSamples& s) {
+  const Locator loc{s};
+  const std::string src = s.source_name.empty() ? "samples" : s.source_name;
+  if (s.source == ForceSource::kContacts && s.num_contacts < 1)
+    return absl::InvalidArgumentError(absl::StrCat(src, ": contact source with no contacts"));
+  const int n = static_cast<int>(s.samples.size());
+  const bool kin = s.HasKinematics();
+  for (int i = 0; i < n; ++i) {
+    const InertiaSample& x = s.samples[i];
+    if (!std::isfinite(x.t)) return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "t", "t"), ": not finite"));
+    if (i > 0 && !(x.t > s.samples[i - 1].t)) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          loc.At(i, "t", "t"), ": time ", Fmt(x.t),
+          x.t == s.samples[i - 1].t ? " duplicates" : " is before", " the previous sample's ",
+          Fmt(s.samples[i - 1].t), " (times must be strictly increasing)"));
+    }
+    if (!Finite(x.position))
+      return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "px,py,pz", "position"), ": not finite"));
+    const double qn = x.orientation.coeffs().norm();
+    if (!std::isfinite(qn))
+      return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "qw,qx,qy,qz", "orientation"), ": not finite"));
+    if (qn < kMinQuaternionNorm) {
+      return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "qw,qx,qy,qz", "orientation"),
+                                                     ": quaternion norm ", Fmt(qn),
+                                                     " is near zero (not a rotation)"));
+    }
+    if (s.source == ForceSource::kWrench) {
+      if (!Finite(x.force))
+        return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "fx,fy,fz", "force"), ": not finite"));
+      if (!Finite(x.torque))
+        return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "tx,ty,tz", "torque"), ": not finite"));
+      if (!(x.force_sigma >= 0) || !std::isfinite(x.force_sigma))
+        return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "f_sigma", "force_sigma"), ": must be finite and >= 0"));
+      if (!(x.torque_sigma >= 0) || !std::isfinite(x.torque_sigma))
+        return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "t_sigma", "torque_sigma"), ": must be finite and >= 0"));
+    } else {
+      if (static_cast<int>(x.contacts.size()) != s.num_contacts) {
+        return absl::InvalidArgumentError(absl::StrCat(loc.Sample(i), ": ", x.contacts.size(),
+                                                       " contacts, expected ", s.num_contacts,
+                                                       " (the same contact set in every sample)"));
+      }
+      for (int c = 0; c < s.num_contacts; ++c) {
+        const ContactReading& r = x.contacts[c];
+        const std::string pfx = absl::StrCat("c", c, "_");
+        if (!Finite(r.point))
+          return absl::InvalidArgumentError(absl::StrCat(
+              loc.At(i, absl::StrCat(pfx, "px,", pfx, "py,", pfx, "pz"), absl::StrCat("contacts[", c, "].point")),
+              ": not finite"));
+        if (!Finite(r.force))
+          return absl::InvalidArgumentError(absl::StrCat(
+              loc.At(i, absl::StrCat(pfx, "fx,", pfx, "fy,", pfx, "fz"), absl::StrCat("contacts[", c, "].force")),
+              ": not finite"));
+        if (!(r.sigma >= 0) || !std::isfinite(r.sigma))
+          return absl::InvalidArgumentError(absl::StrCat(
+              loc.At(i, absl::StrCat(pfx, "sigma"), absl::StrCat("contacts[", c, "].sigma")),
+              ": must be finite and >= 0"));
+      }
+    }
+    if (x.kinematics.has_value() != kin) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          loc.Sample(i), ": measured kinematics must be given for all samples or for none"));
+    }
+    if (kin) {
+      const MeasuredKinematics& k = *x.kinematics;
+      const std::pair<const char*, const Vec3*> fields[] = {
+          {"wx,wy,wz|angular_velocity", &k.angular_velocity},
+          {"vx,vy,vz|velocity", &k.velocity},
+          {"dwx,dwy,dwz|angular_acceleration", &k.angular_acceleration},
+          {"ax,ay,az|acceleration", &k.acceleration}};
+      for (const auto& [names, v] : fields) {
+        if (!Finite(*v)) {
+          const std::string both(names);
+          const size_t bar = both.find('|');
+          return absl::InvalidArgumentError(absl::StrCat(
+              loc.At(i, both.substr(0, bar), "kinematics." + both.substr(bar + 1)), ": not finite"));
+        }
+      }
+    }
+  }
+  return absl::OkStatus();
+}
+
+void NormalizeOrientations(InertiaSamples& s) {
+  for (InertiaSample& x : s.samples) x.orientation.normalize();
+}
+
+absl::StatusOr<InertiaSamples> InertiaSamplesFromCsv(const estimator::CsvTable& table) {
+  const std::string& src = table.source;
+  if (absl::Status st = table.Require(kPoseColumns); !st.ok()) return st;
+
+  // Force source: wrench columns or contact columns, not both.
+  std::set<int> contact_ids;
+  for (const std::string& c : table.columns) {
+    if (c.size() > 1 && c[0] == 'c' && std::isdigit(static_cast<unsigned char>(c[1]))) {
+      const size_t us = c.find('_');
+      if (us == std::string::npos) continue;
+      bool digits = true;
+      for (size_t k = 1; k < us; ++k) digits = digits && std::isdigit(static_cast<unsigned char>(c[k]));
+      if (digits) contact_ids.insert(std::stoi(c.substr(1, us - 1)));
+    }
+  }
+  bool any_wrench = false;
+  for (const auto& c : kWrenchColumns) any_wrench = any_wrench || table.Has(c);
+  InertiaSamples out;
+  out.source_name = src;
+  if (any_wrench && !contact_ids.empty()) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        src, ": both wrench columns (fx..tz) and contact columns (c", *contact_ids.begin(),
+        "_...) are present; give one force source"));
+  }
+  if (any_wrench) {
+    if (absl::Status st = table.Require(kWrenchColumns); !st.ok()) return st;
+    out.source = ForceSource::kWrench;
+  } else if (!contact_ids.empty()) {
+    out.source = ForceSource::kContacts;
+    const int n = *contact_ids.rbegin() + 1;
+    for (int i = 0; i < n; ++i) {
+      if (!contact_ids.count(i)) {
+        return absl::InvalidArgumentError(absl::StrCat(
+            src, ": inconsistent contact columns: contact ", i, " has no columns but contact ",
+            *contact_ids.rbegin(), " does (contacts must be numbered 0..n-1)"));
+      }
+      std::vector<std::string> missing;
+      for (const auto& c : ContactColumns(i))
+        if (!table.Has(c)) missing.push_back(c);
+      if (!missing.empty()) {
+        return absl::InvalidArgumentError(absl::StrCat(src, ": inconsistent contact columns: contact ", i,
+                                                       ": missing column(s) ", absl::StrJoin(missing, ", ")));
+      }
+    }
+    out.num_contacts = n;
+  } else {
+    return absl::InvalidArgumentError(absl::StrCat(
+        src, ": missing force columns: need fx,fy,fz,tx,ty,tz (wrench) or c0_px..c0_fz (contacts)"));
+  }
+
+  // Measured kinematics: any of the columns present -> the required set.
+  bool any_kin = false;
+  for (const auto& c : kKinematicsRequired) any_kin = any_kin || table.Has(c);
+  for (const auto& c : kVelocityColumns) any_kin = any_kin || table.Has(c);
+  bool has_v = false;
+  if (any_kin) {
+    std::vector<std::string> missing;
+    for (const auto& c : kKinematicsRequired)
+      if (!table.Has(c)) missing.push_back(c);
+    if (!missing.empty()) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          src, ": incomplete measured kinematics: missing column(s) ", absl::StrJoin(missing, ", "),
+          " (give wx..wz, dwx..dwz, ax..az, optionally vx..vz, or none of them)"));
+    }
+    int nv = 0;
+    for (const auto& c : kVelocityColumns) nv += table.Has(c);
+    if (nv != 0 && nv != 3) {
+      std::vector<std::string> m;
+      for (const auto& c : kVelocityColumns)
+        if (!table.Has(c)) m.push_back(c);
+      return absl::InvalidArgumentError(
+          absl::StrCat(src, ": incomplete velocity: missing column(s) ", absl::StrJoin(m, ", ")));
+    }
+    has_v = nv == 3;
+  }
+
+  auto col = [&](const std::string& name) { return table.ColumnIndex(name); };
+  const int it = col("t");
+  const int ip[3] = {col("px"), col("py"), col("pz")};
+  const int iq[4] = {col("qw"), col("qx"), col("qy"), col("qz")};
+  int iw[6] = {-1, -1, -1, -1, -1, -1};
+  for (int k = 0; k < 6 && out.source == ForceSource::kWrench; ++k) iw[k] = col(kWrenchColumns[k]);
+  const int ifs = col("f_sigma"), its = col("t_sigma");
+  std::vector<std::array<int, 7>> ic;
+  for (int i = 0; i < out.num_contacts; ++i) {
+    std::array<int, 7> a;
+    const auto names = ContactColumns(i);
+    for (int k = 0; k < 6; ++k) a[k] = col(names[k]);
+    a[6] = col(absl::StrCat("c", i, "_sigma"));
+    ic.push_back(a);
+  }
+  auto kc = [&](const char* a, const char* b, const char* c) {
+    return std::array<int, 3>{col(a), col(b), col(c)};
+  };
+  const auto kw = kc("wx", "wy", "wz"), kv = kc("vx", "vy", "vz"), kdw = kc("dwx", "dwy", "dwz"),
+             ka = kc("ax", "ay", "az");
+
+  out.samples.reserve(table.rows.size());
+  out.line_numbers = table.line_numbers;
+  for (size_t r = 0; r < table.rows.size(); ++r) {
+    const std::vector<double>& row = table.rows[r];
+    auto v3 = [&](const int* idx) { return Vec3(row[idx[0]], row[idx[1]], row[idx[2]]); };
+    InertiaSample s;
+    s.t = row[it];
+    s.position = v3(ip);
+    s.orientation = Eigen::Quaterniond(row[iq[0]], row[iq[1]], row[iq[2]], row[iq[3]]);
+    if (out.source == ForceSource::kWrench) {
+      s.force = v3(iw);
+      s.torque = v3(iw + 3);
+      if (ifs >= 0) s.force_sigma = row[ifs];
+      if (its >= 0) s.torque_sigma = row[its];
+    } else {
+      for (const auto& a : ic) {
+        ContactReading c;
+        c.point = v3(a.data());
+        c.force = v3(a.data() + 3);
+        if (a[6] >= 0) c.sigma = row[a[6]];
+        s.contacts.push_back(c);
+      }
+    }
+    if (any_kin) {
+      MeasuredKinematics k;
+      k.angular_velocity = v3(kw.data());
+      if (has_v) k.velocity = v3(kv.data());
+      k.angular_acceleration = v3(kdw.data());
+      k.acceleration = v3(ka.data());
+      s.kinematics = k;
+    }
+    out.samples.push_back(std::move(s));
+  }
+  // NaN cells: ParseCsv normally rejects them; a table built otherwise may hold them.
+  for (size_t r = 0; r < table.rows.size(); ++r) {
+    for (size_t c = 0; c < table.rows[r].size(); ++c) {
+      if (std::isnan(table.rows[r][c])) {
+        return absl::InvalidArgumentError(absl::StrCat(src, ":", table.line_numbers[r], ": column '",
+                                                       table.columns[c], "': NaN"));
+      }
+    }
+  }
+  if (absl::Status st = ValidateInertiaSamples(out); !st.ok()) return st;
+  const int need = MinimumSamples(out, InertiaMethod::kBaselineLs);  // the least of the methods
+  if (static_cast<int>(out.samples.size()) < need) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        src, ": ", out.samples.size(), " sample(s), at least ", need,
+        " needed for the 10 inertial parameters (6 equations per sample",
+        out.HasKinematics() ? "" : ", after differentiating the poses", ")"));
+  }
+  NormalizeOrientations(out);
+  return out;
+}
+
+absl::StatusOr<InertiaSamples> ParseInertiaCsv(const std::string& text, const std::string& source) {
+  absl::StatusOr<estimator::CsvTable> t = estimator::ParseCsv(text, source);
+  if (!t.ok()) return t.status();
+  return InertiaSamplesFromCsv(*t);
+}
+
+absl::StatusOr<InertiaSamples> ReadInertiaCsvFile(const std::string& path) {
+  absl::StatusOr<estimator::CsvTable> t = estimator::ReadCsvFile(path);
+  if (!t.ok()) return t.status();
+  return InertiaSamplesFromCsv(*t);
+}
+
+std::string InertiaSamplesToCsv(const InertiaSamples& s) {
+  std::vector<std::string> cols = kPoseColumns;
+  if (s.source == ForceSource::kWrench) {
+    cols.insert(cols.end(), kWrenchColumns.begin(), kWrenchColumns.end());
+  } else {
+    for (int i = 0; i < s.num_contacts; ++i) {
+      auto c = ContactColumns(i);
+      cols.insert(cols.end(), c.begin(), c.end());
+    }
+  }
+  bool has_sigma = false;
+  for (const auto& x : s.samples) {
+    has_sigma = has_sigma || x.force_sigma > 0 || x.torque_sigma > 0;
+    for (const auto& c : x.contacts) has_sigma = has_sigma || c.sigma > 0;
+  }
+  if (has_sigma) {
+    if (s.source == ForceSource::kWrench) {
+      cols.push_back("f_sigma");
+      cols.push_back("t_sigma");
+    } else {
+      for (int i = 0; i < s.num_contacts; ++i) cols.push_back(absl::StrCat("c", i, "_sigma"));
+    }
+  }
+  const bool kin = s.HasKinematics();
+  if (kin) {
+    for (const char* c : {"wx", "wy", "wz", "vx", "vy", "vz", "dwx", "dwy", "dwz", "ax", "ay", "az"})
+      cols.push_back(c);
+  }
+  std::string out = absl::StrJoin(cols, ",") + "\n";
+  char buf[32];
+  auto add = [&](double v) {
+    std::snprintf(buf, sizeof(buf), "%.17g", v);
+    out += ',';
+    out += buf;
+  };
+  for (const auto& x : s.samples) {
+    std::snprintf(buf, sizeof(buf), "%.17g", x.t);
+    out += buf;
+    for (int k = 0; k < 3; ++k) add(x.position(k));
+    add(x.orientation.w());
+    add(x.orientation.x());
+    add(x.orientation.y());
+    add(x.orientation.z());
+    if (s.source == ForceSource::kWrench) {
+      for (int k = 0; k < 3; ++k) add(x.force(k));
+      for (int k = 0; k < 3; ++k) add(x.torque(k));
+    } else {
+      for (const auto& c : x.contacts) {
+        for (int k = 0; k < 3; ++k) add(c.point(k));
+        for (int k = 0; k < 3; ++k) add(c.force(k));
+      }
+    }
+    if (has_sigma) {
+      if (s.source == ForceSource::kWrench) {
+        add(x.force_sigma);
+        add(x.torque_sigma);
+      } else {
+        for (const auto& c : x.contacts) add(c.sigma);
+      }
+    }
+    if (kin) {
+      const MeasuredKinematics& k = *x.kinematics;
+      for (const Vec3* v : {&k.angular_velocity, &k.velocity, &k.angular_acceleration, &k.acceleration})
+        for (int j = 0; j < 3; ++j) add((*v)(j));
+    }
+    out += '\n';
+  }
+  return out;
+}
+
+absl::Status WriteInertiaCsvFile(const InertiaSamples& samples, const std::string& path) {
+  std::ofstream f(path);
+  if (!f) return absl::InvalidArgumentError(absl::StrCat(path, ": cannot open for writing"));
+  f << InertiaSamplesToCsv(samples);
+  f.close();
+  if (!f) return absl::InvalidArgumentError(absl::StrCat(path, ": write failed"));
+  return absl::OkStatus();
+}
+
+}  // namespace tactforce::inertia

@@ -1,0 +1,301 @@
+#include "tactforce/sim/sensor_model.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "absl/strings/str_cat.h"
+#include "tactforce/sim/json.h"
+
+namespace tactforce::sim {
+namespace {
+
+constexpr char kFormat[] = "tactforce.sensor_model.v1";
+
+struct NumField {
+  const char* name;
+  double SensorModel::*model_field;  // or null
+  double EffectParams::*effect_field;
+};
+
+const std::vector<NumField>& NumFields() {
+  static const std::vector<NumField> f = {
+      {"gain", &SensorModel::gain, nullptr},
+      {"offset", &SensorModel::offset, nullptr},
+      {"noise", &SensorModel::noise, nullptr},
+      {"partial_error", &SensorModel::partial_error, nullptr},
+      {"threshold", nullptr, &EffectParams::threshold},
+      {"threshold_shift", nullptr, &EffectParams::threshold_shift},
+      {"hysteresis_width", nullptr, &EffectParams::hysteresis_width},
+      {"delay", nullptr, &EffectParams::delay},
+      {"lag", nullptr, &EffectParams::lag},
+      {"saturation", nullptr, &EffectParams::saturation},
+      {"curvature", nullptr, &EffectParams::curvature},
+      {"full_scale", nullptr, &EffectParams::full_scale},
+      {"drift", nullptr, &EffectParams::drift},
+      {"crosstalk", nullptr, &EffectParams::crosstalk},
+  };
+  return f;
+}
+
+double& FieldRef(SensorModel& m, const NumField& f) {
+  return f.model_field ? m.*(f.model_field) : m.effects.*(f.effect_field);
+}
+double FieldVal(const SensorModel& m, const NumField& f) {
+  return f.model_field ? m.*(f.model_field) : m.effects.*(f.effect_field);
+}
+bool IsField(std::string_view name) {
+  for (const auto& f : NumFields())
+    if (name == f.name) return true;
+  return false;
+}
+
+}  // namespace
+
+absl::Status ValidateSensorModel(const SensorModel& m) {
+  for (const auto& f : NumFields()) {
+    if (!std::isfinite(FieldVal(m, f)))
+      return absl::InvalidArgumentError(absl::StrCat("model field '", f.name, "': not a finite number"));
+  }
+  auto nonneg = [](double v, const char* name) -> absl::Status {
+    if (v < 0) return absl::InvalidArgumentError(absl::StrCat("model field '", name, "': must be >= 0, got ", v));
+    return absl::OkStatus();
+  };
+  const EffectParams& e = m.effects;
+  if (m.gain == 0) return absl::InvalidArgumentError("model field 'gain': must be non-zero");
+  for (auto st : {nonneg(m.noise, "noise"), nonneg(m.partial_error, "partial_error"),
+                  nonneg(e.threshold, "threshold"), nonneg(e.hysteresis_width, "hysteresis_width"),
+                  nonneg(e.lag, "lag"), nonneg(e.saturation, "saturation")})
+    if (!st.ok()) return st;
+  if (e.threshold_shift < 0 || e.threshold_shift > 1)
+    return absl::InvalidArgumentError(
+        absl::StrCat("model field 'threshold_shift': must be in [0, 1], got ", e.threshold_shift));
+  if (e.full_scale <= 0)
+    return absl::InvalidArgumentError(absl::StrCat("model field 'full_scale': must be > 0, got ", e.full_scale));
+  if (std::abs(e.delay) > 10)
+    return absl::InvalidArgumentError(absl::StrCat("model field 'delay': |delay| must be <= 10 s, got ", e.delay));
+  if (e.lag > 10) return absl::InvalidArgumentError(absl::StrCat("model field 'lag': must be <= 10 s, got ", e.lag));
+  for (const auto& [k, v] : m.uncertainty) {
+    if (!IsField(k)) return absl::InvalidArgumentError(absl::StrCat("model field 'uncertainty.", k, "': unknown field"));
+  }
+  return absl::OkStatus();
+}
+
+absl::StatusOr<SensorModel> SensorModelFromJson(const std::string& text, const std::string& source) {
+  auto doc = ParseJson(text, source);
+  if (!doc.ok()) return doc.status();
+  if (!doc->is_object()) return absl::InvalidArgumentError(absl::StrCat(source, ": a sensor model must be a JSON object"));
+  SensorModel m;
+  m.source.clear();
+  for (const auto& [key, v] : doc->members()) {
+    auto where = absl::StrCat(source, ":", v.line(), ": field '", key, "'");
+    if (key == "format") {
+      if (!v.is_string() || v.string() != kFormat)
+        return absl::InvalidArgumentError(absl::StrCat(where, ": expected \"", kFormat, "\""));
+      continue;
+    }
+    if (key == "units" || key == "source") {
+      if (!v.is_string()) return absl::InvalidArgumentError(absl::StrCat(where, ": expected a string"));
+      (key == "units" ? m.units : m.source) = v.string();
+      continue;
+    }
+    if (key == "uncertainty") {
+      if (!v.is_object()) return absl::InvalidArgumentError(absl::StrCat(where, ": expected an object"));
+      for (const auto& [uk, uv] : v.members()) {
+        if (!IsField(uk))
+          return absl::InvalidArgumentError(absl::StrCat(source, ":", uv.line(), ": field 'uncertainty.", uk, "': unknown field"));
+        if (uv.is_null()) continue;
+        if (!uv.is_number())
+          return absl::InvalidArgumentError(absl::StrCat(source, ":", uv.line(), ": field 'uncertainty.", uk, "': expected a number"));
+        m.uncertainty[uk] = uv.number();
+      }
+      continue;
+    }
+    if (key == "effects_named" || key == "notes") continue;  // informational (audit output)
+    bool found = false;
+    for (const auto& f : NumFields()) {
+      if (key != f.name) continue;
+      found = true;
+      if (!v.is_number()) return absl::InvalidArgumentError(absl::StrCat(where, ": expected a number"));
+      FieldRef(m, f) = v.number();
+    }
+    if (!found) return absl::InvalidArgumentError(absl::StrCat(where, ": unknown field"));
+  }
+  if (auto st = ValidateSensorModel(m); !st.ok())
+    return absl::InvalidArgumentError(absl::StrCat(source, ": ", st.message()));
+  return m;
+}
+
+absl::StatusOr<SensorModel> LoadSensorModel(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return absl::NotFoundError(absl::StrCat(path, ": cannot open model file"));
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return SensorModelFromJson(ss.str(), path);
+}
+
+std::string SensorModelToJson(const SensorModel& m) {
+  JsonWriter w;
+  w.BeginObject();
+  w.Field("format", kFormat);
+  w.Field("units", m.units);
+  if (!m.source.empty()) w.Field("source", m.source);
+  for (const auto& f : NumFields()) w.Field(f.name, FieldVal(m, f));
+  if (!m.uncertainty.empty()) {
+    w.Key("uncertainty");
+    w.BeginObject();
+    for (const auto& [k, v] : m.uncertainty) w.Field(k, v);
+    w.EndObject();
+  }
+  w.EndObject();
+  return w.str();
+}
+
+absl::Status SaveSensorModel(const SensorModel& m, const std::string& path) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) return absl::InternalError(absl::StrCat(path, ": cannot write model file"));
+  out << SensorModelToJson(m);
+  if (!out) return absl::InternalError(absl::StrCat(path, ": write failed"));
+  return absl::OkStatus();
+}
+
+// ---------------------------------------------------------------------------
+
+namespace {
+
+// Catmull-Rom interpolation of x at time tq within [lo, hi) (indices), with
+// a moving cursor. Clamps outside the segment.
+struct Interp {
+  const double* t;
+  const double* x;
+  int lo, hi;  // segment [lo, hi)
+  int k;       // cursor: t[k] <= tq < t[k+1]
+  double operator()(double tq) {
+    if (tq <= t[lo]) return x[lo];
+    if (tq >= t[hi - 1]) return x[hi - 1];
+    while (k + 1 < hi - 1 && t[k + 1] <= tq) ++k;
+    while (k > lo && t[k] > tq) --k;
+    const int i0 = k, i1 = k + 1;
+    const double h = t[i1] - t[i0];
+    const double s = (tq - t[i0]) / h;
+    // Tangents by finite differences (non-uniform safe), one-sided at ends.
+    auto slope = [&](int i) {
+      if (i <= lo) return (x[lo + 1] - x[lo]) / (t[lo + 1] - t[lo]);
+      if (i >= hi - 1) return (x[hi - 1] - x[hi - 2]) / (t[hi - 1] - t[hi - 2]);
+      return (x[i + 1] - x[i - 1]) / (t[i + 1] - t[i - 1]);
+    };
+    const double m0 = slope(i0) * h, m1 = slope(i1) * h;
+    const double s2 = s * s, s3 = s2 * s;
+    return (2 * s3 - 3 * s2 + 1) * x[i0] + (s3 - 2 * s2 + s) * m0 + (-2 * s3 + 3 * s2) * x[i1] +
+           (s3 - s2) * m1;
+  }
+};
+
+}  // namespace
+
+void ApplyChannel(const EffectParams& p, const ChannelInput& in, std::vector<double>* out_ptr) {
+  std::vector<double>& out = *out_ptr;
+  const int n = in.n;
+  out.resize(n);
+  for (int i = 0; i < n; ++i) out[i] = in.force[i] + (in.shear && p.crosstalk != 0 ? p.crosstalk * in.shear[i] : 0.0);
+
+  // Segment boundaries.
+  std::vector<int> bounds;
+  if (in.segment_starts && !in.segment_starts->empty()) {
+    bounds = *in.segment_starts;
+    if (bounds.front() != 0) bounds.insert(bounds.begin(), 0);
+  } else {
+    bounds.push_back(0);
+  }
+  bounds.push_back(n);
+
+  const bool dynamic = p.delay != 0 || p.lag > 0 || p.hysteresis_width > 0;
+  if (dynamic) {
+    std::vector<double> tmp;
+    for (size_t s = 0; s + 1 < bounds.size(); ++s) {
+      const int lo = bounds[s], hi = bounds[s + 1];
+      if (hi - lo < 2) continue;
+      if (p.delay != 0) {
+        tmp.assign(out.begin() + lo, out.begin() + hi);
+        Interp ip{in.t + lo, tmp.data(), 0, hi - lo, 0};
+        for (int i = lo; i < hi; ++i) out[i] = ip(in.t[i] - p.delay);
+      }
+      if (p.lag > 0) {
+        // Exact solution of tau y' = u - y for u linear between samples.
+        double y = out[lo];
+        double uprev = out[lo];
+        for (int i = lo + 1; i < hi; ++i) {
+          const double h = in.t[i] - in.t[i - 1];
+          const double u = out[i];
+          const double e = std::exp(-h / p.lag);
+          const double slope = (u - uprev) / h;
+          y = u - p.lag * slope + e * (y - uprev + p.lag * slope);
+          uprev = u;
+          out[i] = y;
+        }
+      }
+      if (p.hysteresis_width > 0) {
+        const double r = 0.5 * p.hysteresis_width;
+        double state = 0;  // starts released
+        for (int i = lo; i < hi; ++i) {
+          const double u = out[i];
+          state = std::max(u - r, std::min(u + r, state));
+          out[i] = state;
+        }
+      }
+    }
+  }
+  const bool has_curv = p.curvature != 0;
+  const double cscale = has_curv ? p.curvature / p.full_scale : 0;
+  for (int i = 0; i < n; ++i) {
+    double u = out[i];
+    if (has_curv) u += cscale * u * std::abs(u);
+    if (p.threshold > 0) u = (u < p.threshold) ? 0.0 : u - p.threshold_shift * p.threshold;
+    if (p.saturation > 0 && u > p.saturation) u = p.saturation;
+    if (p.drift != 0) u += p.drift * (in.t[i] - in.t0);
+    out[i] = u;
+  }
+}
+
+std::vector<double> PredictReading(const SensorModel& model, const std::vector<double>& t,
+                                   const std::vector<double>& reference, const std::vector<double>& shear,
+                                   const std::vector<int>& segment_starts) {
+  ChannelInput in;
+  in.t = t.data();
+  in.force = reference.data();
+  in.shear = shear.size() == reference.size() ? shear.data() : nullptr;
+  in.n = static_cast<int>(reference.size());
+  in.segment_starts = &segment_starts;
+  in.t0 = t.empty() ? 0 : t.front();
+  std::vector<double> out;
+  ApplyChannel(model.effects, in, &out);
+  for (double& v : out) v = model.gain * v + model.offset;
+  return out;
+}
+
+double CorrectReading(const SensorModel& m, double reading, double t_since_start, double shear) {
+  const EffectParams& p = m.effects;
+  double u = (reading - m.offset) / m.gain;
+  u -= p.drift * t_since_start;
+  if (p.saturation > 0 && u >= p.saturation) u = p.saturation;
+  if (p.threshold > 0 && u > 0) u += p.threshold_shift * p.threshold;
+  if (p.curvature != 0) {
+    // Solve v + c v|v| = u (monotone where 1 + 2c|v| > 0).
+    const double c = p.curvature / p.full_scale;
+    double v = u;
+    for (int it = 0; it < 30; ++it) {
+      const double f = v + c * v * std::abs(v) - u;
+      const double d = 1 + 2 * c * std::abs(v);
+      if (d <= 1e-6) break;
+      const double step = f / d;
+      v -= step;
+      if (std::abs(step) < 1e-12) break;
+    }
+    u = v;
+  }
+  u -= p.crosstalk * shear;
+  return u;
+}
+
+}  // namespace tactforce::sim
