@@ -39,16 +39,36 @@ absl::StatusOr<std::string> ReadInput(const std::string& path) {
   return text;
 }
 
+int ExitCodeFor(absl::StatusCode code) {
+  switch (code) {
+    case absl::StatusCode::kOk:
+      return kExitOk;
+    case absl::StatusCode::kInvalidArgument:
+      return kExitBadInput;
+    case absl::StatusCode::kUnavailable:
+      return kExitUnavailable;
+    case absl::StatusCode::kDeadlineExceeded:
+      return kExitDeadline;
+    default:
+      return kExitFailure;
+  }
+}
+
 int ReportError(const absl::Status& status) {
   std::string message(status.message());
   for (char& c : message) {
     if (c == '\n' || c == '\r') c = ' ';
   }
-  if (status.code() != absl::StatusCode::kInvalidArgument) {
-    message = absl::StrCat(absl::StatusCodeToString(status.code()), ": ", message);
+  switch (status.code()) {
+    case absl::StatusCode::kInvalidArgument:
+    case absl::StatusCode::kUnavailable:
+    case absl::StatusCode::kDeadlineExceeded:
+      break;
+    default:
+      message = absl::StrCat(absl::StatusCodeToString(status.code()), ": ", message);
   }
   std::cerr << "error: " << message << std::endl;
-  return status.code() == absl::StatusCode::kInvalidArgument ? kExitBadInput : kExitFailure;
+  return ExitCodeFor(status.code());
 }
 
 }  // namespace tactforce::cli

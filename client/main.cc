@@ -6,6 +6,9 @@
 #include "CLI/CLI.hpp"
 #include "cli_common.h"
 #include "demo_command.h"
+#include "estimate_command.h"
+#include "health_command.h"
+#include "load_command.h"
 #include "plan_command.h"
 
 #ifndef TACTFORCE_VERSION
@@ -24,13 +27,28 @@ int Main(int argc, char** argv) {
       "Examples:\n"
       "  tactforce plan --local --request client/examples/sphere_pinch.json --format table\n"
       "  cat request.json | tactforce plan --local --request -\n"
-      "  tactforce demo\n"
+      "  tactforce plan --server localhost:50051 --request client/examples/sphere_pinch.json\n"
+      "  tactforce health --server localhost:50051\n"
+      "  tactforce load --target localhost:50051 --rpc plan --concurrency 8 --duration 5\n"
+      "  tactforce demo [--server localhost:50051]\n"
       "Run 'tactforce COMMAND --help' for the options of a command.");
 
   PlanArgs plan_args;
   CLI::App* plan = AddPlanCommand(app, plan_args);
   DemoArgs demo_args;
   CLI::App* demo = AddDemoCommand(app, demo_args);
+  HealthArgs health_args;
+  CLI::App* health = AddHealthCommand(app, health_args);
+  LoadArgs load_args;
+  CLI::App* load = AddLoadCommand(app, load_args);
+  EstimateArgs estimate_args;
+  CLI::App* estimate = AddEstimateCommand(app, estimate_args);
+  FrictionArgs friction_args;
+  CLI::App* friction = AddFrictionCommand(app, friction_args);
+  CLI::App* simulate = app.add_subcommand("simulate", "Write simulated data sets with their truth");
+  simulate->require_subcommand(1);
+  SimulateFrictionArgs simulate_friction_args;
+  CLI::App* simulate_friction = AddSimulateFrictionCommand(*simulate, simulate_friction_args);
 
   try {
     app.parse(argc, argv);
@@ -47,6 +65,11 @@ int Main(int argc, char** argv) {
 
   if (plan->parsed()) return RunPlan(plan_args);
   if (demo->parsed()) return RunDemo(demo_args);
+  if (health->parsed()) return RunHealth(health_args);
+  if (load->parsed()) return RunLoadCommand(load_args);
+  if (estimate->parsed()) return RunEstimate(estimate_args);
+  if (friction->parsed()) return RunFriction(friction_args);
+  if (simulate_friction->parsed()) return RunSimulateFriction(simulate_friction_args);
   std::cerr << "error: no command given (see tactforce --help)" << std::endl;
   return kExitBadInput;
 }

@@ -1,5 +1,5 @@
-// Where `tactforce plan` sends a request. Today only in-process planning;
-// the gRPC service adds a remote backend (`--server ADDR`) behind the same
+// Where `tactforce plan` (and `demo`) send a request: in-process planning
+// (--local) or tactforce-server over gRPC (--server ADDR), behind one
 // interface.
 #pragma once
 
@@ -7,6 +7,7 @@
 #include <string>
 
 #include "absl/status/statusor.h"
+#include "connection.h"
 #include "tactforce/v1/planner.pb.h"
 
 namespace tactforce::cli {
@@ -15,7 +16,9 @@ class PlanBackend {
  public:
   virtual ~PlanBackend() = default;
   // !ok(): the request was rejected (InvalidArgument names the field) or the
-  // backend could not answer. ok(): a computed plan, whatever its status.
+  // backend could not answer (remote: Unavailable "cannot reach ADDR: ...",
+  // DeadlineExceeded, ...; see RpcError in connection.h). ok(): a computed
+  // plan, whatever its status.
   virtual absl::StatusOr<v1::PlanResponse> Plan(const v1::PlanRequest& request) = 0;
   // For messages: "local", "localhost:50051", ...
   virtual std::string Describe() const = 0;
@@ -23,5 +26,11 @@ class PlanBackend {
 
 // Plans in this process through tactforce::api::HandlePlan.
 std::unique_ptr<PlanBackend> MakeLocalBackend();
+
+// Plans on tactforce-server at `args.server` (unary tactforce.v1.Planner/Plan,
+// one call per Plan(), each with `args.deadline_ms`). Fails only when the
+// channel cannot be built (unreadable TLS files); connecting happens on the
+// first call.
+absl::StatusOr<std::unique_ptr<PlanBackend>> MakeRemoteBackend(const ConnectionArgs& args);
 
 }  // namespace tactforce::cli

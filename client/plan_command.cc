@@ -14,15 +14,16 @@ namespace {
 
 absl::StatusOr<std::unique_ptr<PlanBackend>> SelectBackend(const PlanArgs& args) {
   if (args.local) return MakeLocalBackend();
-  return absl::InvalidArgumentError(
-      "server mode arrives with the planner service; use --local to plan in this process");
+  return MakeRemoteBackend(args.connection);
 }
 
 }  // namespace
 
 CLI::App* AddPlanCommand(CLI::App& app, PlanArgs& args) {
   CLI::App* cmd = app.add_subcommand("plan", "Plan contact forces for one request");
-  cmd->add_flag("--local", args.local, "Plan in this process (no server)");
+  CLI::Option* local = cmd->add_flag("--local", args.local, "Plan in this process (no server)");
+  CLI::Option* server = AddConnectionFlags(cmd, &args.connection);
+  local->excludes(server);
   cmd->add_option("--request", args.request_path,
                   "PlanRequest as JSON (proto field names, snake_case or lowerCamelCase); "
                   "- reads standard input")
@@ -32,8 +33,12 @@ CLI::App* AddPlanCommand(CLI::App& app, PlanArgs& args) {
       ->check(CLI::IsMember({"json", "table"}))
       ->capture_default_str();
   cmd->footer(
-      "Exit status: 0 when a plan was computed (optimal, infeasible or solver failure;\n"
-      "see its status), 2 for bad input (the message names the field), 1 otherwise.");
+      "Sends the request to tactforce-server (--server, default " + std::string(kDefaultServer) +
+      ") unless\n"
+      "--local is given. Exit status: 0 when a plan was computed (optimal, infeasible\n"
+      "or solver failure; see its status), 2 for bad input (the message names the\n"
+      "field), 3 when the server cannot be reached, 4 when it did not answer within\n"
+      "--deadline-ms, 1 otherwise.");
   return cmd;
 }
 

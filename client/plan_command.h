@@ -1,18 +1,19 @@
-// `tactforce plan`: one request (JSON file or stdin) -> one plan.
+// `tactforce plan`: one request (JSON file or stdin) -> one plan, computed by
+// tactforce-server (default, --server ADDR) or in this process (--local).
 #pragma once
 
 #include <string>
 
 #include "CLI/CLI.hpp"
+#include "connection.h"
 
 namespace tactforce::cli {
 
 struct PlanArgs {
-  bool local = false;          // plan in this process
-  std::string request_path;    // "-" = stdin
+  bool local = false;           // plan in this process
+  ConnectionArgs connection;    // --server, --tls-*, --deadline-ms
+  std::string request_path;     // "-" = stdin
   std::string format = "json";  // json | table
-  // Server mode (--server ADDR, default localhost:50051) arrives with the
-  // gRPC service; SelectBackend() in plan_command.cc is where it plugs in.
 };
 
 CLI::App* AddPlanCommand(CLI::App& app, PlanArgs& args);

@@ -185,15 +185,16 @@ struct Entry {
   double value = 0.0;
 };
 
-// c(f) = sqrt(|P f|^2 + eps^2) - eps - (mu n.f - shift) <= 0 for one contact
-// with friction (shift = kappa (mu rho_n + rho_t)).
+// The exact cone of one contact with friction: |P f| <= s with the slack
+// unknown s = mu n.f - shift >= 0 (shift = kappa (mu rho_n + rho_t)), posed
+// as r(f, s) = |P f|^2 / s - s <= 0.
 struct ConeConstraint {
   int contact = 0;
-  int offset = 0;  // first of the contact's three unknowns
+  int offset = 0;   // first of the contact's three force unknowns
+  int s_index = 0;  // the slack unknown s
   Vec3 normal = Vec3::UnitZ();
   double mu = 0.0;
   double shift = 0.0;
-  double eps = 0.0;
 
   Vec3 Force(const Number* x) const {
     return Vec3(x[offset], x[offset + 1], x[offset + 2]);
@@ -202,38 +203,32 @@ struct ConeConstraint {
     const Vec3 f = Force(x);
     return f - normal.dot(f) * normal;
   }
-  // s(f): the cone radius available at this force.
+  // s(f): the cone radius available at the forces in x.
   double Radius(const Number* x) const {
     return mu * normal.dot(Force(x)) - shift;
   }
+  // |P f| - s(f): > 0 outside the cone (N).
+  double Violation(const Number* x) const {
+    return Tangential(x).norm() - Radius(x);
+  }
   double Value(const Number* x) const {
-    return std::sqrt(Tangential(x).squaredNorm() + eps * eps) - eps - Radius(x);
-  }
-  // P f / q - mu n, q = sqrt(|P f|^2 + eps^2).
-  Vec3 Gradient(const Number* x) const {
-    const Vec3 w = Tangential(x);
-    return w / std::sqrt(w.squaredNorm() + eps * eps) - mu * normal;
-  }
-  // P / q - w w^T / q^3 (w = P f).
-  Eigen::Matrix3d Hessian(const Number* x) const {
-    const Vec3 w = Tangential(x);
-    const double q = std::sqrt(w.squaredNorm() + eps * eps);
-    const Eigen::Matrix3d p = Eigen::Matrix3d::Identity() - normal * normal.transpose();
-    return p / q - w * w.transpose() / (q * q * q);
+    const double s = x[s_index];
+    return Tangential(x).squaredNorm() / s - s;
   }
 };
 
-// Where a linear row came from, for messages.
+// Where a linear row came from.
 struct RowOrigin {
-  enum Kind { kEquilibrium, kPlanRow } kind = kEquilibrium;
-  int index = 0;  // row of prepared.rows
+  enum Kind { kEquilibrium, kPlanRow, kConeSlack } kind = kEquilibrium;
+  int index = 0;  // row of prepared.rows, or contact
 };
 
-// The NLP in the reduced unknowns z: f_i = z_i (3 unknowns) for contacts with
-// friction, f_i = n_i z_i (1 unknown) for frictionless ones. The map has
-// orthonormal columns, so |f|^2 = |z|^2.
+// The NLP. Unknowns x = (z, s): z are the reduced forces, f_i = z_i (3
+// unknowns) for contacts with friction and f_i = n_i z_i (1 unknown) for
+// frictionless ones (orthonormal map, so |f|^2 = |z|^2); s are the cone
+// slacks (EXACT only).
 struct Formulation {
-  int num_vars = 0;
+  int num_forces = 0;  // unknowns in z
   std::vector<int> offset;         // per contact
   std::vector<bool> frictionless;  // per contact
   std::vector<Vec3> normal;        // per contact
@@ -245,9 +240,10 @@ struct Formulation {
   std::vector<double> upper;
   std::vector<RowOrigin> origin;
   std::vector<ConeConstraint> cones;  // constraints num_linear, ...
-  VectorXd start;      // minimum-norm equilibrium
+  VectorXd start;      // (z0, s0): the minimum-norm equilibrium
   double scale = 1.0;  // max(1, largest finite bound), N
 
+  int num_vars() const { return num_forces + static_cast<int>(cones.size()); }
   int num_constraints() const {
     return num_linear + static_cast<int>(cones.size());
   }
@@ -267,17 +263,29 @@ struct Formulation {
     return values;
   }
 
-  // Largest violation of the inequalities (plan rows and cones) at z.
-  double MaxViolation(const VectorXd& z) const {
-    const VectorXd values = LinearValues(z.data());
+  // Largest violation (N) of the plan rows and exact cones at the forces in
+  // x (the slacks in x are ignored).
+  double MaxViolation(const VectorXd& x) const {
+    const VectorXd values = LinearValues(x.data());
     double violation = 0.0;
-    for (int r = num_equilibrium; r < num_linear; ++r) {
-      violation = std::max(violation, values(r) - upper[r]);
+    for (int r = 0; r < num_linear; ++r) {
+      if (origin[r].kind == RowOrigin::kPlanRow) {
+        violation = std::max(violation, values(r) - upper[r]);
+      }
     }
     for (const ConeConstraint& cone : cones) {
-      violation = std::max(violation, cone.Value(z.data()));
+      violation = std::max(violation, cone.Violation(x.data()));
     }
     return violation;
+  }
+  // Largest residual of the equilibrium rows at x.
+  double EquilibriumResidual(const VectorXd& x) const {
+    const VectorXd values = LinearValues(x.data());
+    double residual = 0.0;
+    for (int r = 0; r < num_equilibrium; ++r) {
+      residual = std::max(residual, std::abs(values(r) - upper[r]));
+    }
+    return residual;
   }
 };
 
@@ -299,21 +307,21 @@ BuildOutcome BuildFormulation(const PreparedProblem& prepared,
   form->frictionless.resize(static_cast<size_t>(n));
   form->normal.resize(static_cast<size_t>(n));
   bool reduced = false;
-  int num_vars = 0;
+  int num_forces = 0;
   for (int i = 0; i < n; ++i) {
     const Contact& c = problem.contacts[static_cast<size_t>(i)];
-    form->offset[i] = num_vars;
+    form->offset[i] = num_forces;
     form->frictionless[i] = c.friction == 0.0;
     form->normal[i] = c.normal;
-    num_vars += form->frictionless[i] ? 1 : 3;
+    num_forces += form->frictionless[i] ? 1 : 3;
     reduced = reduced || form->frictionless[i];
   }
-  form->num_vars = num_vars;
+  form->num_forces = num_forces;
 
-  // T: f = T z (3n x num_vars), only needed when some contact is reduced.
+  // T: f = T z (3n x num_forces), only needed when some contact is reduced.
   MatrixXd map;
   if (reduced) {
-    map = MatrixXd::Zero(3 * n, num_vars);
+    map = MatrixXd::Zero(3 * n, num_forces);
     for (int i = 0; i < n; ++i) {
       if (form->frictionless[i]) {
         map.block<3, 1>(3 * i, form->offset[i]) = form->normal[i];
@@ -326,10 +334,11 @@ BuildOutcome BuildFormulation(const PreparedProblem& prepared,
   // Equilibrium rows of full row rank in z, and the minimum-norm solution.
   MatrixXd eq_rows;
   VectorXd eq_rhs;
+  VectorXd z0;
   if (!reduced) {
     eq_rows = eq.independent_rows;
     eq_rhs = eq.independent_rhs;
-    form->start = eq.particular;
+    z0 = eq.particular;
   } else {
     const MatrixXd e = eq.independent_rows * map;
     const VectorXd& b = eq.independent_rhs;
@@ -342,9 +351,9 @@ BuildOutcome BuildFormulation(const PreparedProblem& prepared,
     const MatrixXd u = svd.matrixU().leftCols(rank);
     eq_rhs = u.transpose() * b;
     eq_rows = u.transpose() * e;
-    form->start = svd.matrixV().leftCols(rank) *
-                  (eq_rhs.array() / sv.head(rank).array()).matrix();
-    const double residual = (e * form->start - b).norm();
+    z0 = svd.matrixV().leftCols(rank) *
+         (eq_rhs.array() / sv.head(rank).array()).matrix();
+    const double residual = (e * z0 - b).norm();
     if (!(residual <= kEquilibriumTolerance * std::max(1.0, b.norm()))) {
       return {true,
               Infeasible("the contacts cannot resist this wrench with the "
@@ -355,11 +364,11 @@ BuildOutcome BuildFormulation(const PreparedProblem& prepared,
     }
   }
 
-  auto add_row = [&](const Eigen::RowVectorXd& row, double lo, double hi,
-                     RowOrigin origin) {
+  auto add_row = [&](const std::vector<std::pair<int, double>>& terms,
+                     double lo, double hi, RowOrigin origin) {
     const int r = static_cast<int>(form->lower.size());
-    for (int j = 0; j < row.size(); ++j) {
-      if (row(j) != 0.0) form->linear.push_back({r, j, row(j)});
+    for (const auto& [col, value] : terms) {
+      if (value != 0.0) form->linear.push_back({r, col, value});
     }
     form->lower.push_back(lo);
     form->upper.push_back(hi);
@@ -368,8 +377,14 @@ BuildOutcome BuildFormulation(const PreparedProblem& prepared,
     if (std::abs(hi) < kInfinity) form->scale = std::max(form->scale, std::abs(hi));
   };
 
+  auto dense = [](const Eigen::RowVectorXd& row) {
+    std::vector<std::pair<int, double>> terms;
+    for (int j = 0; j < row.size(); ++j) terms.emplace_back(j, row(j));
+    return terms;
+  };
   for (int k = 0; k < eq_rows.rows(); ++k) {
-    add_row(eq_rows.row(k), eq_rhs(k), eq_rhs(k), {RowOrigin::kEquilibrium, k});
+    add_row(dense(eq_rows.row(k)), eq_rhs(k), eq_rhs(k),
+            {RowOrigin::kEquilibrium, k});
   }
   form->num_equilibrium = static_cast<int>(eq_rows.rows());
 
@@ -390,15 +405,11 @@ BuildOutcome BuildFormulation(const PreparedProblem& prepared,
       }
       continue;
     }
-    add_row(a, -kInfinity, rows.rhs(k), {RowOrigin::kPlanRow, k});
+    add_row(dense(a), -kInfinity, rows.rhs(k), {RowOrigin::kPlanRow, k});
   }
-  form->num_linear = static_cast<int>(form->lower.size());
 
-  // Exact friction cones.
+  // Exact friction cones: s_i - mu n.f_i = -shift, s_i >= 0, r_i <= 0.
   if (options.cone == ConeModel::kExact) {
-    const double eps =
-        kConeSmoothing *
-        std::max(1.0, form->start.size() ? form->start.cwiseAbs().maxCoeff() : 0.0);
     for (int i = 0; i < n; ++i) {
       const Contact& c = problem.contacts[static_cast<size_t>(i)];
       const double rho_n = prepared.normal_sigma[static_cast<size_t>(i)];
@@ -417,13 +428,29 @@ BuildOutcome BuildFormulation(const PreparedProblem& prepared,
       ConeConstraint cone;
       cone.contact = i;
       cone.offset = form->offset[i];
+      cone.s_index = num_forces + static_cast<int>(form->cones.size());
       cone.normal = c.normal;
       cone.mu = c.friction;
       cone.shift = kappa * (c.friction * rho_n + rho_t);
-      cone.eps = eps;
-      form->scale = std::max(form->scale, cone.shift);
+      std::vector<std::pair<int, double>> terms = {{cone.s_index, 1.0}};
+      for (int a = 0; a < 3; ++a) {
+        terms.emplace_back(cone.offset + a, -cone.mu * c.normal(a));
+      }
+      add_row(terms, -cone.shift, -cone.shift, {RowOrigin::kConeSlack, i});
       form->cones.push_back(cone);
     }
+  }
+  form->num_linear = static_cast<int>(form->lower.size());
+
+  // Start: the minimum-norm equilibrium, each slack at least |P f| so that
+  // r <= 0 holds and only linear rows are violated (r = |P f|^2 / s - s
+  // explodes for small s).
+  form->start = VectorXd::Zero(form->num_vars());
+  form->start.head(num_forces) = z0;
+  for (const ConeConstraint& cone : form->cones) {
+    const Number* x = form->start.data();
+    form->start(cone.s_index) =
+        std::max({cone.Radius(x), cone.Tangential(x).norm(), 1e-2 * form->scale});
   }
   return {};
 }
@@ -435,6 +462,7 @@ PlanResult CheckUniqueEquilibrium(const Formulation& form,
   const Number* z = form.start.data();
   const VectorXd values = form.LinearValues(z);
   for (int r = form.num_equilibrium; r < form.num_linear; ++r) {
+    if (form.origin[r].kind != RowOrigin::kPlanRow) continue;
     if (values(r) > form.upper[r] + kFeasibilityTolerance *
                                         std::max(1.0, std::abs(form.upper[r]))) {
       return Infeasible(
@@ -453,7 +481,7 @@ PlanResult CheckUniqueEquilibrium(const Formulation& form,
   }
   PlanResult result;
   result.status = PlanStatus::kOptimal;
-  result.forces = form.Forces(form.start);
+  result.forces = form.Forces(form.start.head(form.num_forces));
   return result;
 }
 
@@ -478,9 +506,9 @@ struct StopConditions {
 enum class Phase {
   // min |f|^2 subject to everything: the answer.
   kMinimumNorm,
-  // min t >= 0 with every inequality relaxed by t (rows a.f <= d + t, cones
-  // c(f) <= t); the equilibrium stays exact. Always feasible; t* > 0 proves
-  // the problem infeasible.
+  // min t >= 0 with every inequality relaxed by t (rows a.f <= d + t, cone
+  // slacks s = s(f) + t); the equilibrium stays exact. Always feasible;
+  // t* > 0 proves the problem infeasible.
   kFeasibility,
 };
 
@@ -493,24 +521,19 @@ class ForceNlp final : public Ipopt::TNLP {
         phase_(phase),
         start_(std::move(start)),
         stop_(stop),
-        t_index_(form.num_vars),
-        num_vars_(form.num_vars + (phase == Phase::kFeasibility ? 1 : 0)),
+        t_index_(form.num_vars()),
+        num_vars_(form.num_vars() + (phase == Phase::kFeasibility ? 1 : 0)),
         linear_(form.linear) {
-    const bool relax = phase_ == Phase::kFeasibility;
-    if (relax) {
-      for (int r = form_.num_equilibrium; r < form_.num_linear; ++r) {
-        linear_.push_back({r, t_index_, -1.0});
+    if (phase_ == Phase::kFeasibility) {
+      for (int r = 0; r < form_.num_linear; ++r) {
+        if (form_.origin[r].kind != RowOrigin::kEquilibrium) {
+          linear_.push_back({r, t_index_, -1.0});
+        }
       }
     }
-    // Jacobian of the cone rows: the contact's three unknowns (and t).
-    for (size_t k = 0; k < form_.cones.size(); ++k) {
-      const int row = form_.num_linear + static_cast<int>(k);
-      for (int a = 0; a < 3; ++a) cone_jac_.push_back({row, form_.cones[k].offset + a, 0.0});
-      if (relax) cone_jac_.push_back({row, t_index_, -1.0});
-    }
     // Lower triangle of the Lagrangian Hessian: the diagonal of every force
-    // unknown (the objective 2 I), the full 3x3 block of a contact with a
-    // cone.
+    // unknown (the objective 2 I); for a cone the 3x3 force block, the (s, f)
+    // row and (s, s).
     std::vector<int> cone_of(form_.offset.size(), -1);
     for (size_t k = 0; k < form_.cones.size(); ++k) {
       cone_of[static_cast<size_t>(form_.cones[k].contact)] = static_cast<int>(k);
@@ -530,13 +553,18 @@ class ForceNlp final : public Ipopt::TNLP {
         }
       }
     }
+    for (const ConeConstraint& c : form_.cones) {
+      cone_hess_s_start_.push_back(static_cast<int>(hess_.size()));
+      for (int a = 0; a < 3; ++a) hess_.push_back({c.s_index, c.offset + a, 0.0});
+      hess_.push_back({c.s_index, c.s_index, 0.0});
+    }
   }
 
   bool get_nlp_info(Index& n, Index& m, Index& nnz_jac_g, Index& nnz_h_lag,
                     IndexStyleEnum& index_style) override {
     n = num_vars_;
     m = form_.num_constraints();
-    nnz_jac_g = static_cast<Index>(linear_.size() + cone_jac_.size());
+    nnz_jac_g = static_cast<Index>(linear_.size() + 4 * form_.cones.size());
     nnz_h_lag = static_cast<Index>(hess_.size());
     index_style = C_STYLE;
     return true;
@@ -545,7 +573,7 @@ class ForceNlp final : public Ipopt::TNLP {
   bool get_bounds_info(Index n, Number* x_l, Number* x_u, Index m, Number* g_l,
                        Number* g_u) override {
     for (Index j = 0; j < n; ++j) {
-      x_l[j] = j == t_index_ ? 0.0 : -kInfinity;  // t >= 0 (phase one only)
+      x_l[j] = j < form_.num_forces ? -kInfinity : 0.0;  // s >= 0, t >= 0
       x_u[j] = kInfinity;
     }
     for (int r = 0; r < form_.num_linear; ++r) {
@@ -579,7 +607,7 @@ class ForceNlp final : public Ipopt::TNLP {
   bool eval_f(Index n, const Number* x, bool new_x, Number& obj) override {
     obj = phase_ == Phase::kFeasibility
               ? x[t_index_]
-              : Eigen::Map<const VectorXd>(x, form_.num_vars).squaredNorm();
+              : Eigen::Map<const VectorXd>(x, form_.num_forces).squaredNorm();
     return true;
   }
 
@@ -588,7 +616,7 @@ class ForceNlp final : public Ipopt::TNLP {
       if (phase_ == Phase::kFeasibility) {
         grad[j] = j == t_index_ ? 1.0 : 0.0;
       } else {
-        grad[j] = 2.0 * x[j];
+        grad[j] = j < form_.num_forces ? 2.0 * x[j] : 0.0;
       }
     }
     return true;
@@ -597,9 +625,9 @@ class ForceNlp final : public Ipopt::TNLP {
   bool eval_g(Index n, const Number* x, bool new_x, Index m, Number* g) override {
     for (Index r = 0; r < m; ++r) g[r] = 0.0;
     for (const Entry& e : linear_) g[e.row] += e.value * x[e.col];
-    const double t = phase_ == Phase::kFeasibility ? x[t_index_] : 0.0;
     for (size_t k = 0; k < form_.cones.size(); ++k) {
-      g[form_.num_linear + k] = form_.cones[k].Value(x) - t;
+      if (!(x[form_.cones[k].s_index] > 0.0)) return false;  // outside domain
+      g[form_.num_linear + k] = form_.cones[k].Value(x);
     }
     return true;
   }
@@ -612,18 +640,27 @@ class ForceNlp final : public Ipopt::TNLP {
         i_row[e] = linear_[e].row;
         j_col[e] = linear_[e].col;
       }
-      for (size_t e = 0; e < cone_jac_.size(); ++e) {
-        i_row[nl + e] = cone_jac_[e].row;
-        j_col[nl + e] = cone_jac_[e].col;
+      for (size_t k = 0; k < form_.cones.size(); ++k) {
+        const ConeConstraint& c = form_.cones[k];
+        const Index row = form_.num_linear + static_cast<Index>(k);
+        for (int a = 0; a < 3; ++a) {
+          i_row[nl + 4 * k + a] = row;
+          j_col[nl + 4 * k + a] = c.offset + a;
+        }
+        i_row[nl + 4 * k + 3] = row;
+        j_col[nl + 4 * k + 3] = c.s_index;
       }
       return true;
     }
     for (size_t e = 0; e < nl; ++e) values[e] = linear_[e].value;
-    size_t e = nl;
-    for (const ConeConstraint& cone : form_.cones) {
-      const Vec3 grad = cone.Gradient(x);
-      for (int a = 0; a < 3; ++a) values[e++] = grad(a);
-      if (phase_ == Phase::kFeasibility) values[e++] = -1.0;
+    for (size_t k = 0; k < form_.cones.size(); ++k) {
+      const ConeConstraint& c = form_.cones[k];
+      const double s = x[c.s_index];
+      if (!(s > 0.0)) return false;
+      const Vec3 w = c.Tangential(x);
+      // dr/df = 2 P f / s, dr/ds = -|P f|^2 / s^2 - 1.
+      for (int a = 0; a < 3; ++a) values[nl + 4 * k + a] = 2.0 * w(a) / s;
+      values[nl + 4 * k + 3] = -w.squaredNorm() / (s * s) - 1.0;
     }
     return true;
   }
@@ -641,15 +678,26 @@ class ForceNlp final : public Ipopt::TNLP {
     const double diagonal =
         phase_ == Phase::kFeasibility ? 0.0 : 2.0 * obj_factor;
     for (size_t e = 0; e < hess_.size(); ++e) {
-      values[e] = hess_[e].row == hess_[e].col ? diagonal : 0.0;
+      values[e] = hess_[e].row == hess_[e].col && hess_[e].row < form_.num_forces
+                      ? diagonal
+                      : 0.0;
     }
     for (size_t k = 0; k < form_.cones.size(); ++k) {
+      const ConeConstraint& c = form_.cones[k];
+      const double s = x[c.s_index];
+      if (!(s > 0.0)) return false;
       const double weight = lambda[form_.num_linear + k];
-      const Eigen::Matrix3d h = form_.cones[k].Hessian(x);
+      const Vec3 w = c.Tangential(x);
+      // d2r/df2 = 2 P / s, d2r/ds df = -2 P f / s^2, d2r/ds2 = 2 |P f|^2 / s^3.
+      const Eigen::Matrix3d p =
+          Eigen::Matrix3d::Identity() - c.normal * c.normal.transpose();
       int e = cone_hess_start_[k];
       for (int a = 0; a < 3; ++a) {
-        for (int b = 0; b <= a; ++b) values[e++] += weight * h(a, b);
+        for (int b = 0; b <= a; ++b) values[e++] += weight * 2.0 * p(a, b) / s;
       }
+      e = cone_hess_s_start_[k];
+      for (int a = 0; a < 3; ++a) values[e++] -= weight * 2.0 * w(a) / (s * s);
+      values[e] += weight * 2.0 * w.squaredNorm() / (s * s * s);
     }
     return true;
   }
@@ -670,6 +718,7 @@ class ForceNlp final : public Ipopt::TNLP {
                              const Ipopt::IpoptData* ip_data,
                              Ipopt::IpoptCalculatedQuantities* ip_cq) override {
     last_iteration_ = iter;
+    last_mu_ = mu;
     stop_reason_ = stop_.Check();
     return stop_reason_ == StopConditions::kNone;
   }
@@ -677,6 +726,7 @@ class ForceNlp final : public Ipopt::TNLP {
   const VectorXd& solution() const { return solution_; }
   StopConditions::Reason stop_reason() const { return stop_reason_; }
   int last_iteration() const { return last_iteration_; }
+  double last_mu() const { return last_mu_; }
 
  private:
   const Formulation& form_;
@@ -685,13 +735,14 @@ class ForceNlp final : public Ipopt::TNLP {
   const StopConditions stop_;
   const int t_index_;  // the relaxation t (phase one only)
   const int num_vars_;
-  std::vector<Entry> linear_;    // L, with the t column in phase one
-  std::vector<Entry> cone_jac_;  // structure of the cone rows
-  std::vector<Entry> hess_;      // structure of the Hessian
-  std::vector<int> cone_hess_start_;  // first 3x3 entry, per cone
+  std::vector<Entry> linear_;  // L, with the t column in phase one
+  std::vector<Entry> hess_;    // structure of the Hessian
+  std::vector<int> cone_hess_start_;    // 3x3 force block, per cone
+  std::vector<int> cone_hess_s_start_;  // (s, f) row and (s, s), per cone
   VectorXd solution_;
   StopConditions::Reason stop_reason_ = StopConditions::kNone;
   int last_iteration_ = 0;
+  double last_mu_ = 0.0;
 };
 
 // Sets every option explicitly; returns the names of rejected ones.
@@ -714,6 +765,9 @@ std::string ConfigureIpopt(Ipopt::IpoptApplication& app,
   if (!has_cones) {
     check(o.SetStringValue("jac_d_constant", "yes"), "jac_d_constant");
     check(o.SetStringValue("hessian_constant", "yes"), "hessian_constant");
+  } else {
+    // r divides by the slacks s: keep them strictly positive.
+    check(o.SetNumericValue("bound_relax_factor", 0.0), "bound_relax_factor");
   }
   check(o.SetStringValue("expect_infeasible_problem",
                          expect_infeasible ? "yes" : "no"),
@@ -727,6 +781,7 @@ struct IpoptRun {
   std::string setup_error;  // non-empty: Ipopt did not run
   int iterations = 0;
   StopConditions::Reason stopped = StopConditions::kNone;
+  double last_mu = 0.0;  // barrier parameter of the last iteration
   VectorXd solution;
 
   bool succeeded() const {
@@ -778,6 +833,7 @@ IpoptRun RunIpoptLocked(const Formulation& form, Phase phase, VectorXd start,
     run.iterations = stats->IterationCount();
   }
   run.stopped = nlp->stop_reason();
+  run.last_mu = nlp->last_mu();
   if (run.status == Ipopt::Maximum_CpuTime_Exceeded) {
     run.stopped = StopConditions::kTimeLimit;  // max_cpu_time is not set
   }
@@ -836,7 +892,7 @@ class IpoptSolver final : public ForceSolver {
     Formulation form;
     BuildOutcome built = BuildFormulation(prepared, options, &form);
     if (built.decided) return built.result;
-    if (form.num_equilibrium >= form.num_vars) {
+    if (form.num_equilibrium >= form.num_forces) {
       return CheckUniqueEquilibrium(form, prepared);
     }
 
@@ -861,13 +917,38 @@ class IpoptSolver final : public ForceSolver {
                             StatusName(run.status) + " after " +
                             std::to_string(iterations) + " iterations"));
     };
+    // Solve_Succeeded / Solved_To_Acceptable_Level; or a run that stalled
+    // (Search_Direction_Becomes_Too_Small) with the barrier parameter already
+    // at its final value and the forces feasible: this happens when a contact
+    // ends at a cone apex, where the slack bound s >= 0 and the cone are both
+    // active with opposite gradients, so the multipliers are not unique and
+    // the dual infeasibility cannot reach tol although the (unique) forces
+    // have converged.
+    auto converged = [&](const IpoptRun& run) {
+      if (run.succeeded()) return true;
+      if (!run.setup_error.empty() || run.stopped != StopConditions::kNone ||
+          run.status != Ipopt::Search_Direction_Becomes_Too_Small ||
+          form.cones.empty() || run.solution.size() == 0 ||
+          !run.solution.allFinite()) {
+        return false;
+      }
+      const double tol = kFeasibilityTolerance * form.scale;
+      return run.last_mu <= 10.0 * options.ipopt_tolerance &&
+             form.MaxViolation(run.solution) <= tol &&
+             form.EquilibriumResidual(run.solution) <= tol;
+    };
     auto optimal = [&](const IpoptRun& run) {
       PlanResult result;
       result.status = PlanStatus::kOptimal;
-      if (run.status == Ipopt::Solved_To_Acceptable_Level) {
-        result.message = "Ipopt: Solved_To_Acceptable_Level";
+      if (run.status != Ipopt::Solve_Succeeded) {
+        result.message = std::string("Ipopt: ") + StatusName(run.status) +
+                         (run.status == Ipopt::Search_Direction_Becomes_Too_Small
+                              ? " at a feasible point with the barrier "
+                                "parameter at its final value (a contact at "
+                                "its cone apex); accepted"
+                              : "");
       }
-      result.forces = form.Forces(run.solution.head(form.num_vars));
+      result.forces = form.Forces(run.solution.head(form.num_forces));
       return finish(result);
     };
 
@@ -876,15 +957,20 @@ class IpoptSolver final : public ForceSolver {
                                    /*expect_infeasible=*/true, options, stop);
     iterations += main.iterations;
     if (main.stopped != StopConditions::kNone) return stopped(main.stopped);
-    if (main.succeeded()) return optimal(main);
+    if (converged(main)) return optimal(main);
     if (!main.setup_error.empty()) return failed(main);
 
     // 2. Decide feasibility with the phase-one problem, started from the
     //    minimum-norm equilibrium with t above every violation.
-    VectorXd start1(form.num_vars + 1);
-    start1.head(form.num_vars) = form.start;
-    start1(form.num_vars) =
+    const int nv = form.num_vars();
+    VectorXd start1(nv + 1);
+    start1.head(nv) = form.start;
+    const double t0 =
         std::max(0.0, form.MaxViolation(form.start)) + 1e-2 * form.scale;
+    start1(nv) = t0;
+    for (const ConeConstraint& cone : form.cones) {
+      start1(cone.s_index) = cone.Radius(form.start.data()) + t0;
+    }
     const IpoptRun phase1 = RunIpopt(form, Phase::kFeasibility, start1,
                                      /*expect_infeasible=*/false, options, stop);
     iterations += phase1.iterations;
@@ -897,8 +983,8 @@ class IpoptSolver final : public ForceSolver {
       }
       return failed(main);
     }
-    const VectorXd z1 = phase1.solution.head(form.num_vars);
-    const double violation = form.MaxViolation(z1);
+    VectorXd x1 = phase1.solution.head(nv);
+    const double violation = form.MaxViolation(x1);
     if (violation > kInfeasibilityTolerance * form.scale) {
       return finish(Infeasible(
           std::string("Ipopt: ") + StatusName(main.status) +
@@ -907,11 +993,16 @@ class IpoptSolver final : public ForceSolver {
     }
 
     // 3. Feasible after all: solve again from the feasible point, heuristic off.
-    const IpoptRun retry = RunIpopt(form, Phase::kMinimumNorm, z1,
+    for (const ConeConstraint& cone : form.cones) {
+      x1(cone.s_index) = std::max({cone.Radius(x1.data()),
+                                   cone.Tangential(x1.data()).norm(),
+                                   1e-6 * form.scale});
+    }
+    const IpoptRun retry = RunIpopt(form, Phase::kMinimumNorm, x1,
                                     /*expect_infeasible=*/false, options, stop);
     iterations += retry.iterations;
     if (retry.stopped != StopConditions::kNone) return stopped(retry.stopped);
-    if (retry.succeeded()) return optimal(retry);
+    if (converged(retry)) return optimal(retry);
     return failed(retry);
   }
 };

@@ -67,6 +67,21 @@ v1::Vec3 ToProto(const planner::Vec3& v) {
   return out;
 }
 
+absl::StatusOr<planner::Contact> ContactFromProto(const v1::Contact& in, const std::string& path) {
+  planner::Contact c;
+  c.name = in.name();
+  c.position = FromProto(in.position());
+  c.normal = FromProto(in.normal());
+  c.friction = in.friction();
+  absl::StatusOr<planner::ContactKind> kind = ContactKindFromProto(in.kind(), path + ".kind");
+  if (!kind.ok()) return kind.status();
+  c.kind = *kind;
+  c.sigma = in.sigma();
+  c.min_normal_force = in.min_normal_force();
+  c.max_normal_force = in.max_normal_force();
+  return c;
+}
+
 absl::StatusOr<planner::PlanProblem> ToProblem(const v1::PlanRequest& request) {
   planner::PlanProblem problem;
   const v1::ObjectModel& object = request.object();
@@ -77,20 +92,10 @@ absl::StatusOr<planner::PlanProblem> ToProblem(const v1::PlanRequest& request) {
 
   problem.contacts.reserve(request.contacts_size());
   for (int i = 0; i < request.contacts_size(); ++i) {
-    const v1::Contact& in = request.contacts(i);
-    planner::Contact c;
-    c.name = in.name();
-    c.position = FromProto(in.position());
-    c.normal = FromProto(in.normal());
-    c.friction = in.friction();
-    absl::StatusOr<planner::ContactKind> kind =
-        ContactKindFromProto(in.kind(), absl::StrCat("contacts[", i, "].kind"));
-    if (!kind.ok()) return kind.status();
-    c.kind = *kind;
-    c.sigma = in.sigma();
-    c.min_normal_force = in.min_normal_force();
-    c.max_normal_force = in.max_normal_force();
-    problem.contacts.push_back(std::move(c));
+    absl::StatusOr<planner::Contact> c =
+        ContactFromProto(request.contacts(i), absl::StrCat("contacts[", i, "]"));
+    if (!c.ok()) return c.status();
+    problem.contacts.push_back(*std::move(c));
   }
 
   problem.external_wrench.force = FromProto(request.external_wrench().force());
@@ -231,7 +236,6 @@ v1::PlanResponse ToProto(const planner::PlanResult& result) {
     out->set_ipopt_time_us(in.ipopt_time_us);
     out->set_ipopt_status(ToProto(in.ipopt_status));
     out->set_ipopt_message(in.ipopt_message);
-    // in.ipopt_message has no field in v1.CrossCheck.
   }
   return response;
 }

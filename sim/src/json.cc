@@ -47,7 +47,7 @@ class JsonParser {
 
  private:
   absl::Status Error(std::string_view what) const {
-    return absl::InvalidArgumentError(absl::StrCat(source_, ":", line_, ": ", what));
+    return absl::InvalidArgumentError(absl::StrCat(source_, ":", line_, ": ", std::string(what)));
   }
   void SkipSpace() {
     while (pos_ < s_.size()) {

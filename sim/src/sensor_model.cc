@@ -202,11 +202,10 @@ void ApplyChannel(const EffectParams& p, const ChannelInput& in, std::vector<dou
 
   // Segment boundaries.
   std::vector<int> bounds;
-  if (in.segment_starts && !in.segment_starts->empty()) {
-    bounds = *in.segment_starts;
-    if (bounds.front() != 0) bounds.insert(bounds.begin(), 0);
-  } else {
-    bounds.push_back(0);
+  bounds.push_back(0);
+  if (in.segment_starts) {
+    for (int s : *in.segment_starts)
+      if (s > bounds.back() && s < n) bounds.push_back(s);
   }
   bounds.push_back(n);
 

@@ -9,6 +9,8 @@
 // ValidateProblem, which every Solve() runs with the same field paths.
 #pragma once
 
+#include <string>
+
 #include "absl/status/statusor.h"
 #include "tactforce/planner/types.h"
 #include "tactforce/v1/planner.pb.h"
@@ -21,6 +23,10 @@ struct PlanCall {
   planner::PlanOptions options;
   planner::SolverKind solver = planner::SolverKind::kGeometric;
 };
+
+// One contact; `path` prefixes error fields ("contacts[2]").
+absl::StatusOr<planner::Contact> ContactFromProto(const v1::Contact& contact,
+                                                  const std::string& path);
 
 // Errors: InvalidArgument("<field path>: unknown value N").
 absl::StatusOr<PlanCall> FromProto(const v1::PlanRequest& request);

@@ -44,7 +44,7 @@ struct SensorModel {
   std::string units = "N";       // the reading's units (free text: N, counts, uT)
   double gain = 1;               // reading units per N (may be negative)
   double offset = 0;             // reading units
-  double noise = 0;              // N, per-taxel additive Gaussian sigma (in contact)
+  double noise = 0;              // N, additive Gaussian sigma per taxel under the contact patch
   double partial_error = 0;      // N, error of a partially covered taxel
   EffectParams effects;
   // Fitted models (audit output): 1-sigma uncertainty per field name.

@@ -1,0 +1,222 @@
+#include "estimate_command.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "cli_common.h"
+#include "grpcpp/grpcpp.h"
+#include "tactforce/v1/estimator.grpc.pb.h"
+#include "tactforce/api/convert.h"
+#include "tactforce/api/json.h"
+#include "tactforce/api/services.h"
+#include "tactforce/estimator/csv.h"
+#include "tactforce/estimator/friction.h"
+#include "tactforce/estimator/mesh.h"
+
+namespace tactforce::cli {
+namespace {
+
+absl::StatusOr<planner::Vec3> ParseVec3(const std::string& text, const std::string& flag) {
+  std::vector<double> v;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    char* end = nullptr;
+    const double x = std::strtod(item.c_str(), &end);
+    if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(x))
+      return absl::InvalidArgumentError(absl::StrCat(flag, ": '", text, "' is not x,y,z"));
+    v.push_back(x);
+  }
+  if (v.size() != 3) return absl::InvalidArgumentError(absl::StrCat(flag, ": '", text, "' is not x,y,z"));
+  return planner::Vec3(v[0], v[1], v[2]);
+}
+
+// gRPC status -> absl status, keeping the server's message.
+absl::Status FromGrpc(const grpc::Status& s, const std::string& server) {
+  if (s.ok()) return absl::OkStatus();
+  if (s.error_code() == grpc::StatusCode::INVALID_ARGUMENT) return absl::InvalidArgumentError(s.error_message());
+  return absl::Status(static_cast<absl::StatusCode>(s.error_code()),
+                      absl::StrCat(server, ": ", s.error_message()));
+}
+
+absl::StatusOr<v1::EstimateResponse> RemoteEstimate(const std::string& server,
+                                                    const v1::EstimateRequest& request) {
+  auto channel = grpc::CreateChannel(server, grpc::InsecureChannelCredentials());
+  auto stub = v1::Estimator::NewStub(channel);
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+  v1::EstimateResponse response;
+  if (absl::Status s = FromGrpc(stub->EstimateForces(&context, request, &response), server); !s.ok())
+    return s;
+  return response;
+}
+
+}  // namespace
+
+CLI::App* AddEstimateCommand(CLI::App& app, EstimateArgs& args) {
+  CLI::App* cmd = app.add_subcommand("estimate", "Estimate contact forces from tactile readings");
+  cmd->add_flag("--local", args.local, "Estimate in this process (no server)");
+  cmd->add_option("--server", args.server, "Server address")->capture_default_str();
+  cmd->add_option("--request", args.request_path,
+                  "EstimateRequest as JSON (object, contacts, readings, method, ...); - = stdin")
+      ->required()
+      ->type_name("FILE");
+  cmd->footer("Output: EstimateResponse as JSON (forces per contact, in request order).");
+  return cmd;
+}
+
+int RunEstimate(const EstimateArgs& args) {
+  absl::StatusOr<std::string> text = ReadInput(args.request_path);
+  if (!text.ok()) return ReportError(text.status());
+  v1::EstimateRequest request;
+  if (absl::Status s = api::ParseJson(*text, &request, "request JSON"); !s.ok()) return ReportError(s);
+  absl::StatusOr<v1::EstimateResponse> response;
+  if (args.local) {
+    response = api::HandleEstimate(request);
+  } else {
+    response = RemoteEstimate(args.server, request);
+  }
+  if (!response.ok()) return ReportError(response.status());
+  std::cout << api::ToJson(*response);
+  return std::cout ? kExitOk : kExitFailure;
+}
+
+CLI::App* AddFrictionCommand(CLI::App& app, FrictionArgs& args) {
+  CLI::App* cmd = app.add_subcommand(
+      "friction", "Estimate static friction from probing trials that end in slip");
+  cmd->add_option("trials", args.trial_paths, "Trial CSV files: t,fx,fy,fz,px,py,pz[,slip]")
+      ->required()
+      ->type_name("TRIAL.csv");
+  auto* normal = cmd->add_option("--normal", args.normal, "Surface normal into the object, x,y,z");
+  auto* mesh = cmd->add_option("--mesh", args.mesh_path, "Object mesh (STL or OBJ): nearest-triangle normal");
+  normal->excludes(mesh);
+  cmd->add_flag("--json", args.json, "Print the FrictionResponse as JSON");
+  cmd->add_flag("--linear-fit", args.linear_fit,
+                "Pre-slip force from line fits (ours) instead of the 5-sample average (paper)");
+  cmd->add_option("--slip-distance", args.slip_distance, "Tangential travel that means slip (m)")
+      ->capture_default_str();
+  cmd->add_option("--window", args.window, "Pre-slip samples averaged")->capture_default_str();
+  cmd->add_option("--min-normal-force", args.min_normal_force, "N")->capture_default_str();
+  return cmd;
+}
+
+int RunFriction(const FrictionArgs& args) {
+  if (args.normal.empty() && args.mesh_path.empty())
+    return ReportError(absl::InvalidArgumentError("give --normal x,y,z or --mesh FILE"));
+  v1::FrictionRequest request;
+  for (const std::string& path : args.trial_paths) {
+    absl::StatusOr<estimator::CsvTable> table = estimator::ReadCsvFile(path);
+    if (!table.ok()) return ReportError(table.status());
+    absl::StatusOr<estimator::FrictionTrial> trial = estimator::FrictionTrialFromCsv(*table);
+    if (!trial.ok()) return ReportError(trial.status());
+    v1::FrictionTrial* out = request.add_trials();
+    out->set_name(path);
+    for (const auto& s : trial->samples) {
+      v1::FrictionSample* smp = out->add_samples();
+      smp->set_t(s.t);
+      *smp->mutable_force() = api::ToProto(s.force);
+      *smp->mutable_contact_point() = api::ToProto(s.contact_point);
+      if (s.slip) smp->set_slip(*s.slip);
+    }
+  }
+  if (!args.normal.empty()) {
+    absl::StatusOr<planner::Vec3> n = ParseVec3(args.normal, "--normal");
+    if (!n.ok()) return ReportError(n.status());
+    for (auto& t : *request.mutable_trials()) *t.mutable_normal() = api::ToProto(*n);
+  } else {
+    absl::StatusOr<estimator::TriangleMesh> mesh = estimator::ReadMeshFile(args.mesh_path);
+    if (!mesh.ok()) return ReportError(mesh.status());
+    for (const auto& v : mesh->vertices) *request.mutable_mesh()->add_vertices() = api::ToProto(v);
+    for (const auto& t : mesh->triangles) {
+      v1::Triangle* tri = request.mutable_mesh()->add_triangles();
+      tri->set_a(t[0]);
+      tri->set_b(t[1]);
+      tri->set_c(t[2]);
+    }
+  }
+  request.set_slip_distance(args.slip_distance);
+  request.set_window(static_cast<uint32_t>(std::max(1, args.window)));
+  request.set_min_normal_force(args.min_normal_force);
+  request.set_pre_slip(args.linear_fit ? v1::PRE_SLIP_FORCE_LINEAR_FIT : v1::PRE_SLIP_FORCE_WINDOW_AVERAGE);
+  absl::StatusOr<v1::FrictionResponse> response = api::HandleFriction(request);
+  if (!response.ok()) return ReportError(response.status());
+  if (args.json) {
+    std::cout << api::ToJson(*response);
+    return std::cout ? kExitOk : kExitFailure;
+  }
+  std::cout << absl::StrFormat("%-40s %8s %8s %10s  %s\n", "trial", "mu", "slipped", "slip t (s)", "note");
+  for (const auto& t : response->trials()) {
+    std::cout << absl::StrFormat("%-40s %8.4f %8s %10.3f  %s\n", t.name(), t.mu(),
+                                 t.slipped() ? "yes" : "no", t.slip_time(),
+                                 t.lower_bound() ? "lower bound" : t.message());
+  }
+  std::cout << absl::StrFormat("\nmu: median %.4f  mean %.4f  IQR %.4f  over %d slipped trial(s)\n",
+                               response->median(), response->mean(), response->iqr(), response->count());
+  return std::cout ? kExitOk : kExitFailure;
+}
+
+CLI::App* AddSimulateFrictionCommand(CLI::App& simulate, SimulateFrictionArgs& args) {
+  CLI::App* cmd = simulate.add_subcommand(
+      "friction", "Write simulated probing trials (CSV per trial) and truth.json");
+  cmd->add_option("--mu", args.mu, "True static friction coefficient")->capture_default_str();
+  cmd->add_option("--trials", args.trials, "Number of trials")->capture_default_str();
+  cmd->add_option("--noise", args.noise, "Force noise std. dev. per component (N)")->capture_default_str();
+  cmd->add_option("--rate", args.rate, "Sample rate (Hz)")->capture_default_str();
+  cmd->add_option("--ramp", args.ramp, "Normal-force ramp-down rate (N/s)")->capture_default_str();
+  cmd->add_option("--tangential-force", args.tangential_force, "Held tangential force (N)")
+      ->capture_default_str();
+  cmd->add_flag("--slip-flags", args.slip_flags, "Also write a slip column (0/1)");
+  cmd->add_option("--seed", args.seed, "Random seed")->capture_default_str();
+  cmd->add_option("--out", args.out_dir, "Output directory (created)")->required();
+  return cmd;
+}
+
+int RunSimulateFriction(const SimulateFrictionArgs& args) {
+  if (!(args.mu > 0) || args.trials < 1 || !(args.noise >= 0) || !(args.rate > 0) || !(args.ramp > 0) ||
+      !(args.tangential_force > 0))
+    return ReportError(absl::InvalidArgumentError(
+        "need --mu > 0, --trials >= 1, --noise >= 0, --rate > 0, --ramp > 0, --tangential-force > 0"));
+  estimator::FrictionSimOptions sim;
+  sim.mu = args.mu;
+  sim.trials = args.trials;
+  sim.force_noise = args.noise;
+  sim.rate = args.rate;
+  sim.ramp = args.ramp;
+  sim.tangential_force = args.tangential_force;
+  sim.write_slip_flags = args.slip_flags;
+  sim.seed = args.seed;
+  const estimator::SimulatedFriction data = estimator::SimulateFriction(sim);
+  std::error_code ec;
+  std::filesystem::create_directories(args.out_dir, ec);
+  if (ec) return ReportError(absl::InvalidArgumentError(absl::StrCat(args.out_dir, ": ", ec.message())));
+  for (size_t i = 0; i < data.trials.size(); ++i) {
+    const std::string path = absl::StrCat(args.out_dir, "/trial", i, ".csv");
+    std::ofstream out(path);
+    out << "t,fx,fy,fz,px,py,pz" << (args.slip_flags ? ",slip" : "") << "\n";
+    for (const auto& s : data.trials[i].samples) {
+      out << absl::StrFormat("%.6f,%.6f,%.6f,%.6f,%.8f,%.8f,%.8f", s.t, s.force.x(), s.force.y(),
+                             s.force.z(), s.contact_point.x(), s.contact_point.y(), s.contact_point.z());
+      if (args.slip_flags) out << "," << (s.slip.value_or(false) ? 1 : 0);
+      out << "\n";
+    }
+    if (!out) return ReportError(absl::InternalError(absl::StrCat(path, ": write failed")));
+  }
+  std::ofstream truth(args.out_dir + "/truth.json");
+  truth << absl::StrFormat("{\n  \"mu\": %.6f,\n  \"normal\": [%g, %g, %g],\n  \"slip_times\": [", args.mu,
+                           data.normal.x(), data.normal.y(), data.normal.z());
+  for (size_t i = 0; i < data.true_slip_time.size(); ++i)
+    truth << (i ? ", " : "") << absl::StrFormat("%.6f", data.true_slip_time[i]);
+  truth << absl::StrFormat("],\n  \"force_noise\": %g,\n  \"rate\": %g,\n  \"ramp\": %g,\n  \"seed\": %d\n}\n",
+                           args.noise, args.rate, args.ramp, args.seed);
+  std::cerr << "wrote " << data.trials.size() << " trials and truth.json to " << args.out_dir << "\n";
+  return truth ? kExitOk : kExitFailure;
+}
+
+}  // namespace tactforce::cli

@@ -1,0 +1,31 @@
+// `tactforce health`: the grpc.health.v1 serving status of tactforce-server.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include <grpcpp/grpcpp.h>
+
+#include "CLI/CLI.hpp"
+#include "absl/status/statusor.h"
+#include "connection.h"
+
+namespace tactforce::cli {
+
+struct HealthArgs {
+  ConnectionArgs connection;  // --server, --tls-*, --deadline-ms
+  std::string service;        // "" = the server as a whole
+  double wait_s = 0;          // keep asking until SERVING, up to this long
+};
+
+CLI::App* AddHealthCommand(CLI::App& app, HealthArgs& args);
+int RunHealth(const HealthArgs& args);
+
+// One grpc.health.v1.Health/Check of `service`: "SERVING", "NOT_SERVING",
+// "UNKNOWN", or "SERVICE_UNKNOWN" when the server does not know the service
+// (NOT_FOUND). Errors as RpcError() (connection.h).
+absl::StatusOr<std::string> CheckHealth(const std::shared_ptr<grpc::Channel>& channel,
+                                        const std::string& target,
+                                        const std::string& service, int deadline_ms);
+
+}  // namespace tactforce::cli

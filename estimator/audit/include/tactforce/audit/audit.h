@@ -1,0 +1,143 @@
+// The sensor-model audit: given measured data (reference force vs the
+// sensor's reading), show what the nominal model gets wrong, name the
+// cause(s), extend the model, and measure the gain.
+//
+// Steps (see README, "Model audit"):
+//  1. Nominal model reading = a * reference + b fitted (least squares) on the
+//     training block (the earlier 1 - heldout_fraction of the samples, time
+//     ordered, never shuffled); diagnostics on the residuals.
+//  2. Candidate causes (force-domain operators, the same code the simulation
+//     runs, sim::ApplyChannel): deadzone, saturation, nonlinearity,
+//     hysteresis, delay, lag, drift, crosstalk. Their parameters are fitted
+//     with NLopt (grid start + LN_SBPLX, derivative-free, for the non-smooth
+//     ones; LN_BOBYQA for the smooth ones); gain/offset in closed form.
+//  3. Forward selection: each round fits every remaining candidate on the
+//     training block and scores it on the held-out block with
+//     BIC_h = n_h ln(RSS_h / n_h) + k ln(n_h). The best is accepted when it
+//     lowers BIC_h AND improves the held-out RMS by at least min_gain
+//     (default 1 %); otherwise selection stops. At most max_causes.
+//  4. The extended model = nominal + named effects, jointly re-fitted, with
+//     1-sigma uncertainties (conditional Delta-RSS = sigma^2 intervals).
+//  5. Gain: the measured run re-simulated with both models
+//     (sim::PredictReading), held-out RMS before/after and percent gain.
+#pragma once
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "tactforce/audit/measured_data.h"
+#include "tactforce/sim/sensor_model.h"
+
+namespace tactforce::audit {
+
+enum class Effect { kDeadzone, kSaturation, kNonlinearity, kHysteresis, kDelay, kLag, kDrift, kCrosstalk };
+inline constexpr int kNumEffects = 8;
+const char* EffectName(Effect e);  // "deadzone", ... (report.json vocabulary)
+absl::StatusOr<Effect> ParseEffect(const std::string& name);
+const std::vector<Effect>& AllEffects();
+// Sensor-model fields an effect owns (e.g. deadzone: threshold, threshold_shift).
+std::vector<std::string> EffectFields(Effect e);
+
+struct AuditOptions {
+  double heldout_fraction = 0.35;   // later block used for scoring, (0.1, 0.6)
+  double min_gain = 0.01;           // relative held-out RMS gain to accept a cause
+  int max_causes = 3;
+  double max_delay = 0.3;           // s, |delay| bound
+  double max_lag = 0.5;             // s
+  int max_evaluations = 60;         // NLopt evaluations per local refinement
+  int min_samples = kMinAuditSamples;
+  bool uncertainties = true;
+  std::vector<Effect> candidates;   // empty = all (crosstalk needs a shear column)
+  // A given model: its effects are the base the nominal fit starts from
+  // (gain/offset are re-fitted; its as-given held-out RMS is reported).
+  std::optional<sim::SensorModel> model;
+  std::string reading_units = "reading units";
+  // Downstream: force-estimation error of the grasp estimator with readings
+  // corrected by the extended vs the nominal model (simulated grasps).
+  bool downstream_gain = true;
+  int downstream_grasps = 20;
+  uint64_t seed = 1;
+};
+
+struct ForceBin {
+  double lo = 0, hi = 0;       // N (reference)
+  int count = 0;
+  double mean_residual = 0;    // N (residual / gain)
+  double std_error = 0;        // N
+};
+
+struct Diagnostics {
+  double train_rms = 0;        // reading units
+  double heldout_rms = 0;      // reading units
+  double heldout_rms_force = 0;  // N equivalent (/ |gain|)
+  std::vector<ForceBin> bias_bins;
+  double loading_mean = 0, unloading_mean = 0;  // N, mean residual
+  int loading_count = 0, unloading_count = 0;
+  int ljung_box_lags = 0;
+  double ljung_box_q = 0, ljung_box_p = 1;      // held-out residuals
+  int xcorr_lag_samples = 0;                    // > 0: reading lags reference
+  double xcorr_lag_seconds = 0;
+  double residual_time_slope = 0;               // N/s
+  std::vector<double> residual_time_bins;       // N, mean residual per tenth of the run
+};
+
+struct Cause {
+  std::string effect;                            // vocabulary above
+  std::map<std::string, double> parameters;      // sensor-model field -> value
+  std::map<std::string, double> uncertainties;   // 1 sigma (joint final fit)
+  double heldout_rms_before = 0;                 // reading units
+  double heldout_rms_after = 0;
+  double gain = 0;                               // percent
+  double delta_bic = 0;                          // BIC_h(after) - BIC_h(before) (< 0)
+};
+
+struct CandidateScore {
+  int round = 0;
+  std::string effect;
+  std::map<std::string, double> parameters;
+  double heldout_rms = 0;
+  double bic = 0;
+  bool accepted = false;
+};
+
+struct DownstreamGain {
+  int grasps = 0;
+  double error_nominal = 0;    // N, RMS force-estimation error, readings corrected by the nominal model
+  double error_extended = 0;   // N, corrected by the extended model
+  double gain = 0;             // percent
+  std::string method;
+};
+
+struct AuditReport {
+  std::string source;
+  int n_samples = 0, n_train = 0, n_heldout = 0, skipped_nan_rows = 0;
+  double split_time = 0;       // first held-out time
+  std::string reading_units;
+  bool nominal_adequate = true;
+  std::vector<Cause> causes;   // strongest first
+  sim::SensorModel nominal_model;
+  sim::SensorModel extended_model;
+  std::optional<double> given_model_heldout_rms;  // --model as given
+  Diagnostics nominal, extended;
+  double heldout_rms_before = 0, heldout_rms_after = 0, gain = 0;  // re-simulated; gain in percent
+  std::vector<CandidateScore> candidates;
+  std::optional<DownstreamGain> downstream;
+  std::vector<std::string> notes;
+  // Series for plots.
+  std::vector<double> t, reference, reading, predicted_nominal, predicted_extended;
+};
+
+absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOptions& options = {});
+
+// Writes dir/report.json, dir/summary.txt, dir/extended_model.json and
+// dir/{reading_vs_reference,residual_vs_reference,residual_vs_time}.svg.
+// report.json's "extended_model" is the written model's path.
+absl::Status WriteAuditReport(const AuditReport& report, const std::string& dir);
+std::string AuditReportJson(const AuditReport& report,
+                            const std::string& extended_model_path = "extended_model.json");
+std::string FormatAuditSummary(const AuditReport& report);
+
+}  // namespace tactforce::audit

@@ -1,0 +1,63 @@
+// Measured data for the sensor-model audit: a reference force (N) and the
+// sensor's reading (its own units) on one clock.
+//
+// Formats (see README):
+//   one CSV      t,reference,reading[,shear][,trial]
+//   two streams  reference file t,value[,shear]; reading file t,value.
+//                The reference is interpolated (linearly) onto the reading
+//                times; reading samples outside the reference span are
+//                dropped (counted in notes). Rates may differ; a clock offset
+//                (reading clock minus reference clock) can be given, and any
+//                remaining offset shows up as the 'delay' cause.
+// NaN/empty rows are SKIPPED AND COUNTED (MeasuredData::skipped_nan_rows).
+// Time must increase strictly within each trial (rows of one trial are
+// contiguous; a 'trial' change starts a new segment whose time may restart).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "tactforce/estimator/csv.h"
+
+namespace tactforce::audit {
+
+struct MeasuredData {
+  std::string source;                 // file name(s), for messages
+  std::vector<double> t;              // s
+  std::vector<double> reference;      // N
+  std::vector<double> reading;        // sensor units
+  std::vector<double> shear;          // N, empty when absent
+  std::vector<int> trial;             // per sample (0 when absent)
+  std::vector<int> segment_starts;    // first sample index of each trial (starts with 0)
+  std::vector<int> line;              // source line per sample (may be empty)
+  int skipped_nan_rows = 0;
+  std::vector<std::string> notes;     // e.g. alignment facts
+};
+
+// Minimum number of samples an audit needs (train + held-out block).
+inline constexpr int kMinAuditSamples = 40;
+
+// Errors (InvalidArgument): "<file>: missing column(s) reading";
+// "<file>:<line>: column 't': time not increasing (0.5 after 0.6)";
+// "<file>: column 'reference' is constant (2 N): ..."; too few samples
+// ("<file>: too few samples: 12 valid rows (3 NaN rows skipped), the audit
+// needs at least 40").
+absl::StatusOr<MeasuredData> MeasuredDataFromCsv(const estimator::CsvTable& table);
+absl::StatusOr<MeasuredData> ReadMeasuredCsv(const std::string& path);
+absl::StatusOr<MeasuredData> ParseMeasuredCsv(const std::string& text, const std::string& source);
+
+struct AlignOptions {
+  double clock_offset = 0;  // s: reading time minus this = reference time
+};
+absl::StatusOr<MeasuredData> AlignStreams(const estimator::CsvTable& reference,
+                                          const estimator::CsvTable& reading,
+                                          const AlignOptions& options = {});
+absl::StatusOr<MeasuredData> ReadAndAlignStreams(const std::string& reference_path,
+                                                 const std::string& reading_path,
+                                                 const AlignOptions& options = {});
+
+// Checks sizes, finiteness, time order, non-constant columns, sample count.
+absl::Status ValidateMeasuredData(const MeasuredData& data, int min_samples = kMinAuditSamples);
+
+}  // namespace tactforce::audit

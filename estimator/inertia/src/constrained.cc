@@ -1,0 +1,422 @@
+// CONSTRAINED: physically consistent by construction (log-Cholesky
+// coordinates of the pseudo-inertia, Rucker & Wensing 2022), generalised
+// least squares with errors in forces and kinematics, CoM-in-hull rows.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <nlopt.h>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "internal.h"
+#include "tactforce/inertia/metrics.h"
+
+namespace tactforce::inertia::internal {
+namespace {
+
+// Index maps: U (upper triangular, 4x4) entries <-> theta, P entries <-> p.
+constexpr int kUr[10] = {0, 1, 2, 3, 0, 0, 0, 1, 1, 2};
+constexpr int kUc[10] = {0, 1, 2, 3, 1, 2, 3, 2, 3, 3};
+constexpr int kPi[10] = {0, 1, 2, 3, 0, 0, 0, 1, 1, 2};
+constexpr int kPj[10] = {0, 1, 2, 3, 1, 2, 3, 2, 3, 3};
+
+Eigen::Matrix4d UFromTheta(const Vector10d& th) {
+  Eigen::Matrix4d U = Eigen::Matrix4d::Zero();
+  for (int a = 0; a < 10; ++a) U(kUr[a], kUc[a]) = a < 4 ? std::exp(th(a)) : th(a);
+  return U;
+}
+
+Vector10d PVec(const Eigen::Matrix4d& P) {
+  Vector10d p;
+  for (int k = 0; k < 10; ++k) p(k) = P(kPi[k], kPj[k]);
+  return p;
+}
+
+// The quadratic model in scaled pseudo-inertia entries p:
+//   f = 1/2 p^T A p - b^T p + w (q^T p - log det P)   (+ const)
+struct Model {
+  Matrix10d A;
+  Vector10d b;
+  double w = 0;                 // prior weight
+  Vector10d q = Vector10d::Zero();
+  double scale = 1.0;           // objective divisor (conditioning)
+  std::vector<Vector10d> rows;  // hull rows a^T p <= 0
+
+  double F(const Vector10d& th) const {
+    const Eigen::Matrix4d U = UFromTheta(th);
+    const Vector10d p = PVec(U * U.transpose());
+    double f = 0.5 * p.dot(A * p) - b.dot(p);
+    if (w > 0) f += w * (q.dot(p) - 2.0 * th.head<4>().sum());
+    return f / scale;
+  }
+
+  // Value, gradient and exact Hessian in theta.
+  double Eval(const Vector10d& th, Vector10d* g, Matrix10d* H) const {
+    const Eigen::Matrix4d U = UFromTheta(th);
+    const Vector10d p = PVec(U * U.transpose());
+    const Matrix10d J = Jacobian(th, U);
+    const Vector10d gp = A * p - b + w * q;
+    double f = 0.5 * p.dot(A * p) - b.dot(p);
+    if (w > 0) f += w * (q.dot(p) - 2.0 * th.head<4>().sum());
+    Vector10d grad = J.transpose() * gp;
+    if (w > 0) grad.head<4>().array() -= 2.0 * w;
+    if (g) *g = grad / scale;
+    if (H) {
+      // Gamma: tr(Gamma P) = gp . p.
+      Eigen::Matrix4d Gm = Eigen::Matrix4d::Zero();
+      for (int k = 0; k < 10; ++k) {
+        if (kPi[k] == kPj[k]) Gm(kPi[k], kPi[k]) = gp(k);
+        else Gm(kPi[k], kPj[k]) = Gm(kPj[k], kPi[k]) = 0.5 * gp(k);
+      }
+      const Eigen::Matrix4d GU = Gm * U;
+      Matrix10d Hs = J.transpose() * A * J;
+      for (int a = 0; a < 10; ++a) {
+        const double da = a < 4 ? U(kUr[a], kUc[a]) : 1.0;
+        for (int c = 0; c < 10; ++c) {
+          if (kUc[a] != kUc[c]) continue;
+          const double dc = c < 4 ? U(kUr[c], kUc[c]) : 1.0;
+          Hs(a, c) += 2.0 * Gm(kUr[a], kUr[c]) * da * dc;
+        }
+        if (a < 4) Hs(a, a) += 2.0 * GU(kUr[a], kUc[a]) * U(kUr[a], kUc[a]);
+      }
+      *H = 0.5 * (Hs + Hs.transpose()) / scale;
+    }
+    return f / scale;
+  }
+
+  static Matrix10d Jacobian(const Vector10d& th, const Eigen::Matrix4d& U) {
+    Matrix10d J = Matrix10d::Zero();
+    for (int k = 0; k < 10; ++k) {
+      const int i = kPi[k], j = kPj[k];
+      for (int a = 0; a < 10; ++a) {
+        const int r = kUr[a], c = kUc[a];
+        double d = 0;
+        if (i == r) d += U(j, c);
+        if (j == r) d += U(i, c);
+        J(k, a) = d * (a < 4 ? U(r, c) : 1.0);
+      }
+    }
+    return J;
+  }
+};
+
+Vector10d ThetaFromP(const Eigen::Matrix4d& Pin) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> es(0.5 * (Pin + Pin.transpose()));
+  Eigen::Vector4d l = es.eigenvalues();
+  const double top = std::max(l(3), 1e-12);
+  for (int i = 0; i < 4; ++i) l(i) = std::max(l(i), 1e-3 * top);
+  const Eigen::Matrix4d P = es.eigenvectors() * l.asDiagonal() * es.eigenvectors().transpose();
+  // P = U U^T with U upper triangular: Cholesky of the index-reversed matrix.
+  Eigen::Matrix4d X = P.reverse();
+  Eigen::LLT<Eigen::Matrix4d> llt(0.5 * (X + X.transpose()));
+  const Eigen::Matrix4d L = llt.matrixL();
+  const Eigen::Matrix4d U = L.reverse();
+  Vector10d th;
+  for (int a = 0; a < 10; ++a) th(a) = a < 4 ? std::log(std::max(U(kUr[a], kUc[a]), 1e-300)) : U(kUr[a], kUc[a]);
+  return th;
+}
+
+// Damped Newton on the (unconstrained) model.
+Vector10d Newton(const Model& m, Vector10d th, int max_iter, int* iterations) {
+  Vector10d g;
+  Matrix10d H;
+  double f = m.Eval(th, &g, &H);
+  double lambda = 1e-8;
+  int it = 0;
+  for (; it < max_iter; ++it) {
+    bool accepted = false;
+    for (int tries = 0; tries < 40 && !accepted; ++tries) {
+      Matrix10d Hd = H;
+      Hd.diagonal().array() += lambda * std::max(1.0, H.diagonal().cwiseAbs().maxCoeff());
+      Eigen::LDLT<Matrix10d> ldlt(Hd);
+      if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) {
+        lambda = std::max(lambda * 10, 1e-8);
+        continue;
+      }
+      Vector10d step = -ldlt.solve(g);
+      if (!step.allFinite()) {
+        lambda = std::max(lambda * 10, 1e-8);
+        continue;
+      }
+      // Keep the log-diagonal steps moderate.
+      const double mx = step.head<4>().cwiseAbs().maxCoeff();
+      if (mx > 2.0) step *= 2.0 / mx;
+      const Vector10d cand = th + step;
+      const double fc = m.F(cand);
+      if (std::isfinite(fc) && fc <= f) {
+        const double dec = f - fc;
+        th = cand;
+        f = m.Eval(th, &g, &H);
+        lambda = std::max(lambda / 5, 1e-12);
+        accepted = true;
+        if (step.norm() < 1e-11 || dec <= 1e-16 * std::abs(f)) {
+          *iterations += it + 1;
+          return th;
+        }
+      } else {
+        lambda = std::max(lambda * 10, 1e-8);
+      }
+    }
+    if (!accepted) break;
+  }
+  *iterations += it;
+  return th;
+}
+
+struct SlsqpData {
+  const Model* model;
+  int evals = 0;
+};
+
+double SlsqpObjective(unsigned n, const double* x, double* grad, void* data) {
+  auto* d = static_cast<SlsqpData*>(data);
+  ++d->evals;
+  const Vector10d th = Eigen::Map<const Vector10d>(x);
+  Vector10d g;
+  const double f = d->model->Eval(th, grad ? &g : nullptr, nullptr);
+  if (grad) Eigen::Map<Vector10d>(grad) = g;
+  return f;
+}
+
+void SlsqpConstraints(unsigned m, double* result, unsigned n, const double* x, double* grad, void* data) {
+  auto* d = static_cast<SlsqpData*>(data);
+  const Vector10d th = Eigen::Map<const Vector10d>(x);
+  const Eigen::Matrix4d U = UFromTheta(th);
+  const Vector10d p = PVec(U * U.transpose());
+  Matrix10d J;
+  if (grad) J = Model::Jacobian(th, U);
+  for (unsigned j = 0; j < m; ++j) {
+    const Vector10d& a = d->model->rows[j];
+    result[j] = a.dot(p);
+    if (grad) {
+      const Vector10d gj = J.transpose() * a;
+      for (unsigned i = 0; i < n; ++i) grad[j * n + i] = gj(i);
+    }
+  }
+}
+
+}  // namespace
+
+absl::StatusOr<MethodOutput> FitConstrained(const InertiaSamples& s, const InertiaOptions& o,
+                                            const ConvexHull* hull) {
+  MethodOutput out;
+  std::vector<KinPoint> kin = SmoothedKinematics(s, o.gravity, o.noise, o.smoothing_window, &out.notes);
+  const int n = static_cast<int>(kin.size());
+  std::vector<Vector6d> wrench(n);
+  std::vector<Matrix6d> wcov(n);
+  std::vector<Matrix6x10> Y(n);
+  bool known = true;
+  double f2 = 0, t2 = 0;
+  for (int k = 0; k < n; ++k) {
+    const InertiaSample& x = s.samples[kin[k].index];
+    wrench[k] = SampleWrench(x, s.source);
+    known = WrenchCovariance(x, s.source, o.noise, &wcov[k]) && known;
+    Y[k] = Regressor(kin[k].w, kin[k].dw, kin[k].a_minus_g);
+    f2 += wrench[k].head<3>().squaredNorm();
+    t2 += wrench[k].tail<3>().squaredNorm();
+  }
+  out.notes.push_back(known ? "wrench noise: from the given sigmas" : "wrench noise: estimated from residuals");
+  // Floors keep the weights finite on noise-free data.
+  const double floor_f = 1e-18 * std::max(f2 / (3.0 * n), 1e-300);
+  const double floor_t = 1e-18 * std::max(t2 / (3.0 * n), 1e-300);
+
+  // Unweighted start, then scales.
+  Eigen::MatrixXd Ys(6 * n, 10);
+  Eigen::VectorXd bs(6 * n);
+  for (int k = 0; k < n; ++k) Ys.middleRows<6>(6 * k) = Y[k], bs.segment<6>(6 * k) = wrench[k];
+  int rank = 0;
+  Vector10d pi = ScaledLeastSquares(Ys, bs, Vector10d::Ones(), &rank);
+  double m0 = 1, len = 0.1;
+  RoughScale(pi, hull, &m0, &len);
+  if (o.prior) RoughScale(o.prior->params.ToStandard(), hull, &m0, &len);
+  out.scale = ParameterScale(m0, len);
+  pi = ScaledLeastSquares(Ys, bs, out.scale, &rank);
+  {  // second pass for the scale from a better estimate
+    double m1 = m0, l1 = len;
+    RoughScale(pi, hull, &m1, &l1);
+    if (!o.prior) m0 = m1, len = l1;
+    out.scale = ParameterScale(m0, len);
+  }
+
+  // Linear map from scaled pseudo-inertia entries p to pi.
+  const double dl = 1.0 / (len * std::sqrt(m0)), dm = 1.0 / std::sqrt(m0);
+  const Eigen::Vector4d D(dl, dl, dl, dm);
+  Matrix10d T = Matrix10d::Zero();  // pi = T p
+  auto pidx = [](int i, int j) {
+    if (i > j) std::swap(i, j);
+    for (int k = 0; k < 10; ++k)
+      if (kPi[k] == i && kPj[k] == j) return k;
+    return -1;
+  };
+  auto unscale = [&](int i, int j) { return 1.0 / (D(i) * D(j)); };
+  T(0, pidx(3, 3)) = unscale(3, 3);
+  for (int i = 0; i < 3; ++i) T(1 + i, pidx(i, 3)) = unscale(i, 3);
+  // I_o = tr(Sigma) I - Sigma
+  T(4, pidx(1, 1)) = unscale(1, 1), T(4, pidx(2, 2)) = unscale(2, 2);
+  T(5, pidx(0, 0)) = unscale(0, 0), T(5, pidx(2, 2)) = unscale(2, 2);
+  T(6, pidx(0, 0)) = unscale(0, 0), T(6, pidx(1, 1)) = unscale(1, 1);
+  T(7, pidx(0, 1)) = -unscale(0, 1);
+  T(8, pidx(0, 2)) = -unscale(0, 2);
+  T(9, pidx(1, 2)) = -unscale(1, 2);
+
+  Model model;
+  if (o.prior && o.prior->weight > 0) {
+    const Eigen::Matrix4d P0 = D.asDiagonal() * PseudoInertia(o.prior->params) * D.asDiagonal();
+    const Eigen::Matrix4d G = P0.inverse();
+    for (int k = 0; k < 10; ++k) model.q(k) = kPi[k] == kPj[k] ? G(kPi[k], kPi[k]) : 2.0 * G(kPi[k], kPj[k]);
+    model.w = o.prior->weight;
+  }
+  if (hull) {
+    for (size_t j = 0; j < hull->normals.size(); ++j) {
+      Vector10d a = Vector10d::Zero();
+      for (int i = 0; i < 3; ++i) a(pidx(i, 3)) = hull->normals[j](i);
+      a(pidx(3, 3)) = -hull->offsets[j] / len;
+      // a^T p = (n.h - d m) * dm^2 / len with h, m unscaled: <= 0 inside.
+      model.rows.push_back(a);
+    }
+  }
+
+  Vector10d theta;
+  bool have_theta = false;
+  Matrix10d A = Matrix10d::Zero();
+  for (int round = 0; round < o.reweighting_rounds; ++round) {
+    if (o.interrupt && o.interrupt()) return absl::CancelledError("interrupted");
+    // Residual covariance per sample.
+    Matrix6d est = Matrix6d::Zero();
+    if (!known) {
+      for (int k = 0; k < n; ++k) {
+        const Vector6d r = Y[k] * pi - wrench[k];
+        est += r * r.transpose();
+      }
+      est /= std::max(1, n - 2);
+    }
+    const InertialParameters cur = InertialParameters::FromStandard(pi);
+    const Eigen::Matrix3d Io = cur.InertiaOrigin();
+    const Vec3 h = pi.segment<3>(1);
+    A.setZero();
+    Vector10d bvec = Vector10d::Zero();
+    Matrix10d bias = Matrix10d::Zero();
+    for (int k = 0; k < n; ++k) {
+      Matrix6d C = known ? wcov[k] : est;
+      const KinPoint& q = kin[k];
+      // Kinematic errors propagated through the model at the current pi.
+      Eigen::Matrix<double, 6, 3> Ja, Jw, Jdw, Jr;
+      Ja << pi(0) * Eigen::Matrix3d::Identity(), Skew(h);
+      Jw << -Skew(q.w.cross(h)) - Skew(q.w) * Skew(h), -Skew(Io * q.w) + Skew(q.w) * Io;
+      Jdw << -Skew(h), Io;
+      Jr = Ja * Skew(q.a_minus_g);
+      Matrix6d Ck = q.var_a * Ja * Ja.transpose() + q.var_w * Jw * Jw.transpose() +
+                    q.var_dw * Jdw * Jdw.transpose() + q.var_rot * Jr * Jr.transpose();
+      if (known) C += Ck;
+      C.diagonal().head<3>().array() += floor_f;
+      C.diagonal().tail<3>().array() += floor_t;
+      const Eigen::LLT<Matrix6d> llt(C);
+      const Matrix6x10 WY = llt.solve(Y[k]);
+      A += Y[k].transpose() * WY;
+      bvec += WY.transpose() * wrench[k];
+      // Errors-in-variables bias of Y^T W Y: E[dY^T W dY].
+      if (q.var_a > 0 || q.var_dw > 0 || q.var_rot > 0 || q.var_w > 0) {
+        for (int j = 0; j < 3; ++j) {
+          const Vec3 e = Vec3::Unit(j);
+          const Matrix6x10 Da = Regressor(Vec3::Zero(), Vec3::Zero(), e);
+          const Matrix6x10 Dd = Regressor(Vec3::Zero(), e, Vec3::Zero());
+          const Matrix6x10 Dr = Regressor(Vec3::Zero(), Vec3::Zero(), Skew(q.a_minus_g) * e);
+          const double eps = 1e-4 * std::max(1.0, q.w.norm());
+          const Matrix6x10 Dw = (Regressor(q.w + eps * e, Vec3::Zero(), Vec3::Zero()) -
+                                 Regressor(q.w - eps * e, Vec3::Zero(), Vec3::Zero())) /
+                                (2 * eps);
+          if (q.var_a > 0) bias += q.var_a * Da.transpose() * llt.solve(Da);
+          if (q.var_dw > 0) bias += q.var_dw * Dd.transpose() * llt.solve(Dd);
+          if (q.var_rot > 0) bias += q.var_rot * Dr.transpose() * llt.solve(Dr);
+          if (q.var_w > 0) bias += q.var_w * Dw.transpose() * llt.solve(Dw);
+        }
+      }
+    }
+    // Subtract the bias when the corrected matrix stays well positive definite.
+    Matrix10d Ause = A;
+    {
+      const Matrix10d S = out.scale.asDiagonal();
+      Eigen::SelfAdjointEigenSolver<Matrix10d> e1(S * A * S, Eigen::EigenvaluesOnly);
+      Eigen::SelfAdjointEigenSolver<Matrix10d> e2(S * (A - bias) * S, Eigen::EigenvaluesOnly);
+      if (bias.norm() > 0 && e2.eigenvalues()(0) > 0.5 * e1.eigenvalues()(0)) {
+        Ause = A - bias;
+        if (round == o.reweighting_rounds - 1) out.notes.push_back("errors-in-variables bias correction applied");
+      }
+    }
+    model.A = T.transpose() * Ause * T;
+    model.b = T.transpose() * bvec;
+    model.scale = std::max(model.A.diagonal().cwiseAbs().maxCoeff(), 1e-300);
+    if (!have_theta) {
+      // Unconstrained GLS estimate, projected into the positive definite cone.
+      Eigen::SelfAdjointEigenSolver<Matrix10d> es(model.A);
+      Vector10d p = Vector10d::Zero();
+      const double top = es.eigenvalues()(9);
+      for (int i = 0; i < 10; ++i) {
+        const double l = es.eigenvalues()(i);
+        if (l > 1e-14 * top) p += es.eigenvectors().col(i) * (es.eigenvectors().col(i).dot(model.b) / l);
+      }
+      Eigen::Matrix4d Pt = Eigen::Matrix4d::Zero();
+      for (int k = 0; k < 10; ++k) Pt(kPi[k], kPj[k]) = Pt(kPj[k], kPi[k]) = p(k);
+      if (o.prior) Pt = 0.5 * Pt + 0.5 * D.asDiagonal() * PseudoInertia(o.prior->params) * D.asDiagonal();
+      theta = ThetaFromP(Pt);
+      have_theta = true;
+    }
+    theta = Newton(model, theta, o.max_iterations, &out.iterations);
+    // CoM-in-hull rows: SLSQP when the unconstrained optimum violates them.
+    if (!model.rows.empty()) {
+      const Eigen::Matrix4d U = UFromTheta(theta);
+      const Vector10d p = PVec(U * U.transpose());
+      double worst = -1;
+      for (const auto& a : model.rows) worst = std::max(worst, a.dot(p) / p(pidx(3, 3)));
+      if (worst > 1e-9) {
+        SlsqpData data{&model};
+        nlopt_opt opt = nlopt_create(NLOPT_LD_SLSQP, 10);
+        nlopt_set_min_objective(opt, SlsqpObjective, &data);
+        std::vector<double> tol(model.rows.size(), 1e-12);
+        nlopt_add_inequality_mconstraint(opt, static_cast<unsigned>(model.rows.size()), SlsqpConstraints, &data,
+                                         tol.data());
+        nlopt_set_ftol_rel(opt, 1e-15);
+        nlopt_set_xtol_rel(opt, 1e-12);
+        nlopt_set_maxeval(opt, 20 * o.max_iterations);
+        double x[10], fmin = 0;
+        for (int i = 0; i < 10; ++i) x[i] = theta(i);
+        const nlopt_result res = nlopt_optimize(opt, x, &fmin);
+        nlopt_destroy(opt);
+        out.iterations += data.evals;
+        Vector10d th2 = Eigen::Map<Vector10d>(x);
+        if (res > 0 && th2.allFinite()) {
+          theta = th2;
+          if (round == o.reweighting_rounds - 1) out.notes.push_back("CoM-in-hull constraint active (SLSQP)");
+        } else {
+          out.notes.push_back(absl::StrCat("SLSQP for the hull rows failed (nlopt code ", static_cast<int>(res),
+                                           "); CoM may lie outside the hull"));
+        }
+      }
+    }
+    const Eigen::Matrix4d U = UFromTheta(theta);
+    pi = T * PVec(U * U.transpose());
+    if (o.progress) o.progress(0.9 * (round + 1) / o.reweighting_rounds);
+  }
+  out.pi = pi;
+  out.info = A;
+  // Covariance of pi: (A)^+ (the unconstrained GLS information).
+  {
+    const Matrix10d S = out.scale.asDiagonal();
+    Eigen::SelfAdjointEigenSolver<Matrix10d> es(S * A * S);
+    Matrix10d pinv = Matrix10d::Zero();
+    const double top = es.eigenvalues()(9);
+    for (int i = 0; i < 10; ++i) {
+      const double l = es.eigenvalues()(i);
+      if (l > 1e-14 * top) pinv += es.eigenvectors().col(i) * es.eigenvectors().col(i).transpose() / l;
+    }
+    out.cov = S * pinv * S;
+  }
+  out.samples_used = n;
+  ResidualRms(kin, wrench, pi, &out.rms_force, &out.rms_torque);
+  return out;
+}
+
+}  // namespace tactforce::inertia::internal

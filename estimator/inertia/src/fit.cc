@@ -1,0 +1,271 @@
+#include "tactforce/inertia/fit.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cctype>
+#include <cmath>
+
+#include <Eigen/Eigenvalues>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "internal.h"
+#include "tactforce/inertia/hull.h"
+#include "tactforce/inertia/metrics.h"
+#include "tactforce/inertia/samples.h"
+
+namespace tactforce::inertia {
+
+const char* ToString(InertiaMethod m) {
+  switch (m) {
+    case InertiaMethod::kBaselineLs: return "baseline-ls";
+    case InertiaMethod::kFactorGraph: return "factor-graph";
+    case InertiaMethod::kConstrained: return "constrained";
+  }
+  return "?";
+}
+
+const char* ProtoName(InertiaMethod m) {
+  switch (m) {
+    case InertiaMethod::kBaselineLs: return "INERTIA_METHOD_BASELINE_LS";
+    case InertiaMethod::kFactorGraph: return "INERTIA_METHOD_FACTOR_GRAPH";
+    case InertiaMethod::kConstrained: return "INERTIA_METHOD_CONSTRAINED";
+  }
+  return "?";
+}
+
+absl::StatusOr<InertiaMethod> ParseInertiaMethod(std::string_view text) {
+  std::string s;
+  for (char c : text) s += c == '_' ? '-' : static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (s.rfind("inertia-method-", 0) == 0) s = s.substr(15);
+  if (s == "baseline-ls") return InertiaMethod::kBaselineLs;
+  if (s == "factor-graph") return InertiaMethod::kFactorGraph;
+  if (s == "constrained") return InertiaMethod::kConstrained;
+  return absl::InvalidArgumentError(absl::StrCat(
+      "method: unknown '", std::string(text), "' (expected baseline-ls, factor-graph or constrained)"));
+}
+
+int MinimumSamples(const InertiaSamples& s, InertiaMethod method) {
+  if (method != InertiaMethod::kFactorGraph && s.HasKinematics()) return 2;
+  return method == InertiaMethod::kConstrained ? 5 : 4;
+}
+
+namespace {
+
+absl::Status CheckSigma(double v, const char* name) {
+  if (!std::isfinite(v) || v < 0)
+    return absl::InvalidArgumentError(absl::StrCat(name, ": must be finite and >= 0 (got ", v, ")"));
+  return absl::OkStatus();
+}
+
+absl::Status CheckPositive(double v, const char* name) {
+  if (!std::isfinite(v) || !(v > 0))
+    return absl::InvalidArgumentError(absl::StrCat(name, ": must be finite and > 0 (got ", v, ")"));
+  return absl::OkStatus();
+}
+
+std::string Vec(const Vec3& v) { return absl::StrFormat("(%.6g, %.6g, %.6g)", v.x(), v.y(), v.z()); }
+
+}  // namespace
+
+absl::Status ValidateInertiaOptions(const InertiaOptions& o) {
+  if (!o.gravity.allFinite()) return absl::InvalidArgumentError("gravity: not finite");
+  const InertiaNoise& n = o.noise;
+  const std::pair<double, const char*> sigmas[] = {
+      {n.force_sigma, "noise.force_sigma"},
+      {n.torque_sigma, "noise.torque_sigma"},
+      {n.position_sigma, "noise.position_sigma"},
+      {n.orientation_sigma, "noise.orientation_sigma"},
+      {n.angular_velocity_sigma, "noise.angular_velocity_sigma"},
+      {n.linear_acceleration_sigma, "noise.linear_acceleration_sigma"},
+      {n.angular_acceleration_sigma, "noise.angular_acceleration_sigma"}};
+  for (const auto& [v, name] : sigmas)
+    if (absl::Status st = CheckSigma(v, name); !st.ok()) return st;
+  if (o.savitzky_golay && (o.savitzky_golay_window < 5 || o.savitzky_golay_window % 2 == 0))
+    return absl::InvalidArgumentError(absl::StrCat("savitzky_golay_window: must be odd and >= 5 (got ",
+                                                   o.savitzky_golay_window, ")"));
+  if (o.smoothing_window != 0 && (o.smoothing_window < 5 || o.smoothing_window % 2 == 0))
+    return absl::InvalidArgumentError(absl::StrCat("smoothing_window: must be 0 (automatic) or odd and >= 5 (got ",
+                                                   o.smoothing_window, ")"));
+  if (o.reweighting_rounds < 1) return absl::InvalidArgumentError("reweighting_rounds: must be >= 1");
+  if (o.max_iterations < 1) return absl::InvalidArgumentError("max_iterations: must be >= 1");
+  const std::pair<double, const char*> pos[] = {{o.fg_dynamics_force_sigma, "fg_dynamics_force_sigma"},
+                                                {o.fg_dynamics_torque_sigma, "fg_dynamics_torque_sigma"},
+                                                {o.fg_min_force_sigma, "fg_min_force_sigma"},
+                                                {o.fg_min_torque_sigma, "fg_min_torque_sigma"},
+                                                {o.fg_min_position_sigma, "fg_min_position_sigma"},
+                                                {o.fg_min_orientation_sigma, "fg_min_orientation_sigma"},
+                                                {o.fg_constraint_sigma, "fg_constraint_sigma"}};
+  for (const auto& [v, name] : pos)
+    if (absl::Status st = CheckPositive(v, name); !st.ok()) return st;
+  if (!(o.excitation_threshold >= 0 && o.excitation_threshold < 1))
+    return absl::InvalidArgumentError("excitation_threshold: must be in [0, 1)");
+  std::optional<ConvexHull> hull;
+  if (!o.hull.empty()) {
+    absl::StatusOr<ConvexHull> h = ComputeConvexHull(o.hull);
+    if (!h.ok()) return h.status();
+    hull = *std::move(h);
+  }
+  if (o.prior) {
+    const InertialParameters& p = o.prior->params;
+    if (absl::Status st = CheckPositive(p.mass, "prior.mass"); !st.ok()) return st;
+    if (!p.com.allFinite()) return absl::InvalidArgumentError("prior.com: not finite");
+    for (double v : p.inertia_com.ToArray())
+      if (!std::isfinite(v)) return absl::InvalidArgumentError("prior.inertia: not finite");
+    if (absl::Status st = CheckSigma(o.prior->weight, "prior.weight"); !st.ok()) return st;
+    if (!IsPhysicallyConsistent(p))
+      return absl::InvalidArgumentError(
+          "prior: not physically consistent (its pseudo-inertia is not positive definite: check "
+          "the inertia's triangle inequalities)");
+    if (hull && !hull->Contains(p.com, 1e-9)) {
+      return absl::InvalidArgumentError(absl::StrCat("prior.com ", Vec(p.com),
+                                                     " is outside the hull (by ",
+                                                     absl::StrFormat("%.3g", hull->SignedDistanceBound(p.com)),
+                                                     " m)"));
+    }
+  }
+  return absl::OkStatus();
+}
+
+namespace internal {
+
+void ResidualRms(const std::vector<KinPoint>& kin, const std::vector<Vector6d>& wrench, const Vector10d& pi,
+                 double* rms_force, double* rms_torque) {
+  double sf = 0, st = 0;
+  for (size_t i = 0; i < kin.size(); ++i) {
+    const Vector6d r = Regressor(kin[i].w, kin[i].dw, kin[i].a_minus_g) * pi - wrench[i];
+    sf += r.head<3>().squaredNorm();
+    st += r.tail<3>().squaredNorm();
+  }
+  const double n = std::max<size_t>(kin.size(), 1) * 3.0;
+  *rms_force = std::sqrt(sf / n);
+  *rms_torque = std::sqrt(st / n);
+}
+
+void RoughScale(const Vector10d& pi, const ConvexHull* hull, double* m0, double* length) {
+  double m = pi(0);
+  if (!(m > 0) || !std::isfinite(m)) m = std::abs(m) > 0 && std::isfinite(m) ? std::abs(m) : 1.0;
+  double l = 0;
+  if (hull) l = 0.5 * hull->size;
+  if (!(l > 0)) {
+    const double tr = pi(4) + pi(5) + pi(6);  // = 2 tr(second moment)
+    const double c2 = pi.segment<3>(1).squaredNorm() / (m * m);
+    l = std::sqrt(std::max({0.5 * tr / m, c2, 0.0}));
+  }
+  if (!(l > 1e-6) || !std::isfinite(l)) l = 0.1;
+  *m0 = m;
+  *length = l;
+}
+
+}  // namespace internal
+
+namespace {
+
+// Describes a unit direction in scaled parameter space.
+std::string NameDirection(const Vector10d& v) {
+  const auto& names = StandardParameterNames();
+  int imax = 0;
+  for (int i = 1; i < 10; ++i)
+    if (std::abs(v(i)) > std::abs(v(imax))) imax = i;
+  const double sign = v(imax) < 0 ? -1.0 : 1.0;
+  std::string out;
+  for (int i = 0; i < 10; ++i) {
+    const double c = sign * v(i);
+    if (std::abs(c) < 0.1 * std::abs(v(imax))) continue;
+    if (out.empty()) {
+      out = absl::StrFormat("%.2g %s", c, names[i]);
+    } else {
+      out += absl::StrFormat(" %s %.2g %s", c < 0 ? "-" : "+", std::abs(c), names[i]);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in, const InertiaOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  if (absl::Status st = ValidateInertiaSamples(samples_in); !st.ok()) return st;
+  if (absl::Status st = ValidateInertiaOptions(options); !st.ok()) return st;
+  const int need = MinimumSamples(samples_in, options.method);
+  if (static_cast<int>(samples_in.samples.size()) < need) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        samples_in.source_name.empty() ? "samples" : samples_in.source_name, ": ",
+        samples_in.samples.size(), " sample(s), at least ", need, " needed by ", ToString(options.method),
+        " for the 10 inertial parameters"));
+  }
+  InertiaSamples samples = samples_in;
+  NormalizeOrientations(samples);
+  std::optional<ConvexHull> hull;
+  if (!options.hull.empty()) hull = *ComputeConvexHull(options.hull);
+  const ConvexHull* hp = hull ? &*hull : nullptr;
+
+  absl::StatusOr<internal::MethodOutput> r;
+  switch (options.method) {
+    case InertiaMethod::kBaselineLs: r = internal::FitBaselineLs(samples, options); break;
+    case InertiaMethod::kFactorGraph: r = internal::FitFactorGraph(samples, options, hp); break;
+    case InertiaMethod::kConstrained: r = internal::FitConstrained(samples, options, hp); break;
+  }
+  if (!r.ok()) return r.status();
+
+  InertiaFit fit;
+  fit.method = options.method;
+  fit.standard = r->pi;
+  fit.params = InertialParameters::FromStandard(r->pi);
+  PrincipalAxes(fit.params.inertia_com, &fit.principal_moments, &fit.principal_axes);
+  fit.pseudo_inertia_min_eigenvalue = ScaledPseudoInertiaMinEigenvalue(fit.params);
+  fit.physically_consistent = fit.pseudo_inertia_min_eigenvalue > 1e-12;
+  fit.com_in_hull = hp ? hp->Contains(fit.params.com, 1e-7) : true;
+  fit.residual_rms_force = r->rms_force;
+  fit.residual_rms_torque = r->rms_torque;
+  fit.iterations = r->iterations;
+  fit.samples_used = r->samples_used;
+  fit.notes = r->notes;
+
+  // Standard errors of (m, c, H_c) from the covariance of pi (first-order).
+  if (r->cov.allFinite() && r->cov.norm() > 0 && fit.params.mass != 0) {
+    auto reported = [](const Vector10d& pi) {
+      const InertialParameters p = InertialParameters::FromStandard(pi);
+      Vector10d out;
+      const auto in = p.inertia_com.ToArray();
+      out << p.mass, p.com, in[0], in[1], in[2], in[3], in[4], in[5];
+      return out;
+    };
+    internal::Matrix10d J;
+    for (int i = 0; i < 10; ++i) {
+      const double h = 1e-6 * r->scale(i);
+      Vector10d a = r->pi, b = r->pi;
+      a(i) += h;
+      b(i) -= h;
+      J.col(i) = (reported(a) - reported(b)) / (2 * h);
+    }
+    const internal::Matrix10d c = J * r->cov * J.transpose();
+    const Vector10d se = c.diagonal().cwiseMax(0.0).cwiseSqrt();
+    fit.mass_se = se(0);
+    fit.com_se = se.segment<3>(1);
+    fit.inertia_se = InertiaTensor::FromArray({se(4), se(5), se(6), se(7), se(8), se(9)});
+  }
+
+  // Excitation: eigen-decomposition of S info S (S = parameter scale).
+  {
+    const internal::Matrix10d S = r->scale.asDiagonal();
+    const internal::Matrix10d M = S * r->info * S;
+    Eigen::SelfAdjointEigenSolver<internal::Matrix10d> es(0.5 * (M + M.transpose()));
+    const double top = std::max(es.eigenvalues()(9), 0.0);
+    for (int i = 9; i >= 0; --i) {
+      const double sv = std::sqrt(std::max(es.eigenvalues()(i), 0.0));
+      const double rel = top > 0 ? sv / std::sqrt(top) : 0.0;
+      fit.singular_values.push_back(rel);
+      if (rel < options.excitation_threshold) {
+        fit.poorly_excited.push_back(
+            absl::StrFormat("%s (relative singular value %.2g)", NameDirection(es.eigenvectors().col(i)), rel));
+      }
+    }
+  }
+  fit.time_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (options.progress) options.progress(1.0);
+  return fit;
+}
+
+}  // namespace tactforce::inertia

@@ -1,0 +1,403 @@
+// Kinematics for the fits: three-point differences, measured columns, and
+// local-polynomial smoothing with a data-driven window.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "internal.h"
+
+namespace tactforce::inertia::internal {
+
+Eigen::Matrix3d Skew(const Vec3& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+Vec3 LogSO3(const Eigen::Matrix3d& R) {
+  Eigen::Quaterniond q(R);
+  q.normalize();
+  if (q.w() < 0) q.coeffs() = -q.coeffs();
+  const Vec3 v = q.vec();
+  const double s = v.norm();
+  if (s < 1e-12) return 2.0 * v;  // angle ~ 2 s
+  const double angle = 2.0 * std::atan2(s, q.w());
+  return angle / s * v;
+}
+
+Eigen::Matrix3d ExpSO3(const Vec3& w) {
+  const double a = w.norm();
+  if (a < 1e-12) return Eigen::Matrix3d::Identity() + Skew(w);
+  return Eigen::AngleAxisd(a, w / a).toRotationMatrix();
+}
+
+Matrix6x10 Regressor(const Vec3& w, const Vec3& dw, const Vec3& amg) {
+  Matrix6x10 Y = Matrix6x10::Zero();
+  Y.block<3, 1>(0, 0) = amg;
+  Y.block<3, 3>(0, 1) = Skew(dw) + Skew(w) * Skew(w);
+  Y.block<3, 3>(3, 1) = -Skew(amg);
+  auto L = [](const Vec3& x) {
+    Eigen::Matrix<double, 3, 6> l;
+    l << x(0), 0, 0, x(1), x(2), 0,  //
+        0, x(1), 0, x(0), 0, x(2),   //
+        0, 0, x(2), 0, x(0), x(1);
+    return l;
+  };
+  Y.block<3, 6>(3, 4) = L(dw) + Skew(w) * L(w);
+  return Y;
+}
+
+Vector6d SampleWrench(const InertiaSample& s, ForceSource source) {
+  Vector6d b;
+  if (source == ForceSource::kWrench) {
+    b << s.force, s.torque;
+    return b;
+  }
+  Vec3 f = Vec3::Zero(), tau = Vec3::Zero();
+  for (const ContactReading& c : s.contacts) {
+    f += c.force;
+    tau += c.point.cross(c.force);
+  }
+  b << f, tau;
+  return b;
+}
+
+bool WrenchCovariance(const InertiaSample& s, ForceSource source, const InertiaNoise& noise,
+                      Matrix6d* cov) {
+  cov->setZero();
+  if (source == ForceSource::kWrench) {
+    const double sf = s.force_sigma > 0 ? s.force_sigma : noise.force_sigma;
+    const double st = s.torque_sigma > 0 ? s.torque_sigma : noise.torque_sigma;
+    if (!(sf > 0 && st > 0)) return false;
+    cov->topLeftCorner<3, 3>() = sf * sf * Eigen::Matrix3d::Identity();
+    cov->bottomRightCorner<3, 3>() = st * st * Eigen::Matrix3d::Identity();
+    return true;
+  }
+  for (const ContactReading& c : s.contacts) {
+    const double sg = c.sigma > 0 ? c.sigma : noise.force_sigma;
+    if (c.force.squaredNorm() == 0.0) continue;  // broken contact: a known zero
+    if (!(sg > 0)) return false;
+    Eigen::Matrix<double, 6, 3> G;
+    G << Eigen::Matrix3d::Identity(), Skew(c.point);
+    *cov += sg * sg * G * G.transpose();
+  }
+  return true;
+}
+
+std::vector<KinPoint> FiniteDifferenceKinematics(const InertiaSamples& s, const Vec3& g) {
+  std::vector<KinPoint> out;
+  const auto& x = s.samples;
+  const int n = static_cast<int>(x.size());
+  for (int k = 1; k + 1 < n; ++k) {
+    const Eigen::Matrix3d R0 = x[k - 1].orientation.toRotationMatrix();
+    const Eigen::Matrix3d R1 = x[k].orientation.toRotationMatrix();
+    const Eigen::Matrix3d R2 = x[k + 1].orientation.toRotationMatrix();
+    const double hb = x[k].t - x[k - 1].t, hf = x[k + 1].t - x[k].t;
+    const Vec3 rb = LogSO3(R0.transpose() * R1) / hb, rf = LogSO3(R1.transpose() * R2) / hf;
+    KinPoint p;
+    p.index = k;
+    p.t = x[k].t;
+    p.R = R1;
+    p.w = (hf * rb + hb * rf) / (hb + hf);
+    p.dw = 2.0 * (rf - rb) / (hb + hf);
+    const Vec3 a = 2.0 * ((x[k + 1].position - x[k].position) / hf - (x[k].position - x[k - 1].position) / hb) /
+                   (hb + hf);
+    p.a_minus_g = R1.transpose() * (a - g);
+    out.push_back(p);
+  }
+  return out;
+}
+
+std::vector<KinPoint> MeasuredKinematicsPoints(const InertiaSamples& s, const Vec3& g) {
+  std::vector<KinPoint> out;
+  for (int k = 0; k < static_cast<int>(s.samples.size()); ++k) {
+    const InertiaSample& x = s.samples[k];
+    KinPoint p;
+    p.index = k;
+    p.t = x.t;
+    p.R = x.orientation.toRotationMatrix();
+    p.w = x.kinematics->angular_velocity;
+    p.dw = x.kinematics->angular_acceleration;
+    p.a_minus_g = p.R.transpose() * (x.kinematics->acceleration - g);
+    out.push_back(p);
+  }
+  return out;
+}
+
+Eigen::MatrixXd LocalPolyWeights(const std::vector<double>& t, int k, int window, int degree, int* lo_out) {
+  const int n = static_cast<int>(t.size());
+  const int w = std::max(1, std::min(window, n));
+  const int deg = std::max(0, std::min(degree, w - 1));
+  const int lo = std::clamp(k - w / 2, 0, n - w);
+  *lo_out = lo;
+  const int rows = std::min(deg, 2) + 1;
+  if (w == 1) return Eigen::MatrixXd::Ones(1, 1);
+  const double h = std::max(t[k] - t[lo], t[lo + w - 1] - t[k]);
+  Eigen::MatrixXd V(w, deg + 1);
+  for (int j = 0; j < w; ++j) {
+    const double tau = (t[lo + j] - t[k]) / h;
+    double p = 1.0;
+    for (int i = 0; i <= deg; ++i) V(j, i) = p, p *= tau;
+  }
+  const Eigen::MatrixXd G = V.transpose() * V;
+  Eigen::MatrixXd C = G.ldlt().solve(V.transpose());  // (deg+1) x w
+  Eigen::MatrixXd out(rows, w);
+  out.row(0) = C.row(0);
+  if (rows > 1) out.row(1) = C.row(1) / h;
+  if (rows > 2) out.row(2) = C.row(2) * (2.0 / (h * h));
+  return out;
+}
+
+Eigen::MatrixXd SmoothSeries(const std::vector<double>& t, const Eigen::MatrixXd& values, int window,
+                             int degree) {
+  Eigen::MatrixXd out(values.rows(), values.cols());
+  for (int k = 0; k < values.rows(); ++k) {
+    int lo = 0;
+    const Eigen::MatrixXd W = LocalPolyWeights(t, k, window, degree, &lo);
+    out.row(k) = W.row(0) * values.middleRows(lo, W.cols());
+  }
+  return out;
+}
+
+namespace {
+
+struct Candidate {
+  int window;
+  int degree;
+};
+
+// A vector signal seen from each sample k: values of samples j in
+// [lo[k], lo[k] + v[k].size()) in the chart of sample k.
+struct Charted {
+  std::vector<int> lo;
+  std::vector<std::vector<Vec3>> v;
+  Vec3 At(int k, int j) const { return v[k][j - lo[k]]; }
+};
+
+struct FitResult {
+  Candidate chosen{1, 0};
+  double sigma2 = 0;   // noise variance used
+  bool estimated = false;
+  std::vector<Vec3> d[3];        // value, 1st, 2nd derivative per sample
+  std::vector<double> wsq[3];    // sum of squared weights per sample
+};
+
+constexpr int kMaxWindow = 101;
+
+Charted ChartPositions(const std::vector<Vec3>& p, int span) {
+  const int n = static_cast<int>(p.size());
+  Charted c;
+  c.lo.resize(n);
+  c.v.resize(n);
+  for (int k = 0; k < n; ++k) {
+    const int w = std::min(span, n);
+    const int lo = std::clamp(k - w / 2, 0, n - w);
+    c.lo[k] = lo;
+    c.v[k].resize(w);
+    for (int j = 0; j < w; ++j) c.v[k][j] = p[lo + j] - p[k];
+  }
+  return c;
+}
+
+Charted ChartRotations(const std::vector<Eigen::Matrix3d>& R, int span) {
+  const int n = static_cast<int>(R.size());
+  Charted c;
+  c.lo.resize(n);
+  c.v.resize(n);
+  for (int k = 0; k < n; ++k) {
+    const int w = std::min(span, n);
+    const int lo = std::clamp(k - w / 2, 0, n - w);
+    c.lo[k] = lo;
+    c.v[k].resize(w);
+    const Eigen::Matrix3d Rt = R[k].transpose();
+    for (int j = 0; j < w; ++j) c.v[k][j] = LogSO3(Rt * R[lo + j]);
+  }
+  return c;
+}
+
+// Applies weights row r at k.
+Vec3 Apply(const Charted& c, int k, const Eigen::MatrixXd& W, int lo, int r) {
+  Vec3 acc = Vec3::Zero();
+  for (int j = 0; j < W.cols(); ++j) acc += W(r, j) * c.At(k, lo + j);
+  return acc;
+}
+
+FitResult Final(const std::vector<double>& t, const Charted& c, Candidate cand) {
+  const int n = static_cast<int>(t.size());
+  FitResult f;
+  f.chosen = cand;
+  for (int r = 0; r < 3; ++r) f.d[r].assign(n, Vec3::Zero()), f.wsq[r].assign(n, 0.0);
+  for (int k = 0; k < n; ++k) {
+    int lo = 0;
+    const Eigen::MatrixXd W = LocalPolyWeights(t, k, cand.window, cand.degree, &lo);
+    for (int r = 0; r < W.rows(); ++r) {
+      f.d[r][k] = Apply(c, k, W, lo, r);
+      f.wsq[r][k] = W.row(r).squaredNorm();
+    }
+  }
+  return f;
+}
+
+// Chooses the window/degree minimising an unbiased estimate of the mean
+// squared error of derivative `order` (0 or 2) of the signal:
+//   MSE_c ~ mean |d_c - d_ref|^2 - sigma^2 (|w_ref|^2 - 2 w_c . w_ref)
+// where the reference is the raw data (order 0) or a short quartic fit
+// (order 2): nearly unbiased, so the first term measures bias^2 plus the
+// known noise terms. sigma2 < 0: estimated from the reference residuals.
+FitResult SelectAndFit(const std::vector<double>& t, const Charted& c, int order, double sigma2,
+                       int fixed_window) {
+  const int n = static_cast<int>(t.size());
+  if (fixed_window > 0) {
+    FitResult f = Final(t, c, {fixed_window, 3});
+    f.sigma2 = std::max(sigma2, 0.0);
+    return f;
+  }
+  const Candidate ref = order == 0 ? Candidate{1, 0} : Candidate{std::min(7, n), std::min(4, std::min(7, n) - 1)};
+  std::vector<Candidate> cands;
+  if (order == 0) cands.push_back({1, 0});
+  for (int w : {5, 7, 9, 11, 15, 21, 31, 41, 51, 71, 101}) {
+    if (w > n) continue;
+    if (w >= 7) cands.push_back({w, 4});
+    cands.push_back({w, 2});
+  }
+  if (cands.empty()) cands.push_back(ref);
+  bool estimated = false;
+  if (sigma2 < 0) {
+    // sigma^2 from the residual of the reference (or a short quartic fit).
+    const Candidate e = order == 0 ? Candidate{std::min(7, n), std::min(4, std::min(7, n) - 1)} : ref;
+    double num = 0, den = 0;
+    for (int k = 0; k < n; ++k) {
+      int lo = 0;
+      const Eigen::MatrixXd W = LocalPolyWeights(t, k, e.window, e.degree, &lo);
+      const Vec3 r = c.At(k, k) - Apply(c, k, W, lo, 0);
+      const double wkk = W(0, k - lo);
+      num += r.squaredNorm();
+      den += 3.0 * std::max(1e-12, 1.0 - 2.0 * wkk + W.row(0).squaredNorm());
+    }
+    sigma2 = den > 0 ? num / den : 0.0;
+    estimated = true;
+  }
+  double best = std::numeric_limits<double>::infinity();
+  Candidate chosen = cands.front();
+  for (const Candidate& cand : cands) {
+    double sse = 0, refsq = 0, cross = 0;
+    for (int k = 0; k < n; ++k) {
+      int lo_c = 0, lo_r = 0;
+      const Eigen::MatrixXd Wc = LocalPolyWeights(t, k, cand.window, cand.degree, &lo_c);
+      const Eigen::MatrixXd Wr = LocalPolyWeights(t, k, ref.window, ref.degree, &lo_r);
+      const int r = std::min<int>(order, static_cast<int>(Wc.rows()) - 1);
+      if (r != order || Wr.rows() <= order) {
+        sse = std::numeric_limits<double>::infinity();
+        break;
+      }
+      const Vec3 dc = Apply(c, k, Wc, lo_c, order), dr = Apply(c, k, Wr, lo_r, order);
+      sse += (dc - dr).squaredNorm();
+      refsq += Wr.row(order).squaredNorm();
+      for (int j = 0; j < Wc.cols(); ++j) {
+        const int jj = lo_c + j - lo_r;
+        if (jj >= 0 && jj < Wr.cols()) cross += Wc(order, j) * Wr(order, jj);
+      }
+    }
+    const double mse = sse / (3.0 * n) - sigma2 * (refsq - 2.0 * cross) / n;
+    if (mse < best - 1e-15 * std::abs(best)) best = mse, chosen = cand;
+  }
+  FitResult f = Final(t, c, chosen);
+  f.sigma2 = sigma2;
+  f.estimated = estimated;
+  return f;
+}
+
+std::string Describe(const char* what, const FitResult& f) {
+  return absl::StrFormat("%s: local polynomial window %d, degree %d (noise sigma %.3g%s)", what,
+                         f.chosen.window, f.chosen.degree, std::sqrt(f.sigma2),
+                         f.estimated ? ", estimated" : "");
+}
+
+}  // namespace
+
+std::vector<KinPoint> SmoothedKinematics(const InertiaSamples& s, const Vec3& g, const InertiaNoise& noise,
+                                         int fixed_window, std::vector<std::string>* notes) {
+  const int n = static_cast<int>(s.samples.size());
+  std::vector<double> t(n);
+  std::vector<Vec3> p(n);
+  std::vector<Eigen::Matrix3d> R(n);
+  for (int k = 0; k < n; ++k) {
+    t[k] = s.samples[k].t;
+    p[k] = s.samples[k].position;
+    R[k] = s.samples[k].orientation.toRotationMatrix();
+  }
+  std::vector<KinPoint> out(n);
+  if (s.HasKinematics()) {
+    std::vector<KinPoint> m = MeasuredKinematicsPoints(s, g);
+    // Smooth a measured series (object or world frame) when it is noisy.
+    auto smooth = [&](const char* name, double sigma, auto get, auto set, double KinPoint::*var) {
+      if (!(sigma > 0) && fixed_window <= 0) return;
+      Charted c;
+      c.lo.resize(n);
+      c.v.resize(n);
+      std::vector<Vec3> raw(n);
+      for (int k = 0; k < n; ++k) raw[k] = get(k);
+      c = ChartPositions(raw, kMaxWindow);
+      FitResult f = SelectAndFit(t, c, 0, sigma * sigma, fixed_window);
+      for (int k = 0; k < n; ++k) {
+        set(k, raw[k] + f.d[0][k]);
+        m[k].*var = sigma * sigma * f.wsq[0][k];
+      }
+      if (notes) notes->push_back(Describe(name, f));
+    };
+    std::vector<Vec3> acc(n);
+    for (int k = 0; k < n; ++k) acc[k] = s.samples[k].kinematics->acceleration;
+    smooth("measured angular velocity", noise.angular_velocity_sigma,
+           [&](int k) { return m[k].w; }, [&](int k, const Vec3& v) { m[k].w = v; }, &KinPoint::var_w);
+    smooth("measured angular acceleration", noise.angular_acceleration_sigma,
+           [&](int k) { return m[k].dw; }, [&](int k, const Vec3& v) { m[k].dw = v; }, &KinPoint::var_dw);
+    smooth("measured acceleration", noise.linear_acceleration_sigma,
+           [&](int k) { return acc[k]; }, [&](int k, const Vec3& v) { acc[k] = v; }, &KinPoint::var_a);
+    if (noise.orientation_sigma > 0) {
+      const Charted c = ChartRotations(R, kMaxWindow);
+      FitResult f = SelectAndFit(t, c, 0, noise.orientation_sigma * noise.orientation_sigma, fixed_window);
+      for (int k = 0; k < n; ++k) {
+        m[k].R = R[k] * ExpSO3(f.d[0][k]);
+        m[k].var_rot = f.sigma2 * f.wsq[0][k];
+      }
+      if (notes) notes->push_back(Describe("orientation", f));
+    }
+    for (int k = 0; k < n; ++k) m[k].a_minus_g = m[k].R.transpose() * (acc[k] - g);
+    return m;
+  }
+  const double sp2 = noise.position_sigma > 0 ? noise.position_sigma * noise.position_sigma : -1.0;
+  const double sr2 = noise.orientation_sigma > 0 ? noise.orientation_sigma * noise.orientation_sigma : -1.0;
+  const FitResult fp = SelectAndFit(t, ChartPositions(p, kMaxWindow), 2, sp2, fixed_window);
+  const FitResult fr = SelectAndFit(t, ChartRotations(R, kMaxWindow), 2, sr2, fixed_window);
+  if (notes) {
+    notes->push_back(Describe("kinematics from positions", fp));
+    notes->push_back(Describe("kinematics from orientations", fr));
+  }
+  for (int k = 0; k < n; ++k) {
+    KinPoint& q = out[k];
+    q.index = k;
+    q.t = t[k];
+    q.R = R[k] * ExpSO3(fr.d[0][k]);
+    q.w = fr.d[1][k];
+    q.dw = fr.d[2][k];
+    q.a_minus_g = q.R.transpose() * (fp.d[2][k] - g);
+    q.var_a = fp.sigma2 * fp.wsq[2][k];
+    q.var_w = fr.sigma2 * fr.wsq[1][k];
+    q.var_dw = fr.sigma2 * fr.wsq[2][k];
+    q.var_rot = fr.sigma2 * fr.wsq[0][k];
+  }
+  return out;
+}
+
+Vector10d ParameterScale(double m0, double l) {
+  Vector10d s;
+  s << m0, m0 * l, m0 * l, m0 * l, m0 * l * l, m0 * l * l, m0 * l * l, m0 * l * l, m0 * l * l, m0 * l * l;
+  return s;
+}
+
+}  // namespace tactforce::inertia::internal

@@ -1,0 +1,32 @@
+// Request -> response paths of every RPC beyond Plan, shared by the CLI's
+// local mode and the gRPC service: convert, call the library, convert back.
+// !ok(): invalid request (InvalidArgument naming the field path). ok(): a
+// computed answer; infeasibility is a status inside the response.
+#pragma once
+
+#include <functional>
+
+#include "absl/status/statusor.h"
+#include "tactforce/v1/estimator.pb.h"
+#include "tactforce/v1/planner.pb.h"
+
+namespace tactforce::api {
+
+// Limits a service imposes on every call (the CLI uses the defaults).
+struct CallLimits {
+  int max_contacts = 64;
+  double ipopt_max_cpu_seconds = 0.0;  // 0 = none
+  std::function<bool()> interrupt;     // deadline / cancellation
+};
+
+absl::StatusOr<v1::PlanResponse> HandlePlan(const v1::PlanRequest& request,
+                                            const CallLimits& limits);
+absl::StatusOr<v1::TrajectoryResponse> HandleTrajectory(const v1::TrajectoryRequest& request,
+                                                        const CallLimits& limits = {});
+absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
+    const v1::FrictionProbeRequest& request, const CallLimits& limits = {});
+absl::StatusOr<v1::EstimateResponse> HandleEstimate(const v1::EstimateRequest& request,
+                                                    const CallLimits& limits = {});
+absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& request);
+
+}  // namespace tactforce::api

@@ -1,0 +1,314 @@
+#include "tactforce/sim/simulate.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+
+namespace tactforce::sim {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// A force profile as a continuous function of time: piecewise phases.
+struct Phase {
+  double t0, t1;
+  double f0, f1;     // force at start/end
+  double r0, r1;     // shear ratio at start/end
+  bool cosine;       // raised-cosine (smooth) or linear interpolation
+};
+
+class ProfileFn {
+ public:
+  void Add(double dur, double f1, double r1, bool cosine) {
+    double t0 = phases_.empty() ? 0 : phases_.back().t1;
+    double f0 = phases_.empty() ? 0 : phases_.back().f1;
+    double r0 = phases_.empty() ? 0 : phases_.back().r1;
+    phases_.push_back({t0, t0 + dur, f0, f1, r0, r1, cosine});
+  }
+  double end() const { return phases_.empty() ? 0 : phases_.back().t1; }
+  void Eval(double t, double* f, double* ratio) const {
+    if (phases_.empty()) {
+      *f = *ratio = 0;
+      return;
+    }
+    auto it = std::upper_bound(phases_.begin(), phases_.end(), t,
+                               [](double v, const Phase& p) { return v < p.t1; });
+    if (it == phases_.end()) it = phases_.end() - 1;
+    const Phase& p = *it;
+    double s = std::clamp((t - p.t0) / (p.t1 - p.t0), 0.0, 1.0);
+    if (p.cosine) s = 0.5 - 0.5 * std::cos(kPi * s);
+    *f = p.f0 + (p.f1 - p.f0) * s;
+    *ratio = p.r0 + (p.r1 - p.r0) * s;
+  }
+
+ private:
+  std::vector<Phase> phases_;
+};
+
+struct RandomFn {
+  std::vector<double> amp, freq, phase;
+  std::vector<double> ramp, rfreq, rphase;
+  double mean = 0, scale = 1, max_ratio = 0.6;
+  void Eval(double t, double* f, double* ratio) const {
+    double v = mean;
+    for (size_t i = 0; i < amp.size(); ++i) v += amp[i] * std::sin(2 * kPi * freq[i] * t + phase[i]);
+    *f = std::max(0.0, v * scale);
+    double r = 0.5;
+    for (size_t i = 0; i < ramp.size(); ++i) r += ramp[i] * std::sin(2 * kPi * rfreq[i] * t + rphase[i]);
+    *ratio = max_ratio * std::clamp(r, 0.0, 1.0);
+  }
+};
+
+}  // namespace
+
+std::vector<Taxel> DefaultFingertip(const FingertipGeometry& g) {
+  std::vector<Taxel> taxels;
+  const Eigen::Vector3d centre(0, 0, g.body_length);
+  auto sphere = [&](double polar, double az) {
+    Eigen::Vector3d n(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az), std::cos(polar));
+    taxels.push_back({centre + g.radius * n, n});
+  };
+  sphere(0, 0);
+  for (int k = 0; k < 6; ++k) sphere(kPi / 6, 2 * kPi * k / 6);
+  for (int k = 0; k < 10; ++k) sphere(kPi / 3, 2 * kPi * k / 10 + kPi / 10);
+  for (int ring = 0; ring < 5; ++ring) {
+    const double z = g.body_length * (ring + 0.5) / 5.0;
+    for (int k = 0; k < 5; ++k) {
+      const double az = 2 * kPi * k / 5 + (ring % 2) * kPi / 5;
+      Eigen::Vector3d n(std::cos(az), std::sin(az), 0);
+      taxels.push_back({Eigen::Vector3d(g.radius * n.x(), g.radius * n.y(), z), n});
+    }
+  }
+  return taxels;
+}
+
+FingertipReading AggregateFingertip(const std::vector<Taxel>& taxels, const std::vector<double>& readings) {
+  FingertipReading r;
+  double wsum = 0;
+  Eigen::Vector3d p = Eigen::Vector3d::Zero(), n = Eigen::Vector3d::Zero();
+  for (size_t i = 0; i < taxels.size() && i < readings.size(); ++i) {
+    r.force += readings[i];
+    const double w = std::max(0.0, readings[i]);
+    wsum += w;
+    p += w * taxels[i].position;
+    n += w * taxels[i].normal;
+  }
+  if (wsum > 1e-12) {
+    r.location = p / wsum;
+    if (n.norm() > 1e-12) r.normal = n.normalized();
+  }
+  return r;
+}
+
+absl::StatusOr<Profile> ParseProfile(std::string_view name) {
+  if (name == "press-release") return Profile::kPressRelease;
+  if (name == "ramp") return Profile::kRamp;
+  if (name == "random") return Profile::kRandom;
+  return absl::InvalidArgumentError(
+      absl::StrCat("profile: unknown '", std::string(name), "' (expected press-release, ramp or random)"));
+}
+
+const char* ToString(Profile p) {
+  switch (p) {
+    case Profile::kPressRelease: return "press-release";
+    case Profile::kRamp: return "ramp";
+    case Profile::kRandom: return "random";
+  }
+  return "?";
+}
+
+absl::StatusOr<SimRun> SimulateSensor(const SensorModel& model, const SimOptions& o) {
+  if (auto st = ValidateSensorModel(model); !st.ok()) return st;
+  if (!(o.seconds > 0) || o.seconds > 3600)
+    return absl::InvalidArgumentError(absl::StrCat("seconds: must be in (0, 3600], got ", o.seconds));
+  if (!(o.rate > 0) || o.rate > 100000)
+    return absl::InvalidArgumentError(absl::StrCat("rate: must be in (0, 100000] Hz, got ", o.rate));
+  if (o.seconds * o.rate < 2 || o.seconds * o.rate > 2e7)
+    return absl::InvalidArgumentError(
+        absl::StrCat("seconds * rate: between 2 and 2e7 samples, got ", o.seconds * o.rate));
+  if (!(o.min_peak > 0) || !(o.max_peak >= o.min_peak))
+    return absl::InvalidArgumentError("min_peak/max_peak: need 0 < min_peak <= max_peak");
+  if (o.oversample < 1 || o.oversample > 64)
+    return absl::InvalidArgumentError("oversample: must be in [1, 64]");
+  if (o.reference_noise < 0) return absl::InvalidArgumentError("reference_noise: must be >= 0");
+  if (o.contact_radius < 0) return absl::InvalidArgumentError("contact_radius: must be >= 0");
+  const std::vector<Taxel> taxels = DefaultFingertip();
+  if (o.contact_taxel < 0 || o.contact_taxel >= static_cast<int>(taxels.size()))
+    return absl::InvalidArgumentError(
+        absl::StrCat("contact_taxel: must be in [0, ", taxels.size() - 1, "], got ", o.contact_taxel));
+
+  std::mt19937_64 rng(o.seed);
+  auto uni = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
+  std::normal_distribution<double> gauss(0.0, 1.0);
+
+  // ---- force profile
+  ProfileFn pf;
+  RandomFn rf;
+  const bool random = o.profile == Profile::kRandom;
+  const double total = o.seconds + 1.0;
+  if (o.profile == Profile::kPressRelease) {
+    pf.Add(uni(0.2, 0.5), 0, 0, false);  // initial rest
+    while (pf.end() < total) {
+      const double peak = uni(o.min_peak, o.max_peak);
+      const double ratio = uni(0, o.max_shear_ratio);
+      pf.Add(uni(0.15, 0.5), peak, ratio, true);                    // press
+      pf.Add(uni(0.1, 0.6), peak * uni(0.9, 1.1), ratio, true);      // hold (slight wander)
+      pf.Add(uni(0.15, 0.5), 0, ratio, true);                        // release
+      pf.Add(uni(0.2, 0.5), 0, 0, false);                            // rest
+    }
+  } else if (o.profile == Profile::kRamp) {
+    pf.Add(0.5, 0, 0, false);
+    while (pf.end() < total) {
+      const double peak = uni(o.min_peak, o.max_peak);
+      const double ratio = uni(0, o.max_shear_ratio);
+      pf.Add(uni(1.5, 4.0), peak, ratio, false);
+      pf.Add(uni(0.2, 1.0), peak, ratio, false);
+      pf.Add(uni(1.5, 4.0), 0, ratio, false);
+      pf.Add(uni(0.3, 1.0), 0, 0, false);
+    }
+  } else {
+    for (int i = 0; i < 6; ++i) {
+      rf.amp.push_back(uni(0.3, 1.0) / (i + 1));
+      rf.freq.push_back(uni(0.1, 1.5));
+      rf.phase.push_back(uni(0, 2 * kPi));
+    }
+    for (int i = 0; i < 3; ++i) {
+      rf.ramp.push_back(uni(0.1, 0.3));
+      rf.rfreq.push_back(uni(0.05, 0.5));
+      rf.rphase.push_back(uni(0, 2 * kPi));
+    }
+    double asum = 0;
+    for (double a : rf.amp) asum += a;
+    rf.mean = 0.25 * asum;  // some contact loss: the force is clipped at 0
+    rf.scale = 0.5 * (o.min_peak + o.max_peak) / (1.25 * asum) * 1.6;
+    rf.max_ratio = o.max_shear_ratio;
+  }
+  auto eval = [&](double t, double* f, double* r) {
+    if (random) rf.Eval(t, f, r);
+    else pf.Eval(t, f, r);
+  };
+
+  // ---- contact distribution over taxels (fixed contact patch)
+  std::vector<double> weight(taxels.size(), 0.0);
+  if (o.contact_radius <= 0) {
+    weight[o.contact_taxel] = 1;
+  } else {
+    const Eigen::Vector3d c = taxels[o.contact_taxel].position;
+    double s = 0;
+    for (size_t i = 0; i < taxels.size(); ++i) {
+      const double d = (taxels[i].position - c).norm();
+      if (d <= o.contact_radius) weight[i] = std::exp(-0.5 * d * d / (0.25 * o.contact_radius * o.contact_radius));
+      s += weight[i];
+    }
+    for (double& w : weight) w /= s;
+  }
+  double wmax = *std::max_element(weight.begin(), weight.end());
+  std::vector<int> active;
+  for (size_t i = 0; i < taxels.size(); ++i)
+    if (weight[i] > 0) active.push_back(static_cast<int>(i));
+
+  // ---- fine time grid (oversampled) with a 0.5 s lead-in for delay/lag history
+  const int n_out = static_cast<int>(std::floor(o.seconds * o.rate + 1e-9));
+  const double h = 1.0 / (o.rate * o.oversample);
+  const int lead = static_cast<int>(std::ceil(0.5 / h));
+  const int n_fine = lead + n_out * o.oversample;
+  std::vector<double> tf(n_fine), ff(n_fine), sf(n_fine);
+  for (int k = 0; k < n_fine; ++k) {
+    tf[k] = (k - lead) * h;
+    double f, r;
+    eval(std::max(0.0, tf[k]), &f, &r);
+    if (tf[k] < 0) f = r = 0;
+    ff[k] = f;
+    sf[k] = r * f;
+  }
+
+  // Per active taxel: channel on its share of force and shear. Drift is
+  // referenced to t = 0 of the run (not the lead-in).
+  std::vector<std::vector<double>> taxel_out(active.size());
+  std::vector<double> fshare(n_fine), sshare(n_fine);
+  for (size_t a = 0; a < active.size(); ++a) {
+    const double w = weight[active[a]];
+    for (int k = 0; k < n_fine; ++k) {
+      fshare[k] = w * ff[k];
+      sshare[k] = w * sf[k];
+    }
+    ChannelInput in;
+    in.t = tf.data();
+    in.force = fshare.data();
+    in.shear = sshare.data();
+    in.n = n_fine;
+    in.t0 = 0;
+    ApplyChannel(model.effects, in, &taxel_out[a]);
+    const double coverage = w / wmax;
+    if (model.partial_error > 0 && coverage < 1) {
+      for (int k = 0; k < n_fine; ++k)
+        if (fshare[k] > 0) taxel_out[a][k] += model.partial_error * (1 - coverage);
+    }
+  }
+
+  SimRun run;
+  run.model = model;
+  run.options = o;
+  run.t.resize(n_out);
+  run.reference.resize(n_out);
+  run.reading.resize(n_out);
+  run.shear.resize(n_out);
+  run.true_force.resize(n_out);
+  run.fingertip.resize(n_out);
+  std::vector<double> readings(taxels.size(), 0.0);
+  for (int i = 0; i < n_out; ++i) {
+    const int k = lead + i * o.oversample;
+    run.t[i] = tf[k];
+    run.true_force[i] = ff[k];
+    run.shear[i] = sf[k];
+    std::fill(readings.begin(), readings.end(), 0.0);
+    for (size_t a = 0; a < active.size(); ++a) {
+      double v = taxel_out[a][k];
+      if (model.noise > 0) v += model.noise * gauss(rng);
+      readings[active[a]] = v;
+    }
+    run.fingertip[i] = AggregateFingertip(taxels, readings);
+    run.reading[i] = model.gain * run.fingertip[i].force + model.offset;
+    run.reference[i] = ff[k] + (o.reference_noise > 0 ? o.reference_noise * gauss(rng) : 0.0);
+  }
+  return run;
+}
+
+std::string SimRunCsv(const SimRun& run) {
+  std::string s = "t,reference,reading,shear,trial\n";
+  for (size_t i = 0; i < run.t.size(); ++i)
+    absl::StrAppendFormat(&s, "%.6f,%.9g,%.9g,%.9g,%d\n", run.t[i], run.reference[i], run.reading[i],
+                          run.shear[i], run.options.trial);
+  return s;
+}
+
+absl::Status WriteSimRun(const SimRun& run, const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return absl::InternalError(absl::StrCat(dir, ": cannot create directory: ", ec.message()));
+  {
+    std::ofstream out(dir + "/run.csv");
+    if (!out) return absl::InternalError(absl::StrCat(dir, "/run.csv: cannot write"));
+    out << SimRunCsv(run);
+  }
+  {
+    std::ofstream out(dir + "/fingertip.csv");
+    if (!out) return absl::InternalError(absl::StrCat(dir, "/fingertip.csv: cannot write"));
+    out << "t,force,px,py,pz,nx,ny,nz\n";
+    for (size_t i = 0; i < run.t.size(); ++i) {
+      const auto& f = run.fingertip[i];
+      out << absl::StrFormat("%.6f,%.9g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n", run.t[i], f.force, f.location.x(),
+                             f.location.y(), f.location.z(), f.normal.x(), f.normal.y(), f.normal.z());
+    }
+  }
+  SensorModel m = run.model;
+  if (m.source.empty()) m.source = "simulated (true model)";
+  return SaveSensorModel(m, dir + "/model.json");
+}
+
+}  // namespace tactforce::sim

@@ -1,0 +1,146 @@
+// Hidden-effect generator for the audit tests: per seed, one (or two)
+// effect types with parameters drawn from ranges that matter, simulated on a
+// press-release profile with GeoDEx-like noise, in N or in counts (random
+// sign and scale of the gain). Deterministic in the seed.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "tactforce/audit/audit.h"
+#include "tactforce/sim/simulate.h"
+
+namespace tactforce::audit::testing {
+
+struct HiddenCase {
+  std::vector<Effect> effects;   // empty = null case
+  sim::SensorModel model;        // the truth
+  sim::SimOptions sim;
+  MeasuredData data;
+};
+
+inline constexpr double kMaxPeak = 8.0;
+
+// Parameter ranges (documented in the README's audit section).
+inline void DrawEffect(Effect e, std::mt19937_64& rng, double seconds, sim::EffectParams* p) {
+  auto uni = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
+  auto sign = [&]() { return uni(0, 1) < 0.5 ? -1.0 : 1.0; };
+  switch (e) {
+    case Effect::kDeadzone:
+      p->threshold = uni(0.1, 0.5);
+      p->threshold_shift = uni(0, 1) < 0.5 ? 0.0 : 1.0;  // activation jump or continuous dead-zone
+      break;
+    case Effect::kSaturation: p->saturation = uni(0.4, 0.8);  // x the run's peak force (see MakeHiddenCase)
+      break;
+    case Effect::kNonlinearity:
+      p->curvature = sign() * uni(0.02, 0.08);
+      p->full_scale = kMaxPeak;
+      break;
+    case Effect::kHysteresis: p->hysteresis_width = uni(0.05, 0.3); break;
+    case Effect::kDelay: p->delay = uni(0.010, 0.100); break;
+    case Effect::kLag: p->lag = uni(0.010, 0.100); break;
+    case Effect::kDrift: p->drift = sign() * uni(0.1, 0.5) / seconds; break;
+    case Effect::kCrosstalk: p->crosstalk = sign() * uni(0.05, 0.3); break;
+  }
+}
+
+inline HiddenCase MakeHiddenCase(const std::vector<Effect>& effects, uint64_t seed) {
+  std::mt19937_64 rng(seed * 7919 + 17);
+  auto uni = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
+  HiddenCase hc;
+  hc.effects = effects;
+  hc.sim.profile = sim::Profile::kPressRelease;
+  hc.sim.rate = uni(100, 500);
+  hc.sim.seconds = std::max(10.0, 2500 / hc.sim.rate);
+  hc.sim.seed = seed;
+  hc.sim.min_peak = 1.0;
+  hc.sim.max_peak = kMaxPeak;
+  sim::SensorModel& m = hc.model;
+  m.noise = uni(0.01, 0.03);
+  if (uni(0, 1) < 0.5) {
+    m.units = "N";
+  } else {
+    m.units = "counts";
+    m.gain = (uni(0, 1) < 0.5 ? -1 : 1) * uni(20, 80);
+    m.offset = uni(500, 1500);
+  }
+  for (Effect e : effects) DrawEffect(e, rng, hc.sim.seconds, &m.effects);
+  if (m.effects.saturation > 0) {
+    // Saturation inside the run's force range: a fraction of its peak force
+    // (the profile does not depend on the model, only on the seed).
+    auto ideal = sim::SimulateSensor(sim::SensorModel{}, hc.sim);
+    double fmax = 0;
+    if (ideal.ok())
+      for (double f : ideal->true_force) fmax = std::max(fmax, f);
+    m.effects.saturation *= fmax;
+  }
+  auto run = sim::SimulateSensor(m, hc.sim);
+  if (!run.ok()) return hc;
+  auto data = ParseMeasuredCsv(sim::SimRunCsv(*run), "hidden.csv");
+  if (data.ok()) hc.data = *data;
+  return hc;
+}
+
+// Tolerances on the recovered parameter (documented in the README).
+struct Recovery {
+  bool ok = false;
+  std::string what;
+};
+
+inline Recovery CheckParameters(Effect e, const sim::EffectParams& truth, const Cause& c) {
+  auto get = [&](const char* k) {
+    auto it = c.parameters.find(k);
+    return it == c.parameters.end() ? NAN : it->second;
+  };
+  auto within = [](double got, double want, double abs_tol, double rel_tol) {
+    return std::abs(got - want) <= abs_tol + rel_tol * std::abs(want);
+  };
+  Recovery r;
+  double got = NAN, want = NAN;
+  const char* name = "";
+  switch (e) {
+    case Effect::kDeadzone:
+      name = "threshold"; got = get(name); want = truth.threshold;
+      r.ok = within(got, want, 0.03, 0.15);
+      break;
+    case Effect::kSaturation:
+      name = "saturation"; got = get(name); want = truth.saturation;
+      r.ok = within(got, want, 0.05, 0.03);
+      break;
+    case Effect::kNonlinearity: {
+      name = "curvature";
+      // Curvature is relative to full_scale: compare the coefficient c / F.
+      got = get("curvature") / get("full_scale") * truth.full_scale;
+      want = truth.curvature;
+      r.ok = within(got, want, 0.005, 0.2);
+      break;
+    }
+    case Effect::kHysteresis:
+      name = "hysteresis_width"; got = get(name); want = truth.hysteresis_width;
+      r.ok = within(got, want, 0.02, 0.15);
+      break;
+    case Effect::kDelay:
+      name = "delay"; got = get(name); want = truth.delay;
+      r.ok = within(got, want, 0.002, 0.1);
+      break;
+    case Effect::kLag:
+      name = "lag"; got = get(name); want = truth.lag;
+      r.ok = within(got, want, 0.003, 0.15);
+      break;
+    case Effect::kDrift:
+      name = "drift"; got = get(name); want = truth.drift;
+      r.ok = within(got, want, 0.002, 0.2);
+      break;
+    case Effect::kCrosstalk:
+      name = "crosstalk"; got = get(name); want = truth.crosstalk;
+      r.ok = within(got, want, 0.01, 0.1);
+      break;
+  }
+  r.what = std::string(name) + " got " + std::to_string(got) + " want " + std::to_string(want);
+  return r;
+}
+
+}  // namespace tactforce::audit::testing
