@@ -179,7 +179,7 @@ bool HasUriScheme(const std::string& target) {
 absl::StatusOr<std::vector<std::string>> SplitTargets(const std::string& value) {
   if (HasUriScheme(value)) return std::vector<std::string>{value};
   std::vector<std::string> targets;
-  for (std::string_view part : absl::StrSplit(value, ',')) {
+  for (absl::string_view part : absl::StrSplit(value, ',')) {
     part = absl::StripAsciiWhitespace(part);
     if (part.empty()) {
       return absl::InvalidArgumentError(

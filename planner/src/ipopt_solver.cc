@@ -117,6 +117,10 @@ constexpr double kEquilibriumTolerance = 1e-8;
 // The phase-one optimum t* (N) proves infeasibility above this times
 // max(1, largest bound).
 constexpr double kInfeasibilityTolerance = 1e-7;
+// A run has stalled when the primal step stays below kStallStep times the
+// size of the unknowns for kStallIterations iterations.
+constexpr double kStallStep = 1e-12;
+constexpr int kStallIterations = 8;
 
 double ThreadCpuSeconds() {
   timespec ts{};
@@ -523,7 +527,9 @@ class ForceNlp final : public Ipopt::TNLP {
         stop_(stop),
         t_index_(form.num_vars()),
         num_vars_(form.num_vars() + (phase == Phase::kFeasibility ? 1 : 0)),
-        linear_(form.linear) {
+        linear_(form.linear),
+        stall_step_(kStallStep *
+                    std::max({1.0, form.scale, start_.cwiseAbs().maxCoeff()})) {
     if (phase_ == Phase::kFeasibility) {
       for (int r = 0; r < form_.num_linear; ++r) {
         if (form_.origin[r].kind != RowOrigin::kEquilibrium) {
@@ -720,13 +726,25 @@ class ForceNlp final : public Ipopt::TNLP {
     last_iteration_ = iter;
     last_mu_ = mu;
     stop_reason_ = stop_.Check();
-    return stop_reason_ == StopConditions::kNone;
+    if (stop_reason_ != StopConditions::kNone) return false;
+    // A stalled run: the primal step has vanished for kStallIterations
+    // iterations in a row while Ipopt keeps iterating (degenerate multipliers
+    // at a cone apex). Stop; the caller judges the point.
+    stall_count_ = iter > 0 && d_norm <= stall_step_ ? stall_count_ + 1 : 0;
+    if (stall_count_ >= kStallIterations) {
+      stalled_ = true;
+      stalled_in_restoration_ = mode == Ipopt::RestorationPhaseMode;
+      return false;
+    }
+    return true;
   }
 
   const VectorXd& solution() const { return solution_; }
   StopConditions::Reason stop_reason() const { return stop_reason_; }
   int last_iteration() const { return last_iteration_; }
   double last_mu() const { return last_mu_; }
+  bool stalled() const { return stalled_; }
+  bool stalled_in_restoration() const { return stalled_in_restoration_; }
 
  private:
   const Formulation& form_;
@@ -739,10 +757,14 @@ class ForceNlp final : public Ipopt::TNLP {
   std::vector<Entry> hess_;    // structure of the Hessian
   std::vector<int> cone_hess_start_;    // 3x3 force block, per cone
   std::vector<int> cone_hess_s_start_;  // (s, f) row and (s, s), per cone
+  const double stall_step_;  // primal steps below this count as stalled
   VectorXd solution_;
   StopConditions::Reason stop_reason_ = StopConditions::kNone;
   int last_iteration_ = 0;
   double last_mu_ = 0.0;
+  int stall_count_ = 0;
+  bool stalled_ = false;
+  bool stalled_in_restoration_ = false;
 };
 
 // Sets every option explicitly; returns the names of rejected ones.
@@ -782,6 +804,8 @@ struct IpoptRun {
   int iterations = 0;
   StopConditions::Reason stopped = StopConditions::kNone;
   double last_mu = 0.0;  // barrier parameter of the last iteration
+  bool stalled = false;  // stopped by the stall test (User_Requested_Stop)
+  bool stalled_in_restoration = false;
   VectorXd solution;
 
   bool succeeded() const {
@@ -834,6 +858,8 @@ IpoptRun RunIpoptLocked(const Formulation& form, Phase phase, VectorXd start,
   }
   run.stopped = nlp->stop_reason();
   run.last_mu = nlp->last_mu();
+  run.stalled = nlp->stalled();
+  run.stalled_in_restoration = nlp->stalled_in_restoration();
   if (run.status == Ipopt::Maximum_CpuTime_Exceeded) {
     run.stopped = StopConditions::kTimeLimit;  // max_cpu_time is not set
   }
@@ -924,29 +950,31 @@ class IpoptSolver final : public ForceSolver {
     // active with opposite gradients, so the multipliers are not unique and
     // the dual infeasibility cannot reach tol although the (unique) forces
     // have converged.
-    auto converged = [&](const IpoptRun& run) {
+    auto converged = [&](const IpoptRun& run, Phase phase) {
       if (run.succeeded()) return true;
+      const bool stalled =
+          run.status == Ipopt::Search_Direction_Becomes_Too_Small ||
+          (run.status == Ipopt::User_Requested_Stop && run.stalled &&
+           !run.stalled_in_restoration);
       if (!run.setup_error.empty() || run.stopped != StopConditions::kNone ||
-          run.status != Ipopt::Search_Direction_Becomes_Too_Small ||
-          form.cones.empty() || run.solution.size() == 0 ||
-          !run.solution.allFinite()) {
+          !stalled || run.solution.size() == 0 || !run.solution.allFinite()) {
         return false;
       }
       const double tol = kFeasibilityTolerance * form.scale;
       return run.last_mu <= 10.0 * options.ipopt_tolerance &&
-             form.MaxViolation(run.solution) <= tol &&
-             form.EquilibriumResidual(run.solution) <= tol;
+             form.EquilibriumResidual(run.solution) <= tol &&
+             (phase == Phase::kFeasibility ||
+              form.MaxViolation(run.solution) <= tol);
     };
     auto optimal = [&](const IpoptRun& run) {
       PlanResult result;
       result.status = PlanStatus::kOptimal;
-      if (run.status != Ipopt::Solve_Succeeded) {
-        result.message = std::string("Ipopt: ") + StatusName(run.status) +
-                         (run.status == Ipopt::Search_Direction_Becomes_Too_Small
-                              ? " at a feasible point with the barrier "
-                                "parameter at its final value (a contact at "
-                                "its cone apex); accepted"
-                              : "");
+      if (run.status == Ipopt::Solved_To_Acceptable_Level) {
+        result.message = "Ipopt: Solved_To_Acceptable_Level";
+      } else if (run.status != Ipopt::Solve_Succeeded) {
+        result.message =
+            "Ipopt stalled at a feasible point with the barrier parameter at "
+            "its final value (degenerate multipliers at a cone apex); accepted";
       }
       result.forces = form.Forces(run.solution.head(form.num_forces));
       return finish(result);
@@ -957,8 +985,19 @@ class IpoptSolver final : public ForceSolver {
                                    /*expect_infeasible=*/true, options, stop);
     iterations += main.iterations;
     if (main.stopped != StopConditions::kNone) return stopped(main.stopped);
-    if (converged(main)) return optimal(main);
+    if (converged(main, Phase::kMinimumNorm)) return optimal(main);
     if (!main.setup_error.empty()) return failed(main);
+    if (main.status == Ipopt::Infeasible_Problem_Detected) {
+      // Every constraint is convex (r = |P f|^2 / s - s is a perspective),
+      // so the point of locally least violation Ipopt converged to is a
+      // global one.
+      std::string message = "Ipopt: Infeasible_Problem_Detected";
+      if (main.solution.size() == form.num_vars()) {
+        message += " (the least constraint violation found is " +
+                   FormatNumber(form.MaxViolation(main.solution)) + " N)";
+      }
+      return finish(Infeasible(message));
+    }
 
     // 2. Decide feasibility with the phase-one problem, started from the
     //    minimum-norm equilibrium with t above every violation.
@@ -975,13 +1014,12 @@ class IpoptSolver final : public ForceSolver {
                                      /*expect_infeasible=*/false, options, stop);
     iterations += phase1.iterations;
     if (phase1.stopped != StopConditions::kNone) return stopped(phase1.stopped);
-    if (!phase1.succeeded()) {
-      if (main.status == Ipopt::Infeasible_Problem_Detected) {
-        return finish(Infeasible(
-            "Ipopt: Infeasible_Problem_Detected (unconfirmed: the feasibility "
-            "problem ended with " + std::string(StatusName(phase1.status)) + ")"));
-      }
-      return failed(main);
+    if (!converged(phase1, Phase::kFeasibility)) {
+      return finish(Failure(
+          std::string("Ipopt failed: ") + StatusName(main.status) +
+          ", and the feasibility problem ended with " +
+          StatusName(phase1.status) + " after " + std::to_string(iterations) +
+          " iterations"));
     }
     VectorXd x1 = phase1.solution.head(nv);
     const double violation = form.MaxViolation(x1);
@@ -1002,7 +1040,7 @@ class IpoptSolver final : public ForceSolver {
                                     /*expect_infeasible=*/false, options, stop);
     iterations += retry.iterations;
     if (retry.stopped != StopConditions::kNone) return stopped(retry.stopped);
-    if (converged(retry)) return optimal(retry);
+    if (converged(retry, Phase::kMinimumNorm)) return optimal(retry);
     return failed(retry);
   }
 };

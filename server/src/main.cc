@@ -18,6 +18,7 @@
 #include "tactforce/server/server_config.h"
 #include "tactforce/server/server_host.h"
 #include "tactforce/server/worker_pool.h"
+#include "tactforce/server/estimator_service.h"
 
 namespace {
 
@@ -74,7 +75,8 @@ int main(int argc, char** argv) {
   tactforce::server::ServerHost host(config.ToServerOptions());
   host.AddService(std::make_unique<tactforce::server::PlannerService>(
       &pool, config.ToPlannerOptions()));
-  // Later: host.AddService(std::make_unique<EstimatorService>(...)), AuditService, ...
+  host.AddService(std::make_unique<tactforce::server::EstimatorService>(
+      &pool, tactforce::server::EstimatorServiceOptions{config.max_contacts}));
 
   if (absl::Status started = host.Start(); !started.ok()) {
     std::fprintf(stderr, "tactforce-server: %s\n", std::string(started.message()).c_str());

@@ -1,5 +1,7 @@
 #include "tactforce/server/planner_service.h"
 
+#include "tactforce/server/pooled_unary.h"
+
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -291,6 +293,27 @@ grpc::ServerUnaryReactor* PlannerService::Plan(grpc::CallbackServerContext* cont
 grpc::ServerBidiReactor<v1::PlanRequest, v1::PlanResponse>* PlannerService::PlanStream(
     grpc::CallbackServerContext* context) {
   return new PlanStreamReactor(this, context);
+}
+
+api::CallLimits PlannerService::Limits() const {
+  api::CallLimits limits;
+  limits.max_contacts = options_.max_contacts;
+  limits.ipopt_max_cpu_seconds = options_.solve_timeout_ms / 1000.0;
+  return limits;
+}
+
+grpc::ServerUnaryReactor* PlannerService::PlanTrajectory(grpc::CallbackServerContext* context,
+                                                         const v1::TrajectoryRequest* request,
+                                                         v1::TrajectoryResponse* response) {
+  return ServeOnPool<v1::TrajectoryRequest, v1::TrajectoryResponse>(
+      "PlanTrajectory", context, request, response, pool_, Limits(), &api::HandleTrajectory);
+}
+
+grpc::ServerUnaryReactor* PlannerService::PlanFrictionProbe(grpc::CallbackServerContext* context,
+                                                            const v1::FrictionProbeRequest* request,
+                                                            v1::FrictionProbeResponse* response) {
+  return ServeOnPool<v1::FrictionProbeRequest, v1::FrictionProbeResponse>(
+      "PlanFrictionProbe", context, request, response, pool_, Limits(), &api::HandleFrictionProbe);
 }
 
 }  // namespace tactforce::server

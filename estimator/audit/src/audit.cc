@@ -563,7 +563,7 @@ absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOption
   rep.gain = rep.heldout_rms_before > 0 ? 100 * (1 - rep.heldout_rms_after / rep.heldout_rms_before) : 0;
 
   if (o.downstream_gain && !selected.empty()) {
-    auto dg = internal::MeasureDownstreamGain(rep.nominal_model, rep.extended_model, o.downstream_grasps, o.seed);
+    auto dg = internal::MeasureDownstreamGain(rep.nominal_model, rep.extended_model, o.downstream_grasps, o.seed, st.fmax);
     if (dg.ok()) rep.downstream = *dg;
     else rep.notes.push_back(absl::StrCat("downstream gain not measured: ", dg.status().message()));
   }

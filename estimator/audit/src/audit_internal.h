@@ -16,6 +16,6 @@ double GammaQ(double a, double x);
 
 absl::StatusOr<DownstreamGain> MeasureDownstreamGain(const sim::SensorModel& nominal,
                                                      const sim::SensorModel& extended, int grasps,
-                                                     uint64_t seed);
+                                                     uint64_t seed, double max_force);
 
 }  // namespace tactforce::audit::internal

@@ -239,6 +239,7 @@ std::string AuditReportJson(const AuditReport& r, const std::string& extended_mo
     w.Field("error_nominal", r.downstream->error_nominal);
     w.Field("error_extended", r.downstream->error_extended);
     w.Field("gain", r.downstream->gain);
+    w.Field("error_exact_readings", r.downstream->error_exact_readings);
     w.EndObject();
   } else {
     w.Null();
@@ -289,9 +290,11 @@ std::string FormatAuditSummary(const AuditReport& r) {
                           r.heldout_rms_before, r.heldout_rms_after, r.gain);
   }
   if (r.downstream)
-    absl::StrAppendFormat(&s, "Downstream (%s, %d grasps): force error %.4g N -> %.4g N, gain %.1f %%\n",
+    absl::StrAppendFormat(&s,
+                          "Downstream (%s, %d grasps): force error due to readings %.4g N -> %.4g N, gain %.1f %% "
+                          "(estimator's own error with exact readings %.4g N)\n",
                           r.downstream->method, r.downstream->grasps, r.downstream->error_nominal,
-                          r.downstream->error_extended, r.downstream->gain);
+                          r.downstream->error_extended, r.downstream->gain, r.downstream->error_exact_readings);
   for (const auto& n : r.notes) absl::StrAppend(&s, "Note: ", n, "\n");
   return s;
 }

@@ -177,7 +177,10 @@ double SlsqpObjective(unsigned n, const double* x, double* grad, void* data) {
   const Vector10d th = Eigen::Map<const Vector10d>(x);
   Vector10d g;
   const double f = d->model->Eval(th, grad ? &g : nullptr, nullptr);
-  if (grad) Eigen::Map<Vector10d>(grad) = g;
+  if (grad) {
+    Eigen::Map<Vector10d> gm(grad);
+    gm = g;
+  }
   return f;
 }
 

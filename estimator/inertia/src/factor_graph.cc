@@ -1,4 +1,516 @@
+// FACTOR_GRAPH: Sundaralingam & Hermans III-B, reproduced as published.
+//
+// Variables: the inertial block w = [m, c, Lx, Ly, Lz, R in SO(3)] (inertia
+// about the object ORIGIN H = R diag(Ly+Lz, Lx+Lz, Lx+Ly) R^T, as eq. 9 uses
+// it) and every object pose X_t (right perturbation of R_t, world p_t).
+// Factors:
+//   D_t  dynamics (eq. 8-19) from X_{t-2}, X_{t-1}, X_t and the forces and
+//        contacts of sample t-2; SE(3) logs (eq. 12-13), the first-order frame
+//        change of eq. 14-15 and the differences of eq. 16-17 exactly as
+//        written (including the mixed w_{t,t-1} / w_{t-1,t-2} products and the
+//        forces of the FIRST of the three samples, a one-sample lag).
+//   M    measurement factors on poses and forces. The force variables enter
+//        D linearly and appear in no other factor, so they are eliminated
+//        exactly: D_t is whitened by (Sigma_D + G Sigma_f G^T)^-1/2 (the
+//        Schur complement of the force variables; same optimum).
+//   C    m > 0, c in the hull, L >= 0 (eq. 35-37): costs active only when
+//        violated, as the paper did in GTSAM.
+//   B    optional prior Tr(P0^-1 P) (eq. 20-21), as the residual
+//        sqrt(weight) (Tr(P0^-1 P) - 4).
+// Batch Levenberg-Marquardt on the sparse normal equations.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/Sparse>
+#include <Eigen/SparseCholesky>
+#include <unsupported/Eigen/AutoDiff>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "internal.h"
+#include "tactforce/inertia/metrics.h"
+
 namespace tactforce::inertia::internal {
-absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const InertiaOptions& o, const ConvexHull* hull) { return absl::UnimplementedError("fg"); }
+namespace {
+
+constexpr int kLocal = 28;  // 3 poses x 6 + 10 inertial
+using Deriv = Eigen::Matrix<double, kLocal, 1>;
+using Jet = Eigen::AutoDiffScalar<Deriv>;
+
+template <typename T>
+using V3 = Eigen::Matrix<T, 3, 1>;
+template <typename T>
+using M3 = Eigen::Matrix<T, 3, 3>;
+
+template <typename T>
+M3<T> Hat(const V3<T>& v) {
+  M3<T> m;
+  m << T(0), -v(2), v(1), v(2), T(0), -v(0), -v(1), v(0), T(0);
+  return m;
 }
+
+template <typename T>
+V3<T> LogRot(const M3<T>& R) {
+  using std::atan2;
+  using std::sqrt;
+  V3<T> v(T(0.5) * (R(2, 1) - R(1, 2)), T(0.5) * (R(0, 2) - R(2, 0)), T(0.5) * (R(1, 0) - R(0, 1)));
+  const T c = T(0.5) * (R(0, 0) + R(1, 1) + R(2, 2) - T(1));
+  const T s2 = v.squaredNorm();
+  if (s2 < T(1e-14)) return v * (T(1) + s2 / T(6));
+  const T s = sqrt(s2);
+  const T theta = atan2(s, c);
+  return v * (theta / s);
+}
+
+// SE(3) log of (R, t): rotation vector phi and translation part rho.
+template <typename T>
+void LogSE3(const M3<T>& R, const V3<T>& t, V3<T>* phi, V3<T>* rho) {
+  using std::cos;
+  using std::sin;
+  using std::sqrt;
+  *phi = LogRot(R);
+  const T th2 = phi->squaredNorm();
+  T beta;
+  if (th2 < T(1e-8)) {
+    beta = T(1.0 / 12.0) + th2 / T(720.0);
+  } else {
+    const T th = sqrt(th2);
+    beta = (T(1) - th * sin(th) / (T(2) * (T(1) - cos(th)))) / th2;
+  }
+  const M3<T> P = Hat(*phi);
+  *rho = t - T(0.5) * (P * t) + beta * (P * (P * t));
+}
+
+template <typename T>
+Eigen::Matrix<T, 6, 1> Dynamics(const M3<T>& R0, const V3<T>& p0, const M3<T>& R1, const V3<T>& p1,
+                                const M3<T>& R2, const V3<T>& p2, double dt1, double dt2, const T& m,
+                                const V3<T>& c, const V3<T>& L, const M3<T>& Rl, const Vec3& g,
+                                const Vector6d& wrench) {
+  V3<T> phi_a, rho_a, phi_b, rho_b;
+  LogSE3<T>(R0.transpose() * R1, R0.transpose() * (p1 - p0), &phi_a, &rho_a);  // eq. 10, 12
+  LogSE3<T>(R1.transpose() * R2, R1.transpose() * (p2 - p1), &phi_b, &rho_b);  // eq. 11, 13
+  const V3<T> w1 = phi_a / T(dt1), v1 = rho_a / T(dt1);
+  const V3<T> w2 = phi_b / T(dt2), v2 = rho_b / T(dt2);
+  const V3<T> w2p = w2 + w1.cross(w2) * T(dt2);  // eq. 14
+  const V3<T> v2p = v2 + w1.cross(v2) * T(dt2);  // eq. 15
+  const V3<T> dw = (w2p - w1) / T(dt2);          // eq. 16
+  const V3<T> a = (v2p - v1) / T(dt2);           // eq. 17
+  const V3<T> g0 = R0.transpose() * g.cast<T>();
+  M3<T> Hd = M3<T>::Zero();
+  Hd(0, 0) = L(1) + L(2);
+  Hd(1, 1) = L(0) + L(2);
+  Hd(2, 2) = L(0) + L(1);
+  const M3<T> H = Rl * Hd * Rl.transpose();
+  const V3<T> amg = a - g0;
+  const V3<T> A = m * amg - m * c.cross(dw) + m * w2p.cross(w1.cross(c));  // eq. 18
+  const V3<T> B = m * c.cross(amg) + H * dw + w2p.cross(H * w1);          // eq. 19
+  Eigen::Matrix<T, 6, 1> r;
+  r.template head<3>() = A - wrench.head<3>().cast<T>();
+  r.template tail<3>() = B - wrench.tail<3>().cast<T>();
+  return r;
+}
+
+template <typename T>
+Eigen::Matrix<T, 4, 4> Pseudo(const T& m, const V3<T>& c, const V3<T>& L, const M3<T>& Rl) {
+  // Second moment about the origin: Sigma = R diag(L) R^T.
+  const M3<T> S = Rl * L.asDiagonal() * Rl.transpose();
+  Eigen::Matrix<T, 4, 4> P;
+  P.template topLeftCorner<3, 3>() = S;
+  P.template topRightCorner<3, 1>() = m * c;
+  P.template bottomLeftCorner<1, 3>() = (m * c).transpose();
+  P(3, 3) = m;
+  return P;
+}
+
+struct Inertial {
+  double m = 1;
+  Vec3 c = Vec3::Zero();
+  Vec3 L = Vec3::Ones();
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+
+  Vector10d Standard() const {
+    const Eigen::Matrix3d S = R * L.asDiagonal() * R.transpose();
+    const Eigen::Matrix3d Io = S.trace() * Eigen::Matrix3d::Identity() - S;
+    Vector10d pi;
+    pi << m, m * c, Io(0, 0), Io(1, 1), Io(2, 2), Io(0, 1), Io(0, 2), Io(1, 2);
+    return pi;
+  }
+  void Retract(const Eigen::Ref<const Eigen::VectorXd>& d) {
+    m += d(0);
+    c += d.segment<3>(1);
+    L += d.segment<3>(4);
+    R = R * ExpSO3(d.segment<3>(7));
+  }
+};
+
+struct Pose {
+  Eigen::Matrix3d R;
+  Vec3 p;
+};
+
+Jet Var(double v, int i) {
+  Jet j(v);
+  j.derivatives() = Deriv::Unit(i);
+  return j;
+}
+Jet Const(double v) {
+  Jet j(v);
+  j.derivatives().setZero();
+  return j;
+}
+
+Eigen::Matrix3d InvRightJacobian(const Vec3& phi) {
+  const double th = phi.norm();
+  const Eigen::Matrix3d P = Skew(phi);
+  if (th < 1e-6) return Eigen::Matrix3d::Identity() + 0.5 * P + P * P / 12.0;
+  const double k = 1.0 / (th * th) - (1 + std::cos(th)) / (2 * th * std::sin(th));
+  return Eigen::Matrix3d::Identity() + 0.5 * P + k * P * P;
+}
+
+class Problem {
+ public:
+  Problem(const InertiaSamples& s, const InertiaOptions& o, const ConvexHull* hull)
+      : s_(s), o_(o), hull_(hull), n_(static_cast<int>(s.samples.size())) {
+    meas_.resize(n_);
+    for (int k = 0; k < n_; ++k) {
+      meas_[k].R = s.samples[k].orientation.toRotationMatrix();
+      meas_[k].p = s.samples[k].position;
+    }
+    sig_p_ = std::max(o.noise.position_sigma, o.fg_min_position_sigma);
+    sig_r_ = std::max(o.noise.orientation_sigma, o.fg_min_orientation_sigma);
+    // Whitening of each dynamics factor: (Sigma_D + G Sigma_f G^T)^-1/2.
+    InertiaNoise floored = o.noise;
+    floored.force_sigma = std::max(o.noise.force_sigma, o.fg_min_force_sigma);
+    floored.torque_sigma = std::max(o.noise.torque_sigma, o.fg_min_torque_sigma);
+    for (int k = 0; k + 2 < n_; ++k) {
+      const InertiaSample& x = s.samples[k];
+      Matrix6d C;
+      WrenchCovariance(x, s.source, floored, &C);
+      C.diagonal().head<3>().array() += o.fg_dynamics_force_sigma * o.fg_dynamics_force_sigma;
+      C.diagonal().tail<3>().array() += o.fg_dynamics_torque_sigma * o.fg_dynamics_torque_sigma;
+      // W with W^T W = C^-1: W = L^-1 for C = L L^T.
+      const Eigen::LLT<Matrix6d> llt(C);
+      Matrix6d W = llt.matrixL().solve(Matrix6d::Identity());
+      whiten_.push_back(W);
+      wrench_.push_back(SampleWrench(x, s.source));
+    }
+  }
+
+  int NumVars() const { return 10 + 6 * n_; }
+
+  // Initial values: poses as measured; m and m c from the force rows of the
+  // three-point kinematics; second moment of a small ball around c.
+  void Initialise(double m0, const Vec3& c0, double radius) {
+    poses_ = meas_;
+    in_.m = m0;
+    in_.c = c0;
+    const Eigen::Matrix3d S = m0 * (c0 * c0.transpose() + radius * radius * Eigen::Matrix3d::Identity());
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(S);
+    in_.L = es.eigenvalues();
+    in_.R = es.eigenvectors();
+    if (in_.R.determinant() < 0) in_.R.col(2) = -in_.R.col(2);
+  }
+
+  // Residuals (and, with J, the Jacobian in tangent coordinates).
+  double Evaluate(Eigen::VectorXd* r_out, std::vector<Eigen::Triplet<double>>* J) const {
+    std::vector<double> r;
+    r.reserve(12 * n_ + 32);
+    int row = 0;
+    const Vec3& g = o_.gravity;
+    for (int k = 0; k + 2 < n_; ++k) {
+      const double dt1 = s_.samples[k + 1].t - s_.samples[k].t, dt2 = s_.samples[k + 2].t - s_.samples[k + 1].t;
+      const Pose &a = poses_[k], &b = poses_[k + 1], &cpose = poses_[k + 2];
+      Vector6d e;
+      if (!J) {
+        e = Dynamics<double>(a.R, a.p, b.R, b.p, cpose.R, cpose.p, dt1, dt2, in_.m, in_.c, in_.L, in_.R, g,
+                             wrench_[k]);
+      } else {
+        M3<Jet> R[3];
+        V3<Jet> P[3];
+        const Pose* ps[3] = {&a, &b, &cpose};
+        for (int q = 0; q < 3; ++q) {
+          V3<Jet> d(Var(0, 6 * q), Var(0, 6 * q + 1), Var(0, 6 * q + 2));
+          R[q] = ps[q]->R.cast<Jet>() * (M3<Jet>::Identity() + Hat<Jet>(d));
+          P[q] = ps[q]->p.cast<Jet>() + V3<Jet>(Var(0, 6 * q + 3), Var(0, 6 * q + 4), Var(0, 6 * q + 5));
+        }
+        const Jet m = Var(in_.m, 18);
+        const V3<Jet> c(Var(in_.c(0), 19), Var(in_.c(1), 20), Var(in_.c(2), 21));
+        const V3<Jet> L(Var(in_.L(0), 22), Var(in_.L(1), 23), Var(in_.L(2), 24));
+        const V3<Jet> dr(Var(0, 25), Var(0, 26), Var(0, 27));
+        const M3<Jet> Rl = in_.R.cast<Jet>() * (M3<Jet>::Identity() + Hat<Jet>(dr));
+        const Eigen::Matrix<Jet, 6, 1> ej =
+            Dynamics<Jet>(R[0], P[0], R[1], P[1], R[2], P[2], dt1, dt2, m, c, L, Rl, g, wrench_[k]);
+        Eigen::Matrix<double, 6, kLocal> Jl;
+        for (int i = 0; i < 6; ++i) e(i) = ej(i).value(), Jl.row(i) = ej(i).derivatives().transpose();
+        const Eigen::Matrix<double, 6, kLocal> Jw = whiten_[k] * Jl;
+        for (int i = 0; i < 6; ++i) {
+          for (int q = 0; q < 3; ++q)
+            for (int j = 0; j < 6; ++j) J->emplace_back(row + i, 10 + 6 * (k + q) + j, Jw(i, 6 * q + j));
+          for (int j = 0; j < 10; ++j) J->emplace_back(row + i, j, Jw(i, 18 + j));
+        }
+      }
+      const Vector6d ew = whiten_[k] * e;
+      for (int i = 0; i < 6; ++i) r.push_back(ew(i));
+      row += 6;
+    }
+    // Pose measurement factors.
+    for (int k = 0; k < n_; ++k) {
+      const Vec3 phi = LogSO3(meas_[k].R.transpose() * poses_[k].R);
+      const Vec3 dp = poses_[k].p - meas_[k].p;
+      for (int i = 0; i < 3; ++i) r.push_back(phi(i) / sig_r_);
+      for (int i = 0; i < 3; ++i) r.push_back(dp(i) / sig_p_);
+      if (J) {
+        const Eigen::Matrix3d Jr = InvRightJacobian(phi) / sig_r_;
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+            if (Jr(i, j) != 0) J->emplace_back(row + i, 10 + 6 * k + j, Jr(i, j));
+        for (int i = 0; i < 3; ++i) J->emplace_back(row + 3 + i, 10 + 6 * k + 3 + i, 1.0 / sig_p_);
+      }
+      row += 6;
+    }
+    // Constraint factors, active only when violated.
+    const double sm = o_.fg_constraint_sigma * m_scale_, sl = o_.fg_constraint_sigma * m_scale_ * l_scale_ * l_scale_,
+                 sc = o_.fg_constraint_sigma * l_scale_;
+    const double m_min = 1e-6 * m_scale_;
+    if (in_.m < m_min) {
+      r.push_back((m_min - in_.m) / sm);
+      if (J) J->emplace_back(row, 0, -1.0 / sm);
+      ++row;
+    }
+    for (int i = 0; i < 3; ++i) {
+      if (in_.L(i) < 0) {
+        r.push_back(-in_.L(i) / sl);
+        if (J) J->emplace_back(row, 4 + i, -1.0 / sl);
+        ++row;
+      }
+    }
+    if (hull_) {
+      for (size_t j = 0; j < hull_->normals.size(); ++j) {
+        const double v = hull_->normals[j].dot(in_.c) - hull_->offsets[j];
+        if (v > 0) {
+          r.push_back(v / sc);
+          if (J)
+            for (int i = 0; i < 3; ++i) J->emplace_back(row, 1 + i, hull_->normals[j](i) / sc);
+          ++row;
+        }
+      }
+    }
+    // Trace prior (eq. 20).
+    if (o_.prior && o_.prior->weight > 0) {
+      const double sw = std::sqrt(o_.prior->weight);
+      const Eigen::Matrix4d P0inv = PseudoInertia(o_.prior->params).inverse();
+      const Jet m = Var(in_.m, 18);
+      const V3<Jet> c(Var(in_.c(0), 19), Var(in_.c(1), 20), Var(in_.c(2), 21));
+      const V3<Jet> L(Var(in_.L(0), 22), Var(in_.L(1), 23), Var(in_.L(2), 24));
+      const V3<Jet> dr(Var(0, 25), Var(0, 26), Var(0, 27));
+      const M3<Jet> Rl = in_.R.cast<Jet>() * (M3<Jet>::Identity() + Hat<Jet>(dr));
+      const Eigen::Matrix<Jet, 4, 4> P = Pseudo<Jet>(m, c, L, Rl);
+      Jet tr = Const(0);
+      for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) tr += P0inv(i, j) * P(j, i);
+      r.push_back(sw * (tr.value() - 4.0));
+      if (J)
+        for (int j = 0; j < 10; ++j) J->emplace_back(row, j, sw * tr.derivatives()(18 + j));
+      ++row;
+    }
+    Eigen::VectorXd rv = Eigen::Map<Eigen::VectorXd>(r.data(), r.size());
+    const double cost = 0.5 * rv.squaredNorm();
+    if (r_out) *r_out = std::move(rv);
+    return cost;
+  }
+
+  void Retract(const Eigen::VectorXd& d) {
+    in_.Retract(d.head<10>());
+    for (int k = 0; k < n_; ++k) {
+      poses_[k].R = poses_[k].R * ExpSO3(d.segment<3>(10 + 6 * k));
+      poses_[k].p += d.segment<3>(10 + 6 * k + 3);
+    }
+  }
+
+  // Unwhitened dynamics residual RMS (force, torque).
+  void DynamicsRms(double* f, double* t) const {
+    double sf = 0, st = 0;
+    int cnt = 0;
+    for (int k = 0; k + 2 < n_; ++k) {
+      const double dt1 = s_.samples[k + 1].t - s_.samples[k].t, dt2 = s_.samples[k + 2].t - s_.samples[k + 1].t;
+      const Pose &a = poses_[k], &b = poses_[k + 1], &c = poses_[k + 2];
+      const Vector6d e = Dynamics<double>(a.R, a.p, b.R, b.p, c.R, c.p, dt1, dt2, in_.m, in_.c, in_.L, in_.R,
+                                          o_.gravity, wrench_[k]);
+      sf += e.head<3>().squaredNorm();
+      st += e.tail<3>().squaredNorm();
+      ++cnt;
+    }
+    *f = std::sqrt(sf / std::max(1, 3 * cnt));
+    *t = std::sqrt(st / std::max(1, 3 * cnt));
+  }
+
+  Inertial& inertial() { return in_; }
+  const std::vector<Matrix6d>& whiten() const { return whiten_; }
+  void SetScales(double m, double l) { m_scale_ = m, l_scale_ = l; }
+  std::vector<Pose> poses_;
+
+ private:
+  const InertiaSamples& s_;
+  const InertiaOptions& o_;
+  const ConvexHull* hull_;
+  const int n_;
+  std::vector<Pose> meas_;
+  std::vector<Matrix6d> whiten_;
+  std::vector<Vector6d> wrench_;
+  double sig_p_ = 1e-6, sig_r_ = 1e-6;
+  double m_scale_ = 1, l_scale_ = 0.1;
+  Inertial in_;
+};
+
+}  // namespace
+
+absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const InertiaOptions& o,
+                                            const ConvexHull* hull) {
+  MethodOutput out;
+  const int n = static_cast<int>(s.samples.size());
+  out.notes.push_back("kinematics: three consecutive poses per dynamics factor (eq. 10-17)");
+  if (s.HasKinematics()) out.notes.push_back("measured kinematics ignored by factor-graph (poses only, as the paper)");
+  for (int k = 0; k + 1 < n; ++k) {
+    const Eigen::Matrix3d Rr =
+        s.samples[k].orientation.toRotationMatrix().transpose() * s.samples[k + 1].orientation.toRotationMatrix();
+    if (LogSO3(Rr).norm() > M_PI / 2) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          s.line_numbers.size() > static_cast<size_t>(k + 1) ? absl::StrCat(s.source_name, ":", s.line_numbers[k + 1])
+                                                             : absl::StrCat("samples[", k + 1, "]"),
+          ": the orientation changes by more than 90 degrees since the previous sample; the factor graph's "
+          "finite differences need a higher sample rate"));
+    }
+  }
+
+  // Initial m, m c from the force rows with three-point kinematics.
+  const std::vector<KinPoint> kin = FiniteDifferenceKinematics(s, o.gravity);
+  Eigen::MatrixXd Yf(3 * kin.size(), 4);
+  Eigen::VectorXd bf(3 * kin.size());
+  for (size_t i = 0; i < kin.size(); ++i) {
+    const Matrix6x10 Y = Regressor(kin[i].w, kin[i].dw, kin[i].a_minus_g);
+    Yf.middleRows<3>(3 * i) = Y.topLeftCorner<3, 4>();
+    bf.segment<3>(3 * i) = SampleWrench(s.samples[kin[i].index], s.source).head<3>();
+  }
+  Eigen::Vector4d mh = Yf.colPivHouseholderQr().solve(bf);
+  double m0 = mh(0);
+  if (!(m0 > 0) || !std::isfinite(m0)) {
+    m0 = std::max(bf.norm() / std::sqrt(static_cast<double>(kin.size())) / std::max(o.gravity.norm(), 1e-9), 1e-3);
+    mh.tail<3>().setZero();
+  }
+  Vec3 c0 = mh.tail<3>() / m0;
+  if (!c0.allFinite()) c0.setZero();
+  double len = hull ? 0.25 * hull->size : std::max(0.05, 0.5 * c0.norm());
+  if (o.prior) {
+    m0 = o.prior->params.mass;
+    c0 = o.prior->params.com;
+  }
+  Problem prob(s, o, hull);
+  prob.SetScales(m0, std::max(len, c0.norm()));
+  prob.Initialise(m0, c0, len);
+  if (o.prior) {
+    // Start from the prior's inertia.
+    const Eigen::Matrix4d P0 = PseudoInertia(o.prior->params);
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(P0.topLeftCorner<3, 3>());
+    prob.inertial().L = es.eigenvalues();
+    prob.inertial().R = es.eigenvectors();
+    if (prob.inertial().R.determinant() < 0) prob.inertial().R.col(2) *= -1;
+  }
+
+  const int nv = prob.NumVars();
+  Eigen::VectorXd r;
+  std::vector<Eigen::Triplet<double>> trip;
+  double cost = prob.Evaluate(&r, &trip);
+  double lambda = 1e-4;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
+  bool analysed = false;
+  Eigen::SparseMatrix<double> H;
+  int it = 0;
+  for (; it < o.max_iterations; ++it) {
+    if (o.interrupt && o.interrupt()) return absl::CancelledError("interrupted");
+    Eigen::SparseMatrix<double> J(r.size(), nv);
+    J.setFromTriplets(trip.begin(), trip.end());
+    H = (J.transpose() * J).pruned(0.0);
+    const Eigen::VectorXd g = J.transpose() * r;
+    Eigen::VectorXd diag = H.diagonal();
+    bool accepted = false;
+    double new_cost = cost;
+    for (int tries = 0; tries < 12 && !accepted; ++tries) {
+      Eigen::SparseMatrix<double> Hd = H;
+      for (int i = 0; i < nv; ++i) Hd.coeffRef(i, i) += lambda * std::max(diag(i), 1e-12);
+      if (!analysed) {
+        solver.analyzePattern(Hd);
+        analysed = true;
+      }
+      solver.factorize(Hd);
+      if (solver.info() != Eigen::Success) {
+        lambda *= 10;
+        continue;
+      }
+      const Eigen::VectorXd step = -solver.solve(g);
+      Problem trial = prob;
+      trial.Retract(step);
+      Eigen::VectorXd rt;
+      new_cost = trial.Evaluate(&rt, nullptr);
+      if (std::isfinite(new_cost) && new_cost < cost) {
+        prob = std::move(trial);
+        accepted = true;
+        lambda = std::max(lambda / 3, 1e-12);
+      } else {
+        lambda *= 4;
+      }
+    }
+    if (o.progress) o.progress(0.9 * (it + 1) / o.max_iterations);
+    if (!accepted) break;
+    const double dec = cost - new_cost;
+    trip.clear();
+    cost = prob.Evaluate(&r, &trip);
+    if (dec <= 1e-10 * cost) {
+      ++it;
+      break;
+    }
+  }
+  out.iterations = it;
+  out.pi = prob.inertial().Standard();
+  out.samples_used = std::max(0, n - 2);
+  prob.DynamicsRms(&out.rms_force, &out.rms_torque);
+  out.notes.push_back(absl::StrFormat("Levenberg-Marquardt: %d iterations, final cost %.6g", it, cost));
+
+  // Marginal covariance of the inertial block (Gauss-Newton), mapped to pi.
+  {
+    Eigen::SparseMatrix<double> J(r.size(), nv);
+    J.setFromTriplets(trip.begin(), trip.end());
+    H = J.transpose() * J;
+    solver.compute(H);
+    if (solver.info() == Eigen::Success) {
+      Eigen::MatrixXd E = Eigen::MatrixXd::Zero(nv, 10);
+      for (int i = 0; i < 10; ++i) E(i, i) = 1;
+      const Eigen::MatrixXd X = solver.solve(E);
+      const Matrix10d cov_t = X.topRows<10>();
+      Matrix10d Jp;
+      for (int i = 0; i < 10; ++i) {
+        Inertial a = prob.inertial(), b = prob.inertial();
+        Vector10d d = Vector10d::Zero();
+        d(i) = 1e-7;
+        a.Retract(d);
+        b.Retract(-d);
+        Jp.col(i) = (a.Standard() - b.Standard()) / 2e-7;
+      }
+      const Matrix10d c = Jp * (0.5 * (cov_t + cov_t.transpose())) * Jp.transpose();
+      if (c.allFinite()) out.cov = c;
+    }
+  }
+  // Excitation: three-point regressors whitened like the dynamics factors.
+  double ms = 1, ls = 0.1;
+  RoughScale(out.pi, hull, &ms, &ls);
+  out.scale = ParameterScale(ms, ls);
+  for (size_t i = 0; i < kin.size() && i < prob.whiten().size(); ++i) {
+    const Matrix6x10 Y = prob.whiten()[i] * Regressor(kin[i].w, kin[i].dw, kin[i].a_minus_g);
+    out.info += Y.transpose() * Y;
+  }
+  return out;
+}
+
+}  // namespace tactforce::inertia::internal

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <unordered_map>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
@@ -129,14 +130,61 @@ std::vector<KinPoint> MeasuredKinematicsPoints(const InertiaSamples& s, const Ve
   return out;
 }
 
+namespace {
+
+// Weights of a window depend only on the relative sample times: on a
+// uniform grid, only on (window, degree, k - lo). Small per-thread cache.
+struct WeightKey {
+  int window, degree, offset;
+  double h;
+  bool operator==(const WeightKey& o) const {
+    return window == o.window && degree == o.degree && offset == o.offset && h == o.h;
+  }
+};
+
+struct WeightKeyHash {
+  size_t operator()(const WeightKey& k) const {
+    size_t h = std::hash<double>()(k.h);
+    for (int v : {k.window, k.degree, k.offset}) h = h * 1000003u ^ static_cast<size_t>(v);
+    return h;
+  }
+};
+
+bool UniformAround(const std::vector<double>& t, int lo, int w, double* h) {
+  const double dt = t[lo + 1] - t[lo];
+  for (int j = lo + 1; j < lo + w; ++j) {
+    if (std::abs((t[j] - t[j - 1]) - dt) > 1e-9 * dt) return false;
+  }
+  *h = dt;
+  return true;
+}
+
+Eigen::MatrixXd ComputeWeights(const std::vector<double>& t, int k, int w, int deg, int lo);
+
+}  // namespace
+
 Eigen::MatrixXd LocalPolyWeights(const std::vector<double>& t, int k, int window, int degree, int* lo_out) {
   const int n = static_cast<int>(t.size());
   const int w = std::max(1, std::min(window, n));
   const int deg = std::max(0, std::min(degree, w - 1));
   const int lo = std::clamp(k - w / 2, 0, n - w);
   *lo_out = lo;
-  const int rows = std::min(deg, 2) + 1;
   if (w == 1) return Eigen::MatrixXd::Ones(1, 1);
+  double dt = 0;
+  if (!UniformAround(t, lo, w, &dt)) return ComputeWeights(t, k, w, deg, lo);
+  thread_local std::unordered_map<WeightKey, Eigen::MatrixXd, WeightKeyHash> cache;
+  const WeightKey key{w, deg, k - lo, dt};
+  if (auto it = cache.find(key); it != cache.end()) return it->second;
+  Eigen::MatrixXd m = ComputeWeights(t, k, w, deg, lo);
+  if (cache.size() > 100000) cache.clear();
+  cache.emplace(key, m);
+  return m;
+}
+
+namespace {
+
+Eigen::MatrixXd ComputeWeights(const std::vector<double>& t, int k, int w, int deg, int lo) {
+  const int rows = std::min(deg, 2) + 1;
   const double h = std::max(t[k] - t[lo], t[lo + w - 1] - t[k]);
   Eigen::MatrixXd V(w, deg + 1);
   for (int j = 0; j < w; ++j) {
@@ -152,6 +200,8 @@ Eigen::MatrixXd LocalPolyWeights(const std::vector<double>& t, int k, int window
   if (rows > 2) out.row(2) = C.row(2) * (2.0 / (h * h));
   return out;
 }
+
+}  // namespace
 
 Eigen::MatrixXd SmoothSeries(const std::vector<double>& t, const Eigen::MatrixXd& values, int window,
                              int degree) {
@@ -304,7 +354,7 @@ FitResult SelectAndFit(const std::vector<double>& t, const Charted& c, int order
       }
     }
     const double mse = sse / (3.0 * n) - sigma2 * (refsq - 2.0 * cross) / n;
-    if (mse < best - 1e-15 * std::abs(best)) best = mse, chosen = cand;
+    if (mse < best) best = mse, chosen = cand;
   }
   FitResult f = Final(t, c, chosen);
   f.sigma2 = sigma2;

@@ -46,6 +46,7 @@
 
 #include "absl/status/statusor.h"
 #include "tactforce/api/convert.h"
+#include "tactforce/api/services.h"
 #include "tactforce/server/rpc_support.h"
 #include "tactforce/server/server_host.h"
 #include "tactforce/server/worker_pool.h"
@@ -72,6 +73,13 @@ class PlannerService final : public v1::Planner::CallbackService, public HostedS
                                  v1::PlanResponse* response) override;
   grpc::ServerBidiReactor<v1::PlanRequest, v1::PlanResponse>* PlanStream(
       grpc::CallbackServerContext* context) override;
+  // Whole motions and friction probes: always on the pool.
+  grpc::ServerUnaryReactor* PlanTrajectory(grpc::CallbackServerContext* context,
+                                           const v1::TrajectoryRequest* request,
+                                           v1::TrajectoryResponse* response) override;
+  grpc::ServerUnaryReactor* PlanFrictionProbe(grpc::CallbackServerContext* context,
+                                              const v1::FrictionProbeRequest* request,
+                                              v1::FrictionProbeResponse* response) override;
 
   // --- used by the reactors ---
   // Converts and applies the server-level options (INVALID_ARGUMENT on bad
@@ -85,6 +93,7 @@ class PlannerService final : public v1::Planner::CallbackService, public HostedS
                        v1::PlanResponse* response) const;
 
   WorkerPool* pool() const { return pool_; }
+  api::CallLimits Limits() const;
   const PlannerServiceOptions& options() const { return options_; }
 
  private:

@@ -56,7 +56,8 @@ struct AuditOptions {
   std::optional<sim::SensorModel> model;
   std::string reading_units = "reading units";
   // Downstream: force-estimation error of the grasp estimator with readings
-  // corrected by the extended vs the nominal model (simulated grasps).
+  // corrected by the extended vs the nominal model (simulated grasps, see
+  // src/downstream.cc; measured only when a cause is named).
   bool downstream_gain = true;
   int downstream_grasps = 20;
   uint64_t seed = 1;
@@ -105,9 +106,12 @@ struct CandidateScore {
 
 struct DownstreamGain {
   int grasps = 0;
-  double error_nominal = 0;    // N, RMS force-estimation error, readings corrected by the nominal model
-  double error_extended = 0;   // N, corrected by the extended model
+  // RMS over contacts of |estimate from corrected readings - estimate from
+  // exact normal forces| (N): the estimation error due to the readings.
+  double error_nominal = 0;    // readings corrected by the nominal model
+  double error_extended = 0;   // corrected by the extended model
   double gain = 0;             // percent
+  double error_exact_readings = 0;  // N, estimator's own error vs the true forces (for scale)
   std::string method;
 };
 

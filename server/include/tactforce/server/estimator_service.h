@@ -1,0 +1,40 @@
+// tactforce.v1.Estimator: EstimateForces and EstimateFriction, thin adapters
+// over tactforce::api (which calls the estimator library). Both run on the
+// WorkerPool (friction requests carry whole time series).
+#pragma once
+
+#include <string>
+
+#include "tactforce/server/server_host.h"
+#include "tactforce/server/worker_pool.h"
+#include "tactforce/v1/estimator.grpc.pb.h"
+
+namespace tactforce::server {
+
+struct EstimatorServiceOptions {
+  int max_contacts = 64;
+};
+
+class EstimatorService final : public v1::Estimator::CallbackService, public HostedService {
+ public:
+  EstimatorService(WorkerPool* pool, EstimatorServiceOptions options)
+      : pool_(pool), options_(options) {}
+
+  std::string service_name() const override {
+    return std::string(v1::Estimator::service_full_name());
+  }
+  grpc::Service* grpc_service() override { return this; }
+
+  grpc::ServerUnaryReactor* EstimateForces(grpc::CallbackServerContext* context,
+                                           const v1::EstimateRequest* request,
+                                           v1::EstimateResponse* response) override;
+  grpc::ServerUnaryReactor* EstimateFriction(grpc::CallbackServerContext* context,
+                                             const v1::FrictionRequest* request,
+                                             v1::FrictionResponse* response) override;
+
+ private:
+  WorkerPool* pool_;
+  EstimatorServiceOptions options_;
+};
+
+}  // namespace tactforce::server

@@ -1,0 +1,139 @@
+// The estimation and motion RPCs over the real server: each answer equals the
+// in-process one (same api:: path), and bad requests name their field.
+#include <gtest/gtest.h>
+
+#include "tactforce/api/convert.h"
+#include "tactforce/api/services.h"
+#include "tactforce/estimator/friction.h"
+#include "tactforce/planner/examples.h"
+#include "tactforce/v1/estimator.grpc.pb.h"
+#include "test_support.h"
+
+namespace tactforce::testing {
+namespace {
+
+using EstimationRpcTest = ServerTest;
+
+v1::TrajectoryRequest LiftRequest(int steps) {
+  const planner::TrajectoryProblem t = planner::WrenchLiftAndRotate(steps);
+  v1::TrajectoryRequest r;
+  *r.mutable_plan() = api::ToRequest(t.base, planner::PlanOptions{}, planner::SolverKind::kGeometric);
+  v1::Inertia* in = r.mutable_plan()->mutable_object()->mutable_inertia();
+  in->set_ixx(t.inertia->ixx);
+  in->set_iyy(t.inertia->iyy);
+  in->set_izz(t.inertia->izz);
+  in->set_ixy(t.inertia->ixy);
+  in->set_ixz(t.inertia->ixz);
+  in->set_iyz(t.inertia->iyz);
+  for (const auto& s : t.steps) {
+    v1::TrajectoryStep* out = r.add_steps();
+    *out->mutable_gravity() = api::ToProto(s.gravity);
+    *out->mutable_linear_acceleration() = api::ToProto(s.linear_acceleration);
+    *out->mutable_angular_velocity() = api::ToProto(s.angular_velocity);
+    *out->mutable_angular_acceleration() = api::ToProto(s.angular_acceleration);
+  }
+  return r;
+}
+
+grpc::ClientContext* WithDeadline(grpc::ClientContext* c) {
+  c->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+  return c;
+}
+
+TEST_F(EstimationRpcTest, EstimateForcesMatchesInProcess) {
+  auto stub = v1::Estimator::NewStub(channel_);
+  v1::EstimateRequest request;
+  const v1::PlanRequest wrench = WrenchRequest();
+  *request.mutable_object() = wrench.object();
+  *request.mutable_contacts() = wrench.contacts();
+  for (double r : {2.0, 1.5, 3.5}) request.add_readings(r);
+  for (auto method : {v1::ESTIMATE_METHOD_PROJECTION, v1::ESTIMATE_METHOD_NORMAL_LSQ}) {
+    request.set_method(method);
+    grpc::ClientContext context;
+    v1::EstimateResponse remote;
+    ASSERT_TRUE(stub->EstimateForces(WithDeadline(&context), request, &remote).ok());
+    absl::StatusOr<v1::EstimateResponse> local = api::HandleEstimate(request);
+    ASSERT_TRUE(local.ok());
+    EXPECT_EQ(remote.status(), v1::ESTIMATE_STATUS_OK);
+    ASSERT_EQ(remote.forces_size(), 3);
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_DOUBLE_EQ(remote.forces(i).x(), local->forces(i).x());
+      EXPECT_DOUBLE_EQ(remote.forces(i).z(), local->forces(i).z());
+    }
+  }
+  request.clear_readings();
+  request.add_readings(1.0);
+  grpc::ClientContext context;
+  v1::EstimateResponse response;
+  const grpc::Status bad = stub->EstimateForces(WithDeadline(&context), request, &response);
+  EXPECT_EQ(bad.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(bad.error_message().rfind("readings: expected 3", 0), 0u) << bad.error_message();
+}
+
+TEST_F(EstimationRpcTest, EstimateFrictionRecoversMu) {
+  auto stub = v1::Estimator::NewStub(channel_);
+  estimator::FrictionSimOptions sim;
+  sim.mu = 0.45;
+  sim.trials = 4;
+  const estimator::SimulatedFriction data = estimator::SimulateFriction(sim);
+  v1::FrictionRequest request;
+  for (const auto& trial : data.trials) {
+    v1::FrictionTrial* t = request.add_trials();
+    *t->mutable_normal() = api::ToProto(*trial.normal);
+    for (const auto& s : trial.samples) {
+      v1::FrictionSample* out = t->add_samples();
+      out->set_t(s.t);
+      *out->mutable_force() = api::ToProto(s.force);
+      *out->mutable_contact_point() = api::ToProto(s.contact_point);
+    }
+  }
+  grpc::ClientContext context;
+  v1::FrictionResponse response;
+  ASSERT_TRUE(stub->EstimateFriction(WithDeadline(&context), request, &response).ok());
+  EXPECT_EQ(response.count(), 4);
+  EXPECT_NEAR(response.median(), 0.45, 0.02);
+  request.mutable_trials(1)->mutable_samples(5)->set_t(0.0);
+  grpc::ClientContext context2;
+  const grpc::Status bad = stub->EstimateFriction(WithDeadline(&context2), request, &response);
+  EXPECT_EQ(bad.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(bad.error_message(), "trials[1].samples[5].t: not increasing");
+}
+
+TEST_F(EstimationRpcTest, PlanTrajectoryAndProbe) {
+  const v1::TrajectoryRequest request = LiftRequest(30);
+  grpc::ClientContext context;
+  v1::TrajectoryResponse remote;
+  ASSERT_TRUE(stub_->PlanTrajectory(WithDeadline(&context), request, &remote).ok());
+  EXPECT_EQ(remote.optimal_steps(), 30);
+  absl::StatusOr<v1::TrajectoryResponse> local = api::HandleTrajectory(request);
+  ASSERT_TRUE(local.ok());
+  for (int k = 0; k < 30; ++k) {
+    EXPECT_DOUBLE_EQ(remote.steps(k).forces(0).z(), local->steps(k).forces(0).z());
+  }
+  v1::TrajectoryRequest broken = request;
+  broken.mutable_steps(4)->mutable_angular_velocity()->set_x(std::nan(""));
+  grpc::ClientContext context2;
+  const grpc::Status bad = stub_->PlanTrajectory(WithDeadline(&context2), broken, &remote);
+  EXPECT_EQ(bad.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(bad.error_message(), "steps[4].angular_velocity: not a finite vector");
+
+  v1::FrictionProbeRequest probe;
+  *probe.mutable_plan() = api::ToRequest(planner::BuiltInGrasps()[2].problem, planner::PlanOptions{},
+                                         planner::SolverKind::kGeometric);
+  probe.mutable_position()->set_z(0.06);
+  probe.mutable_normal()->set_z(-1);
+  probe.mutable_tangent()->set_x(1);
+  probe.set_tangential_force(1.0);
+  probe.set_initial_normal_force(3.0);
+  probe.set_final_normal_force(1.0);
+  probe.set_ramp_rate(1.0);
+  probe.set_sample_rate(10.0);
+  grpc::ClientContext context3;
+  v1::FrictionProbeResponse plan;
+  ASSERT_TRUE(stub_->PlanFrictionProbe(WithDeadline(&context3), probe, &plan).ok());
+  EXPECT_EQ(plan.times_size(), 21);
+  EXPECT_EQ(plan.holding().optimal_steps(), 21);
+}
+
+}  // namespace
+}  // namespace tactforce::testing
