@@ -121,6 +121,11 @@ constexpr double kInfeasibilityTolerance = 1e-7;
 // size of the unknowns for kStallIterations iterations.
 constexpr double kStallStep = 1e-12;
 constexpr int kStallIterations = 8;
+// Iteration budget of the first minimum-norm run; a run that needs more goes
+// through the phase-one problem and a second run with the full budget.
+constexpr int kFirstRunIterations = 300;
+// Whether the first run uses Ipopt's expect_infeasible_problem heuristic.
+constexpr bool kExpectInfeasibleFirst = true;
 
 double ThreadCpuSeconds() {
   timespec ts{};
@@ -769,8 +774,8 @@ class ForceNlp final : public Ipopt::TNLP {
 
 // Sets every option explicitly; returns the names of rejected ones.
 std::string ConfigureIpopt(Ipopt::IpoptApplication& app,
-                           const PlanOptions& options, bool has_cones,
-                           bool expect_infeasible) {
+                           const PlanOptions& options, int max_iter,
+                           bool has_cones, bool expect_infeasible) {
   Ipopt::OptionsList& o = *app.Options();
   std::string rejected;
   auto check = [&](bool ok, const char* name) {
@@ -779,7 +784,7 @@ std::string ConfigureIpopt(Ipopt::IpoptApplication& app,
   check(o.SetIntegerValue("print_level", 0), "print_level");
   check(o.SetStringValue("sb", "yes"), "sb");
   check(o.SetNumericValue("tol", options.ipopt_tolerance), "tol");
-  check(o.SetIntegerValue("max_iter", options.ipopt_max_iterations), "max_iter");
+  check(o.SetIntegerValue("max_iter", max_iter), "max_iter");
   check(o.SetStringValue("mu_strategy", "monotone"), "mu_strategy");
   check(o.SetStringValue("linear_solver", "mumps"), "linear_solver");
   check(o.SetIntegerValue("mumps_pivot_order", 0), "mumps_pivot_order");
@@ -830,15 +835,15 @@ std::timed_mutex& MumpsMutex() {
 // One Ipopt run; the caller holds MumpsMutex(). Everything Ipopt allocated
 // is released before this returns.
 IpoptRun RunIpoptLocked(const Formulation& form, Phase phase, VectorXd start,
-                        bool expect_infeasible, const PlanOptions& options,
-                        const StopConditions& stop) {
+                        int max_iter, bool expect_infeasible,
+                        const PlanOptions& options, const StopConditions& stop) {
   IpoptRun run;
   Ipopt::SmartPtr<ForceNlp> nlp = new ForceNlp(form, phase, std::move(start), stop);
   // No console journal: nothing is ever written to stdout.
   Ipopt::SmartPtr<Ipopt::IpoptApplication> app =
       new Ipopt::IpoptApplication(/*create_console_out=*/false);
   const std::string rejected =
-      ConfigureIpopt(*app, options, !form.cones.empty(), expect_infeasible);
+      ConfigureIpopt(*app, options, max_iter, !form.cones.empty(), expect_infeasible);
   if (!rejected.empty()) {
     run.setup_error = "Ipopt rejected the options: " + rejected;
     return run;
@@ -868,8 +873,8 @@ IpoptRun RunIpoptLocked(const Formulation& form, Phase phase, VectorXd start,
 }
 
 IpoptRun RunIpopt(const Formulation& form, Phase phase, VectorXd start,
-                  bool expect_infeasible, const PlanOptions& options,
-                  const StopConditions& stop) {
+                  int max_iter, bool expect_infeasible,
+                  const PlanOptions& options, const StopConditions& stop) {
   // Wait for the lock, still honouring an interrupt (the CPU budget does not
   // run down while blocked).
   std::unique_lock<std::timed_mutex> lock(MumpsMutex(), std::defer_lock);
@@ -881,8 +886,8 @@ IpoptRun RunIpopt(const Formulation& form, Phase phase, VectorXd start,
       return run;
     }
   } while (!lock.try_lock_for(std::chrono::milliseconds(2)));
-  return RunIpoptLocked(form, phase, std::move(start), expect_infeasible,
-                        options, stop);
+  return RunIpoptLocked(form, phase, std::move(start), max_iter,
+                        expect_infeasible, options, stop);
 }
 
 class IpoptSolver final : public ForceSolver {
@@ -981,8 +986,11 @@ class IpoptSolver final : public ForceSolver {
     };
 
     // 1. The minimum-norm problem, with Ipopt's quick infeasibility heuristic.
-    const IpoptRun main = RunIpopt(form, Phase::kMinimumNorm, form.start,
-                                   /*expect_infeasible=*/true, options, stop);
+    const int max_iter = options.ipopt_max_iterations;
+    const IpoptRun main =
+        RunIpopt(form, Phase::kMinimumNorm, form.start,
+                 std::min(max_iter, kFirstRunIterations), kExpectInfeasibleFirst,
+                 options, stop);
     iterations += main.iterations;
     if (main.stopped != StopConditions::kNone) return stopped(main.stopped);
     if (converged(main, Phase::kMinimumNorm)) return optimal(main);
@@ -1010,7 +1018,7 @@ class IpoptSolver final : public ForceSolver {
     for (const ConeConstraint& cone : form.cones) {
       start1(cone.s_index) = cone.Radius(form.start.data()) + t0;
     }
-    const IpoptRun phase1 = RunIpopt(form, Phase::kFeasibility, start1,
+    const IpoptRun phase1 = RunIpopt(form, Phase::kFeasibility, start1, max_iter,
                                      /*expect_infeasible=*/false, options, stop);
     iterations += phase1.iterations;
     if (phase1.stopped != StopConditions::kNone) return stopped(phase1.stopped);
@@ -1036,7 +1044,7 @@ class IpoptSolver final : public ForceSolver {
                                    cone.Tangential(x1.data()).norm(),
                                    1e-6 * form.scale});
     }
-    const IpoptRun retry = RunIpopt(form, Phase::kMinimumNorm, x1,
+    const IpoptRun retry = RunIpopt(form, Phase::kMinimumNorm, x1, max_iter,
                                     /*expect_infeasible=*/false, options, stop);
     iterations += retry.iterations;
     if (retry.stopped != StopConditions::kNone) return stopped(retry.stopped);

@@ -11,6 +11,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "support/cli_fixture.h"
 #include "tactforce/api/json.h"
 
 namespace tactforce {
@@ -31,92 +32,12 @@ constexpr char kPinch[] = R"({
   ]
 })";
 
-// $name when set and not empty, else `fallback`.
-std::string EnvOr(const char* name, const char* fallback) {
-  const char* value = std::getenv(name);
-  return value != nullptr && *value != '\0' ? value : fallback;
-}
+using testing::CliRun;
+using testing::EnvOr;
+using testing::Lines;
 
-struct CliRun {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string Quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) {
-    if (c == '\'') {
-      q += "'\\''";
-    } else {
-      q += c;
-    }
-  }
-  return q + "'";
-}
-
-std::string ReadFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-void WriteFile(const fs::path& path, const std::string& text) {
-  std::ofstream(path, std::ios::binary) << text;
-}
-
-std::vector<std::string> Lines(const std::string& text) {
-  std::vector<std::string> lines;
-  std::istringstream in(text);
-  for (std::string line; std::getline(in, line);) lines.push_back(line);
-  return lines;
-}
-
-class CliTest : public ::testing::Test {
+class CliTest : public testing::CliTest {
  protected:
-  void SetUp() override {
-    binary_ = fs::path(EnvOr("TACTFORCE_BIN_DIR", TACTFORCE_DEFAULT_BIN_DIR)) / "tactforce";
-    ASSERT_TRUE(fs::exists(binary_)) << binary_;
-    std::string pattern = (fs::temp_directory_path() / "tactforce_cli_test.XXXXXX").string();
-    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override {
-    std::error_code ec;
-    if (!dir_.empty()) fs::remove_all(dir_, ec);
-  }
-
-  fs::path Write(const std::string& name, const std::string& text) {
-    WriteFile(dir_ / name, text);
-    return dir_ / name;
-  }
-
-  // Runs tactforce with `args`; `stdin_text` is its standard input.
-  CliRun Tactforce(const std::vector<std::string>& args, const std::string& stdin_text = "") {
-    const fs::path in = Write("stdin.txt", stdin_text);
-    const fs::path out = dir_ / "stdout.txt";
-    const fs::path err = dir_ / "stderr.txt";
-    std::string command = Quote(binary_.string());
-    for (const std::string& a : args) command += " " + Quote(a);
-    command += " <" + Quote(in.string()) + " >" + Quote(out.string()) + " 2>" +
-               Quote(err.string());
-    const int status = std::system(command.c_str());
-    CliRun run;
-    if (status != -1 && WIFEXITED(status)) run.exit_code = WEXITSTATUS(status);
-    run.out = ReadFile(out);
-    run.err = ReadFile(err);
-    return run;
-  }
-
-  // A bad-input run: exit 2, nothing on stdout, one "error: " line on stderr.
-  static void ExpectBadInput(const CliRun& run) {
-    EXPECT_EQ(run.exit_code, 2) << run.err;
-    EXPECT_EQ(run.out, "");
-    ASSERT_EQ(Lines(run.err).size(), 1u) << run.err;
-    EXPECT_THAT(run.err, StartsWith("error: "));
-  }
-
   static v1::PlanResponse ParseResponse(const std::string& json) {
     v1::PlanResponse response;
     absl::Status status = api::ParseJson(json, &response);
@@ -124,8 +45,6 @@ class CliTest : public ::testing::Test {
     return response;
   }
 
-  fs::path binary_;
-  fs::path dir_;
 };
 
 TEST_F(CliTest, PlanFromFilePrintsJson) {
@@ -215,12 +134,6 @@ TEST_F(CliTest, MissingFileIsBadInput) {
       Tactforce({"plan", "--local", "--request", (dir_ / "no_such_file.json").string()});
   ExpectBadInput(run);
   EXPECT_THAT(run.err, HasSubstr("no_such_file.json"));
-}
-
-TEST_F(CliTest, ServerModeIsNotThereYet) {
-  const CliRun run = Tactforce({"plan", "--request", "-"}, kPinch);
-  ExpectBadInput(run);
-  EXPECT_THAT(run.err, HasSubstr("--local"));
 }
 
 TEST_F(CliTest, BadCommandLineIsBadInput) {

@@ -19,6 +19,11 @@ using testing::MakeHiddenCase;
 
 constexpr int kSeeds = 200;
 
+}  // namespace
+// Readable test names/values in gtest and ctest output.
+void PrintTo(Effect e, std::ostream* os) { *os << EffectName(e); }
+namespace {
+
 AuditOptions FastOptions(const HiddenCase& hc) {
   AuditOptions o;
   o.downstream_gain = false;
@@ -46,7 +51,7 @@ TEST_P(SingleEffect, NamedRecoveredWithPositiveGain) {
   const int idx = static_cast<int>(e);
   std::atomic<int> correct{0}, named{0}, extra{0};
   std::mutex mu;
-  std::vector<std::string> failures;
+  std::vector<std::string> failures, extras;
   ForSeeds(kSeeds, [&](int i) {
     const uint64_t seed = 100000 * (idx + 1) + i;
     HiddenCase hc = MakeHiddenCase({e}, seed);
@@ -58,7 +63,12 @@ TEST_P(SingleEffect, NamedRecoveredWithPositiveGain) {
       why = "named " + (rep->causes.empty() ? std::string("nothing") : rep->causes[0].effect);
     } else {
       ++named;
-      if (rep->causes.size() > 1) ++extra;
+      if (rep->causes.size() > 1) {
+        ++extra;
+        std::lock_guard<std::mutex> lock(mu);
+        extras.push_back("seed " + std::to_string(seed) + ": also named " + rep->causes[1].effect + " (gain " +
+                         std::to_string(rep->causes[1].gain) + " %)");
+      }
       auto r = CheckParameters(e, hc.model.effects, rep->causes[0]);
       if (!r.ok) why = r.what;
       else if (!(rep->causes[0].gain > 0 && rep->gain > 0)) why = "gain not positive";
@@ -75,6 +85,7 @@ TEST_P(SingleEffect, NamedRecoveredWithPositiveGain) {
             << kSeeds << " = " << 100 * rate << " %; named first " << named << "; with an extra cause " << extra
             << "\n";
   for (const auto& f : failures) std::cout << "  " << f << "\n";
+  for (const auto& f : extras) std::cout << "  (extra) " << f << "\n";
   RecordProperty("correct_rate", std::to_string(rate));
   EXPECT_GE(rate, 0.95);
 }

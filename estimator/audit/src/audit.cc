@@ -165,6 +165,14 @@ class Engine {
     return ev;
   }
 
+  // Force-domain channel output on the training block.
+  const std::vector<double>& TrainChannel(const EffectParams& p) {
+    ChannelInput in = in_;
+    in.n = n_train_;
+    sim::ApplyChannel(p, in, &g_);
+    return g_;
+  }
+
   std::vector<double> Predict(const EffectParams& p, double a, double b) {
     ChannelInput in = in_;
     in.n = static_cast<int>(d_.t.size());
@@ -250,6 +258,60 @@ FitResult Refine(Engine& eng, const EffectParams& start, const std::vector<Slot>
   return best;
 }
 
+// The RSS is piecewise constant in the threshold (it only changes when the
+// threshold passes a pre-threshold value u_i), and with an activation jump a
+// threshold a little off misclassifies crossing samples by ~threshold. Scan
+// the exact breakpoints near the estimate and take the middle of the best
+// flat interval.
+FitResult PolishThreshold(Engine& eng, const FitResult& in, const Stats& st) {
+  if (!(in.p.threshold > 0)) return in;
+  EffectParams pre = in.p;
+  pre.threshold = 0;
+  pre.saturation = 0;
+  pre.drift = 0;
+  std::vector<double> u = eng.TrainChannel(pre);
+  const double th = in.p.threshold, w = 0.05 * st.range;
+  std::vector<double> near;
+  for (double v : u)
+    if (std::abs(v - th) <= w) near.push_back(v);
+  std::sort(near.begin(), near.end());
+  near.erase(std::unique(near.begin(), near.end()), near.end());
+  if (near.size() < 2) return in;
+  // At most ~120 breakpoints, centred on the estimate.
+  auto it = std::lower_bound(near.begin(), near.end(), th);
+  const long c = it - near.begin();
+  const long lo = std::max(0L, c - 60), hi = std::min<long>(near.size() - 1, c + 60);
+  FitResult best = in;
+  std::vector<std::pair<double, double>> scores;  // (threshold, rss)
+  for (long k = lo; k < hi; ++k) {
+    EffectParams q = in.p;
+    q.threshold = 0.5 * (near[k] + near[k + 1]);
+    if (q.threshold <= 0) continue;
+    scores.emplace_back(q.threshold, eng.Evaluate(q, false).rss_train);
+  }
+  if (scores.empty()) return in;
+  double min_rss = in.rss_train;
+  for (const auto& sc : scores) min_rss = std::min(min_rss, sc.second);
+  if (!(min_rss < in.rss_train * (1 - 1e-12))) return in;
+  // Middle of the run of consecutive breakpoints at the minimum.
+  long first = -1, last = -1;
+  for (size_t k = 0; k < scores.size(); ++k) {
+    if (scores[k].second <= min_rss * (1 + 1e-12)) {
+      if (first < 0) first = k;
+      last = k;
+    } else if (first >= 0) {
+      break;
+    }
+  }
+  best.p.threshold = 0.5 * (scores[first].first + scores[last].first);
+  best.rss_train = eng.Evaluate(best.p, false).rss_train;
+  if (best.rss_train > min_rss * (1 + 1e-9)) {  // middle not on the plateau: take the first minimum
+    best.p.threshold = scores[first].first;
+    best.rss_train = scores[first].second;
+  }
+  return best;
+}
+
 // Fits one effect's parameters on top of `current`: coarse grid over its
 // first parameter (all combinations with the grid of the second), a finer
 // grid around the best, then an NLopt refinement.
@@ -306,7 +368,7 @@ FitResult FitEffect(Engine& eng, Effect e, const EffectParams& current, const st
   }
   const int evals = o.max_evaluations * (1 + static_cast<int>(selected.size()));
   FitResult r = Refine(eng, best.p, joint, smooth, evals, smooth ? 0.1 : 0.02);
-  return r.rss_train <= best.rss_train ? r : best;
+  return PolishThreshold(eng, r.rss_train <= best.rss_train ? r : best, st);
 }
 
 double Bic(double rss, int n, int k) {
@@ -446,6 +508,23 @@ absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOption
 
   // ---- forward selection
   for (int round = 1; round <= o.max_causes; ++round) {
+    if (!selected.empty()) {
+      // Converge the named effects first (with the budget a candidate's joint
+      // refinement gets), so a new effect is credited only with what it adds.
+      std::vector<Slot> sel_slots;
+      bool smooth = true;
+      for (Effect e : selected) {
+        for (const Slot& sl : SlotsFor(e, st, o)) sel_slots.push_back(sl);
+        smooth = smooth && IsSmooth(e);
+      }
+      const int evals = o.max_evaluations * (1 + static_cast<int>(selected.size()));
+      FitResult pol = PolishThreshold(eng, Refine(eng, current, sel_slots, smooth, evals, smooth ? 0.1 : 0.02), st);
+      if (pol.rss_train < ev_cur.rss_train) {
+        current = pol.p;
+        ev_cur = eng.Evaluate(current, true);
+        bic_cur = Bic(ev_cur.rss_heldout, n_h, k_cur);
+      }
+    }
     int best = -1;
     double best_bic = std::numeric_limits<double>::infinity();
     Eval best_ev;
@@ -504,7 +583,7 @@ absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOption
     all_smooth = all_smooth && IsSmooth(e);
   }
   if (selected.size() > 1) {
-    FitResult fr = Refine(eng, current, all_slots, all_smooth, 2 * o.max_evaluations, 0.01);
+    FitResult fr = PolishThreshold(eng, Refine(eng, current, all_slots, all_smooth, 2 * o.max_evaluations, 0.01), st);
     const Eval ev = eng.Evaluate(fr.p, true);
     // Keep the joint refit only when it does not hurt the held-out error.
     if (ev.rss_heldout <= ev_cur.rss_heldout * (1 + 1e-9)) {

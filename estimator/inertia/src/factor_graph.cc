@@ -266,7 +266,7 @@ class Problem {
         const Eigen::Matrix3d Jr = InvRightJacobian(phi) / sig_r_;
         for (int i = 0; i < 3; ++i)
           for (int j = 0; j < 3; ++j)
-            if (Jr(i, j) != 0) J->emplace_back(row + i, 10 + 6 * k + j, Jr(i, j));
+            J->emplace_back(row + i, 10 + 6 * k + j, Jr(i, j));
         for (int i = 0; i < 3; ++i) J->emplace_back(row + 3 + i, 10 + 6 * k + 3 + i, 1.0 / sig_p_);
       }
       row += 6;
@@ -432,15 +432,16 @@ absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const Inert
     if (o.interrupt && o.interrupt()) return absl::CancelledError("interrupted");
     Eigen::SparseMatrix<double> J(r.size(), nv);
     J.setFromTriplets(trip.begin(), trip.end());
-    H = (J.transpose() * J).pruned(0.0);
+    H = J.transpose() * J;
     const Eigen::VectorXd g = J.transpose() * r;
     Eigen::VectorXd diag = H.diagonal();
+    analysed = false;
     bool accepted = false;
     double new_cost = cost;
     for (int tries = 0; tries < 12 && !accepted; ++tries) {
       Eigen::SparseMatrix<double> Hd = H;
       for (int i = 0; i < nv; ++i) Hd.coeffRef(i, i) += lambda * std::max(diag(i), 1e-12);
-      if (!analysed) {
+      if (!analysed) {  // once per outer iteration: H's pattern may change
         solver.analyzePattern(Hd);
         analysed = true;
       }
@@ -450,15 +451,16 @@ absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const Inert
         continue;
       }
       const Eigen::VectorXd step = -solver.solve(g);
-      Problem trial = prob;
-      trial.Retract(step);
-      Eigen::VectorXd rt;
-      new_cost = trial.Evaluate(&rt, nullptr);
+      const Inertial saved_in = prob.inertial();
+      const std::vector<Pose> saved_poses = prob.poses_;
+      prob.Retract(step);
+      new_cost = prob.Evaluate(nullptr, nullptr);
       if (std::isfinite(new_cost) && new_cost < cost) {
-        prob = std::move(trial);
         accepted = true;
         lambda = std::max(lambda / 3, 1e-12);
       } else {
+        prob.inertial() = saved_in;
+        prob.poses_ = saved_poses;
         lambda *= 4;
       }
     }
