@@ -45,16 +45,16 @@ CLI::Option* AddConnectionFlags(CLI::App* cmd, ConnectionArgs* args,
                   "Use TLS; trust server certificates signed by this PEM CA bundle "
                   "(default with other --tls-* flags: the system roots)")
       ->type_name("FILE")
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingFile.description(""));
   CLI::Option* cert =
       cmd->add_option("--tls-cert", args->tls_cert,
                       "Use mutual TLS: PEM client certificate chain (needs --tls-key)")
           ->type_name("FILE")
-          ->check(CLI::ExistingFile);
+          ->check(CLI::ExistingFile.description(""));
   CLI::Option* key = cmd->add_option("--tls-key", args->tls_key,
                                      "PEM private key of --tls-cert")
                          ->type_name("FILE")
-                         ->check(CLI::ExistingFile);
+                         ->check(CLI::ExistingFile.description(""));
   cert->needs(key);
   key->needs(cert);
   cmd->add_option("--tls-server-name", args->tls_server_name,
@@ -110,23 +110,6 @@ void SetDeadline(grpc::ClientContext* context, int deadline_ms) {
   if (deadline_ms > 0) {
     context->set_deadline(std::chrono::system_clock::now() +
                           std::chrono::milliseconds(deadline_ms));
-  }
-}
-
-absl::Status WaitUntilConnected(grpc::Channel* channel, const std::string& target,
-                                std::chrono::milliseconds timeout) {
-  const auto deadline = std::chrono::system_clock::now() + timeout;
-  for (;;) {
-    const grpc_connectivity_state state = channel->GetState(/*try_to_connect=*/true);
-    if (state == GRPC_CHANNEL_READY) return absl::OkStatus();
-    if (state == GRPC_CHANNEL_SHUTDOWN) {
-      return absl::UnavailableError(absl::StrCat("cannot reach ", target, ": channel shut down"));
-    }
-    if (!channel->WaitForStateChange(state, deadline)) {
-      return absl::UnavailableError(absl::StrCat(
-          "cannot reach ", target, ": no connection within ", timeout.count(), " ms",
-          state == GRPC_CHANNEL_TRANSIENT_FAILURE ? " (connection failing)" : ""));
-    }
   }
 }
 

@@ -54,11 +54,6 @@ absl::StatusOr<std::shared_ptr<grpc::Channel>> MakeChannel(
 // Sets the deadline of `context` to now + deadline_ms (no-op for 0).
 void SetDeadline(grpc::ClientContext* context, int deadline_ms);
 
-// Waits up to `timeout` for `channel` to be READY (connecting if idle).
-// Unavailable("cannot reach TARGET: ...") when it does not get there.
-absl::Status WaitUntilConnected(grpc::Channel* channel, const std::string& target,
-                                std::chrono::milliseconds timeout);
-
 // A failed RPC as the error the CLI reports (see cli_common.h):
 //   UNAVAILABLE        -> Unavailable("cannot reach TARGET: <gRPC message>")
 //   DEADLINE_EXCEEDED  -> DeadlineExceeded("TARGET: no answer within N ms"),

@@ -544,6 +544,7 @@ class Driver {
 };
 
 constexpr auto kRoundWait = std::chrono::milliseconds(50);
+constexpr int kMaxSyncThreads = 1024;
 
 template <class Rpc>
 bool RunOpenLoop(Run& run, int channels) {
@@ -706,6 +707,10 @@ absl::StatusOr<LoadReport> RunLoad(const LoadSpec& spec,
   if (open_loop && spec.engine == LoadEngine::kSync) {
     return absl::InvalidArgumentError("--rate: open loop needs --engine callback");
   }
+  if (spec.engine == LoadEngine::kSync && spec.concurrency > kMaxSyncThreads) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "--concurrency: at most ", kMaxSyncThreads, " with --engine sync (one thread each)"));
+  }
 
   Run run(spec, channels);
   const int n = static_cast<int>(channels.size());
@@ -772,12 +777,9 @@ absl::StatusOr<std::vector<std::shared_ptr<grpc::Channel>>> ConnectLoadChannels(
       absl::StatusOr<std::shared_ptr<grpc::Channel>> channel =
           MakeChannel(connection, target, args);
       if (!channel.ok()) return channel.status();
-      if (absl::Status connected = WaitUntilConnected(channel->get(), target,
-                                                      std::chrono::milliseconds(deadline_ms));
-          !connected.ok()) {
-        return connected;
-      }
-      // Warm-up: round_robin connects to every address; a few calls make
+      // Warm-up, which also connects: the first call fails fast with the
+      // reason (connection refused, TLS handshake) when the target cannot be
+      // reached. round_robin connects to every address; a few calls make
       // sure each is used (and the request accepted) before measuring.
       for (int i = 0; i < 2 * addresses; ++i) {
         grpc::ClientContext context;

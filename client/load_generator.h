@@ -81,9 +81,10 @@ struct LoadReport {
   bool interrupted = false;
 };
 
-// Runs the load on `channels` (slot i / call i uses channel i % size). The
-// channels should be connected (see WaitUntilConnected); `targets` is only
-// for the report. Errors (InvalidArgument) only for an unusable spec.
+// Runs the load on `channels` (slot i / call i uses channel i % size),
+// normally made and warmed up by ConnectLoadChannels. Errors
+// (InvalidArgument) only for an unusable spec; failed calls are counted in
+// the report.
 absl::StatusOr<LoadReport> RunLoad(const LoadSpec& spec,
                                    const std::vector<std::shared_ptr<grpc::Channel>>& channels);
 

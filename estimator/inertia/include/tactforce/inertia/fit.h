@@ -140,7 +140,8 @@ struct InertiaFit {
   std::vector<std::string> poorly_excited;
 
   int iterations = 0;
-  double time_seconds = 0.0;
+  double time_seconds = 0.0;   // wall clock
+  double cpu_seconds = 0.0;    // CPU time of the calling thread (all work runs in it)
   int samples_used = 0;        // samples that produced an equation
   std::vector<std::string> notes;  // e.g. "prior ignored by baseline-ls"
 };
