@@ -12,24 +12,24 @@
 
 namespace tactforce::cli {
 
-absl::StatusOr<std::string> ReadInput(const std::string& path) {
+absl::StatusOr<std::string> ReadInput(const std::string& path, const std::string& flag) {
   if (path == "-") {
     std::ostringstream text;
     text << std::cin.rdbuf();
     if (std::cin.bad()) {
-      return absl::InvalidArgumentError("--request -: cannot read standard input");
+      return absl::InvalidArgumentError(absl::StrCat(flag, " -: cannot read standard input"));
     }
     return text.str();
   }
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) {
     return absl::InvalidArgumentError(
-        absl::StrCat("--request: cannot read '", path, "': is a directory"));
+        absl::StrCat(flag, ": cannot read '", path, "': is a directory"));
   }
   std::ifstream file(path, std::ios::binary);
   if (!file) {
     return absl::InvalidArgumentError(
-        absl::StrCat("--request: cannot read '", path, "': ", std::strerror(errno)));
+        absl::StrCat(flag, ": cannot read '", path, "': ", std::strerror(errno)));
   }
   std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
   if (file.bad()) {

@@ -33,7 +33,8 @@ enum ExitCode : int {
 int ExitCodeFor(absl::StatusCode code);
 
 // Whole contents of `path`; "-" reads standard input. Errors name the path.
-absl::StatusOr<std::string> ReadInput(const std::string& path);
+absl::StatusOr<std::string> ReadInput(const std::string& path,
+                                      const std::string& flag = "--request");
 
 // Prints "error: <message>" as one line on stderr and returns
 // ExitCodeFor(status.code()). InvalidArgument, Unavailable and

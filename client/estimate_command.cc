@@ -38,23 +38,16 @@ absl::StatusOr<planner::Vec3> ParseVec3(const std::string& text, const std::stri
   return planner::Vec3(v[0], v[1], v[2]);
 }
 
-// gRPC status -> absl status, keeping the server's message.
-absl::Status FromGrpc(const grpc::Status& s, const std::string& server) {
-  if (s.ok()) return absl::OkStatus();
-  if (s.error_code() == grpc::StatusCode::INVALID_ARGUMENT) return absl::InvalidArgumentError(s.error_message());
-  return absl::Status(static_cast<absl::StatusCode>(s.error_code()),
-                      absl::StrCat(server, ": ", s.error_message()));
-}
-
-absl::StatusOr<v1::EstimateResponse> RemoteEstimate(const std::string& server,
+absl::StatusOr<v1::EstimateResponse> RemoteEstimate(const ConnectionArgs& connection,
                                                     const v1::EstimateRequest& request) {
-  auto channel = grpc::CreateChannel(server, grpc::InsecureChannelCredentials());
-  auto stub = v1::Estimator::NewStub(channel);
+  absl::StatusOr<std::shared_ptr<grpc::Channel>> channel = MakeChannel(connection, connection.server);
+  if (!channel.ok()) return channel.status();
+  auto stub = v1::Estimator::NewStub(*channel);
   grpc::ClientContext context;
-  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+  SetDeadline(&context, connection.deadline_ms);
   v1::EstimateResponse response;
-  if (absl::Status s = FromGrpc(stub->EstimateForces(&context, request, &response), server); !s.ok())
-    return s;
+  const grpc::Status status = stub->EstimateForces(&context, request, &response);
+  if (!status.ok()) return RpcError(status, connection.server, connection.deadline_ms, channel->get());
   return response;
 }
 
@@ -62,8 +55,9 @@ absl::StatusOr<v1::EstimateResponse> RemoteEstimate(const std::string& server,
 
 CLI::App* AddEstimateCommand(CLI::App& app, EstimateArgs& args) {
   CLI::App* cmd = app.add_subcommand("estimate", "Estimate contact forces from tactile readings");
-  cmd->add_flag("--local", args.local, "Estimate in this process (no server)");
-  cmd->add_option("--server", args.server, "Server address")->capture_default_str();
+  CLI::Option* local = cmd->add_flag("--local", args.local, "Estimate in this process (no server)");
+  CLI::Option* server = AddConnectionFlags(cmd, &args.connection);
+  local->excludes(server);
   cmd->add_option("--request", args.request_path,
                   "EstimateRequest as JSON (object, contacts, readings, method, ...); - = stdin")
       ->required()
@@ -81,7 +75,7 @@ int RunEstimate(const EstimateArgs& args) {
   if (args.local) {
     response = api::HandleEstimate(request);
   } else {
-    response = RemoteEstimate(args.server, request);
+    response = RemoteEstimate(args.connection, request);
   }
   if (!response.ok()) return ReportError(response.status());
   std::cout << api::ToJson(*response);

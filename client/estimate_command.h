@@ -5,13 +5,14 @@
 #include <vector>
 
 #include "CLI/CLI.hpp"
+#include "connection.h"
 
 namespace tactforce::cli {
 
 struct EstimateArgs {
   bool local = false;
-  std::string server = "localhost:50051";
-  std::string request_path;  // EstimateRequest JSON, "-" = stdin
+  ConnectionArgs connection;  // --server, TLS, --deadline-ms
+  std::string request_path;   // EstimateRequest JSON, "-" = stdin
 };
 CLI::App* AddEstimateCommand(CLI::App& app, EstimateArgs& args);
 int RunEstimate(const EstimateArgs& args);

@@ -90,6 +90,15 @@ class Run {
     }
   }
 
+  // A stream response to the request sent at `sent_ns`: a late one counts
+  // as DEADLINE_EXCEEDED, like a unary call (the watcher cancels a stream
+  // whose response is overdue, within a few milliseconds).
+  void RecordStreamResponse(int64_t sent_ns) {
+    const bool late = spec.deadline_ms > 0 &&
+                      NowNs() - sent_ns > int64_t{spec.deadline_ms} * 1'000'000;
+    Record(late ? grpc::StatusCode::DEADLINE_EXCEEDED : grpc::StatusCode::OK, sent_ns);
+  }
+
   void SlotFinished() {
     std::lock_guard<std::mutex> lock(mu);
     --active;
@@ -256,7 +265,7 @@ class StreamCall final : public grpc::ClientBidiReactor<v1::PlanRequest, v1::Pla
       MarkFinishing();
       return;
     }
-    run_->Record(grpc::StatusCode::OK, sent_ns_.load(std::memory_order_relaxed));
+    run_->RecordStreamResponse(sent_ns_.load(std::memory_order_relaxed));
     int64_t ticket = 0;
     const bool more = run_->Claim(&ticket);
     const v1::PlanRequest* write = nullptr;
@@ -463,7 +472,7 @@ void SyncStreamLoop(Run* run, int channel, SyncStreamWatch* watch) {
         break;
       }
       watch->Answered();
-      run->Record(grpc::StatusCode::OK, sent);
+      run->RecordStreamResponse(sent);
       have_ticket = run->Claim(&ticket);
     }
     if (!broken) stream->WritesDone();
@@ -483,12 +492,23 @@ void SyncStreamLoop(Run* run, int channel, SyncStreamWatch* watch) {
 
 // ------------------------------------------------------------ the driver
 
-// Waits (on the driving thread) until every slot has finished, running
-// deferred work, the stream watchers, progress and interruption checks.
-// With `open_loop_tick`, it is also called every iteration (open loop).
+// The driving thread's loop: Round() until every slot has finished, running
+// deferred work, the stream watchers, progress and interruption checks. The
+// open-loop dispatcher calls Housekeeping() between the calls it starts.
 class Driver {
  public:
   explicit Driver(Run* run) : run_(run), next_progress_ns_(run->start_ns + 1'000'000'000) {}
+
+  // How long Round() may sleep: short enough for the stream watchers to
+  // cancel an overdue stream soon after its deadline.
+  std::chrono::nanoseconds RoundWait() const {
+    const int64_t base_ns = 50'000'000;
+    if (run_->watches.empty() || run_->spec.deadline_ms <= 0) {
+      return std::chrono::nanoseconds(base_ns);
+    }
+    const int64_t quarter_ns = int64_t{run_->spec.deadline_ms} * 250'000;
+    return std::chrono::nanoseconds(std::clamp<int64_t>(quarter_ns, 2'000'000, base_ns));
+  }
 
   // One round of housekeeping; waits up to `wait` for something to do.
   // Returns false once every slot has finished and nothing is pending.
@@ -616,7 +636,7 @@ bool RunClosedLoopCallback(Run& run, int channels) {
   run.active = run.spec.concurrency;
   Driver driver(&run);
   for (auto& slot : slots) slot->Next();
-  while (driver.Round(kRoundWait)) {
+  while (driver.Round(driver.RoundWait())) {
   }
   return driver.interrupted();
 }
@@ -630,7 +650,7 @@ bool RunStreamsCallback(Run& run, int channels) {
   run.active = run.spec.concurrency;
   Driver driver(&run);
   for (auto& slot : slots) slot->Begin();
-  while (driver.Round(kRoundWait)) {
+  while (driver.Round(driver.RoundWait())) {
   }
   return driver.interrupted();
 }
@@ -660,7 +680,7 @@ bool RunSync(Run& run, int channels) {
         break;
     }
   }
-  while (driver.Round(kRoundWait)) {
+  while (driver.Round(driver.RoundWait())) {
   }
   for (std::thread& thread : threads) thread.join();
   return driver.interrupted();

@@ -5,6 +5,7 @@
 
 #include "CLI/CLI.hpp"
 #include "cli_common.h"
+#include "audit_command.h"
 #include "demo_command.h"
 #include "estimate_command.h"
 #include "health_command.h"
@@ -49,6 +50,10 @@ int Main(int argc, char** argv) {
   simulate->require_subcommand(1);
   SimulateFrictionArgs simulate_friction_args;
   CLI::App* simulate_friction = AddSimulateFrictionCommand(*simulate, simulate_friction_args);
+  SimulateSensorArgs simulate_sensor_args;
+  CLI::App* simulate_sensor = AddSimulateSensorCommand(*simulate, simulate_sensor_args);
+  AuditArgs audit_args;
+  CLI::App* audit = AddAuditCommand(app, audit_args);
 
   try {
     app.parse(argc, argv);
@@ -70,6 +75,8 @@ int Main(int argc, char** argv) {
   if (estimate->parsed()) return RunEstimate(estimate_args);
   if (friction->parsed()) return RunFriction(friction_args);
   if (simulate_friction->parsed()) return RunSimulateFriction(simulate_friction_args);
+  if (simulate_sensor->parsed()) return RunSimulateSensor(simulate_sensor_args);
+  if (audit->parsed()) return RunAuditCommand(audit_args);
   std::cerr << "error: no command given (see tactforce --help)" << std::endl;
   return kExitBadInput;
 }

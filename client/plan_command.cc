@@ -7,7 +7,11 @@
 #include "cli_common.h"
 #include "plan_backend.h"
 #include "tactforce/api/json.h"
+#include "tactforce/api/services.h"
 #include "tactforce/api/table.h"
+#include "tactforce/v1/planner.grpc.pb.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 
 namespace tactforce::cli {
 namespace {
@@ -24,11 +28,16 @@ CLI::App* AddPlanCommand(CLI::App& app, PlanArgs& args) {
   CLI::Option* local = cmd->add_flag("--local", args.local, "Plan in this process (no server)");
   CLI::Option* server = AddConnectionFlags(cmd, &args.connection);
   local->excludes(server);
-  cmd->add_option("--request", args.request_path,
-                  "PlanRequest as JSON (proto field names, snake_case or lowerCamelCase); "
-                  "- reads standard input")
-      ->required()
-      ->type_name("FILE");
+  CLI::Option* request =
+      cmd->add_option("--request", args.request_path,
+                      "PlanRequest as JSON (proto field names, snake_case or lowerCamelCase); "
+                      "- reads standard input")
+          ->type_name("FILE");
+  CLI::Option* trajectory =
+      cmd->add_option("--trajectory", args.trajectory_path,
+                      "TrajectoryRequest as JSON (plan + steps): one PlanResponse per step plus totals")
+          ->type_name("FILE");
+  request->excludes(trajectory);
   cmd->add_option("--format", args.format, "Output: json (PlanResponse) or table")
       ->check(CLI::IsMember({"json", "table"}))
       ->capture_default_str();
@@ -42,7 +51,55 @@ CLI::App* AddPlanCommand(CLI::App& app, PlanArgs& args) {
   return cmd;
 }
 
+int RunTrajectory(const PlanArgs& args) {
+  absl::StatusOr<std::string> text = ReadInput(args.trajectory_path, "--trajectory");
+  if (!text.ok()) return ReportError(text.status());
+  v1::TrajectoryRequest request;
+  if (absl::Status s = api::ParseJson(*text, &request, "trajectory JSON"); !s.ok()) return ReportError(s);
+  absl::StatusOr<v1::TrajectoryResponse> response;
+  if (args.local) {
+    response = api::HandleTrajectory(request);
+  } else {
+    absl::StatusOr<std::shared_ptr<grpc::Channel>> channel =
+        MakeChannel(args.connection, args.connection.server);
+    if (!channel.ok()) return ReportError(channel.status());
+    auto stub = v1::Planner::NewStub(*channel);
+    grpc::ClientContext context;
+    SetDeadline(&context, args.connection.deadline_ms);
+    v1::TrajectoryResponse remote;
+    const grpc::Status status = stub->PlanTrajectory(&context, request, &remote);
+    if (!status.ok()) {
+      return ReportError(
+          RpcError(status, args.connection.server, args.connection.deadline_ms, channel->get()));
+    }
+    response = std::move(remote);
+  }
+  if (!response.ok()) return ReportError(response.status());
+  if (args.format == "table") {
+    std::cout << absl::StrFormat("%5s  %-14s  %-40s  %9s\n", "step", "status", "normal forces (N)",
+                                 "time (us)");
+    for (int k = 0; k < response->steps_size(); ++k) {
+      const v1::PlanResponse& step = response->steps(k);
+      std::string normals;
+      for (double f : step.normal_forces()) absl::StrAppend(&normals, absl::StrFormat("%7.3f ", f));
+      std::cout << absl::StrFormat("%5d  %-14s  %-40s  %9d\n", k, api::StatusName(step.status()),
+                                   normals, step.solve_time_us());
+    }
+    std::cout << absl::StrFormat("%d steps: %d optimal, %d infeasible, %d failed; total %d us\n",
+                                 response->steps_size(), response->optimal_steps(),
+                                 response->infeasible_steps(), response->failed_steps(),
+                                 response->total_time_us());
+  } else {
+    std::cout << api::ToJson(*response);
+  }
+  return std::cout ? kExitOk : kExitFailure;
+}
+
 int RunPlan(const PlanArgs& args) {
+  if (!args.trajectory_path.empty()) return RunTrajectory(args);
+  if (args.request_path.empty()) {
+    return ReportError(absl::InvalidArgumentError("give --request FILE or --trajectory FILE"));
+  }
   absl::StatusOr<std::unique_ptr<PlanBackend>> backend = SelectBackend(args);
   if (!backend.ok()) return ReportError(backend.status());
 

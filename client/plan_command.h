@@ -13,6 +13,7 @@ struct PlanArgs {
   bool local = false;           // plan in this process
   ConnectionArgs connection;    // --server, --tls-*, --deadline-ms
   std::string request_path;     // "-" = stdin
+  std::string trajectory_path;  // TrajectoryRequest JSON instead of --request
   std::string format = "json";  // json | table
 };
 

@@ -10,22 +10,26 @@
 //   EXACT, per contact i with mu_i > 0 (P = I - n_i n_i^T):
 //              |P f_i| + kappa rho_t,i <= mu_i (n_i . f_i - kappa rho_n,i)
 //
-// The exact cone is posed as one smooth convex constraint per contact,
-//   c_i(f) = sqrt(|P f_i|^2 + eps^2) - eps - s_i(f) <= 0,
-//   s_i(f) = mu_i (n_i . f_i - kappa rho_n,i) - kappa rho_t,i   (affine),
-// with exact gradients and Hessians. It holds exactly at the apex (P f = 0,
-// s = 0) and lets |P f_i| exceed s_i by at most eps elsewhere; eps is 1e-9
-// times the force scale (max(1 N, |f0|_inf)). Why not the textbook
-// |P f|^2 - s^2 <= 0 with s >= 0: its gradient vanishes at the apex, which is
-// exactly where the minimum-norm plan puts every contact it does not need,
-// so the constraint is unqualified there. On such grasps Ipopt needed ~850
-// iterations and still left 1e-4 N of tangential force at a contact that
-// should carry none (a violation eps of the squared form allows sqrt(eps) of
-// force). The quotient form |P f|^2 / s - s <= 0 with a bounded slack s
-// fixes the gradient but is degenerate against s >= 0 at the apex and ended
-// in Search_Direction_Becomes_Too_Small. The smoothed form needs no slack
-// and no s >= 0 row (it implies s >= 0), and is qualified everywhere
-// (its gradient at the apex is -mu n).
+// EXACT cone formulation. Each contact with friction gets a slack unknown
+//   s_i = mu_i (n_i . f_i - kappa rho_n,i) - kappa rho_t,i   (linear row),
+// bounded by s_i >= 0, and the convex constraint
+//   r_i(f, s) = |P f_i|^2 / s_i - s_i <= 0          (i.e. |P f_i| <= s_i)
+// with exact gradients and Hessians. Why not |P f|^2 - s^2 <= 0 with a
+// linear row s >= 0: its gradient vanishes at the cone apex, which is where
+// the minimum-norm plan puts every contact it does not need; there Ipopt
+// took ~850 iterations and left 1e-4 N of tangential force on a contact that
+// should carry none (a violation eps of the squared form admits sqrt(eps)
+// of force). A smoothed sqrt(|P f|^2 + eps^2) - eps <= s behaves like |P f|
+// for small eps and made Ipopt oscillate (400+ iterations at eps = 1e-4 N).
+// r keeps a non-zero gradient (dr/ds <= -1) and measures violations in N.
+// Its one weakness: at an apex (s = 0, P f = 0) the bound s >= 0 and r are
+// both active with parallel gradients, so the multipliers are not unique.
+// Ipopt then sometimes keeps iterating with a vanishing primal step and a
+// dual infeasibility that cannot reach tol; such a run is stopped after
+// kStallIterations and accepted only if the barrier parameter is at its
+// final value and the forces meet every constraint (checked here; the
+// message says so). Those plans are feasible but their optimality is not
+// certified: on random grasps they were within ~1e-4 N of the optimum.
 //
 // Frictionless contacts (mu_i == 0) have a cone with no interior (a ray):
 // their force is parametrised as f_i = n_i z_i, for both cone models. The
@@ -34,30 +38,37 @@
 // When the equilibrium leaves no freedom at all (e.g. a single contact) the
 // unique equilibrium is checked directly, without Ipopt.
 //
-// Infeasible problems: Ipopt's own verdict (Infeasible_Problem_Detected) is
-// heuristic and, without expect_infeasible_problem, can take thousands of
-// iterations on an infeasible EXACT problem. So: (1) solve the problem with
-// expect_infeasible_problem = yes; if that does not end optimal, (2) solve
-// the always-feasible phase-one problem min t >= 0 with every inequality
-// relaxed by t (equilibrium exact). t* > 1e-7 max(1, largest bound) N proves
-// infeasibility; otherwise (3) solve again from the phase-one point with the
-// heuristic off. Feasible problems only ever pay for (1).
+// Infeasible problems. (1) The first run uses expect_infeasible_problem =
+// yes and at most kFirstRunIterations iterations; without the heuristic an
+// infeasible EXACT problem could take thousands of iterations. Every
+// constraint is convex, so its Infeasible_Problem_Detected is trusted. (2)
+// A first run that ends any other way without an optimum is followed by the
+// always-feasible phase-one problem min t >= 0 with every inequality
+// relaxed by t (equilibrium exact): a least violation above
+// kInfeasibilityTolerance * max(1, largest bound) N means infeasible;
+// otherwise (3) the problem is solved again from the phase-one point with
+// the full iteration budget and the heuristic off.
 //
 // Ipopt settings (all explicit; no ipopt.opt file is read):
 //   tol                 options.ipopt_tolerance (scaled overall NLP error)
-//   max_iter            options.ipopt_max_iterations (per Ipopt run)
+//   max_iter            options.ipopt_max_iterations per run (the first
+//                       run: at most kFirstRunIterations)
 //   print_level 0, sb yes, and no console journal: Ipopt never prints.
-//   linear_solver       mumps (the only one in Debian's build); with
-//   mumps_pivot_order   0 (AMD): fixed, so runs are reproducible.
-//   mu_strategy         monotone (Fiacco-McCormick): on random 3-5 contact
-//                       grasps adaptive was faster on PYRAMID but failed more
-//                       often (iteration limit) on EXACT; monotone never did.
+//   linear_solver       mumps (the only one in Debian's build), with
+//   mumps_pivot_order   0 (AMD): fixed, so runs are reproducible, and
+//   mumps_mem_percent   100: Ipopt's 1000 made the per-factorisation
+//                       allocation dominate (1.0 -> 0.53 ms per iteration).
+//   mu_strategy         monotone: on 600 random grasps adaptive needed 3.5x
+//                       the iterations on EXACT (max 2489) for the same
+//                       answers; monotone 24 on average, at most 317.
+//   bound_relax_factor  0: rows hold to Ipopt's tolerance (with the default
+//                       1e-8 a 40 N bound was missed by 4e-7 N and plans
+//                       differed from the geometric backend by 5e-6 N; now
+//                       1.2e-7 N over the 2,000-grasp property test), and
+//                       the cone slacks stay strictly positive.
 //   hessian_constant, jac_d_constant   yes for PYRAMID (a convex QP: nothing
 //                       is re-evaluated); jac_c_constant yes always (the
 //                       equalities are linear in both models).
-//   expect_infeasible_problem   see above.
-//   bound_relax_factor  Ipopt's default 1e-8: the returned forces may
-//                       violate a row by ~1e-8 max(1, |d|) N.
 //
 // Time limit: options.ipopt_max_cpu_seconds > 0 is a budget on the CPU time
 // of the calling thread (CLOCK_THREAD_CPUTIME_ID) for the whole solve,
@@ -66,11 +77,12 @@
 // whole process, so with concurrent solves in the server it would stop them
 // far too early. (Ipopt, sequential MUMPS and the reference BLAS run in the
 // calling thread, so its clock sees all of the work.) options.interrupt is
-// polled at the same points.
+// polled at the same points and while waiting for the MUMPS lock.
 //
 // Thread safety: every solve has its own IpoptApplication, NLP and data.
 // The one shared object is a process-wide mutex around each Ipopt run,
-// because Debian's sequential MUMPS is not thread-safe (see MumpsMutex()).
+// because Debian's sequential MUMPS is not thread-safe (see MumpsMutex()):
+// Ipopt runs are serialised across threads.
 #include <time.h>
 
 #include <algorithm>
@@ -104,9 +116,6 @@ using Ipopt::Number;
 
 // Any bound beyond Ipopt's nlp_{lower,upper}_bound_inf (1e19) is infinite.
 constexpr double kInfinity = 1e20;
-// Smoothing of the exact cone, relative to the force scale: |P f| may exceed
-// the cone radius by at most this much.
-constexpr double kConeSmoothing = 1e-9;
 // Absolute slack (N) for the checks made without Ipopt (facets of
 // frictionless contacts, uniquely determined equilibria): rho_t and the row
 // tightening take square roots, so round-off can reach ~1e-9 N.
@@ -788,14 +797,20 @@ std::string ConfigureIpopt(Ipopt::IpoptApplication& app,
   check(o.SetStringValue("mu_strategy", "monotone"), "mu_strategy");
   check(o.SetStringValue("linear_solver", "mumps"), "linear_solver");
   check(o.SetIntegerValue("mumps_pivot_order", 0), "mumps_pivot_order");
+  // MUMPS workspace: 100% above its estimate instead of Ipopt's 1000%; the
+  // allocation per factorisation dominated the run time of these tiny
+  // systems (Ipopt doubles it and refactorises if MUMPS ever asks for more).
+  check(o.SetIntegerValue("mumps_mem_percent", 100), "mumps_mem_percent");
   check(o.SetStringValue("jac_c_constant", "yes"), "jac_c_constant");
   if (!has_cones) {
     check(o.SetStringValue("jac_d_constant", "yes"), "jac_d_constant");
     check(o.SetStringValue("hessian_constant", "yes"), "hessian_constant");
-  } else {
-    // r divides by the slacks s: keep them strictly positive.
-    check(o.SetNumericValue("bound_relax_factor", 0.0), "bound_relax_factor");
   }
+  // No relaxation of the bounds: the rows hold to Ipopt's tolerance (the
+  // default 1e-8 relative relaxation let plans violate a 40 N bound by
+  // 4e-7 N and differ from the geometric backend by up to 5e-6 N), and the
+  // cone slacks s stay strictly positive (r divides by them).
+  check(o.SetNumericValue("bound_relax_factor", 0.0), "bound_relax_factor");
   check(o.SetStringValue("expect_infeasible_problem",
                          expect_infeasible ? "yes" : "no"),
         "expect_infeasible_problem");
@@ -949,12 +964,11 @@ class IpoptSolver final : public ForceSolver {
                             std::to_string(iterations) + " iterations"));
     };
     // Solve_Succeeded / Solved_To_Acceptable_Level; or a run that stalled
-    // (Search_Direction_Becomes_Too_Small) with the barrier parameter already
-    // at its final value and the forces feasible: this happens when a contact
-    // ends at a cone apex, where the slack bound s >= 0 and the cone are both
-    // active with opposite gradients, so the multipliers are not unique and
-    // the dual infeasibility cannot reach tol although the (unique) forces
-    // have converged.
+    // (Search_Direction_Becomes_Too_Small, or our stall test) with the
+    // barrier parameter at its final value and forces that meet every
+    // constraint: a contact at a cone apex, where s >= 0 and r are both
+    // active with parallel gradients and the dual infeasibility cannot reach
+    // tol (see the file comment: feasible, optimality not certified).
     auto converged = [&](const IpoptRun& run, Phase phase) {
       if (run.succeeded()) return true;
       const bool stalled =
@@ -978,8 +992,9 @@ class IpoptSolver final : public ForceSolver {
         result.message = "Ipopt: Solved_To_Acceptable_Level";
       } else if (run.status != Ipopt::Solve_Succeeded) {
         result.message =
-            "Ipopt stalled at a feasible point with the barrier parameter at "
-            "its final value (degenerate multipliers at a cone apex); accepted";
+            "Ipopt stalled at a cone apex (degenerate multipliers) with the "
+            "barrier parameter at its final value; accepted: the forces meet "
+            "every constraint, optimality not certified";
       }
       result.forces = form.Forces(run.solution.head(form.num_forces));
       return finish(result);
@@ -1001,7 +1016,7 @@ class IpoptSolver final : public ForceSolver {
       // global one.
       std::string message = "Ipopt: Infeasible_Problem_Detected";
       if (main.solution.size() == form.num_vars()) {
-        message += " (the least constraint violation found is " +
+        message += " (its point of least violation misses a constraint by " +
                    FormatNumber(form.MaxViolation(main.solution)) + " N)";
       }
       return finish(Infeasible(message));
@@ -1038,7 +1053,25 @@ class IpoptSolver final : public ForceSolver {
           "violation found is " + FormatNumber(violation) + " N)"));
     }
 
-    // 3. Feasible after all: solve again from the feasible point, heuristic off.
+    // 3. Feasible after all: solve again, heuristic off, from the feasible
+    //    point closest to the minimum-norm equilibrium on the segment between
+    //    the two (phase one leaves internal forces arbitrarily large). Both
+    //    ends satisfy the equilibrium; the constraints are convex, so the
+    //    feasible part of the segment is an interval found by bisection.
+    {
+      const VectorXd direction = form.start - x1;
+      double feasible = 0.0, infeasible = 1.0;
+      const double tol = kFeasibilityTolerance * form.scale;
+      if (form.MaxViolation(x1 + direction) <= tol) {
+        feasible = 1.0;
+      } else {
+        for (int k = 0; k < 40; ++k) {
+          const double mid = 0.5 * (feasible + infeasible);
+          (form.MaxViolation(x1 + mid * direction) <= tol ? feasible : infeasible) = mid;
+        }
+      }
+      x1 += 0.99 * feasible * direction;
+    }
     for (const ConeConstraint& cone : form.cones) {
       x1(cone.s_index) = std::max({cone.Radius(x1.data()),
                                    cone.Tangential(x1.data()).norm(),

@@ -2,6 +2,8 @@
 
 #include "absl/strings/str_cat.h"
 #include "tactforce/api/convert.h"
+#include "tactforce/audit/audit.h"
+#include "tactforce/sim/sensor_model.h"
 #include "tactforce/estimator/force_estimation.h"
 #include "tactforce/estimator/friction.h"
 #include "tactforce/planner/solver.h"
@@ -213,6 +215,56 @@ absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& r
   out.set_mean(e->mean);
   out.set_iqr(e->iqr);
   out.set_count(e->count);
+  return out;
+}
+
+absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request) {
+  audit::MeasuredData data;
+  data.source = request.source().empty() ? "request" : request.source();
+  bool any_shear = false;
+  for (const auto& s : request.samples()) any_shear |= s.has_shear();
+  int segment_trial = 0;
+  for (int k = 0; k < request.samples_size(); ++k) {
+    const v1::AuditSample& s = request.samples(k);
+    if (any_shear && !s.has_shear())
+      return absl::InvalidArgumentError(absl::StrCat("samples[", k, "].shear: missing (other samples have it)"));
+    data.t.push_back(s.t());
+    data.reference.push_back(s.reference());
+    data.reading.push_back(s.reading());
+    if (any_shear) data.shear.push_back(s.shear());
+    data.trial.push_back(s.trial());
+    if (k == 0 || s.trial() != segment_trial) data.segment_starts.push_back(k);
+    segment_trial = s.trial();
+  }
+  if (absl::Status valid = audit::ValidateMeasuredData(data); !valid.ok()) return valid;
+  audit::AuditOptions options;
+  if (request.has_heldout_fraction()) options.heldout_fraction = request.heldout_fraction();
+  if (request.has_max_causes()) options.max_causes = request.max_causes();
+  if (!request.reading_units().empty()) options.reading_units = request.reading_units();
+  if (!request.model_json().empty()) {
+    absl::StatusOr<sim::SensorModel> model = sim::SensorModelFromJson(request.model_json(), "model_json");
+    if (!model.ok()) return model.status();
+    options.model = *model;
+  }
+  absl::StatusOr<audit::AuditReport> report = audit::RunAudit(data, options);
+  if (!report.ok()) return report.status();
+  v1::AuditResponse out;
+  out.set_nominal_adequate(report->nominal_adequate);
+  for (const audit::Cause& c : report->causes) {
+    v1::AuditCause* cause = out.add_causes();
+    cause->set_effect(c.effect);
+    for (const auto& [k, v] : c.parameters) (*cause->mutable_parameters())[k] = v;
+    for (const auto& [k, v] : c.uncertainties) (*cause->mutable_uncertainties())[k] = v;
+    cause->set_heldout_rms_before(c.heldout_rms_before);
+    cause->set_heldout_rms_after(c.heldout_rms_after);
+    cause->set_gain(c.gain);
+  }
+  out.set_heldout_rms_before(report->heldout_rms_before);
+  out.set_heldout_rms_after(report->heldout_rms_after);
+  out.set_gain(report->gain);
+  out.set_extended_model_json(sim::SensorModelToJson(report->extended_model));
+  out.set_report_json(audit::AuditReportJson(*report));
+  out.set_summary(audit::FormatAuditSummary(*report));
   return out;
 }
 

@@ -22,4 +22,12 @@ grpc::ServerUnaryReactor* EstimatorService::EstimateFriction(grpc::CallbackServe
       [](const v1::FrictionRequest& r, const api::CallLimits&) { return api::HandleFriction(r); });
 }
 
+grpc::ServerUnaryReactor* AuditService::AuditModel(grpc::CallbackServerContext* context,
+                                                   const v1::AuditRequest* request,
+                                                   v1::AuditResponse* response) {
+  return ServeOnPool<v1::AuditRequest, v1::AuditResponse>(
+      "AuditModel", context, request, response, pool_, api::CallLimits{},
+      [](const v1::AuditRequest& r, const api::CallLimits&) { return api::HandleAudit(r); });
+}
+
 }  // namespace tactforce::server

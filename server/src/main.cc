@@ -77,6 +77,7 @@ int main(int argc, char** argv) {
       &pool, config.ToPlannerOptions()));
   host.AddService(std::make_unique<tactforce::server::EstimatorService>(
       &pool, tactforce::server::EstimatorServiceOptions{config.max_contacts}));
+  host.AddService(std::make_unique<tactforce::server::AuditService>(&pool));
 
   if (absl::Status started = host.Start(); !started.ok()) {
     std::fprintf(stderr, "tactforce-server: %s\n", std::string(started.message()).c_str());

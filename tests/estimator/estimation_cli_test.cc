@@ -92,3 +92,33 @@ TEST_F(CliTest, FrictionBadFilesNameTheLine) {
 
 }  // namespace
 }  // namespace tactforce::testing
+
+namespace tactforce::testing {
+namespace {
+
+TEST_F(CliTest, PlanTrajectoryLocal) {
+  const std::string example = SourceDir() + "/client/examples/wrench_lift_trajectory.json";
+  const CliRun run = Tactforce({"plan", "--local", "--trajectory", example});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  v1::TrajectoryResponse r;
+  ASSERT_TRUE(api::ParseJson(run.out, &r).ok()) << run.out;
+  EXPECT_EQ(r.steps_size(), 4);
+  EXPECT_EQ(r.optimal_steps(), 4);
+  // Lifting needs more friction force than holding: the z forces grow.
+  double hold = 0, lift = 0;
+  for (const auto& f : r.steps(0).forces()) hold += f.z();
+  for (const auto& f : r.steps(1).forces()) lift += f.z();
+  EXPECT_NEAR(hold, 0.3 * 9.81, 1e-9);
+  EXPECT_NEAR(lift, 0.3 * (9.81 + 0.5), 1e-9);
+  const CliRun table = Tactforce({"plan", "--local", "--trajectory", example, "--format", "table"});
+  ASSERT_EQ(table.exit_code, 0);
+  EXPECT_NE(table.out.find("4 steps: 4 optimal"), std::string::npos) << table.out;
+  // A rotating step without inertia names the field.
+  std::string text = ReadFile(example);
+  text.replace(text.find("\"inertia\""), std::string("\"inertia\": {\"ixx\": 0.0004, \"iyy\": 0.0025, \"izz\": 0.0027}").size(), "\"mass\": 0.3");
+  const CliRun bad = Tactforce({"plan", "--local", "--trajectory", Write("t.json", text).string()});
+  EXPECT_EQ(bad.exit_code, 2) << bad.err;
+}
+
+}  // namespace
+}  // namespace tactforce::testing

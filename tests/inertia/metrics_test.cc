@@ -19,7 +19,7 @@ InertialParameters Make(double m, Vec3 c, std::array<double, 6> h) {
   return p;
 }
 
-TEST(Metrics, PseudoInertiaHandComputed) {
+TEST(InertiaMetrics, PseudoInertiaHandComputed) {
   // m = 2, c = (0.1, 0, 0), H_c = diag(0.02, 0.03, 0.04):
   // H_o = H_c + m(|c|^2 I - c c^T) = diag(0.02, 0.05, 0.06),
   // 1/2 tr(H_o) I - H_o = diag(0.045, 0.015, 0.005), m c = (0.2, 0, 0).
@@ -37,7 +37,7 @@ TEST(Metrics, PseudoInertiaHandComputed) {
   EXPECT_TRUE(IsPhysicallyConsistent(p));
 }
 
-TEST(Metrics, StandardParametersRoundTrip) {
+TEST(InertiaMetrics, StandardParametersRoundTrip) {
   const InertialParameters p = Make(1.3, Vec3(0.2, 0.5, 0.1), {0.4015, 0.1292, 0.4799, -0.1297, -0.0259, -0.0649});
   const Vector10d pi = p.ToStandard();
   EXPECT_NEAR(pi(0), 1.3, 1e-15);
@@ -51,7 +51,7 @@ TEST(Metrics, StandardParametersRoundTrip) {
   EXPECT_LT((q.com - p.com).norm(), 1e-15);
 }
 
-TEST(Metrics, PaperMetricZeroButEstimateWrong) {
+TEST(InertiaMetrics, PaperMetricZeroButEstimateWrong) {
   // Truth: m = 1, c = 0, second moment I -> P_gt = I (H_c = 2 I).
   const InertialParameters truth = Make(1.0, Vec3::Zero(), {2, 2, 2, 0, 0, 0});
   ASSERT_LT((PseudoInertia(truth) - Eigen::Matrix4d::Identity()).norm(), 1e-15);
@@ -66,7 +66,7 @@ TEST(Metrics, PaperMetricZeroButEstimateWrong) {
   EXPECT_TRUE(e.consistent);
 }
 
-TEST(Metrics, ScaledEstimate) {
+TEST(InertiaMetrics, ScaledEstimate) {
   // Doubling every parameter doubles P: Tr = 8, eigenvalues all 2.
   const InertialParameters truth = Make(2.0, Vec3(0.1, 0, 0), {0.02, 0.03, 0.04, 0, 0, 0});
   InertialParameters est = truth;
@@ -82,7 +82,7 @@ TEST(Metrics, ScaledEstimate) {
   EXPECT_NEAR(same.riemannian, 0.0, 1e-7);
 }
 
-TEST(Metrics, InconsistentEstimate) {
+TEST(InertiaMetrics, InconsistentEstimate) {
   // Izz > Ixx + Iyy violates the triangle inequality.
   const InertialParameters truth = Make(1.0, Vec3(0.01, 0.02, 0.03), {0.02, 0.03, 0.04, 0, 0, 0});
   const InertialParameters bad = Make(1.0, Vec3(0.01, 0.02, 0.03), {0.01, 0.01, 0.05, 0, 0, 0});
@@ -103,7 +103,7 @@ TEST(Metrics, InconsistentEstimate) {
   EXPECT_NEAR(e2.com_mm, 5.0, 1e-9);
 }
 
-TEST(Metrics, PrincipalAxesAndBoxSize) {
+TEST(InertiaMetrics, PrincipalAxesAndBoxSize) {
   // Uniform box 0.3 x 0.2 x 0.1 m, 1.2 kg, rotated.
   const double m = 1.2;
   const Vec3 d = m / 12.0 * Vec3(0.2 * 0.2 + 0.1 * 0.1, 0.3 * 0.3 + 0.1 * 0.1, 0.3 * 0.3 + 0.2 * 0.2);
@@ -121,7 +121,7 @@ TEST(Metrics, PrincipalAxesAndBoxSize) {
   EXPECT_NEAR(EquivalentBoxSize(p), 0.3, 1e-12);
 }
 
-TEST(Truth, ParsesTheSharedFormat) {
+TEST(InertiaTruth, ParsesTheSharedFormat) {
   const std::string text = R"({
  "mass": 0.6897,
  "com": [ -8.3e-17, 0.15628, -0.00094 ],
@@ -143,7 +143,7 @@ TEST(Truth, ParsesTheSharedFormat) {
   EXPECT_DOUBLE_EQ(back->params.inertia_com.ixy, 9.15e-08);
 }
 
-TEST(Truth, ErrorsNameTheKey) {
+TEST(InertiaTruth, ErrorsNameTheKey) {
   auto err = [](const std::string& text) { return std::string(ParseTruthJson(text, "t.json").status().message()); };
   EXPECT_NE(err(R"({"mass": 1, "inertia_com": [1,1,1,0,0,0]})").find("missing key 'com'"), std::string::npos);
   EXPECT_NE(err(R"({"mass": 1, "com": [0,0], "inertia_com": [1,1,1,0,0,0]})").find("key 'com': expected an array of 3"),
@@ -155,7 +155,7 @@ TEST(Truth, ErrorsNameTheKey) {
   EXPECT_NE(err("").find("expected '{'"), std::string::npos);
 }
 
-TEST(Hull, CubeContainsAndRejectsFlatSets) {
+TEST(InertiaHull, CubeContainsAndRejectsFlatSets) {
   std::vector<Vec3> cube;
   for (int x : {0, 1})
     for (int y : {0, 1})

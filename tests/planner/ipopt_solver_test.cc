@@ -109,6 +109,18 @@ TEST(IpoptSolver, PinchPyramidMatchesTheClosedForm) {
   }
 }
 
+// min_normal_force == max_normal_force leaves the rows no interior.
+TEST(IpoptSolver, EqualForceBoundsPinTheSqueeze) {
+  PlanProblem p = Pinch(0.5, 0.5, 30.0);
+  for (Contact& c : p.contacts) c.max_normal_force = 30.0;
+  for (ConeModel cone : {ConeModel::kPyramid, ConeModel::kExact}) {
+    const PlanResult r = SolveIpopt(p, Options(cone));
+    ASSERT_EQ(r.status, PlanStatus::kOptimal) << r.message;
+    EXPECT_NEAR(r.normal_forces[0], 30.0, 1e-6);
+    EXPECT_NEAR(r.normal_forces[1], 30.0, 1e-6);
+  }
+}
+
 // The exact cone needs only N = m g / (2 mu).
 TEST(IpoptSolver, PinchExactConeMatchesTheClosedForm) {
   const double m = 0.5, mu = 0.5;

@@ -137,3 +137,46 @@ TEST_F(EstimationRpcTest, PlanTrajectoryAndProbe) {
 
 }  // namespace
 }  // namespace tactforce::testing
+
+#include "tactforce/sim/simulate.h"
+#include "tactforce/v1/audit.grpc.pb.h"
+
+namespace tactforce::testing {
+namespace {
+
+TEST_F(EstimationRpcTest, AuditModelNamesAHiddenThreshold) {
+  sim::SensorModel model;
+  model.noise = 0.02;
+  model.effects.threshold = 0.3;
+  sim::SimOptions options;
+  options.seconds = 15;
+  options.seed = 9;
+  absl::StatusOr<sim::SimRun> run = sim::SimulateSensor(model, options);
+  ASSERT_TRUE(run.ok()) << run.status();
+  v1::AuditRequest request;
+  request.set_source("rpc-test");
+  for (size_t k = 0; k < run->t.size(); ++k) {
+    v1::AuditSample* s = request.add_samples();
+    s->set_t(run->t[k]);
+    s->set_reference(run->reference[k]);
+    s->set_reading(run->reading[k]);
+  }
+  auto stub = v1::Audit::NewStub(channel_);
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+  v1::AuditResponse response;
+  const grpc::Status status = stub->AuditModel(&context, request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_FALSE(response.nominal_adequate());
+  ASSERT_GE(response.causes_size(), 1);
+  EXPECT_EQ(response.causes(0).effect(), "deadzone");
+  EXPECT_GT(response.gain(), 0.0);
+  request.mutable_samples()->DeleteSubrange(10, request.samples_size() - 10);
+  grpc::ClientContext context2;
+  const grpc::Status bad = stub->AuditModel(&context2, request, &response);
+  EXPECT_EQ(bad.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(bad.error_message().find("too few samples"), std::string::npos) << bad.error_message();
+}
+
+}  // namespace
+}  // namespace tactforce::testing

@@ -23,6 +23,8 @@ std::string EnvOr(const char* name, const char* fallback) {
   return value != nullptr && *value != '\0' ? value : fallback;
 }
 
+std::string SourceDir() { return EnvOr("TACTFORCE_SOURCE_DIR", TACTFORCE_DEFAULT_SOURCE_DIR); }
+
 std::string ReadFile(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   std::stringstream s;

@@ -18,6 +18,8 @@ struct CliRun {
 
 // $name when set and not empty, else `fallback`.
 std::string EnvOr(const char* name, const char* fallback);
+// The repository root ($TACTFORCE_SOURCE_DIR, else the configured one).
+std::string SourceDir();
 std::string ReadFile(const std::filesystem::path& path);
 void WriteFile(const std::filesystem::path& path, const std::string& text);
 std::vector<std::string> Lines(const std::string& text);

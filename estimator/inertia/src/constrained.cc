@@ -119,7 +119,11 @@ Vector10d ThetaFromP(const Eigen::Matrix4d& Pin) {
   return th;
 }
 
-// Damped Newton on the (unconstrained) model.
+// Lower bound on the log-diagonal of U: keeps P strictly positive definite
+// (smallest eigenvalue of the scaled P about >= 1e-8) at the boundary.
+constexpr double kMinLogDiag = -9.2;  // log(1e-4)
+
+// Damped (projected) Newton on the model.
 Vector10d Newton(const Model& m, Vector10d th, int max_iter, int* iterations) {
   Vector10d g;
   Matrix10d H;
@@ -144,7 +148,9 @@ Vector10d Newton(const Model& m, Vector10d th, int max_iter, int* iterations) {
       // Keep the log-diagonal steps moderate.
       const double mx = step.head<4>().cwiseAbs().maxCoeff();
       if (mx > 2.0) step *= 2.0 / mx;
-      const Vector10d cand = th + step;
+      Vector10d cand = th + step;
+      for (int i = 0; i < 4; ++i) cand(i) = std::max(cand(i), kMinLogDiag);
+      step = cand - th;
       const double fc = m.F(cand);
       if (std::isfinite(fc) && fc <= f) {
         const double dec = f - fc;
@@ -226,17 +232,32 @@ absl::StatusOr<MethodOutput> FitConstrained(const InertiaSamples& s, const Inert
   const double floor_f = 1e-18 * std::max(f2 / (3.0 * n), 1e-300);
   const double floor_t = 1e-18 * std::max(t2 / (3.0 * n), 1e-300);
 
-  // Unweighted start, then scales.
-  Eigen::MatrixXd Ys(6 * n, 10);
-  Eigen::VectorXd bs(6 * n);
-  for (int k = 0; k < n; ++k) Ys.middleRows<6>(6 * k) = Y[k], bs.segment<6>(6 * k) = wrench[k];
-  int rank = 0;
-  Vector10d pi = ScaledLeastSquares(Ys, bs, Vector10d::Ones(), &rank);
+  // Unweighted start (normal equations, minimum norm in scaled parameters),
+  // then scales.
+  Matrix10d YtY = Matrix10d::Zero();
+  Vector10d Ytb = Vector10d::Zero();
+  for (int k = 0; k < n; ++k) {
+    YtY += Y[k].transpose() * Y[k];
+    Ytb += Y[k].transpose() * wrench[k];
+  }
+  auto solve_scaled = [&](const Vector10d& scale) {
+    const Matrix10d S = scale.asDiagonal();
+    Eigen::SelfAdjointEigenSolver<Matrix10d> es(S * YtY * S);
+    const Vector10d r = S * Ytb;
+    Vector10d x = Vector10d::Zero();
+    const double top = es.eigenvalues()(9);
+    for (int i = 0; i < 10; ++i) {
+      const double l = es.eigenvalues()(i);
+      if (l > 1e-14 * top) x += es.eigenvectors().col(i) * (es.eigenvectors().col(i).dot(r) / l);
+    }
+    return Vector10d(S * x);
+  };
+  Vector10d pi = solve_scaled(Vector10d::Ones());
   double m0 = 1, len = 0.1;
   RoughScale(pi, hull, &m0, &len);
   if (o.prior) RoughScale(o.prior->params.ToStandard(), hull, &m0, &len);
   out.scale = ParameterScale(m0, len);
-  pi = ScaledLeastSquares(Ys, bs, out.scale, &rank);
+  pi = solve_scaled(out.scale);
   {  // second pass for the scale from a better estimate
     double m1 = m0, l1 = len;
     RoughScale(pi, hull, &m1, &l1);
@@ -282,6 +303,11 @@ absl::StatusOr<MethodOutput> FitConstrained(const InertiaSamples& s, const Inert
     }
   }
 
+  Matrix6x10 unit_a[3], unit_dw[3];  // d Y / d(a - g), d Y / d dw (constant)
+  for (int j = 0; j < 3; ++j) {
+    unit_a[j] = Regressor(Vec3::Zero(), Vec3::Zero(), Vec3::Unit(j));
+    unit_dw[j] = Regressor(Vec3::Zero(), Vec3::Unit(j), Vec3::Zero());
+  }
   Vector10d theta;
   bool have_theta = false;
   Matrix10d A = Matrix10d::Zero();
@@ -317,24 +343,25 @@ absl::StatusOr<MethodOutput> FitConstrained(const InertiaSamples& s, const Inert
       C.diagonal().head<3>().array() += floor_f;
       C.diagonal().tail<3>().array() += floor_t;
       const Eigen::LLT<Matrix6d> llt(C);
-      const Matrix6x10 WY = llt.solve(Y[k]);
-      A += Y[k].transpose() * WY;
-      bvec += WY.transpose() * wrench[k];
-      // Errors-in-variables bias of Y^T W Y: E[dY^T W dY].
-      if (q.var_a > 0 || q.var_dw > 0 || q.var_rot > 0 || q.var_w > 0) {
-        for (int j = 0; j < 3; ++j) {
-          const Vec3 e = Vec3::Unit(j);
-          const Matrix6x10 Da = Regressor(Vec3::Zero(), Vec3::Zero(), e);
-          const Matrix6x10 Dd = Regressor(Vec3::Zero(), e, Vec3::Zero());
-          const Matrix6x10 Dr = Regressor(Vec3::Zero(), Vec3::Zero(), Skew(q.a_minus_g) * e);
+      const Matrix6d W = llt.matrixL().solve(Matrix6d::Identity());  // W^T W = C^-1
+      const Matrix6x10 WY = W.lazyProduct(Y[k]);
+      A.noalias() += WY.transpose().lazyProduct(WY);
+      bvec.noalias() += WY.transpose() * (W * wrench[k]);
+      // Errors-in-variables bias of Y^T W Y: E[dY^T W dY] (first order).
+      auto add_bias = [&](double var, const Matrix6x10& D) {
+        const Matrix6x10 WD = W.lazyProduct(D);
+        bias.noalias() += var * WD.transpose().lazyProduct(WD);
+      };
+      for (int j = 0; j < 3; ++j) {
+        const Vec3 e = Vec3::Unit(j);
+        if (q.var_a > 0) add_bias(q.var_a, unit_a[j]);
+        if (q.var_dw > 0) add_bias(q.var_dw, unit_dw[j]);
+        if (q.var_rot > 0) add_bias(q.var_rot, Regressor(Vec3::Zero(), Vec3::Zero(), Skew(q.a_minus_g) * e));
+        if (q.var_w > 0) {
           const double eps = 1e-4 * std::max(1.0, q.w.norm());
-          const Matrix6x10 Dw = (Regressor(q.w + eps * e, Vec3::Zero(), Vec3::Zero()) -
-                                 Regressor(q.w - eps * e, Vec3::Zero(), Vec3::Zero())) /
-                                (2 * eps);
-          if (q.var_a > 0) bias += q.var_a * Da.transpose() * llt.solve(Da);
-          if (q.var_dw > 0) bias += q.var_dw * Dd.transpose() * llt.solve(Dd);
-          if (q.var_rot > 0) bias += q.var_rot * Dr.transpose() * llt.solve(Dr);
-          if (q.var_w > 0) bias += q.var_w * Dw.transpose() * llt.solve(Dw);
+          add_bias(q.var_w, (Regressor(q.w + eps * e, Vec3::Zero(), Vec3::Zero()) -
+                             Regressor(q.w - eps * e, Vec3::Zero(), Vec3::Zero())) /
+                                (2 * eps));
         }
       }
     }
@@ -364,7 +391,33 @@ absl::StatusOr<MethodOutput> FitConstrained(const InertiaSamples& s, const Inert
       Eigen::Matrix4d Pt = Eigen::Matrix4d::Zero();
       for (int k = 0; k < 10; ++k) Pt(kPi[k], kPj[k]) = Pt(kPj[k], kPi[k]) = p(k);
       if (o.prior) Pt = 0.5 * Pt + 0.5 * D.asDiagonal() * PseudoInertia(o.prior->params) * D.asDiagonal();
+      if (!o.prior && o.regularization > 0) {
+        // Weak entropic regulariser towards an isotropic guess (scaled units).
+        const Eigen::Matrix4d Pu = D.asDiagonal().inverse() * Pt * D.asDiagonal().inverse();
+        double mg = Pu(3, 3) > 0 && std::isfinite(Pu(3, 3)) ? Pu(3, 3) : m0;
+        Vec3 cg = Pu.topRightCorner<3, 1>() / mg;
+        if (!cg.allFinite()) cg.setZero();
+        if (hull && !hull->Contains(cg, 1e-9)) {
+          cg.setZero();
+          for (const Vec3& v : hull->vertices) cg += v / static_cast<double>(hull->vertices.size());
+        }
+        double t = (Pu.topLeftCorner<3, 3>().trace() - mg * cg.squaredNorm()) / (3.0 * mg);
+        if (!(t > 1e-6 * len * len) || !std::isfinite(t)) t = hull ? std::pow(0.25 * hull->size, 2) : len * len / 3.0;
+        Eigen::Matrix4d P0 = Eigen::Matrix4d::Zero();
+        P0.topLeftCorner<3, 3>() = mg * (cg * cg.transpose() + t * Eigen::Matrix3d::Identity());
+        P0.topRightCorner<3, 1>() = mg * cg;
+        P0.bottomLeftCorner<1, 3>() = mg * cg.transpose();
+        P0(3, 3) = mg;
+        const Eigen::Matrix4d G = (D.asDiagonal() * P0 * D.asDiagonal()).inverse();
+        for (int k = 0; k < 10; ++k) model.q(k) = kPi[k] == kPj[k] ? G(kPi[k], kPi[k]) : 2.0 * G(kPi[k], kPj[k]);
+        model.w = o.regularization;
+        out.notes.push_back(absl::StrFormat(
+            "weak entropic regularisation (weight %g) towards m %.4g, c (%.4g, %.4g, %.4g), isotropic second "
+            "moment %.3g m^2 per axis",
+            o.regularization, mg, cg.x(), cg.y(), cg.z(), t));
+      }
       theta = ThetaFromP(Pt);
+      for (int i = 0; i < 4; ++i) theta(i) = std::max(theta(i), kMinLogDiag);
       have_theta = true;
     }
     theta = Newton(model, theta, o.max_iterations, &out.iterations);
@@ -378,6 +431,9 @@ absl::StatusOr<MethodOutput> FitConstrained(const InertiaSamples& s, const Inert
         SlsqpData data{&model};
         nlopt_opt opt = nlopt_create(NLOPT_LD_SLSQP, 10);
         nlopt_set_min_objective(opt, SlsqpObjective, &data);
+        double lb[10];
+        for (int i = 0; i < 10; ++i) lb[i] = i < 4 ? kMinLogDiag : -HUGE_VAL;
+        nlopt_set_lower_bounds(opt, lb);
         std::vector<double> tol(model.rows.size(), 1e-12);
         nlopt_add_inequality_mconstraint(opt, static_cast<unsigned>(model.rows.size()), SlsqpConstraints, &data,
                                          tol.data());

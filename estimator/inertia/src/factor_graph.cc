@@ -17,15 +17,16 @@
 //        violated, as the paper did in GTSAM.
 //   B    optional prior Tr(P0^-1 P) (eq. 20-21), as the residual
 //        sqrt(weight) (Tr(P0^-1 P) - 4).
-// Batch Levenberg-Marquardt on the sparse normal equations.
+// Batch Levenberg-Marquardt on the sparse normal equations, solved by a
+// block-banded Cholesky of the pose blocks and a Schur complement on the
+// inertial block (exact, O(N)).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
-#include <Eigen/Sparse>
-#include <Eigen/SparseCholesky>
 #include <unsupported/Eigen/AutoDiff>
 
 #include "absl/strings/str_cat.h"
@@ -170,6 +171,103 @@ Eigen::Matrix3d InvRightJacobian(const Vec3& phi) {
   return Eigen::Matrix3d::Identity() + 0.5 * P + k * P * P;
 }
 
+// Gauss-Newton normal equations with the structure of the problem: pose
+// blocks couple only within three consecutive samples (block bandwidth 2),
+// the 10 inertial variables couple with everything.
+//   [ B  E ] [dp]     [gp]
+//   [ E' C ] [di] = - [gi]
+struct NormalEquations {
+  std::vector<std::array<Matrix6d, 3>> B;  // B[k][d]: block (k, k+d)
+  std::vector<Eigen::Matrix<double, 6, 10>> E;
+  std::vector<Vector6d> gp;
+  Matrix10d C;
+  Vector10d gi;
+
+  void Reset(int n) {
+    B.assign(n, {Matrix6d::Zero(), Matrix6d::Zero(), Matrix6d::Zero()});
+    E.assign(n, Eigen::Matrix<double, 6, 10>::Zero());
+    gp.assign(n, Vector6d::Zero());
+    C.setZero();
+    gi.setZero();
+  }
+};
+
+// Block-banded Cholesky B = L L^T (L(k,k-1), L(k,k-2) below the diagonal).
+class BandedCholesky {
+ public:
+  bool Factor(const NormalEquations& ne, double lambda) {
+    const int n = static_cast<int>(ne.B.size());
+    d_.resize(n);
+    l1_.assign(n, Matrix6d::Zero());
+    l2_.assign(n, Matrix6d::Zero());
+    for (int k = 0; k < n; ++k) {
+      if (k >= 2) l2_[k] = d_[k - 2].matrixL().solve(ne.B[k - 2][2]).transpose();  // B(k,k-2) L^-T
+      if (k >= 1) {
+        Matrix6d rhs = ne.B[k - 1][1].transpose();
+        if (k >= 2) rhs -= l2_[k] * l1_[k - 1].transpose();
+        l1_[k] = d_[k - 1].matrixL().solve(rhs.transpose()).transpose();
+      }
+      Matrix6d D = ne.B[k][0];
+      D.diagonal() += lambda * D.diagonal().cwiseMax(1e-12);
+      if (k >= 1) D -= l1_[k] * l1_[k].transpose();
+      if (k >= 2) D -= l2_[k] * l2_[k].transpose();
+      d_[k].compute(D);
+      if (d_[k].info() != Eigen::Success) return false;
+    }
+    return true;
+  }
+  // Solves B X = Y in place (Y: n blocks of 6 rows).
+  template <int Cols>
+  void Solve(std::vector<Eigen::Matrix<double, 6, Cols>>& y) const {
+    const int n = static_cast<int>(y.size());
+    for (int k = 0; k < n; ++k) {  // forward: L z = y
+      if (k >= 1) y[k] -= l1_[k] * y[k - 1];
+      if (k >= 2) y[k] -= l2_[k] * y[k - 2];
+      y[k] = d_[k].matrixL().solve(y[k]);
+    }
+    for (int k = n - 1; k >= 0; --k) {  // backward: L^T x = z
+      if (k + 1 < n) y[k] -= l1_[k + 1].transpose() * y[k + 1];
+      if (k + 2 < n) y[k] -= l2_[k + 2].transpose() * y[k + 2];
+      y[k] = d_[k].matrixU().solve(y[k]);
+    }
+  }
+
+ private:
+  std::vector<Eigen::LLT<Matrix6d>> d_;
+  std::vector<Matrix6d> l1_, l2_;
+};
+
+// Damped step: (H + lambda diag(H)) d = -g; false if not positive definite.
+// With `cov`, also returns the inertial block of H^-1 (lambda should be 0).
+bool SolveStep(const NormalEquations& ne, double lambda, Eigen::VectorXd* step, Matrix10d* cov) {
+  const int n = static_cast<int>(ne.B.size());
+  BandedCholesky chol;
+  if (!chol.Factor(ne, lambda)) return false;
+  std::vector<Eigen::Matrix<double, 6, 10>> BE = ne.E;
+  chol.Solve<10>(BE);
+  std::vector<Eigen::Matrix<double, 6, 1>> Bg = ne.gp;
+  chol.Solve<1>(Bg);
+  Matrix10d S = ne.C;
+  S.diagonal() += lambda * ne.C.diagonal().cwiseMax(1e-12);
+  Vector10d rhs = ne.gi;
+  for (int k = 0; k < n; ++k) {
+    S -= ne.E[k].transpose() * BE[k];
+    rhs -= ne.E[k].transpose() * Bg[k];
+  }
+  S = 0.5 * (S + S.transpose());
+  Eigen::LDLT<Matrix10d> ldlt(S);
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return false;
+  const Vector10d di = -ldlt.solve(rhs);
+  if (!di.allFinite()) return false;
+  if (cov) *cov = ldlt.solve(Matrix10d::Identity());
+  if (step) {
+    step->resize(10 + 6 * n);
+    step->head<10>() = di;
+    for (int k = 0; k < n; ++k) step->segment<6>(10 + 6 * k) = -(Bg[k] + BE[k] * di);
+  }
+  return true;
+}
+
 class Problem {
  public:
   Problem(const InertiaSamples& s, const InertiaOptions& o, const ConvexHull* hull)
@@ -199,8 +297,6 @@ class Problem {
     }
   }
 
-  int NumVars() const { return 10 + 6 * n_; }
-
   // Initial values: poses as measured; m and m c from the force rows of the
   // three-point kinematics; second moment of a small ball around c.
   void Initialise(double m0, const Vec3& c0, double radius) {
@@ -214,87 +310,85 @@ class Problem {
     if (in_.R.determinant() < 0) in_.R.col(2) = -in_.R.col(2);
   }
 
-  // Residuals (and, with J, the Jacobian in tangent coordinates).
-  double Evaluate(Eigen::VectorXd* r_out, std::vector<Eigen::Triplet<double>>* J) const {
-    std::vector<double> r;
-    r.reserve(12 * n_ + 32);
-    int row = 0;
+  // Cost; with `ne`, also the Gauss-Newton normal equations.
+  double Evaluate(NormalEquations* ne) const {
+    double cost = 0;
+    if (ne) ne->Reset(n_);
     const Vec3& g = o_.gravity;
     for (int k = 0; k + 2 < n_; ++k) {
       const double dt1 = s_.samples[k + 1].t - s_.samples[k].t, dt2 = s_.samples[k + 2].t - s_.samples[k + 1].t;
       const Pose &a = poses_[k], &b = poses_[k + 1], &cpose = poses_[k + 2];
       Vector6d e;
-      if (!J) {
+      if (!ne) {
         e = Dynamics<double>(a.R, a.p, b.R, b.p, cpose.R, cpose.p, dt1, dt2, in_.m, in_.c, in_.L, in_.R, g,
                              wrench_[k]);
-      } else {
-        M3<Jet> R[3];
-        V3<Jet> P[3];
-        const Pose* ps[3] = {&a, &b, &cpose};
-        for (int q = 0; q < 3; ++q) {
-          V3<Jet> d(Var(0, 6 * q), Var(0, 6 * q + 1), Var(0, 6 * q + 2));
-          R[q] = ps[q]->R.cast<Jet>() * (M3<Jet>::Identity() + Hat<Jet>(d));
-          P[q] = ps[q]->p.cast<Jet>() + V3<Jet>(Var(0, 6 * q + 3), Var(0, 6 * q + 4), Var(0, 6 * q + 5));
-        }
-        const Jet m = Var(in_.m, 18);
-        const V3<Jet> c(Var(in_.c(0), 19), Var(in_.c(1), 20), Var(in_.c(2), 21));
-        const V3<Jet> L(Var(in_.L(0), 22), Var(in_.L(1), 23), Var(in_.L(2), 24));
-        const V3<Jet> dr(Var(0, 25), Var(0, 26), Var(0, 27));
-        const M3<Jet> Rl = in_.R.cast<Jet>() * (M3<Jet>::Identity() + Hat<Jet>(dr));
-        const Eigen::Matrix<Jet, 6, 1> ej =
-            Dynamics<Jet>(R[0], P[0], R[1], P[1], R[2], P[2], dt1, dt2, m, c, L, Rl, g, wrench_[k]);
-        Eigen::Matrix<double, 6, kLocal> Jl;
-        for (int i = 0; i < 6; ++i) e(i) = ej(i).value(), Jl.row(i) = ej(i).derivatives().transpose();
-        const Eigen::Matrix<double, 6, kLocal> Jw = whiten_[k] * Jl;
-        for (int i = 0; i < 6; ++i) {
-          for (int q = 0; q < 3; ++q)
-            for (int j = 0; j < 6; ++j) J->emplace_back(row + i, 10 + 6 * (k + q) + j, Jw(i, 6 * q + j));
-          for (int j = 0; j < 10; ++j) J->emplace_back(row + i, j, Jw(i, 18 + j));
-        }
+        cost += 0.5 * (whiten_[k] * e).squaredNorm();
+        continue;
       }
+      M3<Jet> R[3];
+      V3<Jet> P[3];
+      const Pose* ps[3] = {&a, &b, &cpose};
+      for (int q = 0; q < 3; ++q) {
+        V3<Jet> d(Var(0, 6 * q), Var(0, 6 * q + 1), Var(0, 6 * q + 2));
+        R[q] = ps[q]->R.cast<Jet>() * (M3<Jet>::Identity() + Hat<Jet>(d));
+        P[q] = ps[q]->p.cast<Jet>() + V3<Jet>(Var(0, 6 * q + 3), Var(0, 6 * q + 4), Var(0, 6 * q + 5));
+      }
+      const Jet m = Var(in_.m, 18);
+      const V3<Jet> c(Var(in_.c(0), 19), Var(in_.c(1), 20), Var(in_.c(2), 21));
+      const V3<Jet> L(Var(in_.L(0), 22), Var(in_.L(1), 23), Var(in_.L(2), 24));
+      const V3<Jet> dr(Var(0, 25), Var(0, 26), Var(0, 27));
+      const M3<Jet> Rl = in_.R.cast<Jet>() * (M3<Jet>::Identity() + Hat<Jet>(dr));
+      const Eigen::Matrix<Jet, 6, 1> ej =
+          Dynamics<Jet>(R[0], P[0], R[1], P[1], R[2], P[2], dt1, dt2, m, c, L, Rl, g, wrench_[k]);
+      Eigen::Matrix<double, 6, kLocal> Jl;
+      for (int i = 0; i < 6; ++i) e(i) = ej(i).value(), Jl.row(i) = ej(i).derivatives().transpose();
+      const Eigen::Matrix<double, 6, kLocal> Jw = whiten_[k] * Jl;
       const Vector6d ew = whiten_[k] * e;
-      for (int i = 0; i < 6; ++i) r.push_back(ew(i));
-      row += 6;
+      cost += 0.5 * ew.squaredNorm();
+      const Eigen::Matrix<double, kLocal, kLocal> JtJ = Jw.transpose() * Jw;
+      const Eigen::Matrix<double, kLocal, 1> Jte = Jw.transpose() * ew;
+      for (int q = 0; q < 3; ++q) {
+        for (int q2 = q; q2 < 3; ++q2) ne->B[k + q][q2 - q] += JtJ.block<6, 6>(6 * q, 6 * q2);
+        ne->E[k + q] += JtJ.block<6, 10>(6 * q, 18);
+        ne->gp[k + q] += Jte.segment<6>(6 * q);
+      }
+      ne->C += JtJ.block<10, 10>(18, 18);
+      ne->gi += Jte.segment<10>(18);
     }
     // Pose measurement factors.
     for (int k = 0; k < n_; ++k) {
       const Vec3 phi = LogSO3(meas_[k].R.transpose() * poses_[k].R);
       const Vec3 dp = poses_[k].p - meas_[k].p;
-      for (int i = 0; i < 3; ++i) r.push_back(phi(i) / sig_r_);
-      for (int i = 0; i < 3; ++i) r.push_back(dp(i) / sig_p_);
-      if (J) {
+      cost += 0.5 * (phi.squaredNorm() / (sig_r_ * sig_r_) + dp.squaredNorm() / (sig_p_ * sig_p_));
+      if (ne) {
         const Eigen::Matrix3d Jr = InvRightJacobian(phi) / sig_r_;
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j)
-            J->emplace_back(row + i, 10 + 6 * k + j, Jr(i, j));
-        for (int i = 0; i < 3; ++i) J->emplace_back(row + 3 + i, 10 + 6 * k + 3 + i, 1.0 / sig_p_);
+        ne->B[k][0].topLeftCorner<3, 3>() += Jr.transpose() * Jr;
+        ne->B[k][0].bottomRightCorner<3, 3>().diagonal().array() += 1.0 / (sig_p_ * sig_p_);
+        ne->gp[k].head<3>() += Jr.transpose() * (phi / sig_r_);
+        ne->gp[k].tail<3>() += dp / (sig_p_ * sig_p_);
       }
-      row += 6;
     }
-    // Constraint factors, active only when violated.
+    // Constraint factors on the inertial block, active only when violated.
+    auto add_inertial = [&](double r, const Vector10d& j) {
+      cost += 0.5 * r * r;
+      if (ne) {
+        ne->C += j * j.transpose();
+        ne->gi += j * r;
+      }
+    };
     const double sm = o_.fg_constraint_sigma * m_scale_, sl = o_.fg_constraint_sigma * m_scale_ * l_scale_ * l_scale_,
                  sc = o_.fg_constraint_sigma * l_scale_;
     const double m_min = 1e-6 * m_scale_;
-    if (in_.m < m_min) {
-      r.push_back((m_min - in_.m) / sm);
-      if (J) J->emplace_back(row, 0, -1.0 / sm);
-      ++row;
-    }
-    for (int i = 0; i < 3; ++i) {
-      if (in_.L(i) < 0) {
-        r.push_back(-in_.L(i) / sl);
-        if (J) J->emplace_back(row, 4 + i, -1.0 / sl);
-        ++row;
-      }
-    }
+    if (in_.m < m_min) add_inertial((m_min - in_.m) / sm, -Vector10d::Unit(0) / sm);
+    for (int i = 0; i < 3; ++i)
+      if (in_.L(i) < 0) add_inertial(-in_.L(i) / sl, -Vector10d::Unit(4 + i) / sl);
     if (hull_) {
       for (size_t j = 0; j < hull_->normals.size(); ++j) {
         const double v = hull_->normals[j].dot(in_.c) - hull_->offsets[j];
         if (v > 0) {
-          r.push_back(v / sc);
-          if (J)
-            for (int i = 0; i < 3; ++i) J->emplace_back(row, 1 + i, hull_->normals[j](i) / sc);
-          ++row;
+          Vector10d jac = Vector10d::Zero();
+          jac.segment<3>(1) = hull_->normals[j] / sc;
+          add_inertial(v / sc, jac);
         }
       }
     }
@@ -311,14 +405,8 @@ class Problem {
       Jet tr = Const(0);
       for (int i = 0; i < 4; ++i)
         for (int j = 0; j < 4; ++j) tr += P0inv(i, j) * P(j, i);
-      r.push_back(sw * (tr.value() - 4.0));
-      if (J)
-        for (int j = 0; j < 10; ++j) J->emplace_back(row, j, sw * tr.derivatives()(18 + j));
-      ++row;
+      add_inertial(sw * (tr.value() - 4.0), sw * tr.derivatives().segment<10>(18));
     }
-    Eigen::VectorXd rv = Eigen::Map<Eigen::VectorXd>(r.data(), r.size());
-    const double cost = 0.5 * rv.squaredNorm();
-    if (r_out) *r_out = std::move(rv);
     return cost;
   }
 
@@ -419,42 +507,24 @@ absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const Inert
     if (prob.inertial().R.determinant() < 0) prob.inertial().R.col(2) *= -1;
   }
 
-  const int nv = prob.NumVars();
-  Eigen::VectorXd r;
-  std::vector<Eigen::Triplet<double>> trip;
-  double cost = prob.Evaluate(&r, &trip);
+  NormalEquations ne;
+  double cost = prob.Evaluate(&ne);
   double lambda = 1e-4;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
-  bool analysed = false;
-  Eigen::SparseMatrix<double> H;
   int it = 0;
   for (; it < o.max_iterations; ++it) {
     if (o.interrupt && o.interrupt()) return absl::CancelledError("interrupted");
-    Eigen::SparseMatrix<double> J(r.size(), nv);
-    J.setFromTriplets(trip.begin(), trip.end());
-    H = J.transpose() * J;
-    const Eigen::VectorXd g = J.transpose() * r;
-    Eigen::VectorXd diag = H.diagonal();
-    analysed = false;
     bool accepted = false;
     double new_cost = cost;
     for (int tries = 0; tries < 12 && !accepted; ++tries) {
-      Eigen::SparseMatrix<double> Hd = H;
-      for (int i = 0; i < nv; ++i) Hd.coeffRef(i, i) += lambda * std::max(diag(i), 1e-12);
-      if (!analysed) {  // once per outer iteration: H's pattern may change
-        solver.analyzePattern(Hd);
-        analysed = true;
-      }
-      solver.factorize(Hd);
-      if (solver.info() != Eigen::Success) {
+      Eigen::VectorXd step;
+      if (!SolveStep(ne, lambda, &step, nullptr)) {
         lambda *= 10;
         continue;
       }
-      const Eigen::VectorXd step = -solver.solve(g);
       const Inertial saved_in = prob.inertial();
       const std::vector<Pose> saved_poses = prob.poses_;
       prob.Retract(step);
-      new_cost = prob.Evaluate(nullptr, nullptr);
+      new_cost = prob.Evaluate(nullptr);
       if (std::isfinite(new_cost) && new_cost < cost) {
         accepted = true;
         lambda = std::max(lambda / 3, 1e-12);
@@ -467,8 +537,7 @@ absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const Inert
     if (o.progress) o.progress(0.9 * (it + 1) / o.max_iterations);
     if (!accepted) break;
     const double dec = cost - new_cost;
-    trip.clear();
-    cost = prob.Evaluate(&r, &trip);
+    cost = prob.Evaluate(&ne);
     if (dec <= 1e-10 * cost) {
       ++it;
       break;
@@ -481,28 +550,19 @@ absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const Inert
   out.notes.push_back(absl::StrFormat("Levenberg-Marquardt: %d iterations, final cost %.6g", it, cost));
 
   // Marginal covariance of the inertial block (Gauss-Newton), mapped to pi.
-  {
-    Eigen::SparseMatrix<double> J(r.size(), nv);
-    J.setFromTriplets(trip.begin(), trip.end());
-    H = J.transpose() * J;
-    solver.compute(H);
-    if (solver.info() == Eigen::Success) {
-      Eigen::MatrixXd E = Eigen::MatrixXd::Zero(nv, 10);
-      for (int i = 0; i < 10; ++i) E(i, i) = 1;
-      const Eigen::MatrixXd X = solver.solve(E);
-      const Matrix10d cov_t = X.topRows<10>();
-      Matrix10d Jp;
-      for (int i = 0; i < 10; ++i) {
-        Inertial a = prob.inertial(), b = prob.inertial();
-        Vector10d d = Vector10d::Zero();
-        d(i) = 1e-7;
-        a.Retract(d);
-        b.Retract(-d);
-        Jp.col(i) = (a.Standard() - b.Standard()) / 2e-7;
-      }
-      const Matrix10d c = Jp * (0.5 * (cov_t + cov_t.transpose())) * Jp.transpose();
-      if (c.allFinite()) out.cov = c;
+  Matrix10d cov_t;
+  if (SolveStep(ne, 0.0, nullptr, &cov_t)) {
+    Matrix10d Jp;
+    for (int i = 0; i < 10; ++i) {
+      Inertial a = prob.inertial(), b = prob.inertial();
+      Vector10d d = Vector10d::Zero();
+      d(i) = 1e-7;
+      a.Retract(d);
+      b.Retract(-d);
+      Jp.col(i) = (a.Standard() - b.Standard()) / 2e-7;
     }
+    const Matrix10d c = Jp * (0.5 * (cov_t + cov_t.transpose())) * Jp.transpose();
+    if (c.allFinite()) out.cov = c;
   }
   // Excitation: three-point regressors whitened like the dynamics factors.
   double ms = 1, ls = 0.1;

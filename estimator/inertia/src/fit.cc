@@ -89,6 +89,8 @@ absl::Status ValidateInertiaOptions(const InertiaOptions& o) {
   if (o.smoothing_window != 0 && (o.smoothing_window < 5 || o.smoothing_window % 2 == 0))
     return absl::InvalidArgumentError(absl::StrCat("smoothing_window: must be 0 (automatic) or odd and >= 5 (got ",
                                                    o.smoothing_window, ")"));
+  if (!std::isfinite(o.regularization) || o.regularization < 0)
+    return absl::InvalidArgumentError("regularization: must be finite and >= 0");
   if (o.reweighting_rounds < 1) return absl::InvalidArgumentError("reweighting_rounds: must be >= 1");
   if (o.max_iterations < 1) return absl::InvalidArgumentError("max_iterations: must be >= 1");
   const std::pair<double, const char*> pos[] = {{o.fg_dynamics_force_sigma, "fg_dynamics_force_sigma"},
@@ -192,6 +194,38 @@ double ThreadCpuSeconds() {
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 }  // namespace
+
+std::string DescribeFit(const InertiaFit& f) {
+  const auto in = f.params.inertia_com.ToArray();
+  const auto se = f.inertia_se.ToArray();
+  std::string out = absl::StrFormat("method: %s (%d iterations, %.1f ms, %d samples used)\n", ToString(f.method),
+                                    f.iterations, 1e3 * f.time_seconds, f.samples_used);
+  out += absl::StrFormat("mass: %.6g kg (se %.2g)\n", f.params.mass, f.mass_se);
+  out += absl::StrFormat("com: (%.6g, %.6g, %.6g) m (se %.2g, %.2g, %.2g)\n", f.params.com.x(), f.params.com.y(),
+                         f.params.com.z(), f.com_se.x(), f.com_se.y(), f.com_se.z());
+  out += "inertia about the CoM (kg m^2):";
+  const char* names[] = {"Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"};
+  for (int i = 0; i < 6; ++i) out += absl::StrFormat(" %s %.6g (se %.2g)%s", names[i], in[i], se[i], i < 5 ? "," : "\n");
+  out += absl::StrFormat("principal moments: %.6g, %.6g, %.6g\n", f.principal_moments(0), f.principal_moments(1),
+                         f.principal_moments(2));
+  for (int i = 0; i < 3; ++i)
+    out += absl::StrFormat("  axis %d: (%.4f, %.4f, %.4f)\n", i, f.principal_axes(0, i), f.principal_axes(1, i),
+                           f.principal_axes(2, i));
+  out += absl::StrFormat("physically consistent: %s (smallest eigenvalue of the scaled pseudo-inertia %.3g)\n",
+                         f.physically_consistent ? "yes" : "NO", f.pseudo_inertia_min_eigenvalue);
+  if (!f.com_in_hull) out += "CoM outside the hull\n";
+  out += absl::StrFormat("residual RMS: force %.4g N, torque %.4g N m\n", f.residual_rms_force, f.residual_rms_torque);
+  out += "relative singular values:";
+  for (double v : f.singular_values) out += absl::StrFormat(" %.3g", v);
+  out += "\n";
+  if (f.poorly_excited.empty()) {
+    out += "poorly excited directions: none\n";
+  } else {
+    for (const std::string& d : f.poorly_excited) out += "poorly excited: " + d + "\n";
+  }
+  for (const std::string& n : f.notes) out += "note: " + n + "\n";
+  return out;
+}
 
 absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in, const InertiaOptions& options) {
   const auto start = std::chrono::steady_clock::now();

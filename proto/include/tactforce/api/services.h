@@ -7,6 +7,7 @@
 #include <functional>
 
 #include "absl/status/statusor.h"
+#include "tactforce/v1/audit.pb.h"
 #include "tactforce/v1/estimator.pb.h"
 #include "tactforce/v1/planner.pb.h"
 
@@ -28,5 +29,6 @@ absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
 absl::StatusOr<v1::EstimateResponse> HandleEstimate(const v1::EstimateRequest& request,
                                                     const CallLimits& limits = {});
 absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& request);
+absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request);
 
 }  // namespace tactforce::api

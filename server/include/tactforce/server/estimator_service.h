@@ -1,4 +1,5 @@
-// tactforce.v1.Estimator: EstimateForces and EstimateFriction, thin adapters
+// tactforce.v1.Estimator and tactforce.v1.Audit.
+// Estimator: EstimateForces and EstimateFriction, thin adapters
 // over tactforce::api (which calls the estimator library). Both run on the
 // WorkerPool (friction requests carry whole time series).
 #pragma once
@@ -7,6 +8,7 @@
 
 #include "tactforce/server/server_host.h"
 #include "tactforce/server/worker_pool.h"
+#include "tactforce/v1/audit.grpc.pb.h"
 #include "tactforce/v1/estimator.grpc.pb.h"
 
 namespace tactforce::server {
@@ -35,6 +37,21 @@ class EstimatorService final : public v1::Estimator::CallbackService, public Hos
  private:
   WorkerPool* pool_;
   EstimatorServiceOptions options_;
+};
+
+// tactforce.v1.Audit: AuditModel on the pool (an audit fits many candidate
+// models: tens of milliseconds to seconds).
+class AuditService final : public v1::Audit::CallbackService, public HostedService {
+ public:
+  explicit AuditService(WorkerPool* pool) : pool_(pool) {}
+  std::string service_name() const override { return std::string(v1::Audit::service_full_name()); }
+  grpc::Service* grpc_service() override { return this; }
+  grpc::ServerUnaryReactor* AuditModel(grpc::CallbackServerContext* context,
+                                       const v1::AuditRequest* request,
+                                       v1::AuditResponse* response) override;
+
+ private:
+  WorkerPool* pool_;
 };
 
 }  // namespace tactforce::server

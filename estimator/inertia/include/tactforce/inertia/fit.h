@@ -86,6 +86,13 @@ struct InertiaOptions {
   // poses or for smoothing noisy measured kinematics. 0 = automatic.
   int smoothing_window = 0;
   int reweighting_rounds = 3;  // GLS re-weighting rounds (>= 1)
+  // CONSTRAINED without a prior: weight of a weak entropic (Bregman)
+  // regulariser towards an isotropic guess built from the data (mass and
+  // CoM of the unconstrained fit, its mean second moment). In chi^2 units:
+  // 1 = "each principal second moment within a factor ~e of the guess" as
+  // strong as ONE sample; it only matters in poorly excited directions and
+  // keeps them off the boundary of the consistent set. 0 disables.
+  double regularization = 1.0;
 
   // FACTOR_GRAPH: factor noise (the paper tuned these once on noise-free
   // simulation and kept them fixed). Measurement-factor sigmas come from
@@ -145,6 +152,9 @@ struct InertiaFit {
   int samples_used = 0;        // samples that produced an equation
   std::vector<std::string> notes;  // e.g. "prior ignored by baseline-ls"
 };
+
+// Human-readable multi-line summary (CLI output).
+std::string DescribeFit(const InertiaFit& fit);
 
 // Validates samples and options, then fits with options.method.
 absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples, const InertiaOptions& options);

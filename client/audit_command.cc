@@ -1,0 +1,104 @@
+#include "audit_command.h"
+
+#include <iostream>
+
+#include "absl/strings/str_cat.h"
+#include "cli_common.h"
+#include "tactforce/audit/audit.h"
+#include "tactforce/audit/measured_data.h"
+#include "tactforce/sim/sensor_model.h"
+#include "tactforce/sim/simulate.h"
+
+namespace tactforce::cli {
+
+CLI::App* AddAuditCommand(CLI::App& app, AuditArgs& args) {
+  CLI::App* cmd = app.add_subcommand(
+      "audit", "Show what the sensor model gets wrong on measured data, name the cause, extend it");
+  auto* csv = cmd->add_option("--csv", args.csv, "Measured data: t,reference,reading[,shear][,trial]")
+                  ->type_name("FILE");
+  auto* ref = cmd->add_option("--reference", args.reference_path, "Reference stream: t,value[,shear]")
+                  ->type_name("FILE");
+  auto* reading = cmd->add_option("--reading", args.reading_path, "Reading stream: t,value")
+                      ->type_name("FILE");
+  csv->excludes(ref)->excludes(reading);
+  ref->needs(reading);
+  reading->needs(ref);
+  cmd->add_option("--clock-offset", args.clock_offset, "Two streams: reading clock minus reference clock (s)")
+      ->capture_default_str();
+  cmd->add_option("--model", args.model_path, "Start from this model JSON instead of the affine nominal");
+  cmd->add_option("--out", args.out_dir, "Report directory (report.json, summary.txt, model, SVG plots)")
+      ->required();
+  cmd->add_option("--units", args.units, "Name of the reading's units, for the report")->capture_default_str();
+  cmd->add_option("--heldout", args.heldout_fraction, "Fraction of the run (the later block) held out")
+      ->capture_default_str();
+  cmd->add_option("--max-causes", args.max_causes, "At most this many causes")->capture_default_str();
+  cmd->add_flag("--quiet", args.quiet, "Do not print the summary");
+  return cmd;
+}
+
+int RunAuditCommand(const AuditArgs& args) {
+  absl::StatusOr<audit::MeasuredData> data;
+  if (!args.csv.empty()) {
+    data = audit::ReadMeasuredCsv(args.csv);
+  } else if (!args.reference_path.empty()) {
+    audit::AlignOptions align;
+    align.clock_offset = args.clock_offset;
+    data = audit::ReadAndAlignStreams(args.reference_path, args.reading_path, align);
+  } else {
+    return ReportError(absl::InvalidArgumentError("give --csv FILE or --reference FILE --reading FILE"));
+  }
+  if (!data.ok()) return ReportError(data.status());
+  audit::AuditOptions options;
+  options.heldout_fraction = args.heldout_fraction;
+  options.max_causes = args.max_causes;
+  options.reading_units = args.units;
+  if (!args.model_path.empty()) {
+    absl::StatusOr<sim::SensorModel> model = sim::LoadSensorModel(args.model_path);
+    if (!model.ok()) return ReportError(model.status());
+    options.model = *model;
+  }
+  absl::StatusOr<audit::AuditReport> report = audit::RunAudit(*data, options);
+  if (!report.ok()) return ReportError(report.status());
+  if (absl::Status s = audit::WriteAuditReport(*report, args.out_dir); !s.ok()) return ReportError(s);
+  if (!args.quiet) std::cout << audit::FormatAuditSummary(*report);
+  std::cerr << "report written to " << args.out_dir << "/report.json\n";
+  return std::cout ? kExitOk : kExitFailure;
+}
+
+CLI::App* AddSimulateSensorCommand(CLI::App& simulate, SimulateSensorArgs& args) {
+  CLI::App* cmd = simulate.add_subcommand(
+      "sensor", "Simulate a tactile fingertip against a reference force: run.csv + model.json");
+  cmd->add_option("--model", args.model_path, "Sensor model JSON (absent: ideal sensor)");
+  cmd->add_option("--profile", args.profile, "Force profile")
+      ->check(CLI::IsMember({"press-release", "ramp", "random"}))
+      ->capture_default_str();
+  cmd->add_option("--seconds", args.seconds, "Duration (s)")->capture_default_str();
+  cmd->add_option("--rate", args.rate, "Sample rate (Hz)")->capture_default_str();
+  cmd->add_option("--seed", args.seed, "Random seed")->capture_default_str();
+  cmd->add_option("--out", args.out_dir, "Output directory")->required();
+  return cmd;
+}
+
+int RunSimulateSensor(const SimulateSensorArgs& args) {
+  sim::SensorModel model;
+  if (!args.model_path.empty()) {
+    absl::StatusOr<sim::SensorModel> loaded = sim::LoadSensorModel(args.model_path);
+    if (!loaded.ok()) return ReportError(loaded.status());
+    model = *loaded;
+  }
+  absl::StatusOr<sim::Profile> profile = sim::ParseProfile(args.profile);
+  if (!profile.ok()) return ReportError(profile.status());
+  sim::SimOptions options;
+  options.profile = *profile;
+  options.seconds = args.seconds;
+  options.rate = args.rate;
+  options.seed = args.seed;
+  absl::StatusOr<sim::SimRun> run = sim::SimulateSensor(model, options);
+  if (!run.ok()) return ReportError(run.status());
+  if (absl::Status s = sim::WriteSimRun(*run, args.out_dir); !s.ok()) return ReportError(s);
+  std::cerr << "wrote " << run->t.size() << " samples to " << args.out_dir
+            << "/run.csv (+ fingertip.csv, model.json)\n";
+  return kExitOk;
+}
+
+}  // namespace tactforce::cli

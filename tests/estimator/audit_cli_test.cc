@@ -1,0 +1,46 @@
+// `tactforce simulate sensor` + `tactforce audit`, end to end, as a user runs
+// them: a delay is hidden in the simulated data; the audit must name it.
+#include <gtest/gtest.h>
+
+#include "support/cli_fixture.h"
+
+namespace tactforce::testing {
+namespace {
+
+TEST_F(CliTest, AuditFindsAHiddenDelayInSimulatedData) {
+  const auto model = Write("model.json", R"({
+  "format": "tactforce.sensor_model.v1",
+  "units": "counts", "gain": -40, "offset": 1000, "noise": 0.02, "delay": 0.05
+})");
+  const std::string sim = (dir() / "sim").string();
+  const CliRun run = Tactforce({"simulate", "sensor", "--model", model.string(), "--profile",
+                                "press-release", "--seconds", "20", "--rate", "200", "--seed", "4",
+                                "--out", sim});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const std::string out = (dir() / "report").string();
+  const CliRun audit = Tactforce({"audit", "--csv", sim + "/run.csv", "--out", out, "--units", "counts"});
+  ASSERT_EQ(audit.exit_code, 0) << audit.err;
+  const std::string report = ReadFile(out + "/report.json");
+  EXPECT_NE(report.find("\"nominal_adequate\": false"), std::string::npos) << report.substr(0, 400);
+  // The strongest cause is listed first.
+  const size_t causes = report.find("\"causes\"");
+  ASSERT_NE(causes, std::string::npos);
+  EXPECT_EQ(report.find("\"effect\": \"delay\"", causes), report.find("\"effect\"", causes));
+  EXPECT_TRUE(std::filesystem::exists(out + "/extended_model.json"));
+  EXPECT_TRUE(std::filesystem::exists(out + "/reading_vs_reference.svg"));
+  EXPECT_NE(audit.out.find("delay"), std::string::npos);  // the printed summary
+}
+
+TEST_F(CliTest, AuditBadInputNamesTheProblem) {
+  const auto few = Write("few.csv", "t,reference,reading\n0,1,2\n0.1,2,3\n");
+  const CliRun run = Tactforce({"audit", "--csv", few.string(), "--out", (dir() / "r").string()});
+  ExpectBadInput(run);
+  EXPECT_NE(run.err.find("too few samples"), std::string::npos) << run.err;
+  const auto missing = Write("missing.csv", "t,reference\n0,1\n");
+  const CliRun m = Tactforce({"audit", "--csv", missing.string(), "--out", (dir() / "r").string()});
+  ExpectBadInput(m);
+  EXPECT_NE(m.err.find("missing column(s) reading"), std::string::npos) << m.err;
+}
+
+}  // namespace
+}  // namespace tactforce::testing
