@@ -111,7 +111,9 @@ TEST(FitInertia, FactorGraphBiasIsFirstOrderInTheSamplePeriod) {
     absl::StatusOr<InertiaFit> fit = FitInertia(sim->samples, o);
     ASSERT_TRUE(fit.ok()) << fit.status();
     const double err = CompareInertia(sim->truth.params, fit->params).riemannian;
-    if (previous > 0) EXPECT_NEAR(err / previous, 0.5, 0.1) << "rate " << rate;
+    if (previous > 0) {
+      EXPECT_NEAR(err / previous, 0.5, 0.1) << "rate " << rate;
+    }
     previous = err;
   }
 }

@@ -138,7 +138,9 @@ TEST(InertiaCsv, SimulatedRoundTrip) {
       EXPECT_EQ(a.position, b.position);
       EXPECT_NEAR((a.orientation.coeffs() - b.orientation.coeffs()).norm(), 0.0, 1e-15);
       EXPECT_EQ(a.contacts[3].force, b.contacts[3].force);
-      if (kin) EXPECT_EQ(a.kinematics->angular_acceleration, b.kinematics->angular_acceleration);
+      if (kin) {
+        EXPECT_EQ(a.kinematics->angular_acceleration, b.kinematics->angular_acceleration);
+      }
     }
   }
 }
