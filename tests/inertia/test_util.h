@@ -1,6 +1,7 @@
 // Helpers shared by the inertia tests.
 #pragma once
 
+#include <cstdio>
 #include <cstdlib>
 #include <optional>
 #include <string>

@@ -221,12 +221,40 @@ struct Candidate {
   int degree;
 };
 
-// A vector signal seen from each sample k: values of samples j in
-// [lo[k], lo[k] + v[k].size()) in the chart of sample k.
-struct Charted {
-  std::vector<int> lo;
-  std::vector<std::vector<Vec3>> v;
-  Vec3 At(int k, int j) const { return v[k][j - lo[k]]; }
+// A vector signal seen from each sample k: values of samples j near k in
+// the chart of sample k (differences for positions, log(R_k^T R_j) for
+// orientations). Computed lazily for one k at a time (O(window) memory).
+class Charted {
+ public:
+  static Charted Positions(const std::vector<Vec3>& p, int span) { return Charted(&p, nullptr, span); }
+  static Charted Rotations(const std::vector<Eigen::Matrix3d>& R, int span) { return Charted(nullptr, &R, span); }
+
+  Vec3 At(int k, int j) const {
+    if (k != k_) Fill(k);
+    return cache_[j - lo_];
+  }
+
+ private:
+  Charted(const std::vector<Vec3>* p, const std::vector<Eigen::Matrix3d>* R, int span)
+      : p_(p), R_(R), n_(static_cast<int>(p ? p->size() : R->size())), span_(std::min(span, n_)) {}
+
+  void Fill(int k) const {
+    k_ = k;
+    lo_ = std::clamp(k - span_ / 2, 0, n_ - span_);
+    cache_.resize(span_);
+    if (p_) {
+      for (int j = 0; j < span_; ++j) cache_[j] = (*p_)[lo_ + j] - (*p_)[k];
+    } else {
+      const Eigen::Matrix3d Rt = (*R_)[k].transpose();
+      for (int j = 0; j < span_; ++j) cache_[j] = LogSO3(Rt * (*R_)[lo_ + j]);
+    }
+  }
+
+  const std::vector<Vec3>* p_;
+  const std::vector<Eigen::Matrix3d>* R_;
+  int n_, span_;
+  mutable int k_ = -1, lo_ = 0;
+  mutable std::vector<Vec3> cache_;
 };
 
 struct FitResult {
@@ -238,37 +266,6 @@ struct FitResult {
 };
 
 constexpr int kMaxWindow = 101;
-
-Charted ChartPositions(const std::vector<Vec3>& p, int span) {
-  const int n = static_cast<int>(p.size());
-  Charted c;
-  c.lo.resize(n);
-  c.v.resize(n);
-  for (int k = 0; k < n; ++k) {
-    const int w = std::min(span, n);
-    const int lo = std::clamp(k - w / 2, 0, n - w);
-    c.lo[k] = lo;
-    c.v[k].resize(w);
-    for (int j = 0; j < w; ++j) c.v[k][j] = p[lo + j] - p[k];
-  }
-  return c;
-}
-
-Charted ChartRotations(const std::vector<Eigen::Matrix3d>& R, int span) {
-  const int n = static_cast<int>(R.size());
-  Charted c;
-  c.lo.resize(n);
-  c.v.resize(n);
-  for (int k = 0; k < n; ++k) {
-    const int w = std::min(span, n);
-    const int lo = std::clamp(k - w / 2, 0, n - w);
-    c.lo[k] = lo;
-    c.v[k].resize(w);
-    const Eigen::Matrix3d Rt = R[k].transpose();
-    for (int j = 0; j < w; ++j) c.v[k][j] = LogSO3(Rt * R[lo + j]);
-  }
-  return c;
-}
 
 // Applies weights row r at k.
 Vec3 Apply(const Charted& c, int k, const Eigen::MatrixXd& W, int lo, int r) {
@@ -332,29 +329,37 @@ FitResult SelectAndFit(const std::vector<double>& t, const Charted& c, int order
     sigma2 = den > 0 ? num / den : 0.0;
     estimated = true;
   }
-  double best = std::numeric_limits<double>::infinity();
-  Candidate chosen = cands.front();
-  for (const Candidate& cand : cands) {
-    double sse = 0, refsq = 0, cross = 0;
-    for (int k = 0; k < n; ++k) {
-      int lo_c = 0, lo_r = 0;
-      const Eigen::MatrixXd Wc = LocalPolyWeights(t, k, cand.window, cand.degree, &lo_c);
-      const Eigen::MatrixXd Wr = LocalPolyWeights(t, k, ref.window, ref.degree, &lo_r);
-      const int r = std::min<int>(order, static_cast<int>(Wc.rows()) - 1);
-      if (r != order || Wr.rows() <= order) {
-        sse = std::numeric_limits<double>::infinity();
-        break;
+  const int nc = static_cast<int>(cands.size());
+  std::vector<double> sse(nc, 0.0), refsq(nc, 0.0), cross(nc, 0.0);
+  std::vector<char> valid(nc, 1);
+  for (int k = 0; k < n; ++k) {
+    int lo_r = 0;
+    const Eigen::MatrixXd Wr = LocalPolyWeights(t, k, ref.window, ref.degree, &lo_r);
+    if (Wr.rows() <= order) return Final(t, c, ref);
+    const Vec3 dr = Apply(c, k, Wr, lo_r, order);
+    const double wr2 = Wr.row(order).squaredNorm();
+    for (int i = 0; i < nc; ++i) {
+      if (!valid[i]) continue;
+      int lo_c = 0;
+      const Eigen::MatrixXd Wc = LocalPolyWeights(t, k, cands[i].window, cands[i].degree, &lo_c);
+      if (Wc.rows() <= order) {
+        valid[i] = 0;
+        continue;
       }
-      const Vec3 dc = Apply(c, k, Wc, lo_c, order), dr = Apply(c, k, Wr, lo_r, order);
-      sse += (dc - dr).squaredNorm();
-      refsq += Wr.row(order).squaredNorm();
+      sse[i] += (Apply(c, k, Wc, lo_c, order) - dr).squaredNorm();
+      refsq[i] += wr2;
       for (int j = 0; j < Wc.cols(); ++j) {
         const int jj = lo_c + j - lo_r;
-        if (jj >= 0 && jj < Wr.cols()) cross += Wc(order, j) * Wr(order, jj);
+        if (jj >= 0 && jj < Wr.cols()) cross[i] += Wc(order, j) * Wr(order, jj);
       }
     }
-    const double mse = sse / (3.0 * n) - sigma2 * (refsq - 2.0 * cross) / n;
-    if (mse < best) best = mse, chosen = cand;
+  }
+  double best = std::numeric_limits<double>::infinity();
+  Candidate chosen = cands.front();
+  for (int i = 0; i < nc; ++i) {
+    if (!valid[i]) continue;
+    const double mse = sse[i] / (3.0 * n) - sigma2 * (refsq[i] - 2.0 * cross[i]) / n;
+    if (mse < best) best = mse, chosen = cands[i];
   }
   FitResult f = Final(t, c, chosen);
   f.sigma2 = sigma2;
@@ -387,12 +392,9 @@ std::vector<KinPoint> SmoothedKinematics(const InertiaSamples& s, const Vec3& g,
     // Smooth a measured series (object or world frame) when it is noisy.
     auto smooth = [&](const char* name, double sigma, auto get, auto set, double KinPoint::*var) {
       if (!(sigma > 0) && fixed_window <= 0) return;
-      Charted c;
-      c.lo.resize(n);
-      c.v.resize(n);
       std::vector<Vec3> raw(n);
       for (int k = 0; k < n; ++k) raw[k] = get(k);
-      c = ChartPositions(raw, kMaxWindow);
+      const Charted c = Charted::Positions(raw, kMaxWindow);
       FitResult f = SelectAndFit(t, c, 0, sigma * sigma, fixed_window);
       for (int k = 0; k < n; ++k) {
         set(k, raw[k] + f.d[0][k]);
@@ -409,7 +411,7 @@ std::vector<KinPoint> SmoothedKinematics(const InertiaSamples& s, const Vec3& g,
     smooth("measured acceleration", noise.linear_acceleration_sigma,
            [&](int k) { return acc[k]; }, [&](int k, const Vec3& v) { acc[k] = v; }, &KinPoint::var_a);
     if (noise.orientation_sigma > 0) {
-      const Charted c = ChartRotations(R, kMaxWindow);
+      const Charted c = Charted::Rotations(R, kMaxWindow);
       FitResult f = SelectAndFit(t, c, 0, noise.orientation_sigma * noise.orientation_sigma, fixed_window);
       for (int k = 0; k < n; ++k) {
         m[k].R = R[k] * ExpSO3(f.d[0][k]);
@@ -422,8 +424,8 @@ std::vector<KinPoint> SmoothedKinematics(const InertiaSamples& s, const Vec3& g,
   }
   const double sp2 = noise.position_sigma > 0 ? noise.position_sigma * noise.position_sigma : -1.0;
   const double sr2 = noise.orientation_sigma > 0 ? noise.orientation_sigma * noise.orientation_sigma : -1.0;
-  const FitResult fp = SelectAndFit(t, ChartPositions(p, kMaxWindow), 2, sp2, fixed_window);
-  const FitResult fr = SelectAndFit(t, ChartRotations(R, kMaxWindow), 2, sr2, fixed_window);
+  const FitResult fp = SelectAndFit(t, Charted::Positions(p, kMaxWindow), 2, sp2, fixed_window);
+  const FitResult fr = SelectAndFit(t, Charted::Rotations(R, kMaxWindow), 2, sr2, fixed_window);
   if (notes) {
     notes->push_back(Describe("kinematics from positions", fp));
     notes->push_back(Describe("kinematics from orientations", fr));
