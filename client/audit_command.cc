@@ -23,8 +23,18 @@ CLI::App* AddAuditCommand(CLI::App& app, AuditArgs& args) {
   csv->excludes(ref)->excludes(reading);
   ref->needs(reading);
   reading->needs(ref);
-  cmd->add_option("--clock-offset", args.clock_offset, "Two streams: reading clock minus reference clock (s)")
-      ->capture_default_str();
+  auto* fixed = cmd->add_option("--clock-offset", args.clock_offset,
+                                "Two streams: fix the clock offset (reading clock minus reference clock, s) instead "
+                                "of estimating it; the sensor's delay is then audited")
+                    ->each([&args](const std::string&) { args.clock_offset_given = true; });
+  auto* none = cmd->add_flag("--no-clock-offset", args.no_clock_offset,
+                             "Two streams: no clock-offset estimation (offset 0; a clock offset then shows as 'delay')");
+  auto* search = cmd->add_option("--max-clock-offset", args.max_clock_offset,
+                                 "Two streams: estimate the clock offset within +/- this (s; default estimation)")
+                     ->capture_default_str();
+  fixed->needs(ref)->excludes(none)->excludes(search);
+  none->needs(ref)->excludes(search);
+  search->needs(ref);
   cmd->add_option("--model", args.model_path, "Start from this model JSON instead of the affine nominal");
   cmd->add_option("--out", args.out_dir, "Report directory (report.json, summary.txt, model, SVG plots)")
       ->required();
@@ -42,7 +52,17 @@ int RunAuditCommand(const AuditArgs& args) {
     data = audit::ReadMeasuredCsv(args.csv);
   } else if (!args.reference_path.empty()) {
     audit::AlignOptions align;
-    align.clock_offset = args.clock_offset;
+    if (args.clock_offset_given) {
+      align.mode = audit::ClockOffsetMode::kFixed;
+      align.clock_offset = args.clock_offset;
+    } else if (args.no_clock_offset) {
+      align.mode = audit::ClockOffsetMode::kFixed;
+      align.clock_offset = 0;
+    } else {
+      align.mode = audit::ClockOffsetMode::kEstimate;
+      align.clock_offset = 0;
+      align.max_clock_offset = args.max_clock_offset;
+    }
     data = audit::ReadAndAlignStreams(args.reference_path, args.reading_path, align);
   } else {
     return ReportError(absl::InvalidArgumentError("give --csv FILE or --reference FILE --reading FILE"));

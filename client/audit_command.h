@@ -12,7 +12,15 @@ struct AuditArgs {
   std::string csv;             // t,reference,reading[,shear][,trial]
   std::string reference_path;  // two-stream mode: t,value[,shear]
   std::string reading_path;    //                  t,value
-  double clock_offset = 0.0;   // s, reading clock minus reference clock
+  // Two streams: the clock offset (reading clock minus reference clock) is
+  // estimated by default (cross-correlation within +/- max_clock_offset, then
+  // refined by the audit; 'delay' is then not a candidate: a constant sensor
+  // delay is indistinguishable from a clock offset). --clock-offset S fixes it
+  // (and 'delay' is audited); --no-clock-offset fixes it at 0.
+  double clock_offset = 0.0;   // s, with clock_offset_given
+  bool clock_offset_given = false;
+  bool no_clock_offset = false;
+  double max_clock_offset = 1.0;  // s, half-width of the estimation search
   std::string model_path;      // a given model JSON instead of the affine nominal
   std::string out_dir;
   std::string units = "reading units";

@@ -35,6 +35,7 @@ const std::vector<NumField>& NumFields() {
       {"full_scale", nullptr, &EffectParams::full_scale},
       {"drift", nullptr, &EffectParams::drift},
       {"crosstalk", nullptr, &EffectParams::crosstalk},
+      {"power_exponent", nullptr, &EffectParams::power_exponent},
   };
   return f;
 }
@@ -48,6 +49,21 @@ double FieldVal(const SensorModel& m, const NumField& f) {
 bool IsField(std::string_view name) {
   for (const auto& f : NumFields())
     if (name == f.name) return true;
+  return false;
+}
+
+constexpr size_t kMaxPiOperators = 64;
+
+// Uncertainty keys: the numeric fields plus "pi_weights[k]" / "pi_thresholds[k]".
+bool IsUncertaintyKey(std::string_view name) {
+  if (IsField(name)) return true;
+  for (std::string_view prefix : {std::string_view("pi_weights["), std::string_view("pi_thresholds[")}) {
+    if (name.size() > prefix.size() + 1 && name.substr(0, prefix.size()) == prefix && name.back() == ']') {
+      std::string_view digits = name.substr(prefix.size(), name.size() - prefix.size() - 1);
+      if (!digits.empty() && std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
+        return true;
+    }
+  }
   return false;
 }
 
@@ -76,8 +92,36 @@ absl::Status ValidateSensorModel(const SensorModel& m) {
   if (std::abs(e.delay) > 10)
     return absl::InvalidArgumentError(absl::StrCat("model field 'delay': |delay| must be <= 10 s, got ", e.delay));
   if (e.lag > 10) return absl::InvalidArgumentError(absl::StrCat("model field 'lag': must be <= 10 s, got ", e.lag));
+  if (e.power_exponent < 0 || e.power_exponent > 10)
+    return absl::InvalidArgumentError(
+        absl::StrCat("model field 'power_exponent': must be in (0, 10] (0 = off), got ", e.power_exponent));
+  if (e.pi_thresholds.size() != e.pi_weights.size())
+    return absl::InvalidArgumentError(absl::StrCat("model fields 'pi_thresholds' and 'pi_weights': must have the same length (",
+                                                   e.pi_thresholds.size(), " vs ", e.pi_weights.size(), ")"));
+  if (e.pi_thresholds.size() > kMaxPiOperators)
+    return absl::InvalidArgumentError(absl::StrCat("model field 'pi_thresholds': at most ", kMaxPiOperators,
+                                                   " play operators, got ", e.pi_thresholds.size()));
+  if (!e.pi_thresholds.empty()) {
+    if (e.hysteresis_width > 0)
+      return absl::InvalidArgumentError(
+          "model fields 'hysteresis_width' and 'pi_thresholds': the play operator and Prandtl-Ishlinskii hysteresis are "
+          "exclusive forms; set one");
+    double wsum = 0;
+    for (size_t k = 0; k < e.pi_thresholds.size(); ++k) {
+      const double r = e.pi_thresholds[k], w = e.pi_weights[k];
+      if (!std::isfinite(r) || r < 0)
+        return absl::InvalidArgumentError(absl::StrCat("model field 'pi_thresholds[", k, "]': must be a finite number >= 0, got ", r));
+      if (k > 0 && !(r > e.pi_thresholds[k - 1]))
+        return absl::InvalidArgumentError(absl::StrCat("model field 'pi_thresholds[", k, "]': thresholds must increase strictly (",
+                                                       r, " after ", e.pi_thresholds[k - 1], ")"));
+      if (!std::isfinite(w) || w < 0)
+        return absl::InvalidArgumentError(absl::StrCat("model field 'pi_weights[", k, "]': must be a finite number >= 0, got ", w));
+      wsum += w;
+    }
+    if (!(wsum > 0)) return absl::InvalidArgumentError("model field 'pi_weights': the weights must not all be 0");
+  }
   for (const auto& [k, v] : m.uncertainty) {
-    if (!IsField(k)) return absl::InvalidArgumentError(absl::StrCat("model field 'uncertainty.", k, "': unknown field"));
+    if (!IsUncertaintyKey(k)) return absl::InvalidArgumentError(absl::StrCat("model field 'uncertainty.", k, "': unknown field"));
   }
   return absl::OkStatus();
 }
@@ -103,7 +147,7 @@ absl::StatusOr<SensorModel> SensorModelFromJson(const std::string& text, const s
     if (key == "uncertainty") {
       if (!v.is_object()) return absl::InvalidArgumentError(absl::StrCat(where, ": expected an object"));
       for (const auto& [uk, uv] : v.members()) {
-        if (!IsField(uk))
+        if (!IsUncertaintyKey(uk))
           return absl::InvalidArgumentError(absl::StrCat(source, ":", uv.line(), ": field 'uncertainty.", uk, "': unknown field"));
         if (uv.is_null()) continue;
         if (!uv.is_number())
@@ -113,6 +157,19 @@ absl::StatusOr<SensorModel> SensorModelFromJson(const std::string& text, const s
       continue;
     }
     if (key == "effects_named" || key == "notes") continue;  // informational (audit output)
+    if (key == "pi_thresholds" || key == "pi_weights") {
+      if (!v.is_array()) return absl::InvalidArgumentError(absl::StrCat(where, ": expected an array of numbers"));
+      std::vector<double>& dst = key == "pi_thresholds" ? m.effects.pi_thresholds : m.effects.pi_weights;
+      dst.clear();
+      for (size_t k = 0; k < v.array().size(); ++k) {
+        const JsonValue& x = v.array()[k];
+        if (!x.is_number())
+          return absl::InvalidArgumentError(
+              absl::StrCat(source, ":", x.line(), ": field '", key, "[", k, "]': expected a number"));
+        dst.push_back(x.number());
+      }
+      continue;
+    }
     bool found = false;
     for (const auto& f : NumFields()) {
       if (key != f.name) continue;
@@ -142,6 +199,10 @@ std::string SensorModelToJson(const SensorModel& m) {
   w.Field("units", m.units);
   if (!m.source.empty()) w.Field("source", m.source);
   for (const auto& f : NumFields()) w.Field(f.name, FieldVal(m, f));
+  if (!m.effects.pi_thresholds.empty() || !m.effects.pi_weights.empty()) {
+    w.NumberArray("pi_thresholds", m.effects.pi_thresholds);
+    w.NumberArray("pi_weights", m.effects.pi_weights);
+  }
   if (!m.uncertainty.empty()) {
     w.Key("uncertainty");
     w.BeginObject();
@@ -209,7 +270,8 @@ void ApplyChannel(const EffectParams& p, const ChannelInput& in, std::vector<dou
   }
   bounds.push_back(n);
 
-  const bool dynamic = p.delay != 0 || p.lag > 0 || p.hysteresis_width > 0;
+  const bool has_pi = !p.pi_thresholds.empty() && p.pi_thresholds.size() == p.pi_weights.size();
+  const bool dynamic = p.delay != 0 || p.lag > 0 || p.hysteresis_width > 0 || has_pi;
   if (dynamic) {
     std::vector<double> tmp;
     for (size_t s = 0; s + 1 < bounds.size(); ++s) {
@@ -242,13 +304,34 @@ void ApplyChannel(const EffectParams& p, const ChannelInput& in, std::vector<dou
           state = std::max(u - r, std::min(u + r, state));
           out[i] = state;
         }
+      } else if (has_pi) {
+        // Prandtl-Ishlinskii: weighted sum of play operators (weights
+        // normalised by their sum), every operator starts released (0).
+        const size_t K = p.pi_thresholds.size();
+        double wsum = 0;
+        for (double w : p.pi_weights) wsum += w;
+        if (wsum > 0) {
+          std::vector<double> state(K, 0.0);
+          for (int i = lo; i < hi; ++i) {
+            const double u = out[i];
+            double y = 0;
+            for (size_t k = 0; k < K; ++k) {
+              const double r = p.pi_thresholds[k];
+              state[k] = std::max(u - r, std::min(u + r, state[k]));
+              y += p.pi_weights[k] * state[k];
+            }
+            out[i] = y / wsum;
+          }
+        }
       }
     }
   }
   const bool has_curv = p.curvature != 0;
   const double cscale = has_curv ? p.curvature / p.full_scale : 0;
+  const bool has_pow = p.power_exponent > 0 && p.power_exponent != 1;
   for (int i = 0; i < n; ++i) {
     double u = out[i];
+    if (has_pow && u != 0) u = (u < 0 ? -p.full_scale : p.full_scale) * std::pow(std::abs(u) / p.full_scale, p.power_exponent);
     if (has_curv) u += cscale * u * std::abs(u);
     if (p.threshold > 0) u = (u < p.threshold) ? 0.0 : u - p.threshold_shift * p.threshold;
     if (p.saturation > 0 && u > p.saturation) u = p.saturation;
@@ -293,6 +376,8 @@ double CorrectReading(const SensorModel& m, double reading, double t_since_start
     }
     u = v;
   }
+  if (p.power_exponent > 0 && p.power_exponent != 1 && u != 0)
+    u = (u < 0 ? -p.full_scale : p.full_scale) * std::pow(std::abs(u) / p.full_scale, 1.0 / p.power_exponent);
   u -= p.crosstalk * shear;
   return u;
 }

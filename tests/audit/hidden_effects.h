@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <algorithm>
 #include <random>
 #include <string>
 #include <vector>
@@ -24,10 +25,61 @@ struct HiddenCase {
 
 inline constexpr double kMaxPeak = 8.0;
 
+// Which form of a two-form effect to hide (kDefault: play operator for
+// hysteresis, quadratic for nonlinearity).
+enum class HiddenForm { kDefault, kPrandtlIshlinskii, kPowerLaw };
+
+// Prandtl-Ishlinskii: the identity (r = 0) with weight 0.1-0.5 plus 3-5 play
+// operators with radii log-uniform in [0.03, 0.3] N, weights uniform in
+// [0.2, 1] (relative); all normalised to sum 1.
+inline void DrawPrandtlIshlinskii(std::mt19937_64& rng, sim::EffectParams* p) {
+  auto uni = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
+  const int K = 3 + static_cast<int>(uni(0, 3));
+  std::vector<double> r;
+  while (static_cast<int>(r.size()) < K) {
+    const double v = 0.03 * std::pow(10.0, uni(0, 1));
+    bool distinct = true;
+    for (double x : r) distinct = distinct && std::abs(std::log(x / v)) > 0.05;
+    if (distinct) r.push_back(v);
+  }
+  std::sort(r.begin(), r.end());
+  const double w0 = uni(0.1, 0.5);
+  std::vector<double> w;
+  double ws = 0;
+  for (int k = 0; k < K; ++k) {
+    w.push_back(uni(0.2, 1.0));
+    ws += w.back();
+  }
+  p->pi_thresholds = {0.0};
+  p->pi_weights = {w0};
+  for (int k = 0; k < K; ++k) {
+    p->pi_thresholds.push_back(r[k]);
+    p->pi_weights.push_back((1 - w0) * w[k] / ws);
+  }
+}
+
+// Maximal loop width of a PI hysteresis, 2 sum w_k r_k / sum w_k (N).
+inline double PiLoopWidth(const sim::EffectParams& p) {
+  double ws = 0, wr = 0;
+  for (size_t k = 0; k < p.pi_weights.size(); ++k) {
+    ws += p.pi_weights[k];
+    wr += p.pi_weights[k] * p.pi_thresholds[k];
+  }
+  return ws > 0 ? 2 * wr / ws : 0;
+}
+
 // Parameter ranges (documented in the README's audit section).
-inline void DrawEffect(Effect e, std::mt19937_64& rng, double seconds, sim::EffectParams* p) {
+inline void DrawEffect(Effect e, std::mt19937_64& rng, double seconds, sim::EffectParams* p,
+                       HiddenForm form = HiddenForm::kDefault) {
   auto uni = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
   auto sign = [&]() { return uni(0, 1) < 0.5 ? -1.0 : 1.0; };
+  if (e == Effect::kHysteresis && form == HiddenForm::kPrandtlIshlinskii) return DrawPrandtlIshlinskii(rng, p);
+  if (e == Effect::kNonlinearity && form == HiddenForm::kPowerLaw) {
+    // Power law reading = a F^p + b: p in [0.7, 0.95] or [1.05, 1.4].
+    p->power_exponent = uni(0, 1) < 0.5 ? uni(0.7, 0.95) : uni(1.05, 1.4);
+    p->full_scale = kMaxPeak;
+    return;
+  }
   switch (e) {
     case Effect::kDeadzone:
       p->threshold = uni(0.1, 0.5);
@@ -47,7 +99,8 @@ inline void DrawEffect(Effect e, std::mt19937_64& rng, double seconds, sim::Effe
   }
 }
 
-inline HiddenCase MakeHiddenCase(const std::vector<Effect>& effects, uint64_t seed) {
+inline HiddenCase MakeHiddenCase(const std::vector<Effect>& effects, uint64_t seed,
+                                 HiddenForm form = HiddenForm::kDefault) {
   std::mt19937_64 rng(seed * 7919 + 17);
   auto uni = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
   HiddenCase hc;
@@ -67,7 +120,7 @@ inline HiddenCase MakeHiddenCase(const std::vector<Effect>& effects, uint64_t se
     m.gain = (uni(0, 1) < 0.5 ? -1 : 1) * uni(20, 80);
     m.offset = uni(500, 1500);
   }
-  for (Effect e : effects) DrawEffect(e, rng, hc.sim.seconds, &m.effects);
+  for (Effect e : effects) DrawEffect(e, rng, hc.sim.seconds, &m.effects, form);
   if (m.effects.saturation > 0) {
     // Saturation inside the run's force range: a fraction of its peak force
     // (the profile does not depend on the model, only on the seed).
@@ -111,6 +164,14 @@ inline Recovery CheckParameters(Effect e, const sim::EffectParams& truth, const 
       r.ok = within(got, want, 0.05, 0.03);
       break;
     case Effect::kNonlinearity: {
+      if (truth.power_exponent > 0) {
+        // Power law: the exponent, +/-(0.01 + 2 %).
+        name = "power_exponent";
+        got = get(name);
+        want = truth.power_exponent;
+        r.ok = within(got, want, 0.01, 0.02);
+        break;
+      }
       name = "curvature";
       // Curvature is relative to full_scale: compare the coefficient c / F.
       got = get("curvature") / get("full_scale") * truth.full_scale;
@@ -119,7 +180,19 @@ inline Recovery CheckParameters(Effect e, const sim::EffectParams& truth, const 
       break;
     }
     case Effect::kHysteresis:
-      name = "hysteresis_width"; got = get(name); want = truth.hysteresis_width;
+      if (!truth.pi_thresholds.empty()) {
+        // PI truth: the maximal loop width 2 sum w r, +/-(0.03 N + 20 %),
+        // from whichever form was named (play: its width).
+        name = "loop_width";
+        got = c.form == "play" ? get("hysteresis_width") : get("loop_width");
+        want = PiLoopWidth(truth);
+        r.ok = within(got, want, 0.03, 0.2);
+        break;
+      }
+      // Play truth: the width, from the play form or the PI's loop width.
+      name = "hysteresis_width";
+      got = c.form == "prandtl_ishlinskii" ? get("loop_width") : get(name);
+      want = truth.hysteresis_width;
       r.ok = within(got, want, 0.02, 0.15);
       break;
     case Effect::kDelay:

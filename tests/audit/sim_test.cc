@@ -229,6 +229,112 @@ TEST(ModelJson, RoundTripAndErrors) {
   EXPECT_TRUE(SensorModelFromJson("{}", "m.json").ok());  // all off = ideal
 }
 
+// ---- Prandtl-Ishlinskii hysteresis and the power law ------------------------
+
+TEST(ModelJson, PrandtlIshlinskiiAndPowerLawRoundTripAndErrors) {
+  SensorModel m;
+  m.effects.pi_thresholds = {0, 0.05, 0.2};
+  m.effects.pi_weights = {0.3, 0.5, 0.2};
+  m.effects.power_exponent = 0.8;
+  m.uncertainty["pi_weights[1]"] = 0.01;
+  m.uncertainty["power_exponent"] = 0.002;
+  const std::string text = SensorModelToJson(m);
+  EXPECT_THAT(text, HasSubstr("\"pi_thresholds\": [0, 0.05, 0.2]"));
+  auto back = SensorModelFromJson(text, "m.json");
+  ASSERT_TRUE(back.ok()) << back.status();
+  EXPECT_EQ(back->effects, m.effects);
+  EXPECT_EQ(back->uncertainty, m.uncertainty);
+  // Models without the new fields do not write them (older readers load them).
+  EXPECT_THAT(SensorModelToJson(SensorModel{}), ::testing::Not(HasSubstr("pi_")));
+
+  auto msg = [](const std::string& json) {
+    return std::string(SensorModelFromJson(json, "m.json").status().message());
+  };
+  EXPECT_THAT(msg("{\"pi_thresholds\": [0, 0.1], \"pi_weights\": [1]}"), HasSubstr("same length"));
+  EXPECT_THAT(msg("{\"pi_thresholds\": [0.1, 0.1], \"pi_weights\": [1, 1]}"), HasSubstr("'pi_thresholds[1]'"));
+  EXPECT_THAT(msg("{\"pi_thresholds\": [0, 0.1], \"pi_weights\": [1, -1]}"), HasSubstr("'pi_weights[1]'"));
+  EXPECT_THAT(msg("{\"pi_thresholds\": [0.1], \"pi_weights\": [0]}"), HasSubstr("must not all be 0"));
+  EXPECT_THAT(msg("{\"pi_thresholds\": [0.1], \"pi_weights\": [1], \"hysteresis_width\": 0.1}"),
+              HasSubstr("exclusive"));
+  EXPECT_THAT(msg("{\"pi_thresholds\": 0.1, \"pi_weights\": [1]}"), HasSubstr("expected an array"));
+  EXPECT_THAT(msg("{\"pi_thresholds\": [\"a\"], \"pi_weights\": [1]}"), HasSubstr("'pi_thresholds[0]': expected a number"));
+  EXPECT_THAT(msg("{\"power_exponent\": -1}"), HasSubstr("power_exponent"));
+  EXPECT_THAT(msg("{\"uncertainty\": {\"pi_weights[x]\": 1}}"), HasSubstr("unknown field"));
+}
+
+TEST(Channel, PrandtlIshlinskiiIsAWeightedSumOfPlayOperators) {
+  // Triangle wave 0 -> 2 -> 0 -> 2 N.
+  std::vector<double> t, f;
+  for (int i = 0; i <= 300; ++i) {
+    t.push_back(0.01 * i);
+    const double ph = std::fmod(0.01 * i, 2.0);
+    f.push_back(ph < 1 ? 2 * ph : 2 * (2 - ph));
+  }
+  ChannelInput in;
+  in.t = t.data();
+  in.force = f.data();
+  in.n = static_cast<int>(t.size());
+  std::vector<double> pi, play1, play2;
+  EffectParams p;
+  p.pi_thresholds = {0, 0.1, 0.3};
+  p.pi_weights = {2, 1, 1};  // relative: 0.5, 0.25, 0.25
+  ApplyChannel(p, in, &pi);
+  EffectParams a;
+  a.hysteresis_width = 0.2;
+  ApplyChannel(a, in, &play1);
+  EffectParams b;
+  b.hysteresis_width = 0.6;
+  ApplyChannel(b, in, &play2);
+  for (size_t i = 0; i < t.size(); ++i) EXPECT_NEAR(pi[i], 0.5 * f[i] + 0.25 * play1[i] + 0.25 * play2[i], 1e-12);
+  // Residual after release = sum w r = 0.25 * 0.1 + 0.25 * 0.3.
+  EXPECT_NEAR(pi[200], 0.1, 1e-9);
+  // A single operator of radius r is the play operator of width 2r.
+  EffectParams single;
+  single.pi_thresholds = {0.1};
+  single.pi_weights = {3};
+  std::vector<double> s;
+  ApplyChannel(single, in, &s);
+  for (size_t i = 0; i < t.size(); ++i) EXPECT_NEAR(s[i], play1[i], 1e-12);
+}
+
+TEST(Channel, PowerLawAndItsInverse) {
+  std::vector<double> t = {0, 1, 2, 3}, f = {0, 1, 4, -2};
+  ChannelInput in;
+  in.t = t.data();
+  in.force = f.data();
+  in.n = 4;
+  EffectParams p;
+  p.power_exponent = 0.5;
+  p.full_scale = 4;
+  std::vector<double> out;
+  ApplyChannel(p, in, &out);
+  EXPECT_NEAR(out[0], 0, 1e-12);
+  EXPECT_NEAR(out[1], 4 * std::sqrt(0.25), 1e-12);
+  EXPECT_NEAR(out[2], 4, 1e-12);
+  EXPECT_NEAR(out[3], -4 * std::sqrt(0.5), 1e-12);  // odd extension
+  SensorModel m;
+  m.effects = p;
+  m.gain = -20;
+  m.offset = 1000;
+  for (double force : {0.3, 1.0, 2.5, 7.0}) {
+    std::vector<double> tt = {0}, ff = {force};
+    const double reading = PredictReading(m, tt, ff, {})[0];
+    EXPECT_NEAR(CorrectReading(m, reading, 0, 0), force, 1e-9);
+  }
+  // Simulation with the new effects runs and matches the channel.
+  SensorModel sm;
+  sm.effects.pi_thresholds = {0, 0.05, 0.15};
+  sm.effects.pi_weights = {0.4, 0.3, 0.3};
+  sm.effects.power_exponent = 0.85;
+  sm.effects.full_scale = 8;
+  auto run = SimulateSensor(sm, Short());
+  ASSERT_TRUE(run.ok()) << run.status();
+  const auto pred = PredictReading(sm, run->t, run->reference, run->shear);
+  double worst = 0;
+  for (size_t i = 0; i < pred.size(); ++i) worst = std::max(worst, std::abs(pred[i] - run->reading[i]));
+  EXPECT_LT(worst, 1e-3);  // play operators on the 4x finer simulation grid
+}
+
 TEST(Json, ParserHandlesTheBasics) {
   auto v = ParseJson(R"({"a": [1, -2.5e3, true, null, "x\n\u00e9"], "b": {}})", "s");
   ASSERT_TRUE(v.ok()) << v.status();

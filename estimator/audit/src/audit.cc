@@ -3,6 +3,8 @@
 #include <limits>
 #include <nlopt.hpp>
 
+#include "Eigen/Dense"
+
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "audit_internal.h"
@@ -45,11 +47,45 @@ absl::StatusOr<Effect> ParseEffect(const std::string& name) {
 namespace {
 
 struct Slot {
-  const char* field;
-  double EffectParams::*ptr;
+  std::string field;
+  double EffectParams::*ptr;  // null for a Prandtl-Ishlinskii weight
   double lo, hi;
   std::vector<double> grid;  // coarse start values (sorted)
+  int pi_index = -1;         // >= 0: pi_weights[pi_index]
 };
+
+double Get(const EffectParams& p, const Slot& s) { return s.pi_index >= 0 ? p.pi_weights[s.pi_index] : p.*(s.ptr); }
+void Set(EffectParams& p, const Slot& s, double v) {
+  if (s.pi_index >= 0) p.pi_weights[s.pi_index] = v;
+  else p.*(s.ptr) = v;
+}
+
+// The functional form of an effect (hysteresis and nonlinearity have two).
+enum class Form { kOnly, kPlay, kPrandtlIshlinskii, kQuadratic, kPowerLaw };
+
+const char* FormName(Form f) {
+  switch (f) {
+    case Form::kOnly: return "";
+    case Form::kPlay: return "play";
+    case Form::kPrandtlIshlinskii: return "prandtl_ishlinskii";
+    case Form::kQuadratic: return "quadratic";
+    case Form::kPowerLaw: return "power_law";
+  }
+  return "";
+}
+
+Form DefaultForm(Effect e) {
+  if (e == Effect::kHysteresis) return Form::kPlay;
+  if (e == Effect::kNonlinearity) return Form::kQuadratic;
+  return Form::kOnly;
+}
+
+// The form an effect has in the parameters p.
+Form FormOf(Effect e, const EffectParams& p) {
+  if (e == Effect::kHysteresis) return p.pi_thresholds.empty() ? Form::kPlay : Form::kPrandtlIshlinskii;
+  if (e == Effect::kNonlinearity) return p.power_exponent > 0 ? Form::kPowerLaw : Form::kQuadratic;
+  return Form::kOnly;
+}
 
 struct Stats {
   double fmin, fmax, range, fabsmax, duration, dt;
@@ -71,8 +107,18 @@ bool IsSmooth(Effect e) {
   return e == Effect::kNonlinearity || e == Effect::kDrift || e == Effect::kCrosstalk;
 }
 
-std::vector<Slot> SlotsFor(Effect e, const Stats& s, const AuditOptions& o) {
+std::vector<Slot> SlotsFor(Effect e, const Stats& s, const AuditOptions& o, Form form = Form::kOnly,
+                           const EffectParams* p = nullptr) {
   const double R = s.range;
+  if (form == Form::kPowerLaw)
+    return {{"power_exponent", &EffectParams::power_exponent, 0.2, 4.0, {0.5, 0.67, 0.8, 0.9, 1.1, 1.25, 1.5, 2.0}}};
+  if (form == Form::kPrandtlIshlinskii) {
+    std::vector<Slot> v;
+    if (p)
+      for (size_t k = 0; k < p->pi_weights.size(); ++k)
+        v.push_back({absl::StrCat("pi_weights[", k, "]"), nullptr, 0.0, 1.0, {}, static_cast<int>(k)});
+    return v;
+  }
   switch (e) {
     case Effect::kDeadzone: {
       std::vector<double> g;
@@ -183,6 +229,7 @@ class Engine {
   }
 
   int n_train() const { return n_train_; }
+  const std::vector<double>& train_reading() const { return d_.reading; }  // first n_train() are training
   long evaluations = 0;
 
  private:
@@ -215,7 +262,7 @@ FitResult Refine(Engine& eng, const EffectParams& start, const std::vector<Slot>
     EffectParams p = c.base;
     for (size_t i = 0; i < c.slots->size(); ++i) {
       const Slot& s = (*c.slots)[i];
-      p.*(s.ptr) = s.lo + std::clamp(x[i], 0.0, 1.0) * (s.hi - s.lo);
+      Set(p, s, s.lo + std::clamp(x[i], 0.0, 1.0) * (s.hi - s.lo));
     }
     return p;
   };
@@ -224,7 +271,7 @@ FitResult Refine(Engine& eng, const EffectParams& start, const std::vector<Slot>
     EffectParams p = c->base;
     for (size_t i = 0; i < c->slots->size(); ++i) {
       const Slot& s = (*c->slots)[i];
-      p.*(s.ptr) = s.lo + std::clamp(x[i], 0.0, 1.0) * (s.hi - s.lo);
+      Set(p, s, s.lo + std::clamp(x[i], 0.0, 1.0) * (s.hi - s.lo));
     }
     const double rss = c->eng->Evaluate(p, false).rss_train;
     if (rss < c->best->rss_train) {
@@ -236,7 +283,7 @@ FitResult Refine(Engine& eng, const EffectParams& start, const std::vector<Slot>
   std::vector<double> x(k), lo(k, 0.0), hi(k, 1.0), dx(k, step);
   for (int i = 0; i < k; ++i) {
     const Slot& s = slots[i];
-    x[i] = s.hi > s.lo ? std::clamp((start.*(s.ptr) - s.lo) / (s.hi - s.lo), 0.0, 1.0) : 0.0;
+    x[i] = s.hi > s.lo ? std::clamp((Get(start, s) - s.lo) / (s.hi - s.lo), 0.0, 1.0) : 0.0;
     if (x[i] + step > 1) dx[i] = -step;
   }
   try {
@@ -329,9 +376,22 @@ FitResult PolishThreshold(Engine& eng, const FitResult& in, const Stats& st) {
 // Fits one effect's parameters on top of `current`: coarse grid over its
 // first parameter (all combinations with the grid of the second), a finer
 // grid around the best, then an NLopt refinement.
+// Slots of the effects named so far, in their current forms.
+std::vector<Slot> SelectedSlots(const std::vector<Effect>& selected, const EffectParams& p, const Stats& st,
+                                const AuditOptions& o, bool* smooth) {
+  std::vector<Slot> v;
+  for (Effect s : selected) {
+    const Form f = FormOf(s, p);
+    for (Slot& sl : SlotsFor(s, st, o, f, &p)) v.push_back(std::move(sl));
+    // PI weights enter non-smoothly through the play operators.
+    if (smooth) *smooth = *smooth && IsSmooth(s) && f != Form::kPrandtlIshlinskii;
+  }
+  return v;
+}
+
 FitResult FitEffect(Engine& eng, Effect e, const EffectParams& current, const std::vector<Effect>& selected,
-                    const Stats& st, const AuditOptions& o) {
-  const std::vector<Slot> slots = SlotsFor(e, st, o);
+                    const Stats& st, const AuditOptions& o, Form form = Form::kOnly) {
+  const std::vector<Slot> slots = SlotsFor(e, st, o, form);
   FitResult best;
   best.p = current;
   auto consider = [&](const EffectParams& p) {
@@ -347,7 +407,7 @@ FitResult FitEffect(Engine& eng, Effect e, const EffectParams& current, const st
   int best_i = 0;
   for (size_t i = 0; i < s0.grid.size(); ++i) {
     EffectParams p = current;
-    p.*(s0.ptr) = s0.grid[i];
+    Set(p, s0, s0.grid[i]);
     if (second.empty()) {
       const double before = best.rss_train;
       consider(p);
@@ -355,7 +415,7 @@ FitResult FitEffect(Engine& eng, Effect e, const EffectParams& current, const st
     } else {
       for (double v : second[0]) {
         EffectParams q = p;
-        q.*(slots[1].ptr) = v;
+        Set(q, slots[1], v);
         const double before = best.rss_train;
         consider(q);
         if (best.rss_train < before) best_i = static_cast<int>(i);
@@ -368,7 +428,7 @@ FitResult FitEffect(Engine& eng, Effect e, const EffectParams& current, const st
     const EffectParams base = best.p;
     for (double v : Lin(a, b, 12)) {
       EffectParams p = base;
-      p.*(s0.ptr) = v;
+      Set(p, s0, v);
       consider(p);
     }
   }
@@ -376,31 +436,202 @@ FitResult FitEffect(Engine& eng, Effect e, const EffectParams& current, const st
   // earlier effect may have absorbed part of this one, e.g. delay + lag).
   std::vector<Slot> joint = slots;
   bool smooth = IsSmooth(e);
-  for (Effect s : selected) {
-    for (const Slot& sl : SlotsFor(s, st, o)) joint.push_back(sl);
-    smooth = smooth && IsSmooth(s);
-  }
+  for (Slot& sl : SelectedSlots(selected, best.p, st, o, &smooth)) joint.push_back(std::move(sl));
   const int evals = o.max_evaluations * (1 + static_cast<int>(selected.size()));
   FitResult r = Refine(eng, best.p, joint, smooth, evals, smooth ? 0.1 : 0.02);
   return PolishThreshold(eng, r.rss_train <= best.rss_train ? r : best, st);
+}
+
+// Non-negative least squares min |X c - y|^2, c >= 0, in normal-equation form
+// (G = X'X, h = X'y; Lawson-Hanson active set). Small problems only.
+std::vector<double> Nnls(const Eigen::MatrixXd& G, const Eigen::VectorXd& h) {
+  const int m = static_cast<int>(h.size());
+  std::vector<double> c(m, 0.0);
+  std::vector<bool> passive(m, false);
+  const double tol = 1e-12 * std::max(1.0, G.diagonal().cwiseAbs().maxCoeff());
+  auto solve_passive = [&](std::vector<double>* z) {
+    std::vector<int> idx;
+    for (int j = 0; j < m; ++j)
+      if (passive[j]) idx.push_back(j);
+    z->assign(m, 0.0);
+    if (idx.empty()) return;
+    Eigen::MatrixXd Gp(idx.size(), idx.size());
+    Eigen::VectorXd hp(idx.size());
+    for (size_t a = 0; a < idx.size(); ++a) {
+      hp[a] = h[idx[a]];
+      for (size_t b = 0; b < idx.size(); ++b) Gp(a, b) = G(idx[a], idx[b]);
+    }
+    // Tiny ridge: neighbouring play operators are nearly collinear.
+    Gp.diagonal().array() += 1e-12 * std::max(1.0, Gp.diagonal().maxCoeff());
+    Eigen::VectorXd zp = Gp.ldlt().solve(hp);
+    for (size_t a = 0; a < idx.size(); ++a) (*z)[idx[a]] = zp[a];
+  };
+  for (int outer = 0; outer < 3 * m; ++outer) {
+    // Gradient of -0.5|Xc-y|^2: w = h - G c.
+    Eigen::VectorXd cv = Eigen::Map<Eigen::VectorXd>(c.data(), m);
+    Eigen::VectorXd w = h - G * cv;
+    int jmax = -1;
+    double wmax = tol;
+    for (int j = 0; j < m; ++j)
+      if (!passive[j] && w[j] > wmax) {
+        wmax = w[j];
+        jmax = j;
+      }
+    if (jmax < 0) break;
+    passive[jmax] = true;
+    for (int inner = 0; inner < 3 * m; ++inner) {
+      std::vector<double> z;
+      solve_passive(&z);
+      bool feasible = true;
+      for (int j = 0; j < m; ++j)
+        if (passive[j] && z[j] <= 0) feasible = false;
+      if (feasible) {
+        c = z;
+        break;
+      }
+      double alpha = 1;
+      for (int j = 0; j < m; ++j)
+        if (passive[j] && z[j] <= 0) alpha = std::min(alpha, c[j] / (c[j] - z[j]));
+      for (int j = 0; j < m; ++j) {
+        c[j] += alpha * (z[j] - c[j]);
+        if (passive[j] && c[j] <= 1e-15) {
+          passive[j] = false;
+          c[j] = 0;
+        }
+      }
+    }
+  }
+  return c;
+}
+
+// Prandtl-Ishlinskii hysteresis on a fixed grid of play radii (r = 0, the
+// identity, plus 12 radii geometric in [0.002 R, 0.1 R]): the channel output
+// is sum_k w_k P_k, linear in the weights when what follows the hysteresis in
+// the chain is affine (+ drift), so the weights (>= 0, with the gain's sign
+// and an offset) are the NNLS solution on the training block. Zero weights
+// are pruned, the rest normalised to sum 1; with a static nonlinearity or
+// other named effects in the model the weights are then refined jointly with
+// them (LN_SBPLX, bounds [0, 1]).
+FitResult FitPrandtlIshlinskii(Engine& eng, const EffectParams& current, const std::vector<Effect>& selected,
+                               const Stats& st, const AuditOptions& o) {
+  std::vector<double> radii = {0.0};
+  for (double r : Geom(0.002 * st.range, 0.1 * st.range, 12)) radii.push_back(r);
+  const int m = static_cast<int>(radii.size());
+  const int n = eng.n_train();
+  const std::vector<double>& y = eng.train_reading();
+  Eigen::MatrixXd X(n, m);
+  for (int k = 0; k < m; ++k) {
+    EffectParams p = current;
+    p.pi_thresholds.clear();
+    p.pi_weights.clear();
+    p.hysteresis_width = 2 * radii[k];
+    const std::vector<double>& g = eng.TrainChannel(p);
+    for (int i = 0; i < n; ++i) X(i, k) = g[i];
+  }
+  // Intercept: centre the columns and the reading.
+  Eigen::VectorXd yv(n);
+  for (int i = 0; i < n; ++i) yv[i] = y[i];
+  const double ymean = yv.mean();
+  yv.array() -= ymean;
+  for (int k = 0; k < m; ++k) X.col(k).array() -= X.col(k).mean();
+  const Eigen::MatrixXd G = X.transpose() * X;
+  const Eigen::VectorXd h = X.transpose() * yv;
+  FitResult best;
+  best.p = current;
+  best.rss_train = eng.Evaluate(current, false).rss_train;
+  for (double sign : {1.0, -1.0}) {
+    std::vector<double> c = Nnls(G, sign * h);
+    double csum = 0;
+    for (double v : c) csum += v;
+    if (!(csum > 0)) continue;
+    EffectParams p = current;
+    p.hysteresis_width = 0;
+    p.pi_thresholds.clear();
+    p.pi_weights.clear();
+    for (int k = 0; k < m; ++k)
+      if (c[k] > 1e-6 * csum) {
+        p.pi_thresholds.push_back(radii[k]);
+        p.pi_weights.push_back(c[k]);
+      }
+    if (p.pi_thresholds.empty() || (p.pi_thresholds.size() == 1 && p.pi_thresholds[0] == 0)) continue;
+    double ws = 0;
+    for (double w : p.pi_weights) ws += w;
+    for (double& w : p.pi_weights) w /= ws;
+    const double rss = eng.Evaluate(p, false).rss_train;
+    if (rss < best.rss_train) {
+      best.rss_train = rss;
+      best.p = p;
+    }
+  }
+  if (best.p.pi_thresholds.empty()) return best;
+  const bool static_after = best.p.curvature != 0 || best.p.power_exponent > 0 || best.p.threshold > 0 ||
+                            best.p.saturation > 0;
+  if (static_after || !selected.empty()) {
+    std::vector<Slot> joint = SlotsFor(Effect::kHysteresis, st, o, Form::kPrandtlIshlinskii, &best.p);
+    for (Slot& sl : SelectedSlots(selected, best.p, st, o, nullptr)) joint.push_back(std::move(sl));
+    const int evals = o.max_evaluations * (1 + static_cast<int>(selected.size()));
+    FitResult r = PolishThreshold(eng, Refine(eng, best.p, joint, false, evals, 0.05), st);
+    if (r.rss_train < best.rss_train) best = r;
+    double ws = 0;
+    for (double w : best.p.pi_weights) ws += w;
+    if (ws > 0)
+      for (double& w : best.p.pi_weights) w /= ws;
+  }
+  return best;
 }
 
 double Bic(double rss, int n, int k) {
   return n * std::log(std::max(rss, 1e-300) / n) + k * std::log(static_cast<double>(n));
 }
 
-int NumParams(Effect e) { return e == Effect::kDeadzone ? 2 : 1; }
+// Parameters an effect adds to the model (BIC's k): a PI hysteresis counts
+// one per active play operator.
+int NumParams(Effect e, const EffectParams& p) {
+  if (e == Effect::kDeadzone) return 2;
+  if (e == Effect::kHysteresis && !p.pi_thresholds.empty()) return static_cast<int>(p.pi_thresholds.size());
+  return 1;
+}
+
+// Maximal loop width of a PI hysteresis (normalised weights): 2 sum w_k r_k.
+double PiLoopWidth(const EffectParams& p) {
+  double ws = 0, wr = 0;
+  for (size_t k = 0; k < p.pi_weights.size() && k < p.pi_thresholds.size(); ++k) {
+    ws += p.pi_weights[k];
+    wr += p.pi_weights[k] * p.pi_thresholds[k];
+  }
+  return ws > 0 ? 2 * wr / ws : 0;
+}
 
 std::map<std::string, double> ParamsOf(Effect e, const EffectParams& p, const Stats& st, const AuditOptions& o) {
   std::map<std::string, double> m;
-  for (const Slot& s : SlotsFor(e, st, o)) m[s.field] = p.*(s.ptr);
+  const Form f = FormOf(e, p);
+  if (f == Form::kPrandtlIshlinskii) {
+    m["loop_width"] = PiLoopWidth(p);
+    m["operators"] = static_cast<double>(p.pi_thresholds.size());
+    return m;
+  }
+  for (const Slot& s : SlotsFor(e, st, o, f, &p)) m[s.field] = Get(p, s);
   if (e == Effect::kNonlinearity) m["full_scale"] = p.full_scale;
+  return m;
+}
+
+std::map<std::string, std::vector<double>> ArrayParamsOf(Effect e, const EffectParams& p) {
+  std::map<std::string, std::vector<double>> m;
+  if (FormOf(e, p) == Form::kPrandtlIshlinskii) {
+    m["pi_thresholds"] = p.pi_thresholds;
+    double ws = 0;
+    for (double w : p.pi_weights) ws += w;
+    std::vector<double> w = p.pi_weights;
+    if (ws > 0)
+      for (double& x : w) x /= ws;
+    m["pi_weights"] = w;
+  }
   return m;
 }
 
 // 1-sigma from the conditional Delta-RSS = sigma^2 interval of each parameter.
 double Uncertainty(Engine& eng, const EffectParams& p, const Slot& s, double rss0, double sigma2) {
-  const double x0 = p.*(s.ptr);
+  const double x0 = Get(p, s);
   const double width = s.hi - s.lo;
   double sides[2];
   int found = 0;
@@ -411,7 +642,7 @@ double Uncertainty(Engine& eng, const EffectParams& p, const Slot& s, double rss
     bool ok = false;
     while (hi <= limit && hi > 0) {
       EffectParams q = p;
-      q.*(s.ptr) = x0 + sign * hi;
+      Set(q, s, x0 + sign * hi);
       if (eng.Evaluate(q, false).rss_train - rss0 >= sigma2) {
         ok = true;
         break;
@@ -427,7 +658,7 @@ double Uncertainty(Engine& eng, const EffectParams& p, const Slot& s, double rss
     for (int it = 0; it < 14; ++it) {
       const double mid = 0.5 * (lo + hi);
       EffectParams q = p;
-      q.*(s.ptr) = x0 + sign * mid;
+      Set(q, s, x0 + sign * mid);
       if (eng.Evaluate(q, false).rss_train - rss0 >= sigma2) hi = mid;
       else lo = mid;
     }
@@ -512,25 +743,45 @@ absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOption
     rep.notes.push_back("no 'shear' column: the crosstalk candidate was not tried");
   }
 
+  // Two streams with an estimated clock offset: a constant delay between the
+  // streams is not identifiable as a sensor effect, so the 'delay' candidate
+  // is replaced by a nuisance delay fitted with every model (the refinement
+  // of the clock offset, reported as clock_offset_s).
+  const bool offset_nuisance = data.clock_offset_source == MeasuredData::ClockOffset::kEstimated;
+  std::vector<Effect> nuisance;
+  if (offset_nuisance) {
+    if (std::find(candidates.begin(), candidates.end(), Effect::kDelay) != candidates.end())
+      rep.notes.push_back(
+          "clock offset estimated from the two streams: a constant sensor delay is indistinguishable from a clock "
+          "offset, so 'delay' is not a candidate cause; it is part of clock_offset_s (give --clock-offset to fix the "
+          "offset and audit the delay)");
+    candidates.erase(std::remove(candidates.begin(), candidates.end(), Effect::kDelay), candidates.end());
+    if (base.delay != 0)
+      rep.notes.push_back("the given model's delay is replaced by the clock-offset refinement");
+    base.delay = 0;
+    nuisance.push_back(Effect::kDelay);
+    base = FitEffect(eng, Effect::kDelay, base, {}, st, o).p;
+  }
+  std::vector<Effect> selected;
+  auto refit_set = [&]() {
+    std::vector<Effect> v = nuisance;
+    v.insert(v.end(), selected.begin(), selected.end());
+    return v;
+  };
+
   // ---- nominal
   Eval ev_cur = eng.Evaluate(base, true);
-  const double a_nom = ev_cur.a, b_nom = ev_cur.b;
-  int k_cur = 2;
+  int k_cur = 2 + static_cast<int>(nuisance.size());
   double bic_cur = Bic(ev_cur.rss_heldout, n_h, k_cur);
   EffectParams current = base;
-  std::vector<Effect> selected;
 
   // ---- forward selection
   for (int round = 1; round <= o.max_causes; ++round) {
     if (!selected.empty()) {
       // Converge the named effects first (with the budget a candidate's joint
       // refinement gets), so a new effect is credited only with what it adds.
-      std::vector<Slot> sel_slots;
       bool smooth = true;
-      for (Effect e : selected) {
-        for (const Slot& sl : SlotsFor(e, st, o)) sel_slots.push_back(sl);
-        smooth = smooth && IsSmooth(e);
-      }
+      const std::vector<Slot> sel_slots = SelectedSlots(refit_set(), current, st, o, &smooth);
       const int evals = o.max_evaluations * (1 + static_cast<int>(selected.size()));
       FitResult pol = PolishThreshold(eng, Refine(eng, current, sel_slots, smooth, evals, smooth ? 0.1 : 0.02), st);
       if (pol.rss_train < ev_cur.rss_train) {
@@ -543,26 +794,40 @@ absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOption
     double best_bic = std::numeric_limits<double>::infinity();
     Eval best_ev;
     EffectParams best_p;
+    std::string best_form;
     std::vector<size_t> round_scores;
+    const std::vector<Effect> refit = refit_set();
     for (size_t ci = 0; ci < candidates.size(); ++ci) {
       const Effect e = candidates[ci];
       if (std::find(selected.begin(), selected.end(), e) != selected.end()) continue;
-      FitResult fr = FitEffect(eng, e, current, selected, st, o);
-      const Eval ev = eng.Evaluate(fr.p, true);
-      const double bic = Bic(ev.rss_heldout, n_h, k_cur + NumParams(e));
-      CandidateScore cs;
-      cs.round = round;
-      cs.effect = EffectName(e);
-      cs.parameters = ParamsOf(e, fr.p, st, o);
-      cs.heldout_rms = std::sqrt(ev.rss_heldout / n_h);
-      cs.bic = bic;
-      round_scores.push_back(rep.candidates.size());
-      rep.candidates.push_back(cs);
-      if (bic < best_bic) {
-        best_bic = bic;
-        best = static_cast<int>(ci);
-        best_ev = ev;
-        best_p = fr.p;
+      // Effects with two forms: each form is fitted and scored like a
+      // candidate of its own (held-out BIC with its own parameter count).
+      std::vector<Form> forms = {DefaultForm(e)};
+      if (e == Effect::kHysteresis) forms.push_back(Form::kPrandtlIshlinskii);
+      if (e == Effect::kNonlinearity) forms.push_back(Form::kPowerLaw);
+      for (Form form : forms) {
+        FitResult fr = form == Form::kPrandtlIshlinskii ? FitPrandtlIshlinskii(eng, current, refit, st, o)
+                                                        : FitEffect(eng, e, current, refit, st, o, form);
+        if (form == Form::kPrandtlIshlinskii && fr.p.pi_thresholds.empty()) continue;  // no hysteresis found
+        const Eval ev = eng.Evaluate(fr.p, true);
+        const double bic = Bic(ev.rss_heldout, n_h, k_cur + NumParams(e, fr.p));
+        CandidateScore cs;
+        cs.round = round;
+        cs.effect = EffectName(e);
+        cs.form = FormName(form);
+        cs.parameters = ParamsOf(e, fr.p, st, o);
+        cs.array_parameters = ArrayParamsOf(e, fr.p);
+        cs.heldout_rms = std::sqrt(ev.rss_heldout / n_h);
+        cs.bic = bic;
+        round_scores.push_back(rep.candidates.size());
+        rep.candidates.push_back(cs);
+        if (bic < best_bic) {
+          best_bic = bic;
+          best = static_cast<int>(ci);
+          best_ev = ev;
+          best_p = fr.p;
+          best_form = FormName(form);
+        }
       }
     }
     if (best < 0) break;
@@ -572,10 +837,13 @@ absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOption
     if (!(best_bic < bic_cur && gain >= o.min_gain)) break;
     const Effect e = candidates[best];
     for (size_t idx : round_scores)
-      if (rep.candidates[idx].effect == EffectName(e)) rep.candidates[idx].accepted = true;
+      if (rep.candidates[idx].effect == EffectName(e) && rep.candidates[idx].form == best_form)
+        rep.candidates[idx].accepted = true;
     Cause c;
     c.effect = EffectName(e);
+    c.form = best_form;
     c.parameters = ParamsOf(e, best_p, st, o);
+    c.array_parameters = ArrayParamsOf(e, best_p);
     c.heldout_rms_before = rms_before;
     c.heldout_rms_after = rms_after;
     c.gain = 100 * gain;
@@ -584,20 +852,20 @@ absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOption
     selected.push_back(e);
     current = best_p;
     ev_cur = best_ev;
-    k_cur += NumParams(e);
+    k_cur += NumParams(e, best_p);
     bic_cur = best_bic;
   }
   rep.nominal_adequate = selected.empty();
 
   // ---- joint refit of all named effects, uncertainties
-  std::vector<Slot> all_slots;
   bool all_smooth = true;
-  for (Effect e : selected) {
-    for (const Slot& s : SlotsFor(e, st, o)) all_slots.push_back(s);
-    all_smooth = all_smooth && IsSmooth(e);
-  }
-  if (selected.size() > 1) {
+  const std::vector<Slot> all_slots = SelectedSlots(refit_set(), current, st, o, &all_smooth);
+  if (selected.size() + nuisance.size() > 1) {
     FitResult fr = PolishThreshold(eng, Refine(eng, current, all_slots, all_smooth, 2 * o.max_evaluations, 0.01), st);
+    double ws = 0;
+    for (double w : fr.p.pi_weights) ws += w;
+    if (ws > 0)
+      for (double& w : fr.p.pi_weights) w /= ws;
     const Eval ev = eng.Evaluate(fr.p, true);
     // Keep the joint refit only when it does not hurt the held-out error.
     if (ev.rss_heldout <= ev_cur.rss_heldout * (1 + 1e-9)) {
@@ -608,15 +876,17 @@ absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOption
   for (auto& c : rep.causes) {
     auto e = ParseEffect(c.effect);
     c.parameters = ParamsOf(*e, current, st, o);
+    c.array_parameters = ArrayParamsOf(*e, current);
   }
   if (o.uncertainties && !selected.empty()) {
     const double rss0 = eng.Evaluate(current, false).rss_train;
-    int k_total = 2;
-    for (Effect e : selected) k_total += NumParams(e);
+    int k_total = 2 + static_cast<int>(nuisance.size());
+    for (Effect e : selected) k_total += NumParams(e, current);
     const double sigma2 = rss0 / std::max(1, n_train - k_total);
     for (auto& c : rep.causes) {
       auto e = ParseEffect(c.effect);
-      for (const Slot& s : SlotsFor(*e, st, o)) c.uncertainties[s.field] = Uncertainty(eng, current, s, rss0, sigma2);
+      for (const Slot& s : SlotsFor(*e, st, o, FormOf(*e, current), &current))
+        c.uncertainties[s.field] = Uncertainty(eng, current, s, rss0, sigma2);
     }
   }
 
@@ -638,8 +908,6 @@ absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOption
   rep.extended_model = make_model(current, ev_cur, "audit extended model");
   for (const auto& c : rep.causes)
     for (const auto& [k, v] : c.uncertainties) rep.extended_model.uncertainty[k] = v;
-  (void)a_nom;
-  (void)b_nom;
 
   // ---- re-simulate with both models, measure the gain, diagnostics
   rep.t = data.t;
@@ -654,6 +922,25 @@ absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOption
   rep.heldout_rms_before = rep.nominal.heldout_rms;
   rep.heldout_rms_after = rep.extended.heldout_rms;
   rep.gain = rep.heldout_rms_before > 0 ? 100 * (1 - rep.heldout_rms_after / rep.heldout_rms_before) : 0;
+
+  // ---- clock offset (two streams)
+  if (data.clock_offset_source == MeasuredData::ClockOffset::kFixed) {
+    rep.clock_offset_s = data.clock_offset;
+    rep.clock_offset_mode = "fixed";
+  } else if (offset_nuisance) {
+    // The refinement is a delay of the reading behind the aligned reference:
+    // reading(t) = F_ref(t - offset - delay).
+    rep.clock_offset_mode = "estimated";
+    rep.clock_offset_xcorr_s = data.clock_offset;
+    rep.clock_offset_refinement_s = current.delay;
+    rep.clock_offset_s = data.clock_offset + current.delay;
+    rep.clock_offset_correlation = data.clock_offset_correlation;
+    // The clock offset is not a property of the sensor: the written models
+    // carry no delay (the re-simulated series above include it).
+    rep.nominal_model.effects.delay = 0;
+    rep.extended_model.effects.delay = 0;
+    rep.extended_model.uncertainty.erase("delay");
+  }
 
   if (o.downstream_gain && !selected.empty()) {
     auto dg = internal::MeasureDownstreamGain(rep.nominal_model, rep.extended_model, o.downstream_grasps, o.seed, st.fmax);

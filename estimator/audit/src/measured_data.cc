@@ -111,6 +111,137 @@ absl::StatusOr<MeasuredData> ReadMeasuredCsv(const std::string& path) {
   return MeasuredDataFromCsv(*table);
 }
 
+namespace {
+
+double MedianStep(const std::vector<double>& t) {
+  std::vector<double> d;
+  for (size_t i = 1; i < t.size(); ++i) d.push_back(t[i] - t[i - 1]);
+  if (d.empty()) return 0;
+  std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+  return d[d.size() / 2];
+}
+
+// |Pearson correlation| of the reading samples idx with the reference
+// (linearly interpolated) at t - offset.
+double OffsetCorrelation(const std::vector<double>& rt, const std::vector<double>& rv, const std::vector<double>& qt,
+                         const std::vector<double>& qv, size_t first, size_t last, double offset) {
+  double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+  size_t k = 0;
+  const double n = static_cast<double>(last - first);
+  for (size_t i = first; i < last; ++i) {
+    const double tq = qt[i] - offset;
+    while (k + 2 < rt.size() && rt[k + 1] < tq) ++k;
+    const double w = std::clamp((tq - rt[k]) / (rt[k + 1] - rt[k]), 0.0, 1.0);
+    const double x = rv[k] + w * (rv[k + 1] - rv[k]);
+    const double y = qv[i];
+    sx += x;
+    sy += y;
+    sxx += x * x;
+    syy += y * y;
+    sxy += x * y;
+  }
+  const double vx = sxx - sx * sx / n, vy = syy - sy * sy / n, cxy = sxy - sx * sy / n;
+  if (!(vx > 0) || !(vy > 0)) return 0;
+  return std::abs(cxy) / std::sqrt(vx * vy);
+}
+
+}  // namespace
+
+absl::StatusOr<ClockOffsetEstimate> EstimateClockOffset(const std::vector<double>& rt, const std::vector<double>& rv,
+                                                        const std::vector<double>& qt, const std::vector<double>& qv,
+                                                        double centre, double max_offset) {
+  if (!std::isfinite(centre)) return absl::InvalidArgumentError("clock offset: the search centre is not a finite number");
+  if (!(max_offset > 0) || !std::isfinite(max_offset))
+    return absl::InvalidArgumentError(
+        absl::StrCat("max clock offset: must be a finite number > 0 s, got ", max_offset));
+  if (rt.size() < 2 || rv.size() != rt.size() || qt.size() < 2 || qv.size() != qt.size())
+    return absl::InvalidArgumentError("clock offset: each stream needs at least 2 samples");
+  // Overlap of the streams at the search centre (in reading time).
+  const double ov_lo = std::max(rt.front() + centre, qt.front());
+  const double ov_hi = std::min(rt.back() + centre, qt.back());
+  const double overlap = ov_hi - ov_lo;
+  if (!(overlap > 2 * max_offset))
+    return absl::InvalidArgumentError(absl::StrCat(
+        "clock offset search +/-", max_offset, " s around ", centre, " s exceeds the streams' overlap (",
+        std::max(0.0, overlap), " s: reference ", rt.front(), "..", rt.back(), " s, reading ", qt.front(), "..",
+        qt.back(), " s); the overlap must be longer than the search range (", 2 * max_offset,
+        " s): give a smaller --max-clock-offset or the offset itself with --clock-offset"));
+  // Reading samples inside the reference span for every offset searched.
+  const double lo = rt.front() + centre + max_offset, hi = rt.back() + centre - max_offset;
+  const size_t first = std::lower_bound(qt.begin(), qt.end(), lo) - qt.begin();
+  const size_t last = std::upper_bound(qt.begin(), qt.end(), hi) - qt.begin();
+  const int used = last > first ? static_cast<int>(last - first) : 0;
+  if (used < kMinAuditSamples)
+    return absl::InvalidArgumentError(absl::StrCat(
+        "clock offset: only ", used, " reading samples lie inside the reference span for every offset in ", centre,
+        " +/- ", max_offset, " s; need at least ", kMinAuditSamples,
+        " (give a smaller --max-clock-offset or the offset with --clock-offset)"));
+  const double h = std::max(1e-9, std::min(MedianStep(rt), MedianStep(qt)));
+  // Coarse grid (at most 2001 points), then a grid of step h/2 around the
+  // best, then golden section within one fine step.
+  const double coarse = std::max(0.5 * h, 2 * max_offset / 2000);
+  auto corr = [&](double off) { return OffsetCorrelation(rt, rv, qt, qv, first, last, off); };
+  double best = centre, best_r = -1;
+  for (double off = centre - max_offset; off <= centre + max_offset + 1e-12; off += coarse) {
+    const double r = corr(off);
+    if (r > best_r) {
+      best_r = r;
+      best = off;
+    }
+  }
+  double fine = std::min(coarse, 0.5 * h);
+  if (coarse > fine) {
+    const double c0 = best;
+    for (double off = c0 - coarse; off <= c0 + coarse + 1e-12; off += fine) {
+      if (off < centre - max_offset || off > centre + max_offset) continue;
+      const double r = corr(off);
+      if (r > best_r) {
+        best_r = r;
+        best = off;
+      }
+    }
+  }
+  {
+    double a = std::max(centre - max_offset, best - fine), b = std::min(centre + max_offset, best + fine);
+    const double g = 0.5 * (std::sqrt(5.0) - 1);
+    double x1 = b - g * (b - a), x2 = a + g * (b - a);
+    double f1 = corr(x1), f2 = corr(x2);
+    for (int it = 0; it < 60 && b - a > 1e-9; ++it) {
+      if (f1 > f2) {
+        b = x2;
+        x2 = x1;
+        f2 = f1;
+        x1 = b - g * (b - a);
+        f1 = corr(x1);
+      } else {
+        a = x1;
+        x1 = x2;
+        f1 = f2;
+        x2 = a + g * (b - a);
+        f2 = corr(x2);
+      }
+    }
+    const double xm = 0.5 * (a + b), fm = corr(xm);
+    if (fm > best_r) {
+      best_r = fm;
+      best = xm;
+    }
+  }
+  if (best - (centre - max_offset) < h || (centre + max_offset) - best < h)
+    return absl::InvalidArgumentError(absl::StrCat(
+        "clock offset: the correlation peak (", best, " s, |r| = ", best_r, ") is at the edge of the search range ",
+        centre, " +/- ", max_offset, " s; the true offset may lie outside: widen --max-clock-offset or give --clock-offset"));
+  if (best_r < 0.3)
+    return absl::InvalidArgumentError(absl::StrCat(
+        "clock offset: no clear correlation between the streams (peak |r| = ", best_r, " at ", best,
+        " s); check that the files belong together, or give --clock-offset"));
+  ClockOffsetEstimate e;
+  e.offset = best;
+  e.correlation = best_r;
+  e.samples = used;
+  return e;
+}
+
 absl::StatusOr<MeasuredData> AlignStreams(const estimator::CsvTable& ref, const estimator::CsvTable& rd,
                                           const AlignOptions& options) {
   if (auto st = ref.Require({"t", "value"}); !st.ok()) return st;
@@ -136,10 +267,24 @@ absl::StatusOr<MeasuredData> AlignStreams(const estimator::CsvTable& ref, const 
                                                    ", need at least 2 to interpolate"));
   MeasuredData d;
   d.source = absl::StrCat(ref.source, " + ", rd.source);
+  double clock_offset = options.clock_offset;
+  d.clock_offset_source = MeasuredData::ClockOffset::kFixed;
+  if (options.mode == ClockOffsetMode::kEstimate) {
+    auto est = EstimateClockOffset(rt, rv, qt, qv, options.clock_offset, options.max_clock_offset);
+    if (!est.ok())
+      return absl::InvalidArgumentError(absl::StrCat(ref.source, " + ", rd.source, ": ", est.status().message()));
+    clock_offset = est->offset;
+    d.clock_offset_source = MeasuredData::ClockOffset::kEstimated;
+    d.clock_offset_correlation = est->correlation;
+    d.notes.push_back(absl::StrCat("clock offset estimated by cross-correlation: ", est->offset, " s (peak |r| ",
+                                   est->correlation, ", ", est->samples, " reading samples, search ",
+                                   options.clock_offset, " +/- ", options.max_clock_offset, " s)"));
+  }
+  d.clock_offset = clock_offset;
   int outside = 0;
   size_t k = 0;
   for (size_t i = 0; i < qt.size(); ++i) {
-    const double tq = qt[i] - options.clock_offset;
+    const double tq = qt[i] - clock_offset;
     if (tq < rt.front() || tq > rt.back()) {
       ++outside;
       continue;
@@ -160,7 +305,7 @@ absl::StatusOr<MeasuredData> AlignStreams(const estimator::CsvTable& ref, const 
   };
   d.notes.push_back(absl::StrCat("two streams aligned: reference ", rt.size(), " samples at ~", rate(rt),
                                  " Hz interpolated onto ", d.t.size(), " reading samples at ~", rate(qt), " Hz",
-                                 options.clock_offset != 0 ? absl::StrCat(" (clock offset ", options.clock_offset, " s)") : ""));
+                                 clock_offset != 0 ? absl::StrCat(" (clock offset ", clock_offset, " s)") : ""));
   if (outside > 0)
     d.notes.push_back(absl::StrCat(outside, " reading sample(s) outside the reference time span dropped"));
   if (d.skipped_nan_rows > 0)

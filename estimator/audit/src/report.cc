@@ -61,6 +61,18 @@ void WriteMap(JsonWriter& w, const std::string& key, const std::map<std::string,
   w.EndObject();
 }
 
+// "parameters": {"form": ..., numbers..., arrays...} ("form" only for the
+// effects with two forms).
+void WriteParameters(JsonWriter& w, const std::string& form, const std::map<std::string, double>& m,
+                     const std::map<std::string, std::vector<double>>& arrays) {
+  w.Key("parameters");
+  w.BeginObject();
+  if (!form.empty()) w.Field("form", form);
+  for (const auto& [k, v] : m) w.Field(k, v);
+  for (const auto& [k, v] : arrays) w.NumberArray(k, v);
+  w.EndObject();
+}
+
 // ---- SVG ------------------------------------------------------------------
 
 struct Series {
@@ -163,6 +175,12 @@ std::string Plot(const std::string& title, const std::string& xlabel, const std:
 
 std::string CauseLine(const Cause& c) {
   std::string p;
+  if (!c.form.empty()) p = c.form;
+  for (const auto& [k, v] : c.array_parameters) {
+    absl::StrAppend(&p, p.empty() ? "" : ", ", k, " = [");
+    for (size_t i = 0; i < v.size(); ++i) absl::StrAppend(&p, i ? " " : "", Fmt(v[i]));
+    p += "]";
+  }
   for (const auto& [k, v] : c.parameters) {
     if (k == "full_scale") continue;
     auto u = c.uncertainties.find(k);
@@ -185,7 +203,7 @@ std::string AuditReportJson(const AuditReport& r, const std::string& extended_mo
   for (const auto& c : r.causes) {
     w.BeginObject();
     w.Field("effect", c.effect);
-    WriteMap(w, "parameters", c.parameters);
+    WriteParameters(w, c.form, c.parameters, c.array_parameters);
     WriteMap(w, "uncertainties", c.uncertainties);
     w.Field("heldout_rms_before", c.heldout_rms_before);
     w.Field("heldout_rms_after", c.heldout_rms_after);
@@ -204,6 +222,23 @@ std::string AuditReportJson(const AuditReport& r, const std::string& extended_mo
   w.FieldInt("n_heldout", r.n_heldout);
   w.FieldInt("skipped_nan_rows", r.skipped_nan_rows);
   w.Field("split_time", r.split_time);
+  w.Key("clock_offset_s");
+  if (r.clock_offset_s) w.Number(*r.clock_offset_s);
+  else w.Null();
+  if (r.clock_offset_s) {
+    w.Key("clock_offset");
+    w.BeginObject();
+    w.Field("mode", r.clock_offset_mode);
+    if (r.clock_offset_mode == "estimated") {
+      w.Field("cross_correlation_s", r.clock_offset_xcorr_s);
+      w.Field("refinement_s", r.clock_offset_refinement_s);
+      w.Field("peak_correlation", r.clock_offset_correlation);
+      w.Field("note",
+              "reading clock minus reference clock; includes any constant sensor delay (indistinguishable from two "
+              "streams)");
+    }
+    w.EndObject();
+  }
   w.Key("nominal_model");
   w.BeginObject();
   w.Field("gain", r.nominal_model.gain);
@@ -224,7 +259,7 @@ std::string AuditReportJson(const AuditReport& r, const std::string& extended_mo
     w.BeginObject();
     w.FieldInt("round", c.round);
     w.Field("effect", c.effect);
-    WriteMap(w, "parameters", c.parameters);
+    WriteParameters(w, c.form, c.parameters, c.array_parameters);
     w.Field("heldout_rms", c.heldout_rms);
     w.Field("bic", c.bic);
     w.FieldBool("accepted", c.accepted);
@@ -259,6 +294,18 @@ std::string FormatAuditSummary(const AuditReport& r) {
                         r.n_heldout, r.split_time);
   if (r.skipped_nan_rows) absl::StrAppendFormat(&s, ", %d NaN rows skipped", r.skipped_nan_rows);
   s += "\n";
+  if (r.clock_offset_s) {
+    if (r.clock_offset_mode == "estimated")
+      absl::StrAppendFormat(&s,
+                            "  two streams, clock offset (reading - reference clock) %.6g s, estimated: "
+                            "cross-correlation %.6g s (peak |r| %.3f) + audit refinement %.3g s; a constant sensor "
+                            "delay is part of it\n",
+                            *r.clock_offset_s, r.clock_offset_xcorr_s, r.clock_offset_correlation,
+                            r.clock_offset_refinement_s);
+    else
+      absl::StrAppendFormat(&s, "  two streams, clock offset (reading - reference clock) %.6g s, as given\n",
+                            *r.clock_offset_s);
+  }
   const auto& nm = r.nominal_model;
   absl::StrAppendFormat(&s, "Nominal model: reading = %.6g * force + %.6g  [%s]\n", nm.gain, nm.offset,
                         r.reading_units);

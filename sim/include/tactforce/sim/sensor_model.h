@@ -6,6 +6,12 @@
 //   u  = u(t - delay)                              (pure time delay)
 //   u  = first-order lag, time constant `lag`
 //   u  = play operator of loop width `hysteresis_width` (radius width/2)
+//        or Prandtl-Ishlinskii hysteresis (the two forms are exclusive):
+//        u = sum_k w_k play_{r_k}(u) / sum_k w_k, radii r_k = pi_thresholds
+//        (N, 0 <= r_1 < ... < r_K; r = 0 is the identity), weights
+//        pi_weights >= 0 (relative: normalised by their sum)
+//   u  = full_scale * sign(u) |u / full_scale|^power_exponent
+//                                                  (power law, 0 = off)
 //   u  = u + curvature * u|u| / full_scale         (smooth nonlinearity)
 //   u  = 0 if u < threshold, else u - threshold_shift * threshold
 //        (shift 0: GeoDEx activation threshold, a jump; 1: continuous dead-zone)
@@ -36,6 +42,15 @@ struct EffectParams {
   double full_scale = 20;        // N, > 0 (only scales curvature)
   double drift = 0;              // N/s
   double crosstalk = 0;          // N per N of shear
+  // Power-law nonlinearity u -> full_scale * sign(u) |u/full_scale|^p
+  // (p > 0; 0 = off; the gain absorbs the full_scale^(1-p) factor, so this
+  // is reading = a * F^p + b in the force domain).
+  double power_exponent = 0;
+  // Prandtl-Ishlinskii hysteresis (empty = off; exclusive with
+  // hysteresis_width): radii r_k (N, strictly increasing, >= 0) and
+  // non-negative relative weights (normalised by their sum, which must be > 0).
+  std::vector<double> pi_thresholds;
+  std::vector<double> pi_weights;
 
   bool operator==(const EffectParams&) const = default;
 };
@@ -88,7 +103,7 @@ std::vector<double> PredictReading(const SensorModel& model, const std::vector<d
 
 // Inverse of the static part: force estimate from a reading, for correcting
 // readings (downstream use). Uses gain/offset, drift, crosstalk (needs shear;
-// pass 0 if unknown), curvature, threshold shift and saturation (clipped
+// pass 0 if unknown), curvature, power law, threshold shift and saturation (clipped
 // readings map to the saturation force). Dynamic effects are not inverted.
 double CorrectReading(const SensorModel& model, double reading, double t_since_start, double shear);
 

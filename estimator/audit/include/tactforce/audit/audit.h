@@ -87,7 +87,12 @@ struct Diagnostics {
 
 struct Cause {
   std::string effect;                            // vocabulary above
+  // Functional form where an effect has more than one: hysteresis "play" or
+  // "prandtl_ishlinskii"; nonlinearity "quadratic" or "power_law"; else "".
+  std::string form;
   std::map<std::string, double> parameters;      // sensor-model field -> value
+  // Array parameters (PI hysteresis: pi_thresholds, pi_weights).
+  std::map<std::string, std::vector<double>> array_parameters;
   std::map<std::string, double> uncertainties;   // 1 sigma (joint final fit)
   double heldout_rms_before = 0;                 // reading units
   double heldout_rms_after = 0;
@@ -98,7 +103,9 @@ struct Cause {
 struct CandidateScore {
   int round = 0;
   std::string effect;
+  std::string form;  // see Cause::form
   std::map<std::string, double> parameters;
+  std::map<std::string, std::vector<double>> array_parameters;
   double heldout_rms = 0;
   double bic = 0;
   bool accepted = false;
@@ -130,6 +137,15 @@ struct AuditReport {
   std::vector<CandidateScore> candidates;
   std::optional<DownstreamGain> downstream;
   std::vector<std::string> notes;
+  // Two streams: the clock offset used (reading clock minus reference clock,
+  // s). Estimated = cross-correlation estimate + the audit's refinement (a
+  // nuisance delay fitted with every model; a constant sensor delay is part of
+  // it, indistinguishable from two streams). Fixed = as given.
+  std::optional<double> clock_offset_s;
+  std::string clock_offset_mode;        // "estimated" | "fixed" | "" (one CSV)
+  double clock_offset_xcorr_s = 0;      // estimated: the cross-correlation stage
+  double clock_offset_refinement_s = 0; // estimated: the audit's refinement
+  double clock_offset_correlation = 0;  // estimated: peak |correlation|
   // Series for plots.
   std::vector<double> t, reference, reading, predicted_nominal, predicted_extended;
 };
