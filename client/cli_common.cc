@@ -1,12 +1,15 @@
 #include "cli_common.h"
 
 #include <cerrno>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <iterator>
 #include <sstream>
+#include <vector>
 
 #include "absl/strings/str_cat.h"
 
@@ -69,6 +72,21 @@ int ReportError(const absl::Status& status) {
   }
   std::cerr << "error: " << message << std::endl;
   return ExitCodeFor(status.code());
+}
+
+absl::StatusOr<Eigen::Vector3d> ParseVec3(const std::string& text, const std::string& flag) {
+  std::vector<double> v;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    char* end = nullptr;
+    const double x = std::strtod(item.c_str(), &end);
+    if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(x))
+      return absl::InvalidArgumentError(absl::StrCat(flag, ": '", text, "' is not x,y,z"));
+    v.push_back(x);
+  }
+  if (v.size() != 3) return absl::InvalidArgumentError(absl::StrCat(flag, ": '", text, "' is not x,y,z"));
+  return Eigen::Vector3d(v[0], v[1], v[2]);
 }
 
 }  // namespace tactforce::cli

@@ -3,6 +3,8 @@
 
 #include <string>
 
+#include <Eigen/Core>
+
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 
@@ -35,6 +37,9 @@ int ExitCodeFor(absl::StatusCode code);
 // Whole contents of `path`; "-" reads standard input. Errors name the path.
 absl::StatusOr<std::string> ReadInput(const std::string& path,
                                       const std::string& flag = "--request");
+
+// "x,y,z" (three finite numbers) as a vector; errors name the flag.
+absl::StatusOr<Eigen::Vector3d> ParseVec3(const std::string& text, const std::string& flag);
 
 // Prints "error: <message>" as one line on stderr and returns
 // ExitCodeFor(status.code()). InvalidArgument, Unavailable and

@@ -23,21 +23,6 @@
 namespace tactforce::cli {
 namespace {
 
-absl::StatusOr<planner::Vec3> ParseVec3(const std::string& text, const std::string& flag) {
-  std::vector<double> v;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    char* end = nullptr;
-    const double x = std::strtod(item.c_str(), &end);
-    if (item.empty() || end != item.c_str() + item.size() || !std::isfinite(x))
-      return absl::InvalidArgumentError(absl::StrCat(flag, ": '", text, "' is not x,y,z"));
-    v.push_back(x);
-  }
-  if (v.size() != 3) return absl::InvalidArgumentError(absl::StrCat(flag, ": '", text, "' is not x,y,z"));
-  return planner::Vec3(v[0], v[1], v[2]);
-}
-
 absl::StatusOr<v1::EstimateResponse> RemoteEstimate(const ConnectionArgs& connection,
                                                     const v1::EstimateRequest& request) {
   absl::StatusOr<std::shared_ptr<grpc::Channel>> channel = MakeChannel(connection, connection.server);

@@ -9,6 +9,7 @@
 #include "demo_command.h"
 #include "estimate_command.h"
 #include "health_command.h"
+#include "inertia_command.h"
 #include "load_command.h"
 #include "plan_command.h"
 
@@ -32,6 +33,7 @@ int Main(int argc, char** argv) {
       "  tactforce health --server localhost:50051\n"
       "  tactforce load --target localhost:50051 --rpc plan --concurrency 8 --duration 5\n"
       "  tactforce demo [--server localhost:50051]\n"
+      "  tactforce simulate inertia --out sim/ && tactforce inertia --csv sim/inertia.csv --truth sim/truth.json\n"
       "Run 'tactforce COMMAND --help' for the options of a command.");
 
   PlanArgs plan_args;
@@ -54,6 +56,10 @@ int Main(int argc, char** argv) {
   CLI::App* simulate_sensor = AddSimulateSensorCommand(*simulate, simulate_sensor_args);
   AuditArgs audit_args;
   CLI::App* audit = AddAuditCommand(app, audit_args);
+  InertiaArgs inertia_args;
+  CLI::App* inertia = AddInertiaCommand(app, inertia_args);
+  SimulateInertiaArgs simulate_inertia_args;
+  CLI::App* simulate_inertia = AddSimulateInertiaCommand(*simulate, simulate_inertia_args);
 
   try {
     app.parse(argc, argv);
@@ -77,6 +83,8 @@ int Main(int argc, char** argv) {
   if (simulate_friction->parsed()) return RunSimulateFriction(simulate_friction_args);
   if (simulate_sensor->parsed()) return RunSimulateSensor(simulate_sensor_args);
   if (audit->parsed()) return RunAuditCommand(audit_args);
+  if (inertia->parsed()) return RunInertia(inertia_args);
+  if (simulate_inertia->parsed()) return RunSimulateInertia(simulate_inertia_args);
   std::cerr << "error: no command given (see tactforce --help)" << std::endl;
   return kExitBadInput;
 }

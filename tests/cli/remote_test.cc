@@ -258,5 +258,36 @@ TEST(RemoteTlsTest, MutualTls) {
   EXPECT_EQ(server->Stop(), 0);
 }
 
+class RemoteInertiaTest : public RemoteCliTest {};
+
+// `tactforce inertia --server` streams the CSV to Estimator.FitInertia in
+// batches and prints the same answer as the local fit.
+TEST_F(RemoteInertiaTest, StreamedFitEqualsLocalFit) {
+  const std::string sim = dir_.Path("sim");
+  ASSERT_EQ(Tactforce({"simulate", "inertia", "--out", sim, "--seconds", "3", "--force-variance", "0.25"}).exit_code, 0);
+  const std::vector<std::string> fit = {"inertia", "--csv", sim + "/inertia.csv", "--truth", sim + "/truth.json",
+                                        "--json", "--method", "factor-graph"};
+  const ProcessResult local = Tactforce(fit);
+  ASSERT_EQ(local.exit_code, 0) << Describe(local);
+  std::vector<std::string> remote_args = fit;
+  for (const char* a : {"--server", "", "--batch", "37"}) remote_args.push_back(a);
+  remote_args[remote_args.size() - 3] = address();
+  const ProcessResult remote = Tactforce(remote_args);
+  ASSERT_EQ(remote.exit_code, 0) << Describe(remote);
+  absl::StatusOr<google::protobuf::Struct> a = ParseJsonObject(local.out);
+  absl::StatusOr<google::protobuf::Struct> b = ParseJsonObject(remote.out);
+  ASSERT_TRUE(a.ok() && b.ok());
+  for (const char* key : {"mass", "physically_consistent", "samples_received"}) {
+    ASSERT_TRUE(a->fields().contains(key)) << key;
+    EXPECT_EQ(a->fields().at(key).DebugString(), b->fields().at(key).DebugString()) << key;
+  }
+  EXPECT_EQ(a->fields().at("inertia").DebugString(), b->fields().at("inertia").DebugString());
+  // A bad file is rejected before anything is sent.
+  const std::string bad = dir_.Write("bad.csv", "t,px\n0,0\n");
+  const ProcessResult r = Tactforce({"inertia", "--csv", bad, "--server", address()});
+  EXPECT_EQ(r.exit_code, kExitBadInput) << Describe(r);
+  ExpectOneLineError(r);
+}
+
 }  // namespace
 }  // namespace tactforce::cli_testing

@@ -1,9 +1,13 @@
 // tactforce.v1.Estimator and tactforce.v1.Audit.
-// Estimator: EstimateForces and EstimateFriction, thin adapters
-// over tactforce::api (which calls the estimator library). Both run on the
-// WorkerPool (friction requests carry whole time series).
+// Estimator: EstimateForces, EstimateFriction and the client-streaming
+// FitInertia, thin adapters over tactforce::api (which calls the estimator
+// libraries). All run on the WorkerPool (friction requests carry whole time
+// series; an inertia fit takes tens to hundreds of milliseconds). FitInertia
+// converts each message as it arrives on the gRPC thread (cheap) and fits on
+// the pool once the client half-closes.
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 #include "tactforce/server/server_host.h"
@@ -15,6 +19,7 @@ namespace tactforce::server {
 
 struct EstimatorServiceOptions {
   int max_contacts = 64;
+  int64_t max_inertia_samples = 1'000'000;  // per FitInertia stream
 };
 
 class EstimatorService final : public v1::Estimator::CallbackService, public HostedService {
@@ -33,6 +38,8 @@ class EstimatorService final : public v1::Estimator::CallbackService, public Hos
   grpc::ServerUnaryReactor* EstimateFriction(grpc::CallbackServerContext* context,
                                              const v1::FrictionRequest* request,
                                              v1::FrictionResponse* response) override;
+  grpc::ServerReadReactor<v1::FitInertiaRequest>* FitInertia(grpc::CallbackServerContext* context,
+                                                             v1::FitInertiaResponse* response) override;
 
  private:
   WorkerPool* pool_;

@@ -21,6 +21,28 @@
 
 namespace tactforce::server {
 
+// The per-call log line of a pool-run RPC (info level): rpc, code, total
+// time, peer, `extra` ("key=value ..." or empty), and the message on error.
+inline void LogPoolRpc(const char* rpc, const grpc::Status& status,
+                       std::chrono::steady_clock::time_point start, const std::string& peer,
+                       const std::string& extra = {}) {
+  if (!spdlog::should_log(spdlog::level::info)) return;
+  const auto us = std::chrono::duration_cast<std::chrono::microseconds>(
+                      std::chrono::steady_clock::now() - start).count();
+  std::string line = absl::StrCat("rpc=", rpc, " code=", StatusCodeName(status.error_code()),
+                                  extra.empty() ? "" : " ", extra, " where=pool total_us=", us,
+                                  " peer=", LogValue(peer));
+  if (!status.ok()) absl::StrAppend(&line, " message=", LogValue(status.error_message()));
+  spdlog::info("{}", line);
+}
+
+// RESOURCE_EXHAUSTED for a full pool.
+inline grpc::Status PoolBusyStatus(const WorkerPool& pool) {
+  return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                      absl::StrCat("server busy: all ", pool.workers(), " workers busy and ",
+                                   pool.max_queued(), " requests queued; retry later"));
+}
+
 template <class Request, class Response>
 using UnaryHandler = std::function<absl::StatusOr<Response>(const Request&, const api::CallLimits&)>;
 
@@ -32,14 +54,7 @@ grpc::ServerUnaryReactor* ServeOnPool(const char* rpc, grpc::CallbackServerConte
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
   const auto start = std::chrono::steady_clock::now();
   auto finish = [rpc, reactor, start](const grpc::Status& status, const std::string& peer) {
-    if (spdlog::should_log(spdlog::level::info)) {
-      const auto us = std::chrono::duration_cast<std::chrono::microseconds>(
-                          std::chrono::steady_clock::now() - start).count();
-      std::string line = absl::StrCat("rpc=", rpc, " code=", StatusCodeName(status.error_code()),
-                                      " where=pool total_us=", us, " peer=", LogValue(peer));
-      if (!status.ok()) absl::StrAppend(&line, " message=", LogValue(status.error_message()));
-      spdlog::info("{}", line);
-    }
+    LogPoolRpc(rpc, status, start, peer);
     reactor->Finish(status);
   };
   const std::string peer = spdlog::should_log(spdlog::level::info) ? context->peer() : "";
@@ -54,10 +69,7 @@ grpc::ServerUnaryReactor* ServeOnPool(const char* rpc, grpc::CallbackServerConte
     finish(grpc::Status::OK, peer);
   });
   if (!queued) {
-    finish(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                        absl::StrCat("server busy: all ", pool->workers(), " workers busy and ",
-                                     pool->max_queued(), " requests queued; retry later")),
-           peer);
+    finish(PoolBusyStatus(*pool), peer);
   }
   return reactor;
 }

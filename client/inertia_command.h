@@ -1,0 +1,60 @@
+// `tactforce inertia` (fit mass, CoM and inertia to a CSV log, locally or
+// through Estimator.FitInertia) and `tactforce simulate inertia` (write a
+// simulated log and its truth). Thin over tactforce::api and the inertia
+// library.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "CLI/CLI.hpp"
+#include "connection.h"
+
+namespace tactforce::cli {
+
+struct InertiaArgs {
+  std::string csv;                   // the inertia CSV (see estimator/inertia/README.md)
+  std::string method = "constrained";
+  std::string gravity;               // "gx,gy,gz" (world); empty: truth's gravity_world or (0,0,-9.81)
+  std::string truth_path;            // truth JSON: adds the error metrics
+  std::string hull_path;             // STL/OBJ mesh or CSV with x,y,z columns: CoM constraint
+  std::string prior_path;            // prior in the truth JSON format
+  double prior_weight = 1.0;
+  bool json = false;                 // print the FitInertiaResponse as proto3 JSON
+  // Noise standard deviations (0 = unknown).
+  double force_sigma = 0, torque_sigma = 0, position_sigma = 0, orientation_sigma = 0;
+  double angular_velocity_sigma = 0, acceleration_sigma = 0, angular_acceleration_sigma = 0;
+  bool savitzky_golay = false;
+  int max_iterations = 0;
+  // Remote mode: set when --server is given.
+  bool remote = false;
+  ConnectionArgs connection;
+  int batch = 500;                   // samples per streamed message
+  bool progress = false;             // progress lines even when stderr is not a terminal
+};
+CLI::App* AddInertiaCommand(CLI::App& app, InertiaArgs& args);
+int RunInertia(const InertiaArgs& args);
+
+struct SimulateInertiaArgs {
+  std::string object = "seed-table1";
+  std::string params_path;          // custom object: truth JSON format
+  std::string mode = "in-hand";     // in-hand | wrist
+  int contacts = 4;
+  double seconds = 10.0;
+  double rate = 100.0;
+  double force_variance = 0.0;      // N^2 (the paper's noise unit)
+  double torque_sigma = 0.0;
+  double position_sigma = 0.0;
+  double orientation_sigma = 0.0;
+  std::string noise_level;          // Nadeau et al.: low | moderate | high (wrist mode)
+  bool kinematics = false;          // write measured kinematics columns
+  double amplitude_scale = 1.0;     // scales the default excitation amplitudes
+  double frequency_scale = 1.0;     // scales its frequencies
+  std::string trajectory_path;      // JSON excitation trajectory instead of the default
+  uint64_t seed = 1;
+  std::string out_dir;              // writes inertia.csv and truth.json
+};
+CLI::App* AddSimulateInertiaCommand(CLI::App& simulate, SimulateInertiaArgs& args);
+int RunSimulateInertia(const SimulateInertiaArgs& args);
+
+}  // namespace tactforce::cli
