@@ -4,6 +4,7 @@
 // two effects at once: both named in >= 90 %. Seeds run on 2 threads.
 #include <atomic>
 #include <iostream>
+#include <map>
 #include <mutex>
 #include <thread>
 
@@ -52,6 +53,7 @@ TEST_P(SingleEffect, NamedRecoveredWithPositiveGain) {
   std::atomic<int> correct{0}, named{0}, extra{0};
   std::mutex mu;
   std::vector<std::string> failures, extras;
+  std::map<std::string, int> forms;  // form named for the two-form effects
   ForSeeds(kSeeds, [&](int i) {
     const uint64_t seed = 100000 * (idx + 1) + i;
     HiddenCase hc = MakeHiddenCase({e}, seed);
@@ -63,6 +65,10 @@ TEST_P(SingleEffect, NamedRecoveredWithPositiveGain) {
       why = "named " + (rep->causes.empty() ? std::string("nothing") : rep->causes[0].effect);
     } else {
       ++named;
+      if (!rep->causes[0].form.empty()) {
+        std::lock_guard<std::mutex> lock(mu);
+        forms[rep->causes[0].form]++;
+      }
       if (rep->causes.size() > 1) {
         ++extra;
         std::lock_guard<std::mutex> lock(mu);
@@ -83,7 +89,9 @@ TEST_P(SingleEffect, NamedRecoveredWithPositiveGain) {
   const double rate = double(correct) / kSeeds;
   std::cout << "[hidden " << EffectName(e) << "] correct (named first + parameters + gain) " << correct << "/"
             << kSeeds << " = " << 100 * rate << " %; named first " << named << "; with an extra cause " << extra
-            << "\n";
+            << (forms.empty() ? "" : "; forms:");
+  for (const auto& [f, k] : forms) std::cout << " " << f << "=" << k;
+  std::cout << "\n";
   for (const auto& f : failures) std::cout << "  " << f << "\n";
   for (const auto& f : extras) std::cout << "  (extra) " << f << "\n";
   RecordProperty("correct_rate", std::to_string(rate));

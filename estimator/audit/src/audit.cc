@@ -806,8 +806,21 @@ absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOption
       if (e == Effect::kHysteresis) forms.push_back(Form::kPrandtlIshlinskii);
       if (e == Effect::kNonlinearity) forms.push_back(Form::kPowerLaw);
       for (Form form : forms) {
-        FitResult fr = form == Form::kPrandtlIshlinskii ? FitPrandtlIshlinskii(eng, current, refit, st, o)
-                                                        : FitEffect(eng, e, current, refit, st, o, form);
+        // The other form of the effect is off while this one is fitted (a
+        // given model may carry either form).
+        EffectParams start = current;
+        if (form == Form::kPlay) {
+          start.pi_thresholds.clear();
+          start.pi_weights.clear();
+        } else if (form == Form::kPrandtlIshlinskii) {
+          start.hysteresis_width = 0;
+        } else if (form == Form::kQuadratic) {
+          start.power_exponent = 0;
+        } else if (form == Form::kPowerLaw) {
+          start.curvature = 0;
+        }
+        FitResult fr = form == Form::kPrandtlIshlinskii ? FitPrandtlIshlinskii(eng, start, refit, st, o)
+                                                        : FitEffect(eng, e, start, refit, st, o, form);
         if (form == Form::kPrandtlIshlinskii && fr.p.pi_thresholds.empty()) continue;  // no hysteresis found
         const Eval ev = eng.Evaluate(fr.p, true);
         const double bic = Bic(ev.rss_heldout, n_h, k_cur + NumParams(e, fr.p));
