@@ -32,9 +32,14 @@ CLI::App* AddAuditCommand(CLI::App& app, AuditArgs& args) {
   auto* search = cmd->add_option("--max-clock-offset", args.max_clock_offset,
                                  "Two streams: estimate the clock offset within +/- this (s; default estimation)")
                      ->capture_default_str();
-  fixed->needs(ref)->excludes(none)->excludes(search);
-  none->needs(ref)->excludes(search);
+  auto* centre = cmd->add_option("--clock-offset-centre", args.clock_offset_centre,
+                                 "Two streams: centre of the clock-offset search (s), e.g. when the clocks have "
+                                 "different epochs")
+                     ->capture_default_str();
+  fixed->needs(ref)->excludes(none)->excludes(search)->excludes(centre);
+  none->needs(ref)->excludes(search)->excludes(centre);
   search->needs(ref);
+  centre->needs(ref);
   cmd->add_option("--model", args.model_path, "Start from this model JSON instead of the affine nominal");
   cmd->add_option("--out", args.out_dir, "Report directory (report.json, summary.txt, model, SVG plots)")
       ->required();
@@ -60,7 +65,7 @@ int RunAuditCommand(const AuditArgs& args) {
       align.clock_offset = 0;
     } else {
       align.mode = audit::ClockOffsetMode::kEstimate;
-      align.clock_offset = 0;
+      align.clock_offset = args.clock_offset_centre;
       align.max_clock_offset = args.max_clock_offset;
     }
     data = audit::ReadAndAlignStreams(args.reference_path, args.reading_path, align);

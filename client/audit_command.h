@@ -21,6 +21,7 @@ struct AuditArgs {
   bool clock_offset_given = false;
   bool no_clock_offset = false;
   double max_clock_offset = 1.0;  // s, half-width of the estimation search
+  double clock_offset_centre = 0.0;  // s, centre of the estimation search
   std::string model_path;      // a given model JSON instead of the affine nominal
   std::string out_dir;
   std::string units = "reading units";

@@ -196,6 +196,64 @@ TEST(TwoStreams, AlignedByInterpolatingTheReference) {
 
 // ---- report, extended model, given model -----------------------------------------
 
+// The two-form effects in report.json ("form", PI arrays) and in the written
+// extended model (loads, re-simulates as audited).
+TEST(Report, FormsAndPrandtlIshlinskiiArraysRoundTrip) {
+  struct Case {
+    Effect e;
+    testing::HiddenForm form;
+    const char* name;
+  };
+  for (const Case& k : {Case{Effect::kHysteresis, testing::HiddenForm::kPrandtlIshlinskii, "prandtl_ishlinskii"},
+                        Case{Effect::kNonlinearity, testing::HiddenForm::kPowerLaw, "power_law"},
+                        Case{Effect::kHysteresis, testing::HiddenForm::kDefault, "play"}}) {
+    testing::HiddenCase hc = testing::MakeHiddenCase({k.e}, 1100003, k.form);
+    AuditOptions o = Quick();
+    o.reading_units = hc.model.units;
+    auto rep = RunAudit(hc.data, o);
+    ASSERT_TRUE(rep.ok()) << rep.status();
+    ASSERT_FALSE(rep->causes.empty());
+    EXPECT_EQ(rep->causes[0].effect, EffectName(k.e));
+    EXPECT_EQ(rep->causes[0].form, k.name);
+    const fs::path dir = fs::temp_directory_path() / (std::string("tactforce_audit_forms_") + k.name);
+    fs::remove_all(dir);
+    ASSERT_TRUE(WriteAuditReport(*rep, dir.string()).ok());
+    std::ifstream in(dir / "report.json");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    auto j = sim::ParseJson(ss.str(), "report.json");
+    ASSERT_TRUE(j.ok()) << j.status();
+    const auto& c0 = j->Find("causes")->array().at(0);
+    const auto* params = c0.Find("parameters");
+    ASSERT_NE(params, nullptr);
+    ASSERT_NE(params->Find("form"), nullptr);
+    EXPECT_EQ(params->Find("form")->string(), k.name);
+    auto model = sim::LoadSensorModel((dir / "extended_model.json").string());
+    ASSERT_TRUE(model.ok()) << model.status();
+    if (k.form == testing::HiddenForm::kPrandtlIshlinskii) {
+      const auto* w = params->Find("pi_weights");
+      const auto* r = params->Find("pi_thresholds");
+      ASSERT_TRUE(w && r && w->is_array() && r->is_array());
+      EXPECT_EQ(w->array().size(), r->array().size());
+      double sum = 0;
+      for (const auto& v : w->array()) {
+        EXPECT_GE(v.number(), 0);
+        sum += v.number();
+      }
+      EXPECT_NEAR(sum, 1, 1e-9);
+      EXPECT_EQ(model->effects.pi_weights.size(), w->array().size());
+      EXPECT_EQ(model->effects.hysteresis_width, 0);
+      EXPECT_NEAR(rep->causes[0].parameters.at("loop_width"), testing::PiLoopWidth(hc.model.effects),
+                  0.03 + 0.2 * testing::PiLoopWidth(hc.model.effects));
+    }
+    if (k.form == testing::HiddenForm::kPowerLaw)
+      EXPECT_NEAR(model->effects.power_exponent, hc.model.effects.power_exponent, 0.01);
+    auto pred = sim::PredictReading(*model, hc.data.t, hc.data.reference, hc.data.shear, hc.data.segment_starts);
+    for (size_t i = 0; i < pred.size(); ++i) ASSERT_NEAR(pred[i], rep->predicted_extended[i], 1e-6) << k.name;
+    EXPECT_THAT(FormatAuditSummary(*rep), HasSubstr(k.name));
+  }
+}
+
 TEST(Report, FilesAndExtendedModelRoundTrip) {
   testing::HiddenCase hc = testing::MakeHiddenCase({Effect::kHysteresis, Effect::kDelay}, 77);
   AuditOptions o;

@@ -37,7 +37,7 @@ Streams MakeStreams(const sim::SensorModel& m, uint64_t seed, double ref_rate, i
   for (size_t i = 0; i < run->t.size(); ++i) {
     absl::StrAppend(&ref, absl::StrFormat("%.9g,%.9g,%.9g\n", run->t[i], run->reference[i], run->shear[i]));
     if (static_cast<int>(i) % decimate == phase)
-      absl::StrAppend(&rd, absl::StrFormat("%.9g,%.9g\n", run->t[i] + offset, run->reading[i]));
+      absl::StrAppend(&rd, absl::StrFormat("%.17g,%.9g\n", run->t[i] + offset, run->reading[i]));
   }
   Streams s;
   s.reference = *estimator::ParseCsv(ref, "ref.csv");
@@ -169,6 +169,29 @@ TEST(ClockOffset, LagStillNamedNextToTheOffset) {
   EXPECT_EQ(rep->causes[0].effect, "lag");
   EXPECT_NEAR(rep->causes[0].parameters.at("lag"), 0.06, 0.003 + 0.15 * 0.06);
   EXPECT_NEAR(*rep->clock_offset_s, -0.37, s.reading_period);
+}
+
+// Clocks with different epochs (reading stamped in Unix time): the search is
+// centred on the difference of the epochs.
+TEST(ClockOffset, DifferentEpochsWithASearchCentre) {
+  sim::SensorModel m;
+  m.noise = 0.02;
+  m.effects.hysteresis_width = 0.15;
+  const double offset = 1.7e9 + 0.2345;
+  Streams s = MakeStreams(m, 55, 600, 6, 3, offset);
+  AlignOptions a = Estimate(1.0);
+  a.clock_offset = 1.7e9;
+  auto d = AlignStreams(s.reference, s.reading, a);
+  ASSERT_TRUE(d.ok()) << d.status();
+  auto rep = RunAudit(*d, Quick());
+  ASSERT_TRUE(rep.ok());
+  EXPECT_NEAR(*rep->clock_offset_s, offset, s.reading_period);
+  ASSERT_FALSE(rep->causes.empty());
+  EXPECT_EQ(rep->causes[0].effect, "hysteresis");
+  EXPECT_THAT(FormatAuditSummary(*rep), HasSubstr("1700000000.2"));
+  // Without the centre: a clear error that says what to do.
+  EXPECT_THAT(Message(AlignStreams(s.reference, s.reading, Estimate(1.0)).status()),
+              HasSubstr("different epochs: give --clock-offset-centre"));
 }
 
 TEST(ClockOffset, BadSearchRangesGiveClearErrors) {

@@ -676,6 +676,15 @@ std::vector<std::string> EffectFields(Effect e) {
   Stats st{0, 1, 1, 1, 1, 0.01, true};
   std::vector<std::string> out;
   for (const Slot& s : SlotsFor(e, st, AuditOptions{})) out.push_back(s.field);
+  // The second forms' fields.
+  if (e == Effect::kHysteresis) {
+    out.push_back("pi_thresholds");
+    out.push_back("pi_weights");
+  }
+  if (e == Effect::kNonlinearity) {
+    out.push_back("power_exponent");
+    out.push_back("full_scale");
+  }
   return out;
 }
 

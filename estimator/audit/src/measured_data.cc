@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 
 namespace tactforce::audit {
 namespace {
@@ -113,6 +114,9 @@ absl::StatusOr<MeasuredData> ReadMeasuredCsv(const std::string& path) {
 
 namespace {
 
+// Times with enough digits for epoch clocks (1.7e9 s to the microsecond).
+std::string G(double v) { return std::abs(v) >= 1e5 ? absl::StrFormat("%.6f", v) : absl::StrFormat("%.7g", v); }
+
 double MedianStep(const std::vector<double>& t) {
   std::vector<double> d;
   for (size_t i = 1; i < t.size(); ++i) d.push_back(t[i] - t[i - 1]);
@@ -162,10 +166,12 @@ absl::StatusOr<ClockOffsetEstimate> EstimateClockOffset(const std::vector<double
   const double overlap = ov_hi - ov_lo;
   if (!(overlap > 2 * max_offset))
     return absl::InvalidArgumentError(absl::StrCat(
-        "clock offset search +/-", max_offset, " s around ", centre, " s exceeds the streams' overlap (",
-        std::max(0.0, overlap), " s: reference ", rt.front(), "..", rt.back(), " s, reading ", qt.front(), "..",
-        qt.back(), " s); the overlap must be longer than the search range (", 2 * max_offset,
-        " s): give a smaller --max-clock-offset or the offset itself with --clock-offset"));
+        "clock offset search +/-", G(max_offset), " s around ", G(centre), " s exceeds the streams' overlap (",
+        G(std::max(0.0, overlap)), " s: reference ", G(rt.front()), "..", G(rt.back()), " s, reading ", G(qt.front()),
+        "..", G(qt.back()), " s); the overlap must be longer than the search range (", G(2 * max_offset), " s): ",
+        overlap > 0 ? "give a smaller --max-clock-offset or the offset itself with --clock-offset"
+                    : "the clocks may have different epochs: give --clock-offset-centre (about reading start minus "
+                      "reference start) or the offset itself with --clock-offset"));
   // Reading samples inside the reference span for every offset searched.
   const double lo = rt.front() + centre + max_offset, hi = rt.back() + centre - max_offset;
   const size_t first = std::lower_bound(qt.begin(), qt.end(), lo) - qt.begin();
@@ -173,8 +179,8 @@ absl::StatusOr<ClockOffsetEstimate> EstimateClockOffset(const std::vector<double
   const int used = last > first ? static_cast<int>(last - first) : 0;
   if (used < kMinAuditSamples)
     return absl::InvalidArgumentError(absl::StrCat(
-        "clock offset: only ", used, " reading samples lie inside the reference span for every offset in ", centre,
-        " +/- ", max_offset, " s; need at least ", kMinAuditSamples,
+        "clock offset: only ", used, " reading samples lie inside the reference span for every offset in ",
+        G(centre), " +/- ", G(max_offset), " s; need at least ", kMinAuditSamples,
         " (give a smaller --max-clock-offset or the offset with --clock-offset)"));
   const double h = std::max(1e-9, std::min(MedianStep(rt), MedianStep(qt)));
   // Coarse grid (at most 2001 points), then a grid of step h/2 around the
@@ -229,11 +235,11 @@ absl::StatusOr<ClockOffsetEstimate> EstimateClockOffset(const std::vector<double
   }
   if (best - (centre - max_offset) < h || (centre + max_offset) - best < h)
     return absl::InvalidArgumentError(absl::StrCat(
-        "clock offset: the correlation peak (", best, " s, |r| = ", best_r, ") is at the edge of the search range ",
-        centre, " +/- ", max_offset, " s; the true offset may lie outside: widen --max-clock-offset or give --clock-offset"));
+        "clock offset: the correlation peak (", G(best), " s, |r| = ", best_r, ") is at the edge of the search range ",
+        G(centre), " +/- ", G(max_offset), " s; the true offset may lie outside: widen --max-clock-offset or give --clock-offset"));
   if (best_r < 0.3)
     return absl::InvalidArgumentError(absl::StrCat(
-        "clock offset: no clear correlation between the streams (peak |r| = ", best_r, " at ", best,
+        "clock offset: no clear correlation between the streams (peak |r| = ", best_r, " at ", G(best),
         " s); check that the files belong together, or give --clock-offset"));
   ClockOffsetEstimate e;
   e.offset = best;
@@ -276,9 +282,9 @@ absl::StatusOr<MeasuredData> AlignStreams(const estimator::CsvTable& ref, const 
     clock_offset = est->offset;
     d.clock_offset_source = MeasuredData::ClockOffset::kEstimated;
     d.clock_offset_correlation = est->correlation;
-    d.notes.push_back(absl::StrCat("clock offset estimated by cross-correlation: ", est->offset, " s (peak |r| ",
+    d.notes.push_back(absl::StrCat("clock offset estimated by cross-correlation: ", G(est->offset), " s (peak |r| ",
                                    est->correlation, ", ", est->samples, " reading samples, search ",
-                                   options.clock_offset, " +/- ", options.max_clock_offset, " s)"));
+                                   G(options.clock_offset), " +/- ", G(options.max_clock_offset), " s)"));
   }
   d.clock_offset = clock_offset;
   int outside = 0;
@@ -305,15 +311,16 @@ absl::StatusOr<MeasuredData> AlignStreams(const estimator::CsvTable& ref, const 
   };
   d.notes.push_back(absl::StrCat("two streams aligned: reference ", rt.size(), " samples at ~", rate(rt),
                                  " Hz interpolated onto ", d.t.size(), " reading samples at ~", rate(qt), " Hz",
-                                 clock_offset != 0 ? absl::StrCat(" (clock offset ", clock_offset, " s)") : ""));
+                                 clock_offset != 0 ? absl::StrCat(" (clock offset ", G(clock_offset), " s)") : ""));
   if (outside > 0)
     d.notes.push_back(absl::StrCat(outside, " reading sample(s) outside the reference time span dropped"));
   if (d.skipped_nan_rows > 0)
     d.notes.push_back(absl::StrCat(d.skipped_nan_rows, " row(s) with NaN/empty fields skipped"));
   if (d.t.empty())
     return absl::InvalidArgumentError(absl::StrCat(
-        d.source, ": the streams do not overlap in time (reference ", rt.front(), "..", rt.back(), " s, reading ",
-        qt.front(), "..", qt.back(), " s); give the clock offset"));
+        d.source, ": the streams do not overlap in time (reference ", G(rt.front()), "..", G(rt.back()),
+        " s, reading ", G(qt.front()), "..", G(qt.back()), " s, clock offset ", G(clock_offset),
+        " s); give the clock offset (--clock-offset) or a search centre (--clock-offset-centre)"));
   if (auto st = ValidateMeasuredData(d); !st.ok()) return st;
   return d;
 }

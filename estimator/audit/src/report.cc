@@ -295,16 +295,20 @@ std::string FormatAuditSummary(const AuditReport& r) {
   if (r.skipped_nan_rows) absl::StrAppendFormat(&s, ", %d NaN rows skipped", r.skipped_nan_rows);
   s += "\n";
   if (r.clock_offset_s) {
+    // Microseconds, also for epoch clocks (1.7e9 s).
+    auto sec = [](double v) {
+      return std::abs(v) >= 1e5 ? absl::StrFormat("%.6f", v) : absl::StrFormat("%.7g", v);
+    };
     if (r.clock_offset_mode == "estimated")
       absl::StrAppendFormat(&s,
-                            "  two streams, clock offset (reading - reference clock) %.6g s, estimated: "
-                            "cross-correlation %.6g s (peak |r| %.3f) + audit refinement %.3g s; a constant sensor "
+                            "  two streams, clock offset (reading - reference clock) %s s, estimated: "
+                            "cross-correlation %s s (peak |r| %.3f) + audit refinement %.3g s; a constant sensor "
                             "delay is part of it\n",
-                            *r.clock_offset_s, r.clock_offset_xcorr_s, r.clock_offset_correlation,
+                            sec(*r.clock_offset_s), sec(r.clock_offset_xcorr_s), r.clock_offset_correlation,
                             r.clock_offset_refinement_s);
     else
-      absl::StrAppendFormat(&s, "  two streams, clock offset (reading - reference clock) %.6g s, as given\n",
-                            *r.clock_offset_s);
+      absl::StrAppendFormat(&s, "  two streams, clock offset (reading - reference clock) %s s, as given\n",
+                            sec(*r.clock_offset_s));
   }
   const auto& nm = r.nominal_model;
   absl::StrAppendFormat(&s, "Nominal model: reading = %.6g * force + %.6g  [%s]\n", nm.gain, nm.offset,

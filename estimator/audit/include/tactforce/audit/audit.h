@@ -38,7 +38,8 @@ inline constexpr int kNumEffects = 8;
 const char* EffectName(Effect e);  // "deadzone", ... (report.json vocabulary)
 absl::StatusOr<Effect> ParseEffect(const std::string& name);
 const std::vector<Effect>& AllEffects();
-// Sensor-model fields an effect owns (e.g. deadzone: threshold, threshold_shift).
+// Sensor-model fields an effect owns, all forms (e.g. deadzone: threshold,
+// threshold_shift; hysteresis: hysteresis_width, pi_thresholds, pi_weights).
 std::vector<std::string> EffectFields(Effect e);
 
 struct AuditOptions {
