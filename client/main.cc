@@ -8,6 +8,7 @@
 #include "audit_command.h"
 #include "demo_command.h"
 #include "estimate_command.h"
+#include "experiment_command.h"
 #include "health_command.h"
 #include "inertia_command.h"
 #include "load_command.h"
@@ -56,6 +57,8 @@ int Main(int argc, char** argv) {
   CLI::App* simulate_sensor = AddSimulateSensorCommand(*simulate, simulate_sensor_args);
   AuditArgs audit_args;
   CLI::App* audit = AddAuditCommand(app, audit_args);
+  ExperimentArgs experiment_args;
+  CLI::App* experiment = AddExperimentCommand(app, experiment_args);
   InertiaArgs inertia_args;
   CLI::App* inertia = AddInertiaCommand(app, inertia_args);
   SimulateInertiaArgs simulate_inertia_args;
@@ -83,6 +86,7 @@ int Main(int argc, char** argv) {
   if (simulate_friction->parsed()) return RunSimulateFriction(simulate_friction_args);
   if (simulate_sensor->parsed()) return RunSimulateSensor(simulate_sensor_args);
   if (audit->parsed()) return RunAuditCommand(audit_args);
+  if (experiment->parsed()) return RunExperiment(experiment_args);
   if (inertia->parsed()) return RunInertia(inertia_args);
   if (simulate_inertia->parsed()) return RunSimulateInertia(simulate_inertia_args);
   std::cerr << "error: no command given (see tactforce --help)" << std::endl;

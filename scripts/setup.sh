@@ -17,6 +17,7 @@ PACKAGES=(
   libspdlog-dev libfmt-dev
   python3 python3-grpcio python3-protobuf
   grpc-proto
+  libmujoco-dev
 )
 
 missing=()

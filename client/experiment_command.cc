@@ -1,0 +1,280 @@
+#include "experiment_command.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+
+#include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "cli_common.h"
+#include "tactforce/experiment/grasp.h"
+#include "tactforce/experiment/slope.h"
+#include "tactforce/sim/sensor_model.h"
+
+namespace tactforce::cli {
+namespace {
+
+namespace ex = tactforce::experiment;
+
+std::string JsonNumber(double v) {
+  if (!std::isfinite(v)) return "null";
+  return absl::StrFormat("%.6g", v);
+}
+
+class ExperimentProgress {
+ public:
+  ExperimentProgress(int total, bool enabled) : total_(total), enabled_(enabled && isatty(2)) {}
+  void Update(int done, const std::string& label) {
+    if (!enabled_) return;
+    const int width = 30;
+    const int fill = total_ > 0 ? done * width / total_ : width;
+    std::cerr << "\r[" << std::string(fill, '#') << std::string(width - fill, '-') << "] " << done << "/" << total_
+              << " " << label << "   " << std::flush;
+  }
+  void Done() {
+    if (enabled_) std::cerr << "\r" << std::string(70, ' ') << "\r" << std::flush;
+  }
+
+ private:
+  int total_;
+  bool enabled_;
+};
+
+int RunGrasp(const ExperimentArgs& a) {
+  std::vector<ex::GraspObject> objects;
+  if (a.object == "all") {
+    objects = ex::AllGraspObjects();
+  } else {
+    auto o = ex::ParseGraspObject(a.object);
+    if (!o.ok()) return ReportError(absl::InvalidArgumentError(absl::StrCat("--", o.status().message())));
+    objects = {*o};
+  }
+  std::vector<ex::Feedback> modes;
+  if (a.feedback == "both") {
+    modes = {ex::Feedback::kRaw, ex::Feedback::kEstimated};
+  } else {
+    auto f = ex::ParseFeedback(a.feedback);
+    if (!f.ok()) return ReportError(absl::InvalidArgumentError(absl::StrCat("--", f.status().message())));
+    modes = {*f};
+  }
+  if (a.trials < 1) return ReportError(absl::InvalidArgumentError(absl::StrFormat("--trials: must be >= 1, got %d", a.trials)));
+  ex::GraspConfig base;
+  base.seed = a.seed;
+  if (a.estimator == "projection") base.estimator = estimator::EstimateMethod::kProjection;
+  else if (a.estimator == "normal-lsq") base.estimator = estimator::EstimateMethod::kNormalLsq;
+  else
+    return ReportError(absl::InvalidArgumentError(
+        absl::StrCat("--estimator: unknown '", a.estimator, "' (expected projection or normal-lsq)")));
+  auto adm = ex::ParseAdmittance(a.admittance);
+  if (!adm.ok()) return ReportError(absl::InvalidArgumentError(absl::StrCat("--", adm.status().message())));
+  base.admittance = *adm;
+  if (a.ideal && !a.sensor_model_path.empty())
+    return ReportError(absl::InvalidArgumentError("--ideal-sensors: cannot be combined with --sensor-model"));
+  if (a.ideal) base.sensors = ex::SensorMode::kIdeal;
+  if (!a.sensor_model_path.empty()) {
+    auto m = sim::LoadSensorModel(a.sensor_model_path);
+    if (!m.ok())
+      return ReportError(absl::InvalidArgumentError(absl::StrCat("--sensor-model: ", m.status().message())));
+    base.sensors = ex::SensorMode::kModel;
+    base.sensor_model = *m;
+  }
+  if (!a.plots_dir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(a.plots_dir, ec);
+    if (ec) return ReportError(absl::InvalidArgumentError(absl::StrCat("--plots: cannot create ", a.plots_dir, ": ", ec.message())));
+    base.trace_trials = 1;
+  }
+  ExperimentProgress bar(static_cast<int>(objects.size() * modes.size()) * a.trials, !a.no_progress);
+  int done_before = 0;
+  std::vector<ex::BatchSummary> rows;
+  const auto wall0 = std::chrono::steady_clock::now();
+  for (ex::GraspObject o : objects) {
+    for (ex::Feedback f : modes) {
+      ex::GraspConfig c = base;
+      c.object = o;
+      c.feedback = f;
+      const std::string label = absl::StrCat(ex::ToString(o), " ", ex::ToString(f));
+      auto b = ex::RunGraspBatch(c, a.trials, [&](int done) { bar.Update(done_before + done, label); });
+      if (!b.ok()) {
+        bar.Done();
+        return ReportError(b.status());
+      }
+      done_before += a.trials;
+      if (!a.plots_dir.empty() && !b->results.empty()) {
+        auto setup = ex::GraspSetup::Create(c);
+        if (!setup.ok()) return ReportError(setup.status());
+        const ex::TrialResult& t0 = b->results[0];
+        const std::string title = absl::StrFormat(
+            "%s, %s feedback, trial 0 (%s): desired / estimated / raw / true normal force", ex::ToString(o),
+            ex::ToString(f), t0.success ? "success" : t0.failure);
+        const std::string path =
+            (std::filesystem::path(a.plots_dir) / absl::StrCat(ex::ToString(o), "_", ex::ToString(f), ".svg")).string();
+        std::ofstream out(path);
+        out << ex::RenderSvg(ex::TracePlot(t0, (*setup)->finger_names(), title));
+        if (!out) return ReportError(absl::InvalidArgumentError(absl::StrCat("--plots: cannot write ", path)));
+      }
+      b->results.clear();
+      rows.push_back(std::move(*b));
+    }
+  }
+  bar.Done();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  if (a.json) {
+    std::string s = "{\"results\":[";
+    for (size_t i = 0; i < rows.size(); ++i) {
+      const ex::BatchSummary& r = rows[i];
+      absl::StrAppend(&s, i ? "," : "", "{\"object\":\"", ex::ToString(r.object), "\",\"feedback\":\"",
+                      ex::ToString(r.feedback), "\",\"trials\":", r.trials, ",\"successes\":", r.successes,
+                      ",\"force_error_mean\":", JsonNumber(r.force_error_mean),
+                      ",\"force_error_std\":", JsonNumber(r.force_error_std), ",\"drops\":", r.drops,
+                      ",\"feedback_error_mean\":", JsonNumber(r.feedback_error_mean),
+                      ",\"converged\":", r.converged,
+                      ",\"converge_time_mean\":", r.converged ? JsonNumber(r.converge_time_mean) : "null",
+                      ",\"sim_seconds\":", JsonNumber(r.sim_seconds), ",\"wall_seconds\":", JsonNumber(r.wall_seconds),
+                      "}");
+    }
+    absl::StrAppend(&s, "],\"seed\":", a.seed, ",\"estimator\":\"", a.estimator, "\",\"admittance\":\"",
+                    a.admittance, "\",\"wall_seconds\":",
+                    JsonNumber(wall), "}");
+    std::cout << s << std::endl;
+    return kExitOk;
+  }
+  std::cout << absl::StrFormat("%-9s %-10s %9s %6s %22s %14s %14s %10s\n", "object", "feedback", "success", "drops",
+                               "force error (N) mean/std", "feedback err", "converge (s)", "x realtime");
+  for (const ex::BatchSummary& r : rows) {
+    std::cout << absl::StrFormat(
+        "%-9s %-10s %4d/%-4d %6d %13.3f / %-6.3f %14.3f %14s %10.1f\n", ex::ToString(r.object),
+        ex::ToString(r.feedback), r.successes, r.trials, r.drops, r.force_error_mean, r.force_error_std,
+        r.feedback_error_mean,
+        r.converged ? absl::StrFormat("%.3f (%d)", r.converge_time_mean, r.converged) : std::string("never"),
+        r.wall_seconds > 0 ? r.sim_seconds / r.wall_seconds : 0.0);
+  }
+  std::cout << absl::StrFormat("total %.1f s wall; seed %d; estimator %s; admittance %s; sensors %s\n", wall, a.seed,
+                               a.estimator, a.admittance,
+                               a.ideal ? "ideal" : a.sensor_model_path.empty() ? "GeoDEx error ranges per trial"
+                                                                               : a.sensor_model_path);
+  return kExitOk;
+}
+
+int RunSlope(const ExperimentArgs& a) {
+  ex::SlopeConfig c;
+  c.mus = a.mus;
+  c.tilt_rate_deg = a.tilt_rate;
+  if (absl::Status s = ex::ValidateSlopeConfig(c); !s.ok())
+    return ReportError(absl::InvalidArgumentError(
+        absl::StrCat("--", absl::StartsWith(s.message(), "mus") ? "mu" : "", s.message())));
+  auto rows = ex::RunSlopeTable(c);
+  if (!rows.ok()) return ReportError(rows.status());
+  struct Creep {
+    std::string settings;
+    double ratio, velocity;
+  };
+  std::vector<Creep> creep;
+  std::vector<ex::SlopeRow> default_rows;
+  if (a.creep) {
+    for (const auto& [name, p] : {std::pair{std::string("chosen"), ex::PhysicsSettings{}},
+                                  std::pair{std::string("mujoco-default"), ex::PhysicsSettings::MujocoDefaults()}}) {
+      for (double ratio : {0.5, 0.9}) {
+        auto v = ex::MeasureCreep(p, 0.5, ratio);
+        if (!v.ok()) return ReportError(v.status());
+        creep.push_back({name, ratio, *v});
+      }
+    }
+    ex::SlopeConfig d = c;
+    d.physics = ex::PhysicsSettings::MujocoDefaults();
+    auto r = ex::RunSlopeTable(d);
+    if (!r.ok()) return ReportError(r.status());
+    default_rows = *r;
+  }
+  if (a.json) {
+    auto row_json = [](const ex::SlopeRow& r) {
+      return absl::StrCat("{\"mu\":", JsonNumber(r.mu), ",\"slip_tilt_deg\":", JsonNumber(r.slip_tilt_deg),
+                          ",\"mu_slope\":", JsonNumber(r.mu_slope),
+                          ",\"mu_probe\":", r.probe_valid ? JsonNumber(r.mu_probe) : "null",
+                          ",\"difference\":", r.probe_valid ? JsonNumber(r.mu_probe - r.mu_slope) : "null", "}");
+    };
+    std::string s = "{\"results\":[";
+    for (size_t i = 0; i < rows->size(); ++i) absl::StrAppend(&s, i ? "," : "", row_json((*rows)[i]));
+    absl::StrAppend(&s, "],\"mujoco_default_results\":[");
+    for (size_t i = 0; i < default_rows.size(); ++i) absl::StrAppend(&s, i ? "," : "", row_json(default_rows[i]));
+    absl::StrAppend(&s, "],\"creep\":[");
+    for (size_t i = 0; i < creep.size(); ++i)
+      absl::StrAppend(&s, i ? "," : "", "{\"settings\":\"", creep[i].settings, "\",\"mu\":0.5,\"load_ratio\":",
+                      JsonNumber(creep[i].ratio), ",\"velocity_m_per_s\":", JsonNumber(creep[i].velocity), "}");
+    absl::StrAppend(&s, "]}");
+    std::cout << s << std::endl;
+    return kExitOk;
+  }
+  auto table = [](const std::vector<ex::SlopeRow>& rs) {
+    std::cout << absl::StrFormat("%6s %11s %9s %9s %9s %9s %14s\n", "mu", "slip tilt", "mu_slope", "slope-mu",
+                                 "mu_probe", "probe-mu", "probe-slope");
+    for (const ex::SlopeRow& r : rs) {
+      if (r.probe_valid)
+        std::cout << absl::StrFormat("%6.3f %9.2f° %9.4f %+9.4f %9.4f %+9.4f %+14.4f\n", r.mu, r.slip_tilt_deg,
+                                     r.mu_slope, r.mu_slope - r.mu, r.mu_probe, r.mu_probe - r.mu,
+                                     r.mu_probe - r.mu_slope);
+      else
+        std::cout << absl::StrFormat("%6.3f %9.2f° %9.4f %+9.4f %9s (%s)\n", r.mu, r.slip_tilt_deg, r.mu_slope,
+                                     r.mu_slope - r.mu, "no slip", r.probe_message);
+    }
+  };
+  std::cout << "Slope method vs probing (chosen solver settings):\n";
+  table(*rows);
+  if (a.creep) {
+    std::cout << "\nSame with MuJoCo's default solver settings:\n";
+    table(default_rows);
+    std::cout << "\nCreep under static friction (mu 0.5, fingertip 0.05 kg on a tilted plate):\n";
+    for (const Creep& k : creep)
+      std::cout << absl::StrFormat("  %-15s load %.0f %% of the cone: %.3g mm/s\n", k.settings, 100 * k.ratio,
+                                   1e3 * k.velocity);
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args) {
+  CLI::App* cmd = app.add_subcommand("experiment", "Closed-loop experiments in MuJoCo (grasp, slope)");
+  cmd->require_subcommand(1);
+  CLI::App* g = cmd->add_subcommand(
+      "grasp", "Grasp-and-lift trials with force feedback on raw or estimated tactile forces (GeoDEx Table III)");
+  g->add_option("--object", args.object, "sphere|wrench|cylinder|cube|all")->capture_default_str();
+  g->add_option("--trials", args.trials, "Seeded trials per object and feedback mode")->capture_default_str();
+  g->add_option("--feedback", args.feedback, "estimated|raw|both")->capture_default_str();
+  g->add_option("--seed", args.seed, "Seed of the per-trial sensor-error draws")->capture_default_str();
+  g->add_flag("--json", args.json, "Print {\"results\":[...]} instead of a table");
+  g->add_option("--plots", args.plots_dir, "Write an SVG force-trace plot of trial 0 per object and mode here")
+      ->type_name("DIR");
+  g->add_option("--estimator", args.estimator, "Estimate for estimated feedback: normal-lsq (ours) | projection (GeoDEx)")
+      ->capture_default_str();
+  g->add_option("--admittance", args.admittance,
+                "full: target += K^-1 (f_desired - f_observed), 3D (the paper's loop); normal: along the sensed "
+                "normal only, planned tangential force fed forward")
+      ->capture_default_str();
+  g->add_option("--sensor-model", args.sensor_model_path,
+                "Sensor model JSON for every fingertip (default: GeoDEx error ranges drawn per trial)")
+      ->type_name("FILE");
+  g->add_flag("--ideal-sensors", args.ideal, "Readings are the true normal forces");
+  g->add_flag("--no-progress", args.no_progress, "No progress bar on stderr");
+  args.grasp = g;
+  CLI::App* s = cmd->add_subcommand(
+      "slope", "Friction by the slope method vs the probing estimate, and MuJoCo's creep under static friction");
+  s->add_option("--mu", args.mus, "MJCF friction coefficients")->delimiter(',')->capture_default_str();
+  s->add_option("--tilt-rate", args.tilt_rate, "Plate tilt rate (deg/s)")->capture_default_str();
+  s->add_flag("--creep,!--no-creep", args.creep, "Also measure creep and repeat with MuJoCo's default settings");
+  s->add_flag("--json", args.json, "JSON output");
+  args.slope = s;
+  return cmd;
+}
+
+int RunExperiment(const ExperimentArgs& args) {
+  if (args.grasp && args.grasp->parsed()) return RunGrasp(args);
+  if (args.slope && args.slope->parsed()) return RunSlope(args);
+  return ReportError(absl::InvalidArgumentError("experiment: give grasp or slope"));
+}
+
+}  // namespace tactforce::cli

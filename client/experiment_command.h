@@ -1,0 +1,37 @@
+// `tactforce experiment grasp|slope`: closed-loop grasp experiments and the
+// slope-method friction ground truth in MuJoCo (tactforce::experiment).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "CLI/CLI.hpp"
+
+namespace tactforce::cli {
+
+struct ExperimentArgs {
+  // grasp
+  std::string object = "all";       // sphere|wrench|cylinder|cube|all
+  int trials = 20;
+  std::string feedback = "both";    // estimated|raw|both
+  uint64_t seed = 1;
+  bool json = false;
+  std::string plots_dir;
+  std::string estimator = "normal-lsq";  // normal-lsq|projection
+  std::string admittance = "full";       // full|normal
+  std::string sensor_model_path;    // one model JSON for every fingertip
+  bool ideal = false;               // ideal sensors
+  bool no_progress = false;
+  // slope
+  std::vector<double> mus = {0.3, 0.5, 0.7, 0.9};
+  double tilt_rate = 0.5;           // deg/s
+  bool creep = true;
+
+  CLI::App* grasp = nullptr;
+  CLI::App* slope = nullptr;
+};
+CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args);
+int RunExperiment(const ExperimentArgs& args);
+
+}  // namespace tactforce::cli

@@ -1,0 +1,36 @@
+// `tactforce experiment grasp|slope` end to end.
+#include <gtest/gtest.h>
+
+#include "support/cli_fixture.h"
+
+namespace tactforce::testing {
+namespace {
+
+using ExperimentCliTest = CliTest;
+
+TEST_F(ExperimentCliTest, GraspJson) {
+  CliRun r = Tactforce({"experiment", "grasp", "--object", "sphere", "--trials", "1", "--feedback", "estimated",
+                        "--json", "--plots", (dir() / "plots").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out.rfind("{\"results\":[{\"object\":\"sphere\",\"feedback\":\"estimated\",\"trials\":1,", 0), 0u)
+      << r.out;
+  EXPECT_NE(r.out.find("\"successes\":"), std::string::npos);
+  EXPECT_NE(r.out.find("\"force_error_mean\":"), std::string::npos);
+  EXPECT_NE(r.out.find("\"force_error_std\":"), std::string::npos);
+  const std::string svg = ReadFile(dir() / "plots" / "sphere_estimated.svg");
+  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
+}
+
+TEST_F(ExperimentCliTest, BadInput) {
+  ExpectBadInput(Tactforce({"experiment", "grasp", "--object", "banana"}));
+  ExpectBadInput(Tactforce({"experiment", "grasp", "--feedback", "psychic"}));
+  ExpectBadInput(Tactforce({"experiment", "grasp", "--trials", "0"}));
+  ExpectBadInput(Tactforce({"experiment", "grasp", "--estimator", "guess"}));
+  ExpectBadInput(Tactforce({"experiment", "grasp", "--sensor-model", (dir() / "missing.json").string()}));
+  ExpectBadInput(Tactforce({"experiment", "slope", "--mu", "0.5,-2"}));
+  CliRun r = Tactforce({"experiment", "grasp", "--object", "banana"});
+  EXPECT_NE(r.err.find("--object"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace tactforce::testing
