@@ -725,6 +725,16 @@ SvgPlot TracePlot(const TrialResult& trial, const std::vector<std::string>& fing
     panel.series = {tru, raw, est, des};
     plot.panels.push_back(std::move(panel));
   }
+  SvgPanel motion;
+  motion.title = "object vs where the hand holds it (lift and hold)";
+  motion.y_label = "mm, deg";
+  SvgSeries slip{"slip (mm)", "#d62728", false, {}}, rot{"rotation (deg)", "#9467bd", false, {}};
+  for (const TraceSample& s : trial.trace) {
+    slip.y.push_back(s.slip * 1e3);
+    rot.y.push_back(s.rotation_deg);
+  }
+  motion.series = {slip, rot};
+  plot.panels.push_back(std::move(motion));
   return plot;
 }
 
