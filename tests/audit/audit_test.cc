@@ -156,6 +156,39 @@ TEST(Units, CountsWithNegativeGainAuditedLikeNewtons) {
   }
 }
 
+// The second forms in counts with a negative gain: the same effect, form and
+// parameters as in N (the noise is the same per seed; the units only scale).
+TEST(Units, NewFormsInCountsWithNegativeGain) {
+  for (auto [e, form] : {std::pair{Effect::kHysteresis, testing::HiddenForm::kPrandtlIshlinskii},
+                         std::pair{Effect::kNonlinearity, testing::HiddenForm::kPowerLaw}}) {
+    testing::HiddenCase hc = testing::MakeHiddenCase({e}, 5151 + static_cast<int>(e), form);
+    sim::SensorModel n_model = hc.model;
+    n_model.units = "N";
+    n_model.gain = 1;
+    n_model.offset = 0;
+    sim::SensorModel c_model = n_model;
+    c_model.units = "counts";
+    c_model.gain = -45;
+    c_model.offset = 1010;
+    auto run_n = sim::SimulateSensor(n_model, hc.sim);
+    auto run_c = sim::SimulateSensor(c_model, hc.sim);
+    ASSERT_TRUE(run_n.ok() && run_c.ok());
+    auto dn = ParseMeasuredCsv(sim::SimRunCsv(*run_n), "n.csv");
+    auto dc = ParseMeasuredCsv(sim::SimRunCsv(*run_c), "c.csv");
+    ASSERT_TRUE(dn.ok() && dc.ok());
+    auto rn = RunAudit(*dn, Quick());
+    auto rc = RunAudit(*dc, Quick());
+    ASSERT_TRUE(rn.ok() && rc.ok());
+    ASSERT_FALSE(rc->causes.empty() || rn->causes.empty()) << EffectName(e);
+    EXPECT_EQ(rc->causes[0].effect, EffectName(e));
+    EXPECT_EQ(rc->causes[0].form, rn->causes[0].form);
+    EXPECT_NEAR(rc->extended_model.gain, -45, 0.5);
+    EXPECT_TRUE(testing::CheckParameters(e, c_model.effects, rc->causes[0]).ok) << EffectName(e);
+    EXPECT_TRUE(testing::CheckParameters(e, n_model.effects, rn->causes[0]).ok) << EffectName(e);
+    EXPECT_NEAR(rc->gain, rn->gain, 0.5) << EffectName(e);
+  }
+}
+
 // ---- two streams -------------------------------------------------------------
 
 TEST(TwoStreams, AlignedByInterpolatingTheReference) {
