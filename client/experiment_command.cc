@@ -117,6 +117,12 @@ int RunGrasp(const ExperimentArgs& a) {
         out << ex::RenderSvg(ex::TracePlot(t0, (*setup)->finger_names(), title));
         if (!out) return ReportError(absl::InvalidArgumentError(absl::StrCat("--plots: cannot write ", path)));
       }
+      if (a.details && !a.json) {
+        for (const ex::TrialResult& t : b->results)
+          std::cerr << absl::StrFormat("%s %s trial %d: %s  slip %.2f mm  rotation %.2f deg  force error %.3f N\n",
+                                       ex::ToString(o), ex::ToString(f), t.trial, t.success ? "success" : t.failure,
+                                       t.max_slip * 1e3, t.max_rotation_deg, t.force_error);
+      }
       b->results.clear();
       rows.push_back(std::move(*b));
     }
@@ -260,6 +266,7 @@ CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args) {
       ->type_name("FILE");
   g->add_flag("--ideal-sensors", args.ideal, "Readings are the true normal forces");
   g->add_flag("--no-progress", args.no_progress, "No progress bar on stderr");
+  g->add_flag("--details", args.details, "Also print one line per trial (outcome, slip, rotation) on stderr");
   args.grasp = g;
   CLI::App* s = cmd->add_subcommand(
       "slope", "Friction by the slope method vs the probing estimate, and MuJoCo's creep under static friction");

@@ -23,6 +23,7 @@ struct ExperimentArgs {
   std::string sensor_model_path;    // one model JSON for every fingertip
   bool ideal = false;               // ideal sensors
   bool no_progress = false;
+  bool details = false;             // one line per trial
   // slope
   std::vector<double> mus = {0.3, 0.5, 0.7, 0.9};
   double tilt_rate = 0.5;           // deg/s
