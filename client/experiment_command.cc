@@ -170,9 +170,13 @@ int RunSlope(const ExperimentArgs& a) {
   ex::SlopeConfig c;
   c.mus = a.mus;
   c.tilt_rate_deg = a.tilt_rate;
-  if (absl::Status s = ex::ValidateSlopeConfig(c); !s.ok())
-    return ReportError(absl::InvalidArgumentError(
-        absl::StrCat("--", absl::StartsWith(s.message(), "mus") ? "mu" : "", s.message())));
+  if (absl::Status s = ex::ValidateSlopeConfig(c); !s.ok()) {
+    const std::string m(s.message());
+    const char* flag = absl::StartsWith(m, "mus")         ? "--mu"
+                       : absl::StartsWith(m, "tilt_rate") ? "--tilt-rate"
+                                                          : "experiment slope";
+    return ReportError(absl::InvalidArgumentError(absl::StrCat(flag, ": ", m)));
+  }
   auto rows = ex::RunSlopeTable(c);
   if (!rows.ok()) return ReportError(rows.status());
   struct Creep {
