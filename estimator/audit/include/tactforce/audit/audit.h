@@ -11,6 +11,12 @@
 //     hysteresis, delay, lag, drift, crosstalk. Their parameters are fitted
 //     with NLopt (grid start + LN_SBPLX, derivative-free, for the non-smooth
 //     ones; LN_BOBYQA for the smooth ones); gain/offset in closed form.
+//     Two effects have two forms, each fitted and scored as a candidate of
+//     its own (the lower held-out BIC represents the effect): hysteresis =
+//     play operator | Prandtl-Ishlinskii (non-negative weights on a fixed
+//     radius grid, NNLS), nonlinearity = quadratic | power law.
+//     Two streams with an estimated clock offset: 'delay' is replaced by a
+//     nuisance delay fitted with every model (reported in clock_offset_s).
 //  3. Forward selection: each round fits every remaining candidate on the
 //     training block and scores it on the held-out block with
 //     BIC_h = n_h ln(RSS_h / n_h) + k ln(n_h). The best is accepted when it
