@@ -118,6 +118,9 @@ TEST(GraspExperiment, BadConfigsNameTheField) {
   c = {};
   c.control_rate = 5000;
   expect_field(c, "control_rate");
+  c = {};
+  c.fingertip_mass = 0.001;
+  expect_field(c, "kp");
   EXPECT_FALSE(ParseGraspObject("banana").ok());
   EXPECT_EQ(std::string(ParseGraspObject("banana").status().message()).substr(0, 7), "object:");
   EXPECT_FALSE(RunGraspBatch(GraspConfig{}, 0).ok());

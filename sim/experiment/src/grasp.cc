@@ -96,6 +96,11 @@ absl::Status ValidateGraspConfig(const GraspConfig& c) {
   if (auto s = positive("kp", c.kp); !s.ok()) return s;
   if (auto s = positive("damping_ratio", c.damping_ratio); !s.ok()) return s;
   if (auto s = positive("fingertip_mass", c.fingertip_mass); !s.ok()) return s;
+  if (std::sqrt(c.kp / c.fingertip_mass) * c.physics.timestep > 1.0)
+    return bad("kp", absl::StrFormat("too stiff for fingertip_mass %g kg at timestep %g s (sqrt(kp/m) dt = %.2f > 1: "
+                                     "the explicit PD would be unstable)",
+                                     c.fingertip_mass, c.physics.timestep,
+                                     std::sqrt(c.kp / c.fingertip_mass) * c.physics.timestep));
   if (!(c.fingertip_radius >= 0.003 && c.fingertip_radius <= 0.03))
     return bad("fingertip_radius", absl::StrFormat("must be in [0.003, 0.03] m, got %g", c.fingertip_radius));
   if (!(c.confidence >= 0 && std::isfinite(c.confidence)))
@@ -539,7 +544,6 @@ absl::StatusOr<TrialResult> RunGraspTrial(const GraspSetup& setup, int trial) {
   bool lift_started = false;
   Vec3 p_lift = Vec3::Zero();
   Matrix3d R_lift = Matrix3d::Identity();
-  HandMotion h_lift;
   bool dropped = false;
 
   for (int k = 0; k <= total_steps && !dropped; ++k) {
@@ -607,7 +611,6 @@ absl::StatusOr<TrialResult> RunGraspTrial(const GraspSetup& setup, int trial) {
           lift_started = true;
           p_lift = p;
           R_lift = R;
-          h_lift = hm;
         }
         // Expected pose: the hand's motion since the lift started applied to
         // the object's pose then (the hand is at rest when the lift starts).
