@@ -1,6 +1,6 @@
 #include "experiment_command.h"
 
-#include <unistd.h>
+#include <algorithm>
 
 #include <chrono>
 #include <filesystem>
@@ -11,6 +11,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "cli_common.h"
+#include "progress.h"
 #include "tactforce/experiment/grasp.h"
 #include "tactforce/experiment/slope.h"
 #include "tactforce/sim/sensor_model.h"
@@ -24,25 +25,6 @@ std::string JsonNumber(double v) {
   if (!std::isfinite(v)) return "null";
   return absl::StrFormat("%.6g", v);
 }
-
-class ExperimentProgress {
- public:
-  ExperimentProgress(int total, bool enabled) : total_(total), enabled_(enabled && isatty(2)) {}
-  void Update(int done, const std::string& label) {
-    if (!enabled_) return;
-    const int width = 30;
-    const int fill = total_ > 0 ? done * width / total_ : width;
-    std::cerr << "\r[" << std::string(fill, '#') << std::string(width - fill, '-') << "] " << done << "/" << total_
-              << " " << label << "   " << std::flush;
-  }
-  void Done() {
-    if (enabled_) std::cerr << "\r" << std::string(70, ' ') << "\r" << std::flush;
-  }
-
- private:
-  int total_;
-  bool enabled_;
-};
 
 int RunGrasp(const ExperimentArgs& a) {
   std::vector<ex::GraspObject> objects;
@@ -88,7 +70,8 @@ int RunGrasp(const ExperimentArgs& a) {
     if (ec) return ReportError(absl::InvalidArgumentError(absl::StrCat("--plots: cannot create ", a.plots_dir, ": ", ec.message())));
     base.trace_trials = 1;
   }
-  ExperimentProgress bar(static_cast<int>(objects.size() * modes.size()) * a.trials, !a.no_progress);
+  const int total_trials = static_cast<int>(objects.size() * modes.size()) * a.trials;
+  ProgressBar bar("trials", !a.no_progress && ProgressBar::StderrIsTerminal(), std::chrono::milliseconds(0));
   int done_before = 0;
   std::vector<ex::BatchSummary> rows;
   const auto wall0 = std::chrono::steady_clock::now();
@@ -98,9 +81,12 @@ int RunGrasp(const ExperimentArgs& a) {
       c.object = o;
       c.feedback = f;
       const std::string label = absl::StrCat(ex::ToString(o), " ", ex::ToString(f));
-      auto b = ex::RunGraspBatch(c, a.trials, [&](int done) { bar.Update(done_before + done, label); });
+      auto b = ex::RunGraspBatch(c, a.trials, [&](int done) {
+        bar.Update(static_cast<double>(done_before + done) / std::max(1, total_trials),
+                   absl::StrCat(done_before + done, "/", total_trials, " ", label));
+      });
       if (!b.ok()) {
-        bar.Done();
+        bar.Finish();
         return ReportError(b.status());
       }
       done_before += a.trials;
@@ -127,7 +113,7 @@ int RunGrasp(const ExperimentArgs& a) {
       rows.push_back(std::move(*b));
     }
   }
-  bar.Done();
+  bar.Finish();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   if (a.json) {
     std::string s = "{\"results\":[";
