@@ -121,38 +121,56 @@ TEST(Trials, TimeRestartsPerTrial) {
 
 // ---- units -----------------------------------------------------------------
 
+// The hidden case's effects with the reading in N (gain 1) and in counts
+// with a negative gain (-45 counts/N, offset 1010), both audited.
+struct NewtonsAndCounts {
+  sim::SensorModel n_model, c_model;
+  absl::StatusOr<AuditReport> rn, rc;
+};
+
+NewtonsAndCounts AuditInNewtonsAndCounts(const testing::HiddenCase& hc) {
+  NewtonsAndCounts out;
+  out.n_model = hc.model;
+  out.n_model.units = "N";
+  out.n_model.gain = 1;
+  out.n_model.offset = 0;
+  out.c_model = out.n_model;
+  out.c_model.units = "counts";
+  out.c_model.gain = -45;  // reading falls as force rises
+  out.c_model.offset = 1010;
+  auto run_n = sim::SimulateSensor(out.n_model, hc.sim);
+  auto run_c = sim::SimulateSensor(out.c_model, hc.sim);
+  if (!run_n.ok() || !run_c.ok()) {
+    out.rn = out.rc = absl::InternalError("simulation failed");
+    return out;
+  }
+  auto dn = ParseMeasuredCsv(sim::SimRunCsv(*run_n), "n.csv");
+  auto dc = ParseMeasuredCsv(sim::SimRunCsv(*run_c), "c.csv");
+  if (!dn.ok() || !dc.ok()) {
+    out.rn = out.rc = absl::InternalError("measured CSV rejected");
+    return out;
+  }
+  out.rn = RunAudit(*dn, Quick());
+  AuditOptions oc = Quick();
+  oc.reading_units = "counts";
+  out.rc = RunAudit(*dc, oc);
+  return out;
+}
+
 TEST(Units, CountsWithNegativeGainAuditedLikeNewtons) {
   for (Effect e : {Effect::kSaturation, Effect::kDeadzone, Effect::kHysteresis, Effect::kDelay}) {
-    testing::HiddenCase hc = testing::MakeHiddenCase({e}, 4242 + static_cast<int>(e));
-    sim::SensorModel n_model = hc.model;
-    n_model.units = "N";
-    n_model.gain = 1;
-    n_model.offset = 0;
-    sim::SensorModel c_model = n_model;
-    c_model.units = "counts";
-    c_model.gain = -45;  // reading falls as force rises
-    c_model.offset = 1010;
-    auto run_n = sim::SimulateSensor(n_model, hc.sim);
-    auto run_c = sim::SimulateSensor(c_model, hc.sim);
-    ASSERT_TRUE(run_n.ok() && run_c.ok());
-    auto dn = ParseMeasuredCsv(sim::SimRunCsv(*run_n), "n.csv");
-    auto dc = ParseMeasuredCsv(sim::SimRunCsv(*run_c), "c.csv");
-    ASSERT_TRUE(dn.ok() && dc.ok());
-    auto rn = RunAudit(*dn, Quick());
-    AuditOptions oc = Quick();
-    oc.reading_units = "counts";
-    auto rc = RunAudit(*dc, oc);
-    ASSERT_TRUE(rn.ok() && rc.ok());
-    ASSERT_FALSE(rc->causes.empty()) << EffectName(e);
-    EXPECT_EQ(rc->causes[0].effect, EffectName(e));
-    EXPECT_EQ(rn->causes[0].effect, EffectName(e));
+    const NewtonsAndCounts r = AuditInNewtonsAndCounts(testing::MakeHiddenCase({e}, 4242 + static_cast<int>(e)));
+    ASSERT_TRUE(r.rn.ok() && r.rc.ok()) << r.rn.status() << r.rc.status();
+    ASSERT_FALSE(r.rc->causes.empty() || r.rn->causes.empty()) << EffectName(e);
+    EXPECT_EQ(r.rc->causes[0].effect, EffectName(e));
+    EXPECT_EQ(r.rn->causes[0].effect, EffectName(e));
     // (The nominal gain is biased by the unmodelled effect; the extended one is not.)
-    EXPECT_LT(rc->nominal_model.gain, 0);
-    EXPECT_NEAR(rc->extended_model.gain, -45, 0.5);
-    EXPECT_TRUE(testing::CheckParameters(e, c_model.effects, rc->causes[0]).ok) << EffectName(e);
-    for (const auto& [k, v] : rn->causes[0].parameters)
-      EXPECT_NEAR(rc->causes[0].parameters.at(k), v, 1e-3 * (1 + std::abs(v))) << EffectName(e) << " " << k;
-    EXPECT_NEAR(rc->gain, rn->gain, 0.5) << EffectName(e);
+    EXPECT_LT(r.rc->nominal_model.gain, 0);
+    EXPECT_NEAR(r.rc->extended_model.gain, -45, 0.5);
+    EXPECT_TRUE(testing::CheckParameters(e, r.c_model.effects, r.rc->causes[0]).ok) << EffectName(e);
+    for (const auto& [k, v] : r.rn->causes[0].parameters)
+      EXPECT_NEAR(r.rc->causes[0].parameters.at(k), v, 1e-3 * (1 + std::abs(v))) << EffectName(e) << " " << k;
+    EXPECT_NEAR(r.rc->gain, r.rn->gain, 0.5) << EffectName(e);
   }
 }
 
@@ -161,31 +179,16 @@ TEST(Units, CountsWithNegativeGainAuditedLikeNewtons) {
 TEST(Units, NewFormsInCountsWithNegativeGain) {
   for (auto [e, form] : {std::pair{Effect::kHysteresis, testing::HiddenForm::kPrandtlIshlinskii},
                          std::pair{Effect::kNonlinearity, testing::HiddenForm::kPowerLaw}}) {
-    testing::HiddenCase hc = testing::MakeHiddenCase({e}, 5151 + static_cast<int>(e), form);
-    sim::SensorModel n_model = hc.model;
-    n_model.units = "N";
-    n_model.gain = 1;
-    n_model.offset = 0;
-    sim::SensorModel c_model = n_model;
-    c_model.units = "counts";
-    c_model.gain = -45;
-    c_model.offset = 1010;
-    auto run_n = sim::SimulateSensor(n_model, hc.sim);
-    auto run_c = sim::SimulateSensor(c_model, hc.sim);
-    ASSERT_TRUE(run_n.ok() && run_c.ok());
-    auto dn = ParseMeasuredCsv(sim::SimRunCsv(*run_n), "n.csv");
-    auto dc = ParseMeasuredCsv(sim::SimRunCsv(*run_c), "c.csv");
-    ASSERT_TRUE(dn.ok() && dc.ok());
-    auto rn = RunAudit(*dn, Quick());
-    auto rc = RunAudit(*dc, Quick());
-    ASSERT_TRUE(rn.ok() && rc.ok());
-    ASSERT_FALSE(rc->causes.empty() || rn->causes.empty()) << EffectName(e);
-    EXPECT_EQ(rc->causes[0].effect, EffectName(e));
-    EXPECT_EQ(rc->causes[0].form, rn->causes[0].form);
-    EXPECT_NEAR(rc->extended_model.gain, -45, 0.5);
-    EXPECT_TRUE(testing::CheckParameters(e, c_model.effects, rc->causes[0]).ok) << EffectName(e);
-    EXPECT_TRUE(testing::CheckParameters(e, n_model.effects, rn->causes[0]).ok) << EffectName(e);
-    EXPECT_NEAR(rc->gain, rn->gain, 0.5) << EffectName(e);
+    const NewtonsAndCounts r =
+        AuditInNewtonsAndCounts(testing::MakeHiddenCase({e}, 5151 + static_cast<int>(e), form));
+    ASSERT_TRUE(r.rn.ok() && r.rc.ok()) << r.rn.status() << r.rc.status();
+    ASSERT_FALSE(r.rc->causes.empty() || r.rn->causes.empty()) << EffectName(e);
+    EXPECT_EQ(r.rc->causes[0].effect, EffectName(e));
+    EXPECT_EQ(r.rc->causes[0].form, r.rn->causes[0].form);
+    EXPECT_NEAR(r.rc->extended_model.gain, -45, 0.5);
+    EXPECT_TRUE(testing::CheckParameters(e, r.c_model.effects, r.rc->causes[0]).ok) << EffectName(e);
+    EXPECT_TRUE(testing::CheckParameters(e, r.n_model.effects, r.rn->causes[0]).ok) << EffectName(e);
+    EXPECT_NEAR(r.rc->gain, r.rn->gain, 0.5) << EffectName(e);
   }
 }
 

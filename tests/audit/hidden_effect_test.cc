@@ -17,6 +17,8 @@ namespace {
 using testing::CheckParameters;
 using testing::HiddenCase;
 using testing::MakeHiddenCase;
+using testing::FastOptions;
+using testing::ForSeeds;
 
 constexpr int kSeeds = 200;
 
@@ -24,26 +26,6 @@ constexpr int kSeeds = 200;
 // Readable test names/values in gtest and ctest output.
 void PrintTo(Effect e, std::ostream* os) { *os << EffectName(e); }
 namespace {
-
-AuditOptions FastOptions(const HiddenCase& hc) {
-  AuditOptions o;
-  o.downstream_gain = false;
-  o.uncertainties = false;
-  o.reading_units = hc.model.units;
-  return o;
-}
-
-// Runs body(seed_index) for i in [0, n) on two threads.
-template <typename F>
-void ForSeeds(int n, F body) {
-  std::atomic<int> next{0};
-  auto worker = [&] {
-    for (int i = next++; i < n; i = next++) body(i);
-  };
-  std::thread a(worker), b(worker);
-  a.join();
-  b.join();
-}
 
 class SingleEffect : public ::testing::TestWithParam<Effect> {};
 

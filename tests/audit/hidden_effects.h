@@ -7,7 +7,9 @@
 #include <cmath>
 #include <cstdint>
 #include <algorithm>
+#include <atomic>
 #include <random>
+#include <thread>
 #include <string>
 #include <vector>
 
@@ -24,6 +26,28 @@ struct HiddenCase {
 };
 
 inline constexpr double kMaxPeak = 8.0;
+
+// Audit options for the many-seed tests: no downstream gain, no
+// uncertainties (the expensive extras), the case's reading units.
+inline AuditOptions FastOptions(const HiddenCase& hc) {
+  AuditOptions o;
+  o.downstream_gain = false;
+  o.uncertainties = false;
+  o.reading_units = hc.model.units;
+  return o;
+}
+
+// Runs body(i) for i in [0, n) on two threads.
+template <typename F>
+void ForSeeds(int n, F body) {
+  std::atomic<int> next{0};
+  auto worker = [&] {
+    for (int i = next++; i < n; i = next++) body(i);
+  };
+  std::thread a(worker), b(worker);
+  a.join();
+  b.join();
+}
 
 // Which form of a two-form effect to hide (kDefault: play operator for
 // hysteresis, quadratic for nonlinearity).

@@ -20,27 +20,10 @@ using testing::CheckParameters;
 using testing::HiddenCase;
 using testing::HiddenForm;
 using testing::MakeHiddenCase;
+using testing::FastOptions;
+using testing::ForSeeds;
 
 constexpr int kSeeds = 200;
-
-AuditOptions FastOptions(const HiddenCase& hc) {
-  AuditOptions o;
-  o.downstream_gain = false;
-  o.uncertainties = false;
-  o.reading_units = hc.model.units;
-  return o;
-}
-
-template <typename F>
-void ForSeeds(int n, F body) {
-  std::atomic<int> next{0};
-  auto worker = [&] {
-    for (int i = next++; i < n; i = next++) body(i);
-  };
-  std::thread a(worker), b(worker);
-  a.join();
-  b.join();
-}
 
 struct Tally {
   std::atomic<int> named{0}, recovered{0}, correct{0}, extra{0};
