@@ -41,7 +41,6 @@ TEST_P(IdealSensorTrial, Succeeds) {
     EXPECT_LT(r->force_error, 0.15) << ToString(GetParam()) << " " << ToString(f);
     EXPECT_GE(r->converge_time, 0.0) << ToString(GetParam()) << " " << ToString(f);
     EXPECT_EQ(r->estimate_failures, 0);
-    EXPECT_LT(r->wall_seconds, r->sim_seconds) << "slower than real time";
   }
 }
 
