@@ -8,7 +8,11 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "tactforce/api/convert.h"
+#include "tactforce/api/inertia.h"
 #include "tactforce/api/json.h"
+#include "tactforce/inertia/samples.h"
+#include "tactforce/inertia/simulate.h"
 #include "test_support.h"
 
 namespace tactforce::testing {
@@ -19,9 +23,8 @@ using ::testing::HasSubstr;
 
 class PythonClientTest : public ServerTest {
  protected:
-  ProcessResult Python(std::vector<std::string> args) {
-    std::vector<std::string> argv = {TACTFORCE_PYTHON3,
-                                     (SourceDir() / "client/python/plan_client.py").string()};
+  ProcessResult Python(std::vector<std::string> args, const char* script = "client/python/plan_client.py") {
+    std::vector<std::string> argv = {TACTFORCE_PYTHON3, (SourceDir() / script).string()};
     argv.insert(argv.end(), args.begin(), args.end());
     return RunProcess(argv, {std::string("PYTHONPATH=") + TACTFORCE_PYTHON_STUB_DIR});
   }
@@ -79,6 +82,50 @@ TEST_F(PythonClientTest, ReportsInvalidRequestsAndUnreachableServers) {
   run = Python({"--server", address, "--timeout", "2"});
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_THAT(run.err, HasSubstr("UNAVAILABLE"));
+}
+
+// client/python/inertia_client.py streams a CSV to Estimator.FitInertia in
+// batches; its answer equals the in-process fit of the same file, and a bad
+// row is reported with its line before anything wrong reaches the server.
+TEST_F(PythonClientTest, StreamsAnInertiaCsvLikeTheCppFit) {
+  std::string pattern = (fs::temp_directory_path() / "tactforce_py.XXXXXX").string();
+  ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+  inertia::SimulationOptions o;
+  o.duration = 3.0;
+  o.noise.force_sigma = 0.3;
+  o.seed = 5;
+  absl::StatusOr<inertia::SimulationResult> sim = inertia::SimulateInertia(o);
+  ASSERT_TRUE(sim.ok()) << sim.status();
+  const std::string csv = pattern + "/log.csv", truth = pattern + "/truth.json";
+  ASSERT_TRUE(inertia::WriteSimulation(*sim, csv, truth).ok());
+
+  ProcessResult run = Python({"--server", server_->address(), "--csv", csv, "--truth", truth, "--method",
+                              "factor-graph", "--batch", "64", "--json"},
+                             "client/python/inertia_client.py");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  v1::FitInertiaResponse from_python;
+  absl::Status parsed = api::ParseJson(run.out, &from_python);
+  ASSERT_TRUE(parsed.ok()) << parsed << "\n" << run.out;
+
+  absl::StatusOr<inertia::InertiaSamples> samples = inertia::ReadInertiaCsvFile(csv);
+  ASSERT_TRUE(samples.ok()) << samples.status();
+  v1::InertiaFitOptions options;
+  options.set_method(v1::INERTIA_METHOD_FACTOR_GRAPH);
+  *options.mutable_truth() = api::InertialParametersToProto(sim->truth.params);
+  *options.mutable_gravity() = api::ToProto(*sim->truth.gravity_world);
+  absl::StatusOr<v1::FitInertiaResponse> local = api::FitInertiaSamples(*samples, options);
+  ASSERT_TRUE(local.ok()) << local.status();
+  EXPECT_EQ(from_python.samples_received(), local->samples_received());
+  EXPECT_DOUBLE_EQ(from_python.mass(), local->mass());
+  EXPECT_DOUBLE_EQ(from_python.inertia().ixy(), local->inertia().ixy());
+  EXPECT_DOUBLE_EQ(from_python.errors().riemannian(), local->errors().riemannian());
+
+  std::ofstream(pattern + "/bad.csv") << "t,px,py,pz,qw,qx,qy,qz,fx,fy,fz,tx,ty,tz\n0,0,0,0,1,0,0,0,0,0,1,0,0,0\n"
+                                         "0.1,0,zero,0,1,0,0,0,0,0,1,0,0,0\n";
+  run = Python({"--server", server_->address(), "--csv", pattern + "/bad.csv"}, "client/python/inertia_client.py");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_THAT(run.err, HasSubstr("bad.csv:3: column 'py': not a number"));
+  fs::remove_all(pattern);
 }
 
 }  // namespace
