@@ -253,6 +253,11 @@ absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request) {
   for (const audit::Cause& c : report->causes) {
     v1::AuditCause* cause = out.add_causes();
     cause->set_effect(c.effect);
+    cause->set_form(c.form);
+    for (const auto& [k, values] : c.array_parameters) {
+      v1::DoubleList& list = (*cause->mutable_array_parameters())[k];
+      for (double v : values) list.add_values(v);
+    }
     for (const auto& [k, v] : c.parameters) (*cause->mutable_parameters())[k] = v;
     for (const auto& [k, v] : c.uncertainties) (*cause->mutable_uncertainties())[k] = v;
     cause->set_heldout_rms_before(c.heldout_rms_before);

@@ -178,5 +178,46 @@ TEST_F(EstimationRpcTest, AuditModelNamesAHiddenThreshold) {
   EXPECT_NE(bad.error_message().find("too few samples"), std::string::npos) << bad.error_message();
 }
 
+// The form of a two-form effect and its array parameters reach RPC clients
+// as fields, not only inside report_json.
+TEST_F(EstimationRpcTest, AuditModelReportsThePrandtlIshlinskiiForm) {
+  sim::SensorModel model;
+  model.noise = 0.01;
+  model.effects.pi_thresholds = {0.0, 0.04, 0.12, 0.25};
+  model.effects.pi_weights = {0.25, 0.25, 0.25, 0.25};
+  sim::SimOptions options;
+  options.seconds = 20;
+  options.seed = 11;
+  absl::StatusOr<sim::SimRun> run = sim::SimulateSensor(model, options);
+  ASSERT_TRUE(run.ok()) << run.status();
+  v1::AuditRequest request;
+  for (size_t k = 0; k < run->t.size(); ++k) {
+    v1::AuditSample* s = request.add_samples();
+    s->set_t(run->t[k]);
+    s->set_reference(run->reference[k]);
+    s->set_reading(run->reading[k]);
+  }
+  auto stub = v1::Audit::NewStub(channel_);
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+  v1::AuditResponse response;
+  const grpc::Status status = stub->AuditModel(&context, request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  ASSERT_GE(response.causes_size(), 1);
+  const v1::AuditCause& cause = response.causes(0);
+  EXPECT_EQ(cause.effect(), "hysteresis");
+  EXPECT_EQ(cause.form(), "prandtl_ishlinskii");
+  ASSERT_TRUE(cause.array_parameters().contains("pi_weights"));
+  ASSERT_TRUE(cause.array_parameters().contains("pi_thresholds"));
+  const v1::DoubleList& weights = cause.array_parameters().at("pi_weights");
+  EXPECT_EQ(weights.values_size(), cause.array_parameters().at("pi_thresholds").values_size());
+  double sum = 0;
+  for (double w : weights.values()) {
+    EXPECT_GE(w, 0.0);
+    sum += w;
+  }
+  EXPECT_NEAR(sum, 1.0, 1e-9);
+}
+
 }  // namespace
 }  // namespace tactforce::testing
