@@ -26,20 +26,9 @@ import json
 import math
 import sys
 
-try:
-    import grpc
-    from google.protobuf import json_format
-except ImportError as error:  # pragma: no cover - environment problem
-    sys.exit(f"error: {error}: install python3-grpcio and python3-protobuf "
-             "and run with /usr/bin/python3")
+from client_env import EXIT_BAD_INPUT, EXIT_OK, EXIT_RPC_FAILED, load
 
-try:
-    from tactforce.v1 import estimator_pb2_grpc, inertia_pb2
-except ImportError as error:  # pragma: no cover - environment problem
-    sys.exit(f"error: {error}: set PYTHONPATH to the generated stubs "
-             "(<build>/python, made by the tactforce_python_stubs target)")
-
-EXIT_OK, EXIT_RPC_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+grpc, json_format, (estimator_pb2_grpc, inertia_pb2) = load("estimator_pb2_grpc", "inertia_pb2")
 
 METHODS = {
     "baseline-ls": inertia_pb2.INERTIA_METHOD_BASELINE_LS,

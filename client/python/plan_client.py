@@ -23,20 +23,9 @@ deadline, ...), 2 bad command line or invalid request (INVALID_ARGUMENT).
 import argparse
 import sys
 
-try:
-    import grpc
-    from google.protobuf import json_format
-except ImportError as error:  # pragma: no cover - environment problem
-    sys.exit(f"error: {error}: install python3-grpcio and python3-protobuf "
-             "and run with /usr/bin/python3")
+from client_env import EXIT_BAD_INPUT, EXIT_OK, EXIT_RPC_FAILED, load
 
-try:
-    from tactforce.v1 import planner_pb2, planner_pb2_grpc
-except ImportError as error:  # pragma: no cover - environment problem
-    sys.exit(f"error: {error}: set PYTHONPATH to the generated stubs "
-             "(<build>/python, made by the tactforce_python_stubs target)")
-
-EXIT_OK, EXIT_RPC_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+grpc, json_format, (planner_pb2, planner_pb2_grpc) = load("planner_pb2", "planner_pb2_grpc")
 
 SOLVERS = {
     "geometric": planner_pb2.SOLVER_GEOMETRIC,

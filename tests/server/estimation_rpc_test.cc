@@ -144,6 +144,17 @@ TEST_F(EstimationRpcTest, PlanTrajectoryAndProbe) {
 namespace tactforce::testing {
 namespace {
 
+v1::AuditRequest AuditRequestFrom(const sim::SimRun& run) {
+  v1::AuditRequest request;
+  for (size_t k = 0; k < run.t.size(); ++k) {
+    v1::AuditSample* s = request.add_samples();
+    s->set_t(run.t[k]);
+    s->set_reference(run.reference[k]);
+    s->set_reading(run.reading[k]);
+  }
+  return request;
+}
+
 TEST_F(EstimationRpcTest, AuditModelNamesAHiddenThreshold) {
   sim::SensorModel model;
   model.noise = 0.02;
@@ -153,14 +164,8 @@ TEST_F(EstimationRpcTest, AuditModelNamesAHiddenThreshold) {
   options.seed = 9;
   absl::StatusOr<sim::SimRun> run = sim::SimulateSensor(model, options);
   ASSERT_TRUE(run.ok()) << run.status();
-  v1::AuditRequest request;
+  v1::AuditRequest request = AuditRequestFrom(*run);
   request.set_source("rpc-test");
-  for (size_t k = 0; k < run->t.size(); ++k) {
-    v1::AuditSample* s = request.add_samples();
-    s->set_t(run->t[k]);
-    s->set_reference(run->reference[k]);
-    s->set_reading(run->reading[k]);
-  }
   auto stub = v1::Audit::NewStub(channel_);
   grpc::ClientContext context;
   context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
@@ -190,13 +195,7 @@ TEST_F(EstimationRpcTest, AuditModelReportsThePrandtlIshlinskiiForm) {
   options.seed = 11;
   absl::StatusOr<sim::SimRun> run = sim::SimulateSensor(model, options);
   ASSERT_TRUE(run.ok()) << run.status();
-  v1::AuditRequest request;
-  for (size_t k = 0; k < run->t.size(); ++k) {
-    v1::AuditSample* s = request.add_samples();
-    s->set_t(run->t[k]);
-    s->set_reference(run->reference[k]);
-    s->set_reading(run->reading[k]);
-  }
+  v1::AuditRequest request = AuditRequestFrom(*run);
   auto stub = v1::Audit::NewStub(channel_);
   grpc::ClientContext context;
   context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
