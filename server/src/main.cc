@@ -76,7 +76,7 @@ int main(int argc, char** argv) {
   host.AddService(std::make_unique<tactforce::server::PlannerService>(
       &pool, config.ToPlannerOptions()));
   host.AddService(std::make_unique<tactforce::server::EstimatorService>(
-      &pool, tactforce::server::EstimatorServiceOptions{config.max_contacts}));
+      &pool, config.ToEstimatorOptions()));
   host.AddService(std::make_unique<tactforce::server::AuditService>(&pool));
 
   if (absl::Status started = host.Start(); !started.ok()) {
@@ -86,10 +86,10 @@ int main(int argc, char** argv) {
   std::printf("tactforce-server listening on %s\n", host.bound_address().c_str());
   std::fflush(stdout);
   spdlog::info("event=start address={} tls={} mtls={} workers={} queue={} max_contacts={} "
-               "solve_timeout_ms={} inline_max_contacts={} max_message_bytes={}",
+               "solve_timeout_ms={} inline_max_contacts={} max_message_bytes={} max_inertia_samples={}",
                host.bound_address(), host.tls(), !config.tls_client_ca.empty(), pool.workers(),
                pool.max_queued(), config.max_contacts, config.solve_timeout_ms,
-               config.inline_max_contacts, config.max_message_bytes);
+               config.inline_max_contacts, config.max_message_bytes, config.max_inertia_samples);
   if (AllInterfaces(config.listen) && !host.tls()) {
     spdlog::warn("event=plaintext_all_interfaces address={} note=\"listening on every "
                  "interface without TLS\"",

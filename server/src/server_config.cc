@@ -28,6 +28,13 @@ PlannerServiceOptions ServerConfig::ToPlannerOptions() const {
   return options;
 }
 
+EstimatorServiceOptions ServerConfig::ToEstimatorOptions() const {
+  EstimatorServiceOptions options;
+  options.max_contacts = max_contacts;
+  options.max_inertia_samples = max_inertia_samples;
+  return options;
+}
+
 void RegisterFlags(CLI::App& app, ServerConfig* c) {
   app.option_defaults()->always_capture_default();
   app.add_option("--listen", c->listen,
@@ -49,6 +56,9 @@ void RegisterFlags(CLI::App& app, ServerConfig* c) {
   app.add_option("--max-contacts", c->max_contacts,
                  "Most contacts a request may have (INVALID_ARGUMENT 'contacts: ...' beyond)")
       ->check(CLI::Range(1, 100'000));
+  app.add_option("--max-inertia-samples", c->max_inertia_samples,
+                 "Most samples one FitInertia stream may carry (INVALID_ARGUMENT 'samples: ...' beyond)")
+      ->check(CLI::Range(int64_t{10}, int64_t{100'000'000}));
   app.add_option("--solve-timeout-ms", c->solve_timeout_ms,
                  "CPU-time cap of one Ipopt solve in ms (0 = none); a solve that hits it "
                  "returns PLAN_STATUS_SOLVER_FAILURE")

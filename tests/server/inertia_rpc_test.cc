@@ -118,5 +118,19 @@ TEST_F(InertiaRpcTest, EmptyStreamAndBadOptionsAreInvalidArgument) {
       << status.error_message();
 }
 
+class InertiaRpcLimitTest : public ServerTest {
+ protected:
+  std::vector<std::string> server_flags() const override { return {"--max-inertia-samples", "50"}; }
+};
+
+TEST_F(InertiaRpcLimitTest, StreamBeyondTheServersSampleLimitIsRejected) {
+  const inertia::SimulationResult sim = Simulated(0.0);
+  auto stub = v1::Estimator::NewStub(channel_);
+  v1::FitInertiaResponse response;
+  const grpc::Status status = Stream(*stub, sim.samples, v1::InertiaFitOptions(), 20, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("more than 50 samples"), std::string::npos) << status.error_message();
+}
+
 }  // namespace
 }  // namespace tactforce::testing

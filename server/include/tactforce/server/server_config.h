@@ -1,9 +1,11 @@
 // Command-line configuration of tactforce-server (CLI11).
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 #include "CLI/CLI.hpp"
+#include "tactforce/server/estimator_service.h"
 #include "tactforce/server/planner_service.h"
 #include "tactforce/server/server_host.h"
 
@@ -17,6 +19,7 @@ struct ServerConfig {
   int max_contacts = 64;
   int solve_timeout_ms = 10'000;
   int inline_max_contacts = 8;
+  int64_t max_inertia_samples = 1'000'000;  // per FitInertia stream
   std::string tls_cert;
   std::string tls_key;
   std::string tls_client_ca;
@@ -26,6 +29,7 @@ struct ServerConfig {
   int EffectiveWorkers() const;
   ServerOptions ToServerOptions() const;
   PlannerServiceOptions ToPlannerOptions() const;
+  EstimatorServiceOptions ToEstimatorOptions() const;
 };
 
 // Adds every flag (with its documentation and range checks) to `app`.
