@@ -10,6 +10,18 @@
 
 namespace tactforce::inertia::internal {
 
+Matrix10d ScaledPseudoInverse(const Matrix10d& A, const Vector10d& scale, double relative_tolerance) {
+  const Matrix10d S = scale.asDiagonal();
+  Eigen::SelfAdjointEigenSolver<Matrix10d> es(S * A * S);
+  Matrix10d pinv = Matrix10d::Zero();
+  const double top = es.eigenvalues()(9);
+  for (int i = 0; i < 10; ++i) {
+    const double l = es.eigenvalues()(i);
+    if (l > relative_tolerance * top) pinv += es.eigenvectors().col(i) * es.eigenvectors().col(i).transpose() / l;
+  }
+  return S * pinv * S;
+}
+
 Vector10d ScaledLeastSquares(const Eigen::MatrixXd& Y, const Eigen::VectorXd& b, const Vector10d& scale,
                              int* rank) {
   const Eigen::MatrixXd Ys = Y * scale.asDiagonal();
@@ -85,15 +97,7 @@ absl::StatusOr<MethodOutput> FitBaselineLs(const InertiaSamples& s, const Inerti
   const double dof = std::max(1, 6 * n - rank);
   const double s2 = r.squaredNorm() / dof;
   const Matrix10d YtY = Y.transpose() * Y;
-  const Matrix10d S = out.scale.asDiagonal();
-  Eigen::SelfAdjointEigenSolver<Matrix10d> es(S * YtY * S);
-  Matrix10d pinv = Matrix10d::Zero();
-  const double top = es.eigenvalues()(9);
-  for (int i = 0; i < 10; ++i) {
-    const double l = es.eigenvalues()(i);
-    if (l > 1e-20 * top) pinv += es.eigenvectors().col(i) * es.eigenvectors().col(i).transpose() / l;
-  }
-  out.cov = s2 * S * pinv * S;
+  out.cov = s2 * ScaledPseudoInverse(YtY, out.scale, 1e-20);
   const double wf = 1.0 / std::max(out.rms_force * out.rms_force, 1e-300);
   const double wt = 1.0 / std::max(out.rms_torque * out.rms_torque, 1e-300);
   const double scale_t = std::isfinite(wt / wf) && out.rms_force > 0 && out.rms_torque > 0 ? wt / wf : 1.0 / (len * len);

@@ -462,17 +462,7 @@ absl::StatusOr<MethodOutput> FitConstrained(const InertiaSamples& s, const Inert
   out.pi = pi;
   out.info = A;
   // Covariance of pi: (A)^+ (the unconstrained GLS information).
-  {
-    const Matrix10d S = out.scale.asDiagonal();
-    Eigen::SelfAdjointEigenSolver<Matrix10d> es(S * A * S);
-    Matrix10d pinv = Matrix10d::Zero();
-    const double top = es.eigenvalues()(9);
-    for (int i = 0; i < 10; ++i) {
-      const double l = es.eigenvalues()(i);
-      if (l > 1e-14 * top) pinv += es.eigenvectors().col(i) * es.eigenvectors().col(i).transpose() / l;
-    }
-    out.cov = S * pinv * S;
-  }
+  out.cov = ScaledPseudoInverse(A, out.scale, 1e-14);
   out.samples_used = n;
   ResidualRms(kin, wrench, pi, &out.rms_force, &out.rms_torque);
   return out;

@@ -96,6 +96,12 @@ void ResidualRms(const std::vector<KinPoint>& kin, const std::vector<Vector6d>& 
 Vector10d ScaledLeastSquares(const Eigen::MatrixXd& Y, const Eigen::VectorXd& b, const Vector10d& scale,
                              int* rank);
 
+// S (S A S)^+ S with S = diag(scale): the pseudo-inverse of a symmetric
+// positive semi-definite information matrix A computed in scaled
+// coordinates; eigenvalues below relative_tolerance * the largest are
+// dropped (unidentifiable directions get zero variance).
+Matrix10d ScaledPseudoInverse(const Matrix10d& A, const Vector10d& scale, double relative_tolerance);
+
 // Rough mass and length scale from an unconstrained estimate (fallbacks
 // when it is unphysical).
 void RoughScale(const Vector10d& pi, const ConvexHull* hull, double* m0, double* length);
