@@ -1,5 +1,7 @@
 #include "tactforce/api/json.h"
 
+#include "tactforce/sim/json.h"
+
 #include <string>
 
 #include "absl/status/status.h"
@@ -69,34 +71,12 @@ std::string ToJson(const google::protobuf::Message& message, bool compact) {
   const auto status = google::protobuf::util::MessageToJsonString(message, &out, options);
   if (!status.ok()) {
     // Only possible for unresolvable Any types, which the API does not use.
-    return absl::StrCat("{\"error\": ", JsonQuote(status.ToString()), "}\n");
+    return absl::StrCat("{\"error\": ", sim::JsonEscape(status.ToString()), "}\n");
   }
   // With add_whitespace protobuf already ends the text with a newline.
   if (!compact && (out.empty() || out.back() != '\n')) out.push_back('\n');
   return out;
 }
 
-std::string JsonQuote(std::string_view text) {
-  std::string out = "\"";
-  for (unsigned char c : text) {
-    switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\r': out += "\\r"; break;
-      case '\t': out += "\\t"; break;
-      case '\b': out += "\\b"; break;
-      case '\f': out += "\\f"; break;
-      default:
-        if (c < 0x20) {
-          out += absl::StrFormat("\\u%04x", c);
-        } else {
-          out.push_back(static_cast<char>(c));
-        }
-    }
-  }
-  out.push_back('"');
-  return out;
-}
 
 }  // namespace tactforce::api

@@ -142,10 +142,5 @@ TEST(JsonTest, ResponseJsonKeepsProtoNamesAndPrintsZeros) {
   EXPECT_THAT(ToJson(response, /*compact=*/true), HasSubstr(R"("cross_check":{"agree":true)"));
 }
 
-TEST(JsonTest, JsonQuoteEscapes) {
-  EXPECT_EQ(JsonQuote("plain"), "\"plain\"");
-  EXPECT_EQ(JsonQuote("a\"b\\c\nd\x01"), "\"a\\\"b\\\\c\\nd\\u0001\"");
-}
-
 }  // namespace
 }  // namespace tactforce::api

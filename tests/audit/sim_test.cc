@@ -394,5 +394,12 @@ TEST(Channel, PredictReadingMatchesTheSimulationWithoutNoise) {
   }
 }
 
+// The one JSON string quoter of the project (sim/json.h), also used by the
+// CLI's JSON output.
+TEST(Json, EscapeQuotesAndEscapes) {
+  EXPECT_EQ(JsonEscape("plain"), "\"plain\"");
+  EXPECT_EQ(JsonEscape("a\"b\\c\nd\x01"), "\"a\\\"b\\\\c\\nd\\u0001\"");
+}
+
 }  // namespace
 }  // namespace tactforce::sim

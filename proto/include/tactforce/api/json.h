@@ -25,7 +25,5 @@ absl::StatusOr<v1::PlanRequest> ParsePlanRequestJson(std::string_view json);
 // when pretty-printed.
 std::string ToJson(const google::protobuf::Message& message, bool compact = false);
 
-// `text` as a JSON string literal, quotes included.
-std::string JsonQuote(std::string_view text);
 
 }  // namespace tactforce::api

@@ -1,6 +1,7 @@
 // Minimal JSON for tactforce's flat files (sensor model JSON, audit
-// report.json). This is the ONE hand-written JSON reader/writer of the sim
-// and audit libraries; nothing else parses JSON.
+// report.json, inertia truth files, trajectory JSON). This is the ONE
+// hand-written JSON reader/writer of the project (the API messages use
+// protobuf's JSON mapping); JsonEscape is also the CLI's string quoter.
 //
 // Reader: objects, arrays, strings (\uXXXX escapes for the BMP), numbers,
 // true/false/null. Errors name the source and line ("m.json:3: expected ':'").
