@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <sstream>
 
@@ -19,6 +18,8 @@
 #include "tactforce/estimator/csv.h"
 #include "tactforce/estimator/friction.h"
 #include "tactforce/estimator/mesh.h"
+#include "tactforce/sim/json.h"
+#include "tactforce/sim/text_file.h"
 
 namespace tactforce::cli {
 namespace {
@@ -176,26 +177,30 @@ int RunSimulateFriction(const SimulateFrictionArgs& args) {
   std::filesystem::create_directories(args.out_dir, ec);
   if (ec) return ReportError(absl::InvalidArgumentError(absl::StrCat(args.out_dir, ": ", ec.message())));
   for (size_t i = 0; i < data.trials.size(); ++i) {
-    const std::string path = absl::StrCat(args.out_dir, "/trial", i, ".csv");
-    std::ofstream out(path);
-    out << "t,fx,fy,fz,px,py,pz" << (args.slip_flags ? ",slip" : "") << "\n";
+    std::string csv = absl::StrCat("t,fx,fy,fz,px,py,pz", args.slip_flags ? ",slip" : "", "\n");
     for (const auto& s : data.trials[i].samples) {
-      out << absl::StrFormat("%.6f,%.6f,%.6f,%.6f,%.8f,%.8f,%.8f", s.t, s.force.x(), s.force.y(),
-                             s.force.z(), s.contact_point.x(), s.contact_point.y(), s.contact_point.z());
-      if (args.slip_flags) out << "," << (s.slip.value_or(false) ? 1 : 0);
-      out << "\n";
+      absl::StrAppendFormat(&csv, "%.6f,%.6f,%.6f,%.6f,%.8f,%.8f,%.8f", s.t, s.force.x(), s.force.y(), s.force.z(),
+                            s.contact_point.x(), s.contact_point.y(), s.contact_point.z());
+      if (args.slip_flags) absl::StrAppend(&csv, ",", s.slip.value_or(false) ? 1 : 0);
+      csv += "\n";
     }
-    if (!out) return ReportError(absl::InternalError(absl::StrCat(path, ": write failed")));
+    const std::string path = absl::StrCat(args.out_dir, "/trial", i, ".csv");
+    if (absl::Status st = sim::WriteTextFile(path, csv); !st.ok()) return ReportError(st);
   }
-  std::ofstream truth(args.out_dir + "/truth.json");
-  truth << absl::StrFormat("{\n  \"mu\": %.6f,\n  \"normal\": [%g, %g, %g],\n  \"slip_times\": [", args.mu,
-                           data.normal.x(), data.normal.y(), data.normal.z());
-  for (size_t i = 0; i < data.true_slip_time.size(); ++i)
-    truth << (i ? ", " : "") << absl::StrFormat("%.6f", data.true_slip_time[i]);
-  truth << absl::StrFormat("],\n  \"force_noise\": %g,\n  \"rate\": %g,\n  \"ramp\": %g,\n  \"seed\": %d\n}\n",
-                           args.noise, args.rate, args.ramp, args.seed);
+  sim::JsonWriter truth;
+  truth.BeginObject();
+  truth.Field("mu", args.mu);
+  truth.NumberArray("normal", {data.normal.x(), data.normal.y(), data.normal.z()});
+  truth.NumberArray("slip_times", data.true_slip_time);
+  truth.Field("force_noise", args.noise);
+  truth.Field("rate", args.rate);
+  truth.Field("ramp", args.ramp);
+  truth.FieldInt("seed", static_cast<long long>(args.seed));
+  truth.EndObject();
+  if (absl::Status st = sim::WriteTextFile(args.out_dir + "/truth.json", truth.str() + "\n"); !st.ok())
+    return ReportError(st);
   std::cerr << "wrote " << data.trials.size() << " trials and truth.json to " << args.out_dir << "\n";
-  return truth ? kExitOk : kExitFailure;
+  return kExitOk;
 }
 
 }  // namespace tactforce::cli

@@ -4,7 +4,6 @@
 
 #include <chrono>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 
 #include "absl/strings/match.h"
@@ -15,6 +14,7 @@
 #include "tactforce/experiment/grasp.h"
 #include "tactforce/experiment/slope.h"
 #include "tactforce/sim/sensor_model.h"
+#include "tactforce/sim/text_file.h"
 
 namespace tactforce::cli {
 namespace {
@@ -99,9 +99,9 @@ int RunGrasp(const ExperimentArgs& a) {
             ex::ToString(f), t0.success ? "success" : t0.failure);
         const std::string path =
             (std::filesystem::path(a.plots_dir) / absl::StrCat(ex::ToString(o), "_", ex::ToString(f), ".svg")).string();
-        std::ofstream out(path);
-        out << ex::RenderSvg(ex::TracePlot(t0, (*setup)->finger_names(), title));
-        if (!out) return ReportError(absl::InvalidArgumentError(absl::StrCat("--plots: cannot write ", path)));
+        if (absl::Status st = sim::WriteTextFile(path, ex::RenderSvg(ex::TracePlot(t0, (*setup)->finger_names(), title)));
+            !st.ok())
+          return ReportError(absl::Status(st.code(), absl::StrCat("--plots: ", st.message())));
       }
       if (a.details && !a.json) {
         for (const ex::TrialResult& t : b->results)

@@ -2,11 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
-#include <sstream>
 
 #include "absl/strings/str_cat.h"
 #include "tactforce/sim/json.h"
+#include "tactforce/sim/text_file.h"
 
 namespace tactforce::sim {
 namespace {
@@ -185,11 +184,9 @@ absl::StatusOr<SensorModel> SensorModelFromJson(const std::string& text, const s
 }
 
 absl::StatusOr<SensorModel> LoadSensorModel(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return absl::NotFoundError(absl::StrCat(path, ": cannot open model file"));
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return SensorModelFromJson(ss.str(), path);
+  absl::StatusOr<std::string> text = ReadTextFile(path);
+  if (!text.ok()) return text.status();
+  return SensorModelFromJson(*text, path);
 }
 
 std::string SensorModelToJson(const SensorModel& m) {
@@ -214,11 +211,7 @@ std::string SensorModelToJson(const SensorModel& m) {
 }
 
 absl::Status SaveSensorModel(const SensorModel& m, const std::string& path) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) return absl::InternalError(absl::StrCat(path, ": cannot write model file"));
-  out << SensorModelToJson(m);
-  if (!out) return absl::InternalError(absl::StrCat(path, ": write failed"));
-  return absl::OkStatus();
+  return WriteTextFile(path, SensorModelToJson(m));
 }
 
 // ---------------------------------------------------------------------------

@@ -3,11 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <random>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "tactforce/sim/text_file.h"
 
 namespace tactforce::sim {
 namespace {
@@ -291,21 +291,15 @@ absl::Status WriteSimRun(const SimRun& run, const std::string& dir) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) return absl::InternalError(absl::StrCat(dir, ": cannot create directory: ", ec.message()));
-  {
-    std::ofstream out(dir + "/run.csv");
-    if (!out) return absl::InternalError(absl::StrCat(dir, "/run.csv: cannot write"));
-    out << SimRunCsv(run);
+  if (absl::Status s = WriteTextFile(dir + "/run.csv", SimRunCsv(run)); !s.ok()) return s;
+  std::string fingertip = "t,force,px,py,pz,nx,ny,nz\n";
+  for (size_t i = 0; i < run.t.size(); ++i) {
+    const auto& f = run.fingertip[i];
+    absl::StrAppendFormat(&fingertip, "%.6f,%.9g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n", run.t[i], f.force,
+                          f.location.x(), f.location.y(), f.location.z(), f.normal.x(), f.normal.y(),
+                          f.normal.z());
   }
-  {
-    std::ofstream out(dir + "/fingertip.csv");
-    if (!out) return absl::InternalError(absl::StrCat(dir, "/fingertip.csv: cannot write"));
-    out << "t,force,px,py,pz,nx,ny,nz\n";
-    for (size_t i = 0; i < run.t.size(); ++i) {
-      const auto& f = run.fingertip[i];
-      out << absl::StrFormat("%.6f,%.9g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n", run.t[i], f.force, f.location.x(),
-                             f.location.y(), f.location.z(), f.normal.x(), f.normal.y(), f.normal.z());
-    }
-  }
+  if (absl::Status s = WriteTextFile(dir + "/fingertip.csv", fingertip); !s.ok()) return s;
   SensorModel m = run.model;
   if (m.source.empty()) m.source = "simulated (true model)";
   return SaveSensorModel(m, dir + "/model.json");

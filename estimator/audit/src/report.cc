@@ -1,11 +1,11 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "tactforce/audit/audit.h"
+#include "tactforce/sim/text_file.h"
 #include "tactforce/sim/json.h"
 
 namespace tactforce::audit {
@@ -356,12 +356,8 @@ absl::Status WriteAuditReport(const AuditReport& r, const std::string& dir) {
   if (ec) return absl::InternalError(absl::StrCat(dir, ": cannot create directory: ", ec.message()));
   const std::string model_path = dir + "/extended_model.json";
   if (auto st = sim::SaveSensorModel(r.extended_model, model_path); !st.ok()) return st;
-  auto write = [&](const std::string& name, const std::string& text) -> absl::Status {
-    std::ofstream out(dir + "/" + name, std::ios::binary);
-    if (!out) return absl::InternalError(absl::StrCat(dir, "/", name, ": cannot write"));
-    out << text;
-    if (!out) return absl::InternalError(absl::StrCat(dir, "/", name, ": write failed"));
-    return absl::OkStatus();
+  auto write = [&](const std::string& name, const std::string& text) {
+    return sim::WriteTextFile(dir + "/" + name, text);
   };
   if (auto st = write("report.json", AuditReportJson(r, model_path)); !st.ok()) return st;
   if (auto st = write("summary.txt", FormatAuditSummary(r)); !st.ok()) return st;

@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <functional>
 #include <map>
 #include <set>
@@ -11,6 +10,7 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "tactforce/inertia/fit.h"
+#include "tactforce/sim/text_file.h"
 
 namespace tactforce::inertia {
 namespace {
@@ -372,12 +372,7 @@ std::string InertiaSamplesToCsv(const InertiaSamples& s) {
 }
 
 absl::Status WriteInertiaCsvFile(const InertiaSamples& samples, const std::string& path) {
-  std::ofstream f(path);
-  if (!f) return absl::InvalidArgumentError(absl::StrCat(path, ": cannot open for writing"));
-  f << InertiaSamplesToCsv(samples);
-  f.close();
-  if (!f) return absl::InvalidArgumentError(absl::StrCat(path, ": write failed"));
-  return absl::OkStatus();
+  return sim::WriteTextFile(path, InertiaSamplesToCsv(samples));
 }
 
 }  // namespace tactforce::inertia

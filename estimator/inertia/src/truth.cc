@@ -1,13 +1,11 @@
 #include "tactforce/inertia/truth.h"
 
 #include <cmath>
-#include <cstdio>
-#include <fstream>
-#include <sstream>
 #include <vector>
 
 #include "absl/strings/str_cat.h"
 #include "tactforce/sim/json.h"
+#include "tactforce/sim/text_file.h"
 
 namespace tactforce::inertia {
 
@@ -52,42 +50,29 @@ absl::StatusOr<InertiaTruth> ParseTruthJson(const std::string& text, const std::
 }
 
 absl::StatusOr<InertiaTruth> ReadTruthJsonFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) return absl::InvalidArgumentError(absl::StrCat(path, ": cannot open"));
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return ParseTruthJson(buffer.str(), path);
+  absl::StatusOr<std::string> text = sim::ReadTextFile(path);
+  if (!text.ok()) return text.status();
+  return ParseTruthJson(*text, path);
 }
 
 std::string TruthToJson(const InertiaTruth& t) {
-  char buf[64];
-  auto num = [&](double v) {
-    std::snprintf(buf, sizeof(buf), "%.17g", v);
-    return std::string(buf);
-  };
-  const auto& p = t.params;
-  const auto in = p.inertia_com.ToArray();
-  std::string out = "{\n";
-  out += "  \"mass\": " + num(p.mass) + ",\n";
-  out += "  \"com\": [" + num(p.com.x()) + ", " + num(p.com.y()) + ", " + num(p.com.z()) + "],\n";
-  out += "  \"inertia_com\": [";
-  for (int i = 0; i < 6; ++i) out += (i ? ", " : "") + num(in[i]);
-  out += "]";
+  const InertialParameters& p = t.params;
+  const auto inertia = p.inertia_com.ToArray();
+  sim::JsonWriter w;
+  w.BeginObject();
+  w.Field("mass", p.mass);
+  w.NumberArray("com", {p.com.x(), p.com.y(), p.com.z()});
+  w.NumberArray("inertia_com", std::vector<double>(inertia.begin(), inertia.end()));
   if (t.gravity_world) {
     const Vec3& g = *t.gravity_world;
-    out += ",\n  \"gravity_world\": [" + num(g.x()) + ", " + num(g.y()) + ", " + num(g.z()) + "]";
+    w.NumberArray("gravity_world", {g.x(), g.y(), g.z()});
   }
-  out += "\n}\n";
-  return out;
+  w.EndObject();
+  return w.str() + "\n";
 }
 
 absl::Status WriteTruthJsonFile(const InertiaTruth& truth, const std::string& path) {
-  std::ofstream f(path);
-  if (!f) return absl::InvalidArgumentError(absl::StrCat(path, ": cannot open for writing"));
-  f << TruthToJson(truth);
-  f.close();
-  if (!f) return absl::InvalidArgumentError(absl::StrCat(path, ": write failed"));
-  return absl::OkStatus();
+  return sim::WriteTextFile(path, TruthToJson(truth));
 }
 
 }  // namespace tactforce::inertia
