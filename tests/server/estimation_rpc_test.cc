@@ -144,41 +144,48 @@ TEST_F(EstimationRpcTest, PlanTrajectoryAndProbe) {
 namespace tactforce::testing {
 namespace {
 
-v1::AuditRequest AuditRequestFrom(const sim::SimRun& run) {
+// Readings of `model` against a simulated press-release reference, as an
+// AuditRequest.
+v1::AuditRequest SimulatedAuditRequest(const sim::SensorModel& model, double seconds, uint64_t seed) {
+  sim::SimOptions options;
+  options.seconds = seconds;
+  options.seed = seed;
+  absl::StatusOr<sim::SimRun> run = sim::SimulateSensor(model, options);
+  EXPECT_TRUE(run.ok()) << run.status();
   v1::AuditRequest request;
-  for (size_t k = 0; k < run.t.size(); ++k) {
+  if (!run.ok()) return request;
+  for (size_t k = 0; k < run->t.size(); ++k) {
     v1::AuditSample* s = request.add_samples();
-    s->set_t(run.t[k]);
-    s->set_reference(run.reference[k]);
-    s->set_reading(run.reading[k]);
+    s->set_t(run->t[k]);
+    s->set_reference(run->reference[k]);
+    s->set_reading(run->reading[k]);
   }
   return request;
+}
+
+// AuditModel with a 60 s deadline.
+grpc::Status CallAudit(v1::Audit::Stub& stub, const v1::AuditRequest& request, v1::AuditResponse* response) {
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+  return stub.AuditModel(&context, request, response);
 }
 
 TEST_F(EstimationRpcTest, AuditModelNamesAHiddenThreshold) {
   sim::SensorModel model;
   model.noise = 0.02;
   model.effects.threshold = 0.3;
-  sim::SimOptions options;
-  options.seconds = 15;
-  options.seed = 9;
-  absl::StatusOr<sim::SimRun> run = sim::SimulateSensor(model, options);
-  ASSERT_TRUE(run.ok()) << run.status();
-  v1::AuditRequest request = AuditRequestFrom(*run);
+  v1::AuditRequest request = SimulatedAuditRequest(model, 15, 9);
   request.set_source("rpc-test");
   auto stub = v1::Audit::NewStub(channel_);
-  grpc::ClientContext context;
-  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
   v1::AuditResponse response;
-  const grpc::Status status = stub->AuditModel(&context, request, &response);
+  const grpc::Status status = CallAudit(*stub, request, &response);
   ASSERT_TRUE(status.ok()) << status.error_message();
   EXPECT_FALSE(response.nominal_adequate());
   ASSERT_GE(response.causes_size(), 1);
   EXPECT_EQ(response.causes(0).effect(), "deadzone");
   EXPECT_GT(response.gain(), 0.0);
   request.mutable_samples()->DeleteSubrange(10, request.samples_size() - 10);
-  grpc::ClientContext context2;
-  const grpc::Status bad = stub->AuditModel(&context2, request, &response);
+  const grpc::Status bad = CallAudit(*stub, request, &response);
   EXPECT_EQ(bad.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_NE(bad.error_message().find("too few samples"), std::string::npos) << bad.error_message();
 }
@@ -190,17 +197,10 @@ TEST_F(EstimationRpcTest, AuditModelReportsThePrandtlIshlinskiiForm) {
   model.noise = 0.01;
   model.effects.pi_thresholds = {0.0, 0.04, 0.12, 0.25};
   model.effects.pi_weights = {0.25, 0.25, 0.25, 0.25};
-  sim::SimOptions options;
-  options.seconds = 20;
-  options.seed = 11;
-  absl::StatusOr<sim::SimRun> run = sim::SimulateSensor(model, options);
-  ASSERT_TRUE(run.ok()) << run.status();
-  v1::AuditRequest request = AuditRequestFrom(*run);
+  const v1::AuditRequest request = SimulatedAuditRequest(model, 20, 11);
   auto stub = v1::Audit::NewStub(channel_);
-  grpc::ClientContext context;
-  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
   v1::AuditResponse response;
-  const grpc::Status status = stub->AuditModel(&context, request, &response);
+  const grpc::Status status = CallAudit(*stub, request, &response);
   ASSERT_TRUE(status.ok()) << status.error_message();
   ASSERT_GE(response.causes_size(), 1);
   const v1::AuditCause& cause = response.causes(0);
