@@ -24,7 +24,19 @@
 //                 pose/kinematics noise propagated through the model
 //                 (iteratively re-weighted); optional entropic (Bregman) prior;
 //                 CoM-in-hull rows as hard constraints (NLopt SLSQP); exact
-//                 derivatives, damped Newton.
+//                 derivatives, damped Newton. Given a mesh, its
+//                 uniform-density inertia scaled to the fitted mass is used
+//                 as the prior (eq. 20-21) unless a prior is given.
+//   DENSITY       ours, needs a closed mesh: the density is non-negative and
+//                 constant over K regions of the solid (density.h), so the
+//                 ten standard parameters are linear in the K densities; a
+//                 non-negative least squares in K unknowns with the same
+//                 noise weighting as CONSTRAINED and a smoothness
+//                 regulariser between neighbouring regions whose strength is
+//                 chosen by held-out time blocks. Every answer is
+//                 density-realizable. When the data contradict the mesh
+//                 (held-out residual significantly worse than CONSTRAINED's)
+//                 the fit says so and returns CONSTRAINED's answer, marked.
 //
 // No exceptions: bad input is absl::InvalidArgument naming the field, line
 // or column. Insufficient excitation is not an error: the result names the
@@ -32,6 +44,7 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -39,13 +52,15 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "tactforce/estimator/mesh.h"
+#include "tactforce/inertia/density.h"
 #include "tactforce/inertia/types.h"
 
 namespace tactforce::inertia {
 
-enum class InertiaMethod { kBaselineLs, kFactorGraph, kConstrained };
+enum class InertiaMethod { kBaselineLs, kFactorGraph, kConstrained, kDensity };
 
-// "baseline-ls", "factor-graph", "constrained" (CLI spelling).
+// "baseline-ls", "factor-graph", "constrained", "density" (CLI spelling).
 const char* ToString(InertiaMethod method);
 // "INERTIA_METHOD_BASELINE_LS", ... (proto enum names).
 const char* ProtoName(InertiaMethod method);
@@ -77,6 +92,26 @@ struct InertiaOptions {
   std::vector<Vec3> hull;
   std::optional<InertiaPrior> prior;
   InertiaNoise noise;
+
+  // Closed mesh of the object (object frame, m) and its name for messages.
+  // Needed by DENSITY; CONSTRAINED uses its uniform-density inertia, scaled
+  // to the fitted mass, as the prior (weight `mesh_prior_weight`) when no
+  // `prior` is given. Other methods ignore it (noted). The mesh's vertices
+  // also serve as the hull when `hull` is empty.
+  std::shared_ptr<const estimator::TriangleMesh> mesh;
+  std::string mesh_name = "mesh";
+  double mesh_prior_weight = 1.0;  // >= 0, chi^2 units like prior.weight
+
+  // DENSITY.
+  RegionOptions regions;
+  // Strength of the smoothness regulariser between neighbouring regions
+  // (relative units, see README); < 0: chosen by held-out time blocks.
+  double density_regularization = -1.0;
+  int density_folds = 5;  // contiguous time blocks for the held-out choice (>= 2)
+  // Contradiction test: the mesh is rejected when DENSITY's held-out
+  // weighted residual exceeds CONSTRAINED's by this factor AND the
+  // difference is significant (z > 4 over the held-out samples). 0 disables.
+  double contradiction_ratio = 1.2;
 
   // BASELINE_LS: Savitzky-Golay smoothing of the wrench and kinematics.
   bool savitzky_golay = false;
@@ -130,6 +165,9 @@ struct InertiaFit {
   bool physically_consistent = false;      // 4x4 pseudo-inertia positive definite
   double pseudo_inertia_min_eigenvalue = 0.0;  // of P scaled to unit mass and size
   bool com_in_hull = true;                 // true when no hull was given
+  // A non-negative density inside the mesh produces these parameters
+  // (DENSITY, by construction; false for the other methods).
+  bool density_realizable = false;
 
   double residual_rms_force = 0.0;   // N, Newton-Euler residual per component
   double residual_rms_torque = 0.0;  // N m
@@ -145,6 +183,24 @@ struct InertiaFit {
   // parameters about the origin).
   std::vector<double> singular_values;
   std::vector<std::string> poorly_excited;
+
+  // DENSITY: the fitted density per region, the regions (for plots), the
+  // regulariser chosen, the mesh check, and the contradiction test.
+  struct RegionDensity {
+    std::string label;
+    double density = 0.0;         // kg/m^3
+    double volume = 0.0;          // m^3
+    double standard_error = 0.0;  // kg/m^3 (0 when unknown)
+  };
+  std::vector<RegionDensity> densities;
+  std::shared_ptr<const RegionModel> region_model;
+  double density_regularization = 0.0;     // the strength used
+  std::string density_regularization_rule; // "held-out time blocks (5 folds)" or "given"
+  std::optional<estimator::MeshCheck> mesh_check;
+  // Held-out weighted residual of DENSITY relative to CONSTRAINED's (0 = not tested).
+  double heldout_residual_ratio = 0.0;
+  bool mesh_contradicted = false;          // the answer is CONSTRAINED's
+  std::string mesh_contradiction;          // one line, empty when not contradicted
 
   int iterations = 0;
   double time_seconds = 0.0;   // wall clock
