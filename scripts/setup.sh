@@ -18,6 +18,7 @@ PACKAGES=(
   python3 python3-grpcio python3-protobuf
   grpc-proto
   libmujoco-dev
+  libassimp-dev libqhull-dev nlohmann-json3-dev
 )
 
 missing=()

@@ -1,15 +1,15 @@
 #include "tactforce/estimator/mesh.h"
 
-#include <algorithm>
-#include <cstdint>
-#include <cstring>
-#include <fstream>
+#include <cmath>
+#include <filesystem>
 #include <limits>
-#include <sstream>
 
 #include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
 
+#include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
+#include "mesh_internal.h"
 
 namespace tactforce::estimator {
 namespace {
@@ -39,85 +39,70 @@ Vector3d ClosestOnTriangle(const Vector3d& p, const Vector3d& a, const Vector3d&
   return a + ab * (vb * denom) + ac * (vc * denom);
 }
 
-absl::StatusOr<TriangleMesh> ReadObj(std::istream& in, const std::string& path) {
-  TriangleMesh mesh;
-  std::string line;
-  int line_number = 0;
-  while (std::getline(in, line)) {
-    ++line_number;
-    std::istringstream ls(line);
-    std::string tag;
-    if (!(ls >> tag) || tag[0] == '#') continue;
-    if (tag == "v") {
-      Vector3d v;
-      if (!(ls >> v.x() >> v.y() >> v.z()))
-        return absl::InvalidArgumentError(absl::StrCat(path, ":", line_number, ": bad vertex"));
-      mesh.vertices.push_back(v);
-    } else if (tag == "f") {
-      std::vector<int> idx;
-      std::string token;
-      while (ls >> token) {
-        try {
-          int i = std::stoi(token.substr(0, token.find('/')));
-          i = i < 0 ? static_cast<int>(mesh.vertices.size()) + i : i - 1;  // OBJ is 1-based
-          idx.push_back(i);
-        } catch (...) {
-          return absl::InvalidArgumentError(
-              absl::StrCat(path, ":", line_number, ": bad face index '", token, "'"));
-        }
-      }
-      if (idx.size() < 3)
-        return absl::InvalidArgumentError(absl::StrCat(path, ":", line_number, ": face with < 3 vertices"));
-      for (size_t k = 1; k + 1 < idx.size(); ++k) mesh.triangles.push_back({idx[0], idx[k], idx[k + 1]});
-    }
-  }
-  return mesh;
+
+// Placement checks shared by ValidatePlacement and the descriptor reader;
+// `field` starts the message.
+absl::Status CheckScale(double scale, const std::string& field) {
+  if (std::isfinite(scale) && scale > 0) return absl::OkStatus();
+  return absl::InvalidArgumentError(absl::StrCat(field, ": must be > 0 (got ", scale, ")"));
 }
 
-absl::StatusOr<TriangleMesh> ReadStl(const std::string& bytes, const std::string& path) {
-  TriangleMesh mesh;
-  auto add = [&](const Vector3d& a, const Vector3d& b, const Vector3d& c) {
-    const int base = static_cast<int>(mesh.vertices.size());
-    mesh.vertices.insert(mesh.vertices.end(), {a, b, c});
-    mesh.triangles.push_back({base, base + 1, base + 2});
-  };
-  if (bytes.size() >= 84) {
-    uint32_t count = 0;
-    std::memcpy(&count, bytes.data() + 80, 4);
-    if (bytes.size() == 84 + 50ull * count) {  // binary
-      for (uint32_t t = 0; t < count; ++t) {
-        const char* rec = bytes.data() + 84 + 50ull * t + 12;  // skip the normal
-        float v[9];
-        std::memcpy(v, rec, sizeof(v));
-        add(Vector3d(v[0], v[1], v[2]), Vector3d(v[3], v[4], v[5]), Vector3d(v[6], v[7], v[8]));
-      }
-      return mesh;
-    }
+absl::Status CheckPosition(const Vector3d& p, const std::string& field) {
+  if (p.allFinite()) return absl::OkStatus();
+  return absl::InvalidArgumentError(absl::StrCat(field, ": not finite"));
+}
+
+absl::Status CheckQuaternion(const Eigen::Quaterniond& q, const std::string& field) {
+  if (!q.coeffs().allFinite()) return absl::InvalidArgumentError(absl::StrCat(field, ": not finite"));
+  if (q.norm() >= 1e-6) return absl::OkStatus();
+  return absl::InvalidArgumentError(
+      absl::StrCat(field, ": quaternion norm ", q.norm(), " is near zero (must be >= 1e-6)"));
+}
+
+using Json = nlohmann::json;
+
+absl::Status KeyError(const std::string& path, absl::string_view what) {
+  return absl::InvalidArgumentError(absl::StrCat(path, ": ", what));
+}
+
+// `n` finite numbers from a JSON array at `key`.
+absl::StatusOr<std::vector<double>> Numbers(const Json& j, size_t n, const std::string& path,
+                                            const std::string& key, const std::string& what) {
+  if (!j.is_array() || j.size() != n)
+    return KeyError(path, absl::StrCat("'", key, "' must be an array of ", n, " numbers ", what, " (got ",
+                                       j.is_array() ? absl::StrCat(j.size(), " elements") : j.type_name(), ")"));
+  std::vector<double> out;
+  for (size_t i = 0; i < n; ++i) {
+    if (!j[i].is_number())
+      return KeyError(path, absl::StrCat("'", key, "[", i, "]' must be a number (got ", j[i].type_name(), ")"));
+    out.push_back(j[i].get<double>());
+    if (!std::isfinite(out.back()))
+      return KeyError(path, absl::StrCat("'", key, "[", i, "]' is not finite"));
   }
-  std::istringstream in(bytes);
-  std::string line, word;
-  int line_number = 0;
-  std::vector<Vector3d> facet;
-  while (std::getline(in, line)) {
-    ++line_number;
-    std::istringstream ls(line);
-    if (!(ls >> word)) continue;
-    if (word == "vertex") {
-      Vector3d v;
-      if (!(ls >> v.x() >> v.y() >> v.z()))
-        return absl::InvalidArgumentError(absl::StrCat(path, ":", line_number, ": bad vertex"));
-      facet.push_back(v);
-    } else if (word == "endfacet") {
-      if (facet.size() != 3)
-        return absl::InvalidArgumentError(
-            absl::StrCat(path, ":", line_number, ": facet with ", facet.size(), " vertices"));
-      add(facet[0], facet[1], facet[2]);
-      facet.clear();
-    }
+  return out;
+}
+
+// Line and column (1-based) of byte offset `byte` (1-based, as nlohmann reports it).
+std::pair<int, int> LineColumn(const std::string& text, size_t byte) {
+  int line = 1, column = 1;
+  for (size_t i = 0; i + 1 < byte && i < text.size(); ++i) {
+    if (text[i] == '\n') ++line, column = 1;
+    else ++column;
   }
-  if (mesh.triangles.empty())
-    return absl::InvalidArgumentError(absl::StrCat(path, ": not an STL file (no facets)"));
-  return mesh;
+  return {line, column};
+}
+
+absl::StatusOr<Json> ParseJson(const std::string& text, const std::string& path) {
+  try {
+    return Json::parse(text);
+  } catch (const Json::parse_error& e) {
+    const auto [line, column] = LineColumn(text, e.byte);
+    std::string what = e.what();
+    if (const size_t p = what.find("syntax error"); p != std::string::npos) what = what.substr(p);
+    return absl::InvalidArgumentError(absl::StrCat(path, ":", line, ":", column, ": JSON ", what));
+  } catch (const std::exception& e) {
+    return absl::InvalidArgumentError(absl::StrCat(path, ": JSON: ", e.what()));
+  }
 }
 
 }  // namespace
@@ -144,25 +129,95 @@ absl::Status ValidateMesh(const TriangleMesh& mesh) {
   return absl::OkStatus();
 }
 
-absl::StatusOr<TriangleMesh> ReadMeshFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return absl::InvalidArgumentError(absl::StrCat(path, ": cannot open"));
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  std::string lower = path;
-  std::transform(lower.begin(), lower.end(), lower.begin(), ::tolower);
-  absl::StatusOr<TriangleMesh> mesh;
-  if (lower.size() > 4 && lower.substr(lower.size() - 4) == ".obj") {
-    std::istringstream s(bytes);
-    mesh = ReadObj(s, path);
-  } else if (lower.size() > 4 && lower.substr(lower.size() - 4) == ".stl") {
-    mesh = ReadStl(bytes, path);
-  } else {
-    return absl::InvalidArgumentError(absl::StrCat(path, ": unknown mesh format (use .stl or .obj)"));
+absl::Status ValidatePlacement(const MeshPlacement& placement, std::string_view field_view) {
+  const std::string field(field_view);
+  if (absl::Status s = CheckScale(placement.scale, absl::StrCat(field, ".scale")); !s.ok()) return s;
+  if (absl::Status s = CheckPosition(placement.position, absl::StrCat(field, ".position")); !s.ok()) return s;
+  return CheckQuaternion(placement.orientation, absl::StrCat(field, ".orientation"));
+}
+
+TriangleMesh TransformToObjectFrame(const TriangleMesh& mesh, const MeshPlacement& placement) {
+  const Eigen::Matrix3d Rt = placement.orientation.normalized().toRotationMatrix().transpose();
+  TriangleMesh out = mesh;
+  for (Vector3d& v : out.vertices) v = Rt * (placement.scale * v - placement.position);
+  return out;
+}
+
+absl::StatusOr<MeshDescriptor> ReadMeshDescriptor(const std::string& path) {
+  absl::StatusOr<std::string> text = internal::ReadWholeFile(path);
+  if (!text.ok()) return text.status();
+  absl::StatusOr<Json> json = ParseJson(*text, path);
+  if (!json.ok()) return json.status();
+  const Json& j = *json;
+  if (!j.is_object()) return KeyError(path, absl::StrCat("expected a JSON object (got ", j.type_name(), ")"));
+  for (const auto& [key, value] : j.items()) {
+    if (key != "mesh" && key != "scale" && key != "object_in_mesh")
+      return KeyError(path, absl::StrCat("unknown key '", key, "' (expected mesh, scale, object_in_mesh)"));
   }
+  MeshDescriptor d;
+  const auto mesh = j.find("mesh");
+  if (mesh == j.end()) return KeyError(path, "missing key 'mesh' (the mesh file, .stl, .obj or .ply)");
+  if (!mesh->is_string() || mesh->get_ref<const std::string&>().empty())
+    return KeyError(path, absl::StrCat("'mesh' must be a non-empty string (got ",
+                                       mesh->is_string() ? "\"\"" : mesh->type_name(), ")"));
+  const std::filesystem::path file = mesh->get<std::string>();
+  d.mesh_path = file.is_absolute() ? file.string() : (std::filesystem::path(path).parent_path() / file).string();
+  if (const auto scale = j.find("scale"); scale != j.end()) {
+    if (!scale->is_number())
+      return KeyError(path, absl::StrCat("'scale' must be a number (got ", scale->type_name(), ")"));
+    d.placement.scale = scale->get<double>();
+    if (absl::Status s = CheckScale(d.placement.scale, "scale"); !s.ok()) return KeyError(path, s.message());
+  }
+  if (const auto pose = j.find("object_in_mesh"); pose != j.end()) {
+    if (!pose->is_object())
+      return KeyError(path, absl::StrCat("'object_in_mesh' must be an object with position and quaternion (got ",
+                                         pose->type_name(), ")"));
+    for (const auto& [key, value] : pose->items()) {
+      if (key != "position" && key != "quaternion")
+        return KeyError(path, absl::StrCat("unknown key 'object_in_mesh.", key, "' (expected position, quaternion)"));
+    }
+    if (const auto p = pose->find("position"); p != pose->end()) {
+      absl::StatusOr<std::vector<double>> v = Numbers(*p, 3, path, "object_in_mesh.position", "[x, y, z]");
+      if (!v.ok()) return v.status();
+      d.placement.position = Vector3d((*v)[0], (*v)[1], (*v)[2]);
+    }
+    if (const auto q = pose->find("quaternion"); q != pose->end()) {
+      absl::StatusOr<std::vector<double>> v = Numbers(*q, 4, path, "object_in_mesh.quaternion", "[w, x, y, z]");
+      if (!v.ok()) return v.status();
+      d.placement.orientation = Eigen::Quaterniond((*v)[0], (*v)[1], (*v)[2], (*v)[3]);
+      if (absl::Status s = CheckQuaternion(d.placement.orientation, "object_in_mesh.quaternion"); !s.ok())
+        return KeyError(path, s.message());
+    }
+  }
+  return d;
+}
+
+absl::StatusOr<LoadedMesh> LoadMesh(const MeshRequest& request) {
+  LoadedMesh out;
+  const std::string ext = absl::AsciiStrToLower(std::filesystem::path(request.path).extension().string());
+  if (ext == ".json") {
+    absl::StatusOr<MeshDescriptor> d = ReadMeshDescriptor(request.path);
+    if (!d.ok()) return d.status();
+    out.mesh_path = d->mesh_path;
+    out.placement = d->placement;
+  } else {
+    out.mesh_path = request.path;
+  }
+  if (request.scale) out.placement.scale = *request.scale;
+  if (request.pose) {
+    out.placement.position = request.pose->position;
+    out.placement.orientation = request.pose->orientation;
+  }
+  if (absl::Status s = ValidatePlacement(out.placement); !s.ok()) return s;
+  absl::StatusOr<std::string> format = MeshFormatFromPath(out.mesh_path);
+  if (!format.ok()) return format.status();
+  absl::StatusOr<TriangleMesh> mesh = ReadMeshFile(out.mesh_path);
   if (!mesh.ok()) return mesh.status();
-  if (absl::Status s = ValidateMesh(*mesh); !s.ok())
-    return absl::InvalidArgumentError(absl::StrCat(path, ": ", s.message()));
-  return mesh;
+  out.format = *format;
+  out.name = std::filesystem::path(out.mesh_path).filename().string();
+  out.placement.orientation.normalize();
+  out.mesh = TransformToObjectFrame(*mesh, out.placement);
+  return out;
 }
 
 NearestTriangle FindNearestTriangle(const TriangleMesh& mesh, const Vector3d& point) {

@@ -18,11 +18,22 @@
 
 namespace tactforce::inertia {
 
+namespace {
+// Significance of the held-out residual difference (per-sample z statistic)
+// needed, besides the ratio, to call the mesh contradicted.
+constexpr double kContradictionZ = 4.0;
+// ... and a misfit that is physically visible: the held-out RMS wrench
+// residual grows by more than this fraction of the RMS wrench (noise-free
+// data make any rounding-level difference "significant").
+constexpr double kContradictionExcess = 1e-6;
+}  // namespace
+
 const char* ToString(InertiaMethod m) {
   switch (m) {
     case InertiaMethod::kBaselineLs: return "baseline-ls";
     case InertiaMethod::kFactorGraph: return "factor-graph";
     case InertiaMethod::kConstrained: return "constrained";
+    case InertiaMethod::kDensity: return "density";
   }
   return "?";
 }
@@ -32,6 +43,7 @@ const char* ProtoName(InertiaMethod m) {
     case InertiaMethod::kBaselineLs: return "INERTIA_METHOD_BASELINE_LS";
     case InertiaMethod::kFactorGraph: return "INERTIA_METHOD_FACTOR_GRAPH";
     case InertiaMethod::kConstrained: return "INERTIA_METHOD_CONSTRAINED";
+    case InertiaMethod::kDensity: return "INERTIA_METHOD_DENSITY";
   }
   return "?";
 }
@@ -43,13 +55,14 @@ absl::StatusOr<InertiaMethod> ParseInertiaMethod(std::string_view text) {
   if (s == "baseline-ls") return InertiaMethod::kBaselineLs;
   if (s == "factor-graph") return InertiaMethod::kFactorGraph;
   if (s == "constrained") return InertiaMethod::kConstrained;
+  if (s == "density") return InertiaMethod::kDensity;
   return absl::InvalidArgumentError(absl::StrCat(
-      "method: unknown '", std::string(text), "' (expected baseline-ls, factor-graph or constrained)"));
+      "method: unknown '", std::string(text), "' (expected baseline-ls, factor-graph, constrained or density)"));
 }
 
 int MinimumSamples(const InertiaSamples& s, InertiaMethod method) {
   if (method != InertiaMethod::kFactorGraph && s.HasKinematics()) return 2;
-  return method == InertiaMethod::kConstrained ? 5 : 4;
+  return method == InertiaMethod::kConstrained || method == InertiaMethod::kDensity ? 5 : 4;
 }
 
 namespace {
@@ -67,6 +80,34 @@ absl::Status CheckPositive(double v, const char* name) {
 }
 
 std::string Vec(const Vec3& v) { return absl::StrFormat("(%.6g, %.6g, %.6g)", v.x(), v.y(), v.z()); }
+
+absl::Status ValidateMeshOptions(const InertiaOptions& o) {
+  if (absl::Status st = CheckSigma(o.mesh_prior_weight, "mesh_prior_weight"); !st.ok()) return st;
+  if (!std::isfinite(o.density_regularization))
+    return absl::InvalidArgumentError("density_regularization: must be finite (< 0 = automatic)");
+  if (o.density_folds < 2) return absl::InvalidArgumentError("density_folds: must be >= 2");
+  if (absl::Status st = CheckSigma(o.contradiction_ratio, "contradiction_ratio"); !st.ok()) return st;
+  if (o.regions.target_regions < 1 || o.regions.target_regions > 512)
+    return absl::InvalidArgumentError(
+        absl::StrCat("regions.target_regions: must be in 1..512 (got ", o.regions.target_regions, ")"));
+  if (o.method == InertiaMethod::kDensity && !o.mesh)
+    return absl::InvalidArgumentError("mesh: the density method needs the object's closed mesh (--mesh)");
+  if (o.mesh) {
+    for (size_t i = 0; i < o.mesh->vertices.size(); ++i)
+      if (!o.mesh->vertices[i].allFinite())
+        return absl::InvalidArgumentError(absl::StrCat(o.mesh_name, ": vertex ", i, " is not finite"));
+    for (size_t t = 0; t < o.mesh->triangles.size(); ++t)
+      for (int k : o.mesh->triangles[t])
+        if (k < 0 || k >= static_cast<int>(o.mesh->vertices.size()))
+          return absl::InvalidArgumentError(absl::StrCat(o.mesh_name, ": triangle ", t, " has vertex index ", k,
+                                                         " out of range"));
+    if (o.method == InertiaMethod::kDensity || o.method == InertiaMethod::kConstrained) {
+      if (absl::Status st = estimator::RequireClosedSolid(estimator::CheckMesh(*o.mesh), o.mesh_name); !st.ok())
+        return st;
+    }
+  }
+  return absl::OkStatus();
+}
 
 }  // namespace
 
@@ -104,6 +145,7 @@ absl::Status ValidateInertiaOptions(const InertiaOptions& o) {
     if (absl::Status st = CheckPositive(v, name); !st.ok()) return st;
   if (!(o.excitation_threshold >= 0 && o.excitation_threshold < 1))
     return absl::InvalidArgumentError("excitation_threshold: must be in [0, 1)");
+  if (absl::Status st = ValidateMeshOptions(o); !st.ok()) return st;
   std::optional<ConvexHull> hull;
   if (!o.hull.empty()) {
     absl::StatusOr<ConvexHull> h = ComputeConvexHull(o.hull);
@@ -223,9 +265,94 @@ std::string DescribeFit(const InertiaFit& f) {
   } else {
     for (const std::string& d : f.poorly_excited) out += "poorly excited: " + d + "\n";
   }
+  if (f.mesh_check) {
+    const estimator::MeshCheck& m = *f.mesh_check;
+    out += absl::StrFormat("mesh: %d faces, %d vertices, %s, volume %.6g m^3\n", m.faces, m.vertices,
+                           m.closed && m.consistently_oriented ? "closed and consistently oriented" : "NOT a closed solid",
+                           m.volume);
+  }
+  if (!f.densities.empty()) {
+    out += absl::StrFormat("densities (%s%s, regulariser %.3g by %s):\n",
+                           f.density_realizable ? "density-realizable" : "not used",
+                           f.mesh_contradicted ? ", mesh contradicted" : "", f.density_regularization,
+                           f.density_regularization_rule);
+    for (const InertiaFit::RegionDensity& d : f.densities)
+      out += absl::StrFormat("  %-18s %10.5g kg/m^3 (se %.2g)  volume %.4g m^3\n", d.label, d.density,
+                             d.standard_error, d.volume);
+  }
+  if (f.method == InertiaMethod::kDensity)
+    out += absl::StrFormat("density-realizable: %s\n", f.density_realizable ? "yes" : "NO");
+  if (f.mesh_contradicted) out += f.mesh_contradiction + "\n";
   for (const std::string& n : f.notes) out += "note: " + n + "\n";
   return out;
 }
+
+namespace {
+
+// CONSTRAINED; given a mesh and no prior, the mesh's uniform-density inertia
+// scaled to the mass of a first fit is the prior of a second.
+absl::StatusOr<internal::MethodOutput> FitConstrainedWithMesh(const InertiaSamples& samples,
+                                                              const InertiaOptions& options, const ConvexHull* hull) {
+  absl::StatusOr<internal::MethodOutput> first = internal::FitConstrained(samples, options, hull);
+  if (!first.ok() || !options.mesh || options.prior || !(options.mesh_prior_weight > 0)) return first;
+  const SolidMoments solid = MeshMoments(*options.mesh);
+  if (!(solid.volume > 0) || !(first->pi(0) > 0)) return first;
+  InertiaOptions with_prior = options;
+  with_prior.prior = InertiaPrior{InertialParameters::FromStandard(solid.Standard(first->pi(0) / solid.volume)),
+                                  options.mesh_prior_weight};
+  absl::StatusOr<internal::MethodOutput> second = internal::FitConstrained(samples, with_prior, hull);
+  if (!second.ok()) return second;
+  second->iterations += first->iterations;
+  second->notes.push_back(absl::StrFormat(
+      "prior: %s at uniform density %.4g kg/m^3 (the fitted mass %.6g kg), weight %g", options.mesh_name,
+      first->pi(0) / solid.volume, first->pi(0), options.mesh_prior_weight));
+  return second;
+}
+
+// DENSITY; when the data contradict the mesh, CONSTRAINED's answer, marked.
+absl::StatusOr<internal::MethodOutput> FitDensityOrFallBack(const InertiaSamples& samples,
+                                                            const InertiaOptions& options, const ConvexHull* hull,
+                                                            InertiaFit* fit) {
+  fit->mesh_check = estimator::CheckMesh(*options.mesh);
+  absl::StatusOr<RegionModel> regions = BuildRegions(*options.mesh, options.regions, options.mesh_name);
+  if (!regions.ok()) return regions.status();
+  auto model = std::make_shared<const RegionModel>(*std::move(regions));
+  absl::StatusOr<internal::MethodOutput> r = internal::FitDensity(samples, options, *model);
+  if (!r.ok()) return r.status();
+  fit->region_model = model;
+  for (size_t i = 0; i < model->regions.size(); ++i) {
+    fit->densities.push_back({model->regions[i].label, r->densities[i], model->regions[i].moments.volume,
+                              r->density_se[i]});
+  }
+  fit->density_regularization = r->regularization;
+  fit->density_regularization_rule = r->regularization_rule;
+  fit->heldout_residual_ratio = r->heldout_ratio;
+  r->notes.push_back(absl::StrFormat(
+      "held-out weighted residual %.3gx the free 10-parameter fit's (z = %.3g over the held-out samples, RMS "
+      "excess %.2g of the RMS wrench)",
+      r->heldout_ratio, r->heldout_z, r->heldout_excess));
+  const bool contradicted = options.contradiction_ratio > 0 && r->heldout_ratio > options.contradiction_ratio &&
+                            r->heldout_z > kContradictionZ && r->heldout_excess > kContradictionExcess;
+  if (!contradicted) {
+    fit->density_realizable = true;
+    return r;
+  }
+  fit->mesh_contradicted = true;
+  fit->mesh_contradiction = absl::StrFormat(
+      "the data contradict the mesh: held-out residual %.3gx the mesh-free fit's; check scale and object_in_mesh "
+      "(the answer is CONSTRAINED's; the densities are those of the rejected mesh fit)",
+      r->heldout_ratio);
+  InertiaOptions plain = options;
+  plain.mesh = nullptr;
+  plain.method = InertiaMethod::kConstrained;
+  absl::StatusOr<internal::MethodOutput> c = internal::FitConstrained(samples, plain, hull);
+  if (!c.ok()) return c.status();
+  c->notes.insert(c->notes.begin(), fit->mesh_contradiction);
+  c->iterations += r->iterations;
+  return c;
+}
+
+}  // namespace
 
 absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in, const InertiaOptions& options) {
   const auto start = std::chrono::steady_clock::now();
@@ -245,15 +372,18 @@ absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in, const In
   if (!options.hull.empty()) hull = *ComputeConvexHull(options.hull);
   const ConvexHull* hp = hull ? &*hull : nullptr;
 
+  InertiaFit fit;
   absl::StatusOr<internal::MethodOutput> r;
   switch (options.method) {
     case InertiaMethod::kBaselineLs: r = internal::FitBaselineLs(samples, options); break;
     case InertiaMethod::kFactorGraph: r = internal::FitFactorGraph(samples, options, hp); break;
-    case InertiaMethod::kConstrained: r = internal::FitConstrained(samples, options, hp); break;
+    case InertiaMethod::kConstrained: r = FitConstrainedWithMesh(samples, options, hp); break;
+    case InertiaMethod::kDensity: r = FitDensityOrFallBack(samples, options, hp, &fit); break;
   }
   if (!r.ok()) return r.status();
+  if (options.mesh && (options.method == InertiaMethod::kBaselineLs || options.method == InertiaMethod::kFactorGraph))
+    r->notes.push_back(absl::StrCat("mesh ignored by ", ToString(options.method)));
 
-  InertiaFit fit;
   fit.method = options.method;
   fit.standard = r->pi;
   fit.params = InertialParameters::FromStandard(r->pi);

@@ -1,15 +1,79 @@
 #include "tactforce/inertia/hull.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
-#include <set>
-#include <utility>
+#include <string>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/strip.h"
+
+extern "C" {
+#include <libqhull_r/qhull_ra.h>
+}
 
 namespace tactforce::inertia {
+namespace {
+
+// The hull of `pts` (already checked: >= 4 finite, not flat) with Debian's
+// reentrant qhull. Default options: coplanar facets merged (C-0), so each
+// face of the hull is one half-space. Qhull's messages go to a memory stream
+// and only appear in the error.
+absl::StatusOr<ConvexHull> QhullHull(const std::vector<Vec3>& pts, double size) {
+  std::vector<coordT> coords(3 * pts.size());
+  for (size_t i = 0; i < pts.size(); ++i)
+    for (int k = 0; k < 3; ++k) coords[3 * i + k] = pts[i](k);
+  char* log_text = nullptr;
+  size_t log_size = 0;
+  std::FILE* log = open_memstream(&log_text, &log_size);
+  if (log == nullptr) return absl::InternalError("hull: cannot open a memory stream for qhull's messages");
+
+  qhT qh_storage;
+  qhT* qh = &qh_storage;
+  qh_zero(qh, log);
+  char options[] = "qhull";
+  const int exit_code = qh_new_qhull(qh, 3, static_cast<int>(pts.size()), coords.data(), False, options,
+                                     nullptr, log);
+  ConvexHull hull;
+  hull.size = size;
+  if (exit_code == 0) {
+    std::vector<char> is_vertex(pts.size(), 0);
+    facetT* facet;
+    vertexT* vertex;
+    vertexT** vertexp;
+    FORALLfacets {
+      const Vec3 n(facet->normal[0], facet->normal[1], facet->normal[2]);
+      double d = -facet->offset;
+      FOREACHvertex_(facet->vertices) {
+        const int id = qh_pointid(qh, vertex->point);
+        if (id < 0 || id >= static_cast<int>(pts.size())) continue;
+        is_vertex[id] = 1;
+        d = std::max(d, n.dot(pts[id]));  // every hull vertex inside, exactly
+      }
+      hull.normals.push_back(n);
+      hull.offsets.push_back(d);
+    }
+    for (size_t i = 0; i < pts.size(); ++i)
+      if (is_vertex[i]) hull.vertices.push_back(pts[i]);
+  }
+  qh_freeqhull(qh, !qh_ALL);
+  int current_long = 0, total_long = 0;
+  qh_memfreeshort(qh, &current_long, &total_long);
+  std::fclose(log);
+  std::string message(log_text ? log_text : "", log_size);
+  std::free(log_text);
+  if (exit_code != 0 || hull.normals.size() < 4) {
+    const size_t end = message.find('\n');
+    message = std::string(absl::StripAsciiWhitespace(message.substr(0, end)));
+    return absl::InvalidArgumentError(absl::StrCat("hull: degenerate: qhull failed (code ", exit_code, ")",
+                                                   message.empty() ? "" : ": ", message));
+  }
+  return hull;
+}
+
+}  // namespace
 
 double ConvexHull::SignedDistanceBound(const Vec3& x) const {
   double worst = -std::numeric_limits<double>::infinity();
@@ -37,7 +101,8 @@ absl::StatusOr<ConvexHull> ComputeConvexHull(const std::vector<Vec3>& pts) {
   if (!(size > 0)) return absl::InvalidArgumentError("hull: all vertices coincide");
   const double eps = 1e-10 * size;
 
-  // Initial tetrahedron from extreme points.
+  // Collinear and flat sets are rejected here, with messages people can act on;
+  // qhull then only sees sets with volume.
   int i0 = 0;
   for (int i = 1; i < n; ++i)
     if (pts[i].x() < pts[i0].x()) i0 = i;
@@ -67,71 +132,7 @@ absl::StatusOr<ConvexHull> ComputeConvexHull(const std::vector<Vec3>& pts) {
   if (i3 < 0 || best <= 1e-9 * size)
     return absl::InvalidArgumentError("hull: degenerate: all vertices are coplanar (a flat object has no volume)");
 
-  const Vec3 interior = 0.25 * (pts[i0] + pts[i1] + pts[i2] + pts[i3]);
-  struct Face {
-    std::array<int, 3> v;
-    Vec3 n;
-    double d;
-  };
-  auto make = [&](int a, int b, int c) {
-    Face f;
-    f.v = {a, b, c};
-    f.n = (pts[b] - pts[a]).cross(pts[c] - pts[a]);
-    const double len = f.n.norm();
-    f.n = len > 0 ? Vec3(f.n / len) : Vec3::Zero();
-    f.d = f.n.dot(pts[a]);
-    if (f.n.dot(interior) > f.d) {  // inward: flip
-      std::swap(f.v[1], f.v[2]);
-      f.n = -f.n;
-      f.d = -f.d;
-    }
-    return f;
-  };
-  std::vector<Face> faces = {make(i0, i1, i2), make(i0, i1, i3), make(i0, i2, i3), make(i1, i2, i3)};
-
-  for (int p = 0; p < n; ++p) {
-    if (p == i0 || p == i1 || p == i2 || p == i3) continue;
-    std::vector<char> visible(faces.size(), 0);
-    bool any = false;
-    for (size_t f = 0; f < faces.size(); ++f) {
-      if (faces[f].n.dot(pts[p]) - faces[f].d > eps) visible[f] = 1, any = true;
-    }
-    if (!any) continue;
-    std::set<std::pair<int, int>> edges;
-    for (size_t f = 0; f < faces.size(); ++f) {
-      if (!visible[f]) continue;
-      const auto& v = faces[f].v;
-      for (int k = 0; k < 3; ++k) edges.insert({v[k], v[(k + 1) % 3]});
-    }
-    std::vector<Face> kept;
-    kept.reserve(faces.size() + edges.size());
-    for (size_t f = 0; f < faces.size(); ++f)
-      if (!visible[f]) kept.push_back(faces[f]);
-    for (const auto& [a, b] : edges) {
-      if (edges.count({b, a})) continue;  // interior edge of the visible region
-      Face f;
-      f.v = {a, b, p};
-      f.n = (pts[b] - pts[a]).cross(pts[p] - pts[a]);
-      const double len = f.n.norm();
-      if (!(len > 0)) continue;
-      f.n /= len;
-      f.d = f.n.dot(pts[a]);
-      kept.push_back(f);
-    }
-    faces = std::move(kept);
-  }
-
-  ConvexHull hull;
-  hull.size = size;
-  std::set<int> used;
-  for (const Face& f : faces) {
-    if (f.n.squaredNorm() == 0) continue;
-    hull.normals.push_back(f.n);
-    hull.offsets.push_back(f.d);
-    for (int v : f.v) used.insert(v);
-  }
-  for (int v : used) hull.vertices.push_back(pts[v]);
-  return hull;
+  return QhullHull(pts, size);
 }
 
 }  // namespace tactforce::inertia

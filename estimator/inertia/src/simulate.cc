@@ -95,6 +95,12 @@ absl::StatusOr<SimulatedObject> ObjectFromParameters(const std::string& name, co
     for (int sy : {-1, 1})
       for (int sz : {-1, 1})
         o.hull.push_back(p.com + V * Vec3(sx * half(0), sy * half(1), sz * half(2)));
+  // The box as a closed mesh: corner index 4*(x>0) + 2*(y>0) + (z>0); each
+  // face's two triangles counter-clockwise seen from outside (det V = +1).
+  o.mesh.vertices = o.hull;
+  o.mesh.triangles = {{0, 1, 3}, {0, 3, 2}, {4, 6, 7}, {4, 7, 5},   // -x, +x
+                      {0, 4, 5}, {0, 5, 1}, {2, 3, 7}, {2, 7, 6},   // -y, +y
+                      {0, 2, 6}, {0, 6, 4}, {1, 5, 7}, {1, 7, 3}};  // -z, +z
   // A pinch across the thinnest dimension: two fingertips on each of the two
   // largest faces, spread along the longest axis.
   const double s = 0.4 * half(2);

@@ -1,4 +1,4 @@
-// Convex hull of a point set in 3-D (incremental algorithm), as half-spaces
+// Convex hull of a point set in 3-D (Debian's qhull), as half-spaces
 // n_j . x <= d_j with unit outward normals. Used for the CoM-in-hull
 // constraint of FACTOR_GRAPH (eq. 36) and CONSTRAINED.
 #pragma once

@@ -1,0 +1,286 @@
+// DENSITY: non-negative, piecewise-constant density over the regions of a
+// closed mesh. The standard parameters are linear in the K densities,
+// pi = Phi rho, so the GLS data term of CONSTRAINED becomes a quadratic in
+// rho; with a smoothness penalty between neighbouring regions the fit is a
+// non-negative quadratic programme in K unknowns (primal active set). The
+// penalty's strength is chosen by held-out contiguous time blocks.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "internal.h"
+
+namespace tactforce::inertia::internal {
+namespace {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+// min 1/2 u^T Q u - g^T u  s.t. u >= 0, Q symmetric positive definite
+// (Lawson-Hanson style primal active set). `u` is the start (feasible).
+VectorXd NonNegativeQp(const MatrixXd& Q, const VectorXd& g, int* iterations) {
+  const int K = static_cast<int>(g.size());
+  VectorXd u = VectorXd::Zero(K);
+  std::vector<bool> free(K, false);
+  const double tol = 1e-12 * std::max(1.0, g.cwiseAbs().maxCoeff());
+  auto solve_free = [&](VectorXd* z) {
+    std::vector<int> idx;
+    for (int i = 0; i < K; ++i)
+      if (free[i]) idx.push_back(i);
+    const int m = static_cast<int>(idx.size());
+    MatrixXd Qf(m, m);
+    VectorXd gf(m);
+    for (int a = 0; a < m; ++a) {
+      gf(a) = g(idx[a]);
+      for (int b = 0; b < m; ++b) Qf(a, b) = Q(idx[a], idx[b]);
+    }
+    const VectorXd zf = Qf.ldlt().solve(gf);
+    z->setZero(K);
+    for (int a = 0; a < m; ++a) (*z)(idx[a]) = zf(a);
+  };
+  for (int outer = 0; outer < 4 * K + 10; ++outer) {
+    ++*iterations;
+    const VectorXd w = g - Q * u;  // negative gradient
+    int j = -1;
+    double best = tol;
+    for (int i = 0; i < K; ++i)
+      if (!free[i] && w(i) > best) best = w(i), j = i;
+    if (j < 0) break;
+    free[j] = true;
+    for (int inner = 0; inner <= K; ++inner) {
+      VectorXd z;
+      solve_free(&z);
+      bool positive = true;
+      for (int i = 0; i < K; ++i)
+        if (free[i] && !(z(i) > 0)) positive = false;
+      if (positive) {
+        u = z;
+        break;
+      }
+      double alpha = 1.0;
+      for (int i = 0; i < K; ++i)
+        if (free[i] && !(z(i) > 0)) alpha = std::min(alpha, u(i) / (u(i) - z(i)));
+      u += alpha * (z - u);
+      for (int i = 0; i < K; ++i)
+        if (free[i] && u(i) <= 1e-14 * std::max(1.0, u.cwiseAbs().maxCoeff())) free[i] = false, u(i) = 0;
+    }
+  }
+  return u.cwiseMax(0.0);
+}
+
+// The quadratic data term in u = rho / rho_ref: 1/2 u^T H u - g^T u + c/2.
+struct Quadratic {
+  MatrixXd H;
+  VectorXd g;
+  double c = 0;
+  double Value(const VectorXd& u) const { return u.dot(H * u) - 2 * g.dot(u) + c; }  // = chi^2
+};
+
+Quadratic Project(const Matrix10d& A, const Vector10d& b, double c, const MatrixXd& Phi) {
+  Quadratic q;
+  q.H = Phi.transpose() * A * Phi;
+  q.g = Phi.transpose() * b;
+  q.c = c;
+  return q;
+}
+
+// Free 10-parameter GLS solution of A pi = b (scaled pseudo-inverse).
+Vector10d FreeGls(const Matrix10d& A, const Vector10d& b, const Vector10d& scale) {
+  return ScaledPseudoInverse(A, scale, 1e-12) * b;
+}
+
+// The CoM the data imply (free GLS fit) must lie in the mesh's bounding box,
+// up to 1 % of its diagonal plus 5 standard errors of that CoM.
+absl::Status CheckComInBoundingBox(const GlsSums& sums, const Vector10d& scale, const InertiaOptions& o) {
+  if (!o.mesh) return absl::OkStatus();
+  Eigen::AlignedBox3d box;
+  for (const Vec3& v : o.mesh->vertices) box.extend(v);
+  const Matrix10d cov = ScaledPseudoInverse(sums.A, scale, 1e-12);
+  const Vector10d free = cov * sums.b;
+  const double m = free(0);
+  if (!(m > 0) || box.isEmpty()) return absl::OkStatus();
+  const Vec3 com = free.segment<3>(1) / m;
+  double se = 0;  // largest standard error of a CoM component (first order)
+  for (int i = 0; i < 3; ++i) {
+    const double var = (cov(1 + i, 1 + i) - 2 * com(i) * cov(1 + i, 0) + com(i) * com(i) * cov(0, 0)) / (m * m);
+    se = std::max(se, std::sqrt(std::max(var, 0.0)));
+  }
+  const double outside = box.exteriorDistance(com);
+  if (outside > 0.01 * box.diagonal().norm() + 5 * se) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "%s: the CoM of the data (%.4g, %.4g, %.4g) m is outside the mesh's bounding box by %.3g m (standard error "
+        "%.2g m): check the mesh's scale and object_in_mesh",
+        o.mesh_name, com.x(), com.y(), com.z(), outside, se));
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::StatusOr<MethodOutput> FitDensity(const InertiaSamples& s, const InertiaOptions& o, const RegionModel& regions) {
+  MethodOutput out;
+  for (const std::string& n : regions.notes) out.notes.push_back(n);
+  const GlsData gls = PrepareGls(s, o, &out.notes);
+  const int n = static_cast<int>(gls.kin.size());
+  const int K = static_cast<int>(regions.regions.size());
+  const double volume = regions.total.volume;
+
+  // Columns: standard parameters of each region at 1 kg/m^3.
+  MatrixXd Phi(10, K);
+  for (int r = 0; r < K; ++r) Phi.col(r) = regions.regions[r].moments.Standard(1.0);
+  const Vector10d phi_total = regions.total.Standard(1.0);
+
+  // Reference density: the uniform solid fitted to the unweighted equations.
+  double rho_ref = phi_total.dot(gls.Ytb) / std::max(phi_total.dot(gls.YtY * phi_total), 1e-300);
+  if (!(rho_ref > 0) || !std::isfinite(rho_ref)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        o.mesh_name, ": the data give a non-positive mass for the mesh (", rho_ref * volume,
+        " kg): check the force signs, gravity and the mesh's scale"));
+  }
+  const double length = std::sqrt(std::max(regions.total.second.trace() / volume, 1e-12));
+  out.scale = ParameterScale(rho_ref * volume, length);
+
+  // Smoothness penalty sum_ij w_ij (u_i - u_j)^2 = u^T L u.
+  MatrixXd L = MatrixXd::Zero(K, K);
+  for (size_t e = 0; e < regions.neighbours.size(); ++e) {
+    const int i = regions.neighbours[e][0], j = regions.neighbours[e][1];
+    const double w = regions.neighbour_weights[e];
+    L(i, i) += w, L(j, j) += w, L(i, j) -= w, L(j, i) -= w;
+  }
+  const double l_scale = L.trace() > 0 ? L.trace() / K : 1.0;
+  const MatrixXd Phi_u = Phi * rho_ref;  // pi = Phi_u u
+
+  const int folds = std::clamp(o.density_folds, 2, std::max(2, n / 10));
+  const bool choose = o.density_regularization < 0;
+  Vector10d pi = phi_total * rho_ref;
+  VectorXd u = VectorXd::Ones(K);
+  double lambda_rel = choose ? 0.0 : o.density_regularization;
+  std::vector<GlsSums> blocks;
+  GlsSums last_total;
+  std::vector<Matrix6d> whiteners;
+  Quadratic full;
+  std::vector<Quadratic> train, held;
+  MatrixXd Hreg;
+  int qp_iterations = 0;
+  for (int round = 0; round < o.reweighting_rounds; ++round) {
+    if (o.interrupt && o.interrupt()) return absl::CancelledError("interrupted");
+    const bool last = round == o.reweighting_rounds - 1;
+    GlsSums total;
+    AccumulateGls(gls, pi, &total, folds, &blocks, last ? &whiteners : nullptr);
+    last_total = total;
+    if (round == 0) {
+      if (absl::Status st = CheckComInBoundingBox(total, out.scale, o); !st.ok()) return st;
+    }
+    bool corrected = false;
+    const Matrix10d A = BiasCorrected(total, out.scale, &corrected);
+    if (corrected && last) out.notes.push_back("errors-in-variables bias correction applied");
+    full = Project(A, total.b, total.c, Phi_u);
+    out.info = total.A;
+    // A small ridge keeps the QP strictly convex when K exceeds what the
+    // data determine and no smoothing is used.
+    const double h_scale = std::max(full.H.trace() / K, 1e-300);
+    const MatrixXd ridge = 1e-10 * h_scale * MatrixXd::Identity(K, K);
+    train.assign(folds, Quadratic());
+    held.assign(folds, Quadratic());
+    for (int f = 0; f < folds; ++f) {
+      GlsSums rest = total;
+      rest.A -= blocks[f].A, rest.b -= blocks[f].b, rest.c -= blocks[f].c, rest.bias -= blocks[f].bias;
+      bool fold_corrected = false;
+      train[f] = Project(BiasCorrected(rest, out.scale, &fold_corrected), rest.b, rest.c, Phi_u);
+      held[f] = Project(blocks[f].A, blocks[f].b, blocks[f].c, Phi_u);
+    }
+    if (choose && K > 1 && !regions.neighbours.empty()) {
+      // Held-out weighted residual over a log grid of strengths (relative to
+      // the data's mean curvature per region); the smallest wins, ties go to
+      // the smoother fit.
+      double best = std::numeric_limits<double>::infinity();
+      for (int e = 12; e >= -7; --e) {
+        const double rel = e == -7 ? 0.0 : std::pow(10.0, e);
+        double cv = 0;
+        for (int f = 0; f < folds; ++f) {
+          const double tr_scale = std::max(train[f].H.trace() / K, 1e-300);
+          const VectorXd uf =
+              NonNegativeQp(train[f].H + rel * tr_scale / l_scale * L + ridge, train[f].g, &qp_iterations);
+          cv += held[f].Value(uf);
+        }
+        if (cv < best * (1 - 1e-9)) best = cv, lambda_rel = rel;
+      }
+    }
+    Hreg = full.H + lambda_rel * h_scale / l_scale * L + ridge;
+    u = NonNegativeQp(Hreg, full.g, &qp_iterations);
+    pi = Phi_u * u;
+    if (o.progress) o.progress(0.9 * (round + 1) / o.reweighting_rounds);
+  }
+  out.pi = pi;
+  out.iterations = qp_iterations;
+  out.samples_used = n;
+  out.regularization = lambda_rel;
+  out.regularization_rule = choose ? absl::StrCat("held-out time blocks (", folds, " folds)") : "given";
+  out.densities.resize(K);
+  for (int r = 0; r < K; ++r) out.densities[r] = rho_ref * u(r);
+
+  // Covariance of the densities on the free set: Q^-1 H Q^-1 (Q = H + lambda L).
+  {
+    std::vector<int> idx;
+    for (int r = 0; r < K; ++r)
+      if (u(r) > 0) idx.push_back(r);
+    const int m = static_cast<int>(idx.size());
+    MatrixXd Qf(m, m), Hf(m, m);
+    for (int a = 0; a < m; ++a)
+      for (int b = 0; b < m; ++b) Qf(a, b) = Hreg(idx[a], idx[b]), Hf(a, b) = full.H(idx[a], idx[b]);
+    out.density_se.assign(K, 0.0);
+    if (m > 0) {
+      const MatrixXd Qi = Qf.ldlt().solve(MatrixXd::Identity(m, m));
+      const MatrixXd cov_u = Qi * Hf * Qi;
+      MatrixXd Pf(10, m);
+      for (int a = 0; a < m; ++a) {
+        out.density_se[idx[a]] = rho_ref * std::sqrt(std::max(cov_u(a, a), 0.0));
+        Pf.col(a) = Phi_u.col(idx[a]);
+      }
+      out.cov = Pf * cov_u * Pf.transpose();
+    }
+  }
+
+  // Contradiction statistic: held-out residual per sample of DENSITY against
+  // the free 10-parameter GLS fit (the model CONSTRAINED regularises), each
+  // fitted on the other blocks.
+  {
+    std::vector<Vector10d> pi_density(folds), pi_free(folds);
+    for (int f = 0; f < folds; ++f) {
+      const double tr_scale = std::max(train[f].H.trace() / K, 1e-300);
+      const double h_scale = std::max(full.H.trace() / K, 1e-300);
+      const VectorXd uf = NonNegativeQp(train[f].H + lambda_rel * tr_scale / l_scale * L +
+                                            1e-10 * h_scale * MatrixXd::Identity(K, K),
+                                        train[f].g, &qp_iterations);
+      pi_density[f] = Phi_u * uf;
+      // The free model on the same (last round's) weights.
+      pi_free[f] = FreeGls(last_total.A - blocks[f].A, last_total.b - blocks[f].b, out.scale);
+    }
+    double sum_d = 0, sum_d2 = 0, res_density = 0, res_free = 0;
+    double raw_density = 0, raw_free = 0, raw_wrench = 0;  // unweighted, for the physical size
+    for (int k = 0; k < n; ++k) {
+      const int f = BlockOf(k, n, folds);
+      const Vector6d ed = gls.Y[k] * pi_density[f] - gls.wrench[k];
+      const Vector6d ef = gls.Y[k] * pi_free[f] - gls.wrench[k];
+      const double rd = (whiteners[k] * ed).squaredNorm();
+      const double rf = (whiteners[k] * ef).squaredNorm();
+      res_density += rd, res_free += rf;
+      sum_d += rd - rf, sum_d2 += (rd - rf) * (rd - rf);
+      raw_density += ed.squaredNorm(), raw_free += ef.squaredNorm(), raw_wrench += gls.wrench[k].squaredNorm();
+    }
+    out.heldout_excess = raw_wrench > 0 ? (std::sqrt(raw_density) - std::sqrt(raw_free)) / std::sqrt(raw_wrench) : 0;
+    const double mean = sum_d / n;
+    const double var = std::max(sum_d2 / n - mean * mean, 0.0);
+    out.heldout_ratio = res_free > 0 ? res_density / res_free : (res_density > 0 ? HUGE_VAL : 1.0);
+    out.heldout_z = var > 0 ? mean / std::sqrt(var / n) : (mean > 0 ? HUGE_VAL : 0.0);
+  }
+  ResidualRms(gls.kin, gls.wrench, pi, &out.rms_force, &out.rms_torque);
+  return out;
+}
+
+}  // namespace tactforce::inertia::internal
