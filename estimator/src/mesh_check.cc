@@ -62,10 +62,11 @@ MeshCheck CheckMesh(const TriangleMesh& mesh) {
     size_t j = i;
     int forward = 0;
     for (; j < edges.size() && edges[j].key == edges[i].key; ++j) forward += edges[j].forward;
-    const size_t uses = j - i;
+    const int uses = static_cast<int>(j - i);
     if (uses == 1) ++c.boundary_edges;
-    else if (uses > 2) ++c.non_manifold_edges;
-    else if (forward != 1) ++c.inconsistent_edges;
+    else if (uses == 2 && forward != 1) ++c.inconsistent_edges;
+    else if (uses > 2 && 2 * forward != uses) ++c.non_manifold_edges;
+    else if (uses > 2) ++c.junction_edges;
     i = j;
   }
   if (c.area > 0) c.degenerate_area_fraction = degenerate_area / c.area;
@@ -79,8 +80,9 @@ absl::Status RequireClosedSolid(const MeshCheck& c, std::string_view name_view) 
   const std::string name(name_view);
   if (c.faces == 0) return absl::InvalidArgumentError(absl::StrCat(name, ": no triangles"));
   if (c.non_manifold_edges > 0)
-    return absl::InvalidArgumentError(absl::StrCat(name, ": ", c.non_manifold_edges,
-                                                   " non-manifold edges (shared by more than two triangles)"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(name, ": ", c.non_manifold_edges,
+                     " non-manifold edges (shared by more than two triangles, not as many in each direction)"));
   if (c.boundary_edges > 0)
     return absl::InvalidArgumentError(
         absl::StrCat(name, ": ", c.boundary_edges, " boundary edges: the mesh is not closed"));

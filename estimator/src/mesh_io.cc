@@ -8,7 +8,9 @@
 #include <cstring>
 #include <exception>
 #include <filesystem>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
@@ -98,7 +100,11 @@ absl::StatusOr<TriangleMesh> ReadMeshBytes(std::string_view bytes, std::string_v
   Assimp::Importer importer;
   const aiScene* scene = nullptr;
   try {
-    scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(), aiProcess_Triangulate, hint.c_str());
+    // Validation runs first: assimp's readers do not check face indices (a
+    // truncated binary PLY has faces pointing past the vertices), and
+    // triangulating or welding such faces reads out of bounds.
+    scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(),
+                                        aiProcess_ValidateDataStructure | aiProcess_Triangulate, hint.c_str());
   } catch (const std::exception& e) {
     return absl::InvalidArgumentError(absl::StrCat(name, ": assimp: ", e.what()));
   }
@@ -107,7 +113,13 @@ absl::StatusOr<TriangleMesh> ReadMeshBytes(std::string_view bytes, std::string_v
     if (message.empty()) message = "cannot read the file";
     return absl::InvalidArgumentError(absl::StrCat(name, ": assimp: ", message));
   }
-  return FromScene(*scene, name);
+  absl::StatusOr<TriangleMesh> mesh = FromScene(*scene, name);
+  if (mesh.ok() && hint == "ply" && mesh->face_colors.empty()) {
+    // assimp keeps the file's face order; a count mismatch means it did not.
+    std::optional<std::vector<uint32_t>> colors = internal::PlyFaceColors(bytes);
+    if (colors && colors->size() == mesh->triangles.size()) mesh->face_colors = *std::move(colors);
+  }
+  return mesh;
 }
 
 absl::StatusOr<TriangleMesh> ReadMeshFile(const std::string& path) {

@@ -269,8 +269,10 @@ std::string DescribeFit(const InertiaFit& f) {
   }
   if (f.mesh_check) {
     const estimator::MeshCheck& m = *f.mesh_check;
-    out += absl::StrFormat("mesh: %d faces, %d vertices, %s, volume %.6g m^3\n", m.faces, m.vertices,
+    out += absl::StrFormat("mesh: %d faces, %d vertices, %s%s, volume %.6g m^3\n", m.faces, m.vertices,
                            m.closed && m.consistently_oriented ? "closed and consistently oriented" : "NOT a closed solid",
+                           m.junction_edges > 0 ? absl::StrCat(" (", m.junction_edges, " edges where closed parts touch)")
+                                                : std::string(),
                            m.volume);
   }
   if (!f.densities.empty()) {

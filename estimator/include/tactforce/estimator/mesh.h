@@ -99,13 +99,21 @@ struct LoadedMesh {
 absl::StatusOr<LoadedMesh> LoadMesh(const MeshRequest& request);
 
 // What a density fit needs of a mesh: a closed, consistently oriented
-// surface (every edge shared by exactly two triangles, in opposite
-// directions) enclosing positive volume, without degenerate faces dominating.
+// surface (every edge traversed as often in one direction as in the other:
+// shared by two triangles in opposite directions, or a junction of closed
+// parts) enclosing positive volume, without degenerate faces dominating.
 struct MeshCheck {
   int vertices = 0;
   int faces = 0;
   int boundary_edges = 0;         // edges used by one triangle only
-  int non_manifold_edges = 0;     // edges used by more than two triangles
+  // Edges used by more than two triangles, not as many times in each
+  // direction (no solid on either side is well defined).
+  int non_manifold_edges = 0;
+  // Edges used by 4, 6, ... triangles, as many times in each direction:
+  // closed parts that touch along an edge or share a face (a hammer's head
+  // and handle). The surface is still a closed oriented boundary; mass
+  // properties are those of the union.
+  int junction_edges = 0;
   int inconsistent_edges = 0;     // shared edges traversed twice in the same direction
   int degenerate_faces = 0;       // zero-area triangles
   double degenerate_area_fraction = 0.0;  // (tiny) area of degenerate faces / total area
