@@ -75,7 +75,8 @@ CLI::App* AddFrictionCommand(CLI::App& app, FrictionArgs& args) {
       ->required()
       ->type_name("TRIAL.csv");
   auto* normal = cmd->add_option("--normal", args.normal, "Surface normal into the object, x,y,z");
-  auto* mesh = cmd->add_option("--mesh", args.mesh_path, "Object mesh (STL or OBJ): nearest-triangle normal");
+  auto* mesh = cmd->add_option("--mesh", args.mesh_path,
+                               "Object mesh (STL, OBJ or PLY; object frame, m): nearest-triangle normal");
   normal->excludes(mesh);
   cmd->add_flag("--json", args.json, "Print the FrictionResponse as JSON");
   cmd->add_flag("--linear-fit", args.linear_fit,

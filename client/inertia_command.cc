@@ -1,14 +1,22 @@
 #include "inertia_command.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
+#include <vector>
 
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_split.h"
 #include "cli_common.h"
 #include "grpcpp/grpcpp.h"
 #include "progress.h"
@@ -17,6 +25,9 @@
 #include "tactforce/api/json.h"
 #include "tactforce/estimator/csv.h"
 #include "tactforce/estimator/mesh.h"
+#include "tactforce/inertia/density.h"
+#include "tactforce/inertia/density_plot.h"
+#include "tactforce/inertia/fit.h"
 #include "tactforce/inertia/samples.h"
 #include "tactforce/inertia/simulate.h"
 #include "tactforce/inertia/truth.h"
@@ -28,13 +39,18 @@ namespace {
 
 using inertia::Vec3;
 
-// Hull vertices from a mesh (.stl/.obj) or a CSV with x,y,z columns.
+bool IsMeshPath(const std::string& path) {
+  const std::string ext = absl::AsciiStrToLower(std::filesystem::path(path).extension().string());
+  return ext == ".stl" || ext == ".obj" || ext == ".ply" || ext == ".json";
+}
+
+// Hull vertices from a mesh (.stl/.obj/.ply in the object frame, or a mesh
+// descriptor .json) or a CSV with x,y,z columns.
 absl::StatusOr<std::vector<Vec3>> ReadHullVertices(const std::string& path) {
-  std::string ext = absl::AsciiStrToLower(std::filesystem::path(path).extension().string());
-  if (ext == ".stl" || ext == ".obj") {
-    absl::StatusOr<estimator::TriangleMesh> mesh = estimator::ReadMeshFile(path);
+  if (IsMeshPath(path)) {
+    absl::StatusOr<estimator::LoadedMesh> mesh = estimator::LoadMesh(estimator::MeshRequest(path));
     if (!mesh.ok()) return mesh.status();
-    return mesh->vertices;
+    return mesh->mesh.vertices;
   }
   absl::StatusOr<estimator::CsvTable> table = estimator::ReadCsvFile(path);
   if (!table.ok()) return table.status();
@@ -45,10 +61,79 @@ absl::StatusOr<std::vector<Vec3>> ReadHullVertices(const std::string& path) {
   return out;
 }
 
-// The FitInertia request options from the flags (and the truth/prior files).
-absl::StatusOr<v1::InertiaFitOptions> BuildOptions(const InertiaArgs& args) {
+// One finite number; errors name the flag and the token.
+absl::StatusOr<double> ParseNumber(const std::string& token, const std::string& flag) {
+  const std::string t(absl::StripAsciiWhitespace(token));
+  char* end = nullptr;
+  const double x = t.empty() ? 0.0 : std::strtod(t.c_str(), &end);
+  if (t.empty() || end != t.c_str() + t.size())
+    return absl::InvalidArgumentError(absl::StrCat(flag, ": '", token, "' is not a number"));
+  if (!std::isfinite(x)) return absl::InvalidArgumentError(absl::StrCat(flag, ": '", token, "' is not finite"));
+  return x;
+}
+
+// --mesh-pose x,y,z,qw,qx,qy,qz: the object frame in the mesh frame.
+absl::StatusOr<estimator::MeshPlacement> ParseMeshPose(const std::string& text) {
+  const std::vector<std::string> tokens = absl::StrSplit(text, ',');
+  if (tokens.size() != 7)
+    return absl::InvalidArgumentError(absl::StrCat("--mesh-pose: expected 7 numbers x,y,z,qw,qx,qy,qz (got ",
+                                                   tokens.size(), " in '", text, "')"));
+  std::array<double, 7> v{};
+  for (size_t i = 0; i < 7; ++i) {
+    absl::StatusOr<double> x = ParseNumber(tokens[i], "--mesh-pose");
+    if (!x.ok()) return x.status();
+    v[i] = *x;
+  }
+  estimator::MeshPlacement pose;
+  pose.position = Vec3(v[0], v[1], v[2]);
+  pose.orientation = Eigen::Quaterniond(v[3], v[4], v[5], v[6]);
+  if (!(pose.orientation.norm() >= 1e-6))
+    return absl::InvalidArgumentError(absl::StrCat("--mesh-pose: quaternion qw,qx,qy,qz has norm ",
+                                                   pose.orientation.norm(), " (near zero) in '", text, "'"));
+  return pose;
+}
+
+// The mesh of --mesh [--mesh-scale] [--mesh-pose], loaded and placed in the
+// object frame, and the bytes of the mesh file it came from (sent to the
+// fit, locally or to the server, with the same placement).
+struct FlagMesh {
+  estimator::LoadedMesh loaded;
+  std::string bytes;
+};
+
+absl::StatusOr<FlagMesh> LoadFlagMesh(const InertiaArgs& args) {
+  estimator::MeshRequest request;
+  request.path = args.mesh_path;
+  if (!args.mesh_scale.empty()) {
+    absl::StatusOr<double> scale = ParseNumber(args.mesh_scale, "--mesh-scale");
+    if (!scale.ok()) return scale.status();
+    if (!(*scale > 0))
+      return absl::InvalidArgumentError(absl::StrCat("--mesh-scale: must be > 0 (got ", args.mesh_scale, ")"));
+    request.scale = *scale;
+  }
+  if (!args.mesh_pose.empty()) {
+    absl::StatusOr<estimator::MeshPlacement> pose = ParseMeshPose(args.mesh_pose);
+    if (!pose.ok()) return pose.status();
+    request.pose = *pose;
+  }
+  std::error_code ec;
+  if (!std::filesystem::exists(args.mesh_path, ec))
+    return absl::InvalidArgumentError(absl::StrCat("--mesh: '", args.mesh_path, "' does not exist"));
+  absl::StatusOr<estimator::LoadedMesh> loaded = estimator::LoadMesh(request);
+  if (!loaded.ok()) return loaded.status();
+  absl::StatusOr<std::string> bytes = ReadInput(loaded->mesh_path, "--mesh");
+  if (!bytes.ok()) return bytes.status();
+  return FlagMesh{*std::move(loaded), *std::move(bytes)};
+}
+
+// The FitInertia request options from the flags (and the truth/prior/mesh
+// files). `mesh` receives the loaded --mesh.
+absl::StatusOr<v1::InertiaFitOptions> BuildOptions(const InertiaArgs& args, std::optional<FlagMesh>* mesh) {
   v1::InertiaFitOptions o;
-  absl::StatusOr<inertia::InertiaMethod> method = inertia::ParseInertiaMethod(args.method);
+  const std::string method_name = !args.method.empty() ? args.method
+                                  : args.mesh_path.empty() ? "constrained"
+                                                           : "density";
+  absl::StatusOr<inertia::InertiaMethod> method = inertia::ParseInertiaMethod(method_name);
   if (!method.ok()) return absl::InvalidArgumentError(absl::StrCat("--", method.status().message()));
   o.set_method(api::InertiaMethodToProto(*method));
   if (!args.truth_path.empty()) {
@@ -84,7 +169,85 @@ absl::StatusOr<v1::InertiaFitOptions> BuildOptions(const InertiaArgs& args) {
   o.set_savitzky_golay(args.savitzky_golay);
   if (args.max_iterations < 0) return absl::InvalidArgumentError("--max-iterations: must be >= 0");
   o.set_max_iterations(static_cast<uint32_t>(args.max_iterations));
+
+  absl::StatusOr<inertia::RegionScheme> scheme = inertia::ParseRegionScheme(args.regions);
+  if (!scheme.ok()) return absl::InvalidArgumentError(absl::StrCat("--regions: ", scheme.status().message()));
+  o.set_regions(api::RegionSchemeToProto(*scheme));
+  if (args.target_regions < 0 || args.target_regions > 512)
+    return absl::InvalidArgumentError(
+        absl::StrCat("--target-regions: must be in 1..512, 0 = 12 (got ", args.target_regions, ")"));
+  o.set_target_regions(static_cast<uint32_t>(args.target_regions));
+  if (!args.density_regularization.empty()) {
+    absl::StatusOr<double> x = ParseNumber(args.density_regularization, "--density-regularization");
+    if (!x.ok()) return x.status();
+    if (*x < 0)
+      return absl::InvalidArgumentError(absl::StrCat("--density-regularization: must be >= 0 (got ",
+                                                     args.density_regularization,
+                                                     "); leave it out for the held-out choice"));
+    o.set_density_regularization(*x);
+  }
+  if (!args.mesh_prior_weight.empty()) {
+    absl::StatusOr<double> x = ParseNumber(args.mesh_prior_weight, "--mesh-prior-weight");
+    if (!x.ok()) return x.status();
+    if (*x < 0)
+      return absl::InvalidArgumentError(
+          absl::StrCat("--mesh-prior-weight: must be >= 0 (got ", args.mesh_prior_weight, ")"));
+    o.set_mesh_prior_weight(*x);
+  }
+  if (!args.contradiction_ratio.empty()) {
+    absl::StatusOr<double> x = ParseNumber(args.contradiction_ratio, "--contradiction-ratio");
+    if (!x.ok()) return x.status();
+    if (*x < 0)
+      return absl::InvalidArgumentError(absl::StrCat("--contradiction-ratio: must be >= 0, 0 disables (got ",
+                                                     args.contradiction_ratio, ")"));
+    o.set_contradiction_ratio(*x);
+  }
+  if (!args.mesh_path.empty()) {
+    absl::StatusOr<FlagMesh> loaded = LoadFlagMesh(args);
+    if (!loaded.ok()) return loaded.status();
+    *o.mutable_mesh() = api::MeshInputToProto(loaded->bytes, loaded->loaded.format, loaded->loaded.name,
+                                              loaded->loaded.placement);
+    *mesh = *std::move(loaded);
+  }
   return o;
+}
+
+// --plot: the directory must exist (checked before the fit).
+absl::Status CheckPlotPath(const std::string& path) {
+  if (path.empty()) return absl::OkStatus();
+  std::filesystem::path parent = std::filesystem::path(path).parent_path();
+  if (parent.empty()) parent = ".";
+  std::error_code ec;
+  if (!std::filesystem::is_directory(parent, ec))
+    return absl::InvalidArgumentError(
+        absl::StrCat("--plot: directory '", parent.string(), "' of '", path, "' does not exist"));
+  return absl::OkStatus();
+}
+
+// Writes the SVG of the fit on the mesh. `fit` is the library's result
+// (local) or the server's answer converted back; the latter has no region
+// model, which is rebuilt from the same mesh and options (deterministic).
+absl::Status WritePlot(const InertiaArgs& args, const FlagMesh& mesh, inertia::InertiaFit fit,
+                       const v1::InertiaFitOptions& options) {
+  if (!fit.region_model && !fit.densities.empty()) {
+    inertia::RegionOptions regions;
+    absl::StatusOr<inertia::RegionScheme> scheme = inertia::ParseRegionScheme(args.regions);
+    if (scheme.ok()) regions.scheme = *scheme;
+    if (options.target_regions() != 0) regions.target_regions = static_cast<int>(options.target_regions());
+    absl::StatusOr<inertia::RegionModel> model = inertia::BuildRegions(mesh.loaded.mesh, regions, mesh.loaded.name);
+    if (model.ok() && model->regions.size() == fit.densities.size())
+      fit.region_model = std::make_shared<const inertia::RegionModel>(*std::move(model));
+  }
+  inertia::DensityPlotOptions plot;
+  plot.title = absl::StrCat(mesh.loaded.name, ": ", inertia::ToString(fit.method), " fit");
+  if (options.has_truth()) plot.true_com = api::FromProto(options.truth().com());
+  absl::StatusOr<std::string> svg = inertia::DensityPlotSvg(mesh.loaded.mesh, fit, plot);
+  if (!svg.ok()) return absl::Status(svg.status().code(), absl::StrCat("--plot: ", svg.status().message()));
+  std::ofstream out(args.plot_path, std::ios::binary);
+  out << *svg;
+  out.close();
+  if (!out) return absl::InvalidArgumentError(absl::StrCat("--plot: cannot write '", args.plot_path, "'"));
+  return absl::OkStatus();
 }
 
 // Streams the samples to Estimator.FitInertia in batches.
@@ -104,6 +267,11 @@ absl::StatusOr<v1::FitInertiaResponse> RemoteFit(const InertiaArgs& args,
   const size_t batch = static_cast<size_t>(std::max(1, args.batch));
   v1::FitInertiaRequest message;
   *message.mutable_options() = options;
+  if (options.has_mesh() && n > 0) {
+    // The mesh makes the options big: they travel alone, so that only the
+    // mesh counts against the server's --max-message-bytes.
+    if (writer->Write(message)) message.Clear();
+  }
   size_t sent = 0;
   do {  // at least one message, even for an empty log
     const size_t end = std::min(n, sent + batch);
@@ -118,6 +286,16 @@ absl::StatusOr<v1::FitInertiaResponse> RemoteFit(const InertiaArgs& args,
   writer->WritesDone();
   const grpc::Status status = writer->Finish();
   upload.Finish();
+  if (status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED && options.has_mesh()) {
+    // The first message carries the mesh: name the limit and how to raise it.
+    v1::FitInertiaRequest first;
+    *first.mutable_options() = options;
+    return absl::ResourceExhaustedError(absl::StrCat(
+        args.connection.server, ": ", status.error_message(), " (the first FitInertia message, ",
+        first.ByteSizeLong(), " bytes, carries the mesh ", options.mesh().name(), " of ",
+        options.mesh().data().size(), " bytes: start tactforce-server with a larger --max-message-bytes, or give "
+        "a smaller mesh)"));
+  }
   if (!status.ok()) return RpcError(status, args.connection.server, args.connection.deadline_ms, channel->get());
   return response;
 }
@@ -137,14 +315,57 @@ CLI::App* AddInertiaCommand(CLI::App& app, InertiaArgs& args) {
   cmd->add_option("--csv", args.csv, "Samples: t,px..pz,qw..qz and a wrench (fx..tz) or contacts (c{i}_px..c{i}_fz)")
       ->type_name("FILE")
       ->required();
-  cmd->add_option("--method", args.method, "baseline-ls, factor-graph or constrained")
-      ->check(CLI::IsMember({"baseline-ls", "factor-graph", "constrained"}))
-      ->capture_default_str();
+  cmd->add_option("--method", args.method,
+                  "baseline-ls, factor-graph, constrained or density (default: density with --mesh, else constrained)")
+      ->check(CLI::IsMember({"baseline-ls", "factor-graph", "constrained", "density"}));
   cmd->add_option("--gravity", args.gravity, "Gravity in the world, gx,gy,gz (m/s^2); default: the truth's or 0,0,-9.81");
   cmd->add_option("--truth", args.truth_path, "Truth JSON (mass, com, inertia_com): print the error metrics")
       ->type_name("FILE");
-  cmd->add_option("--hull", args.hull_path, "Object geometry for the CoM constraint: STL, OBJ or CSV x,y,z")
+  cmd->add_option("--hull", args.hull_path,
+                  "Object geometry for the CoM constraint: STL, OBJ, PLY (object frame, m), a mesh descriptor JSON "
+                  "or CSV x,y,z")
       ->type_name("FILE");
+  CLI::Option* mesh = cmd->add_option(
+                              "--mesh", args.mesh_path,
+                              "The object's closed mesh: STL, OBJ or PLY in the object frame (m), or a descriptor "
+                              "JSON {\"mesh\": FILE, \"scale\": S, \"object_in_mesh\": {\"position\": [x,y,z], "
+                              "\"quaternion\": [w,x,y,z]}}; needed by density, a prior for constrained")
+                          ->type_name("FILE|DESCRIPTOR.json");
+  cmd->add_option("--mesh-scale", args.mesh_scale, "Mesh units to m (> 0), replaces the descriptor's scale")
+      ->type_name("S")
+      ->needs(mesh);
+  cmd->add_option("--mesh-pose", args.mesh_pose,
+                  "Object frame in the mesh frame (m after scaling; quaternion w first), replaces object_in_mesh")
+      ->type_name("x,y,z,qw,qx,qy,qz")
+      ->needs(mesh);
+  cmd->add_option("--regions", args.regions,
+                  "density: regions of constant density: auto (colours if they split the mesh into closed parts, "
+                  "else grid), grid, colors or single")
+      ->check(CLI::IsMember({"auto", "grid", "colors", "single"}))
+      ->capture_default_str()
+      ->needs(mesh);
+  cmd->add_option("--target-regions", args.target_regions, "density, grid: about this many regions (1..512; 0 = 12)")
+      ->type_name("N")
+      ->needs(mesh);
+  cmd->add_option("--density-regularization", args.density_regularization,
+                  "density: smoothness strength between neighbouring regions (>= 0); default: chosen by held-out "
+                  "time blocks")
+      ->type_name("X")
+      ->needs(mesh);
+  cmd->add_option("--mesh-prior-weight", args.mesh_prior_weight,
+                  "constrained with --mesh: weight of the mesh's uniform-density prior (chi^2 units; default 1)")
+      ->type_name("W")
+      ->needs(mesh);
+  cmd->add_option("--contradiction-ratio", args.contradiction_ratio,
+                  "density: reject the mesh when its held-out residual exceeds constrained's by this factor "
+                  "(default 1.2; 0 disables)")
+      ->type_name("R")
+      ->needs(mesh);
+  cmd->add_option("--plot", args.plot_path,
+                  "Write an SVG of the fit: the mesh in the principal planes, regions coloured by density, the "
+                  "fitted (and with --truth the true) CoM")
+      ->type_name("FILE.svg")
+      ->needs(mesh);
   cmd->add_option("--prior", args.prior_path, "Prior parameters (truth JSON format)")->type_name("FILE");
   cmd->add_option("--prior-weight", args.prior_weight, "Weight of the prior (chi^2 units)")->capture_default_str();
   cmd->add_flag("--json", args.json, "Print the FitInertia response as proto3 JSON");
@@ -167,22 +388,31 @@ CLI::App* AddInertiaCommand(CLI::App& app, InertiaArgs& args) {
 
 int RunInertia(const InertiaArgs& args) {
   if (args.batch < 1) return ReportError(absl::InvalidArgumentError("--batch: must be >= 1"));
-  absl::StatusOr<v1::InertiaFitOptions> options = BuildOptions(args);
+  if (absl::Status s = CheckPlotPath(args.plot_path); !s.ok()) return ReportError(s);
+  std::optional<FlagMesh> mesh;
+  absl::StatusOr<v1::InertiaFitOptions> options = BuildOptions(args, &mesh);
   if (!options.ok()) return ReportError(options.status());
   absl::StatusOr<inertia::InertiaSamples> samples = inertia::ReadInertiaCsvFile(args.csv);
   if (!samples.ok()) return ReportError(samples.status());
 
   const bool show_progress = args.progress || ProgressBar::StderrIsTerminal();
   absl::StatusOr<v1::FitInertiaResponse> response;
+  std::optional<inertia::InertiaFit> local_fit;
   if (args.remote) {
     ProgressBar upload("upload", show_progress);
     response = RemoteFit(args, *samples, *options, upload);
   } else {
-    ProgressBar fit("fit", show_progress);
+    ProgressBar bar("fit", show_progress);
+    local_fit.emplace();
     response = api::FitInertiaSamples(*samples, *options, {},
-                                      [&fit](double fraction) { fit.Update(fraction); });
+                                      [&bar](double fraction) { bar.Update(fraction); }, &*local_fit);
   }
   if (!response.ok()) return ReportError(response.status());
+  if (!args.plot_path.empty() && mesh) {
+    if (absl::Status s = WritePlot(args, *mesh, local_fit ? *local_fit : api::InertiaFitFromProto(*response), *options);
+        !s.ok())
+      return ReportError(s);
+  }
 
   if (args.json) {
     std::cout << api::ToJson(*response);
@@ -266,6 +496,41 @@ absl::StatusOr<inertia::ExcitationTrajectory> ReadTrajectory(const std::string& 
   return t;
 }
 
+// Binary STL (little-endian float32; normals from the winding), the format
+// `tactforce inertia --mesh` reads back.
+absl::Status WriteBinaryStl(const estimator::TriangleMesh& mesh, const std::string& path, const std::string& label) {
+  std::string bytes(80, '\0');
+  const std::string header = absl::StrCat("tactforce simulate inertia: ", label, " (object frame, m)");
+  std::memcpy(bytes.data(), header.data(), std::min<size_t>(header.size(), 80));
+  auto put32 = [&bytes](uint32_t v) {
+    for (int i = 0; i < 4; ++i) bytes.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
+  };
+  auto put_float = [&put32](double x) {
+    const float f = static_cast<float>(x);
+    uint32_t v = 0;
+    std::memcpy(&v, &f, sizeof v);
+    put32(v);
+  };
+  put32(static_cast<uint32_t>(mesh.triangles.size()));
+  for (const auto& t : mesh.triangles) {
+    const Vec3& a = mesh.vertices[t[0]];
+    const Vec3& b = mesh.vertices[t[1]];
+    const Vec3& c = mesh.vertices[t[2]];
+    Vec3 cross = (b - a).cross(c - a);
+    if (cross.norm() > 0) cross.normalize();
+    const Vec3 normal = cross;
+    for (const Vec3* v : {&normal, &a, &b, &c})
+      for (int k = 0; k < 3; ++k) put_float((*v)(k));
+    bytes.push_back('\0');  // attribute byte count
+    bytes.push_back('\0');
+  }
+  std::ofstream out(path, std::ios::binary);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  out.close();
+  if (!out) return absl::InvalidArgumentError(absl::StrCat("--out: cannot write '", path, "'"));
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 CLI::App* AddSimulateInertiaCommand(CLI::App& simulate, SimulateInertiaArgs& args) {
@@ -303,7 +568,10 @@ CLI::App* AddSimulateInertiaCommand(CLI::App& simulate, SimulateInertiaArgs& arg
       ->excludes(amp)
       ->excludes(freq);
   cmd->add_option("--seed", args.seed, "Random seed")->capture_default_str();
-  cmd->add_option("--out", args.out_dir, "Output directory (inertia.csv, truth.json)")->required();
+  cmd->add_option("--out", args.out_dir,
+                  "Output directory: inertia.csv, truth.json and mesh.stl (the object's closed solid, object frame, "
+                  "m: inertia --mesh OUT/mesh.stl)")
+      ->required();
   return cmd;
 }
 
@@ -359,8 +627,13 @@ int RunSimulateInertia(const SimulateInertiaArgs& args) {
   const std::string csv = (std::filesystem::path(args.out_dir) / "inertia.csv").string();
   const std::string truth = (std::filesystem::path(args.out_dir) / "truth.json").string();
   if (absl::Status s = inertia::WriteSimulation(*result, csv, truth); !s.ok()) return ReportError(s);
+  const std::string mesh = (std::filesystem::path(args.out_dir) / "mesh.stl").string();
+  const bool has_mesh = !result->object.mesh.triangles.empty();
+  if (has_mesh) {
+    if (absl::Status s = WriteBinaryStl(result->object.mesh, mesh, result->object.name); !s.ok()) return ReportError(s);
+  }
   std::cerr << "wrote " << result->samples.samples.size() << " samples of '" << result->object.name << "' to "
-            << csv << " (+ truth.json)\n";
+            << csv << " (+ truth.json" << (has_mesh ? ", mesh.stl" : "") << ")\n";
   return kExitOk;
 }
 

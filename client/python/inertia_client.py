@@ -11,6 +11,15 @@ FitInertiaResponse as JSON (proto field names) or a short summary.
         --server 127.0.0.1:50051 --csv run.csv [--method factor-graph] \\
         [--truth truth.json] [--batch 500] [--json]
 
+With the object's mesh (STL, OBJ or PLY in the object frame, metres, or a
+descriptor JSON {"mesh": FILE, "scale": S, "object_in_mesh": {"position":
+[x,y,z], "quaternion": [w,x,y,z]}}) the file's bytes travel in the first
+message (MeshInput; at most the server's --max-message-bytes) and the
+method defaults to density:
+
+    ... inertia_client.py --server HOST:PORT --csv Hammer.csv \\
+        --mesh Hammer.mesh.json [--mesh-scale 0.001] [--regions grid]
+
 Uses Debian's python3-grpcio and python3-protobuf (hence /usr/bin/python3).
 Only the columns tactforce documents are read; unknown columns are ignored.
 Checks here are minimal (header, numbers); the server validates everything
@@ -24,6 +33,7 @@ import argparse
 import csv
 import json
 import math
+import os
 import sys
 
 from client_env import EXIT_BAD_INPUT, EXIT_OK, EXIT_RPC_FAILED, load
@@ -34,7 +44,17 @@ METHODS = {
     "baseline-ls": inertia_pb2.INERTIA_METHOD_BASELINE_LS,
     "factor-graph": inertia_pb2.INERTIA_METHOD_FACTOR_GRAPH,
     "constrained": inertia_pb2.INERTIA_METHOD_CONSTRAINED,
+    "density": inertia_pb2.INERTIA_METHOD_DENSITY,
 }
+
+REGIONS = {
+    "auto": inertia_pb2.REGION_SCHEME_AUTO,
+    "grid": inertia_pb2.REGION_SCHEME_GRID,
+    "colors": inertia_pb2.REGION_SCHEME_COLORS,
+    "single": inertia_pb2.REGION_SCHEME_SINGLE,
+}
+
+MESH_FORMATS = {".stl": "stl", ".obj": "obj", ".ply": "ply"}
 
 POSE = ["t", "px", "py", "pz", "qw", "qx", "qy", "qz"]
 WRENCH = ["fx", "fy", "fz", "tx", "ty", "tz"]
@@ -122,6 +142,73 @@ def read_truth(path):
     return params, truth.get("gravity_world")
 
 
+def parse_numbers(text, count, flag, what):
+    tokens = text.split(",")
+    if len(tokens) != count:
+        raise BadInput(f"{flag}: expected {count} numbers {what} (got {len(tokens)} in '{text}')")
+    values = []
+    for token in tokens:
+        try:
+            value = float(token)
+        except ValueError:
+            raise BadInput(f"{flag}: '{token}' is not a number") from None
+        if not math.isfinite(value):
+            raise BadInput(f"{flag}: '{token}' is not finite")
+        values.append(value)
+    return values
+
+
+def read_mesh(path, scale=None, pose=None):
+    """MeshInput for --mesh: a mesh file (object frame, m) or a descriptor
+    JSON; --mesh-scale / --mesh-pose replace the descriptor's values. The
+    server reads, places and checks the mesh and names what is wrong."""
+    mesh = inertia_pb2.MeshInput()
+    if path.lower().endswith(".json"):
+        with open(path, encoding="utf-8") as handle:
+            try:
+                descriptor = json.load(handle)
+            except json.JSONDecodeError as error:
+                raise BadInput(f"{path}: {error}") from None
+        if not isinstance(descriptor, dict):
+            raise BadInput(f"{path}: expected a JSON object")
+        unknown = sorted(set(descriptor) - {"mesh", "scale", "object_in_mesh"})
+        if unknown:
+            raise BadInput(f"{path}: unknown key '{unknown[0]}' (expected mesh, scale, object_in_mesh)")
+        if not isinstance(descriptor.get("mesh"), str) or not descriptor["mesh"]:
+            raise BadInput(f"{path}: missing key 'mesh' (the mesh file, .stl, .obj or .ply)")
+        file = os.path.join(os.path.dirname(path), descriptor["mesh"])
+        try:
+            if "scale" in descriptor:
+                mesh.scale = float(descriptor["scale"])
+            placement = descriptor.get("object_in_mesh", {})
+            unknown = sorted(set(placement) - {"position", "quaternion"})
+            if unknown:
+                raise BadInput(f"{path}: object_in_mesh: unknown key '{unknown[0]}' (expected position, quaternion)")
+            if "position" in placement:
+                set_vec(mesh.position, [float(v) for v in placement["position"]])
+            if "quaternion" in placement:
+                q = mesh.orientation
+                q.w, q.x, q.y, q.z = (float(v) for v in placement["quaternion"])
+        except (TypeError, ValueError, AttributeError) as error:
+            raise BadInput(f"{path}: bad scale or object_in_mesh ({error})") from None
+    else:
+        file = path
+    extension = os.path.splitext(file)[1].lower()
+    if extension not in MESH_FORMATS:
+        raise BadInput(f"{file}: unknown mesh extension '{extension}' (expected .stl, .obj or .ply)")
+    with open(file, "rb") as handle:
+        mesh.data = handle.read()
+    mesh.format = MESH_FORMATS[extension]
+    mesh.name = os.path.basename(file)
+    if scale is not None:
+        mesh.scale = scale
+    if pose is not None:
+        set_vec(mesh.position, pose[:3])
+        q = mesh.orientation
+        q.w, q.x, q.y, q.z = pose[3:]
+    return mesh
+
+
 class RequestStream:
     """The request stream: options first, then batches of samples. Keeps
     the first BadInput raised while reading (gRPC only reports that the
@@ -142,6 +229,11 @@ class RequestStream:
 def requests(samples, options, batch):
     message = inertia_pb2.FitInertiaRequest()
     message.options.CopyFrom(options)
+    if options.HasField("mesh"):
+        # The mesh makes the options big: they travel alone, so that only
+        # the mesh counts against the server's --max-message-bytes.
+        yield message
+        message = inertia_pb2.FitInertiaRequest()
     for sample in samples:
         message.samples.append(sample)
         if len(message.samples) == batch:
@@ -155,7 +247,13 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--server", default="localhost:50051", help="HOST:PORT")
     parser.add_argument("--csv", required=True, help="inertia CSV")
-    parser.add_argument("--method", choices=sorted(METHODS), default="constrained")
+    parser.add_argument("--method", choices=sorted(METHODS),
+                        help="default: density with --mesh, else constrained")
+    parser.add_argument("--mesh", help="object mesh: STL/OBJ/PLY (object frame, m) or descriptor JSON")
+    parser.add_argument("--mesh-scale", type=float, help="mesh units to m (> 0), replaces the descriptor's")
+    parser.add_argument("--mesh-pose", help="x,y,z,qw,qx,qy,qz: object frame in the mesh frame")
+    parser.add_argument("--regions", choices=sorted(REGIONS), default="auto", help="density: region scheme")
+    parser.add_argument("--target-regions", type=int, default=0, help="density, grid: about N regions (0 = 12)")
     parser.add_argument("--truth", help="truth JSON: the response carries the error metrics")
     parser.add_argument("--batch", type=int, default=500, help="samples per message")
     parser.add_argument("--deadline", type=float, default=120.0, help="seconds")
@@ -164,9 +262,22 @@ def main():
     if args.batch < 1:
         parser.error("--batch: must be >= 1")
 
+    if args.mesh is None and (args.mesh_scale is not None or args.mesh_pose is not None):
+        parser.error("--mesh-scale and --mesh-pose need --mesh")
+    if args.mesh_scale is not None and not args.mesh_scale > 0:
+        parser.error(f"--mesh-scale: must be > 0 (got {args.mesh_scale:g})")
+    if not 0 <= args.target_regions <= 512:
+        parser.error("--target-regions: must be in 1..512 (0 = 12)")
+
     options = inertia_pb2.InertiaFitOptions()
-    options.method = METHODS[args.method]
+    method = args.method or ("density" if args.mesh else "constrained")
+    options.method = METHODS[method]
+    options.regions = REGIONS[args.regions]
+    options.target_regions = args.target_regions
     try:
+        if args.mesh:
+            pose = parse_numbers(args.mesh_pose, 7, "--mesh-pose", "x,y,z,qw,qx,qy,qz") if args.mesh_pose else None
+            options.mesh.CopyFrom(read_mesh(args.mesh, args.mesh_scale, pose))
         if args.truth:
             params, gravity = read_truth(args.truth)
             options.truth.CopyFrom(params)
@@ -186,7 +297,11 @@ def main():
         print(f"error: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except grpc.RpcError as error:
-        print(f"error: {error.code().name}: {error.details()}", file=sys.stderr)
+        hint = ""
+        if error.code() == grpc.StatusCode.RESOURCE_EXHAUSTED and options.HasField("mesh"):
+            hint = (f" (the first message carries the mesh {options.mesh.name}, {len(options.mesh.data)} bytes: "
+                    "start tactforce-server with a larger --max-message-bytes, or give a smaller mesh)")
+        print(f"error: {error.code().name}: {error.details()}{hint}", file=sys.stderr)
         return EXIT_BAD_INPUT if error.code() == grpc.StatusCode.INVALID_ARGUMENT else EXIT_RPC_FAILED
 
     if args.json:
@@ -199,6 +314,15 @@ def main():
               f"Ixy {i.ixy:.6g}, Ixz {i.ixz:.6g}, Iyz {i.iyz:.6g} kg m^2")
         print(f"physically consistent: {'yes' if response.physically_consistent else 'NO'}; "
               f"{response.samples_received} samples, {response.time_seconds * 1e3:.1f} ms")
+        if len(response.densities):
+            realizable = "yes" if response.density_realizable else "NO"
+            print(f"density-realizable: {realizable}; regulariser {response.density_regularization:.3g} "
+                  f"({response.density_regularization_rule})")
+            for region in response.densities:
+                print(f"  {region.label:<18} {region.density:10.5g} kg/m^3 (se {region.standard_error:.2g})  "
+                      f"volume {region.volume:.4g} m^3")
+        if response.mesh_contradicted:
+            print(response.mesh_contradiction)
         if response.HasField("errors"):
             e = response.errors
             print(f"errors: paper metric {e.paper_metric:.4g}, Riemannian {e.riemannian:.4g}, "

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <utility>
 
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "tactforce/api/convert.h"
 #include "tactforce/inertia/metrics.h"
@@ -29,17 +31,134 @@ inertia::InertiaTensor TensorFromProto(const v1::Inertia& t) {
   return inertia::InertiaTensor{t.ixx(), t.iyy(), t.izz(), t.ixy(), t.ixz(), t.iyz()};
 }
 
-absl::Status Prefixed(const absl::Status& status, const char* prefix) {
+absl::Status Prefixed(const absl::Status& status, absl::string_view prefix) {
   return absl::Status(status.code(), absl::StrCat(prefix, status.message()));
 }
 
+// Library messages about the mesh start with its name ("box.stl: 3
+// boundary edges ..."); over the API they start with the field.
+absl::Status PrefixedForField(const absl::Status& status, const std::string& mesh_name) {
+  if (!mesh_name.empty() && absl::StartsWith(status.message(), absl::StrCat(mesh_name, ":")))
+    return Prefixed(status, "options.mesh: ");
+  return Prefixed(status, "options.");
+}
+
+absl::StatusOr<inertia::RegionScheme> RegionSchemeFromProto(v1::RegionScheme scheme) {
+  switch (scheme) {
+    case v1::REGION_SCHEME_AUTO: return inertia::RegionScheme::kAuto;
+    case v1::REGION_SCHEME_GRID: return inertia::RegionScheme::kGrid;
+    case v1::REGION_SCHEME_COLORS: return inertia::RegionScheme::kColors;
+    case v1::REGION_SCHEME_SINGLE: return inertia::RegionScheme::kSingle;
+    default: break;
+  }
+  return absl::InvalidArgumentError(absl::StrCat("options.regions: unknown value ", static_cast<int>(scheme)));
+}
+
+inertia::InertiaMethod InertiaMethodFromProto(v1::InertiaMethod method) {
+  switch (method) {
+    case v1::INERTIA_METHOD_BASELINE_LS: return inertia::InertiaMethod::kBaselineLs;
+    case v1::INERTIA_METHOD_FACTOR_GRAPH: return inertia::InertiaMethod::kFactorGraph;
+    case v1::INERTIA_METHOD_DENSITY: return inertia::InertiaMethod::kDensity;
+    default: return inertia::InertiaMethod::kConstrained;
+  }
+}
+
+v1::MeshCheck MeshCheckToProto(const estimator::MeshCheck& c) {
+  v1::MeshCheck out;
+  out.set_closed(c.closed);
+  out.set_consistently_oriented(c.consistently_oriented);
+  out.set_volume(c.volume);
+  out.set_faces(c.faces);
+  out.set_vertices(c.vertices);
+  out.set_boundary_edges(c.boundary_edges);
+  out.set_non_manifold_edges(c.non_manifold_edges);
+  out.set_inconsistent_edges(c.inconsistent_edges);
+  out.set_degenerate_faces(c.degenerate_faces);
+  out.set_area(c.area);
+  out.set_junction_edges(c.junction_edges);
+  return out;
+}
+
+estimator::MeshCheck MeshCheckFromProto(const v1::MeshCheck& c) {
+  estimator::MeshCheck out;
+  out.closed = c.closed();
+  out.consistently_oriented = c.consistently_oriented();
+  out.volume = c.volume();
+  out.faces = c.faces();
+  out.vertices = c.vertices();
+  out.boundary_edges = c.boundary_edges();
+  out.non_manifold_edges = c.non_manifold_edges();
+  out.inconsistent_edges = c.inconsistent_edges();
+  out.degenerate_faces = c.degenerate_faces();
+  out.area = c.area();
+  out.junction_edges = c.junction_edges();
+  return out;
+}
+
 }  // namespace
+
+v1::RegionScheme RegionSchemeToProto(inertia::RegionScheme scheme) {
+  switch (scheme) {
+    case inertia::RegionScheme::kAuto: return v1::REGION_SCHEME_AUTO;
+    case inertia::RegionScheme::kGrid: return v1::REGION_SCHEME_GRID;
+    case inertia::RegionScheme::kColors: return v1::REGION_SCHEME_COLORS;
+    case inertia::RegionScheme::kSingle: return v1::REGION_SCHEME_SINGLE;
+  }
+  return v1::REGION_SCHEME_AUTO;
+}
+
+absl::StatusOr<ObjectMesh> MeshFromProto(const v1::MeshInput& input, std::string_view field_view) {
+  const std::string field(field_view);
+  ObjectMesh out;
+  out.name = input.name().empty() ? "mesh" : input.name();
+  if (input.data().empty())
+    return absl::InvalidArgumentError(
+        absl::StrCat(field, ".data: empty (give the bytes of ", out.name, ", an STL, OBJ or PLY file)"));
+  std::string format = input.format();
+  if (format.empty()) {
+    if (input.name().empty())
+      return absl::InvalidArgumentError(
+          absl::StrCat(field, ".format: empty and no name to take it from (give \"stl\", \"obj\" or \"ply\")"));
+    absl::StatusOr<std::string> from_name = estimator::MeshFormatFromPath(input.name());
+    if (!from_name.ok()) return Prefixed(from_name.status(), absl::StrCat(field, ".format: "));
+    format = *from_name;
+  }
+  estimator::MeshPlacement placement;
+  if (input.has_scale()) placement.scale = input.scale();
+  if (input.has_position()) placement.position = FromProto(input.position());
+  if (input.has_orientation()) {
+    const v1::Quaternion& q = input.orientation();
+    placement.orientation = Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z());
+  }
+  if (absl::Status s = estimator::ValidatePlacement(placement, field); !s.ok()) return s;
+  absl::StatusOr<estimator::TriangleMesh> mesh = estimator::ReadMeshBytes(input.data(), format, out.name);
+  if (!mesh.ok()) return Prefixed(mesh.status(), absl::StrCat(field, ": "));
+  out.mesh = estimator::TransformToObjectFrame(*mesh, placement);
+  return out;
+}
+
+v1::MeshInput MeshInputToProto(std::string bytes, const std::string& format, const std::string& name,
+                               const estimator::MeshPlacement& placement) {
+  v1::MeshInput out;
+  out.set_data(std::move(bytes));
+  out.set_format(format);
+  out.set_name(name);
+  out.set_scale(placement.scale);
+  *out.mutable_position() = ToProto(placement.position);
+  v1::Quaternion* q = out.mutable_orientation();
+  q->set_w(placement.orientation.w());
+  q->set_x(placement.orientation.x());
+  q->set_y(placement.orientation.y());
+  q->set_z(placement.orientation.z());
+  return out;
+}
 
 v1::InertiaMethod InertiaMethodToProto(inertia::InertiaMethod method) {
   switch (method) {
     case inertia::InertiaMethod::kBaselineLs: return v1::INERTIA_METHOD_BASELINE_LS;
     case inertia::InertiaMethod::kFactorGraph: return v1::INERTIA_METHOD_FACTOR_GRAPH;
     case inertia::InertiaMethod::kConstrained: return v1::INERTIA_METHOD_CONSTRAINED;
+    case inertia::InertiaMethod::kDensity: return v1::INERTIA_METHOD_DENSITY;
   }
   return v1::INERTIA_METHOD_UNSPECIFIED;
 }
@@ -64,9 +183,12 @@ absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::Inerti
   inertia::InertiaOptions out;
   switch (o.method()) {
     case v1::INERTIA_METHOD_UNSPECIFIED:
+      out.method = o.has_mesh() ? inertia::InertiaMethod::kDensity : inertia::InertiaMethod::kConstrained;
+      break;
     case v1::INERTIA_METHOD_CONSTRAINED: out.method = inertia::InertiaMethod::kConstrained; break;
     case v1::INERTIA_METHOD_BASELINE_LS: out.method = inertia::InertiaMethod::kBaselineLs; break;
     case v1::INERTIA_METHOD_FACTOR_GRAPH: out.method = inertia::InertiaMethod::kFactorGraph; break;
+    case v1::INERTIA_METHOD_DENSITY: out.method = inertia::InertiaMethod::kDensity; break;
     default:
       return absl::InvalidArgumentError(absl::StrCat("options.method: unknown value ", o.method()));
   }
@@ -91,11 +213,30 @@ absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::Inerti
   out.smoothing_window = static_cast<int>(o.smoothing_window());
   if (o.max_iterations() != 0) out.max_iterations = static_cast<int>(o.max_iterations());
   if (o.has_regularization()) out.regularization = o.regularization();
+  absl::StatusOr<inertia::RegionScheme> scheme = RegionSchemeFromProto(o.regions());
+  if (!scheme.ok()) return scheme.status();
+  out.regions.scheme = *scheme;
+  if (o.target_regions() != 0) {
+    if (o.target_regions() > 512)
+      return absl::InvalidArgumentError(
+          absl::StrCat("options.target_regions: must be in 1..512, 0 = 12 (got ", o.target_regions(), ")"));
+    out.regions.target_regions = static_cast<int>(o.target_regions());
+  }
+  if (o.has_density_regularization()) out.density_regularization = o.density_regularization();
+  if (o.has_mesh_prior_weight()) out.mesh_prior_weight = o.mesh_prior_weight();
+  if (o.has_contradiction_ratio()) out.contradiction_ratio = o.contradiction_ratio();
+  if (o.has_mesh()) {
+    absl::StatusOr<ObjectMesh> mesh = MeshFromProto(o.mesh());
+    if (!mesh.ok()) return mesh.status();
+    out.mesh_name = mesh->name;
+    out.mesh = std::make_shared<const estimator::TriangleMesh>(std::move(mesh->mesh));
+  }
   if (o.has_truth() && !inertia::IsPhysicallyConsistent(InertialParametersFromProto(o.truth()))) {
     return absl::InvalidArgumentError(
         "options.truth: not physically consistent (mass > 0 and a positive-definite pseudo-inertia needed)");
   }
-  if (absl::Status s = inertia::ValidateInertiaOptions(out); !s.ok()) return Prefixed(s, "options.");
+  if (absl::Status s = inertia::ValidateInertiaOptions(out); !s.ok())
+    return PrefixedForField(s, out.mesh ? out.mesh_name : std::string());
   return out;
 }
 
@@ -154,16 +295,27 @@ v1::FitInertiaResponse InertiaFitToProto(const inertia::InertiaFit& fit) {
   out.set_time_seconds(fit.time_seconds);
   out.set_samples_used(fit.samples_used);
   for (const std::string& n : fit.notes) out.add_notes(n);
+  for (const inertia::InertiaFit::RegionDensity& d : fit.densities) {
+    v1::DensityRegion* r = out.add_densities();
+    r->set_label(d.label);
+    r->set_density(d.density);
+    r->set_volume(d.volume);
+    r->set_standard_error(d.standard_error);
+  }
+  out.set_density_realizable(fit.density_realizable);
+  if (fit.mesh_check) *out.mutable_mesh_check() = MeshCheckToProto(*fit.mesh_check);
+  out.set_density_regularization(fit.density_regularization);
+  out.set_density_regularization_rule(fit.density_regularization_rule);
+  out.set_heldout_residual_ratio(fit.heldout_residual_ratio);
+  out.set_mesh_contradicted(fit.mesh_contradicted);
+  out.set_mesh_contradiction(fit.mesh_contradiction);
+  if (fit.region_model) out.set_region_scheme(RegionSchemeToProto(fit.region_model->scheme));
   return out;
 }
 
 inertia::InertiaFit InertiaFitFromProto(const v1::FitInertiaResponse& r) {
   inertia::InertiaFit fit;
-  switch (r.method()) {
-    case v1::INERTIA_METHOD_BASELINE_LS: fit.method = inertia::InertiaMethod::kBaselineLs; break;
-    case v1::INERTIA_METHOD_FACTOR_GRAPH: fit.method = inertia::InertiaMethod::kFactorGraph; break;
-    default: fit.method = inertia::InertiaMethod::kConstrained; break;
-  }
+  fit.method = InertiaMethodFromProto(r.method());
   fit.params.mass = r.mass();
   fit.params.com = FromProto(r.com());
   fit.params.inertia_com = TensorFromProto(r.inertia());
@@ -184,13 +336,23 @@ inertia::InertiaFit InertiaFitFromProto(const v1::FitInertiaResponse& r) {
   fit.time_seconds = r.time_seconds();
   fit.samples_used = r.samples_used();
   fit.notes.assign(r.notes().begin(), r.notes().end());
+  for (const v1::DensityRegion& d : r.densities())
+    fit.densities.push_back({d.label(), d.density(), d.volume(), d.standard_error()});
+  fit.density_realizable = r.density_realizable();
+  if (r.has_mesh_check()) fit.mesh_check = MeshCheckFromProto(r.mesh_check());
+  fit.density_regularization = r.density_regularization();
+  fit.density_regularization_rule = r.density_regularization_rule();
+  fit.heldout_residual_ratio = r.heldout_residual_ratio();
+  fit.mesh_contradicted = r.mesh_contradicted();
+  fit.mesh_contradiction = r.mesh_contradiction();
   return fit;
 }
 
 absl::StatusOr<v1::FitInertiaResponse> FitInertiaSamples(const inertia::InertiaSamples& samples,
                                                          const v1::InertiaFitOptions& options,
                                                          const CallLimits& limits,
-                                                         std::function<void(double)> progress) {
+                                                         std::function<void(double)> progress,
+                                                         inertia::InertiaFit* fit_out) {
   absl::StatusOr<inertia::InertiaOptions> converted = InertiaOptionsFromProto(options);
   if (!converted.ok()) return converted.status();
   converted->progress = std::move(progress);
@@ -198,6 +360,7 @@ absl::StatusOr<v1::FitInertiaResponse> FitInertiaSamples(const inertia::InertiaS
   absl::StatusOr<inertia::InertiaFit> fit = inertia::FitInertia(samples, *converted);
   if (!fit.ok()) return fit.status();
   v1::FitInertiaResponse response = InertiaFitToProto(*fit);
+  if (fit_out != nullptr) *fit_out = *fit;
   response.set_samples_received(static_cast<int32_t>(samples.samples.size()));
   if (options.has_truth()) {
     const inertia::InertiaErrors e =

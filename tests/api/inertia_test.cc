@@ -3,10 +3,22 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "tactforce/api/convert.h"
+#include "tactforce/inertia/density.h"
 #include "tactforce/inertia/simulate.h"
 
 namespace tactforce::api {
 namespace {
+
+using inertia::Vec3;
 
 inertia::SimulationResult Simulated(inertia::SimulationMode mode, bool kinematics) {
   inertia::SimulationOptions o;
@@ -149,6 +161,227 @@ TEST(InertiaOptionsFromProto, ValidatesAndNamesFields) {
   ASSERT_TRUE(ok->prior.has_value());
   EXPECT_EQ(ok->prior->weight, 1.0);  // 0 = the default weight
   EXPECT_EQ(ok->prior->params.mass, 2.0);
+}
+
+// ---------------------------------------------------------------- meshes
+
+// A Wavefront OBJ of `mesh` whose vertices are v_file = (R v + p) / scale,
+// i.e. a CAD file in other units and another frame: MeshInput's placement
+// (scale, p, R) maps it back to the object frame. `skip` drops a triangle.
+std::string ObjText(const estimator::TriangleMesh& mesh, double scale = 1.0, const Vec3& p = Vec3::Zero(),
+                    const Eigen::Quaterniond& q = Eigen::Quaterniond::Identity(), int skip = -1) {
+  std::string out = "# test mesh\n";
+  for (const Vec3& v : mesh.vertices) {
+    const Vec3 f = (q * v + p) / scale;
+    out += absl::StrFormat("v %.17g %.17g %.17g\n", f.x(), f.y(), f.z());
+  }
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    if (static_cast<int>(t) == skip) continue;
+    const auto& tri = mesh.triangles[t];
+    out += absl::StrFormat("f %d %d %d\n", tri[0] + 1, tri[1] + 1, tri[2] + 1);
+  }
+  return out;
+}
+
+inertia::SimulationResult SimulatedBox() {
+  inertia::SimulationOptions o;
+  o.object = "box";
+  o.mode = inertia::SimulationMode::kWristWrench;
+  o.duration = 3.0;
+  o.rate_hz = 100.0;
+  o.write_kinematics = true;
+  o.seed = 4;
+  absl::StatusOr<inertia::SimulationResult> r = inertia::SimulateInertia(o);
+  EXPECT_TRUE(r.ok()) << r.status();
+  return *r;
+}
+
+// The mesh bytes, read and placed as the server does, give back the
+// object-frame box (float precision of the file reader), and a DENSITY fit
+// with it fills every new response field and round-trips through the
+// library type.
+TEST(InertiaMeshInput, PlacedCadMeshGivesTheObjectFrameBoxAndADensityFit) {
+  const inertia::SimulationResult sim = SimulatedBox();
+  const estimator::TriangleMesh& box = sim.object.mesh;
+  ASSERT_EQ(box.triangles.size(), 12u);
+  const double scale = 0.001;  // the file is in mm
+  const Vec3 p(0.01, -0.02, 0.03);
+  const Eigen::Quaterniond q(Eigen::AngleAxisd(0.3, Vec3(1, 2, 3).normalized()));
+  estimator::MeshPlacement placement;
+  placement.scale = scale;
+  placement.position = p;
+  placement.orientation = q;
+  const v1::MeshInput input = MeshInputToProto(ObjText(box, scale, p, q), "obj", "box.obj", placement);
+  EXPECT_EQ(input.scale(), scale);
+  EXPECT_EQ(input.orientation().w(), q.w());
+
+  absl::StatusOr<ObjectMesh> mesh = MeshFromProto(input);
+  ASSERT_TRUE(mesh.ok()) << mesh.status();
+  EXPECT_EQ(mesh->name, "box.obj");
+  ASSERT_EQ(mesh->mesh.vertices.size(), box.vertices.size());
+  ASSERT_EQ(mesh->mesh.triangles.size(), box.triangles.size());
+  for (size_t i = 0; i < box.vertices.size(); ++i) {  // the reader may reorder the vertices
+    double nearest = 1e9;
+    for (const Vec3& v : mesh->mesh.vertices) nearest = std::min(nearest, (v - box.vertices[i]).norm());
+    EXPECT_LT(nearest, 1e-7) << "vertex " << i;
+  }
+
+  v1::InertiaFitOptions options;  // UNSPECIFIED + a mesh = DENSITY
+  *options.mutable_mesh() = input;
+  options.set_regions(v1::REGION_SCHEME_GRID);
+  options.set_target_regions(8);
+  *options.mutable_truth() = InertialParametersToProto(sim.truth.params);
+  *options.mutable_gravity() = ToProto(*sim.truth.gravity_world);
+  absl::StatusOr<inertia::InertiaOptions> converted = InertiaOptionsFromProto(options);
+  ASSERT_TRUE(converted.ok()) << converted.status();
+  EXPECT_EQ(converted->method, inertia::InertiaMethod::kDensity);
+  EXPECT_EQ(converted->mesh_name, "box.obj");
+  EXPECT_EQ(converted->regions.scheme, inertia::RegionScheme::kGrid);
+  EXPECT_EQ(converted->regions.target_regions, 8);
+  EXPECT_LT(converted->density_regularization, 0);  // automatic
+  options.set_density_regularization(0.5);
+  options.set_mesh_prior_weight(2.0);
+  options.set_contradiction_ratio(0.0);
+  converted = InertiaOptionsFromProto(options);
+  ASSERT_TRUE(converted.ok()) << converted.status();
+  EXPECT_EQ(converted->density_regularization, 0.5);
+  EXPECT_EQ(converted->mesh_prior_weight, 2.0);
+  EXPECT_EQ(converted->contradiction_ratio, 0.0);
+  options.clear_density_regularization();
+  options.clear_mesh_prior_weight();
+  options.clear_contradiction_ratio();
+
+  inertia::InertiaFit library_fit;
+  absl::StatusOr<v1::FitInertiaResponse> r = FitInertiaSamples(sim.samples, options, {}, {}, &library_fit);
+  ASSERT_TRUE(r.ok()) << r.status();
+  EXPECT_EQ(r->method(), v1::INERTIA_METHOD_DENSITY);
+  EXPECT_TRUE(r->density_realizable());
+  EXPECT_FALSE(r->mesh_contradicted());
+  EXPECT_TRUE(r->mesh_contradiction().empty());
+  EXPECT_EQ(r->region_scheme(), v1::REGION_SCHEME_GRID);
+  ASSERT_GE(r->densities_size(), 2);
+  ASSERT_EQ(static_cast<size_t>(r->densities_size()), library_fit.densities.size());
+  ASSERT_NE(library_fit.region_model, nullptr);  // handed out for plots
+  double volume = 0;
+  for (int i = 0; i < r->densities_size(); ++i) {
+    EXPECT_EQ(r->densities(i).label(), library_fit.densities[i].label);
+    EXPECT_EQ(r->densities(i).density(), library_fit.densities[i].density);
+    EXPECT_GE(r->densities(i).density(), 0.0);
+    EXPECT_GT(r->densities(i).volume(), 0.0);
+    volume += r->densities(i).volume();
+  }
+  ASSERT_TRUE(r->has_mesh_check());
+  EXPECT_TRUE(r->mesh_check().closed());
+  EXPECT_TRUE(r->mesh_check().consistently_oriented());
+  EXPECT_EQ(r->mesh_check().faces(), 12);
+  EXPECT_EQ(r->mesh_check().vertices(), 8);
+  EXPECT_EQ(r->mesh_check().boundary_edges(), 0);
+  EXPECT_NEAR(r->mesh_check().volume(), volume, 1e-9 * volume);
+  EXPECT_NEAR(r->mesh_check().volume(), inertia::MeshMoments(box).volume, 1e-6 * volume);
+  EXPECT_GE(r->density_regularization(), 0.0);
+  EXPECT_FALSE(r->density_regularization_rule().empty());
+  EXPECT_GT(r->heldout_residual_ratio(), 0.0);
+  // Noise-free data of a uniform box: the truth.
+  ASSERT_TRUE(r->has_errors());
+  EXPECT_LT(r->errors().mass_percent(), 0.01);
+  EXPECT_LT(r->errors().riemannian(), 0.02);
+
+  const inertia::InertiaFit back = InertiaFitFromProto(*r);
+  EXPECT_EQ(back.method, inertia::InertiaMethod::kDensity);
+  EXPECT_TRUE(back.density_realizable);
+  ASSERT_TRUE(back.mesh_check.has_value());
+  EXPECT_EQ(back.mesh_check->faces, 12);
+  EXPECT_NE(inertia::DescribeFit(back).find("density-realizable: yes"), std::string::npos);
+  const v1::FitInertiaResponse again = InertiaFitToProto(back);
+  EXPECT_EQ(again.densities_size(), r->densities_size());
+  EXPECT_EQ(again.densities(0).standard_error(), r->densities(0).standard_error());
+  EXPECT_EQ(again.density_regularization_rule(), r->density_regularization_rule());
+  EXPECT_EQ(again.heldout_residual_ratio(), r->heldout_residual_ratio());
+  EXPECT_EQ(again.mesh_check().volume(), r->mesh_check().volume());
+
+  // Without a mesh the new fields stay empty.
+  options.clear_mesh();
+  options.set_method(v1::INERTIA_METHOD_CONSTRAINED);
+  r = FitInertiaSamples(sim.samples, options);
+  ASSERT_TRUE(r.ok()) << r.status();
+  EXPECT_EQ(r->densities_size(), 0);
+  EXPECT_FALSE(r->density_realizable());
+  EXPECT_FALSE(r->has_mesh_check());
+}
+
+TEST(InertiaMeshInput, BadMeshesAndPlacementsNameTheField) {
+  const inertia::SimulationResult sim = SimulatedBox();
+  const estimator::TriangleMesh& box = sim.object.mesh;
+  auto error = [](const v1::InertiaFitOptions& o) {
+    absl::StatusOr<inertia::InertiaOptions> r = InertiaOptionsFromProto(o);
+    EXPECT_FALSE(r.ok());
+    EXPECT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument);
+    return std::string(r.status().message());
+  };
+  auto with_mesh = [&](const std::string& bytes, const std::string& format, const std::string& name) {
+    v1::InertiaFitOptions o;
+    o.set_method(v1::INERTIA_METHOD_DENSITY);
+    o.mutable_mesh()->set_data(bytes);
+    o.mutable_mesh()->set_format(format);
+    o.mutable_mesh()->set_name(name);
+    return o;
+  };
+  const std::string obj = ObjText(box);
+  {
+    v1::InertiaFitOptions o;
+    o.set_method(v1::INERTIA_METHOD_DENSITY);  // no mesh: the library's error
+    EXPECT_NE(error(o).find("options.mesh: the density method needs the object's closed mesh"), std::string::npos)
+        << error(o);
+  }
+  {
+    v1::InertiaFitOptions o = with_mesh(obj, "obj", "box.obj");
+    o.mutable_mesh()->set_scale(-1);
+    EXPECT_EQ(error(o), "options.mesh.scale: must be > 0 (got -1)");
+    o.mutable_mesh()->set_scale(0.001);
+    o.mutable_mesh()->mutable_orientation()->set_w(0);  // present, zero norm
+    EXPECT_NE(error(o).find("options.mesh.orientation: quaternion norm 0"), std::string::npos) << error(o);
+    o.mutable_mesh()->clear_orientation();
+    o.mutable_mesh()->mutable_position()->set_y(std::nan(""));
+    EXPECT_NE(error(o).find("options.mesh.position: not finite"), std::string::npos) << error(o);
+  }
+  {
+    const std::string e = error(with_mesh("this is not a mesh at all", "ply", "junk.ply"));
+    EXPECT_NE(e.find("options.mesh: junk.ply: "), std::string::npos) << e;
+  }
+  {
+    const std::string e = error(with_mesh("", "stl", "empty.stl"));
+    EXPECT_NE(e.find("options.mesh.data: empty"), std::string::npos) << e;
+    EXPECT_NE(e.find("empty.stl"), std::string::npos) << e;
+  }
+  {
+    const std::string e = error(with_mesh(obj, "", "box.step"));
+    EXPECT_NE(e.find("options.mesh.format: "), std::string::npos) << e;
+    EXPECT_NE(e.find("box.step"), std::string::npos) << e;
+  }
+  {
+    // The format from the name's extension when not given.
+    EXPECT_TRUE(InertiaOptionsFromProto(with_mesh(obj, "", "box.OBJ")).ok());
+    const std::string e = error(with_mesh(obj, "", ""));
+    EXPECT_NE(e.find("options.mesh.format: empty"), std::string::npos) << e;
+  }
+  {
+    // One triangle missing: the library's mesh check, named by the file.
+    const std::string e = error(with_mesh(ObjText(box, 1.0, Vec3::Zero(), Eigen::Quaterniond::Identity(), 5), "obj",
+                                          "open.obj"));
+    EXPECT_NE(e.find("options.mesh: open.obj: 3 boundary edges"), std::string::npos) << e;
+    EXPECT_NE(e.find("not closed"), std::string::npos) << e;
+  }
+  {
+    v1::InertiaFitOptions o = with_mesh(obj, "obj", "box.obj");
+    o.set_target_regions(513);
+    EXPECT_NE(error(o).find("options.target_regions"), std::string::npos) << error(o);
+    o.set_target_regions(0);
+    o.set_regions(static_cast<v1::RegionScheme>(9));
+    EXPECT_NE(error(o).find("options.regions: unknown value 9"), std::string::npos) << error(o);
+    o.set_regions(v1::REGION_SCHEME_SINGLE);
+    o.set_mesh_prior_weight(-1);
+    EXPECT_NE(error(o).find("options.mesh_prior_weight"), std::string::npos) << error(o);
+  }
 }
 
 }  // namespace

@@ -116,11 +116,11 @@ TEST(Friction, BadInputNamesTheField) {
   EXPECT_EQ(EstimateFriction(data.trials).status().message(),
             "trials[0].samples[3].force: not finite");
   FrictionOptions o;
-  o.mesh = TriangleMesh{{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(2, 0, 0)}, {{0, 1, 2}}};
+  o.mesh = TriangleMesh{{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(2, 0, 0)}, {{0, 1, 2}}, {}};
   data = SimulateFriction(sim);
   EXPECT_NE(EstimateFriction(data.trials, o).status().message().find("mesh.triangles[0]: degenerate"),
             std::string::npos);
-  o.mesh = TriangleMesh{{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}, {{0, 1, 5}}};
+  o.mesh = TriangleMesh{{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}, {{0, 1, 5}}, {}};
   EXPECT_NE(EstimateFriction(data.trials, o).status().message().find("out of range"),
             std::string::npos);
 }

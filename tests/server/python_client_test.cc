@@ -8,6 +8,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "absl/strings/str_format.h"
 #include "tactforce/api/convert.h"
 #include "tactforce/api/inertia.h"
 #include "tactforce/api/json.h"
@@ -125,6 +126,127 @@ TEST_F(PythonClientTest, StreamsAnInertiaCsvLikeTheCppFit) {
   run = Python({"--server", server_->address(), "--csv", pattern + "/bad.csv"}, "client/python/inertia_client.py");
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_THAT(run.err, HasSubstr("bad.csv:3: column 'py': not a number"));
+  fs::remove_all(pattern);
+}
+
+// --mesh: the mesh file's bytes go in the first message (format from the
+// extension); the method defaults to density, and the answer equals the
+// in-process fit with the same MeshInput. A descriptor JSON carries the
+// placement; bad flags are refused before any call.
+TEST_F(PythonClientTest, SendsAMeshForADensityFit) {
+  std::string pattern = (fs::temp_directory_path() / "tactforce_py.XXXXXX").string();
+  ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+  inertia::SimulationOptions o;
+  o.object = "box";
+  o.mode = inertia::SimulationMode::kWristWrench;
+  o.duration = 3.0;
+  o.write_kinematics = true;
+  o.seed = 6;
+  absl::StatusOr<inertia::SimulationResult> sim = inertia::SimulateInertia(o);
+  ASSERT_TRUE(sim.ok()) << sim.status();
+  const std::string csv = pattern + "/log.csv", truth = pattern + "/truth.json";
+  ASSERT_TRUE(inertia::WriteSimulation(*sim, csv, truth).ok());
+  // The box in millimetres, for --mesh-scale and the descriptor.
+  std::string obj;
+  for (const inertia::Vec3& v : sim->object.mesh.vertices)
+    obj += absl::StrFormat("v %.17g %.17g %.17g\n", 1000 * v.x(), 1000 * v.y(), 1000 * v.z());
+  for (const auto& t : sim->object.mesh.triangles) obj += absl::StrFormat("f %d %d %d\n", t[0] + 1, t[1] + 1, t[2] + 1);
+  std::ofstream(pattern + "/box_mm.obj") << obj;
+  std::ofstream(pattern + "/box.mesh.json") << R"({"mesh": "box_mm.obj", "scale": 0.001})";
+
+  ProcessResult run = Python({"--server", server_->address(), "--csv", csv, "--truth", truth, "--mesh",
+                              pattern + "/box_mm.obj", "--mesh-scale", "0.001", "--regions", "grid", "--json"},
+                             "client/python/inertia_client.py");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  v1::FitInertiaResponse from_python;
+  absl::Status parsed = api::ParseJson(run.out, &from_python);
+  ASSERT_TRUE(parsed.ok()) << parsed << "\n" << run.out;
+  EXPECT_EQ(from_python.method(), v1::INERTIA_METHOD_DENSITY);
+  EXPECT_TRUE(from_python.density_realizable());
+  EXPECT_GE(from_python.densities_size(), 2);
+  EXPECT_EQ(from_python.mesh_check().faces(), 12);
+  EXPECT_LT(from_python.errors().mass_percent(), 0.1);
+
+  absl::StatusOr<inertia::InertiaSamples> samples = inertia::ReadInertiaCsvFile(csv);
+  ASSERT_TRUE(samples.ok()) << samples.status();
+  v1::InertiaFitOptions options;
+  options.set_method(v1::INERTIA_METHOD_DENSITY);
+  options.set_regions(v1::REGION_SCHEME_GRID);
+  options.mutable_mesh()->set_data(obj);
+  options.mutable_mesh()->set_format("obj");
+  options.mutable_mesh()->set_name("box_mm.obj");
+  options.mutable_mesh()->set_scale(0.001);
+  *options.mutable_truth() = api::InertialParametersToProto(sim->truth.params);
+  *options.mutable_gravity() = api::ToProto(*sim->truth.gravity_world);
+  absl::StatusOr<v1::FitInertiaResponse> local = api::FitInertiaSamples(*samples, options);
+  ASSERT_TRUE(local.ok()) << local.status();
+  EXPECT_DOUBLE_EQ(from_python.mass(), local->mass());
+  EXPECT_DOUBLE_EQ(from_python.inertia().ixy(), local->inertia().ixy());
+  ASSERT_EQ(from_python.densities_size(), local->densities_size());
+  EXPECT_DOUBLE_EQ(from_python.densities(0).density(), local->densities(0).density());
+
+  // The descriptor: same mesh, same placement, same answer; text output.
+  run = Python({"--server", server_->address(), "--csv", csv, "--mesh", pattern + "/box.mesh.json", "--regions",
+                "grid"},
+               "client/python/inertia_client.py");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_THAT(run.out, HasSubstr("density-realizable: yes"));
+  EXPECT_THAT(run.out, HasSubstr("kg/m^3"));
+
+  run = Python({"--server", server_->address(), "--csv", csv, "--mesh", pattern + "/box_mm.obj", "--mesh-scale",
+                "0"},
+               "client/python/inertia_client.py");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_THAT(run.err, HasSubstr("--mesh-scale: must be > 0"));
+  std::ofstream(pattern + "/bad.mesh.json") << R"({"mesh": "box_mm.obj", "units": "mm"})";
+  run = Python({"--server", server_->address(), "--csv", csv, "--mesh", pattern + "/bad.mesh.json"},
+               "client/python/inertia_client.py");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_THAT(run.err, HasSubstr("bad.mesh.json: unknown key 'units'"));
+  // An open mesh: the server's check, named by the file.
+  std::string open = obj.substr(0, obj.rfind("f "));
+  std::ofstream(pattern + "/open.obj") << open;
+  run = Python({"--server", server_->address(), "--csv", csv, "--mesh", pattern + "/open.obj"},
+               "client/python/inertia_client.py");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_THAT(run.err, HasSubstr("INVALID_ARGUMENT: options.mesh: open.obj: 3 boundary edges"));
+  fs::remove_all(pattern);
+}
+
+class PythonClientMessageLimitTest : public PythonClientTest {
+ protected:
+  std::vector<std::string> server_flags() const override { return {"--max-message-bytes", "65536"}; }
+};
+
+// A mesh over the server's message limit: RESOURCE_EXHAUSTED (exit 1) with
+// the flag that raises it.
+TEST_F(PythonClientMessageLimitTest, OversizeMeshNamesTheServersLimit) {
+  std::string pattern = (fs::temp_directory_path() / "tactforce_py.XXXXXX").string();
+  ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+  inertia::SimulationOptions o;
+  o.object = "box";
+  o.duration = 2.0;
+  absl::StatusOr<inertia::SimulationResult> sim = inertia::SimulateInertia(o);
+  ASSERT_TRUE(sim.ok()) << sim.status();
+  ASSERT_TRUE(inertia::WriteSimulation(*sim, pattern + "/log.csv", pattern + "/truth.json").ok());
+  std::string obj;
+  for (const inertia::Vec3& v : sim->object.mesh.vertices) obj += absl::StrFormat("v %.17g %.17g %.17g\n", v.x(), v.y(), v.z());
+  for (const auto& t : sim->object.mesh.triangles) obj += absl::StrFormat("f %d %d %d\n", t[0] + 1, t[1] + 1, t[2] + 1);
+  std::ofstream(pattern + "/box.obj") << obj;
+  while (obj.size() < 100'000) obj += "# padding padding padding padding padding padding padding padding\n";
+  std::ofstream(pattern + "/big.obj") << obj;
+  ProcessResult run = Python({"--server", server_->address(), "--csv", pattern + "/log.csv", "--mesh",
+                              pattern + "/big.obj"},
+                             "client/python/inertia_client.py");
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_THAT(run.err, HasSubstr("RESOURCE_EXHAUSTED"));
+  EXPECT_THAT(run.err, HasSubstr("65536"));
+  EXPECT_THAT(run.err, HasSubstr("--max-message-bytes"));
+  // The server still serves: the small mesh fits.
+  run = Python({"--server", server_->address(), "--csv", pattern + "/log.csv", "--mesh", pattern + "/box.obj"},
+               "client/python/inertia_client.py");
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_THAT(run.out, HasSubstr("density-realizable: yes"));
   fs::remove_all(pattern);
 }
 

@@ -286,7 +286,7 @@ std::string DescribeFit(const InertiaFit& f) {
   }
   if (f.method == InertiaMethod::kDensity)
     out += absl::StrFormat("density-realizable: %s\n", f.density_realizable ? "yes" : "NO");
-  if (f.mesh_contradicted) out += f.mesh_contradiction + "\n";
+  // A contradicted mesh's line is the first note.
   for (const std::string& n : f.notes) out += "note: " + n + "\n";
   return out;
 }

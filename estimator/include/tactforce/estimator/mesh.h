@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -84,6 +85,8 @@ absl::StatusOr<MeshDescriptor> ReadMeshDescriptor(const std::string& path);
 // other path is a mesh file in the object frame in metres. Overrides replace
 // the descriptor's values.
 struct MeshRequest {
+  MeshRequest() = default;
+  MeshRequest(std::string mesh_path) : path(std::move(mesh_path)) {}  // NOLINT: implicit, LoadMesh({path})
   std::string path;
   std::optional<double> scale;
   std::optional<MeshPlacement> pose;  // position and orientation only (scale ignored)
