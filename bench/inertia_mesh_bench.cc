@@ -30,7 +30,7 @@
 #include <vector>
 
 #include "absl/strings/str_split.h"
-#include "tactforce/estimator/mesh.h"
+#include "tactforce/io/mesh.h"
 #include "tactforce/inertia/density.h"
 #include "tactforce/inertia/fit.h"
 #include "tactforce/inertia/metrics.h"
@@ -100,7 +100,7 @@ InertiaOptions NoisyOptions(const SimulationNoise& n) {
 }
 
 void FitInto(const InertiaSamples& s, const InertialParameters& truth, InertiaOptions o, const Variant& v,
-             const std::shared_ptr<const estimator::TriangleMesh>& mesh, const std::string& mesh_name, Cell* cell) {
+             const std::shared_ptr<const io::TriangleMesh>& mesh, const std::string& mesh_name, Cell* cell) {
   o.method = v.method;
   if (v.mesh) {
     o.mesh = mesh;
@@ -130,7 +130,7 @@ struct Tool {
   InertiaSamples samples;
   InertialParameters truth;
   Vec3 gravity;
-  std::shared_ptr<const estimator::TriangleMesh> mesh;
+  std::shared_ptr<const io::TriangleMesh> mesh;
   std::string mesh_name;
   int faces = 0;
 };
@@ -203,7 +203,7 @@ int main(int argc, char** argv) {
     t.name = name;
     absl::StatusOr<InertiaSamples> s = ReadInertiaCsvFile(dir + "/" + name + ".csv");
     absl::StatusOr<InertiaTruth> truth = ReadTruthJsonFile(dir + "/" + name + ".truth.json");
-    absl::StatusOr<estimator::LoadedMesh> mesh = estimator::LoadMesh({dir + "/" + name + ".mesh.json"});
+    absl::StatusOr<io::LoadedMesh> mesh = io::LoadMesh({dir + "/" + name + ".mesh.json"});
     if (!s.ok() || !truth.ok() || !mesh.ok()) {
       std::printf("Shared tools skipped: %s\n\n",
                   std::string((!s.ok() ? s.status() : !truth.ok() ? truth.status() : mesh.status()).message()).c_str());
@@ -214,7 +214,7 @@ int main(int argc, char** argv) {
     t.truth = truth->params;
     t.gravity = truth->gravity_world.value_or(Vec3(0, 0, -9.81));
     t.faces = static_cast<int>(mesh->mesh.triangles.size());
-    t.mesh = std::make_shared<const estimator::TriangleMesh>(std::move(mesh->mesh));
+    t.mesh = std::make_shared<const io::TriangleMesh>(std::move(mesh->mesh));
     t.mesh_name = mesh->name;
     tools.push_back(std::move(t));
   }
@@ -241,7 +241,7 @@ int main(int argc, char** argv) {
           std::fprintf(stderr, "%s\n", std::string(sim.status().message()).c_str());
           return 1;
         }
-        auto mesh = std::make_shared<const estimator::TriangleMesh>(sim->object.mesh);
+        auto mesh = std::make_shared<const io::TriangleMesh>(sim->object.mesh);
         InertiaOptions o;
         o.noise.force_sigma = so.noise.force_sigma;
         for (int v : {1, 2, 3}) FitInto(sim->samples, sim->truth.params, o, kVariants[v], mesh, "box mesh", &cells[v]);
@@ -266,7 +266,7 @@ int main(int argc, char** argv) {
       std::vector<double> l, b, f;
       for (int rep = 0; rep < 3; ++rep) {
         double c0 = CpuSeconds();
-        absl::StatusOr<estimator::LoadedMesh> m = estimator::LoadMesh({dir + "/" + t.name + ".mesh.json"});
+        absl::StatusOr<io::LoadedMesh> m = io::LoadMesh({dir + "/" + t.name + ".mesh.json"});
         double c1 = CpuSeconds();
         absl::StatusOr<RegionModel> r = BuildRegions(m->mesh, ro, m->name);
         double c2 = CpuSeconds();
@@ -275,7 +275,7 @@ int main(int argc, char** argv) {
         InertiaOptions o = NoisyOptions(noise);
         o.gravity = t.gravity;
         o.method = InertiaMethod::kDensity;
-        o.mesh = std::make_shared<const estimator::TriangleMesh>(m->mesh);
+        o.mesh = std::make_shared<const io::TriangleMesh>(m->mesh);
         o.mesh_name = m->name;
         o.regions = ro;
         absl::StatusOr<InertiaFit> fit = FitInertia(s, o);

@@ -21,7 +21,7 @@
 #include "tactforce/api/table.h"
 #include "tactforce/planner/examples.h"
 #include "tactforce/planner/solver.h"
-#include "tactforce/sim/json.h"
+#include "tactforce/io/json.h"
 
 namespace tactforce::cli {
 namespace {
@@ -133,7 +133,7 @@ std::string FormatJson(const std::vector<DemoRow>& rows, int repeat,
         &out,
         "%s\n    {\"name\": %s, \"description\": %s, \"geometric_time_us\": %d, "
         "\"ipopt_time_us\": %d, \"speed_ratio\": %.6g,\n     \"response\": %s}",
-        i == 0 ? "" : ",", sim::JsonEscape(row.grasp.name), sim::JsonEscape(row.grasp.description),
+        i == 0 ? "" : ",", io::JsonEscape(row.grasp.name), io::JsonEscape(row.grasp.description),
         row.geometric_us, row.ipopt_us, row.speed_ratio,
         api::ToJson(row.response, /*compact=*/true));
   }
@@ -280,7 +280,7 @@ std::string FormatRemoteTable(const RemoteResult& r, const DemoArgs& args) {
 std::string FormatRemoteJson(const RemoteResult& r) {
   std::string out = absl::StrFormat(
       "{\"address\": %s, \"health\": %s, \"planner_health\": %s, \"grasps\": [",
-      sim::JsonEscape(r.address), sim::JsonEscape(r.health), sim::JsonEscape(r.planner_health));
+      io::JsonEscape(r.address), io::JsonEscape(r.health), io::JsonEscape(r.planner_health));
   for (size_t i = 0; i < r.rows.size(); ++i) {
     const RemoteRow& row = r.rows[i];
     absl::StrAppendFormat(
@@ -288,7 +288,7 @@ std::string FormatRemoteJson(const RemoteResult& r) {
         "%s\n    {\"name\": %s, \"match\": %s, \"max_force_diff_vs_local\": %.6g, "
         "\"geometric_round_trip_us\": %d, \"geometric_server_us\": %d,\n     "
         "\"response\": %s}",
-        i == 0 ? "" : ",", sim::JsonEscape(row.name), row.match ? "true" : "false",
+        i == 0 ? "" : ",", io::JsonEscape(row.name), row.match ? "true" : "false",
         row.max_diff_vs_local, row.geometric_round_trip_us, row.geometric_server_us,
         api::ToJson(row.response, /*compact=*/true));
   }

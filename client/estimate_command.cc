@@ -15,11 +15,11 @@
 #include "tactforce/api/convert.h"
 #include "tactforce/api/json.h"
 #include "tactforce/api/services.h"
-#include "tactforce/estimator/csv.h"
+#include "tactforce/io/csv.h"
 #include "tactforce/estimator/friction.h"
-#include "tactforce/estimator/mesh.h"
-#include "tactforce/sim/json.h"
-#include "tactforce/sim/text_file.h"
+#include "tactforce/io/mesh.h"
+#include "tactforce/io/json.h"
+#include "tactforce/io/text_file.h"
 
 namespace tactforce::cli {
 namespace {
@@ -93,7 +93,7 @@ int RunFriction(const FrictionArgs& args) {
     return ReportError(absl::InvalidArgumentError("give --normal x,y,z or --mesh FILE"));
   v1::FrictionRequest request;
   for (const std::string& path : args.trial_paths) {
-    absl::StatusOr<estimator::CsvTable> table = estimator::ReadCsvFile(path);
+    absl::StatusOr<io::CsvTable> table = io::ReadCsvFile(path);
     if (!table.ok()) return ReportError(table.status());
     absl::StatusOr<estimator::FrictionTrial> trial = estimator::FrictionTrialFromCsv(*table);
     if (!trial.ok()) return ReportError(trial.status());
@@ -112,7 +112,7 @@ int RunFriction(const FrictionArgs& args) {
     if (!n.ok()) return ReportError(n.status());
     for (auto& t : *request.mutable_trials()) *t.mutable_normal() = api::ToProto(*n);
   } else {
-    absl::StatusOr<estimator::TriangleMesh> mesh = estimator::ReadMeshFile(args.mesh_path);
+    absl::StatusOr<io::TriangleMesh> mesh = io::ReadMeshFile(args.mesh_path);
     if (!mesh.ok()) return ReportError(mesh.status());
     for (const auto& v : mesh->vertices) *request.mutable_mesh()->add_vertices() = api::ToProto(v);
     for (const auto& t : mesh->triangles) {
@@ -186,9 +186,9 @@ int RunSimulateFriction(const SimulateFrictionArgs& args) {
       csv += "\n";
     }
     const std::string path = absl::StrCat(args.out_dir, "/trial", i, ".csv");
-    if (absl::Status st = sim::WriteTextFile(path, csv); !st.ok()) return ReportError(st);
+    if (absl::Status st = io::WriteTextFile(path, csv); !st.ok()) return ReportError(st);
   }
-  sim::JsonWriter truth;
+  io::JsonWriter truth;
   truth.BeginObject();
   truth.Field("mu", args.mu);
   truth.NumberArray("normal", {data.normal.x(), data.normal.y(), data.normal.z()});
@@ -198,7 +198,7 @@ int RunSimulateFriction(const SimulateFrictionArgs& args) {
   truth.Field("ramp", args.ramp);
   truth.FieldInt("seed", static_cast<long long>(args.seed));
   truth.EndObject();
-  if (absl::Status st = sim::WriteTextFile(args.out_dir + "/truth.json", truth.str() + "\n"); !st.ok())
+  if (absl::Status st = io::WriteTextFile(args.out_dir + "/truth.json", truth.str() + "\n"); !st.ok())
     return ReportError(st);
   std::cerr << "wrote " << data.trials.size() << " trials and truth.json to " << args.out_dir << "\n";
   return kExitOk;

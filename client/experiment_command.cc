@@ -14,7 +14,7 @@
 #include "tactforce/experiment/grasp.h"
 #include "tactforce/experiment/slope.h"
 #include "tactforce/sim/sensor_model.h"
-#include "tactforce/sim/text_file.h"
+#include "tactforce/io/text_file.h"
 
 namespace tactforce::cli {
 namespace {
@@ -99,7 +99,7 @@ int RunGrasp(const ExperimentArgs& a) {
             ex::ToString(f), t0.success ? "success" : t0.failure);
         const std::string path =
             (std::filesystem::path(a.plots_dir) / absl::StrCat(ex::ToString(o), "_", ex::ToString(f), ".svg")).string();
-        if (absl::Status st = sim::WriteTextFile(path, ex::RenderSvg(ex::TracePlot(t0, (*setup)->finger_names(), title)));
+        if (absl::Status st = io::WriteTextFile(path, io::RenderSvg(ex::TracePlot(t0, (*setup)->finger_names(), title)));
             !st.ok())
           return ReportError(absl::Status(st.code(), absl::StrCat("--plots: ", st.message())));
       }

@@ -23,15 +23,15 @@
 #include "tactforce/api/convert.h"
 #include "tactforce/api/inertia.h"
 #include "tactforce/api/json.h"
-#include "tactforce/estimator/csv.h"
-#include "tactforce/estimator/mesh.h"
+#include "tactforce/io/csv.h"
+#include "tactforce/io/mesh.h"
 #include "tactforce/inertia/density.h"
 #include "tactforce/inertia/density_plot.h"
 #include "tactforce/inertia/fit.h"
 #include "tactforce/inertia/samples.h"
 #include "tactforce/inertia/simulate.h"
 #include "tactforce/inertia/truth.h"
-#include "tactforce/sim/json.h"
+#include "tactforce/io/json.h"
 #include "tactforce/v1/estimator.grpc.pb.h"
 
 namespace tactforce::cli {
@@ -48,11 +48,11 @@ bool IsMeshPath(const std::string& path) {
 // descriptor .json) or a CSV with x,y,z columns.
 absl::StatusOr<std::vector<Vec3>> ReadHullVertices(const std::string& path) {
   if (IsMeshPath(path)) {
-    absl::StatusOr<estimator::LoadedMesh> mesh = estimator::LoadMesh(estimator::MeshRequest(path));
+    absl::StatusOr<io::LoadedMesh> mesh = io::LoadMesh(io::MeshRequest(path));
     if (!mesh.ok()) return mesh.status();
     return mesh->mesh.vertices;
   }
-  absl::StatusOr<estimator::CsvTable> table = estimator::ReadCsvFile(path);
+  absl::StatusOr<io::CsvTable> table = io::ReadCsvFile(path);
   if (!table.ok()) return table.status();
   if (absl::Status s = table->Require({"x", "y", "z"}); !s.ok()) return s;
   const int ix = table->ColumnIndex("x"), iy = table->ColumnIndex("y"), iz = table->ColumnIndex("z");
@@ -73,7 +73,7 @@ absl::StatusOr<double> ParseNumber(const std::string& token, const std::string& 
 }
 
 // --mesh-pose x,y,z,qw,qx,qy,qz: the object frame in the mesh frame.
-absl::StatusOr<estimator::MeshPlacement> ParseMeshPose(const std::string& text) {
+absl::StatusOr<io::MeshPlacement> ParseMeshPose(const std::string& text) {
   const std::vector<std::string> tokens = absl::StrSplit(text, ',');
   if (tokens.size() != 7)
     return absl::InvalidArgumentError(absl::StrCat("--mesh-pose: expected 7 numbers x,y,z,qw,qx,qy,qz (got ",
@@ -84,7 +84,7 @@ absl::StatusOr<estimator::MeshPlacement> ParseMeshPose(const std::string& text) 
     if (!x.ok()) return x.status();
     v[i] = *x;
   }
-  estimator::MeshPlacement pose;
+  io::MeshPlacement pose;
   pose.position = Vec3(v[0], v[1], v[2]);
   pose.orientation = Eigen::Quaterniond(v[3], v[4], v[5], v[6]);
   if (!(pose.orientation.norm() >= 1e-6))
@@ -97,12 +97,12 @@ absl::StatusOr<estimator::MeshPlacement> ParseMeshPose(const std::string& text) 
 // object frame, and the bytes of the mesh file it came from (sent to the
 // fit, locally or to the server, with the same placement).
 struct FlagMesh {
-  estimator::LoadedMesh loaded;
+  io::LoadedMesh loaded;
   std::string bytes;
 };
 
 absl::StatusOr<FlagMesh> LoadFlagMesh(const InertiaArgs& args) {
-  estimator::MeshRequest request;
+  io::MeshRequest request;
   request.path = args.mesh_path;
   if (!args.mesh_scale.empty()) {
     absl::StatusOr<double> scale = ParseNumber(args.mesh_scale, "--mesh-scale");
@@ -112,14 +112,14 @@ absl::StatusOr<FlagMesh> LoadFlagMesh(const InertiaArgs& args) {
     request.scale = *scale;
   }
   if (!args.mesh_pose.empty()) {
-    absl::StatusOr<estimator::MeshPlacement> pose = ParseMeshPose(args.mesh_pose);
+    absl::StatusOr<io::MeshPlacement> pose = ParseMeshPose(args.mesh_pose);
     if (!pose.ok()) return pose.status();
     request.pose = *pose;
   }
   std::error_code ec;
   if (!std::filesystem::exists(args.mesh_path, ec))
     return absl::InvalidArgumentError(absl::StrCat("--mesh: '", args.mesh_path, "' does not exist"));
-  absl::StatusOr<estimator::LoadedMesh> loaded = estimator::LoadMesh(request);
+  absl::StatusOr<io::LoadedMesh> loaded = io::LoadMesh(request);
   if (!loaded.ok()) return loaded.status();
   absl::StatusOr<std::string> bytes = ReadInput(loaded->mesh_path, "--mesh");
   if (!bytes.ok()) return bytes.status();
@@ -427,12 +427,12 @@ int RunInertia(const InertiaArgs& args) {
 
 namespace {
 
-absl::StatusOr<std::vector<inertia::SinusoidComponent>> ParseComponents(const sim::JsonValue& v,
+absl::StatusOr<std::vector<inertia::SinusoidComponent>> ParseComponents(const io::JsonValue& v,
                                                                          const std::string& where) {
   if (!v.is_array()) return absl::InvalidArgumentError(absl::StrCat(where, ": expected an array"));
   std::vector<inertia::SinusoidComponent> out;
   for (size_t i = 0; i < v.array().size(); ++i) {
-    const sim::JsonValue& c = v.array()[i];
+    const io::JsonValue& c = v.array()[i];
     const std::string at = absl::StrCat(where, "[", i, "]");
     if (!c.is_object()) return absl::InvalidArgumentError(absl::StrCat(at, ": expected an object"));
     inertia::SinusoidComponent s;
@@ -461,9 +461,9 @@ absl::StatusOr<std::vector<inertia::SinusoidComponent>> ParseComponents(const si
   return out;
 }
 
-absl::StatusOr<Vec3> ParseTriple(const sim::JsonValue& v, const std::string& where) {
+absl::StatusOr<Vec3> ParseTriple(const io::JsonValue& v, const std::string& where) {
   if (!v.is_array() || v.array().size() != 3 ||
-      !std::all_of(v.array().begin(), v.array().end(), [](const sim::JsonValue& x) { return x.is_number(); }))
+      !std::all_of(v.array().begin(), v.array().end(), [](const io::JsonValue& x) { return x.is_number(); }))
     return absl::InvalidArgumentError(absl::StrCat(where, ": expected an array of 3 numbers"));
   return Vec3(v.array()[0].number(), v.array()[1].number(), v.array()[2].number());
 }
@@ -473,7 +473,7 @@ absl::StatusOr<Vec3> ParseTriple(const sim::JsonValue& v, const std::string& whe
 absl::StatusOr<inertia::ExcitationTrajectory> ReadTrajectory(const std::string& path) {
   absl::StatusOr<std::string> text = ReadInput(path, "--trajectory");
   if (!text.ok()) return text.status();
-  absl::StatusOr<sim::JsonValue> root = sim::ParseJson(*text, path);
+  absl::StatusOr<io::JsonValue> root = io::ParseJson(*text, path);
   if (!root.ok()) return root.status();
   if (!root->is_object()) return absl::InvalidArgumentError(absl::StrCat(path, ": expected a JSON object"));
   inertia::ExcitationTrajectory t;
@@ -498,7 +498,7 @@ absl::StatusOr<inertia::ExcitationTrajectory> ReadTrajectory(const std::string& 
 
 // Binary STL (little-endian float32; normals from the winding), the format
 // `tactforce inertia --mesh` reads back.
-absl::Status WriteBinaryStl(const estimator::TriangleMesh& mesh, const std::string& path, const std::string& label) {
+absl::Status WriteBinaryStl(const io::TriangleMesh& mesh, const std::string& path, const std::string& label) {
   std::string bytes(80, '\0');
   const std::string header = absl::StrCat("tactforce simulate inertia: ", label, " (object frame, m)");
   std::memcpy(bytes.data(), header.data(), std::min<size_t>(header.size(), 80));

@@ -21,7 +21,7 @@
 #include "tactforce/api/json.h"
 #include "tactforce/planner/random_grasps.h"
 #include "tactforce/v1/planner.grpc.pb.h"
-#include "tactforce/sim/json.h"
+#include "tactforce/io/json.h"
 
 namespace tactforce::cli {
 namespace {
@@ -868,14 +868,14 @@ std::string FormatLoadJson(const LoadReport& r, const std::string& target) {
   std::string errors = "{";
   bool first = true;
   for (const auto& [code, count] : r.errors) {
-    absl::StrAppendFormat(&errors, "%s%s: %d", first ? "" : ", ", sim::JsonEscape(code), count);
+    absl::StrAppendFormat(&errors, "%s%s: %d", first ? "" : ", ", io::JsonEscape(code), count);
     first = false;
   }
   errors += "}";
   std::string out = absl::StrFormat(
       "{\"rpc\": %s, \"target\": %s, \"mode\": %s, \"engine\": %s, \"concurrency\": %d, ",
-      sim::JsonEscape(r.rpc), sim::JsonEscape(target), sim::JsonEscape(r.mode),
-      sim::JsonEscape(r.engine), r.concurrency);
+      io::JsonEscape(r.rpc), io::JsonEscape(target), io::JsonEscape(r.mode),
+      io::JsonEscape(r.engine), r.concurrency);
   if (r.mode == "open") absl::StrAppendFormat(&out, "\"rate\": %g, ", r.rate);
   absl::StrAppendFormat(&out,
                         "\"channels\": %d, \"requests\": %d, \"ok\": %d, \"duration_s\": %.4f, "

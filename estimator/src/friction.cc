@@ -164,7 +164,7 @@ absl::StatusOr<FrictionEstimate> EstimateFriction(const std::vector<FrictionTria
     return absl::InvalidArgumentError(
         "options: need slip_distance > 0, window >= 1, fit_window >= 3, min_normal_force >= 0");
   if (o.mesh) {
-    if (absl::Status s = ValidateMesh(*o.mesh); !s.ok()) return s;
+    if (absl::Status s = io::ValidateMesh(*o.mesh); !s.ok()) return s;
   }
   FrictionEstimate out;
   for (int i = 0; i < static_cast<int>(trials.size()); ++i) {
@@ -175,7 +175,7 @@ absl::StatusOr<FrictionEstimate> EstimateFriction(const std::vector<FrictionTria
     if (trial.normal) {
       n = trial.normal->normalized();
     } else if (o.mesh) {
-      const NearestTriangle near = FindNearestTriangle(*o.mesh, trial.samples.front().contact_point);
+      const io::NearestTriangle near = io::FindNearestTriangle(*o.mesh, trial.samples.front().contact_point);
       n = near.inward_normal;
       triangle = near.triangle;
     } else {
@@ -201,7 +201,7 @@ absl::StatusOr<FrictionEstimate> EstimateFriction(const std::vector<FrictionTria
   return out;
 }
 
-absl::StatusOr<FrictionTrial> FrictionTrialFromCsv(const CsvTable& table) {
+absl::StatusOr<FrictionTrial> FrictionTrialFromCsv(const io::CsvTable& table) {
   if (absl::Status s = table.Require({"t", "fx", "fy", "fz", "px", "py", "pz"}); !s.ok()) return s;
   FrictionTrial trial;
   trial.name = table.source;

@@ -4,8 +4,8 @@
 #include <cmath>
 
 #include "absl/strings/str_cat.h"
-#include "tactforce/sim/json.h"
-#include "tactforce/sim/text_file.h"
+#include "tactforce/io/json.h"
+#include "tactforce/io/text_file.h"
 
 namespace tactforce::sim {
 namespace {
@@ -126,7 +126,7 @@ absl::Status ValidateSensorModel(const SensorModel& m) {
 }
 
 absl::StatusOr<SensorModel> SensorModelFromJson(const std::string& text, const std::string& source) {
-  auto doc = ParseJson(text, source);
+  auto doc = io::ParseJson(text, source);
   if (!doc.ok()) return doc.status();
   if (!doc->is_object()) return absl::InvalidArgumentError(absl::StrCat(source, ": a sensor model must be a JSON object"));
   SensorModel m;
@@ -161,7 +161,7 @@ absl::StatusOr<SensorModel> SensorModelFromJson(const std::string& text, const s
       std::vector<double>& dst = key == "pi_thresholds" ? m.effects.pi_thresholds : m.effects.pi_weights;
       dst.clear();
       for (size_t k = 0; k < v.array().size(); ++k) {
-        const JsonValue& x = v.array()[k];
+        const io::JsonValue& x = v.array()[k];
         if (!x.is_number())
           return absl::InvalidArgumentError(
               absl::StrCat(source, ":", x.line(), ": field '", key, "[", k, "]': expected a number"));
@@ -184,13 +184,13 @@ absl::StatusOr<SensorModel> SensorModelFromJson(const std::string& text, const s
 }
 
 absl::StatusOr<SensorModel> LoadSensorModel(const std::string& path) {
-  absl::StatusOr<std::string> text = ReadTextFile(path);
+  absl::StatusOr<std::string> text = io::ReadTextFile(path);
   if (!text.ok()) return text.status();
   return SensorModelFromJson(*text, path);
 }
 
 std::string SensorModelToJson(const SensorModel& m) {
-  JsonWriter w;
+  io::JsonWriter w;
   w.BeginObject();
   w.Field("format", kFormat);
   w.Field("units", m.units);
@@ -211,7 +211,7 @@ std::string SensorModelToJson(const SensorModel& m) {
 }
 
 absl::Status SaveSensorModel(const SensorModel& m, const std::string& path) {
-  return WriteTextFile(path, SensorModelToJson(m));
+  return io::WriteTextFile(path, SensorModelToJson(m));
 }
 
 // ---------------------------------------------------------------------------

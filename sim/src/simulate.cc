@@ -7,7 +7,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "tactforce/sim/text_file.h"
+#include "tactforce/io/text_file.h"
 
 namespace tactforce::sim {
 namespace {
@@ -291,7 +291,7 @@ absl::Status WriteSimRun(const SimRun& run, const std::string& dir) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) return absl::InternalError(absl::StrCat(dir, ": cannot create directory: ", ec.message()));
-  if (absl::Status s = WriteTextFile(dir + "/run.csv", SimRunCsv(run)); !s.ok()) return s;
+  if (absl::Status s = io::WriteTextFile(dir + "/run.csv", SimRunCsv(run)); !s.ok()) return s;
   std::string fingertip = "t,force,px,py,pz,nx,ny,nz\n";
   for (size_t i = 0; i < run.t.size(); ++i) {
     const auto& f = run.fingertip[i];
@@ -299,7 +299,7 @@ absl::Status WriteSimRun(const SimRun& run, const std::string& dir) {
                           f.location.x(), f.location.y(), f.location.z(), f.normal.x(), f.normal.y(),
                           f.normal.z());
   }
-  if (absl::Status s = WriteTextFile(dir + "/fingertip.csv", fingertip); !s.ok()) return s;
+  if (absl::Status s = io::WriteTextFile(dir + "/fingertip.csv", fingertip); !s.ok()) return s;
   SensorModel m = run.model;
   if (m.source.empty()) m.source = "simulated (true model)";
   return SaveSensorModel(m, dir + "/model.json");

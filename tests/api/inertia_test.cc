@@ -168,7 +168,7 @@ TEST(InertiaOptionsFromProto, ValidatesAndNamesFields) {
 // A Wavefront OBJ of `mesh` whose vertices are v_file = (R v + p) / scale,
 // i.e. a CAD file in other units and another frame: MeshInput's placement
 // (scale, p, R) maps it back to the object frame. `skip` drops a triangle.
-std::string ObjText(const estimator::TriangleMesh& mesh, double scale = 1.0, const Vec3& p = Vec3::Zero(),
+std::string ObjText(const io::TriangleMesh& mesh, double scale = 1.0, const Vec3& p = Vec3::Zero(),
                     const Eigen::Quaterniond& q = Eigen::Quaterniond::Identity(), int skip = -1) {
   std::string out = "# test mesh\n";
   for (const Vec3& v : mesh.vertices) {
@@ -202,12 +202,12 @@ inertia::SimulationResult SimulatedBox() {
 // library type.
 TEST(InertiaMeshInput, PlacedCadMeshGivesTheObjectFrameBoxAndADensityFit) {
   const inertia::SimulationResult sim = SimulatedBox();
-  const estimator::TriangleMesh& box = sim.object.mesh;
+  const io::TriangleMesh& box = sim.object.mesh;
   ASSERT_EQ(box.triangles.size(), 12u);
   const double scale = 0.001;  // the file is in mm
   const Vec3 p(0.01, -0.02, 0.03);
   const Eigen::Quaterniond q(Eigen::AngleAxisd(0.3, Vec3(1, 2, 3).normalized()));
-  estimator::MeshPlacement placement;
+  io::MeshPlacement placement;
   placement.scale = scale;
   placement.position = p;
   placement.orientation = q;
@@ -311,7 +311,7 @@ TEST(InertiaMeshInput, PlacedCadMeshGivesTheObjectFrameBoxAndADensityFit) {
 
 TEST(InertiaMeshInput, BadMeshesAndPlacementsNameTheField) {
   const inertia::SimulationResult sim = SimulatedBox();
-  const estimator::TriangleMesh& box = sim.object.mesh;
+  const io::TriangleMesh& box = sim.object.mesh;
   auto error = [](const v1::InertiaFitOptions& o) {
     absl::StatusOr<inertia::InertiaOptions> r = InertiaOptionsFromProto(o);
     EXPECT_FALSE(r.ok());

@@ -10,7 +10,7 @@
 #include "gtest/gtest.h"
 #include "hidden_effects.h"
 #include "absl/strings/str_cat.h"
-#include "tactforce/sim/json.h"
+#include "tactforce/io/json.h"
 
 namespace tactforce::audit {
 namespace {
@@ -212,8 +212,8 @@ TEST(TwoStreams, AlignedByInterpolatingTheReference) {
     ref += absl::StrCat(run->t[i], ",", run->reference[i], ",", run->shear[i], "\n");
     if (i % 4 == 1) rd += absl::StrCat(run->t[i] + 100.0, ",", run->reading[i], "\n");
   }
-  auto rt = estimator::ParseCsv(ref, "ref.csv");
-  auto qt = estimator::ParseCsv(rd, "reading.csv");
+  auto rt = io::ParseCsv(ref, "ref.csv");
+  auto qt = io::ParseCsv(rd, "reading.csv");
   ASSERT_TRUE(rt.ok() && qt.ok());
   EXPECT_THAT(Message(AlignStreams(*rt, *qt).status()), HasSubstr("do not overlap"));
   AlignOptions ao;
@@ -226,7 +226,7 @@ TEST(TwoStreams, AlignedByInterpolatingTheReference) {
   ASSERT_FALSE(rep->causes.empty());
   EXPECT_EQ(rep->causes[0].effect, "delay");
   EXPECT_NEAR(rep->causes[0].parameters.at("delay"), 0.03, 0.004);
-  auto missing = estimator::ParseCsv("t,v\n0,1\n", "ref.csv");
+  auto missing = io::ParseCsv("t,v\n0,1\n", "ref.csv");
   EXPECT_THAT(Message(AlignStreams(*missing, *qt).status()), HasSubstr("ref.csv: missing column(s) value"));
 }
 
@@ -257,7 +257,7 @@ TEST(Report, FormsAndPrandtlIshlinskiiArraysRoundTrip) {
     std::ifstream in(dir / "report.json");
     std::stringstream ss;
     ss << in.rdbuf();
-    auto j = sim::ParseJson(ss.str(), "report.json");
+    auto j = io::ParseJson(ss.str(), "report.json");
     ASSERT_TRUE(j.ok()) << j.status();
     const auto& c0 = j->Find("causes")->array().at(0);
     const auto* params = c0.Find("parameters");
@@ -307,7 +307,7 @@ TEST(Report, FilesAndExtendedModelRoundTrip) {
   std::ifstream in(dir / "report.json");
   std::stringstream ss;
   ss << in.rdbuf();
-  auto j = sim::ParseJson(ss.str(), "report.json");
+  auto j = io::ParseJson(ss.str(), "report.json");
   ASSERT_TRUE(j.ok()) << j.status();
   ASSERT_NE(j->Find("nominal_adequate"), nullptr);
   EXPECT_FALSE(j->Find("nominal_adequate")->boolean());

@@ -18,7 +18,7 @@ using ::testing::HasSubstr;
 std::string Message(const absl::Status& s) { return std::string(s.message()); }
 
 struct Streams {
-  estimator::CsvTable reference, reading;
+  io::CsvTable reference, reading;
   double reading_period = 0;
 };
 
@@ -40,8 +40,8 @@ Streams MakeStreams(const sim::SensorModel& m, uint64_t seed, double ref_rate, i
       absl::StrAppend(&rd, absl::StrFormat("%.17g,%.9g\n", run->t[i] + offset, run->reading[i]));
   }
   Streams s;
-  s.reference = *estimator::ParseCsv(ref, "ref.csv");
-  s.reading = *estimator::ParseCsv(rd, "reading.csv");
+  s.reference = *io::ParseCsv(ref, "ref.csv");
+  s.reading = *io::ParseCsv(rd, "reading.csv");
   s.reading_period = decimate / ref_rate;
   return s;
 }
@@ -216,7 +216,7 @@ TEST(ClockOffset, BadSearchRangesGiveClearErrors) {
   std::mt19937_64 rng(1);
   std::normal_distribution<double> nd;
   for (int i = 0; i < 1000; ++i) absl::StrAppend(&rd, i * 0.01, ",", nd(rng), "\n");
-  auto noise = estimator::ParseCsv(rd, "noise.csv");
+  auto noise = io::ParseCsv(rd, "noise.csv");
   ASSERT_TRUE(noise.ok());
   auto r = AlignStreams(s.reference, *noise, Estimate(0.5));
   ASSERT_FALSE(r.ok());

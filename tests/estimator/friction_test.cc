@@ -83,7 +83,7 @@ TEST(Friction, UsesTheNearestMeshTriangleNormal) {
   SimulatedFriction data = SimulateFriction(sim);
   for (auto& t : data.trials) t.normal.reset();
   // A box 0.04 m high: the probe touches the top face z = 0.02 (CCW from outside).
-  TriangleMesh box;
+  io::TriangleMesh box;
   const double h = 0.02;
   for (int k = 0; k < 8; ++k)
     box.vertices.emplace_back(k & 1 ? h : -h, k & 2 ? h : -h, k & 4 ? h : -h);
@@ -116,30 +116,30 @@ TEST(Friction, BadInputNamesTheField) {
   EXPECT_EQ(EstimateFriction(data.trials).status().message(),
             "trials[0].samples[3].force: not finite");
   FrictionOptions o;
-  o.mesh = TriangleMesh{{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(2, 0, 0)}, {{0, 1, 2}}, {}};
+  o.mesh = io::TriangleMesh{{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(2, 0, 0)}, {{0, 1, 2}}, {}};
   data = SimulateFriction(sim);
   EXPECT_NE(EstimateFriction(data.trials, o).status().message().find("mesh.triangles[0]: degenerate"),
             std::string::npos);
-  o.mesh = TriangleMesh{{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}, {{0, 1, 5}}, {}};
+  o.mesh = io::TriangleMesh{{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}, {{0, 1, 5}}, {}};
   EXPECT_NE(EstimateFriction(data.trials, o).status().message().find("out of range"),
             std::string::npos);
 }
 
 TEST(Friction, CsvRoundTripAndErrors) {
-  absl::StatusOr<CsvTable> t = ParseCsv("t,fx,fy,fz,px,py,pz,slip\n0,1,0,-2,0,0,0,0\n0.01,1,0,-2,0,0,0,1\n",
+  absl::StatusOr<io::CsvTable> t = io::ParseCsv("t,fx,fy,fz,px,py,pz,slip\n0,1,0,-2,0,0,0,0\n0.01,1,0,-2,0,0,0,1\n",
                                         "a.csv");
   ASSERT_TRUE(t.ok());
   absl::StatusOr<FrictionTrial> trial = FrictionTrialFromCsv(*t);
   ASSERT_TRUE(trial.ok());
   EXPECT_EQ(trial->samples.size(), 2u);
   EXPECT_TRUE(*trial->samples[1].slip);
-  EXPECT_EQ(ParseCsv("t,fx\n0,abc\n", "b.csv").status().message(),
+  EXPECT_EQ(io::ParseCsv("t,fx\n0,abc\n", "b.csv").status().message(),
             "b.csv:2: column 'fx': not a number ('abc')");
-  t = ParseCsv("t,fx\n0,1\n", "c.csv");
+  t = io::ParseCsv("t,fx\n0,1\n", "c.csv");
   EXPECT_EQ(FrictionTrialFromCsv(*t).status().message(), "c.csv: missing column(s) fy, fz, px, py, pz");
-  t = ParseCsv("t,fx,fy,fz,px,py,pz\n0,1,0,-2,0,0,0\n0,1,0,-2,0,0,0\n", "d.csv");
+  t = io::ParseCsv("t,fx,fy,fz,px,py,pz\n0,1,0,-2,0,0,0\n0,1,0,-2,0,0,0\n", "d.csv");
   EXPECT_EQ(FrictionTrialFromCsv(*t).status().message(), "d.csv:3: column 't': not increasing");
-  EXPECT_EQ(ParseCsv("t,fx\n0,1,2\n", "e.csv").status().message(), "e.csv:2: 3 fields, header has 2");
+  EXPECT_EQ(io::ParseCsv("t,fx\n0,1,2\n", "e.csv").status().message(), "e.csv:2: 3 fields, header has 2");
 }
 
 }  // namespace

@@ -1,8 +1,8 @@
-// Meshes (estimator/mesh.h): reading a unit cube written in every format,
+// Meshes (io/mesh.h): reading a unit cube written in every format,
 // the shared workshop tools through their descriptors, descriptor errors,
 // placement, the closed-solid checks and reading errors; and the qhull
 // convex hull (inertia/hull.h) of a cube and of the tools' vertices.
-#include "tactforce/estimator/mesh.h"
+#include "tactforce/io/mesh.h"
 
 #include <unistd.h>
 
@@ -35,9 +35,9 @@ using Eigen::Vector3d;
 
 bool Has(const std::string& s, const std::string& what) { return s.find(what) != std::string::npos; }
 
-MeshRequest Request(const std::string& path, std::optional<double> scale = std::nullopt,
-                    std::optional<MeshPlacement> pose = std::nullopt) {
-  MeshRequest r;
+io::MeshRequest Request(const std::string& path, std::optional<double> scale = std::nullopt,
+                    std::optional<io::MeshPlacement> pose = std::nullopt) {
+  io::MeshRequest r;
   r.path = path;
   r.scale = scale;
   r.pose = pose;
@@ -63,8 +63,8 @@ std::vector<std::array<int, 3>> CubeTriangles() {
   return t;
 }
 
-TriangleMesh Cube() {
-  TriangleMesh m;
+io::TriangleMesh Cube() {
+  io::TriangleMesh m;
   for (int i = 0; i < 8; ++i) m.vertices.push_back(Corner(i));
   m.triangles = CubeTriangles();
   return m;
@@ -166,7 +166,7 @@ class MeshFiles : public ::testing::Test {
 };
 
 // The welded cube: its 8 corners, 12 triangles, closed, outward, volume 1.
-void ExpectUnitCube(const TriangleMesh& m, const std::string& what) {
+void ExpectUnitCube(const io::TriangleMesh& m, const std::string& what) {
   SCOPED_TRACE(what);
   ASSERT_EQ(m.vertices.size(), 8u);
   ASSERT_EQ(m.triangles.size(), 12u);
@@ -174,7 +174,7 @@ void ExpectUnitCube(const TriangleMesh& m, const std::string& what) {
   for (const Vector3d& v : m.vertices) corners.insert({v.x(), v.y(), v.z()});
   for (int i = 0; i < 8; ++i) expected.insert({Corner(i).x(), Corner(i).y(), Corner(i).z()});
   EXPECT_EQ(corners, expected);
-  const MeshCheck c = CheckMesh(m);
+  const io::MeshCheck c = io::CheckMesh(m);
   EXPECT_TRUE(c.closed);
   EXPECT_TRUE(c.consistently_oriented);
   EXPECT_EQ(c.boundary_edges, 0);
@@ -183,7 +183,7 @@ void ExpectUnitCube(const TriangleMesh& m, const std::string& what) {
   EXPECT_EQ(c.degenerate_faces, 0);
   EXPECT_NEAR(c.volume, 1.0, 1e-12);
   EXPECT_NEAR(c.area, 6.0, 1e-12);
-  EXPECT_TRUE(RequireClosedSolid(c, what).ok()) << RequireClosedSolid(c, what);
+  EXPECT_TRUE(io::RequireClosedSolid(c, what).ok()) << io::RequireClosedSolid(c, what);
 }
 
 struct Format {
@@ -204,24 +204,24 @@ TEST_F(MeshFiles, EveryFormatGivesTheWeldedUnitCube) {
   for (const Format& f : kFormats) {
     const std::string bytes = f.bytes();
     const std::string path = Write(f.file, bytes);
-    absl::StatusOr<TriangleMesh> from_file = ReadMeshFile(path);
+    absl::StatusOr<io::TriangleMesh> from_file = io::ReadMeshFile(path);
     ASSERT_TRUE(from_file.ok()) << f.file << ": " << from_file.status();
     ExpectUnitCube(*from_file, f.file);
     EXPECT_EQ(static_cast<int>(from_file->face_colors.size()), f.colors) << f.file;
-    EXPECT_EQ(*MeshFormatFromPath(path), f.format);
+    EXPECT_EQ(*io::MeshFormatFromPath(path), f.format);
 
-    absl::StatusOr<TriangleMesh> from_memory = ReadMeshBytes(bytes, f.format, f.file);
+    absl::StatusOr<io::TriangleMesh> from_memory = io::ReadMeshBytes(bytes, f.format, f.file);
     ASSERT_TRUE(from_memory.ok()) << f.file << ": " << from_memory.status();
     EXPECT_EQ(from_memory->vertices, from_file->vertices) << f.file;
     EXPECT_EQ(from_memory->triangles, from_file->triangles) << f.file;
     EXPECT_EQ(from_memory->face_colors, from_file->face_colors) << f.file;
   }
   // The format hint is case-insensitive.
-  EXPECT_TRUE(ReadMeshBytes(ObjWithQuads(), "OBJ", "cube").ok());
+  EXPECT_TRUE(io::ReadMeshBytes(ObjWithQuads(), "OBJ", "cube").ok());
 }
 
 TEST_F(MeshFiles, ColoursArePerFaceOrAveragedFromTheVertices) {
-  absl::StatusOr<TriangleMesh> ascii = ReadMeshFile(Write("c.ply", AsciiPlyWithFaceColors()));
+  absl::StatusOr<io::TriangleMesh> ascii = io::ReadMeshFile(Write("c.ply", AsciiPlyWithFaceColors()));
   ASSERT_TRUE(ascii.ok()) << ascii.status();
   ASSERT_EQ(ascii->face_colors.size(), 12u);
   // Each triangle has its quad's colour; the two triangles of a quad are its
@@ -241,11 +241,11 @@ TEST_F(MeshFiles, ColoursArePerFaceOrAveragedFromTheVertices) {
     ASSERT_GE(quad, 0);
     EXPECT_EQ(ascii->face_colors[t], kFaceColors[quad]) << "triangle " << t;
   }
-  absl::StatusOr<TriangleMesh> binary = ReadMeshFile(Write("c_bin.ply", BinaryPlyWithVertexColors()));
+  absl::StatusOr<io::TriangleMesh> binary = io::ReadMeshFile(Write("c_bin.ply", BinaryPlyWithVertexColors()));
   ASSERT_TRUE(binary.ok()) << binary.status();
   EXPECT_EQ(binary->face_colors, std::vector<uint32_t>(12, 0x336699));
   // No colours in the file: none in the mesh.
-  EXPECT_TRUE(ReadMeshBytes(AsciiStl(), "stl", "cube.stl")->face_colors.empty());
+  EXPECT_TRUE(io::ReadMeshBytes(AsciiStl(), "stl", "cube.stl")->face_colors.empty());
 }
 
 // ------------------------------------------------------------ shared tools
@@ -257,16 +257,16 @@ TEST(SharedMeshes, LoadClosedWithPlausibleDensities) {
   if (!dir) GTEST_SKIP() << "../shared/data/inertia is absent";
   for (const char* tool : kTools) {
     SCOPED_TRACE(tool);
-    absl::StatusOr<LoadedMesh> m = LoadMesh(Request(*dir + "/" + tool + ".mesh.json"));
+    absl::StatusOr<io::LoadedMesh> m = io::LoadMesh(Request(*dir + "/" + tool + ".mesh.json"));
     ASSERT_TRUE(m.ok()) << m.status();
     EXPECT_EQ(m->name, std::string(tool) + ".ply");
     EXPECT_EQ(m->format, "ply");
     EXPECT_EQ(fs::path(m->mesh_path), fs::path(*dir) / (std::string(tool) + ".ply"));
     EXPECT_EQ(m->placement.scale, 0.001);  // the CAD files are in millimetres
-    const MeshCheck c = CheckMesh(m->mesh);
+    const io::MeshCheck c = io::CheckMesh(m->mesh);
     EXPECT_TRUE(c.closed) << c.boundary_edges << " boundary, " << c.non_manifold_edges << " non-manifold";
     EXPECT_TRUE(c.consistently_oriented) << c.inconsistent_edges;
-    EXPECT_TRUE(RequireClosedSolid(c, m->name).ok()) << RequireClosedSolid(c, m->name);
+    EXPECT_TRUE(io::RequireClosedSolid(c, m->name).ok()) << io::RequireClosedSolid(c, m->name);
     absl::StatusOr<inertia::InertiaTruth> truth = inertia::ReadTruthJsonFile(*dir + "/" + tool + ".truth.json");
     ASSERT_TRUE(truth.ok()) << truth.status();
     const double density = truth->params.mass / c.volume;  // kg/m^3
@@ -292,14 +292,14 @@ class Descriptors : public MeshFiles {
   std::string Error(const std::string& json, std::string* path = nullptr) {
     const std::string p = Write("bad.mesh.json", json);
     if (path) *path = p;
-    absl::StatusOr<MeshDescriptor> d = ReadMeshDescriptor(p);
+    absl::StatusOr<io::MeshDescriptor> d = io::ReadMeshDescriptor(p);
     EXPECT_FALSE(d.ok()) << json;
     if (d.ok()) return "";
     EXPECT_EQ(d.status().code(), absl::StatusCode::kInvalidArgument);
     // Every message starts with the file.
     EXPECT_EQ(d.status().message().rfind(p, 0), 0u) << d.status();
-    // Each is also what LoadMesh says.
-    absl::StatusOr<LoadedMesh> loaded = LoadMesh(Request(p));
+    // Each is also what io::LoadMesh says.
+    absl::StatusOr<io::LoadedMesh> loaded = io::LoadMesh(Request(p));
     EXPECT_FALSE(loaded.ok());
     if (!loaded.ok()) {
       EXPECT_EQ(loaded.status().message(), d.status().message());
@@ -313,7 +313,7 @@ TEST_F(Descriptors, ReadsAllKeysAndDefaults) {
   const std::string p = Write("cube.mesh.json",
                               R"({"mesh": "cube.obj", "scale": 0.001,
                                   "object_in_mesh": {"position": [1, 2, 3], "quaternion": [0, 0, 0, 2]}})");
-  absl::StatusOr<MeshDescriptor> d = ReadMeshDescriptor(p);
+  absl::StatusOr<io::MeshDescriptor> d = io::ReadMeshDescriptor(p);
   ASSERT_TRUE(d.ok()) << d.status();
   EXPECT_EQ(fs::path(d->mesh_path), dir_ / "cube.obj");  // next to the descriptor
   EXPECT_EQ(d->placement.scale, 0.001);
@@ -321,7 +321,7 @@ TEST_F(Descriptors, ReadsAllKeysAndDefaults) {
   EXPECT_EQ(d->placement.orientation.coeffs(), Eigen::Vector4d(0, 0, 2, 0));  // x, y, z, w
 
   const std::string q = Write("plain.mesh.json", R"({"mesh": "cube.obj"})");
-  absl::StatusOr<MeshDescriptor> plain = ReadMeshDescriptor(q);
+  absl::StatusOr<io::MeshDescriptor> plain = io::ReadMeshDescriptor(q);
   ASSERT_TRUE(plain.ok()) << plain.status();
   EXPECT_EQ(plain->placement.scale, 1.0);
   EXPECT_EQ(plain->placement.position, Vector3d::Zero());
@@ -365,7 +365,7 @@ TEST_F(Descriptors, ErrorsNameTheFileAndTheKey) {
   EXPECT_LE(column, 15) << e;  // nlohmann reports the end of the token (15)
 
   // A descriptor that does not exist.
-  absl::StatusOr<MeshDescriptor> missing = ReadMeshDescriptor((dir_ / "none.mesh.json").string());
+  absl::StatusOr<io::MeshDescriptor> missing = io::ReadMeshDescriptor((dir_ / "none.mesh.json").string());
   ASSERT_FALSE(missing.ok());
   EXPECT_TRUE(Has(std::string(missing.status().message()), (dir_ / "none.mesh.json").string() + ": cannot open"))
       << missing.status();
@@ -376,12 +376,12 @@ TEST_F(Descriptors, LoadMeshOverridesReplaceTheDescriptorsValues) {
   const std::string p = Write("cube.mesh.json",
                               R"({"mesh": "cube.obj", "scale": 0.001,
                                   "object_in_mesh": {"position": [0, 0, 0.0005], "quaternion": [0.7071067811865476, 0, 0, 0.7071067811865476]}})");
-  absl::StatusOr<LoadedMesh> m = LoadMesh(Request(p));
+  absl::StatusOr<io::LoadedMesh> m = io::LoadMesh(Request(p));
   ASSERT_TRUE(m.ok()) << m.status();
   EXPECT_EQ(m->name, "cube.obj");
   EXPECT_EQ(m->format, "obj");
   // Corner (1, 0, 0) mm -> R^T ((0.001, 0, 0) - (0, 0, 0.0005)) = (0, -0.001, -0.0005).
-  auto image = [](const LoadedMesh& l, const Vector3d& corner) {
+  auto image = [](const io::LoadedMesh& l, const Vector3d& corner) {
     for (size_t i = 0; i < l.mesh.vertices.size(); ++i) {
       // The loaded mesh keeps the file's vertex order; find the corner by the inverse map.
       const Vector3d back =
@@ -391,39 +391,39 @@ TEST_F(Descriptors, LoadMeshOverridesReplaceTheDescriptorsValues) {
     return Vector3d(Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
   };
   EXPECT_LT((image(*m, Vector3d(1, 0, 0)) - Vector3d(0, -0.001, -0.0005)).norm(), 1e-15);
-  EXPECT_NEAR(CheckMesh(m->mesh).volume, 1e-9, 1e-21);  // 1 mm^3, rotation keeps the sign
+  EXPECT_NEAR(io::CheckMesh(m->mesh).volume, 1e-9, 1e-21);  // 1 mm^3, rotation keeps the sign
 
   // --mesh-scale replaces the descriptor's scale, keeps its pose.
-  absl::StatusOr<LoadedMesh> s = LoadMesh(Request(p, 2.0));
+  absl::StatusOr<io::LoadedMesh> s = io::LoadMesh(Request(p, 2.0));
   ASSERT_TRUE(s.ok()) << s.status();
   EXPECT_EQ(s->placement.scale, 2.0);
   EXPECT_EQ(s->placement.position, Vector3d(0, 0, 0.0005));
   EXPECT_LT((image(*s, Vector3d(1, 0, 0)) - Vector3d(0, -2, -0.0005)).norm(), 1e-12);
-  EXPECT_NEAR(CheckMesh(s->mesh).volume, 8.0, 1e-12);
+  EXPECT_NEAR(io::CheckMesh(s->mesh).volume, 8.0, 1e-12);
 
   // --mesh-pose replaces position and orientation, keeps the scale.
-  MeshPlacement pose;
+  io::MeshPlacement pose;
   pose.scale = 123;  // ignored
   pose.position = Vector3d(0.01, 0, 0);
   pose.orientation = Eigen::Quaterniond::Identity();
-  absl::StatusOr<LoadedMesh> posed = LoadMesh(Request(p, std::nullopt, pose));
+  absl::StatusOr<io::LoadedMesh> posed = io::LoadMesh(Request(p, std::nullopt, pose));
   ASSERT_TRUE(posed.ok()) << posed.status();
   EXPECT_EQ(posed->placement.scale, 0.001);
   EXPECT_EQ(posed->placement.position, Vector3d(0.01, 0, 0));
   EXPECT_LT((image(*posed, Vector3d(1, 0, 0)) - Vector3d(0.001 - 0.01, 0, 0)).norm(), 1e-15);
 
   // Without a descriptor the file is in the object frame, metres; overrides apply.
-  absl::StatusOr<LoadedMesh> bare = LoadMesh(Request((dir_ / "cube.obj").string(), 0.5, std::nullopt));
+  absl::StatusOr<io::LoadedMesh> bare = io::LoadMesh(Request((dir_ / "cube.obj").string(), 0.5, std::nullopt));
   ASSERT_TRUE(bare.ok()) << bare.status();
-  EXPECT_NEAR(CheckMesh(bare->mesh).volume, 0.125, 1e-15);
+  EXPECT_NEAR(io::CheckMesh(bare->mesh).volume, 0.125, 1e-15);
 
   // Bad overrides are errors naming the field.
-  absl::StatusOr<LoadedMesh> zero = LoadMesh(Request(p, 0.0, std::nullopt));
+  absl::StatusOr<io::LoadedMesh> zero = io::LoadMesh(Request(p, 0.0, std::nullopt));
   ASSERT_FALSE(zero.ok());
   EXPECT_TRUE(Has(std::string(zero.status().message()), "mesh.scale: must be > 0")) << zero.status();
-  MeshPlacement no_rotation;
+  io::MeshPlacement no_rotation;
   no_rotation.orientation = Eigen::Quaterniond(0, 0, 0, 0);
-  absl::StatusOr<LoadedMesh> bad_pose = LoadMesh(Request(p, std::nullopt, no_rotation));
+  absl::StatusOr<io::LoadedMesh> bad_pose = io::LoadMesh(Request(p, std::nullopt, no_rotation));
   ASSERT_FALSE(bad_pose.ok());
   EXPECT_TRUE(Has(std::string(bad_pose.status().message()), "mesh.orientation")) << bad_pose.status();
 }
@@ -431,149 +431,149 @@ TEST_F(Descriptors, LoadMeshOverridesReplaceTheDescriptorsValues) {
 // ---------------------------------------------------------------- placement
 
 TEST(Placement, TransformMapsAVertexAsRTransposeOfScaledMinusPosition) {
-  TriangleMesh m = Cube();
+  io::TriangleMesh m = Cube();
   m.face_colors.assign(12, 0x123456);
   for (Vector3d& v : m.vertices) v *= 1000;  // millimetres
-  MeshPlacement pl;
+  io::MeshPlacement pl;
   pl.scale = 0.001;
   pl.position = Vector3d(0.01, -0.02, 0.5);
   // 90 degrees about z, not normalised (norm 2).
   pl.orientation = Eigen::Quaterniond(std::sqrt(2.0), 0, 0, std::sqrt(2.0));
-  ASSERT_TRUE(ValidatePlacement(pl).ok());
-  const TriangleMesh out = TransformToObjectFrame(m, pl);
+  ASSERT_TRUE(io::ValidatePlacement(pl).ok());
+  const io::TriangleMesh out = io::TransformToObjectFrame(m, pl);
   // Corner 1 = (1000, 0, 0) mm: (1, 0, 0) m - p = (0.99, 0.02, -0.5); R^T turns
   // (x, y, z) into (y, -x, z).
   EXPECT_LT((out.vertices[1] - Vector3d(0.02, -0.99, -0.5)).norm(), 1e-15);
   // Every vertex, against the formula with a general rotation.
   pl.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Vector3d(1, 2, 3).normalized()));
   pl.orientation.coeffs() *= 3.0;
-  const TriangleMesh general = TransformToObjectFrame(m, pl);
+  const io::TriangleMesh general = io::TransformToObjectFrame(m, pl);
   const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   for (size_t i = 0; i < m.vertices.size(); ++i)
     EXPECT_LT((general.vertices[i] - R.transpose() * (0.001 * m.vertices[i] - pl.position)).norm(), 1e-15);
   EXPECT_EQ(general.triangles, m.triangles);
   EXPECT_EQ(general.face_colors, m.face_colors);
-  EXPECT_NEAR(CheckMesh(general).volume, 1.0, 1e-12);
+  EXPECT_NEAR(io::CheckMesh(general).volume, 1.0, 1e-12);
 }
 
 TEST(Placement, ValidationNamesTheField) {
-  MeshPlacement pl;
+  io::MeshPlacement pl;
   pl.scale = -1;
-  EXPECT_EQ(ValidatePlacement(pl, "mesh").message(), "mesh.scale: must be > 0 (got -1)");
+  EXPECT_EQ(io::ValidatePlacement(pl, "mesh").message(), "mesh.scale: must be > 0 (got -1)");
   pl.scale = 1;
   pl.position = Vector3d(0, std::nan(""), 0);
-  EXPECT_EQ(ValidatePlacement(pl, "m").message(), "m.position: not finite");
+  EXPECT_EQ(io::ValidatePlacement(pl, "m").message(), "m.position: not finite");
   pl.position.setZero();
   pl.orientation = Eigen::Quaterniond(1e-7, 0, 0, 0);
-  EXPECT_TRUE(Has(std::string(ValidatePlacement(pl).message()), "mesh.orientation: quaternion norm"));
+  EXPECT_TRUE(Has(std::string(io::ValidatePlacement(pl).message()), "mesh.orientation: quaternion norm"));
 }
 
 // ----------------------------------------------------------------- checking
 
 TEST(CheckMesh, OpenBoxCountsItsBoundaryEdges) {
-  TriangleMesh one = Cube();
+  io::TriangleMesh one = Cube();
   one.triangles.pop_back();  // one triangle missing: its three edges are used once
-  MeshCheck c = CheckMesh(one);
+  io::MeshCheck c = io::CheckMesh(one);
   EXPECT_EQ(c.boundary_edges, 3);
   EXPECT_FALSE(c.closed);
-  EXPECT_EQ(RequireClosedSolid(c, "box.stl").message(), "box.stl: 3 boundary edges: the mesh is not closed");
+  EXPECT_EQ(io::RequireClosedSolid(c, "box.stl").message(), "box.stl: 3 boundary edges: the mesh is not closed");
 
-  TriangleMesh face = Cube();
+  io::TriangleMesh face = Cube();
   face.triangles.resize(10);  // a whole face missing: its four sides (the diagonal goes with it)
-  c = CheckMesh(face);
+  c = io::CheckMesh(face);
   EXPECT_EQ(c.boundary_edges, 4);
   EXPECT_FALSE(c.closed);
   EXPECT_TRUE(c.consistently_oriented);
-  EXPECT_EQ(RequireClosedSolid(c, "box.stl").message(), "box.stl: 4 boundary edges: the mesh is not closed");
+  EXPECT_EQ(io::RequireClosedSolid(c, "box.stl").message(), "box.stl: 4 boundary edges: the mesh is not closed");
 }
 
 TEST(CheckMesh, InvertedBoxMustBeFlipped) {
-  TriangleMesh m = Cube();
+  io::TriangleMesh m = Cube();
   for (auto& t : m.triangles) std::swap(t[1], t[2]);
-  const MeshCheck c = CheckMesh(m);
+  const io::MeshCheck c = io::CheckMesh(m);
   EXPECT_TRUE(c.closed);
   EXPECT_TRUE(c.consistently_oriented);
   EXPECT_NEAR(c.volume, -1.0, 1e-12);
-  const std::string e(RequireClosedSolid(c, "box.stl").message());
+  const std::string e(io::RequireClosedSolid(c, "box.stl").message());
   EXPECT_TRUE(Has(e, "box.stl: volume -1 m^3 is negative")) << e;
   EXPECT_TRUE(Has(e, "flip the winding")) << e;
 }
 
 TEST(CheckMesh, FinOnAnEdgeIsNonManifold) {
-  TriangleMesh m = Cube();
+  io::TriangleMesh m = Cube();
   // A triangle standing on the cube's edge 0-1, pointing away from it.
   m.vertices.emplace_back(0.5, -1, -1);
   m.triangles.push_back({0, 1, 8});
-  const MeshCheck c = CheckMesh(m);
+  const io::MeshCheck c = io::CheckMesh(m);
   EXPECT_EQ(c.non_manifold_edges, 1);  // edge 0-1, now used three times
   EXPECT_EQ(c.boundary_edges, 2);      // the fin's free sides
   EXPECT_FALSE(c.closed);
-  const std::string e(RequireClosedSolid(c, "x.ply").message());
+  const std::string e(io::RequireClosedSolid(c, "x.ply").message());
   EXPECT_EQ(e.rfind("x.ply: 1 non-manifold edges (shared by more than two triangles", 0), 0u) << e;
 }
 
 TEST(CheckMesh, OneFlippedTriangleIsInconsistent) {
-  TriangleMesh m = Cube();
+  io::TriangleMesh m = Cube();
   std::swap(m.triangles[4][1], m.triangles[4][2]);
-  const MeshCheck c = CheckMesh(m);
+  const io::MeshCheck c = io::CheckMesh(m);
   EXPECT_TRUE(c.closed);  // every edge still has two triangles
   EXPECT_FALSE(c.consistently_oriented);
   EXPECT_EQ(c.inconsistent_edges, 3);
-  EXPECT_EQ(RequireClosedSolid(c, "part.obj").message(),
+  EXPECT_EQ(io::RequireClosedSolid(c, "part.obj").message(),
             "part.obj: 3 edges are traversed twice in the same direction: the triangles are not consistently "
             "oriented");
 }
 
 TEST(CheckMesh, DegenerateFacesAreCounted) {
-  TriangleMesh m = Cube();
+  io::TriangleMesh m = Cube();
   m.vertices.emplace_back(0.5, 0, 0);  // on the edge 0-1
   m.triangles.push_back({0, 8, 1});    // zero area
-  const MeshCheck c = CheckMesh(m);
+  const io::MeshCheck c = io::CheckMesh(m);
   EXPECT_EQ(c.degenerate_faces, 1);
   EXPECT_EQ(c.degenerate_area_fraction, 0.0);
   EXPECT_NEAR(c.volume, 1.0, 1e-12);
-  EXPECT_TRUE(Has(std::string(ValidateMesh(m).message()), "mesh.triangles[12]: degenerate"));
-  EXPECT_TRUE(ValidateMesh(Cube()).ok());
+  EXPECT_TRUE(Has(std::string(io::ValidateMesh(m).message()), "mesh.triangles[12]: degenerate"));
+  EXPECT_TRUE(io::ValidateMesh(Cube()).ok());
 }
 
 // ------------------------------------------------------------ reading errors
 
 TEST_F(MeshFiles, ReadingErrorsNameTheFile) {
   const std::string dae = Write("cube.dae", ObjWithQuads());
-  absl::StatusOr<TriangleMesh> r = ReadMeshFile(dae);
+  absl::StatusOr<io::TriangleMesh> r = io::ReadMeshFile(dae);
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.status().message(), dae + ": unknown mesh format '.dae' (expected .stl, .obj or .ply)");
-  absl::StatusOr<LoadedMesh> l = LoadMesh(Request(dae));
+  absl::StatusOr<io::LoadedMesh> l = io::LoadMesh(Request(dae));
   ASSERT_FALSE(l.ok());
   EXPECT_TRUE(Has(std::string(l.status().message()), "unknown mesh format")) << l.status();
-  r = ReadMeshBytes(ObjWithQuads(), "gltf", "memory");
+  r = io::ReadMeshBytes(ObjWithQuads(), "gltf", "memory");
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.status().message(), "memory: unknown mesh format 'gltf' (expected stl, obj or ply)");
 
   const std::string missing = (dir_ / "missing.ply").string();
-  r = ReadMeshFile(missing);
+  r = io::ReadMeshFile(missing);
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.status().message().rfind(missing + ": cannot open", 0), 0u) << r.status();
-  l = LoadMesh(Request(missing));
+  l = io::LoadMesh(Request(missing));
   ASSERT_FALSE(l.ok());
   EXPECT_EQ(l.status().message().rfind(missing + ": cannot open", 0), 0u) << l.status();
 
   // A descriptor pointing at a missing mesh names the mesh.
   const std::string desc = Write("gone.mesh.json", R"({"mesh": "gone.stl"})");
-  l = LoadMesh(Request(desc));
+  l = io::LoadMesh(Request(desc));
   ASSERT_FALSE(l.ok());
   EXPECT_EQ(l.status().message().rfind((dir_ / "gone.stl").string() + ": cannot open", 0), 0u) << l.status();
 
   std::string garbage = "\x01\x02\x03 not a mesh at all \xff\xfe";
   for (const char* ext : {"stl", "obj", "ply"}) {
     const std::string path = Write(std::string("garbage.") + ext, garbage);
-    r = ReadMeshFile(path);
+    r = io::ReadMeshFile(path);
     ASSERT_FALSE(r.ok()) << ext;
     EXPECT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument);
     EXPECT_EQ(r.status().message().rfind(path + ": ", 0), 0u) << r.status();
   }
   const std::string empty = Write("empty.stl", "");
-  r = ReadMeshFile(empty);
+  r = io::ReadMeshFile(empty);
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.status().message(), empty + ": empty file");
   // Files cut short (a broken download): never a solid. A binary PLY whose
@@ -586,7 +586,7 @@ TEST_F(MeshFiles, ReadingErrorsNameTheFile) {
     const std::string bytes = f.bytes();
     for (size_t cut : {40, 100}) {
       SCOPED_TRACE(absl::StrFormat("%s cut by %d bytes", f.file, cut));
-      r = ReadMeshBytes(bytes.substr(0, bytes.size() - cut), f.format, f.file);
+      r = io::ReadMeshBytes(bytes.substr(0, bytes.size() - cut), f.format, f.file);
       if (std::string(f.file) == "cube_binary.ply") {
         ASSERT_FALSE(r.ok());
         EXPECT_TRUE(Has(std::string(r.status().message()), "cube_binary.ply: assimp: Validation failed"))
@@ -596,7 +596,7 @@ TEST_F(MeshFiles, ReadingErrorsNameTheFile) {
         EXPECT_EQ(r.status().message().rfind(std::string(f.file) + ": ", 0), 0u) << r.status();
         continue;
       }
-      EXPECT_FALSE(RequireClosedSolid(CheckMesh(*r), f.file).ok());
+      EXPECT_FALSE(io::RequireClosedSolid(io::CheckMesh(*r), f.file).ok());
     }
   }
 }

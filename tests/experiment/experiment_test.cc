@@ -8,7 +8,7 @@
 #include "tactforce/experiment/grasp.h"
 #include "tactforce/experiment/sensor_channel.h"
 #include "tactforce/experiment/slope.h"
-#include "tactforce/experiment/svg.h"
+#include "tactforce/io/svg.h"
 #include "tactforce/sim/sensor_model.h"
 
 namespace tactforce::experiment {

@@ -14,7 +14,7 @@
 
 #include <gtest/gtest.h>
 
-#include "tactforce/estimator/mesh.h"
+#include "tactforce/io/mesh.h"
 #include "tactforce/inertia/density.h"
 #include "tactforce/inertia/fit.h"
 #include "tactforce/inertia/simulate.h"
@@ -22,7 +22,7 @@
 namespace tactforce::inertia {
 namespace {
 
-using estimator::TriangleMesh;
+using io::TriangleMesh;
 
 // Axis-aligned box [lo, hi], triangles counter-clockwise seen from outside.
 void AddBox(TriangleMesh* m, const Vec3& lo, const Vec3& hi, uint32_t color = 0) {

@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "tactforce/estimator/mesh.h"
+#include "tactforce/io/mesh.h"
 #include "tactforce/inertia/density.h"
 #include "tactforce/inertia/fit.h"
 #include "tactforce/inertia/metrics.h"
@@ -18,7 +18,7 @@
 namespace tactforce::inertia {
 namespace {
 
-using estimator::TriangleMesh;
+using io::TriangleMesh;
 
 // Axis-aligned box [lo, hi] (outward winding, or inward when `flip`).
 void AppendBox(TriangleMesh* m, const Vec3& lo, const Vec3& hi, bool flip = false, uint32_t color = 0) {
@@ -288,7 +288,7 @@ TEST(DensityFit, UniformBoxFromNoiseFreeDataIsExact) {
 TEST(DensityFit, UniformSharedToolFromNoiseFreeData) {
   const auto dir = testing::SharedInertiaDir();
   if (!dir) GTEST_SKIP() << "../shared/data/inertia is absent";
-  absl::StatusOr<estimator::LoadedMesh> mesh = estimator::LoadMesh({*dir + "/Pliers.mesh.json"});
+  absl::StatusOr<io::LoadedMesh> mesh = io::LoadMesh({*dir + "/Pliers.mesh.json"});
   ASSERT_TRUE(mesh.ok()) << mesh.status();
   absl::StatusOr<InertiaSamples> samples = ReadInertiaCsvFile(*dir + "/Pliers.csv");
   ASSERT_TRUE(samples.ok()) << samples.status();
@@ -308,7 +308,7 @@ TEST(DensityFit, UniformSharedToolFromNoiseFreeData) {
 TEST(DensityFit, UniformSharedToolWithModerateNoise) {
   const auto dir = testing::SharedInertiaDir();
   if (!dir) GTEST_SKIP() << "../shared/data/inertia is absent";
-  absl::StatusOr<estimator::LoadedMesh> mesh = estimator::LoadMesh({*dir + "/Pliers.mesh.json"});
+  absl::StatusOr<io::LoadedMesh> mesh = io::LoadMesh({*dir + "/Pliers.mesh.json"});
   ASSERT_TRUE(mesh.ok()) << mesh.status();
   absl::StatusOr<InertiaSamples> samples = ReadInertiaCsvFile(*dir + "/Pliers.csv");
   ASSERT_TRUE(samples.ok()) << samples.status();

@@ -150,7 +150,7 @@ TEST(InertiaTruth, ErrorsNameTheKey) {
             std::string::npos);
   EXPECT_NE(err(R"({"mass": -1, "com": [0,0,0], "inertia_com": [1,1,1,0,0,0]})").find("key 'mass': must be > 0"),
             std::string::npos);
-  // Syntax errors name the file and line (the shared JSON reader of sim/json.h).
+  // Syntax errors name the file and line (the shared JSON reader of io/json.h).
   EXPECT_EQ(err("{\n\"mass\": 1,\n\"com\": [0,0,0] \"inertia_com\": []}").rfind("t.json:3:", 0), 0u)
       << err("{\n\"mass\": 1,\n\"com\": [0,0,0] \"inertia_com\": []}");
   EXPECT_EQ(err("").rfind("t.json", 0), 0u) << err("");

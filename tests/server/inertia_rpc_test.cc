@@ -147,7 +147,7 @@ namespace fs = std::filesystem;
 
 // The simulated object's mesh as a Wavefront OBJ (object frame, m), padded
 // with comment lines to at least `min_bytes`.
-std::string ObjText(const estimator::TriangleMesh& mesh, size_t min_bytes = 0) {
+std::string ObjText(const io::TriangleMesh& mesh, size_t min_bytes = 0) {
   std::string out = "# tactforce test mesh\n";
   for (const inertia::Vec3& v : mesh.vertices) out += absl::StrFormat("v %.17g %.17g %.17g\n", v.x(), v.y(), v.z());
   for (const auto& t : mesh.triangles) out += absl::StrFormat("f %d %d %d\n", t[0] + 1, t[1] + 1, t[2] + 1);

@@ -16,7 +16,7 @@
 namespace tactforce::inertia {
 namespace {
 
-using estimator::TriangleMesh;
+using io::TriangleMesh;
 
 // Adds the integrals of the signed tetrahedron (o, a, b, c).
 void AddTetrahedron(const Vec3& o, const Vec3& a, const Vec3& b, const Vec3& c, SolidMoments* m) {
@@ -88,7 +88,7 @@ SolidMoments Rotated(const SolidMoments& local, const Eigen::Matrix3d& frame) {
 std::string ColorName(uint32_t c) { return absl::StrFormat("colour #%06x", c & 0xffffff); }
 
 // Boundary edges of a subset of triangles (edges whose reverse is missing).
-int BoundaryEdges(const TriangleMesh& mesh, const std::vector<int>& tris) {
+int BoundaryEdges(const io::TriangleMesh& mesh, const std::vector<int>& tris) {
   std::unordered_map<uint64_t, int> directed;
   directed.reserve(tris.size() * 3);
   auto key = [](int a, int b) { return (static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b); };
@@ -103,7 +103,7 @@ int BoundaryEdges(const TriangleMesh& mesh, const std::vector<int>& tris) {
   return boundary;
 }
 
-absl::StatusOr<RegionModel> ColorRegions(const TriangleMesh& mesh, std::string_view name) {
+absl::StatusOr<RegionModel> ColorRegions(const io::TriangleMesh& mesh, std::string_view name) {
   if (mesh.face_colors.size() != mesh.triangles.size())
     return absl::InvalidArgumentError(absl::StrCat(std::string(name), ": the mesh has no face colours (use --regions grid)"));
   std::map<uint32_t, std::vector<int>> groups;
@@ -116,7 +116,7 @@ absl::StatusOr<RegionModel> ColorRegions(const TriangleMesh& mesh, std::string_v
     if (boundary > 0)
       return absl::InvalidArgumentError(absl::StrCat(std::string(name), ": ", ColorName(color), " does not bound a closed part (",
                                                      boundary, " boundary edges); use --regions grid"));
-    TriangleMesh part;
+    io::TriangleMesh part;
     part.vertices = mesh.vertices;
     for (int t : tris) part.triangles.push_back(mesh.triangles[t]);
     DensityRegion r;
@@ -141,7 +141,7 @@ absl::StatusOr<RegionModel> ColorRegions(const TriangleMesh& mesh, std::string_v
 
 // Principal axes of the uniform solid about its centroid, columns sorted by
 // the vertices' extent along them (longest first), right-handed.
-Eigen::Matrix3d GridAxes(const TriangleMesh& mesh, const SolidMoments& total) {
+Eigen::Matrix3d GridAxes(const io::TriangleMesh& mesh, const SolidMoments& total) {
   const Vec3 c = total.Centroid();
   const Eigen::Matrix3d cov = total.second / total.volume - c * c.transpose();
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(0.5 * (cov + cov.transpose()));
@@ -170,7 +170,7 @@ std::array<int, 3> CellCounts(const Vec3& extent, double h) {
   return n;
 }
 
-RegionModel GridRegions(const TriangleMesh& mesh, const SolidMoments& total, const std::array<int, 3>& n,
+RegionModel GridRegions(const io::TriangleMesh& mesh, const SolidMoments& total, const std::array<int, 3>& n,
                         const Eigen::Matrix3d& axes, const Vec3& lo, const Vec3& hi,
                         const std::vector<Vec3>& v, const std::vector<Eigen::AlignedBox3d>& boxes) {
   RegionModel model;
@@ -266,7 +266,7 @@ SolidMoments& SolidMoments::operator-=(const SolidMoments& o) {
   return *this;
 }
 
-SolidMoments MeshMoments(const TriangleMesh& mesh) {
+SolidMoments MeshMoments(const io::TriangleMesh& mesh) {
   SolidMoments m;
   if (mesh.vertices.empty()) return m;
   // Cone from a vertex of the mesh: smaller terms than from the origin.
@@ -276,7 +276,7 @@ SolidMoments MeshMoments(const TriangleMesh& mesh) {
   return m;
 }
 
-SolidMoments OctantMoments(const TriangleMesh& mesh, const Eigen::Matrix3d& frame, const Vec3& corner) {
+SolidMoments OctantMoments(const io::TriangleMesh& mesh, const Eigen::Matrix3d& frame, const Vec3& corner) {
   std::vector<Vec3> v(mesh.vertices.size());
   for (size_t i = 0; i < v.size(); ++i) v[i] = frame.transpose() * mesh.vertices[i];
   std::vector<Eigen::AlignedBox3d> boxes(mesh.triangles.size());
@@ -309,7 +309,7 @@ absl::StatusOr<RegionScheme> ParseRegionScheme(std::string_view text) {
       absl::StrCat("regions: unknown '", std::string(text), "' (expected auto, grid, colors or single)"));
 }
 
-absl::StatusOr<RegionModel> BuildRegions(const TriangleMesh& mesh, const RegionOptions& options,
+absl::StatusOr<RegionModel> BuildRegions(const io::TriangleMesh& mesh, const RegionOptions& options,
                                          std::string_view name) {
   if (options.target_regions < 1 || options.target_regions > 512)
     return absl::InvalidArgumentError(

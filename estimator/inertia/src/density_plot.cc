@@ -34,7 +34,7 @@
 namespace tactforce::inertia {
 namespace {
 
-using estimator::TriangleMesh;
+using io::TriangleMesh;
 
 constexpr uint32_t kGrey = 0xd0d0d0;       // no region / no region model
 constexpr double kMaxPanelsWidth = 960;    // px, the three panels together
@@ -116,7 +116,7 @@ struct Marker {
 
 }  // namespace
 
-absl::StatusOr<std::string> DensityPlotSvg(const TriangleMesh& mesh, const InertiaFit& fit,
+absl::StatusOr<std::string> DensityPlotSvg(const io::TriangleMesh& mesh, const InertiaFit& fit,
                                            const DensityPlotOptions& options) {
   if (mesh.vertices.empty() || mesh.triangles.empty())
     return absl::InvalidArgumentError("density plot: the mesh is empty");
@@ -212,7 +212,7 @@ absl::StatusOr<std::string> DensityPlotSvg(const TriangleMesh& mesh, const Inert
     }
   }
   // Back faces are hidden only on a closed, outward-oriented surface.
-  const estimator::MeshCheck check = estimator::CheckMesh(mesh);
+  const io::MeshCheck check = io::CheckMesh(mesh);
   const bool cull = check.closed && check.consistently_oriented && check.volume > 0;
 
   // Layout.

@@ -104,7 +104,7 @@ absl::Status ValidateMeshOptions(const InertiaOptions& o) {
           return absl::InvalidArgumentError(absl::StrCat(o.mesh_name, ": triangle ", t, " has vertex index ", k,
                                                          " out of range"));
     if (o.method == InertiaMethod::kDensity || o.method == InertiaMethod::kConstrained) {
-      if (absl::Status st = estimator::RequireClosedSolid(estimator::CheckMesh(*o.mesh), o.mesh_name); !st.ok())
+      if (absl::Status st = io::RequireClosedSolid(io::CheckMesh(*o.mesh), o.mesh_name); !st.ok())
         return st;
     }
   }
@@ -268,7 +268,7 @@ std::string DescribeFit(const InertiaFit& f) {
     for (const std::string& d : f.poorly_excited) out += "poorly excited: " + d + "\n";
   }
   if (f.mesh_check) {
-    const estimator::MeshCheck& m = *f.mesh_check;
+    const io::MeshCheck& m = *f.mesh_check;
     out += absl::StrFormat("mesh: %d faces, %d vertices, %s%s, volume %.6g m^3\n", m.faces, m.vertices,
                            m.closed && m.consistently_oriented ? "closed and consistently oriented" : "NOT a closed solid",
                            m.junction_edges > 0 ? absl::StrCat(" (", m.junction_edges, " edges where closed parts touch)")
@@ -317,7 +317,7 @@ absl::StatusOr<internal::MethodOutput> FitConstrainedWithMesh(const InertiaSampl
 absl::StatusOr<internal::MethodOutput> FitDensityOrFallBack(const InertiaSamples& samples,
                                                             const InertiaOptions& options, const ConvexHull* hull,
                                                             InertiaFit* fit) {
-  fit->mesh_check = estimator::CheckMesh(*options.mesh);
+  fit->mesh_check = io::CheckMesh(*options.mesh);
   absl::StatusOr<RegionModel> regions = BuildRegions(*options.mesh, options.regions, options.mesh_name);
   if (!regions.ok()) return regions.status();
   auto model = std::make_shared<const RegionModel>(*std::move(regions));

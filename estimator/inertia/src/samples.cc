@@ -10,7 +10,7 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "tactforce/inertia/fit.h"
-#include "tactforce/sim/text_file.h"
+#include "tactforce/io/text_file.h"
 
 namespace tactforce::inertia {
 namespace {
@@ -138,7 +138,7 @@ void NormalizeOrientations(InertiaSamples& s) {
   for (InertiaSample& x : s.samples) x.orientation.normalize();
 }
 
-absl::StatusOr<InertiaSamples> InertiaSamplesFromCsv(const estimator::CsvTable& table) {
+absl::StatusOr<InertiaSamples> InertiaSamplesFromCsv(const io::CsvTable& table) {
   const std::string& src = table.source;
   if (absl::Status st = table.Require(kPoseColumns); !st.ok()) return st;
 
@@ -268,7 +268,7 @@ absl::StatusOr<InertiaSamples> InertiaSamplesFromCsv(const estimator::CsvTable& 
     }
     out.samples.push_back(std::move(s));
   }
-  // NaN cells: ParseCsv normally rejects them; a table built otherwise may hold them.
+  // NaN cells: io::ParseCsv normally rejects them; a table built otherwise may hold them.
   for (size_t r = 0; r < table.rows.size(); ++r) {
     for (size_t c = 0; c < table.rows[r].size(); ++c) {
       if (std::isnan(table.rows[r][c])) {
@@ -290,13 +290,13 @@ absl::StatusOr<InertiaSamples> InertiaSamplesFromCsv(const estimator::CsvTable& 
 }
 
 absl::StatusOr<InertiaSamples> ParseInertiaCsv(const std::string& text, const std::string& source) {
-  absl::StatusOr<estimator::CsvTable> t = estimator::ParseCsv(text, source);
+  absl::StatusOr<io::CsvTable> t = io::ParseCsv(text, source);
   if (!t.ok()) return t.status();
   return InertiaSamplesFromCsv(*t);
 }
 
 absl::StatusOr<InertiaSamples> ReadInertiaCsvFile(const std::string& path) {
-  absl::StatusOr<estimator::CsvTable> t = estimator::ReadCsvFile(path);
+  absl::StatusOr<io::CsvTable> t = io::ReadCsvFile(path);
   if (!t.ok()) return t.status();
   return InertiaSamplesFromCsv(*t);
 }
@@ -372,7 +372,7 @@ std::string InertiaSamplesToCsv(const InertiaSamples& s) {
 }
 
 absl::Status WriteInertiaCsvFile(const InertiaSamples& samples, const std::string& path) {
-  return sim::WriteTextFile(path, InertiaSamplesToCsv(samples));
+  return io::WriteTextFile(path, InertiaSamplesToCsv(samples));
 }
 
 }  // namespace tactforce::inertia

@@ -4,13 +4,13 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
-#include "tactforce/sim/json.h"
-#include "tactforce/sim/text_file.h"
+#include "tactforce/io/json.h"
+#include "tactforce/io/text_file.h"
 
 namespace tactforce::inertia {
 
 absl::StatusOr<InertiaTruth> ParseTruthJson(const std::string& text, const std::string& source) {
-  absl::StatusOr<sim::JsonValue> root = sim::ParseJson(text, source);
+  absl::StatusOr<io::JsonValue> root = io::ParseJson(text, source);
   if (!root.ok()) return root.status();
   if (!root->is_object()) return absl::InvalidArgumentError(absl::StrCat(source, ": expected a JSON object"));
   auto key_error = [&](const std::string& key, const std::string& what) {
@@ -18,14 +18,14 @@ absl::StatusOr<InertiaTruth> ParseTruthJson(const std::string& text, const std::
   };
   auto array = [&](const std::string& key, size_t n, bool required,
                    std::vector<double>* out) -> absl::Status {
-    const sim::JsonValue* v = root->Find(key);
+    const io::JsonValue* v = root->Find(key);
     if (v == nullptr) {
       return required ? absl::InvalidArgumentError(absl::StrCat(source, ": missing key '", key, "'"))
                       : absl::OkStatus();
     }
     if (!v->is_array() || v->array().size() != n)
       return key_error(key, absl::StrCat("expected an array of ", n, " numbers"));
-    for (const sim::JsonValue& x : v->array()) {
+    for (const io::JsonValue& x : v->array()) {
       if (!x.is_number()) return key_error(key, absl::StrCat("expected an array of ", n, " numbers"));
       if (!std::isfinite(x.number())) return key_error(key, "not finite");
       out->push_back(x.number());
@@ -33,7 +33,7 @@ absl::StatusOr<InertiaTruth> ParseTruthJson(const std::string& text, const std::
     return absl::OkStatus();
   };
   InertiaTruth truth;
-  const sim::JsonValue* m = root->Find("mass");
+  const io::JsonValue* m = root->Find("mass");
   if (m == nullptr) return absl::InvalidArgumentError(absl::StrCat(source, ": missing key 'mass'"));
   if (!m->is_number() || !std::isfinite(m->number())) return key_error("mass", "expected a number");
   if (!(m->number() > 0)) return key_error("mass", "must be > 0");
@@ -50,7 +50,7 @@ absl::StatusOr<InertiaTruth> ParseTruthJson(const std::string& text, const std::
 }
 
 absl::StatusOr<InertiaTruth> ReadTruthJsonFile(const std::string& path) {
-  absl::StatusOr<std::string> text = sim::ReadTextFile(path);
+  absl::StatusOr<std::string> text = io::ReadTextFile(path);
   if (!text.ok()) return text.status();
   return ParseTruthJson(*text, path);
 }
@@ -58,7 +58,7 @@ absl::StatusOr<InertiaTruth> ReadTruthJsonFile(const std::string& path) {
 std::string TruthToJson(const InertiaTruth& t) {
   const InertialParameters& p = t.params;
   const auto inertia = p.inertia_com.ToArray();
-  sim::JsonWriter w;
+  io::JsonWriter w;
   w.BeginObject();
   w.Field("mass", p.mass);
   w.NumberArray("com", {p.com.x(), p.com.y(), p.com.z()});
@@ -72,7 +72,7 @@ std::string TruthToJson(const InertiaTruth& t) {
 }
 
 absl::Status WriteTruthJsonFile(const InertiaTruth& truth, const std::string& path) {
-  return sim::WriteTextFile(path, TruthToJson(truth));
+  return io::WriteTextFile(path, TruthToJson(truth));
 }
 
 }  // namespace tactforce::inertia

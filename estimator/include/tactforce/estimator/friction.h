@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "tactforce/estimator/csv.h"
-#include "tactforce/estimator/mesh.h"
+#include "tactforce/io/csv.h"
+#include "tactforce/io/mesh.h"
 #include "tactforce/planner/types.h"
 
 namespace tactforce::estimator {
@@ -48,7 +48,7 @@ struct FrictionOptions {
   // Onset back-tracking: speed noise level = median + k * 1.4826 MAD of the
   // tangential contact-point speeds before detection.
   double noise_k = 6.0;
-  std::optional<TriangleMesh> mesh;
+  std::optional<io::TriangleMesh> mesh;
 };
 
 struct TrialFriction {
@@ -75,12 +75,12 @@ struct FrictionEstimate {
 
 // Errors name the field: "trials: empty", "trials[2].samples[7].t: not
 // increasing", "trials[0].normal: zero length", "trials[1]: no normal and no
-// mesh", mesh errors from ValidateMesh.
+// mesh", mesh errors from io::ValidateMesh.
 absl::StatusOr<FrictionEstimate> EstimateFriction(const std::vector<FrictionTrial>& trials,
                                                   const FrictionOptions& options = {});
 
 // CSV `t,fx,fy,fz,px,py,pz[,slip]` -> trial (name = source).
-absl::StatusOr<FrictionTrial> FrictionTrialFromCsv(const CsvTable& table);
+absl::StatusOr<FrictionTrial> FrictionTrialFromCsv(const io::CsvTable& table);
 
 // ---- simulator for tests and users ---------------------------------------
 struct FrictionSimOptions {

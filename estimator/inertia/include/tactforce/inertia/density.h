@@ -12,7 +12,7 @@
 #include <Eigen/Core>
 
 #include "absl/status/statusor.h"
-#include "tactforce/estimator/mesh.h"
+#include "tactforce/io/mesh.h"
 #include "tactforce/inertia/types.h"
 
 namespace tactforce::inertia {
@@ -33,14 +33,14 @@ struct SolidMoments {
 // Exact integrals of the polyhedron bounded by a closed, consistently
 // oriented mesh (object frame, m): sums over signed tetrahedra (divergence
 // theorem). An inside-out mesh gives a negative volume.
-SolidMoments MeshMoments(const estimator::TriangleMesh& mesh);
+SolidMoments MeshMoments(const io::TriangleMesh& mesh);
 
 // The same for the part of the solid inside the octant
 // {x <= corner.x, y <= corner.y, z <= corner.z} of `frame` (columns = the
 // octant's axes in the object frame, orthonormal): each triangle is clipped
 // to the octant and coned from the corner, so the missing cap faces, which
 // lie on planes through the corner, contribute nothing. Exact.
-SolidMoments OctantMoments(const estimator::TriangleMesh& mesh, const Eigen::Matrix3d& frame,
+SolidMoments OctantMoments(const io::TriangleMesh& mesh, const Eigen::Matrix3d& frame,
                            const Vec3& corner_in_frame);
 
 enum class RegionScheme {
@@ -87,7 +87,7 @@ struct RegionModel {
 // Splits the solid bounded by `mesh` (object frame, m; closed) into regions.
 // Errors name `name`, e.g. "Pliers.ply: colour #e5e5e5 does not bound a
 // closed part (423 boundary edges); use --regions grid".
-absl::StatusOr<RegionModel> BuildRegions(const estimator::TriangleMesh& mesh, const RegionOptions& options,
+absl::StatusOr<RegionModel> BuildRegions(const io::TriangleMesh& mesh, const RegionOptions& options,
                                          std::string_view name = "mesh");
 
 }  // namespace tactforce::inertia

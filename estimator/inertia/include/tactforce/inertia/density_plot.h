@@ -9,7 +9,7 @@
 #include <string>
 
 #include "absl/status/statusor.h"
-#include "tactforce/estimator/mesh.h"
+#include "tactforce/io/mesh.h"
 #include "tactforce/inertia/fit.h"
 #include "tactforce/inertia/types.h"
 
@@ -39,7 +39,7 @@ struct DensityPlotOptions {
 // InvalidArgument when the mesh is empty or has out-of-range indices or
 // non-finite vertices, when its triangle count differs from the fit's region
 // model, or when the fit has not one density per region.
-absl::StatusOr<std::string> DensityPlotSvg(const estimator::TriangleMesh& mesh, const InertiaFit& fit,
+absl::StatusOr<std::string> DensityPlotSvg(const io::TriangleMesh& mesh, const InertiaFit& fit,
                                            const DensityPlotOptions& options = {});
 
 }  // namespace tactforce::inertia

@@ -52,7 +52,7 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
-#include "tactforce/estimator/mesh.h"
+#include "tactforce/io/mesh.h"
 #include "tactforce/inertia/density.h"
 #include "tactforce/inertia/types.h"
 
@@ -98,7 +98,7 @@ struct InertiaOptions {
   // to the fitted mass, as the prior (weight `mesh_prior_weight`) when no
   // `prior` is given. Other methods ignore it (noted). The mesh's vertices
   // also serve as the hull when `hull` is empty.
-  std::shared_ptr<const estimator::TriangleMesh> mesh;
+  std::shared_ptr<const io::TriangleMesh> mesh;
   std::string mesh_name = "mesh";
   double mesh_prior_weight = 1.0;  // >= 0, chi^2 units like prior.weight
 
@@ -196,7 +196,7 @@ struct InertiaFit {
   std::shared_ptr<const RegionModel> region_model;
   double density_regularization = 0.0;     // the strength used
   std::string density_regularization_rule; // "held-out time blocks (5 folds)" or "given"
-  std::optional<estimator::MeshCheck> mesh_check;
+  std::optional<io::MeshCheck> mesh_check;
   // Held-out weighted residual of DENSITY relative to CONSTRAINED's (0 = not tested).
   double heldout_residual_ratio = 0.0;
   bool mesh_contradicted = false;          // the answer is CONSTRAINED's

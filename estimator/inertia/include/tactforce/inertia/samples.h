@@ -20,7 +20,7 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
-#include "tactforce/estimator/csv.h"
+#include "tactforce/io/csv.h"
 #include "tactforce/inertia/types.h"
 
 namespace tactforce::inertia {
@@ -30,9 +30,9 @@ namespace tactforce::inertia {
 // time 0.11 is not after the previous sample's 0.11", "run.csv:7: columns
 // qw,qx,qy,qz: quaternion norm 2e-09 is near zero", "run.csv: contact 1:
 // missing column(s) c1_fz", "run.csv: 3 samples, at least 4 needed ...".
-absl::StatusOr<InertiaSamples> InertiaSamplesFromCsv(const estimator::CsvTable& table);
+absl::StatusOr<InertiaSamples> InertiaSamplesFromCsv(const io::CsvTable& table);
 
-// ReadCsvFile + InertiaSamplesFromCsv.
+// io::ReadCsvFile + InertiaSamplesFromCsv.
 absl::StatusOr<InertiaSamples> ReadInertiaCsvFile(const std::string& path);
 absl::StatusOr<InertiaSamples> ParseInertiaCsv(const std::string& text, const std::string& source);
 

@@ -24,7 +24,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "tactforce/estimator/mesh.h"
+#include "tactforce/io/mesh.h"
 #include "tactforce/inertia/truth.h"
 #include "tactforce/inertia/types.h"
 
@@ -78,7 +78,7 @@ struct SimulatedObject {
   std::vector<Vec3> hull;  // convex-hull vertices (object frame)
   // The solid whose uniform density gives `params` (the box below, or a
   // mesh given by the caller), object frame, metres, outward-facing.
-  estimator::TriangleMesh mesh;
+  io::TriangleMesh mesh;
   std::vector<Vec3> contact_points;
   std::vector<Vec3> contact_normals;  // unit, into the object
 };

@@ -1,0 +1,436 @@
+#include "tactforce/api/inertia.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <utility>
+
+#include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
+#include "tactforce/api/convert.h"
+#include "tactforce/inertia/metrics.h"
+#include "tactforce/inertia/samples.h"
+
+namespace tactforce::api {
+namespace {
+
+using inertia::Vec3;
+
+v1::Inertia TensorToProto(const inertia::InertiaTensor& t) {
+  v1::Inertia out;
+  out.set_ixx(t.ixx);
+  out.set_iyy(t.iyy);
+  out.set_izz(t.izz);
+  out.set_ixy(t.ixy);
+  out.set_ixz(t.ixz);
+  out.set_iyz(t.iyz);
+  return out;
+}
+
+inertia::InertiaTensor TensorFromProto(const v1::Inertia& t) {
+  return inertia::InertiaTensor{t.ixx(), t.iyy(), t.izz(), t.ixy(), t.ixz(), t.iyz()};
+}
+
+absl::Status Prefixed(const absl::Status& status, absl::string_view prefix) {
+  return absl::Status(status.code(), absl::StrCat(prefix, status.message()));
+}
+
+// Library messages about the mesh start with its name ("box.stl: 3
+// boundary edges ..."); over the API they start with the field.
+absl::Status PrefixedForField(const absl::Status& status, const std::string& mesh_name) {
+  if (!mesh_name.empty() && absl::StartsWith(status.message(), absl::StrCat(mesh_name, ":")))
+    return Prefixed(status, "options.mesh: ");
+  return Prefixed(status, "options.");
+}
+
+absl::StatusOr<inertia::RegionScheme> RegionSchemeFromProto(v1::RegionScheme scheme) {
+  switch (scheme) {
+    case v1::REGION_SCHEME_AUTO: return inertia::RegionScheme::kAuto;
+    case v1::REGION_SCHEME_GRID: return inertia::RegionScheme::kGrid;
+    case v1::REGION_SCHEME_COLORS: return inertia::RegionScheme::kColors;
+    case v1::REGION_SCHEME_SINGLE: return inertia::RegionScheme::kSingle;
+    default: break;
+  }
+  return absl::InvalidArgumentError(absl::StrCat("options.regions: unknown value ", static_cast<int>(scheme)));
+}
+
+inertia::InertiaMethod InertiaMethodFromProto(v1::InertiaMethod method) {
+  switch (method) {
+    case v1::INERTIA_METHOD_BASELINE_LS: return inertia::InertiaMethod::kBaselineLs;
+    case v1::INERTIA_METHOD_FACTOR_GRAPH: return inertia::InertiaMethod::kFactorGraph;
+    case v1::INERTIA_METHOD_DENSITY: return inertia::InertiaMethod::kDensity;
+    default: return inertia::InertiaMethod::kConstrained;
+  }
+}
+
+v1::MeshCheck MeshCheckToProto(const io::MeshCheck& c) {
+  v1::MeshCheck out;
+  out.set_closed(c.closed);
+  out.set_consistently_oriented(c.consistently_oriented);
+  out.set_volume(c.volume);
+  out.set_faces(c.faces);
+  out.set_vertices(c.vertices);
+  out.set_boundary_edges(c.boundary_edges);
+  out.set_non_manifold_edges(c.non_manifold_edges);
+  out.set_inconsistent_edges(c.inconsistent_edges);
+  out.set_degenerate_faces(c.degenerate_faces);
+  out.set_area(c.area);
+  out.set_junction_edges(c.junction_edges);
+  return out;
+}
+
+io::MeshCheck MeshCheckFromProto(const v1::MeshCheck& c) {
+  io::MeshCheck out;
+  out.closed = c.closed();
+  out.consistently_oriented = c.consistently_oriented();
+  out.volume = c.volume();
+  out.faces = c.faces();
+  out.vertices = c.vertices();
+  out.boundary_edges = c.boundary_edges();
+  out.non_manifold_edges = c.non_manifold_edges();
+  out.inconsistent_edges = c.inconsistent_edges();
+  out.degenerate_faces = c.degenerate_faces();
+  out.area = c.area();
+  out.junction_edges = c.junction_edges();
+  return out;
+}
+
+}  // namespace
+
+v1::RegionScheme RegionSchemeToProto(inertia::RegionScheme scheme) {
+  switch (scheme) {
+    case inertia::RegionScheme::kAuto: return v1::REGION_SCHEME_AUTO;
+    case inertia::RegionScheme::kGrid: return v1::REGION_SCHEME_GRID;
+    case inertia::RegionScheme::kColors: return v1::REGION_SCHEME_COLORS;
+    case inertia::RegionScheme::kSingle: return v1::REGION_SCHEME_SINGLE;
+  }
+  return v1::REGION_SCHEME_AUTO;
+}
+
+absl::StatusOr<ObjectMesh> MeshFromProto(const v1::MeshInput& input, std::string_view field_view) {
+  const std::string field(field_view);
+  ObjectMesh out;
+  out.name = input.name().empty() ? "mesh" : input.name();
+  if (input.data().empty())
+    return absl::InvalidArgumentError(
+        absl::StrCat(field, ".data: empty (give the bytes of ", out.name, ", an STL, OBJ or PLY file)"));
+  std::string format = input.format();
+  if (format.empty()) {
+    if (input.name().empty())
+      return absl::InvalidArgumentError(
+          absl::StrCat(field, ".format: empty and no name to take it from (give \"stl\", \"obj\" or \"ply\")"));
+    absl::StatusOr<std::string> from_name = io::MeshFormatFromPath(input.name());
+    if (!from_name.ok()) return Prefixed(from_name.status(), absl::StrCat(field, ".format: "));
+    format = *from_name;
+  }
+  io::MeshPlacement placement;
+  if (input.has_scale()) placement.scale = input.scale();
+  if (input.has_position()) placement.position = FromProto(input.position());
+  if (input.has_orientation()) {
+    const v1::Quaternion& q = input.orientation();
+    placement.orientation = Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z());
+  }
+  if (absl::Status s = io::ValidatePlacement(placement, field); !s.ok()) return s;
+  absl::StatusOr<io::TriangleMesh> mesh = io::ReadMeshBytes(input.data(), format, out.name);
+  if (!mesh.ok()) return Prefixed(mesh.status(), absl::StrCat(field, ": "));
+  out.mesh = io::TransformToObjectFrame(*mesh, placement);
+  return out;
+}
+
+v1::MeshInput MeshInputToProto(std::string bytes, const std::string& format, const std::string& name,
+                               const io::MeshPlacement& placement) {
+  v1::MeshInput out;
+  out.set_data(std::move(bytes));
+  out.set_format(format);
+  out.set_name(name);
+  out.set_scale(placement.scale);
+  *out.mutable_position() = ToProto(placement.position);
+  v1::Quaternion* q = out.mutable_orientation();
+  q->set_w(placement.orientation.w());
+  q->set_x(placement.orientation.x());
+  q->set_y(placement.orientation.y());
+  q->set_z(placement.orientation.z());
+  return out;
+}
+
+v1::InertiaMethod InertiaMethodToProto(inertia::InertiaMethod method) {
+  switch (method) {
+    case inertia::InertiaMethod::kBaselineLs: return v1::INERTIA_METHOD_BASELINE_LS;
+    case inertia::InertiaMethod::kFactorGraph: return v1::INERTIA_METHOD_FACTOR_GRAPH;
+    case inertia::InertiaMethod::kConstrained: return v1::INERTIA_METHOD_CONSTRAINED;
+    case inertia::InertiaMethod::kDensity: return v1::INERTIA_METHOD_DENSITY;
+  }
+  return v1::INERTIA_METHOD_UNSPECIFIED;
+}
+
+inertia::InertialParameters InertialParametersFromProto(const v1::InertialParameters& p) {
+  inertia::InertialParameters out;
+  out.mass = p.mass();
+  out.com = FromProto(p.com());
+  out.inertia_com = TensorFromProto(p.inertia());
+  return out;
+}
+
+v1::InertialParameters InertialParametersToProto(const inertia::InertialParameters& p) {
+  v1::InertialParameters out;
+  out.set_mass(p.mass);
+  *out.mutable_com() = ToProto(p.com);
+  *out.mutable_inertia() = TensorToProto(p.inertia_com);
+  return out;
+}
+
+absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::InertiaFitOptions& o) {
+  inertia::InertiaOptions out;
+  switch (o.method()) {
+    case v1::INERTIA_METHOD_UNSPECIFIED:
+      out.method = o.has_mesh() ? inertia::InertiaMethod::kDensity : inertia::InertiaMethod::kConstrained;
+      break;
+    case v1::INERTIA_METHOD_CONSTRAINED: out.method = inertia::InertiaMethod::kConstrained; break;
+    case v1::INERTIA_METHOD_BASELINE_LS: out.method = inertia::InertiaMethod::kBaselineLs; break;
+    case v1::INERTIA_METHOD_FACTOR_GRAPH: out.method = inertia::InertiaMethod::kFactorGraph; break;
+    case v1::INERTIA_METHOD_DENSITY: out.method = inertia::InertiaMethod::kDensity; break;
+    default:
+      return absl::InvalidArgumentError(absl::StrCat("options.method: unknown value ", o.method()));
+  }
+  if (o.has_gravity()) out.gravity = FromProto(o.gravity());
+  for (const v1::Vec3& v : o.hull()) out.hull.push_back(FromProto(v));
+  if (o.has_prior()) {
+    inertia::InertiaPrior prior;
+    prior.params = InertialParametersFromProto(o.prior().params());
+    prior.weight = o.prior().weight() == 0.0 ? 1.0 : o.prior().weight();
+    out.prior = prior;
+  }
+  const v1::InertiaNoise& n = o.noise();
+  out.noise.force_sigma = n.force_sigma();
+  out.noise.torque_sigma = n.torque_sigma();
+  out.noise.position_sigma = n.position_sigma();
+  out.noise.orientation_sigma = n.orientation_sigma();
+  out.noise.angular_velocity_sigma = n.angular_velocity_sigma();
+  out.noise.linear_acceleration_sigma = n.linear_acceleration_sigma();
+  out.noise.angular_acceleration_sigma = n.angular_acceleration_sigma();
+  out.savitzky_golay = o.savitzky_golay();
+  if (o.savitzky_golay_window() != 0) out.savitzky_golay_window = static_cast<int>(o.savitzky_golay_window());
+  out.smoothing_window = static_cast<int>(o.smoothing_window());
+  if (o.max_iterations() != 0) out.max_iterations = static_cast<int>(o.max_iterations());
+  if (o.has_regularization()) out.regularization = o.regularization();
+  absl::StatusOr<inertia::RegionScheme> scheme = RegionSchemeFromProto(o.regions());
+  if (!scheme.ok()) return scheme.status();
+  out.regions.scheme = *scheme;
+  if (o.target_regions() != 0) {
+    if (o.target_regions() > 512)
+      return absl::InvalidArgumentError(
+          absl::StrCat("options.target_regions: must be in 1..512, 0 = 12 (got ", o.target_regions(), ")"));
+    out.regions.target_regions = static_cast<int>(o.target_regions());
+  }
+  if (o.has_density_regularization()) out.density_regularization = o.density_regularization();
+  if (o.has_mesh_prior_weight()) out.mesh_prior_weight = o.mesh_prior_weight();
+  if (o.has_contradiction_ratio()) out.contradiction_ratio = o.contradiction_ratio();
+  if (o.has_mesh()) {
+    absl::StatusOr<ObjectMesh> mesh = MeshFromProto(o.mesh());
+    if (!mesh.ok()) return mesh.status();
+    out.mesh_name = mesh->name;
+    out.mesh = std::make_shared<const io::TriangleMesh>(std::move(mesh->mesh));
+  }
+  if (o.has_truth() && !inertia::IsPhysicallyConsistent(InertialParametersFromProto(o.truth()))) {
+    return absl::InvalidArgumentError(
+        "options.truth: not physically consistent (mass > 0 and a positive-definite pseudo-inertia needed)");
+  }
+  if (absl::Status s = inertia::ValidateInertiaOptions(out); !s.ok())
+    return PrefixedForField(s, out.mesh ? out.mesh_name : std::string());
+  return out;
+}
+
+v1::InertiaSample InertiaSampleToProto(const inertia::InertiaSample& s, inertia::ForceSource source) {
+  v1::InertiaSample out;
+  out.set_t(s.t);
+  *out.mutable_position() = ToProto(s.position);
+  v1::Quaternion* q = out.mutable_orientation();
+  q->set_w(s.orientation.w());
+  q->set_x(s.orientation.x());
+  q->set_y(s.orientation.y());
+  q->set_z(s.orientation.z());
+  if (source == inertia::ForceSource::kWrench) {
+    *out.mutable_wrench()->mutable_force() = ToProto(s.force);
+    *out.mutable_wrench()->mutable_torque() = ToProto(s.torque);
+    out.set_force_sigma(s.force_sigma);
+    out.set_torque_sigma(s.torque_sigma);
+  } else {
+    for (const inertia::ContactReading& c : s.contacts) {
+      v1::ContactSample* cs = out.add_contacts();
+      *cs->mutable_point() = ToProto(c.point);
+      *cs->mutable_force() = ToProto(c.force);
+      cs->set_sigma(c.sigma);
+    }
+  }
+  if (s.kinematics) {
+    v1::MeasuredKinematics* k = out.mutable_kinematics();
+    *k->mutable_angular_velocity() = ToProto(s.kinematics->angular_velocity);
+    *k->mutable_velocity() = ToProto(s.kinematics->velocity);
+    *k->mutable_angular_acceleration() = ToProto(s.kinematics->angular_acceleration);
+    *k->mutable_acceleration() = ToProto(s.kinematics->acceleration);
+  }
+  return out;
+}
+
+v1::FitInertiaResponse InertiaFitToProto(const inertia::InertiaFit& fit) {
+  v1::FitInertiaResponse out;
+  out.set_method(InertiaMethodToProto(fit.method));
+  out.set_mass(fit.params.mass);
+  *out.mutable_com() = ToProto(fit.params.com);
+  *out.mutable_inertia() = TensorToProto(fit.params.inertia_com);
+  *out.mutable_principal_moments() = ToProto(fit.principal_moments);
+  for (int k = 0; k < 3; ++k) *out.add_principal_axes() = ToProto(Vec3(fit.principal_axes.col(k)));
+  out.set_physically_consistent(fit.physically_consistent);
+  out.set_pseudo_inertia_min_eigenvalue(fit.pseudo_inertia_min_eigenvalue);
+  out.set_com_in_hull(fit.com_in_hull);
+  out.set_residual_rms_force(fit.residual_rms_force);
+  out.set_residual_rms_torque(fit.residual_rms_torque);
+  v1::InertiaStandardErrors* se = out.mutable_standard_errors();
+  se->set_mass(fit.mass_se);
+  *se->mutable_com() = ToProto(fit.com_se);
+  *se->mutable_inertia() = TensorToProto(fit.inertia_se);
+  for (double s : fit.singular_values) out.add_singular_values(s);
+  for (const std::string& d : fit.poorly_excited) out.add_poorly_excited(d);
+  out.set_iterations(fit.iterations);
+  out.set_time_seconds(fit.time_seconds);
+  out.set_samples_used(fit.samples_used);
+  for (const std::string& n : fit.notes) out.add_notes(n);
+  for (const inertia::InertiaFit::RegionDensity& d : fit.densities) {
+    v1::DensityRegion* r = out.add_densities();
+    r->set_label(d.label);
+    r->set_density(d.density);
+    r->set_volume(d.volume);
+    r->set_standard_error(d.standard_error);
+  }
+  out.set_density_realizable(fit.density_realizable);
+  if (fit.mesh_check) *out.mutable_mesh_check() = MeshCheckToProto(*fit.mesh_check);
+  out.set_density_regularization(fit.density_regularization);
+  out.set_density_regularization_rule(fit.density_regularization_rule);
+  out.set_heldout_residual_ratio(fit.heldout_residual_ratio);
+  out.set_mesh_contradicted(fit.mesh_contradicted);
+  out.set_mesh_contradiction(fit.mesh_contradiction);
+  if (fit.region_model) out.set_region_scheme(RegionSchemeToProto(fit.region_model->scheme));
+  return out;
+}
+
+inertia::InertiaFit InertiaFitFromProto(const v1::FitInertiaResponse& r) {
+  inertia::InertiaFit fit;
+  fit.method = InertiaMethodFromProto(r.method());
+  fit.params.mass = r.mass();
+  fit.params.com = FromProto(r.com());
+  fit.params.inertia_com = TensorFromProto(r.inertia());
+  fit.standard = fit.params.ToStandard();
+  fit.principal_moments = FromProto(r.principal_moments());
+  for (int k = 0; k < std::min(3, r.principal_axes_size()); ++k) fit.principal_axes.col(k) = FromProto(r.principal_axes(k));
+  fit.physically_consistent = r.physically_consistent();
+  fit.pseudo_inertia_min_eigenvalue = r.pseudo_inertia_min_eigenvalue();
+  fit.com_in_hull = r.com_in_hull();
+  fit.residual_rms_force = r.residual_rms_force();
+  fit.residual_rms_torque = r.residual_rms_torque();
+  fit.mass_se = r.standard_errors().mass();
+  fit.com_se = FromProto(r.standard_errors().com());
+  fit.inertia_se = TensorFromProto(r.standard_errors().inertia());
+  fit.singular_values.assign(r.singular_values().begin(), r.singular_values().end());
+  fit.poorly_excited.assign(r.poorly_excited().begin(), r.poorly_excited().end());
+  fit.iterations = r.iterations();
+  fit.time_seconds = r.time_seconds();
+  fit.samples_used = r.samples_used();
+  fit.notes.assign(r.notes().begin(), r.notes().end());
+  for (const v1::DensityRegion& d : r.densities())
+    fit.densities.push_back({d.label(), d.density(), d.volume(), d.standard_error()});
+  fit.density_realizable = r.density_realizable();
+  if (r.has_mesh_check()) fit.mesh_check = MeshCheckFromProto(r.mesh_check());
+  fit.density_regularization = r.density_regularization();
+  fit.density_regularization_rule = r.density_regularization_rule();
+  fit.heldout_residual_ratio = r.heldout_residual_ratio();
+  fit.mesh_contradicted = r.mesh_contradicted();
+  fit.mesh_contradiction = r.mesh_contradiction();
+  return fit;
+}
+
+absl::StatusOr<v1::FitInertiaResponse> FitInertiaSamples(const inertia::InertiaSamples& samples,
+                                                         const v1::InertiaFitOptions& options,
+                                                         const CallLimits& limits,
+                                                         std::function<void(double)> progress,
+                                                         inertia::InertiaFit* fit_out) {
+  absl::StatusOr<inertia::InertiaOptions> converted = InertiaOptionsFromProto(options);
+  if (!converted.ok()) return converted.status();
+  converted->progress = std::move(progress);
+  converted->interrupt = limits.interrupt;
+  absl::StatusOr<inertia::InertiaFit> fit = inertia::FitInertia(samples, *converted);
+  if (!fit.ok()) return fit.status();
+  v1::FitInertiaResponse response = InertiaFitToProto(*fit);
+  if (fit_out != nullptr) *fit_out = *fit;
+  response.set_samples_received(static_cast<int32_t>(samples.samples.size()));
+  if (options.has_truth()) {
+    const inertia::InertiaErrors e =
+        inertia::CompareInertia(InertialParametersFromProto(options.truth()), fit->params);
+    v1::InertiaErrors* errors = response.mutable_errors();
+    errors->set_paper_metric(e.paper_metric);
+    errors->set_riemannian(e.riemannian);
+    errors->set_mass_percent(e.mass_percent);
+    errors->set_com_mm(e.com_mm);
+    errors->set_consistent(e.consistent);
+  }
+  return response;
+}
+
+absl::Status InertiaStream::Add(const v1::FitInertiaRequest& message) {
+  const int index = messages_++;
+  if (message.has_options()) {
+    if (index != 0) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          "options: only the first message of the stream may carry options (message ", index, " does)"));
+    }
+    options_ = message.options();
+  }
+  for (const v1::InertiaSample& in : message.samples()) {
+    const int64_t i = samples_received();
+    if (i >= max_samples_) {
+      return absl::InvalidArgumentError(absl::StrCat("samples: more than ", max_samples_,
+                                                     " samples in one stream (the server's limit)"));
+    }
+    const std::string where = absl::StrCat("samples[", i, "]");
+    const bool has_contacts = in.contacts_size() > 0;
+    if (i == 0) {
+      if (has_contacts == in.has_wrench()) {
+        return absl::InvalidArgumentError(absl::StrCat(
+            where, ": give exactly one force source, wrench or contacts (the first sample sets it for the stream)"));
+      }
+      samples_.source = has_contacts ? inertia::ForceSource::kContacts : inertia::ForceSource::kWrench;
+      samples_.num_contacts = in.contacts_size();
+    } else if (samples_.source == inertia::ForceSource::kWrench && (has_contacts || !in.has_wrench())) {
+      return absl::InvalidArgumentError(absl::StrCat(where, ": wrench expected (samples[0] has a wrench)"));
+    } else if (samples_.source == inertia::ForceSource::kContacts && in.has_wrench()) {
+      return absl::InvalidArgumentError(absl::StrCat(where, ".wrench: contacts expected (samples[0] has contacts)"));
+    }
+    inertia::InertiaSample s;
+    s.t = in.t();
+    s.position = FromProto(in.position());
+    s.orientation = Eigen::Quaterniond(in.orientation().w(), in.orientation().x(), in.orientation().y(),
+                                       in.orientation().z());
+    s.force = FromProto(in.wrench().force());
+    s.torque = FromProto(in.wrench().torque());
+    s.force_sigma = in.force_sigma();
+    s.torque_sigma = in.torque_sigma();
+    for (const v1::ContactSample& c : in.contacts()) {
+      s.contacts.push_back(inertia::ContactReading{FromProto(c.point()), FromProto(c.force()), c.sigma()});
+    }
+    if (in.has_kinematics()) {
+      const v1::MeasuredKinematics& k = in.kinematics();
+      s.kinematics = inertia::MeasuredKinematics{FromProto(k.angular_velocity()), FromProto(k.velocity()),
+                                                 FromProto(k.angular_acceleration()),
+                                                 FromProto(k.acceleration())};
+    }
+    samples_.samples.push_back(std::move(s));
+  }
+  return absl::OkStatus();
+}
+
+absl::StatusOr<v1::FitInertiaResponse> InertiaStream::Fit(const CallLimits& limits,
+                                                          std::function<void(double)> progress) const {
+  if (samples_.samples.empty()) return absl::InvalidArgumentError("samples: the stream carried no samples");
+  return FitInertiaSamples(samples_, options_, limits, std::move(progress));
+}
+
+}  // namespace tactforce::api

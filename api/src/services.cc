@@ -1,0 +1,276 @@
+#include "tactforce/api/services.h"
+
+#include "absl/strings/str_cat.h"
+#include "tactforce/api/convert.h"
+#include "tactforce/audit/audit.h"
+#include "tactforce/sim/sensor_model.h"
+#include "tactforce/estimator/force_estimation.h"
+#include "tactforce/estimator/friction.h"
+#include "tactforce/planner/solver.h"
+#include "tactforce/planner/trajectory.h"
+
+namespace tactforce::api {
+namespace {
+
+absl::StatusOr<PlanCall> LimitedCall(const v1::PlanRequest& request, const CallLimits& limits) {
+  absl::StatusOr<PlanCall> call = FromProto(request);
+  if (!call.ok()) return call.status();
+  call->options.max_contacts = limits.max_contacts;
+  call->options.ipopt_max_cpu_seconds = limits.ipopt_max_cpu_seconds;
+  call->options.interrupt = limits.interrupt;
+  return call;
+}
+
+// Prefixes field paths of a nested message ("plan." + "contacts[1].normal").
+absl::Status Nested(const absl::Status& s, const char* prefix) {
+  if (s.ok() || s.code() != absl::StatusCode::kInvalidArgument) return s;
+  return absl::InvalidArgumentError(absl::StrCat(prefix, s.message()));
+}
+
+v1::TrajectoryResponse ToProto(const planner::TrajectoryResult& r) {
+  v1::TrajectoryResponse out;
+  for (const planner::PlanResult& step : r.steps) *out.add_steps() = api::ToProto(step);
+  out.set_optimal_steps(r.optimal);
+  out.set_infeasible_steps(r.infeasible);
+  out.set_failed_steps(r.failed);
+  out.set_total_time_us(r.total_time_us);
+  return out;
+}
+
+v1::EstimateStatus ToProto(estimator::EstimateStatus s) {
+  switch (s) {
+    case estimator::EstimateStatus::kOk: return v1::ESTIMATE_STATUS_OK;
+    case estimator::EstimateStatus::kInfeasible: return v1::ESTIMATE_STATUS_INFEASIBLE;
+    case estimator::EstimateStatus::kSolverFailure: return v1::ESTIMATE_STATUS_SOLVER_FAILURE;
+  }
+  return v1::ESTIMATE_STATUS_UNSPECIFIED;
+}
+
+}  // namespace
+
+absl::StatusOr<v1::PlanResponse> HandlePlan(const v1::PlanRequest& request,
+                                            const CallLimits& limits) {
+  absl::StatusOr<PlanCall> call = LimitedCall(request, limits);
+  if (!call.ok()) return call.status();
+  absl::StatusOr<planner::PlanResult> result =
+      planner::Plan(call->problem, call->options, call->solver);
+  if (!result.ok()) return result.status();
+  return api::ToProto(*result);
+}
+
+absl::StatusOr<v1::TrajectoryResponse> HandleTrajectory(const v1::TrajectoryRequest& request,
+                                                        const CallLimits& limits) {
+  absl::StatusOr<PlanCall> call = LimitedCall(request.plan(), limits);
+  if (!call.ok()) return Nested(call.status(), "plan.");
+  planner::TrajectoryProblem t;
+  t.base = call->problem;
+  if (request.plan().object().has_inertia()) {
+    const v1::Inertia& in = request.plan().object().inertia();
+    t.inertia = planner::Inertia{in.ixx(), in.iyy(), in.izz(), in.ixy(), in.ixz(), in.iyz()};
+  }
+  for (int k = 0; k < request.steps_size(); ++k) {
+    const v1::TrajectoryStep& in = request.steps(k);
+    planner::TrajectoryStep step;
+    step.gravity = in.has_gravity() ? FromProto(in.gravity()) : t.base.object.gravity;
+    step.linear_acceleration = FromProto(in.linear_acceleration());
+    step.angular_velocity = FromProto(in.angular_velocity());
+    step.angular_acceleration = FromProto(in.angular_acceleration());
+    step.external_wrench = {FromProto(in.external_wrench().force()),
+                            FromProto(in.external_wrench().torque())};
+    if (in.contacts_size() > 0) {
+      std::vector<planner::Contact> contacts;
+      for (int i = 0; i < in.contacts_size(); ++i) {
+        absl::StatusOr<planner::Contact> c =
+            ContactFromProto(in.contacts(i), absl::StrCat("steps[", k, "].contacts[", i, "]"));
+        if (!c.ok()) return c.status();
+        contacts.push_back(*std::move(c));
+      }
+      step.contacts = std::move(contacts);
+    }
+    t.steps.push_back(std::move(step));
+  }
+  const bool warm = !request.has_warm_start() || request.warm_start();
+  absl::StatusOr<planner::TrajectoryResult> r =
+      planner::PlanTrajectory(t, call->options, call->solver, warm);
+  if (!r.ok()) return r.status();
+  return ToProto(*r);
+}
+
+absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
+    const v1::FrictionProbeRequest& request, const CallLimits& limits) {
+  absl::StatusOr<PlanCall> call = LimitedCall(request.plan(), limits);
+  if (!call.ok()) return Nested(call.status(), "plan.");
+  planner::FrictionProbe probe;
+  probe.position = FromProto(request.position());
+  probe.normal = FromProto(request.normal());
+  probe.tangent = FromProto(request.tangent());
+  probe.tangential_force = request.tangential_force();
+  probe.initial_normal_force = request.initial_normal_force();
+  probe.final_normal_force = request.final_normal_force();
+  probe.ramp_rate = request.ramp_rate();
+  probe.sample_rate = request.sample_rate();
+  absl::StatusOr<planner::ProbePlan> plan =
+      planner::PlanFrictionProbe(call->problem, probe, call->options, call->solver);
+  if (!plan.ok()) return plan.status();
+  v1::FrictionProbeResponse out;
+  for (double t : plan->times) out.add_times(t);
+  for (const auto& f : plan->probe_forces) *out.add_probe_forces() = api::ToProto(f);
+  *out.mutable_holding() = ToProto(plan->holding);
+  return out;
+}
+
+absl::StatusOr<v1::EstimateResponse> HandleEstimate(const v1::EstimateRequest& request,
+                                                    const CallLimits& limits) {
+  v1::PlanRequest as_plan;
+  *as_plan.mutable_object() = request.object();
+  *as_plan.mutable_contacts() = request.contacts();
+  *as_plan.mutable_external_wrench() = request.external_wrench();
+  absl::StatusOr<planner::PlanProblem> problem = ToProblem(as_plan);
+  if (!problem.ok()) return problem.status();
+  estimator::EstimateOptions o;
+  switch (request.method()) {
+    case v1::ESTIMATE_METHOD_UNSPECIFIED:
+    case v1::ESTIMATE_METHOD_PROJECTION: o.method = estimator::EstimateMethod::kProjection; break;
+    case v1::ESTIMATE_METHOD_NORMAL_LSQ: o.method = estimator::EstimateMethod::kNormalLsq; break;
+    default:
+      return absl::InvalidArgumentError(
+          absl::StrCat("method: unknown value ", static_cast<int>(request.method())));
+  }
+  if (request.has_origin_weight()) o.origin_weight = request.origin_weight();
+  if (request.cone_sides() > 64) return absl::InvalidArgumentError("cone_sides: must be in 3..64");
+  if (request.cone_sides() != 0) o.cone_sides = static_cast<int>(request.cone_sides());
+  o.max_contacts = limits.max_contacts;
+  const std::vector<double> readings(request.readings().begin(), request.readings().end());
+  absl::StatusOr<estimator::ForceEstimate> e = estimator::EstimateForces(*problem, readings, o);
+  if (!e.ok()) return e.status();
+  v1::EstimateResponse out;
+  out.set_status(ToProto(e->status));
+  out.set_message(e->message);
+  for (const auto& f : e->forces) *out.add_forces() = api::ToProto(f);
+  for (double v : e->normal_forces) out.add_normal_forces(v);
+  for (double v : e->residuals) out.add_residuals(v);
+  out.set_method(e->method == estimator::EstimateMethod::kProjection ? v1::ESTIMATE_METHOD_PROJECTION
+                                                                   : v1::ESTIMATE_METHOD_NORMAL_LSQ);
+  for (int j : e->negative_readings) out.add_negative_readings(j);
+  out.set_solve_time_us(e->solve_time_us);
+  out.set_iterations(e->iterations);
+  return out;
+}
+
+absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& request) {
+  std::vector<estimator::FrictionTrial> trials;
+  for (int i = 0; i < request.trials_size(); ++i) {
+    const v1::FrictionTrial& in = request.trials(i);
+    estimator::FrictionTrial trial;
+    trial.name = in.name().empty() ? absl::StrCat("trial", i) : in.name();
+    if (in.has_normal()) trial.normal = FromProto(in.normal());
+    for (const v1::FrictionSample& s : in.samples()) {
+      estimator::FrictionSample out;
+      out.t = s.t();
+      out.force = FromProto(s.force());
+      out.contact_point = FromProto(s.contact_point());
+      if (s.has_slip()) out.slip = s.slip();
+      trial.samples.push_back(out);
+    }
+    trials.push_back(std::move(trial));
+  }
+  estimator::FrictionOptions o;
+  if (request.mesh().triangles_size() > 0 || request.mesh().vertices_size() > 0) {
+    io::TriangleMesh mesh;
+    for (const auto& v : request.mesh().vertices()) mesh.vertices.push_back(FromProto(v));
+    for (const auto& t : request.mesh().triangles()) mesh.triangles.push_back({t.a(), t.b(), t.c()});
+    o.mesh = std::move(mesh);
+  }
+  if (request.has_slip_distance()) o.slip_distance = request.slip_distance();
+  if (request.has_window()) o.window = static_cast<int>(std::min<uint32_t>(request.window(), 1u << 20));
+  if (request.has_fit_window())
+    o.fit_window = static_cast<int>(std::min<uint32_t>(request.fit_window(), 1u << 20));
+  if (request.has_min_normal_force()) o.min_normal_force = request.min_normal_force();
+  switch (request.pre_slip()) {
+    case v1::PRE_SLIP_FORCE_UNSPECIFIED:
+    case v1::PRE_SLIP_FORCE_WINDOW_AVERAGE: o.pre_slip = estimator::PreSlipForce::kWindowAverage; break;
+    case v1::PRE_SLIP_FORCE_LINEAR_FIT: o.pre_slip = estimator::PreSlipForce::kLinearFit; break;
+    default:
+      return absl::InvalidArgumentError(
+          absl::StrCat("pre_slip: unknown value ", static_cast<int>(request.pre_slip())));
+  }
+  absl::StatusOr<estimator::FrictionEstimate> e = estimator::EstimateFriction(trials, o);
+  if (!e.ok()) return e.status();
+  v1::FrictionResponse out;
+  for (const auto& t : e->trials) {
+    v1::TrialFriction* r = out.add_trials();
+    r->set_name(t.name);
+    r->set_slipped(t.slipped);
+    r->set_valid(t.valid);
+    r->set_mu(t.mu);
+    r->set_lower_bound(t.lower_bound);
+    r->set_slip_time(t.slip_time);
+    r->set_slip_index(t.slip_index);
+    r->set_force_angle(t.force_angle);
+    *r->mutable_normal() = api::ToProto(t.normal);
+    r->set_mesh_triangle(t.mesh_triangle);
+    r->set_message(t.message);
+  }
+  out.set_median(e->median);
+  out.set_mean(e->mean);
+  out.set_iqr(e->iqr);
+  out.set_count(e->count);
+  return out;
+}
+
+absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request) {
+  audit::MeasuredData data;
+  data.source = request.source().empty() ? "request" : request.source();
+  bool any_shear = false;
+  for (const auto& s : request.samples()) any_shear |= s.has_shear();
+  int segment_trial = 0;
+  for (int k = 0; k < request.samples_size(); ++k) {
+    const v1::AuditSample& s = request.samples(k);
+    if (any_shear && !s.has_shear())
+      return absl::InvalidArgumentError(absl::StrCat("samples[", k, "].shear: missing (other samples have it)"));
+    data.t.push_back(s.t());
+    data.reference.push_back(s.reference());
+    data.reading.push_back(s.reading());
+    if (any_shear) data.shear.push_back(s.shear());
+    data.trial.push_back(s.trial());
+    if (k == 0 || s.trial() != segment_trial) data.segment_starts.push_back(k);
+    segment_trial = s.trial();
+  }
+  if (absl::Status valid = audit::ValidateMeasuredData(data); !valid.ok()) return valid;
+  audit::AuditOptions options;
+  if (request.has_heldout_fraction()) options.heldout_fraction = request.heldout_fraction();
+  if (request.has_max_causes()) options.max_causes = request.max_causes();
+  if (!request.reading_units().empty()) options.reading_units = request.reading_units();
+  if (!request.model_json().empty()) {
+    absl::StatusOr<sim::SensorModel> model = sim::SensorModelFromJson(request.model_json(), "model_json");
+    if (!model.ok()) return model.status();
+    options.model = *model;
+  }
+  absl::StatusOr<audit::AuditReport> report = audit::RunAudit(data, options);
+  if (!report.ok()) return report.status();
+  v1::AuditResponse out;
+  out.set_nominal_adequate(report->nominal_adequate);
+  for (const audit::Cause& c : report->causes) {
+    v1::AuditCause* cause = out.add_causes();
+    cause->set_effect(c.effect);
+    cause->set_form(c.form);
+    for (const auto& [k, values] : c.array_parameters) {
+      v1::DoubleList& list = (*cause->mutable_array_parameters())[k];
+      for (double v : values) list.add_values(v);
+    }
+    for (const auto& [k, v] : c.parameters) (*cause->mutable_parameters())[k] = v;
+    for (const auto& [k, v] : c.uncertainties) (*cause->mutable_uncertainties())[k] = v;
+    cause->set_heldout_rms_before(c.heldout_rms_before);
+    cause->set_heldout_rms_after(c.heldout_rms_after);
+    cause->set_gain(c.gain);
+  }
+  out.set_heldout_rms_before(report->heldout_rms_before);
+  out.set_heldout_rms_after(report->heldout_rms_after);
+  out.set_gain(report->gain);
+  out.set_extended_model_json(sim::SensorModelToJson(report->extended_model));
+  out.set_report_json(audit::AuditReportJson(*report));
+  out.set_summary(audit::FormatAuditSummary(*report));
+  return out;
+}
+
+}  // namespace tactforce::api

@@ -1,0 +1,339 @@
+#include "tactforce/audit/measured_data.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+
+namespace tactforce::audit {
+namespace {
+
+std::string Where(const MeasuredData& d, int i) {
+  if (i >= 0 && i < static_cast<int>(d.line.size())) return absl::StrCat(d.source, ":", d.line[i]);
+  return absl::StrCat(d.source, ": sample ", i);
+}
+
+}  // namespace
+
+absl::Status ValidateMeasuredData(const MeasuredData& d, int min_samples) {
+  const size_t n = d.t.size();
+  if (d.reference.size() != n || d.reading.size() != n)
+    return absl::InvalidArgumentError(absl::StrCat(d.source, ": columns t, reference, reading differ in length"));
+  if (!d.shear.empty() && d.shear.size() != n)
+    return absl::InvalidArgumentError(absl::StrCat(d.source, ": column 'shear' differs in length"));
+  if (static_cast<int>(n) < min_samples) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        d.source, ": too few samples: ", n, " valid rows",
+        d.skipped_nan_rows ? absl::StrCat(" (", d.skipped_nan_rows, " NaN rows skipped)") : "",
+        ", the audit needs at least ", min_samples, " (a training block and a later held-out block)"));
+  }
+  auto check_finite = [&](const std::vector<double>& v, const char* col) -> absl::Status {
+    for (size_t i = 0; i < v.size(); ++i)
+      if (!std::isfinite(v[i]))
+        return absl::InvalidArgumentError(absl::StrCat(Where(d, i), ": column '", col, "': not a finite number"));
+    return absl::OkStatus();
+  };
+  for (auto st : {check_finite(d.t, "t"), check_finite(d.reference, "reference"),
+                  check_finite(d.reading, "reading"), check_finite(d.shear, "shear")})
+    if (!st.ok()) return st;
+  std::vector<int> starts = d.segment_starts.empty() ? std::vector<int>{0} : d.segment_starts;
+  for (size_t i = 1; i < n; ++i) {
+    if (std::binary_search(starts.begin(), starts.end(), static_cast<int>(i))) continue;
+    if (!(d.t[i] > d.t[i - 1]))
+      return absl::InvalidArgumentError(absl::StrCat(Where(d, i), ": column 't': time not increasing (", d.t[i],
+                                                     " after ", d.t[i - 1], "); sort the rows by time"));
+  }
+  auto check_const = [&](const std::vector<double>& v, const char* col, const char* why) -> absl::Status {
+    auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+    if (*hi - *lo <= 1e-12 * std::max(1.0, std::abs(*hi)))
+      return absl::InvalidArgumentError(
+          absl::StrCat(d.source, ": column '", col, "' is constant (", *lo, "): ", why));
+    return absl::OkStatus();
+  };
+  if (auto st = check_const(d.reference, "reference",
+                            "the audit needs a varying reference force (press, ramp or random profile)");
+      !st.ok())
+    return st;
+  if (auto st = check_const(d.reading, "reading", "the sensor does not respond; nothing to audit"); !st.ok())
+    return st;
+  return absl::OkStatus();
+}
+
+absl::StatusOr<MeasuredData> MeasuredDataFromCsv(const io::CsvTable& table) {
+  if (auto st = table.Require({"t", "reference", "reading"}); !st.ok()) return st;
+  MeasuredData d;
+  d.source = table.source;
+  d.t = table.Column("t");
+  d.reference = table.Column("reference");
+  d.reading = table.Column("reading");
+  if (table.Has("shear")) d.shear = table.Column("shear");
+  d.line = table.line_numbers;
+  d.skipped_nan_rows = table.skipped_rows;
+  const size_t n = d.t.size();
+  d.trial.assign(n, 0);
+  if (table.Has("trial")) {
+    const auto tr = table.Column("trial");
+    std::vector<int> seen;
+    for (size_t i = 0; i < n; ++i) {
+      if (tr[i] != std::round(tr[i]))
+        return absl::InvalidArgumentError(
+            absl::StrCat(table.source, ":", d.line[i], ": column 'trial': not an integer (", tr[i], ")"));
+      d.trial[i] = static_cast<int>(tr[i]);
+      if (i == 0 || d.trial[i] != d.trial[i - 1]) {
+        if (std::find(seen.begin(), seen.end(), d.trial[i]) != seen.end())
+          return absl::InvalidArgumentError(absl::StrCat(table.source, ":", d.line[i], ": column 'trial': trial ",
+                                                         d.trial[i], " resumes after another trial; keep each trial's rows together"));
+        seen.push_back(d.trial[i]);
+        d.segment_starts.push_back(static_cast<int>(i));
+      }
+    }
+  }
+  if (d.segment_starts.empty()) d.segment_starts.push_back(0);
+  if (d.skipped_nan_rows > 0)
+    d.notes.push_back(absl::StrCat(d.skipped_nan_rows, " row(s) with NaN/empty fields skipped"));
+  if (auto st = ValidateMeasuredData(d); !st.ok()) return st;
+  return d;
+}
+
+absl::StatusOr<MeasuredData> ParseMeasuredCsv(const std::string& text, const std::string& source) {
+  io::CsvOptions opt;
+  opt.skip_nan_rows = true;
+  auto table = io::ParseCsv(text, source, opt);
+  if (!table.ok()) return table.status();
+  return MeasuredDataFromCsv(*table);
+}
+
+absl::StatusOr<MeasuredData> ReadMeasuredCsv(const std::string& path) {
+  io::CsvOptions opt;
+  opt.skip_nan_rows = true;
+  auto table = io::ReadCsvFile(path, opt);
+  if (!table.ok()) return table.status();
+  return MeasuredDataFromCsv(*table);
+}
+
+namespace {
+
+// Times with enough digits for epoch clocks (1.7e9 s to the microsecond).
+std::string G(double v) { return std::abs(v) >= 1e5 ? absl::StrFormat("%.6f", v) : absl::StrFormat("%.7g", v); }
+
+double MedianStep(const std::vector<double>& t) {
+  std::vector<double> d;
+  for (size_t i = 1; i < t.size(); ++i) d.push_back(t[i] - t[i - 1]);
+  if (d.empty()) return 0;
+  std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+  return d[d.size() / 2];
+}
+
+// |Pearson correlation| of the reading samples idx with the reference
+// (linearly interpolated) at t - offset.
+double OffsetCorrelation(const std::vector<double>& rt, const std::vector<double>& rv, const std::vector<double>& qt,
+                         const std::vector<double>& qv, size_t first, size_t last, double offset) {
+  double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+  size_t k = 0;
+  const double n = static_cast<double>(last - first);
+  for (size_t i = first; i < last; ++i) {
+    const double tq = qt[i] - offset;
+    while (k + 2 < rt.size() && rt[k + 1] < tq) ++k;
+    const double w = std::clamp((tq - rt[k]) / (rt[k + 1] - rt[k]), 0.0, 1.0);
+    const double x = rv[k] + w * (rv[k + 1] - rv[k]);
+    const double y = qv[i];
+    sx += x;
+    sy += y;
+    sxx += x * x;
+    syy += y * y;
+    sxy += x * y;
+  }
+  const double vx = sxx - sx * sx / n, vy = syy - sy * sy / n, cxy = sxy - sx * sy / n;
+  if (!(vx > 0) || !(vy > 0)) return 0;
+  return std::abs(cxy) / std::sqrt(vx * vy);
+}
+
+}  // namespace
+
+absl::StatusOr<ClockOffsetEstimate> EstimateClockOffset(const std::vector<double>& rt, const std::vector<double>& rv,
+                                                        const std::vector<double>& qt, const std::vector<double>& qv,
+                                                        double centre, double max_offset) {
+  if (!std::isfinite(centre)) return absl::InvalidArgumentError("clock offset: the search centre is not a finite number");
+  if (!(max_offset > 0) || !std::isfinite(max_offset))
+    return absl::InvalidArgumentError(
+        absl::StrCat("max clock offset: must be a finite number > 0 s, got ", max_offset));
+  if (rt.size() < 2 || rv.size() != rt.size() || qt.size() < 2 || qv.size() != qt.size())
+    return absl::InvalidArgumentError("clock offset: each stream needs at least 2 samples");
+  // Overlap of the streams at the search centre (in reading time).
+  const double ov_lo = std::max(rt.front() + centre, qt.front());
+  const double ov_hi = std::min(rt.back() + centre, qt.back());
+  const double overlap = ov_hi - ov_lo;
+  if (!(overlap > 2 * max_offset))
+    return absl::InvalidArgumentError(absl::StrCat(
+        "clock offset search +/-", G(max_offset), " s around ", G(centre), " s exceeds the streams' overlap (",
+        G(std::max(0.0, overlap)), " s: reference ", G(rt.front()), "..", G(rt.back()), " s, reading ", G(qt.front()),
+        "..", G(qt.back()), " s); the overlap must be longer than the search range (", G(2 * max_offset), " s): ",
+        overlap > 0 ? "give a smaller --max-clock-offset or the offset itself with --clock-offset"
+                    : "the clocks may have different epochs: give --clock-offset-centre (about reading start minus "
+                      "reference start) or the offset itself with --clock-offset"));
+  // Reading samples inside the reference span for every offset searched.
+  const double lo = rt.front() + centre + max_offset, hi = rt.back() + centre - max_offset;
+  const size_t first = std::lower_bound(qt.begin(), qt.end(), lo) - qt.begin();
+  const size_t last = std::upper_bound(qt.begin(), qt.end(), hi) - qt.begin();
+  const int used = last > first ? static_cast<int>(last - first) : 0;
+  if (used < kMinAuditSamples)
+    return absl::InvalidArgumentError(absl::StrCat(
+        "clock offset: only ", used, " reading samples lie inside the reference span for every offset in ",
+        G(centre), " +/- ", G(max_offset), " s; need at least ", kMinAuditSamples,
+        " (give a smaller --max-clock-offset or the offset with --clock-offset)"));
+  const double h = std::max(1e-9, std::min(MedianStep(rt), MedianStep(qt)));
+  // Coarse grid (at most 2001 points), then a grid of step h/2 around the
+  // best, then golden section within one fine step.
+  const double coarse = std::max(0.5 * h, 2 * max_offset / 2000);
+  auto corr = [&](double off) { return OffsetCorrelation(rt, rv, qt, qv, first, last, off); };
+  double best = centre, best_r = -1;
+  for (double off = centre - max_offset; off <= centre + max_offset + 1e-12; off += coarse) {
+    const double r = corr(off);
+    if (r > best_r) {
+      best_r = r;
+      best = off;
+    }
+  }
+  double fine = std::min(coarse, 0.5 * h);
+  if (coarse > fine) {
+    const double c0 = best;
+    for (double off = c0 - coarse; off <= c0 + coarse + 1e-12; off += fine) {
+      if (off < centre - max_offset || off > centre + max_offset) continue;
+      const double r = corr(off);
+      if (r > best_r) {
+        best_r = r;
+        best = off;
+      }
+    }
+  }
+  {
+    double a = std::max(centre - max_offset, best - fine), b = std::min(centre + max_offset, best + fine);
+    const double g = 0.5 * (std::sqrt(5.0) - 1);
+    double x1 = b - g * (b - a), x2 = a + g * (b - a);
+    double f1 = corr(x1), f2 = corr(x2);
+    for (int it = 0; it < 60 && b - a > 1e-9; ++it) {
+      if (f1 > f2) {
+        b = x2;
+        x2 = x1;
+        f2 = f1;
+        x1 = b - g * (b - a);
+        f1 = corr(x1);
+      } else {
+        a = x1;
+        x1 = x2;
+        f1 = f2;
+        x2 = a + g * (b - a);
+        f2 = corr(x2);
+      }
+    }
+    const double xm = 0.5 * (a + b), fm = corr(xm);
+    if (fm > best_r) {
+      best_r = fm;
+      best = xm;
+    }
+  }
+  if (best - (centre - max_offset) < h || (centre + max_offset) - best < h)
+    return absl::InvalidArgumentError(absl::StrCat(
+        "clock offset: the correlation peak (", G(best), " s, |r| = ", best_r, ") is at the edge of the search range ",
+        G(centre), " +/- ", G(max_offset), " s; the true offset may lie outside: widen --max-clock-offset or give --clock-offset"));
+  if (best_r < 0.3)
+    return absl::InvalidArgumentError(absl::StrCat(
+        "clock offset: no clear correlation between the streams (peak |r| = ", best_r, " at ", G(best),
+        " s); check that the files belong together, or give --clock-offset"));
+  ClockOffsetEstimate e;
+  e.offset = best;
+  e.correlation = best_r;
+  e.samples = used;
+  return e;
+}
+
+absl::StatusOr<MeasuredData> AlignStreams(const io::CsvTable& ref, const io::CsvTable& rd,
+                                          const AlignOptions& options) {
+  if (auto st = ref.Require({"t", "value"}); !st.ok()) return st;
+  if (auto st = rd.Require({"t", "value"}); !st.ok()) return st;
+  if (!std::isfinite(options.clock_offset))
+    return absl::InvalidArgumentError("clock_offset: not a finite number");
+  const auto rt = ref.Column("t"), rv = ref.Column("value");
+  const bool has_shear = ref.Has("shear");
+  const auto rs = has_shear ? ref.Column("shear") : std::vector<double>{};
+  const auto qt = rd.Column("t"), qv = rd.Column("value");
+  auto check_sorted = [](const io::CsvTable& tb, const std::vector<double>& t) -> absl::Status {
+    for (size_t i = 1; i < t.size(); ++i)
+      if (!(t[i] > t[i - 1]))
+        return absl::InvalidArgumentError(absl::StrCat(tb.source, ":", tb.line_numbers[i],
+                                                       ": column 't': time not increasing (", t[i], " after ",
+                                                       t[i - 1], "); sort the rows by time"));
+    return absl::OkStatus();
+  };
+  if (auto st = check_sorted(ref, rt); !st.ok()) return st;
+  if (auto st = check_sorted(rd, qt); !st.ok()) return st;
+  if (rt.size() < 2)
+    return absl::InvalidArgumentError(absl::StrCat(ref.source, ": too few samples: ", rt.size(),
+                                                   ", need at least 2 to interpolate"));
+  MeasuredData d;
+  d.source = absl::StrCat(ref.source, " + ", rd.source);
+  double clock_offset = options.clock_offset;
+  d.clock_offset_source = MeasuredData::ClockOffset::kFixed;
+  if (options.mode == ClockOffsetMode::kEstimate) {
+    auto est = EstimateClockOffset(rt, rv, qt, qv, options.clock_offset, options.max_clock_offset);
+    if (!est.ok())
+      return absl::InvalidArgumentError(absl::StrCat(ref.source, " + ", rd.source, ": ", est.status().message()));
+    clock_offset = est->offset;
+    d.clock_offset_source = MeasuredData::ClockOffset::kEstimated;
+    d.clock_offset_correlation = est->correlation;
+    d.notes.push_back(absl::StrCat("clock offset estimated by cross-correlation: ", G(est->offset), " s (peak |r| ",
+                                   est->correlation, ", ", est->samples, " reading samples, search ",
+                                   G(options.clock_offset), " +/- ", G(options.max_clock_offset), " s)"));
+  }
+  d.clock_offset = clock_offset;
+  int outside = 0;
+  size_t k = 0;
+  for (size_t i = 0; i < qt.size(); ++i) {
+    const double tq = qt[i] - clock_offset;
+    if (tq < rt.front() || tq > rt.back()) {
+      ++outside;
+      continue;
+    }
+    while (k + 2 < rt.size() && rt[k + 1] < tq) ++k;
+    const double w = (tq - rt[k]) / (rt[k + 1] - rt[k]);
+    d.t.push_back(qt[i]);
+    d.reading.push_back(qv[i]);
+    d.reference.push_back(rv[k] + w * (rv[k + 1] - rv[k]));
+    if (has_shear) d.shear.push_back(rs[k] + w * (rs[k + 1] - rs[k]));
+    d.line.push_back(rd.line_numbers[i]);
+  }
+  d.trial.assign(d.t.size(), 0);
+  d.segment_starts = {0};
+  d.skipped_nan_rows = ref.skipped_rows + rd.skipped_rows;
+  auto rate = [](const std::vector<double>& t) {
+    return t.size() > 1 ? (t.size() - 1) / (t.back() - t.front()) : 0.0;
+  };
+  d.notes.push_back(absl::StrCat("two streams aligned: reference ", rt.size(), " samples at ~", rate(rt),
+                                 " Hz interpolated onto ", d.t.size(), " reading samples at ~", rate(qt), " Hz",
+                                 clock_offset != 0 ? absl::StrCat(" (clock offset ", G(clock_offset), " s)") : ""));
+  if (outside > 0)
+    d.notes.push_back(absl::StrCat(outside, " reading sample(s) outside the reference time span dropped"));
+  if (d.skipped_nan_rows > 0)
+    d.notes.push_back(absl::StrCat(d.skipped_nan_rows, " row(s) with NaN/empty fields skipped"));
+  if (d.t.empty())
+    return absl::InvalidArgumentError(absl::StrCat(
+        d.source, ": the streams do not overlap in time (reference ", G(rt.front()), "..", G(rt.back()),
+        " s, reading ", G(qt.front()), "..", G(qt.back()), " s, clock offset ", G(clock_offset),
+        " s); give the clock offset (--clock-offset) or a search centre (--clock-offset-centre)"));
+  if (auto st = ValidateMeasuredData(d); !st.ok()) return st;
+  return d;
+}
+
+absl::StatusOr<MeasuredData> ReadAndAlignStreams(const std::string& reference_path, const std::string& reading_path,
+                                                 const AlignOptions& options) {
+  io::CsvOptions opt;
+  opt.skip_nan_rows = true;
+  auto ref = io::ReadCsvFile(reference_path, opt);
+  if (!ref.ok()) return ref.status();
+  auto rd = io::ReadCsvFile(reading_path, opt);
+  if (!rd.ok()) return rd.status();
+  return AlignStreams(*ref, *rd, options);
+}
+
+}  // namespace tactforce::audit

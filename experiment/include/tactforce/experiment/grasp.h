@@ -1,0 +1,172 @@
+// Closed-loop grasp-and-lift experiments in MuJoCo (GeoDEx Table III):
+// floating spherical fingertips on three slide joints each, PD-controlled in
+// fingertip space (the Jacobian is the identity), close on an object resting
+// on a table, regulate their normal forces with an admittance loop on either
+// the raw tactile readings or tactforce's estimate, lift, hold and place.
+//
+//   GraspConfig c;  c.object = GraspObject::kWrench;  c.feedback = Feedback::kRaw;
+//   auto setup = GraspSetup::Create(c);            // plans once per object
+//   auto trial = RunGraspTrial(**setup, 3);        // trial 3 of seed c.seed
+//   auto batch = RunGraspBatch(c, 20);             // 20 trials, summary
+//
+// All quantities SI. Errors are InvalidArgument naming the config field.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "tactforce/estimator/force_estimation.h"
+#include "tactforce/experiment/physics.h"
+#include "tactforce/experiment/sensor_channel.h"
+#include "tactforce/io/svg.h"
+#include "tactforce/planner/trajectory.h"
+#include "tactforce/sim/sensor_model.h"
+
+namespace tactforce::experiment {
+
+enum class GraspObject {
+  kSphere,    // 0.082 kg, r 35 mm, 2-finger pinch, mu 0.8
+  kWrench,    // 0.3 kg wrench (handle + head), 3 fingers, mu 0.9
+  kCylinder,  // 0.36 kg, d 0.11 m, 4 fingers, mu 0.6
+  kCube,      // 8 cm, 0.15 kg, 2 fingers (mu 0.8) pivot it about a bottom edge on the table (mu 0.6)
+};
+const char* ToString(GraspObject o);  // "sphere", "wrench", "cylinder", "cube"
+absl::StatusOr<GraspObject> ParseGraspObject(std::string_view name);
+std::vector<GraspObject> AllGraspObjects();
+
+enum class Feedback { kRaw, kEstimated };
+const char* ToString(Feedback f);  // "raw", "estimated"
+absl::StatusOr<Feedback> ParseFeedback(std::string_view name);
+
+// How the force error drives the fingertip targets.
+enum class Admittance {
+  // target += gain K^-1 (f_desired - f_observed), the whole 3D force (the
+  // paper's and the loop). Raw readings observe r_i n_i: no tangential part.
+  kFull,
+  // Only along the sensed normal: delta_n += gain K^-1 (fn_desired - fn_observed);
+  // the planned tangential force is fed forward as a position offset K^-1 f_t.
+  kNormal,
+};
+const char* ToString(Admittance a);  // "full", "normal"
+absl::StatusOr<Admittance> ParseAdmittance(std::string_view name);
+
+enum class SensorMode {
+  kGeoDexRandom,  // a model drawn per fingertip and trial from `error_ranges`
+  kModel,         // `sensor_model` on every fingertip (noise still seeded per trial)
+  kIdeal,         // readings = true normal force
+};
+
+struct PhaseDurations {  // s
+  double close = 0.3;        // fingertips move from open to contact (position control)
+  double settle = 0.5;       // force loop on, object on the table
+  double hold = 0.5;
+  double lift = 1.0;         // minimum-jerk lift (cube: pivot up)
+  double hold_lifted = 1.0;
+  double place = 0.8;        // back down
+};
+
+struct GraspConfig {
+  GraspObject object = GraspObject::kWrench;
+  Feedback feedback = Feedback::kEstimated;
+  estimator::EstimateMethod estimator = estimator::EstimateMethod::kNormalLsq;  // or kProjection (GeoDEx)
+  SensorMode sensors = SensorMode::kGeoDexRandom;
+  ErrorRanges error_ranges;
+  sim::SensorModel sensor_model;  // kModel
+  uint64_t seed = 1;              // trial k draws from (seed, k), independent of feedback
+  PhaseDurations phases;
+  double lift_height = 0.05;      // m
+  double pivot_angle_deg = 15;    // cube
+  double control_rate = 200;      // Hz: sensor sampling, estimation, admittance update
+  // Admittance: each control tick moves a fingertip target by
+  // gain * K^-1 (f_desired - f_observed), K = kp (see Admittance).
+  Admittance admittance = Admittance::kFull;
+  double admittance_gain = 0.2;
+  double kp = 10000;              // N/m, fingertip PD stiffness (also its tangential stiffness)
+  double damping_ratio = 1.0;
+  double fingertip_mass = 0.05;   // kg (gravity compensated)
+  double fingertip_radius = 0.012;  // m
+  double confidence = 1.0;        // planner kappa
+  double max_rotation_deg = 1.0;  // success thresholds during lift + hold
+  double max_slip = 0.005;        // m
+  double drop_distance = 0.02;    // m, object this far from where the hand holds it = dropped
+  PhysicsSettings physics;
+  int trace_trials = 0;          // record TraceSamples for trials 0..trace_trials-1
+};
+absl::Status ValidateGraspConfig(const GraspConfig& c);
+
+enum class Phase { kClose, kSettle, kHold, kLift, kHoldLifted, kPlace };
+const char* ToString(Phase p);
+
+struct TraceSample {
+  double t = 0;
+  Phase phase = Phase::kClose;
+  // Per intrinsic fingertip (N, normal components).
+  std::vector<double> desired, raw, estimated, truth;
+  double slip = 0, rotation_deg = 0;  // vs where the hand holds it (lift and after)
+};
+
+struct TrialResult {
+  int trial = 0;
+  uint64_t seed = 0;
+  bool success = false;
+  bool dropped = false;
+  std::string failure;          // "", "dropped", "slip 7.1 mm", "rotation 2.3 deg"
+  double max_slip = 0;          // m, during lift + hold
+  double max_rotation_deg = 0;
+  double force_error = 0;       // N, mean |fn_true - fn_desired| over fingertips, hold..hold_lifted
+  double feedback_error = 0;    // N, mean |fn_observed - fn_true| (what the loop was told vs truth)
+  double converge_time = -1;    // s after settle start until the loop's own error stays
+                                // below max(0.1 N, 10 %) for 0.1 s; -1 = never
+  int estimate_failures = 0;    // ticks where the estimator gave no answer (raw used)
+  double sim_seconds = 0, wall_seconds = 0;
+  std::vector<sim::SensorModel> sensor_models;  // per fingertip (the draw)
+  std::vector<TraceSample> trace;                // when record_trace
+};
+
+// Object, MJCF and force plans of one config, shared by its trials.
+class GraspSetup {
+ public:
+  static absl::StatusOr<std::unique_ptr<GraspSetup>> Create(const GraspConfig& config);
+  ~GraspSetup();
+  const GraspConfig& config() const { return config_; }
+  const std::string& mjcf() const { return mjcf_; }
+  const std::vector<std::string>& finger_names() const;
+
+  struct Impl;
+  const Impl& impl() const { return *impl_; }
+
+ private:
+  GraspSetup() = default;
+  GraspConfig config_;
+  std::string mjcf_;
+  std::unique_ptr<Impl> impl_;
+};
+
+absl::StatusOr<TrialResult> RunGraspTrial(const GraspSetup& setup, int trial);
+
+struct BatchSummary {
+  GraspObject object = GraspObject::kWrench;
+  Feedback feedback = Feedback::kEstimated;
+  int trials = 0, successes = 0, drops = 0;
+  double force_error_mean = 0, force_error_std = 0;  // over trials (N)
+  double feedback_error_mean = 0;                    // N
+  double converge_time_mean = -1;                    // s over converged trials; -1 none
+  int converged = 0;
+  double wall_seconds = 0, sim_seconds = 0;
+  std::vector<TrialResult> results;
+};
+
+// Runs trials 0..n-1; `progress(done)` after each.
+absl::StatusOr<BatchSummary> RunGraspBatch(const GraspConfig& config, int trials,
+                                           const std::function<void(int)>& progress = {});
+
+// Desired / estimated / raw / true normal-force traces, one panel per fingertip.
+io::SvgPlot TracePlot(const TrialResult& trial, const std::vector<std::string>& finger_names,
+                  const std::string& title);
+
+}  // namespace tactforce::experiment

@@ -1,0 +1,99 @@
+// Minimal JSON for tactforce's flat files (sensor model JSON, audit
+// report.json, inertia truth files, trajectory JSON). This is the ONE
+// hand-written JSON reader/writer of the project (the API messages use
+// protobuf's JSON mapping); JsonEscape is also the CLI's string quoter.
+//
+// Reader: objects, arrays, strings (\uXXXX escapes for the BMP), numbers,
+// true/false/null. Errors name the source and line ("m.json:3: expected ':'").
+// Writer: JsonWriter emits pretty-printed JSON; non-finite numbers are written
+// as null (JSON has no NaN/Infinity).
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "absl/status/statusor.h"
+
+namespace tactforce::io {
+
+class JsonValue {
+ public:
+  enum class Type { kNull, kBool, kNumber, kString, kArray, kObject };
+
+  JsonValue() = default;
+  static JsonValue Number(double v);
+  static JsonValue Bool(bool v);
+  static JsonValue String(std::string v);
+
+  Type type() const { return type_; }
+  bool is_null() const { return type_ == Type::kNull; }
+  bool is_number() const { return type_ == Type::kNumber; }
+  bool is_string() const { return type_ == Type::kString; }
+  bool is_bool() const { return type_ == Type::kBool; }
+  bool is_object() const { return type_ == Type::kObject; }
+  bool is_array() const { return type_ == Type::kArray; }
+
+  double number() const { return number_; }
+  bool boolean() const { return bool_; }
+  const std::string& string() const { return string_; }
+  const std::vector<JsonValue>& array() const { return array_; }
+  // Object members in file order (keys unique; a duplicate key is an error).
+  const std::vector<std::pair<std::string, JsonValue>>& members() const { return members_; }
+  const JsonValue* Find(std::string_view key) const;  // nullptr when absent
+  int line() const { return line_; }                  // 1-based line where it starts
+
+ private:
+  friend class JsonParser;
+  Type type_ = Type::kNull;
+  double number_ = 0;
+  bool bool_ = false;
+  std::string string_;
+  std::vector<JsonValue> array_;
+  std::vector<std::pair<std::string, JsonValue>> members_;
+  int line_ = 0;
+};
+
+absl::StatusOr<JsonValue> ParseJson(std::string_view text, const std::string& source);
+
+// Streaming pretty writer. Usage:
+//   JsonWriter w; w.BeginObject(); w.Key("a"); w.Number(1); w.EndObject();
+//   std::string s = w.str();
+class JsonWriter {
+ public:
+  void BeginObject();
+  void EndObject();
+  void BeginArray();
+  void EndArray();
+  void Key(std::string_view key);
+  void Number(double v);
+  void Int(long long v);
+  void Bool(bool v);
+  void String(std::string_view v);
+  void Null();
+  // Convenience: Key(k) + value.
+  void Field(std::string_view key, double v) { Key(key); Number(v); }
+  void Field(std::string_view key, std::string_view v) { Key(key); String(v); }
+  void Field(std::string_view key, const char* v) { Key(key); String(v); }
+  void FieldBool(std::string_view key, bool v) { Key(key); Bool(v); }
+  void FieldInt(std::string_view key, long long v) { Key(key); Int(v); }
+  // Arrays of numbers on one line.
+  void NumberArray(std::string_view key, const std::vector<double>& values);
+  const std::string& str() const { return out_; }
+
+ private:
+  void BeforeValue();
+  void Newline();
+  std::string out_;
+  std::vector<bool> first_;   // per open container: no element written yet
+  std::vector<bool> is_obj_;
+  bool after_key_ = false;
+};
+
+std::string JsonEscape(std::string_view s);
+// Shortest round-trip formatting of a double ("%.17g" trimmed); "null" if not finite.
+std::string JsonNumber(double v);
+
+}  // namespace tactforce::io
