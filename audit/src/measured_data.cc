@@ -1,12 +1,32 @@
+// Measured data for the audit: one CSV (t, reference, reading[, shear][,
+// trial]) read into MeasuredData and validated (sizes, finite values, time
+// order per trial, non-constant columns, sample count; errors name file, line
+// and column), or two streams on their own clocks aligned by interpolating
+// the reference onto the reading times after subtracting the clock offset,
+// which is given or estimated by maximising the correlation of the streams
+// (coarse grid, finer grid, golden section). Also the median time step the
+// audit's fits and diagnostics scale with.
 #include "tactforce/audit/measured_data.h"
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "audit_internal.h"
 
 namespace tactforce::audit {
+
+double internal::MedianStep(const std::vector<double>& t, double fallback) {
+  std::vector<double> steps;
+  for (size_t i = 1; i < t.size(); ++i)
+    if (t[i] > t[i - 1]) steps.push_back(t[i] - t[i - 1]);
+  if (steps.empty()) return fallback;
+  std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
+  return steps[steps.size() / 2];
+}
+
 namespace {
 
 std::string Where(const MeasuredData& d, int i) {
@@ -117,14 +137,6 @@ namespace {
 // Times with enough digits for epoch clocks (1.7e9 s to the microsecond).
 std::string G(double v) { return std::abs(v) >= 1e5 ? absl::StrFormat("%.6f", v) : absl::StrFormat("%.7g", v); }
 
-double MedianStep(const std::vector<double>& t) {
-  std::vector<double> d;
-  for (size_t i = 1; i < t.size(); ++i) d.push_back(t[i] - t[i - 1]);
-  if (d.empty()) return 0;
-  std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
-  return d[d.size() / 2];
-}
-
 // |Pearson correlation| of the reading samples idx with the reference
 // (linearly interpolated) at t - offset.
 double OffsetCorrelation(const std::vector<double>& rt, const std::vector<double>& rv, const std::vector<double>& qt,
@@ -149,11 +161,11 @@ double OffsetCorrelation(const std::vector<double>& rt, const std::vector<double
   return std::abs(cxy) / std::sqrt(vx * vy);
 }
 
-}  // namespace
-
-absl::StatusOr<ClockOffsetEstimate> EstimateClockOffset(const std::vector<double>& rt, const std::vector<double>& rv,
-                                                        const std::vector<double>& qt, const std::vector<double>& qv,
-                                                        double centre, double max_offset) {
+// Checks the search arguments and that the streams overlap at the centre by
+// more than the search range.
+absl::Status CheckClockOffsetSearch(const std::vector<double>& rt, const std::vector<double>& rv,
+                                    const std::vector<double>& qt, const std::vector<double>& qv, double centre,
+                                    double max_offset) {
   if (!std::isfinite(centre)) return absl::InvalidArgumentError("clock offset: the search centre is not a finite number");
   if (!(max_offset > 0) || !std::isfinite(max_offset))
     return absl::InvalidArgumentError(
@@ -172,6 +184,69 @@ absl::StatusOr<ClockOffsetEstimate> EstimateClockOffset(const std::vector<double
         overlap > 0 ? "give a smaller --max-clock-offset or the offset itself with --clock-offset"
                     : "the clocks may have different epochs: give --clock-offset-centre (about reading start minus "
                       "reference start) or the offset itself with --clock-offset"));
+  return absl::OkStatus();
+}
+
+// A correlation maximum: offset (s) and |r| there.
+struct CorrelationPeak {
+  double offset;
+  double correlation;
+};
+
+// Maximum of corr over a grid of step `coarse` on centre +/- max_offset, then
+// over a grid of step `fine` within one coarse step of it (inside the range).
+CorrelationPeak GridPeak(const std::function<double(double)>& corr, double centre, double max_offset, double coarse,
+                         double fine) {
+  CorrelationPeak peak{centre, -1};
+  for (double off = centre - max_offset; off <= centre + max_offset + 1e-12; off += coarse) {
+    const double r = corr(off);
+    if (r > peak.correlation) peak = {off, r};
+  }
+  if (coarse > fine) {
+    const double c0 = peak.offset;
+    for (double off = c0 - coarse; off <= c0 + coarse + 1e-12; off += fine) {
+      if (off < centre - max_offset || off > centre + max_offset) continue;
+      const double r = corr(off);
+      if (r > peak.correlation) peak = {off, r};
+    }
+  }
+  return peak;
+}
+
+// Golden-section search of corr within `fine` of the peak (inside
+// centre +/- max_offset); the better of its result and the peak.
+CorrelationPeak GoldenSectionPeak(const std::function<double(double)>& corr, double centre, double max_offset,
+                                  double fine, CorrelationPeak peak) {
+  double a = std::max(centre - max_offset, peak.offset - fine), b = std::min(centre + max_offset, peak.offset + fine);
+  const double g = 0.5 * (std::sqrt(5.0) - 1);
+  double x1 = b - g * (b - a), x2 = a + g * (b - a);
+  double f1 = corr(x1), f2 = corr(x2);
+  for (int it = 0; it < 60 && b - a > 1e-9; ++it) {
+    if (f1 > f2) {
+      b = x2;
+      x2 = x1;
+      f2 = f1;
+      x1 = b - g * (b - a);
+      f1 = corr(x1);
+    } else {
+      a = x1;
+      x1 = x2;
+      f1 = f2;
+      x2 = a + g * (b - a);
+      f2 = corr(x2);
+    }
+  }
+  const double xm = 0.5 * (a + b), fm = corr(xm);
+  if (fm > peak.correlation) peak = {xm, fm};
+  return peak;
+}
+
+}  // namespace
+
+absl::StatusOr<ClockOffsetEstimate> EstimateClockOffset(const std::vector<double>& rt, const std::vector<double>& rv,
+                                                        const std::vector<double>& qt, const std::vector<double>& qv,
+                                                        double centre, double max_offset) {
+  if (auto st = CheckClockOffsetSearch(rt, rv, qt, qv, centre, max_offset); !st.ok()) return st;
   // Reading samples inside the reference span for every offset searched.
   const double lo = rt.front() + centre + max_offset, hi = rt.back() + centre - max_offset;
   const size_t first = std::lower_bound(qt.begin(), qt.end(), lo) - qt.begin();
@@ -182,71 +257,72 @@ absl::StatusOr<ClockOffsetEstimate> EstimateClockOffset(const std::vector<double
         "clock offset: only ", used, " reading samples lie inside the reference span for every offset in ",
         G(centre), " +/- ", G(max_offset), " s; need at least ", kMinAuditSamples,
         " (give a smaller --max-clock-offset or the offset with --clock-offset)"));
-  const double h = std::max(1e-9, std::min(MedianStep(rt), MedianStep(qt)));
+  const double h = std::max(1e-9, std::min(internal::MedianStep(rt, 0.0), internal::MedianStep(qt, 0.0)));
   // Coarse grid (at most 2001 points), then a grid of step h/2 around the
   // best, then golden section within one fine step.
   const double coarse = std::max(0.5 * h, 2 * max_offset / 2000);
-  auto corr = [&](double off) { return OffsetCorrelation(rt, rv, qt, qv, first, last, off); };
-  double best = centre, best_r = -1;
-  for (double off = centre - max_offset; off <= centre + max_offset + 1e-12; off += coarse) {
-    const double r = corr(off);
-    if (r > best_r) {
-      best_r = r;
-      best = off;
-    }
-  }
-  double fine = std::min(coarse, 0.5 * h);
-  if (coarse > fine) {
-    const double c0 = best;
-    for (double off = c0 - coarse; off <= c0 + coarse + 1e-12; off += fine) {
-      if (off < centre - max_offset || off > centre + max_offset) continue;
-      const double r = corr(off);
-      if (r > best_r) {
-        best_r = r;
-        best = off;
-      }
-    }
-  }
-  {
-    double a = std::max(centre - max_offset, best - fine), b = std::min(centre + max_offset, best + fine);
-    const double g = 0.5 * (std::sqrt(5.0) - 1);
-    double x1 = b - g * (b - a), x2 = a + g * (b - a);
-    double f1 = corr(x1), f2 = corr(x2);
-    for (int it = 0; it < 60 && b - a > 1e-9; ++it) {
-      if (f1 > f2) {
-        b = x2;
-        x2 = x1;
-        f2 = f1;
-        x1 = b - g * (b - a);
-        f1 = corr(x1);
-      } else {
-        a = x1;
-        x1 = x2;
-        f1 = f2;
-        x2 = a + g * (b - a);
-        f2 = corr(x2);
-      }
-    }
-    const double xm = 0.5 * (a + b), fm = corr(xm);
-    if (fm > best_r) {
-      best_r = fm;
-      best = xm;
-    }
-  }
-  if (best - (centre - max_offset) < h || (centre + max_offset) - best < h)
+  const double fine = std::min(coarse, 0.5 * h);
+  const std::function<double(double)> corr = [&](double off) {
+    return OffsetCorrelation(rt, rv, qt, qv, first, last, off);
+  };
+  const CorrelationPeak peak =
+      GoldenSectionPeak(corr, centre, max_offset, fine, GridPeak(corr, centre, max_offset, coarse, fine));
+  if (peak.offset - (centre - max_offset) < h || (centre + max_offset) - peak.offset < h)
     return absl::InvalidArgumentError(absl::StrCat(
-        "clock offset: the correlation peak (", G(best), " s, |r| = ", best_r, ") is at the edge of the search range ",
-        G(centre), " +/- ", G(max_offset), " s; the true offset may lie outside: widen --max-clock-offset or give --clock-offset"));
-  if (best_r < 0.3)
+        "clock offset: the correlation peak (", G(peak.offset), " s, |r| = ", peak.correlation,
+        ") is at the edge of the search range ", G(centre), " +/- ", G(max_offset),
+        " s; the true offset may lie outside: widen --max-clock-offset or give --clock-offset"));
+  if (peak.correlation < 0.3)
     return absl::InvalidArgumentError(absl::StrCat(
-        "clock offset: no clear correlation between the streams (peak |r| = ", best_r, " at ", G(best),
-        " s); check that the files belong together, or give --clock-offset"));
+        "clock offset: no clear correlation between the streams (peak |r| = ", peak.correlation, " at ",
+        G(peak.offset), " s); check that the files belong together, or give --clock-offset"));
   ClockOffsetEstimate e;
-  e.offset = best;
-  e.correlation = best_r;
+  e.offset = peak.offset;
+  e.correlation = peak.correlation;
   e.samples = used;
   return e;
 }
+
+namespace {
+
+// InvalidArgument naming the file and line where the time t (column 't' of
+// table tb) does not increase.
+absl::Status CheckTimeIncreasing(const io::CsvTable& tb, const std::vector<double>& t) {
+  for (size_t i = 1; i < t.size(); ++i)
+    if (!(t[i] > t[i - 1]))
+      return absl::InvalidArgumentError(absl::StrCat(tb.source, ":", tb.line_numbers[i],
+                                                     ": column 't': time not increasing (", t[i], " after ",
+                                                     t[i - 1], "); sort the rows by time"));
+  return absl::OkStatus();
+}
+
+// Appends to d every reading sample (qt, qv; lines from rd) whose time minus
+// clock_offset lies in the reference span, with the reference (rt, rv) and
+// shear (rs, empty when absent) interpolated linearly there. Returns the
+// number of samples outside.
+int InterpolateReference(const std::vector<double>& rt, const std::vector<double>& rv, const std::vector<double>& rs,
+                         const io::CsvTable& rd, const std::vector<double>& qt, const std::vector<double>& qv,
+                         double clock_offset, MeasuredData* d) {
+  int outside = 0;
+  size_t k = 0;
+  for (size_t i = 0; i < qt.size(); ++i) {
+    const double tq = qt[i] - clock_offset;
+    if (tq < rt.front() || tq > rt.back()) {
+      ++outside;
+      continue;
+    }
+    while (k + 2 < rt.size() && rt[k + 1] < tq) ++k;
+    const double w = (tq - rt[k]) / (rt[k + 1] - rt[k]);
+    d->t.push_back(qt[i]);
+    d->reading.push_back(qv[i]);
+    d->reference.push_back(rv[k] + w * (rv[k + 1] - rv[k]));
+    if (!rs.empty()) d->shear.push_back(rs[k] + w * (rs[k + 1] - rs[k]));
+    d->line.push_back(rd.line_numbers[i]);
+  }
+  return outside;
+}
+
+}  // namespace
 
 absl::StatusOr<MeasuredData> AlignStreams(const io::CsvTable& ref, const io::CsvTable& rd,
                                           const AlignOptions& options) {
@@ -255,19 +331,10 @@ absl::StatusOr<MeasuredData> AlignStreams(const io::CsvTable& ref, const io::Csv
   if (!std::isfinite(options.clock_offset))
     return absl::InvalidArgumentError("clock_offset: not a finite number");
   const auto rt = ref.Column("t"), rv = ref.Column("value");
-  const bool has_shear = ref.Has("shear");
-  const auto rs = has_shear ? ref.Column("shear") : std::vector<double>{};
+  const auto rs = ref.Has("shear") ? ref.Column("shear") : std::vector<double>{};
   const auto qt = rd.Column("t"), qv = rd.Column("value");
-  auto check_sorted = [](const io::CsvTable& tb, const std::vector<double>& t) -> absl::Status {
-    for (size_t i = 1; i < t.size(); ++i)
-      if (!(t[i] > t[i - 1]))
-        return absl::InvalidArgumentError(absl::StrCat(tb.source, ":", tb.line_numbers[i],
-                                                       ": column 't': time not increasing (", t[i], " after ",
-                                                       t[i - 1], "); sort the rows by time"));
-    return absl::OkStatus();
-  };
-  if (auto st = check_sorted(ref, rt); !st.ok()) return st;
-  if (auto st = check_sorted(rd, qt); !st.ok()) return st;
+  if (auto st = CheckTimeIncreasing(ref, rt); !st.ok()) return st;
+  if (auto st = CheckTimeIncreasing(rd, qt); !st.ok()) return st;
   if (rt.size() < 2)
     return absl::InvalidArgumentError(absl::StrCat(ref.source, ": too few samples: ", rt.size(),
                                                    ", need at least 2 to interpolate"));
@@ -287,22 +354,7 @@ absl::StatusOr<MeasuredData> AlignStreams(const io::CsvTable& ref, const io::Csv
                                    G(options.clock_offset), " +/- ", G(options.max_clock_offset), " s)"));
   }
   d.clock_offset = clock_offset;
-  int outside = 0;
-  size_t k = 0;
-  for (size_t i = 0; i < qt.size(); ++i) {
-    const double tq = qt[i] - clock_offset;
-    if (tq < rt.front() || tq > rt.back()) {
-      ++outside;
-      continue;
-    }
-    while (k + 2 < rt.size() && rt[k + 1] < tq) ++k;
-    const double w = (tq - rt[k]) / (rt[k + 1] - rt[k]);
-    d.t.push_back(qt[i]);
-    d.reading.push_back(qv[i]);
-    d.reference.push_back(rv[k] + w * (rv[k + 1] - rv[k]));
-    if (has_shear) d.shear.push_back(rs[k] + w * (rs[k + 1] - rs[k]));
-    d.line.push_back(rd.line_numbers[i]);
-  }
+  const int outside = InterpolateReference(rt, rv, rs, rd, qt, qv, clock_offset, &d);
   d.trial.assign(d.t.size(), 0);
   d.segment_starts = {0};
   d.skipped_nan_rows = ref.skipped_rows + rd.skipped_rows;

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include <Eigen/Cholesky>
 
@@ -50,6 +51,17 @@ class ActiveSetSolver {
   double Scale(int k) const {
     return std::max({1.0, std::abs(rhs_(k)), normal_norms_(k) * x_.norm()});
   }
+  // Normals, right-hand sides, the factorisation J = L^-T and the
+  // unconstrained minimum; false if H is not positive definite.
+  bool Initialize();
+  // Makes every equality active; returns the first inconsistent one, or -1.
+  int AddEqualities();
+  // Adds inequality k (stacked index), dropping blocking constraints on the
+  // way; nullopt once added, else why the solve ends.
+  std::optional<DenseQpStatus> AddInequality(int k, int max_iterations);
+  // Active inequality limiting the partial step (its position in active_, or
+  // -1) and that step length (infinite if none).
+  int BlockingActive(double* step) const;
   // Direction in primal (z) and dual (r) spaces for adding constraint k.
   void Directions(int k);
   void AddToFactorization();
@@ -173,7 +185,7 @@ DenseQpResult ActiveSetSolver::Finish(DenseQpStatus status, int blocking) {
   return out;
 }
 
-DenseQpResult ActiveSetSolver::Run() {
+bool ActiveSetSolver::Initialize() {
   is_active_.assign(p_ + m_, 0);
   u_.resize(0);
   normals_.resize(n_, p_ + m_);
@@ -185,24 +197,24 @@ DenseQpResult ActiveSetSolver::Run() {
   Eigen::LLT<MatrixXd> llt(qp_.hessian);
   if (llt.info() != Eigen::Success) {
     x_ = VectorXd::Zero(n_);
-    return Finish(DenseQpStatus::kNumericalError, -1);
+    return false;
   }
   // J = L^-T; unconstrained minimum x = -H^-1 g.
   J_ = llt.matrixU().solve(MatrixXd::Identity(n_, n_));
   R_ = MatrixXd::Zero(n_, n_);
   x_ = -llt.solve(qp_.gradient);
-  const int max_iterations =
-      settings_.max_iterations > 0 ? settings_.max_iterations : 5 * (n_ + m_ + p_) + 20;
-  const double tol = settings_.tolerance;
+  return true;
+}
 
-  // Equalities first: each becomes active with a multiplier of either sign.
+int ActiveSetSolver::AddEqualities() {
+  const double tol = settings_.tolerance;
   for (int k = 0; k < p_; ++k) {
     Directions(k);
     const double zn = z_.dot(Normal(k));
     if (z_.norm() <= tol * std::max(1.0, Normal(k).norm()) || std::abs(zn) <= tol) {
       // Dependent on earlier equalities: redundant if already satisfied.
       if (std::abs(Slack(k)) <= 1e3 * tol * Scale(k)) continue;
-      return Finish(DenseQpStatus::kInfeasible, k);
+      return k;
     }
     const double t = -Slack(k) / zn;  // moves x onto the hyperplane
     x_ -= t * z_;
@@ -213,55 +225,76 @@ DenseQpResult ActiveSetSolver::Run() {
     u_.conservativeResize(u_.size() + 1);
     u_(u_.size() - 1) = t;
   }
+  return -1;
+}
 
+int ActiveSetSolver::BlockingActive(double* step) const {
+  // Along the step x -= t z the multipliers move as u -= t r.
+  *step = kInf;
+  int drop = -1;
+  for (int i = 0; i < static_cast<int>(active_.size()); ++i) {
+    if (active_[i] < p_ || r_(i) <= settings_.tolerance) continue;
+    const double ratio = u_(i) / r_(i);
+    if (ratio < *step) {
+      *step = ratio;
+      drop = i;
+    }
+  }
+  return drop;
+}
+
+std::optional<DenseQpStatus> ActiveSetSolver::AddInequality(int k, int max_iterations) {
+  const double tol = settings_.tolerance;
+  double u_new = 0.0;  // multiplier of the constraint being added
+  while (true) {
+    if (++iterations_ > max_iterations) return DenseQpStatus::kIterationLimit;
+    Directions(k);
+    const int q = static_cast<int>(active_.size());
+    double t1;  // partial step length
+    const int drop = BlockingActive(&t1);
+    const double zn = z_.dot(Normal(k));
+    double t2 = kInf;  // full step length
+    if (z_.norm() > tol * std::max(1.0, Normal(k).norm()) && zn > tol * tol) {
+      t2 = -Slack(k) / zn;
+    }
+    if (t1 == kInf && t2 == kInf) return DenseQpStatus::kInfeasible;
+    if (t2 == kInf) {  // dual-only step, then drop
+      if (q > 0) u_ -= t1 * r_;
+      u_new += t1;
+      is_active_[active_[drop]] = 0;
+      DropFromFactorization(drop);
+      continue;
+    }
+    const double t = std::min(t1, t2);
+    x_ -= t * z_;
+    if (q > 0) u_ -= t * r_;
+    u_new += t;
+    if (t2 <= t1) {
+      AddToFactorization();
+      active_.push_back(k);
+      is_active_[k] = 1;
+      u_.conservativeResize(q + 1);
+      u_(q) = u_new;
+      return std::nullopt;
+    }
+    is_active_[active_[drop]] = 0;
+    DropFromFactorization(drop);
+  }
+}
+
+DenseQpResult ActiveSetSolver::Run() {
+  if (!Initialize()) return Finish(DenseQpStatus::kNumericalError, -1);
+  const int max_iterations =
+      settings_.max_iterations > 0 ? settings_.max_iterations : 5 * (n_ + m_ + p_) + 20;
+  // Equalities first: each becomes active with a multiplier of either sign.
+  if (const int inconsistent = AddEqualities(); inconsistent >= 0) {
+    return Finish(DenseQpStatus::kInfeasible, inconsistent);
+  }
   while (true) {
     const int k = MostViolated();
     if (k < 0) return Finish(DenseQpStatus::kOptimal, -1);
-    double u_new = 0.0;  // multiplier of the constraint being added
-    // Add constraint k; partial steps drop blocking constraints on the way.
-    while (true) {
-      if (++iterations_ > max_iterations) return Finish(DenseQpStatus::kIterationLimit, k);
-      Directions(k);
-      const int q = static_cast<int>(active_.size());
-      // Partial step length: largest step keeping active inequality duals >= 0.
-      double t1 = kInf;
-      int drop = -1;
-      for (int i = 0; i < q; ++i) {
-        // Along the step x -= t z the multipliers move as u -= t r.
-        if (active_[i] < p_ || r_(i) <= tol) continue;
-        const double ratio = u_(i) / r_(i);
-        if (ratio < t1) {
-          t1 = ratio;
-          drop = i;
-        }
-      }
-      const double zn = z_.dot(Normal(k));
-      double t2 = kInf;
-      if (z_.norm() > tol * std::max(1.0, Normal(k).norm()) && zn > tol * tol) {
-        t2 = -Slack(k) / zn;
-      }
-      if (t1 == kInf && t2 == kInf) return Finish(DenseQpStatus::kInfeasible, k);
-      if (t2 == kInf) {  // dual-only step, then drop
-        if (q > 0) u_ -= t1 * r_;
-        u_new += t1;
-        is_active_[active_[drop]] = 0;
-        DropFromFactorization(drop);
-        continue;
-      }
-      const double t = std::min(t1, t2);
-      x_ -= t * z_;
-      if (q > 0) u_ -= t * r_;
-      u_new += t;
-      if (t2 <= t1) {
-        AddToFactorization();
-        active_.push_back(k);
-        is_active_[k] = 1;
-        u_.conservativeResize(q + 1);
-        u_(q) = u_new;
-        break;
-      }
-      is_active_[active_[drop]] = 0;
-      DropFromFactorization(drop);
+    if (const std::optional<DenseQpStatus> stop = AddInequality(k, max_iterations)) {
+      return Finish(*stop, k);
     }
   }
 }

@@ -1,3 +1,4 @@
+// The built-in example grasps of examples.h.
 #include "tactforce/planner/examples.h"
 
 #include <cmath>

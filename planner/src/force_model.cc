@@ -1,3 +1,5 @@
+// The shared geometry of force_model.h: G and b, the FE-plane, the measurement
+// ellipsoid, the tightened rows and cones, and Prepare().
 #include "tactforce/planner/force_model.h"
 
 #include <algorithm>
@@ -97,12 +99,17 @@ std::pair<Vec3, Vec3> TangentBasis(const Vec3& normal) {
   return {t1, normal.cross(t1)};
 }
 
+std::string ContactLabel(const PlanProblem& problem, int contact) {
+  std::string label = absl::StrCat("contact ", contact);
+  const std::string& name = problem.contacts[contact].name;
+  if (!name.empty()) absl::StrAppend(&label, " (", name, ")");
+  return label;
+}
+
 std::string ConstraintRows::Describe(int row, const PlanProblem& problem) const {
   if (row < 0 || row >= static_cast<int>(info.size())) return absl::StrCat("row ", row);
   const RowInfo& r = info[row];
-  const std::string& name = problem.contacts[r.contact].name;
-  std::string who = absl::StrCat("contact ", r.contact);
-  if (!name.empty()) absl::StrAppend(&who, " (", name, ")");
+  const std::string who = ContactLabel(problem, r.contact);
   switch (r.kind) {
     case RowKind::kFrictionFacet:
       return absl::StrCat(who, " friction cone facet ", r.facet);
@@ -179,6 +186,22 @@ std::vector<double> TangentialForceSigma(const PlanProblem& problem,
   return out;
 }
 
+std::vector<double> ExactConeShift(const PlanProblem& problem,
+                                   const std::vector<double>& normal_sigma,
+                                   const std::vector<double>& tangential_sigma,
+                                   double confidence) {
+  std::vector<double> out(problem.contacts.size());
+  for (size_t i = 0; i < out.size(); ++i) {
+    out[i] = confidence * (problem.contacts[i].friction * normal_sigma[i] + tangential_sigma[i]);
+  }
+  return out;
+}
+
+double ExactConeSlack(const Vec3& normal, double mu, double shift, const Vec3& force) {
+  const Vec3 tangential = force - normal.dot(force) * normal;
+  return (mu * normal.dot(force) - shift) - tangential.norm();
+}
+
 PreparedProblem Prepare(PlanProblem validated, const PlanOptions& options) {
   PreparedProblem p;
   p.problem = std::move(validated);
@@ -188,6 +211,10 @@ PreparedProblem Prepare(PlanProblem validated, const PlanOptions& options) {
                                options.cone == ConeModel::kPyramid);
   p.normal_sigma = NormalForceSigma(p.problem, p.ellipsoid);
   p.tangential_sigma = TangentialForceSigma(p.problem, p.ellipsoid);
+  if (options.cone == ConeModel::kExact) {
+    p.cone_shift =
+        ExactConeShift(p.problem, p.normal_sigma, p.tangential_sigma, options.confidence);
+  }
   return p;
 }
 

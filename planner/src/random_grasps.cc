@@ -1,3 +1,4 @@
+// MakeRandomGrasp() (random_grasps.h): seeded random grasps on spheres, boxes, cylinders.
 #include "tactforce/planner/random_grasps.h"
 
 #include <cmath>

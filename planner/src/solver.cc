@@ -1,3 +1,5 @@
+// ForceSolver::Solve(), the part every backend shares (validation,
+// preparation, timing, reported quantities), and MakeSolver()/Plan().
 #include "tactforce/planner/solver.h"
 
 #include <algorithm>
@@ -10,6 +12,24 @@
 
 namespace tactforce::planner {
 namespace {
+
+// Smallest slack (N) of the tightened rows and, for ConeModel::kExact, of the
+// robust exact cones at the stacked forces f; 0 when there is nothing to meet.
+double MinMargin(const PreparedProblem& prepared, const PlanOptions& options,
+                 const std::vector<Vec3>& forces, const Eigen::VectorXd& stacked) {
+  double margin = std::numeric_limits<double>::infinity();
+  if (prepared.rows.matrix.rows() > 0) {
+    margin = (prepared.rows.rhs - prepared.rows.matrix * stacked).minCoeff();
+  }
+  if (options.cone == ConeModel::kExact) {
+    for (int i = 0; i < prepared.num_contacts(); ++i) {
+      const Contact& c = prepared.problem.contacts[i];
+      margin = std::min(margin,
+                        ExactConeSlack(c.normal, c.friction, prepared.cone_shift[i], forces[i]));
+    }
+  }
+  return std::isfinite(margin) ? margin : 0.0;
+}
 
 // Fills the quantities every backend reports the same way.
 void FinishResult(const PreparedProblem& prepared, const PlanOptions& options,
@@ -36,23 +56,7 @@ void FinishResult(const PreparedProblem& prepared, const PlanOptions& options,
     result->normal_forces[i] = problem.contacts[i].normal.dot(result->forces[i]);
     result->objective += result->forces[i].squaredNorm();
   }
-  double margin = std::numeric_limits<double>::infinity();
-  if (prepared.rows.matrix.rows() > 0) {
-    margin = (prepared.rows.rhs - prepared.rows.matrix * stacked).minCoeff();
-  }
-  if (options.cone == ConeModel::kExact) {
-    const double kappa = options.confidence;
-    for (int i = 0; i < n; ++i) {
-      const Contact& c = problem.contacts[i];
-      const Vec3& f = result->forces[i];
-      const double fn = c.normal.dot(f);
-      const double tangential = (f - fn * c.normal).norm();
-      const double slack = c.friction * (fn - kappa * prepared.normal_sigma[i]) -
-                           kappa * prepared.tangential_sigma[i] - tangential;
-      margin = std::min(margin, slack);
-    }
-  }
-  result->min_margin = std::isfinite(margin) ? margin : 0.0;
+  result->min_margin = MinMargin(prepared, options, result->forces, stacked);
 }
 
 }  // namespace

@@ -1,3 +1,4 @@
+// Force plans along a motion and friction-probe plans (trajectory.h).
 #include "tactforce/planner/trajectory.h"
 
 #include <chrono>

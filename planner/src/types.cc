@@ -1,15 +1,21 @@
+// PlanOptions::IsValid() and the names of the planner's enums.
 #include "tactforce/planner/types.h"
 
 #include <cmath>
+#include <utility>
+
+#include "absl/strings/str_cat.h"
 
 namespace tactforce::planner {
 
 bool PlanOptions::IsValid(std::string* error) const {
-  auto fail = [&](const char* what) {
-    if (error != nullptr) *error = what;
+  auto fail = [&](std::string what) {
+    if (error != nullptr) *error = std::move(what);
     return false;
   };
-  if (cone_sides < 3 || cone_sides > 64) return fail("cone_sides: must be in 3..64");
+  if (cone_sides < kMinConeSides || cone_sides > kMaxConeSides) {
+    return fail(absl::StrCat("cone_sides: must be in ", kMinConeSides, "..", kMaxConeSides));
+  }
   if (!std::isfinite(confidence) || confidence < 0.0)
     return fail("confidence: must be finite and >= 0");
   if (!std::isfinite(rank_tolerance) || rank_tolerance <= 0.0 || rank_tolerance >= 1e-2)

@@ -1,3 +1,4 @@
+// ValidateProblem() (validation.h): field-by-field checks with API field paths.
 #include "tactforce/planner/validation.h"
 
 #include <cmath>

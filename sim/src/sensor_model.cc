@@ -1,3 +1,9 @@
+// The sensor model: its JSON form (read with file:line errors naming the
+// field, validated, written), the force-domain channel ApplyChannel that the
+// simulation and the audit share (crosstalk; per segment delay, lag and
+// hysteresis; then the static effects and drift), the noise-free reading of
+// a measured reference (PredictReading) and the static inverse used to
+// correct readings (CorrectReading).
 #include "tactforce/sim/sensor_model.h"
 
 #include <algorithm>
@@ -248,81 +254,83 @@ struct Interp {
 
 }  // namespace
 
-void ApplyChannel(const EffectParams& p, const ChannelInput& in, std::vector<double>* out_ptr) {
-  std::vector<double>& out = *out_ptr;
-  const int n = in.n;
-  out.resize(n);
-  for (int i = 0; i < n; ++i) out[i] = in.force[i] + (in.shear && p.crosstalk != 0 ? p.crosstalk * in.shear[i] : 0.0);
+namespace {
 
-  // Segment boundaries.
+// Segment boundaries of the channel input: 0, the segment starts inside
+// (0, n), n.
+std::vector<int> SegmentBounds(const ChannelInput& in) {
   std::vector<int> bounds;
   bounds.push_back(0);
   if (in.segment_starts) {
     for (int s : *in.segment_starts)
-      if (s > bounds.back() && s < n) bounds.push_back(s);
+      if (s > bounds.back() && s < in.n) bounds.push_back(s);
   }
-  bounds.push_back(n);
+  bounds.push_back(in.n);
+  return bounds;
+}
 
-  const bool has_pi = !p.pi_thresholds.empty() && p.pi_thresholds.size() == p.pi_weights.size();
-  const bool dynamic = p.delay != 0 || p.lag > 0 || p.hysteresis_width > 0 || has_pi;
-  if (dynamic) {
-    std::vector<double> tmp;
-    for (size_t s = 0; s + 1 < bounds.size(); ++s) {
-      const int lo = bounds[s], hi = bounds[s + 1];
-      if (hi - lo < 2) continue;
-      if (p.delay != 0) {
-        tmp.assign(out.begin() + lo, out.begin() + hi);
-        Interp ip{in.t + lo, tmp.data(), 0, hi - lo, 0};
-        for (int i = lo; i < hi; ++i) out[i] = ip(in.t[i] - p.delay);
-      }
-      if (p.lag > 0) {
-        // Exact solution of tau y' = u - y for u linear between samples.
-        double y = out[lo];
-        double uprev = out[lo];
-        for (int i = lo + 1; i < hi; ++i) {
-          const double h = in.t[i] - in.t[i - 1];
-          const double u = out[i];
-          const double e = std::exp(-h / p.lag);
-          const double slope = (u - uprev) / h;
-          y = u - p.lag * slope + e * (y - uprev + p.lag * slope);
-          uprev = u;
-          out[i] = y;
-        }
-      }
-      if (p.hysteresis_width > 0) {
-        const double r = 0.5 * p.hysteresis_width;
-        double state = 0;  // starts released
-        for (int i = lo; i < hi; ++i) {
-          const double u = out[i];
-          state = std::max(u - r, std::min(u + r, state));
-          out[i] = state;
-        }
-      } else if (has_pi) {
-        // Prandtl-Ishlinskii: weighted sum of play operators (weights
-        // normalised by their sum), every operator starts released (0).
-        const size_t K = p.pi_thresholds.size();
-        double wsum = 0;
-        for (double w : p.pi_weights) wsum += w;
-        if (wsum > 0) {
-          std::vector<double> state(K, 0.0);
-          for (int i = lo; i < hi; ++i) {
-            const double u = out[i];
-            double y = 0;
-            for (size_t k = 0; k < K; ++k) {
-              const double r = p.pi_thresholds[k];
-              state[k] = std::max(u - r, std::min(u + r, state[k]));
-              y += p.pi_weights[k] * state[k];
-            }
-            out[i] = y / wsum;
-          }
-        }
-      }
-    }
+// Pure delay of out[lo, hi) (cubic interpolation; tmp is scratch).
+void ApplyDelay(double delay, const double* t, int lo, int hi, std::vector<double>& out, std::vector<double>& tmp) {
+  tmp.assign(out.begin() + lo, out.begin() + hi);
+  Interp ip{t + lo, tmp.data(), 0, hi - lo, 0};
+  for (int i = lo; i < hi; ++i) out[i] = ip(t[i] - delay);
+}
+
+// First-order lag of out[lo, hi): the exact solution of tau y' = u - y for u
+// linear between samples, starting at rest on the first sample.
+void ApplyLag(double lag, const double* t, int lo, int hi, std::vector<double>& out) {
+  double y = out[lo];
+  double uprev = out[lo];
+  for (int i = lo + 1; i < hi; ++i) {
+    const double h = t[i] - t[i - 1];
+    const double u = out[i];
+    const double e = std::exp(-h / lag);
+    const double slope = (u - uprev) / h;
+    y = u - lag * slope + e * (y - uprev + lag * slope);
+    uprev = u;
+    out[i] = y;
   }
+}
+
+// Play operator of the given loop width on out[lo, hi), starting released.
+void ApplyPlay(double width, int lo, int hi, std::vector<double>& out) {
+  const double r = 0.5 * width;
+  double state = 0;  // starts released
+  for (int i = lo; i < hi; ++i) {
+    const double u = out[i];
+    state = std::max(u - r, std::min(u + r, state));
+    out[i] = state;
+  }
+}
+
+// Prandtl-Ishlinskii hysteresis on out[lo, hi): the weighted sum of play
+// operators (weights normalised by their sum), every operator starting
+// released (0). Nothing when the weights sum to 0.
+void ApplyPrandtlIshlinskii(const EffectParams& p, int lo, int hi, std::vector<double>& out) {
+  const size_t K = p.pi_thresholds.size();
+  double wsum = 0;
+  for (double w : p.pi_weights) wsum += w;
+  if (!(wsum > 0)) return;
+  std::vector<double> state(K, 0.0);
+  for (int i = lo; i < hi; ++i) {
+    const double u = out[i];
+    double y = 0;
+    for (size_t k = 0; k < K; ++k) {
+      const double r = p.pi_thresholds[k];
+      state[k] = std::max(u - r, std::min(u + r, state[k]));
+      y += p.pi_weights[k] * state[k];
+    }
+    out[i] = y / wsum;
+  }
+}
+
+// The static effects and drift, sample by sample: power law, curvature,
+// threshold, saturation, drift.
+void ApplyStaticEffects(const EffectParams& p, const ChannelInput& in, std::vector<double>& out) {
   const bool has_curv = p.curvature != 0;
   const double cscale = has_curv ? p.curvature / p.full_scale : 0;
   const bool has_pow = p.power_exponent > 0 && p.power_exponent != 1;
-  for (int i = 0; i < n; ++i) {
+  for (int i = 0; i < in.n; ++i) {
     double u = out[i];
     if (has_pow && u != 0) u = (u < 0 ? -p.full_scale : p.full_scale) * std::pow(std::abs(u) / p.full_scale, p.power_exponent);
     if (has_curv) u += cscale * u * std::abs(u);
@@ -331,6 +339,31 @@ void ApplyChannel(const EffectParams& p, const ChannelInput& in, std::vector<dou
     if (p.drift != 0) u += p.drift * (in.t[i] - in.t0);
     out[i] = u;
   }
+}
+
+}  // namespace
+
+void ApplyChannel(const EffectParams& p, const ChannelInput& in, std::vector<double>* out_ptr) {
+  std::vector<double>& out = *out_ptr;
+  const int n = in.n;
+  out.resize(n);
+  for (int i = 0; i < n; ++i) out[i] = in.force[i] + (in.shear && p.crosstalk != 0 ? p.crosstalk * in.shear[i] : 0.0);
+  const bool has_pi = !p.pi_thresholds.empty() && p.pi_thresholds.size() == p.pi_weights.size();
+  const bool dynamic = p.delay != 0 || p.lag > 0 || p.hysteresis_width > 0 || has_pi;
+  if (dynamic) {
+    // The dynamic effects restart in every segment (trial).
+    const std::vector<int> bounds = SegmentBounds(in);
+    std::vector<double> tmp;
+    for (size_t s = 0; s + 1 < bounds.size(); ++s) {
+      const int lo = bounds[s], hi = bounds[s + 1];
+      if (hi - lo < 2) continue;
+      if (p.delay != 0) ApplyDelay(p.delay, in.t, lo, hi, out, tmp);
+      if (p.lag > 0) ApplyLag(p.lag, in.t, lo, hi, out);
+      if (p.hysteresis_width > 0) ApplyPlay(p.hysteresis_width, lo, hi, out);
+      else if (has_pi) ApplyPrandtlIshlinskii(p, lo, hi, out);
+    }
+  }
+  ApplyStaticEffects(p, in, out);
 }
 
 std::vector<double> PredictReading(const SensorModel& model, const std::vector<double>& t,

@@ -1,3 +1,9 @@
+// The fingertip simulation: the 42-taxel geometry, GeoDEx IV-A aggregation,
+// force profiles (press-release, ramp, random) drawn from a seed, and
+// SimulateSensor, which samples the profile on a grid oversampled for exact
+// delay and lag, runs every taxel under the contact patch through the sensor
+// model's channel (sim::ApplyChannel), adds noise and aggregates the output
+// samples; plus the run's CSV/JSON writer (the audit's input format).
 #include "tactforce/sim/simulate.h"
 
 #include <algorithm>
@@ -122,7 +128,11 @@ const char* ToString(Profile p) {
   return "?";
 }
 
-absl::StatusOr<SimRun> SimulateSensor(const SensorModel& model, const SimOptions& o) {
+namespace {
+
+// Checks the options against the fingertip's taxel count; InvalidArgument
+// naming the option or the model field.
+absl::Status ValidateSimOptions(const SensorModel& model, const SimOptions& o, int n_taxels) {
   if (auto st = ValidateSensorModel(model); !st.ok()) return st;
   if (!(o.seconds > 0) || o.seconds > 3600)
     return absl::InvalidArgumentError(absl::StrCat("seconds: must be in (0, 3600], got ", o.seconds));
@@ -137,108 +147,153 @@ absl::StatusOr<SimRun> SimulateSensor(const SensorModel& model, const SimOptions
     return absl::InvalidArgumentError("oversample: must be in [1, 64]");
   if (o.reference_noise < 0) return absl::InvalidArgumentError("reference_noise: must be >= 0");
   if (o.contact_radius < 0) return absl::InvalidArgumentError("contact_radius: must be >= 0");
-  const std::vector<Taxel> taxels = DefaultFingertip();
-  if (o.contact_taxel < 0 || o.contact_taxel >= static_cast<int>(taxels.size()))
+  if (o.contact_taxel < 0 || o.contact_taxel >= n_taxels)
     return absl::InvalidArgumentError(
-        absl::StrCat("contact_taxel: must be in [0, ", taxels.size() - 1, "], got ", o.contact_taxel));
+        absl::StrCat("contact_taxel: must be in [0, ", n_taxels - 1, "], got ", o.contact_taxel));
+  return absl::OkStatus();
+}
 
-  std::mt19937_64 rng(o.seed);
-  auto uni = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
-  std::normal_distribution<double> gauss(0.0, 1.0);
+double Uniform(std::mt19937_64& rng, double a, double b) {
+  return std::uniform_real_distribution<double>(a, b)(rng);
+}
 
-  // ---- force profile
-  ProfileFn pf;
-  RandomFn rf;
-  const bool random = o.profile == Profile::kRandom;
-  const double total = o.seconds + 1.0;
-  if (o.profile == Profile::kPressRelease) {
-    pf.Add(uni(0.2, 0.5), 0, 0, false);  // initial rest
-    while (pf.end() < total) {
-      const double peak = uni(o.min_peak, o.max_peak);
-      const double ratio = uni(0, o.max_shear_ratio);
-      pf.Add(uni(0.15, 0.5), peak, ratio, true);                    // press
-      pf.Add(uni(0.1, 0.6), peak * uni(0.9, 1.1), ratio, true);      // hold (slight wander)
-      pf.Add(uni(0.15, 0.5), 0, ratio, true);                        // release
-      pf.Add(uni(0.2, 0.5), 0, 0, false);                            // rest
-    }
-  } else if (o.profile == Profile::kRamp) {
-    pf.Add(0.5, 0, 0, false);
-    while (pf.end() < total) {
-      const double peak = uni(o.min_peak, o.max_peak);
-      const double ratio = uni(0, o.max_shear_ratio);
-      pf.Add(uni(1.5, 4.0), peak, ratio, false);
-      pf.Add(uni(0.2, 1.0), peak, ratio, false);
-      pf.Add(uni(1.5, 4.0), 0, ratio, false);
-      pf.Add(uni(0.3, 1.0), 0, 0, false);
-    }
-  } else {
-    for (int i = 0; i < 6; ++i) {
-      rf.amp.push_back(uni(0.3, 1.0) / (i + 1));
-      rf.freq.push_back(uni(0.1, 1.5));
-      rf.phase.push_back(uni(0, 2 * kPi));
-    }
-    for (int i = 0; i < 3; ++i) {
-      rf.ramp.push_back(uni(0.1, 0.3));
-      rf.rfreq.push_back(uni(0.05, 0.5));
-      rf.rphase.push_back(uni(0, 2 * kPi));
-    }
-    double asum = 0;
-    for (double a : rf.amp) asum += a;
-    rf.mean = 0.25 * asum;  // some contact loss: the force is clipped at 0
-    rf.scale = 0.5 * (o.min_peak + o.max_peak) / (1.25 * asum) * 1.6;
-    rf.max_ratio = o.max_shear_ratio;
+// The normal force (N) and shear ratio of a profile as functions of time (s).
+struct ForceProfile {
+  bool random = false;
+  ProfileFn phases;  // press-release and ramp
+  RandomFn sines;    // random
+  void Eval(double t, double* f, double* ratio) const {
+    if (random) sines.Eval(t, f, ratio);
+    else phases.Eval(t, f, ratio);
   }
-  auto eval = [&](double t, double* f, double* r) {
-    if (random) rf.Eval(t, f, r);
-    else pf.Eval(t, f, r);
-  };
+};
 
-  // ---- contact distribution over taxels (fixed contact patch)
+// Presses until `total` s: rest, raised-cosine press to a drawn peak, hold
+// (+/-10 % wander), release; the shear ratio drawn per press.
+void DrawPressRelease(const SimOptions& o, double total, std::mt19937_64& rng, ProfileFn* pf) {
+  pf->Add(Uniform(rng, 0.2, 0.5), 0, 0, false);  // initial rest
+  while (pf->end() < total) {
+    const double peak = Uniform(rng, o.min_peak, o.max_peak);
+    const double ratio = Uniform(rng, 0, o.max_shear_ratio);
+    pf->Add(Uniform(rng, 0.15, 0.5), peak, ratio, true);  // press
+    // Hold with a slight wander; the wander is drawn before the duration (the
+    // order GCC evaluated the arguments of the one-line form in).
+    const double hold_force = peak * Uniform(rng, 0.9, 1.1);
+    pf->Add(Uniform(rng, 0.1, 0.6), hold_force, ratio, true);
+    pf->Add(Uniform(rng, 0.15, 0.5), 0, ratio, true);  // release
+    pf->Add(Uniform(rng, 0.2, 0.5), 0, 0, false);      // rest
+  }
+}
+
+// Linear ramps up and down with short holds until `total` s.
+void DrawRamps(const SimOptions& o, double total, std::mt19937_64& rng, ProfileFn* pf) {
+  pf->Add(0.5, 0, 0, false);
+  while (pf->end() < total) {
+    const double peak = Uniform(rng, o.min_peak, o.max_peak);
+    const double ratio = Uniform(rng, 0, o.max_shear_ratio);
+    pf->Add(Uniform(rng, 1.5, 4.0), peak, ratio, false);
+    pf->Add(Uniform(rng, 0.2, 1.0), peak, ratio, false);
+    pf->Add(Uniform(rng, 1.5, 4.0), 0, ratio, false);
+    pf->Add(Uniform(rng, 0.3, 1.0), 0, 0, false);
+  }
+}
+
+// Six force sinusoids (0.1-1.5 Hz) clipped at 0, three for the shear ratio.
+void DrawSines(const SimOptions& o, std::mt19937_64& rng, RandomFn* rf) {
+  for (int i = 0; i < 6; ++i) {
+    rf->amp.push_back(Uniform(rng, 0.3, 1.0) / (i + 1));
+    rf->freq.push_back(Uniform(rng, 0.1, 1.5));
+    rf->phase.push_back(Uniform(rng, 0, 2 * kPi));
+  }
+  for (int i = 0; i < 3; ++i) {
+    rf->ramp.push_back(Uniform(rng, 0.1, 0.3));
+    rf->rfreq.push_back(Uniform(rng, 0.05, 0.5));
+    rf->rphase.push_back(Uniform(rng, 0, 2 * kPi));
+  }
+  double asum = 0;
+  for (double a : rf->amp) asum += a;
+  rf->mean = 0.25 * asum;  // some contact loss: the force is clipped at 0
+  rf->scale = 0.5 * (o.min_peak + o.max_peak) / (1.25 * asum) * 1.6;
+  rf->max_ratio = o.max_shear_ratio;
+}
+
+// The profile of o.profile, drawn from rng, covering the run plus 1 s.
+ForceProfile DrawForceProfile(const SimOptions& o, std::mt19937_64& rng) {
+  ForceProfile p;
+  p.random = o.profile == Profile::kRandom;
+  const double total = o.seconds + 1.0;
+  if (o.profile == Profile::kPressRelease) DrawPressRelease(o, total, rng, &p.phases);
+  else if (o.profile == Profile::kRamp) DrawRamps(o, total, rng, &p.phases);
+  else DrawSines(o, rng, &p.sines);
+  return p;
+}
+
+// The contact patch: each taxel's share of the force (Gaussian over the
+// taxels within contact_radius of the contact taxel, summing to 1; all on
+// the contact taxel when the radius is 0).
+std::vector<double> ContactWeights(const std::vector<Taxel>& taxels, const SimOptions& o) {
   std::vector<double> weight(taxels.size(), 0.0);
   if (o.contact_radius <= 0) {
     weight[o.contact_taxel] = 1;
-  } else {
-    const Eigen::Vector3d c = taxels[o.contact_taxel].position;
-    double s = 0;
-    for (size_t i = 0; i < taxels.size(); ++i) {
-      const double d = (taxels[i].position - c).norm();
-      if (d <= o.contact_radius) weight[i] = std::exp(-0.5 * d * d / (0.25 * o.contact_radius * o.contact_radius));
-      s += weight[i];
-    }
-    for (double& w : weight) w /= s;
+    return weight;
   }
-  double wmax = *std::max_element(weight.begin(), weight.end());
-  std::vector<int> active;
-  for (size_t i = 0; i < taxels.size(); ++i)
-    if (weight[i] > 0) active.push_back(static_cast<int>(i));
+  const Eigen::Vector3d c = taxels[o.contact_taxel].position;
+  double s = 0;
+  for (size_t i = 0; i < taxels.size(); ++i) {
+    const double d = (taxels[i].position - c).norm();
+    if (d <= o.contact_radius) weight[i] = std::exp(-0.5 * d * d / (0.25 * o.contact_radius * o.contact_radius));
+    s += weight[i];
+  }
+  for (double& w : weight) w /= s;
+  return weight;
+}
 
-  // ---- fine time grid (oversampled) with a 0.5 s lead-in for delay/lag history
-  const int n_out = static_cast<int>(std::floor(o.seconds * o.rate + 1e-9));
+// The profile on the fine (oversampled) grid, with a 0.5 s lead-in at zero
+// force for the delay/lag history: t (s), force and shear (N).
+struct FineGrid {
+  int lead = 0;   // samples before t = 0
+  int n_out = 0;  // output samples
+  std::vector<double> t, force, shear;
+};
+
+FineGrid SampleFineGrid(const ForceProfile& profile, const SimOptions& o) {
+  FineGrid g;
+  g.n_out = static_cast<int>(std::floor(o.seconds * o.rate + 1e-9));
   const double h = 1.0 / (o.rate * o.oversample);
-  const int lead = static_cast<int>(std::ceil(0.5 / h));
-  const int n_fine = lead + n_out * o.oversample;
-  std::vector<double> tf(n_fine), ff(n_fine), sf(n_fine);
+  g.lead = static_cast<int>(std::ceil(0.5 / h));
+  const int n_fine = g.lead + g.n_out * o.oversample;
+  g.t.resize(n_fine);
+  g.force.resize(n_fine);
+  g.shear.resize(n_fine);
   for (int k = 0; k < n_fine; ++k) {
-    tf[k] = (k - lead) * h;
+    g.t[k] = (k - g.lead) * h;
     double f, r;
-    eval(std::max(0.0, tf[k]), &f, &r);
-    if (tf[k] < 0) f = r = 0;
-    ff[k] = f;
-    sf[k] = r * f;
+    profile.Eval(std::max(0.0, g.t[k]), &f, &r);
+    if (g.t[k] < 0) f = r = 0;
+    g.force[k] = f;
+    g.shear[k] = r * f;
   }
+  return g;
+}
 
-  // Per active taxel: channel on its share of force and shear. Drift is
-  // referenced to t = 0 of the run (not the lead-in).
+// Channel output (N) on the fine grid of every taxel with a positive weight
+// (in taxel order), from its share of force and shear, plus the partial-
+// contact error on the partially covered ones. Drift is referenced to t = 0
+// of the run (not the lead-in).
+std::vector<std::vector<double>> SimulateTaxels(const SensorModel& model, const FineGrid& g,
+                                                const std::vector<double>& weight, const std::vector<int>& active) {
+  const int n_fine = static_cast<int>(g.t.size());
+  const double wmax = *std::max_element(weight.begin(), weight.end());
   std::vector<std::vector<double>> taxel_out(active.size());
   std::vector<double> fshare(n_fine), sshare(n_fine);
   for (size_t a = 0; a < active.size(); ++a) {
     const double w = weight[active[a]];
     for (int k = 0; k < n_fine; ++k) {
-      fshare[k] = w * ff[k];
-      sshare[k] = w * sf[k];
+      fshare[k] = w * g.force[k];
+      sshare[k] = w * g.shear[k];
     }
     ChannelInput in;
-    in.t = tf.data();
+    in.t = g.t.data();
     in.force = fshare.data();
     in.shear = sshare.data();
     in.n = n_fine;
@@ -250,32 +305,58 @@ absl::StatusOr<SimRun> SimulateSensor(const SensorModel& model, const SimOptions
         if (fshare[k] > 0) taxel_out[a][k] += model.partial_error * (1 - coverage);
     }
   }
+  return taxel_out;
+}
 
-  SimRun run;
-  run.model = model;
-  run.options = o;
-  run.t.resize(n_out);
-  run.reference.resize(n_out);
-  run.reading.resize(n_out);
-  run.shear.resize(n_out);
-  run.true_force.resize(n_out);
-  run.fingertip.resize(n_out);
+// The output samples (every oversample-th fine sample after the lead-in):
+// taxel readings with noise, aggregated to the fingertip, the reading
+// (gain, offset) and the reference (with its noise).
+void SampleOutputs(const SensorModel& model, const SimOptions& o, const std::vector<Taxel>& taxels,
+                   const FineGrid& g, const std::vector<int>& active,
+                   const std::vector<std::vector<double>>& taxel_out, std::mt19937_64& rng, SimRun* run) {
+  const int n_out = g.n_out;
+  run->t.resize(n_out);
+  run->reference.resize(n_out);
+  run->reading.resize(n_out);
+  run->shear.resize(n_out);
+  run->true_force.resize(n_out);
+  run->fingertip.resize(n_out);
+  std::normal_distribution<double> gauss(0.0, 1.0);
   std::vector<double> readings(taxels.size(), 0.0);
   for (int i = 0; i < n_out; ++i) {
-    const int k = lead + i * o.oversample;
-    run.t[i] = tf[k];
-    run.true_force[i] = ff[k];
-    run.shear[i] = sf[k];
+    const int k = g.lead + i * o.oversample;
+    run->t[i] = g.t[k];
+    run->true_force[i] = g.force[k];
+    run->shear[i] = g.shear[k];
     std::fill(readings.begin(), readings.end(), 0.0);
     for (size_t a = 0; a < active.size(); ++a) {
       double v = taxel_out[a][k];
       if (model.noise > 0) v += model.noise * gauss(rng);
       readings[active[a]] = v;
     }
-    run.fingertip[i] = AggregateFingertip(taxels, readings);
-    run.reading[i] = model.gain * run.fingertip[i].force + model.offset;
-    run.reference[i] = ff[k] + (o.reference_noise > 0 ? o.reference_noise * gauss(rng) : 0.0);
+    run->fingertip[i] = AggregateFingertip(taxels, readings);
+    run->reading[i] = model.gain * run->fingertip[i].force + model.offset;
+    run->reference[i] = g.force[k] + (o.reference_noise > 0 ? o.reference_noise * gauss(rng) : 0.0);
   }
+}
+
+}  // namespace
+
+absl::StatusOr<SimRun> SimulateSensor(const SensorModel& model, const SimOptions& o) {
+  const std::vector<Taxel> taxels = DefaultFingertip();
+  if (auto st = ValidateSimOptions(model, o, static_cast<int>(taxels.size())); !st.ok()) return st;
+  std::mt19937_64 rng(o.seed);
+  const ForceProfile profile = DrawForceProfile(o, rng);
+  const std::vector<double> weight = ContactWeights(taxels, o);
+  std::vector<int> active;
+  for (size_t i = 0; i < taxels.size(); ++i)
+    if (weight[i] > 0) active.push_back(static_cast<int>(i));
+  const FineGrid grid = SampleFineGrid(profile, o);
+  const std::vector<std::vector<double>> taxel_out = SimulateTaxels(model, grid, weight, active);
+  SimRun run;
+  run.model = model;
+  run.options = o;
+  SampleOutputs(model, o, taxels, grid, active, taxel_out, rng, &run);
   return run;
 }
 

@@ -155,5 +155,44 @@ TEST(ConstraintRows, PyramidRowsAndRobustTightening) {
   EXPECT_EQ(rows.Describe(k, p), "contact 0 minimum normal force");
 }
 
+// shift = kappa (mu rho_n + rho_t), computed once in Prepare; the slack
+// mu n.f - shift - |P f| is zero on the robust cone's surface.
+TEST(ExactCone, ShiftAndSlackOfTheRobustCone) {
+  PlanOptions o;
+  o.cone = ConeModel::kExact;
+  o.confidence = 2.0;
+  const PreparedProblem prepared = Prepare(ThreeFingerProblem(), o);
+  ASSERT_EQ(prepared.cone_shift.size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    const Contact& c = prepared.problem.contacts[i];
+    EXPECT_GT(prepared.tangential_sigma[i], 0.0);
+    EXPECT_NEAR(prepared.cone_shift[i],
+                2.0 * (c.friction * prepared.normal_sigma[i] + prepared.tangential_sigma[i]),
+                1e-15);
+    const double shift = prepared.cone_shift[i];
+    const auto [t1, t2] = TangentBasis(c.normal);
+    const double fn = 3.0;
+    const Vec3 on_surface = fn * c.normal + (c.friction * fn - shift) * (0.6 * t1 + 0.8 * t2);
+    EXPECT_NEAR(ExactConeSlack(c.normal, c.friction, shift, on_surface), 0.0, 1e-14);
+    EXPECT_NEAR(ExactConeSlack(c.normal, c.friction, shift, fn * c.normal),
+                c.friction * fn - shift, 1e-14);
+    EXPECT_NEAR(ExactConeSlack(c.normal, c.friction, shift, on_surface + 0.5 * t2),
+                -(on_surface + 0.5 * t2 - fn * c.normal).norm() + (c.friction * fn - shift),
+                1e-14);
+  }
+  o.confidence = 0.0;
+  const std::vector<double> untightened = Prepare(ThreeFingerProblem(), o).cone_shift;
+  EXPECT_EQ(untightened, std::vector<double>(3, 0.0));
+  o.cone = ConeModel::kPyramid;  // the facets carry the tightening
+  EXPECT_TRUE(Prepare(ThreeFingerProblem(), o).cone_shift.empty());
+}
+
+TEST(ContactLabel, IndexAndNameWhenThereIsOne) {
+  PlanProblem p = ThreeFingerProblem();
+  p.contacts[1].name = "thumb";
+  EXPECT_EQ(ContactLabel(p, 0), "contact 0");
+  EXPECT_EQ(ContactLabel(p, 1), "contact 1 (thumb)");
+}
+
 }  // namespace
 }  // namespace tactforce::planner

@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "planner/fixtures.h"
 #include "tactforce/planner/force_model.h"
 #include "tactforce/planner/solver.h"
 #include "tactforce/planner/types.h"
@@ -17,62 +18,17 @@
 namespace tactforce::planner {
 namespace {
 
+using fixtures::Finger;
+using fixtures::Options;
+using fixtures::Pinch;
+using fixtures::ThreeFingerGrasp;
+
 constexpr double kG = 9.81;
 
 PlanResult SolveIpopt(const PlanProblem& problem, const PlanOptions& options) {
   absl::StatusOr<PlanResult> r = MakeSolver(SolverKind::kIpopt)->Solve(problem, options);
   EXPECT_TRUE(r.ok()) << r.status();
   return r.ok() ? *r : PlanResult{};
-}
-
-Contact Finger(const Vec3& position, const Vec3& normal, double mu,
-               double min_force = 0.0, double sigma = 0.0) {
-  Contact c;
-  c.position = position;
-  c.normal = normal;
-  c.friction = mu;
-  c.min_normal_force = min_force;
-  c.sigma = sigma;
-  return c;
-}
-
-// Antipodal pinch of a sphere of radius 3 cm: contacts at (+-r, 0, 0) with
-// normals (-+1, 0, 0), gravity along -z.
-PlanProblem Pinch(double mass, double mu, double min_force = 0.0) {
-  const double r = 0.03;
-  PlanProblem p;
-  p.object.mass = mass;
-  p.contacts.push_back(Finger(Vec3(r, 0, 0), Vec3(-1, 0, 0), mu, min_force));
-  p.contacts.push_back(Finger(Vec3(-r, 0, 0), Vec3(1, 0, 0), mu, min_force));
-  return p;
-}
-
-// Three fingers 120 degrees apart, slightly below the equator of a sphere,
-// plus a fourth on top: a 3-4 contact grasp with a non-trivial optimum.
-PlanProblem ThreeFingerGrasp(int contacts = 3, double sigma = 0.0) {
-  const double r = 0.04;
-  PlanProblem p;
-  p.object.mass = 0.3;
-  p.object.com = Vec3(0.004, -0.002, 0.003);
-  const double mus[] = {0.6, 0.8, 0.5};
-  for (int i = 0; i < 3; ++i) {
-    const double a = 2.0 * std::numbers::pi * i / 3.0 + 0.2;
-    const Vec3 d = Vec3(std::cos(a), std::sin(a), -0.3).normalized();
-    p.contacts.push_back(Finger(r * d, -d, mus[i], i == 1 ? 0.5 : 0.0, sigma));
-  }
-  if (contacts > 3) {
-    const Vec3 d = Vec3(0.1, 0.0, 1.0).normalized();
-    p.contacts.push_back(Finger(r * d, -d, 0.4, 0.2, sigma));
-  }
-  return p;
-}
-
-PlanOptions Options(ConeModel cone, double kappa = 0.0, int sides = 12) {
-  PlanOptions o;
-  o.cone = cone;
-  o.confidence = kappa;
-  o.cone_sides = sides;
-  return o;
 }
 
 // Largest |G f - b| of a result.

@@ -58,6 +58,9 @@ MeasurementEllipsoid ComputeMeasurementEllipsoid(const PlanProblem& problem,
 // on ties), t1 = normalize(e - (e . n) n), t2 = n x t1.
 std::pair<Vec3, Vec3> TangentBasis(const Vec3& normal);
 
+// "contact 2 (thumb)" (index, and the name when there is one), for messages.
+std::string ContactLabel(const PlanProblem& problem, int contact);
+
 enum class RowKind { kFrictionFacet, kMinNormal, kMaxNormal };
 
 struct RowInfo {
@@ -92,14 +95,32 @@ std::vector<double> NormalForceSigma(const PlanProblem& problem,
 std::vector<double> TangentialForceSigma(const PlanProblem& problem,
                                          const MeasurementEllipsoid& ellipsoid);
 
+// Robust tightening of each contact's exact (circular) friction cone (N):
+// shift_i = kappa (mu_i rho_n,i + rho_t,i), so the cone every force the
+// sensors could mistake for f_i stays in is
+//   |P_i f_i| <= mu_i n_i . f_i - shift_i,   P_i = I - n_i n_i^T.
+// `normal_sigma` / `tangential_sigma` as from the two functions above.
+std::vector<double> ExactConeShift(const PlanProblem& problem,
+                                   const std::vector<double>& normal_sigma,
+                                   const std::vector<double>& tangential_sigma,
+                                   double confidence);
+
+// Slack (N) of that robust cone at the force f of a contact with unit
+// normal n and friction mu: mu n . f - shift - |P f|; >= 0 inside.
+double ExactConeSlack(const Vec3& normal, double mu, double shift, const Vec3& force);
+
 // Everything a backend needs, derived once from a validated request.
 struct PreparedProblem {
   PlanProblem problem;  // validated, normals of unit length
   ForceEquilibrium equilibrium;
   MeasurementEllipsoid ellipsoid;
   ConstraintRows rows;  // PYRAMID: facets + bounds; EXACT: bounds only
-  std::vector<double> normal_sigma;      // rho_n,i
-  std::vector<double> tangential_sigma;  // rho_t,i
+  std::vector<double> normal_sigma;      // rho_n,i (N)
+  std::vector<double> tangential_sigma;  // rho_t,i (N)
+  // EXACT: ExactConeShift() at options.confidence (N), the one tightening of
+  // the exact cones that every backend and the reported margin use.
+  // PYRAMID: empty (the facets in `rows` carry the tightening).
+  std::vector<double> cone_shift;
   int num_contacts() const { return static_cast<int>(problem.contacts.size()); }
 };
 

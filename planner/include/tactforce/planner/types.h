@@ -56,10 +56,15 @@ enum class ConeModel { kPyramid, kExact };
 enum class SolverKind { kGeometric, kIpopt, kCrossCheck };
 
 // Settings shared by every backend (Ceres-style: IsValid explains itself).
+// The member initialisers are THE defaults: front ends (the API's unset
+// fields, the CLI) take them from PlanOptions{} rather than repeating them.
 struct PlanOptions {
+  static constexpr int kMinConeSides = 3;
+  static constexpr int kMaxConeSides = 64;
+
   ConeModel cone = ConeModel::kPyramid;
-  int cone_sides = 12;       // k, facets of the inscribed pyramid, 3..64
-  double confidence = 1.0;   // kappa: rows tightened by kappa * ellipsoid support
+  int cone_sides = 12;       // k, facets of the inscribed pyramid, kMin..kMaxConeSides
+  double confidence = 1.0;   // kappa >= 0: rows tightened by kappa * ellipsoid support
   double rank_tolerance = 1e-9;  // relative singular-value cut-off for null(G)
   int max_contacts = 64;
 

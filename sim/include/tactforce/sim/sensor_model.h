@@ -20,7 +20,7 @@
 //   u  = u + partial_error * (1 - coverage)        (partial contact, in contact only)
 //   reading = gain * (u + noise * N(0,1)) + offset
 // Every effect parameter 0 = off; all off with gain 1, offset 0 = ideal.
-// The fingertip sums taxel readings (GeoDEx IV-A), see fingertip.h.
+// The fingertip sums taxel readings (GeoDEx IV-A), see simulate.h.
 #pragma once
 
 #include <map>
