@@ -1,3 +1,6 @@
+// `tactforce audit` (measured data from one CSV or two aligned streams,
+// the audit, its report directory and summary) and `tactforce simulate
+// sensor` (a simulated fingertip run against a reference force).
 #include "audit_command.h"
 
 #include <iostream>

@@ -1,3 +1,5 @@
+// What every subcommand shares: reading an input file or stdin, "x,y,z"
+// vectors, and reporting an error as one line with its exit code.
 #include "cli_common.h"
 
 #include <cerrno>

@@ -1,3 +1,5 @@
+// The connection flags, channels with their credentials, and the mapping of
+// a failed gRPC call to the CLI's one-line error; --target lists.
 #include "connection.h"
 
 #include <array>
@@ -139,15 +141,10 @@ absl::Status RpcError(const grpc::Status& status, const std::string& target, int
 }
 
 std::string StatusCodeName(grpc::StatusCode code) {
-  static constexpr std::array<const char*, 17> kNames = {
-      "OK",        "CANCELLED",          "UNKNOWN",           "INVALID_ARGUMENT",
-      "DEADLINE_EXCEEDED", "NOT_FOUND",  "ALREADY_EXISTS",    "PERMISSION_DENIED",
-      "RESOURCE_EXHAUSTED", "FAILED_PRECONDITION", "ABORTED", "OUT_OF_RANGE",
-      "UNIMPLEMENTED", "INTERNAL",       "UNAVAILABLE",       "DATA_LOSS",
-      "UNAUTHENTICATED"};
-  const int index = static_cast<int>(code);
-  if (index >= 0 && index < static_cast<int>(kNames.size())) return kNames[index];
-  return absl::StrCat("CODE_", index);
+  // absl and gRPC share the canonical codes and their names.
+  std::string name = absl::StatusCodeToString(static_cast<absl::StatusCode>(code));
+  if (name.empty()) return absl::StrCat("CODE_", static_cast<int>(code));
+  return name;
 }
 
 bool HasUriScheme(const std::string& target) {

@@ -1,3 +1,7 @@
+// `tactforce demo`: every built-in grasp planned here with the cross-check
+// backend (geometric vs Ipopt, fastest of --repeat), and with --server the
+// same grasps through tactforce-server (health, answers compared with the
+// local ones, geometric round trips) and a short load test; tables or JSON.
 #include "demo_command.h"
 
 #include <algorithm>
@@ -16,8 +20,10 @@
 #include "health_command.h"
 #include "load_generator.h"
 #include "plan_backend.h"
+#include "remote_call.h"
 #include "tactforce/api/convert.h"
 #include "tactforce/api/json.h"
+#include "tactforce/api/names.h"
 #include "tactforce/api/table.h"
 #include "tactforce/planner/examples.h"
 #include "tactforce/planner/solver.h"
@@ -186,15 +192,12 @@ absl::StatusOr<RemoteResult> RunRemote(const DemoArgs& args, const std::vector<D
   RemoteResult result;
   result.address = args.server;
 
-  absl::StatusOr<std::shared_ptr<grpc::Channel>> channel =
-      MakeChannel(connection, connection.server);
-  if (!channel.ok()) return channel.status();
-  absl::StatusOr<std::string> health =
-      CheckHealth(*channel, connection.server, "", connection.deadline_ms);
+  absl::StatusOr<RemoteServer> server = RemoteServer::Open(connection);
+  if (!server.ok()) return server.status();
+  absl::StatusOr<std::string> health = CheckHealth(*server, "");
   if (!health.ok()) return health.status();
   result.health = *health;
-  absl::StatusOr<std::string> planner_health =
-      CheckHealth(*channel, connection.server, "tactforce.v1.Planner", connection.deadline_ms);
+  absl::StatusOr<std::string> planner_health = CheckHealth(*server, "tactforce.v1.Planner");
   if (!planner_health.ok()) return planner_health.status();
   result.planner_health = *planner_health;
 

@@ -1,43 +1,28 @@
+// `tactforce estimate` (contact forces from tactile readings, in this
+// process or through Estimator.EstimateForces), `tactforce friction` (mu
+// from slip trials) and `tactforce simulate friction` (trials with their
+// truth): flags, input files to requests, responses to text.
 #include "estimate_command.h"
 
-#include <chrono>
-#include <cmath>
-#include <cstdio>
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
-#include <sstream>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "cli_common.h"
-#include "grpcpp/grpcpp.h"
-#include "tactforce/v1/estimator.grpc.pb.h"
+#include "remote_call.h"
 #include "tactforce/api/convert.h"
 #include "tactforce/api/json.h"
 #include "tactforce/api/services.h"
-#include "tactforce/io/csv.h"
 #include "tactforce/estimator/friction.h"
-#include "tactforce/io/mesh.h"
+#include "tactforce/io/csv.h"
 #include "tactforce/io/json.h"
+#include "tactforce/io/mesh.h"
 #include "tactforce/io/text_file.h"
+#include "tactforce/v1/estimator.grpc.pb.h"
 
 namespace tactforce::cli {
-namespace {
-
-absl::StatusOr<v1::EstimateResponse> RemoteEstimate(const ConnectionArgs& connection,
-                                                    const v1::EstimateRequest& request) {
-  absl::StatusOr<std::shared_ptr<grpc::Channel>> channel = MakeChannel(connection, connection.server);
-  if (!channel.ok()) return channel.status();
-  auto stub = v1::Estimator::NewStub(*channel);
-  grpc::ClientContext context;
-  SetDeadline(&context, connection.deadline_ms);
-  v1::EstimateResponse response;
-  const grpc::Status status = stub->EstimateForces(&context, request, &response);
-  if (!status.ok()) return RpcError(status, connection.server, connection.deadline_ms, channel->get());
-  return response;
-}
-
-}  // namespace
 
 CLI::App* AddEstimateCommand(CLI::App& app, EstimateArgs& args) {
   CLI::App* cmd = app.add_subcommand("estimate", "Estimate contact forces from tactile readings");
@@ -57,12 +42,9 @@ int RunEstimate(const EstimateArgs& args) {
   if (!text.ok()) return ReportError(text.status());
   v1::EstimateRequest request;
   if (absl::Status s = api::ParseJson(*text, &request, "request JSON"); !s.ok()) return ReportError(s);
-  absl::StatusOr<v1::EstimateResponse> response;
-  if (args.local) {
-    response = api::HandleEstimate(request);
-  } else {
-    response = RemoteEstimate(args.connection, request);
-  }
+  absl::StatusOr<v1::EstimateResponse> response =
+      args.local ? api::HandleEstimate(request)
+                 : CallUnary(args.connection, &v1::Estimator::Stub::EstimateForces, request);
   if (!response.ok()) return ReportError(response.status());
   std::cout << api::ToJson(*response);
   return std::cout ? kExitOk : kExitFailure;

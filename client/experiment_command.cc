@@ -1,10 +1,17 @@
+// `tactforce experiment grasp` (grasp-and-lift batches per object and
+// feedback mode: a table or JSON, SVG traces, per-trial details) and
+// `tactforce experiment slope` (slope-method friction vs the probing
+// estimate, and MuJoCo's creep): flags to configurations, runs, output.
 #include "experiment_command.h"
 
 #include <algorithm>
-
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
@@ -26,58 +33,106 @@ std::string JsonNumber(double v) {
   return absl::StrFormat("%.6g", v);
 }
 
-int RunGrasp(const ExperimentArgs& a) {
+// What `experiment grasp` runs: objects x feedback modes, each a batch of
+// --trials trials with `base` as the shared configuration.
+struct GraspRun {
   std::vector<ex::GraspObject> objects;
+  std::vector<ex::Feedback> modes;
+  ex::GraspConfig base;
+};
+
+// --object and --feedback ("all" and "both" expand).
+absl::Status SetObjectsAndModes(const ExperimentArgs& a, GraspRun* run) {
   if (a.object == "all") {
-    objects = ex::AllGraspObjects();
+    run->objects = ex::AllGraspObjects();
   } else {
     auto o = ex::ParseGraspObject(a.object);
-    if (!o.ok()) return ReportError(absl::InvalidArgumentError(absl::StrCat("--", o.status().message())));
-    objects = {*o};
+    if (!o.ok()) return absl::InvalidArgumentError(absl::StrCat("--", o.status().message()));
+    run->objects = {*o};
   }
-  std::vector<ex::Feedback> modes;
   if (a.feedback == "both") {
-    modes = {ex::Feedback::kRaw, ex::Feedback::kEstimated};
+    run->modes = {ex::Feedback::kRaw, ex::Feedback::kEstimated};
   } else {
     auto f = ex::ParseFeedback(a.feedback);
-    if (!f.ok()) return ReportError(absl::InvalidArgumentError(absl::StrCat("--", f.status().message())));
-    modes = {*f};
+    if (!f.ok()) return absl::InvalidArgumentError(absl::StrCat("--", f.status().message()));
+    run->modes = {*f};
   }
-  if (a.trials < 1) return ReportError(absl::InvalidArgumentError(absl::StrFormat("--trials: must be >= 1, got %d", a.trials)));
-  ex::GraspConfig base;
-  base.seed = a.seed;
-  if (a.estimator == "projection") base.estimator = estimator::EstimateMethod::kProjection;
-  else if (a.estimator == "normal-lsq") base.estimator = estimator::EstimateMethod::kNormalLsq;
+  return absl::OkStatus();
+}
+
+// --seed, --estimator, --admittance, --ideal-sensors / --sensor-model and
+// --plots (the directory is created; trial 0 of each batch is traced).
+absl::Status SetBaseConfig(const ExperimentArgs& a, ex::GraspConfig* base) {
+  base->seed = a.seed;
+  if (a.estimator == "projection") base->estimator = estimator::EstimateMethod::kProjection;
+  else if (a.estimator == "normal-lsq") base->estimator = estimator::EstimateMethod::kNormalLsq;
   else
-    return ReportError(absl::InvalidArgumentError(
-        absl::StrCat("--estimator: unknown '", a.estimator, "' (expected projection or normal-lsq)")));
+    return absl::InvalidArgumentError(
+        absl::StrCat("--estimator: unknown '", a.estimator, "' (expected projection or normal-lsq)"));
   auto adm = ex::ParseAdmittance(a.admittance);
-  if (!adm.ok()) return ReportError(absl::InvalidArgumentError(absl::StrCat("--", adm.status().message())));
-  base.admittance = *adm;
+  if (!adm.ok()) return absl::InvalidArgumentError(absl::StrCat("--", adm.status().message()));
+  base->admittance = *adm;
   if (a.ideal && !a.sensor_model_path.empty())
-    return ReportError(absl::InvalidArgumentError("--ideal-sensors: cannot be combined with --sensor-model"));
-  if (a.ideal) base.sensors = ex::SensorMode::kIdeal;
+    return absl::InvalidArgumentError("--ideal-sensors: cannot be combined with --sensor-model");
+  if (a.ideal) base->sensors = ex::SensorMode::kIdeal;
   if (!a.sensor_model_path.empty()) {
     auto m = sim::LoadSensorModel(a.sensor_model_path);
-    if (!m.ok())
-      return ReportError(absl::InvalidArgumentError(absl::StrCat("--sensor-model: ", m.status().message())));
-    base.sensors = ex::SensorMode::kModel;
-    base.sensor_model = *m;
+    if (!m.ok()) return absl::InvalidArgumentError(absl::StrCat("--sensor-model: ", m.status().message()));
+    base->sensors = ex::SensorMode::kModel;
+    base->sensor_model = *m;
   }
   if (!a.plots_dir.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(a.plots_dir, ec);
-    if (ec) return ReportError(absl::InvalidArgumentError(absl::StrCat("--plots: cannot create ", a.plots_dir, ": ", ec.message())));
-    base.trace_trials = 1;
+    if (ec) return absl::InvalidArgumentError(absl::StrCat("--plots: cannot create ", a.plots_dir, ": ", ec.message()));
+    base->trace_trials = 1;
   }
-  const int total_trials = static_cast<int>(objects.size() * modes.size()) * a.trials;
-  ProgressBar bar("trials", !a.no_progress && ProgressBar::StderrIsTerminal(), std::chrono::milliseconds(0));
+  return absl::OkStatus();
+}
+
+absl::StatusOr<GraspRun> GraspRunFromFlags(const ExperimentArgs& a) {
+  GraspRun run;
+  if (absl::Status s = SetObjectsAndModes(a, &run); !s.ok()) return s;
+  if (a.trials < 1) return absl::InvalidArgumentError(absl::StrFormat("--trials: must be >= 1, got %d", a.trials));
+  if (absl::Status s = SetBaseConfig(a, &run.base); !s.ok()) return s;
+  return run;
+}
+
+// Trial 0's force traces of the batch run with `c` as PLOTS/OBJECT_FEEDBACK.svg.
+absl::Status WriteTracePlot(const std::string& plots_dir, const ex::GraspConfig& c, const ex::TrialResult& t0) {
+  auto setup = ex::GraspSetup::Create(c);
+  if (!setup.ok()) return setup.status();
+  const std::string title = absl::StrFormat(
+      "%s, %s feedback, trial 0 (%s): desired / estimated / raw / true normal force", ex::ToString(c.object),
+      ex::ToString(c.feedback), t0.success ? "success" : t0.failure);
+  const std::string path =
+      (std::filesystem::path(plots_dir) / absl::StrCat(ex::ToString(c.object), "_", ex::ToString(c.feedback), ".svg"))
+          .string();
+  if (absl::Status st = io::WriteTextFile(path, io::RenderSvg(ex::TracePlot(t0, (*setup)->finger_names(), title)));
+      !st.ok())
+    return absl::Status(st.code(), absl::StrCat("--plots: ", st.message()));
+  return absl::OkStatus();
+}
+
+// --details: one line per trial on stderr.
+void PrintTrialDetails(const ex::GraspConfig& c, const ex::BatchSummary& b) {
+  for (const ex::TrialResult& t : b.results)
+    std::cerr << absl::StrFormat("%s %s trial %d: %s  slip %.2f mm  rotation %.2f deg  force error %.3f N\n",
+                                 ex::ToString(c.object), ex::ToString(c.feedback), t.trial,
+                                 t.success ? "success" : t.failure, t.max_slip * 1e3, t.max_rotation_deg,
+                                 t.force_error);
+}
+
+// Every object x mode batch in order, with `bar` counting trials; the
+// summaries without their per-trial results.
+absl::StatusOr<std::vector<ex::BatchSummary>> RunGraspBatches(const ExperimentArgs& a, const GraspRun& run,
+                                                             ProgressBar& bar) {
+  const int total_trials = static_cast<int>(run.objects.size() * run.modes.size()) * a.trials;
   int done_before = 0;
   std::vector<ex::BatchSummary> rows;
-  const auto wall0 = std::chrono::steady_clock::now();
-  for (ex::GraspObject o : objects) {
-    for (ex::Feedback f : modes) {
-      ex::GraspConfig c = base;
+  for (ex::GraspObject o : run.objects) {
+    for (ex::Feedback f : run.modes) {
+      ex::GraspConfig c = run.base;
       c.object = o;
       c.feedback = f;
       const std::string label = absl::StrCat(ex::ToString(o), " ", ex::ToString(f));
@@ -87,99 +142,161 @@ int RunGrasp(const ExperimentArgs& a) {
       });
       if (!b.ok()) {
         bar.Finish();
-        return ReportError(b.status());
+        return b.status();
       }
       done_before += a.trials;
       if (!a.plots_dir.empty() && !b->results.empty()) {
-        auto setup = ex::GraspSetup::Create(c);
-        if (!setup.ok()) return ReportError(setup.status());
-        const ex::TrialResult& t0 = b->results[0];
-        const std::string title = absl::StrFormat(
-            "%s, %s feedback, trial 0 (%s): desired / estimated / raw / true normal force", ex::ToString(o),
-            ex::ToString(f), t0.success ? "success" : t0.failure);
-        const std::string path =
-            (std::filesystem::path(a.plots_dir) / absl::StrCat(ex::ToString(o), "_", ex::ToString(f), ".svg")).string();
-        if (absl::Status st = io::WriteTextFile(path, io::RenderSvg(ex::TracePlot(t0, (*setup)->finger_names(), title)));
-            !st.ok())
-          return ReportError(absl::Status(st.code(), absl::StrCat("--plots: ", st.message())));
+        if (absl::Status s = WriteTracePlot(a.plots_dir, c, b->results[0]); !s.ok()) return s;
       }
-      if (a.details && !a.json) {
-        for (const ex::TrialResult& t : b->results)
-          std::cerr << absl::StrFormat("%s %s trial %d: %s  slip %.2f mm  rotation %.2f deg  force error %.3f N\n",
-                                       ex::ToString(o), ex::ToString(f), t.trial, t.success ? "success" : t.failure,
-                                       t.max_slip * 1e3, t.max_rotation_deg, t.force_error);
-      }
+      if (a.details && !a.json) PrintTrialDetails(c, *b);
       b->results.clear();
       rows.push_back(std::move(*b));
     }
   }
-  bar.Finish();
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  if (a.json) {
-    std::string s = "{\"results\":[";
-    for (size_t i = 0; i < rows.size(); ++i) {
-      const ex::BatchSummary& r = rows[i];
-      absl::StrAppend(&s, i ? "," : "", "{\"object\":\"", ex::ToString(r.object), "\",\"feedback\":\"",
-                      ex::ToString(r.feedback), "\",\"trials\":", r.trials, ",\"successes\":", r.successes,
-                      ",\"force_error_mean\":", JsonNumber(r.force_error_mean),
-                      ",\"force_error_std\":", JsonNumber(r.force_error_std), ",\"drops\":", r.drops,
-                      ",\"feedback_error_mean\":", JsonNumber(r.feedback_error_mean),
-                      ",\"converged\":", r.converged,
-                      ",\"converge_time_mean\":", r.converged ? JsonNumber(r.converge_time_mean) : "null",
-                      ",\"sim_seconds\":", JsonNumber(r.sim_seconds), ",\"wall_seconds\":", JsonNumber(r.wall_seconds),
-                      "}");
-    }
-    absl::StrAppend(&s, "],\"seed\":", a.seed, ",\"estimator\":\"", a.estimator, "\",\"admittance\":\"",
-                    a.admittance, "\",\"wall_seconds\":",
-                    JsonNumber(wall), "}");
-    std::cout << s << std::endl;
-    return kExitOk;
+  return rows;
+}
+
+// {"results":[{object, feedback, trials, successes, ...}], "seed", ...}
+std::string GraspJson(const ExperimentArgs& a, const std::vector<ex::BatchSummary>& rows, double wall) {
+  std::string s = "{\"results\":[";
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const ex::BatchSummary& r = rows[i];
+    absl::StrAppend(&s, i ? "," : "", "{\"object\":\"", ex::ToString(r.object), "\",\"feedback\":\"",
+                    ex::ToString(r.feedback), "\",\"trials\":", r.trials, ",\"successes\":", r.successes,
+                    ",\"force_error_mean\":", JsonNumber(r.force_error_mean),
+                    ",\"force_error_std\":", JsonNumber(r.force_error_std), ",\"drops\":", r.drops,
+                    ",\"feedback_error_mean\":", JsonNumber(r.feedback_error_mean),
+                    ",\"converged\":", r.converged,
+                    ",\"converge_time_mean\":", r.converged ? JsonNumber(r.converge_time_mean) : "null",
+                    ",\"sim_seconds\":", JsonNumber(r.sim_seconds), ",\"wall_seconds\":", JsonNumber(r.wall_seconds),
+                    "}");
   }
-  std::cout << absl::StrFormat("%-9s %-10s %9s %6s %22s %14s %14s %10s\n", "object", "feedback", "success", "drops",
-                               "force error (N) mean/std", "feedback err", "converge (s)", "x realtime");
+  absl::StrAppend(&s, "],\"seed\":", a.seed, ",\"estimator\":\"", a.estimator, "\",\"admittance\":\"",
+                  a.admittance, "\",\"wall_seconds\":",
+                  JsonNumber(wall), "}");
+  return s;
+}
+
+// One row per batch and a line with the wall time and the settings.
+std::string GraspTable(const ExperimentArgs& a, const std::vector<ex::BatchSummary>& rows, double wall) {
+  std::string out = absl::StrFormat("%-9s %-10s %9s %6s %22s %14s %14s %10s\n", "object", "feedback", "success",
+                                    "drops", "force error (N) mean/std", "feedback err", "converge (s)",
+                                    "x realtime");
   for (const ex::BatchSummary& r : rows) {
-    std::cout << absl::StrFormat(
+    absl::StrAppend(&out, absl::StrFormat(
         "%-9s %-10s %4d/%-4d %6d %13.3f / %-6.3f %14.3f %14s %10.1f\n", ex::ToString(r.object),
         ex::ToString(r.feedback), r.successes, r.trials, r.drops, r.force_error_mean, r.force_error_std,
         r.feedback_error_mean,
         r.converged ? absl::StrFormat("%.3f (%d)", r.converge_time_mean, r.converged) : std::string("never"),
-        r.wall_seconds > 0 ? r.sim_seconds / r.wall_seconds : 0.0);
+        r.wall_seconds > 0 ? r.sim_seconds / r.wall_seconds : 0.0));
   }
-  std::cout << absl::StrFormat("total %.1f s wall; seed %d; estimator %s; admittance %s; sensors %s\n", wall, a.seed,
-                               a.estimator, a.admittance,
-                               a.ideal ? "ideal" : a.sensor_model_path.empty() ? "GeoDEx error ranges per trial"
-                                                                               : a.sensor_model_path);
+  absl::StrAppend(&out, absl::StrFormat("total %.1f s wall; seed %d; estimator %s; admittance %s; sensors %s\n",
+                                        wall, a.seed, a.estimator, a.admittance,
+                                        a.ideal ? "ideal"
+                                        : a.sensor_model_path.empty() ? "GeoDEx error ranges per trial"
+                                                                      : a.sensor_model_path));
+  return out;
+}
+
+int RunGrasp(const ExperimentArgs& a) {
+  absl::StatusOr<GraspRun> run = GraspRunFromFlags(a);
+  if (!run.ok()) return ReportError(run.status());
+  ProgressBar bar("trials", !a.no_progress && ProgressBar::StderrIsTerminal(), std::chrono::milliseconds(0));
+  const auto wall0 = std::chrono::steady_clock::now();
+  absl::StatusOr<std::vector<ex::BatchSummary>> rows = RunGraspBatches(a, *run, bar);
+  if (!rows.ok()) return ReportError(rows.status());
+  bar.Finish();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  if (a.json) {
+    std::cout << GraspJson(a, *rows, wall) << std::endl;
+  } else {
+    std::cout << GraspTable(a, *rows, wall);
+  }
   return kExitOk;
+}
+
+// MuJoCo's creep under static friction at one load ratio of the cone.
+struct Creep {
+  std::string settings;  // "chosen" or "mujoco-default"
+  double ratio, velocity;
+};
+
+// --creep: creep at 50 % and 90 % of the cone with both solver settings.
+absl::StatusOr<std::vector<Creep>> MeasureCreepTable() {
+  std::vector<Creep> creep;
+  for (const auto& [name, p] : {std::pair{std::string("chosen"), ex::PhysicsSettings{}},
+                                std::pair{std::string("mujoco-default"), ex::PhysicsSettings::MujocoDefaults()}}) {
+    for (double ratio : {0.5, 0.9}) {
+      auto v = ex::MeasureCreep(p, 0.5, ratio);
+      if (!v.ok()) return v.status();
+      creep.push_back({name, ratio, *v});
+    }
+  }
+  return creep;
+}
+
+std::string SlopeRowJson(const ex::SlopeRow& r) {
+  return absl::StrCat("{\"mu\":", JsonNumber(r.mu), ",\"slip_tilt_deg\":", JsonNumber(r.slip_tilt_deg),
+                      ",\"mu_slope\":", JsonNumber(r.mu_slope),
+                      ",\"mu_probe\":", r.probe_valid ? JsonNumber(r.mu_probe) : "null",
+                      ",\"difference\":", r.probe_valid ? JsonNumber(r.mu_probe - r.mu_slope) : "null", "}");
+}
+
+// {"results":[...],"mujoco_default_results":[...],"creep":[...]}
+std::string SlopeJson(const std::vector<ex::SlopeRow>& rows, const std::vector<ex::SlopeRow>& default_rows,
+                      const std::vector<Creep>& creep) {
+  std::string s = "{\"results\":[";
+  for (size_t i = 0; i < rows.size(); ++i) absl::StrAppend(&s, i ? "," : "", SlopeRowJson(rows[i]));
+  absl::StrAppend(&s, "],\"mujoco_default_results\":[");
+  for (size_t i = 0; i < default_rows.size(); ++i) absl::StrAppend(&s, i ? "," : "", SlopeRowJson(default_rows[i]));
+  absl::StrAppend(&s, "],\"creep\":[");
+  for (size_t i = 0; i < creep.size(); ++i)
+    absl::StrAppend(&s, i ? "," : "", "{\"settings\":\"", creep[i].settings, "\",\"mu\":0.5,\"load_ratio\":",
+                    JsonNumber(creep[i].ratio), ",\"velocity_m_per_s\":", JsonNumber(creep[i].velocity), "}");
+  absl::StrAppend(&s, "]}");
+  return s;
+}
+
+// Slope vs probe per friction coefficient.
+std::string SlopeTable(const std::vector<ex::SlopeRow>& rows) {
+  std::string out = absl::StrFormat("%6s %11s %9s %9s %9s %9s %14s\n", "mu", "slip tilt", "mu_slope", "slope-mu",
+                                    "mu_probe", "probe-mu", "probe-slope");
+  for (const ex::SlopeRow& r : rows) {
+    if (r.probe_valid)
+      absl::StrAppend(&out, absl::StrFormat("%6.3f %9.2f° %9.4f %+9.4f %9.4f %+9.4f %+14.4f\n", r.mu,
+                                            r.slip_tilt_deg, r.mu_slope, r.mu_slope - r.mu, r.mu_probe,
+                                            r.mu_probe - r.mu, r.mu_probe - r.mu_slope));
+    else
+      absl::StrAppend(&out, absl::StrFormat("%6.3f %9.2f° %9.4f %+9.4f %9s (%s)\n", r.mu, r.slip_tilt_deg,
+                                            r.mu_slope, r.mu_slope - r.mu, "no slip", r.probe_message));
+  }
+  return out;
+}
+
+// --mu and --tilt-rate checked by the library; its message names the flag.
+absl::Status CheckSlopeFlags(const ex::SlopeConfig& c) {
+  absl::Status s = ex::ValidateSlopeConfig(c);
+  if (s.ok()) return s;
+  const std::string m(s.message());
+  const char* flag = absl::StartsWith(m, "mus")         ? "--mu"
+                     : absl::StartsWith(m, "tilt_rate") ? "--tilt-rate"
+                                                        : "experiment slope";
+  return absl::InvalidArgumentError(absl::StrCat(flag, ": ", m));
 }
 
 int RunSlope(const ExperimentArgs& a) {
   ex::SlopeConfig c;
   c.mus = a.mus;
   c.tilt_rate_deg = a.tilt_rate;
-  if (absl::Status s = ex::ValidateSlopeConfig(c); !s.ok()) {
-    const std::string m(s.message());
-    const char* flag = absl::StartsWith(m, "mus")         ? "--mu"
-                       : absl::StartsWith(m, "tilt_rate") ? "--tilt-rate"
-                                                          : "experiment slope";
-    return ReportError(absl::InvalidArgumentError(absl::StrCat(flag, ": ", m)));
-  }
+  if (absl::Status s = CheckSlopeFlags(c); !s.ok()) return ReportError(s);
   auto rows = ex::RunSlopeTable(c);
   if (!rows.ok()) return ReportError(rows.status());
-  struct Creep {
-    std::string settings;
-    double ratio, velocity;
-  };
   std::vector<Creep> creep;
   std::vector<ex::SlopeRow> default_rows;
   if (a.creep) {
-    for (const auto& [name, p] : {std::pair{std::string("chosen"), ex::PhysicsSettings{}},
-                                  std::pair{std::string("mujoco-default"), ex::PhysicsSettings::MujocoDefaults()}}) {
-      for (double ratio : {0.5, 0.9}) {
-        auto v = ex::MeasureCreep(p, 0.5, ratio);
-        if (!v.ok()) return ReportError(v.status());
-        creep.push_back({name, ratio, *v});
-      }
-    }
+    absl::StatusOr<std::vector<Creep>> measured = MeasureCreepTable();
+    if (!measured.ok()) return ReportError(measured.status());
+    creep = *std::move(measured);
     ex::SlopeConfig d = c;
     d.physics = ex::PhysicsSettings::MujocoDefaults();
     auto r = ex::RunSlopeTable(d);
@@ -187,42 +304,12 @@ int RunSlope(const ExperimentArgs& a) {
     default_rows = *r;
   }
   if (a.json) {
-    auto row_json = [](const ex::SlopeRow& r) {
-      return absl::StrCat("{\"mu\":", JsonNumber(r.mu), ",\"slip_tilt_deg\":", JsonNumber(r.slip_tilt_deg),
-                          ",\"mu_slope\":", JsonNumber(r.mu_slope),
-                          ",\"mu_probe\":", r.probe_valid ? JsonNumber(r.mu_probe) : "null",
-                          ",\"difference\":", r.probe_valid ? JsonNumber(r.mu_probe - r.mu_slope) : "null", "}");
-    };
-    std::string s = "{\"results\":[";
-    for (size_t i = 0; i < rows->size(); ++i) absl::StrAppend(&s, i ? "," : "", row_json((*rows)[i]));
-    absl::StrAppend(&s, "],\"mujoco_default_results\":[");
-    for (size_t i = 0; i < default_rows.size(); ++i) absl::StrAppend(&s, i ? "," : "", row_json(default_rows[i]));
-    absl::StrAppend(&s, "],\"creep\":[");
-    for (size_t i = 0; i < creep.size(); ++i)
-      absl::StrAppend(&s, i ? "," : "", "{\"settings\":\"", creep[i].settings, "\",\"mu\":0.5,\"load_ratio\":",
-                      JsonNumber(creep[i].ratio), ",\"velocity_m_per_s\":", JsonNumber(creep[i].velocity), "}");
-    absl::StrAppend(&s, "]}");
-    std::cout << s << std::endl;
+    std::cout << SlopeJson(*rows, default_rows, creep) << std::endl;
     return kExitOk;
   }
-  auto table = [](const std::vector<ex::SlopeRow>& rs) {
-    std::cout << absl::StrFormat("%6s %11s %9s %9s %9s %9s %14s\n", "mu", "slip tilt", "mu_slope", "slope-mu",
-                                 "mu_probe", "probe-mu", "probe-slope");
-    for (const ex::SlopeRow& r : rs) {
-      if (r.probe_valid)
-        std::cout << absl::StrFormat("%6.3f %9.2f° %9.4f %+9.4f %9.4f %+9.4f %+14.4f\n", r.mu, r.slip_tilt_deg,
-                                     r.mu_slope, r.mu_slope - r.mu, r.mu_probe, r.mu_probe - r.mu,
-                                     r.mu_probe - r.mu_slope);
-      else
-        std::cout << absl::StrFormat("%6.3f %9.2f° %9.4f %+9.4f %9s (%s)\n", r.mu, r.slip_tilt_deg, r.mu_slope,
-                                     r.mu_slope - r.mu, "no slip", r.probe_message);
-    }
-  };
-  std::cout << "Slope method vs probing (chosen solver settings):\n";
-  table(*rows);
+  std::cout << "Slope method vs probing (chosen solver settings):\n" << SlopeTable(*rows);
   if (a.creep) {
-    std::cout << "\nSame with MuJoCo's default solver settings:\n";
-    table(default_rows);
+    std::cout << "\nSame with MuJoCo's default solver settings:\n" << SlopeTable(default_rows);
     std::cout << "\nCreep under static friction (mu 0.5, fingertip 0.05 kg on a tilted plate):\n";
     for (const Creep& k : creep)
       std::cout << absl::StrFormat("  %-15s load %.0f %% of the cone: %.3g mm/s\n", k.settings, 100 * k.ratio,

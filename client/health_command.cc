@@ -1,8 +1,11 @@
+// `tactforce health` and CheckHealth (also used by `demo` and the warm-up of
+// `load`): one grpc.health.v1.Health/Check through CallUnary, the serving
+// status by its wire name, and the --wait loop that asks again until
+// SERVING.
 #include "health_command.h"
 
 #include <chrono>
 #include <iostream>
-#include <memory>
 #include <thread>
 
 #include "absl/strings/str_cat.h"
@@ -14,35 +17,27 @@ namespace {
 
 using HealthResponse = grpc::health::v1::HealthCheckResponse;
 
+// The status's name in health.proto; "UNKNOWN" for a value newer than it.
 std::string ServingName(HealthResponse::ServingStatus status) {
-  switch (status) {
-    case HealthResponse::SERVING:
-      return "SERVING";
-    case HealthResponse::NOT_SERVING:
-      return "NOT_SERVING";
-    case HealthResponse::SERVICE_UNKNOWN:
-      return "SERVICE_UNKNOWN";
-    default:
-      return "UNKNOWN";
-  }
+  const std::string& name = HealthResponse::ServingStatus_Name(status);
+  return name.empty() ? "UNKNOWN" : name;
 }
 
 }  // namespace
 
-absl::StatusOr<std::string> CheckHealth(const std::shared_ptr<grpc::Channel>& channel,
-                                        const std::string& target,
-                                        const std::string& service, int deadline_ms) {
-  std::unique_ptr<grpc::health::v1::Health::Stub> stub =
-      grpc::health::v1::Health::NewStub(channel);
+absl::StatusOr<std::string> CheckHealth(const RemoteServer& server, const std::string& service) {
   grpc::health::v1::HealthCheckRequest request;
   request.set_service(service);
-  HealthResponse response;
-  grpc::ClientContext context;
-  SetDeadline(&context, deadline_ms);
-  const grpc::Status status = stub->Check(&context, request, &response);
-  if (status.error_code() == grpc::StatusCode::NOT_FOUND) return std::string("SERVICE_UNKNOWN");
-  if (!status.ok()) return RpcError(status, target, deadline_ms, channel.get());
-  return ServingName(response.status());
+  absl::StatusOr<HealthResponse> response =
+      CallUnary(server, &grpc::health::v1::Health::Stub::Check, request);
+  if (response.status().code() == absl::StatusCode::kNotFound) return std::string("SERVICE_UNKNOWN");
+  if (!response.ok()) return response.status();
+  return ServingName(response->status());
+}
+
+absl::Status UnknownServiceError(const std::string& target, const std::string& service) {
+  return absl::InvalidArgumentError(
+      absl::StrCat(target, " does not know service '", service, "' (--service)"));
 }
 
 CLI::App* AddHealthCommand(CLI::App& app, HealthArgs& args) {
@@ -74,16 +69,15 @@ int RunHealth(const HealthArgs& args) {
     channel_args.SetInt(GRPC_ARG_MIN_RECONNECT_BACKOFF_MS, 100);
     channel_args.SetInt(GRPC_ARG_MAX_RECONNECT_BACKOFF_MS, 500);
   }
-  absl::StatusOr<std::shared_ptr<grpc::Channel>> channel =
-      MakeChannel(connection, connection.server, channel_args);
-  if (!channel.ok()) return ReportError(channel.status());
+  absl::StatusOr<RemoteServer> server = RemoteServer::Open(connection, channel_args);
+  if (!server.ok()) return ReportError(server.status());
 
   using Clock = std::chrono::steady_clock;
   const Clock::time_point give_up =
       Clock::now() + std::chrono::milliseconds(static_cast<int64_t>(args.wait_s * 1000));
   absl::StatusOr<std::string> state;
   for (;;) {
-    state = CheckHealth(*channel, connection.server, args.service, connection.deadline_ms);
+    state = CheckHealth(*server, args.service);
     const bool retry = state.ok() ? (*state != "SERVING" && *state != "SERVICE_UNKNOWN")
                                   : (state.status().code() == absl::StatusCode::kUnavailable ||
                                      state.status().code() ==
@@ -95,11 +89,7 @@ int RunHealth(const HealthArgs& args) {
 
   std::cout << *state << std::endl;
   if (*state == "SERVING") return kExitOk;
-  if (*state == "SERVICE_UNKNOWN") {
-    std::cerr << "error: " << connection.server << " does not know service '" << args.service
-              << "' (--service)" << std::endl;
-    return kExitBadInput;
-  }
+  if (*state == "SERVICE_UNKNOWN") return ReportError(UnknownServiceError(connection.server, args.service));
   return kExitUnavailable;
 }
 

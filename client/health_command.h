@@ -1,14 +1,12 @@
 // `tactforce health`: the grpc.health.v1 serving status of tactforce-server.
 #pragma once
 
-#include <memory>
 #include <string>
-
-#include <grpcpp/grpcpp.h>
 
 #include "CLI/CLI.hpp"
 #include "absl/status/statusor.h"
 #include "connection.h"
+#include "remote_call.h"
 
 namespace tactforce::cli {
 
@@ -23,9 +21,10 @@ int RunHealth(const HealthArgs& args);
 
 // One grpc.health.v1.Health/Check of `service`: "SERVING", "NOT_SERVING",
 // "UNKNOWN", or "SERVICE_UNKNOWN" when the server does not know the service
-// (NOT_FOUND). Errors as RpcError() (connection.h).
-absl::StatusOr<std::string> CheckHealth(const std::shared_ptr<grpc::Channel>& channel,
-                                        const std::string& target,
-                                        const std::string& service, int deadline_ms);
+// (NOT_FOUND). Other failures as CallUnary reports them (remote_call.h).
+absl::StatusOr<std::string> CheckHealth(const RemoteServer& server, const std::string& service);
+
+// InvalidArgument "TARGET does not know service 'NAME' (--service)".
+absl::Status UnknownServiceError(const std::string& target, const std::string& service);
 
 }  // namespace tactforce::cli

@@ -1,3 +1,7 @@
+// `tactforce inertia`: the flags to InertiaFitOptions (truth, gravity, hull,
+// prior, noise, and the mesh with its scale, pose and density settings), the
+// fit in this process or streamed in batches to Estimator.FitInertia, the
+// SVG plot of a density fit, and the text or JSON answer.
 #include "inertia_command.h"
 
 #include <algorithm>
@@ -5,7 +9,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -18,20 +21,18 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
 #include "cli_common.h"
-#include "grpcpp/grpcpp.h"
 #include "progress.h"
+#include "remote_call.h"
 #include "tactforce/api/convert.h"
 #include "tactforce/api/inertia.h"
 #include "tactforce/api/json.h"
-#include "tactforce/io/csv.h"
-#include "tactforce/io/mesh.h"
 #include "tactforce/inertia/density.h"
 #include "tactforce/inertia/density_plot.h"
 #include "tactforce/inertia/fit.h"
 #include "tactforce/inertia/samples.h"
-#include "tactforce/inertia/simulate.h"
 #include "tactforce/inertia/truth.h"
-#include "tactforce/io/json.h"
+#include "tactforce/io/csv.h"
+#include "tactforce/io/mesh.h"
 #include "tactforce/v1/estimator.grpc.pb.h"
 
 namespace tactforce::cli {
@@ -126,39 +127,56 @@ absl::StatusOr<FlagMesh> LoadFlagMesh(const InertiaArgs& args) {
   return FlagMesh{*std::move(loaded), *std::move(bytes)};
 }
 
-// The FitInertia request options from the flags (and the truth/prior/mesh
-// files). `mesh` receives the loaded --mesh.
-absl::StatusOr<v1::InertiaFitOptions> BuildOptions(const InertiaArgs& args, std::optional<FlagMesh>* mesh) {
-  v1::InertiaFitOptions o;
+// An optional number flag that must be >= 0: nullopt when not given, else
+// the number; the error says "FLAG: must be >= 0<rule> (got TEXT)<advice>".
+absl::StatusOr<std::optional<double>> ParseNonNegative(const std::string& text, const std::string& flag,
+                                                       const std::string& rule = "",
+                                                       const std::string& advice = "") {
+  if (text.empty()) return std::nullopt;
+  absl::StatusOr<double> x = ParseNumber(text, flag);
+  if (!x.ok()) return x.status();
+  if (*x < 0)
+    return absl::InvalidArgumentError(absl::StrCat(flag, ": must be >= 0", rule, " (got ", text, ")", advice));
+  return *x;
+}
+
+// The method (default: density with --mesh, else constrained), --truth,
+// --gravity, --hull and --prior.
+absl::Status SetModelOptions(const InertiaArgs& args, v1::InertiaFitOptions* o) {
   const std::string method_name = !args.method.empty() ? args.method
                                   : args.mesh_path.empty() ? "constrained"
                                                            : "density";
   absl::StatusOr<inertia::InertiaMethod> method = inertia::ParseInertiaMethod(method_name);
   if (!method.ok()) return absl::InvalidArgumentError(absl::StrCat("--", method.status().message()));
-  o.set_method(api::InertiaMethodToProto(*method));
+  o->set_method(api::InertiaMethodToProto(*method));
   if (!args.truth_path.empty()) {
     absl::StatusOr<inertia::InertiaTruth> truth = inertia::ReadTruthJsonFile(args.truth_path);
     if (!truth.ok()) return truth.status();
-    *o.mutable_truth() = api::InertialParametersToProto(truth->params);
-    if (truth->gravity_world && args.gravity.empty()) *o.mutable_gravity() = api::ToProto(*truth->gravity_world);
+    *o->mutable_truth() = api::InertialParametersToProto(truth->params);
+    if (truth->gravity_world && args.gravity.empty()) *o->mutable_gravity() = api::ToProto(*truth->gravity_world);
   }
   if (!args.gravity.empty()) {
     absl::StatusOr<Eigen::Vector3d> g = ParseVec3(args.gravity, "--gravity");
     if (!g.ok()) return g.status();
-    *o.mutable_gravity() = api::ToProto(*g);
+    *o->mutable_gravity() = api::ToProto(*g);
   }
   if (!args.hull_path.empty()) {
     absl::StatusOr<std::vector<Vec3>> hull = ReadHullVertices(args.hull_path);
     if (!hull.ok()) return hull.status();
-    for (const Vec3& v : *hull) *o.add_hull() = api::ToProto(v);
+    for (const Vec3& v : *hull) *o->add_hull() = api::ToProto(v);
   }
   if (!args.prior_path.empty()) {
     absl::StatusOr<inertia::InertiaTruth> prior = inertia::ReadTruthJsonFile(args.prior_path);
     if (!prior.ok()) return prior.status();
-    *o.mutable_prior()->mutable_params() = api::InertialParametersToProto(prior->params);
-    o.mutable_prior()->set_weight(args.prior_weight);
+    *o->mutable_prior()->mutable_params() = api::InertialParametersToProto(prior->params);
+    o->mutable_prior()->set_weight(args.prior_weight);
   }
-  v1::InertiaNoise* n = o.mutable_noise();
+  return absl::OkStatus();
+}
+
+// The noise sigmas, Savitzky-Golay smoothing and --max-iterations.
+absl::Status SetSolverOptions(const InertiaArgs& args, v1::InertiaFitOptions* o) {
+  v1::InertiaNoise* n = o->mutable_noise();
   n->set_force_sigma(args.force_sigma);
   n->set_torque_sigma(args.torque_sigma);
   n->set_position_sigma(args.position_sigma);
@@ -166,42 +184,45 @@ absl::StatusOr<v1::InertiaFitOptions> BuildOptions(const InertiaArgs& args, std:
   n->set_angular_velocity_sigma(args.angular_velocity_sigma);
   n->set_linear_acceleration_sigma(args.acceleration_sigma);
   n->set_angular_acceleration_sigma(args.angular_acceleration_sigma);
-  o.set_savitzky_golay(args.savitzky_golay);
+  o->set_savitzky_golay(args.savitzky_golay);
   if (args.max_iterations < 0) return absl::InvalidArgumentError("--max-iterations: must be >= 0");
-  o.set_max_iterations(static_cast<uint32_t>(args.max_iterations));
+  o->set_max_iterations(static_cast<uint32_t>(args.max_iterations));
+  return absl::OkStatus();
+}
 
+// --regions, --target-regions, --density-regularization,
+// --mesh-prior-weight and --contradiction-ratio.
+absl::Status SetDensityOptions(const InertiaArgs& args, v1::InertiaFitOptions* o) {
   absl::StatusOr<inertia::RegionScheme> scheme = inertia::ParseRegionScheme(args.regions);
   if (!scheme.ok()) return absl::InvalidArgumentError(absl::StrCat("--regions: ", scheme.status().message()));
-  o.set_regions(api::RegionSchemeToProto(*scheme));
+  o->set_regions(api::RegionSchemeToProto(*scheme));
   if (args.target_regions < 0 || args.target_regions > 512)
     return absl::InvalidArgumentError(
         absl::StrCat("--target-regions: must be in 1..512, 0 = 12 (got ", args.target_regions, ")"));
-  o.set_target_regions(static_cast<uint32_t>(args.target_regions));
-  if (!args.density_regularization.empty()) {
-    absl::StatusOr<double> x = ParseNumber(args.density_regularization, "--density-regularization");
-    if (!x.ok()) return x.status();
-    if (*x < 0)
-      return absl::InvalidArgumentError(absl::StrCat("--density-regularization: must be >= 0 (got ",
-                                                     args.density_regularization,
-                                                     "); leave it out for the held-out choice"));
-    o.set_density_regularization(*x);
-  }
-  if (!args.mesh_prior_weight.empty()) {
-    absl::StatusOr<double> x = ParseNumber(args.mesh_prior_weight, "--mesh-prior-weight");
-    if (!x.ok()) return x.status();
-    if (*x < 0)
-      return absl::InvalidArgumentError(
-          absl::StrCat("--mesh-prior-weight: must be >= 0 (got ", args.mesh_prior_weight, ")"));
-    o.set_mesh_prior_weight(*x);
-  }
-  if (!args.contradiction_ratio.empty()) {
-    absl::StatusOr<double> x = ParseNumber(args.contradiction_ratio, "--contradiction-ratio");
-    if (!x.ok()) return x.status();
-    if (*x < 0)
-      return absl::InvalidArgumentError(absl::StrCat("--contradiction-ratio: must be >= 0, 0 disables (got ",
-                                                     args.contradiction_ratio, ")"));
-    o.set_contradiction_ratio(*x);
-  }
+  o->set_target_regions(static_cast<uint32_t>(args.target_regions));
+  absl::StatusOr<std::optional<double>> regularization =
+      ParseNonNegative(args.density_regularization, "--density-regularization", "",
+                       "; leave it out for the held-out choice");
+  if (!regularization.ok()) return regularization.status();
+  if (regularization->has_value()) o->set_density_regularization(**regularization);
+  absl::StatusOr<std::optional<double>> prior_weight =
+      ParseNonNegative(args.mesh_prior_weight, "--mesh-prior-weight");
+  if (!prior_weight.ok()) return prior_weight.status();
+  if (prior_weight->has_value()) o->set_mesh_prior_weight(**prior_weight);
+  absl::StatusOr<std::optional<double>> ratio =
+      ParseNonNegative(args.contradiction_ratio, "--contradiction-ratio", ", 0 disables");
+  if (!ratio.ok()) return ratio.status();
+  if (ratio->has_value()) o->set_contradiction_ratio(**ratio);
+  return absl::OkStatus();
+}
+
+// The FitInertia request options from the flags (and the truth/prior/mesh
+// files). `mesh` receives the loaded --mesh.
+absl::StatusOr<v1::InertiaFitOptions> BuildOptions(const InertiaArgs& args, std::optional<FlagMesh>* mesh) {
+  v1::InertiaFitOptions o;
+  if (absl::Status s = SetModelOptions(args, &o); !s.ok()) return s;
+  if (absl::Status s = SetSolverOptions(args, &o); !s.ok()) return s;
+  if (absl::Status s = SetDensityOptions(args, &o); !s.ok()) return s;
   if (!args.mesh_path.empty()) {
     absl::StatusOr<FlagMesh> loaded = LoadFlagMesh(args);
     if (!loaded.ok()) return loaded.status();
@@ -250,53 +271,64 @@ absl::Status WritePlot(const InertiaArgs& args, const FlagMesh& mesh, inertia::I
   return absl::OkStatus();
 }
 
-// Streams the samples to Estimator.FitInertia in batches.
-absl::StatusOr<v1::FitInertiaResponse> RemoteFit(const InertiaArgs& args,
-                                                 const inertia::InertiaSamples& samples,
-                                                 const v1::InertiaFitOptions& options,
-                                                 ProgressBar& upload) {
-  absl::StatusOr<std::shared_ptr<grpc::Channel>> channel =
-      MakeChannel(args.connection, args.connection.server);
-  if (!channel.ok()) return channel.status();
-  auto stub = v1::Estimator::NewStub(*channel);
-  grpc::ClientContext context;
-  SetDeadline(&context, args.connection.deadline_ms);
-  v1::FitInertiaResponse response;
-  std::unique_ptr<grpc::ClientWriter<v1::FitInertiaRequest>> writer = stub->FitInertia(&context, &response);
+// Writes the FitInertia stream: the options (alone first when they carry
+// the mesh), then the samples in messages of `batch`; at least one message,
+// even for an empty log. Stops early when the server ends the call
+// (Finish() says why).
+void WriteFitStream(grpc::ClientWriter<v1::FitInertiaRequest>& writer, const inertia::InertiaSamples& samples,
+                    const v1::InertiaFitOptions& options, size_t batch, ProgressBar& upload) {
   const size_t n = samples.samples.size();
-  const size_t batch = static_cast<size_t>(std::max(1, args.batch));
   v1::FitInertiaRequest message;
   *message.mutable_options() = options;
   if (options.has_mesh() && n > 0) {
     // The mesh makes the options big: they travel alone, so that only the
     // mesh counts against the server's --max-message-bytes.
-    if (writer->Write(message)) message.Clear();
+    if (writer.Write(message)) message.Clear();
   }
   size_t sent = 0;
-  do {  // at least one message, even for an empty log
+  do {
     const size_t end = std::min(n, sent + batch);
     for (size_t i = sent; i < end; ++i)
       *message.add_samples() = api::InertiaSampleToProto(samples.samples[i], samples.source);
-    if (!writer->Write(message)) break;  // the server ended the call: Finish() says why
+    if (!writer.Write(message)) break;
     sent = end;
     upload.Update(static_cast<double>(sent) / static_cast<double>(std::max<size_t>(n, 1)),
                   absl::StrCat(sent, "/", n, " samples"));
     message.Clear();
   } while (sent < n);
-  writer->WritesDone();
+  writer.WritesDone();
+}
+
+// RESOURCE_EXHAUSTED of a stream whose first message carries the mesh:
+// names the limit, the message's size and how to raise it.
+absl::Status MeshTooLargeError(const std::string& target, const grpc::Status& status,
+                               const v1::InertiaFitOptions& options) {
+  v1::FitInertiaRequest first;
+  *first.mutable_options() = options;
+  return absl::ResourceExhaustedError(absl::StrCat(
+      target, ": ", status.error_message(), " (the first FitInertia message, ", first.ByteSizeLong(),
+      " bytes, carries the mesh ", options.mesh().name(), " of ", options.mesh().data().size(),
+      " bytes: start tactforce-server with a larger --max-message-bytes, or give a smaller mesh)"));
+}
+
+// Streams the samples to Estimator.FitInertia in batches of --batch.
+absl::StatusOr<v1::FitInertiaResponse> RemoteFit(const InertiaArgs& args,
+                                                 const inertia::InertiaSamples& samples,
+                                                 const v1::InertiaFitOptions& options,
+                                                 ProgressBar& upload) {
+  absl::StatusOr<RemoteServer> server = RemoteServer::Open(args.connection);
+  if (!server.ok()) return server.status();
+  v1::Estimator::Stub stub(server->channel());
+  grpc::ClientContext context;
+  server->SetDeadline(&context);
+  v1::FitInertiaResponse response;
+  std::unique_ptr<grpc::ClientWriter<v1::FitInertiaRequest>> writer = stub.FitInertia(&context, &response);
+  WriteFitStream(*writer, samples, options, static_cast<size_t>(std::max(1, args.batch)), upload);
   const grpc::Status status = writer->Finish();
   upload.Finish();
-  if (status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED && options.has_mesh()) {
-    // The first message carries the mesh: name the limit and how to raise it.
-    v1::FitInertiaRequest first;
-    *first.mutable_options() = options;
-    return absl::ResourceExhaustedError(absl::StrCat(
-        args.connection.server, ": ", status.error_message(), " (the first FitInertia message, ",
-        first.ByteSizeLong(), " bytes, carries the mesh ", options.mesh().name(), " of ",
-        options.mesh().data().size(), " bytes: start tactforce-server with a larger --max-message-bytes, or give "
-        "a smaller mesh)"));
-  }
-  if (!status.ok()) return RpcError(status, args.connection.server, args.connection.deadline_ms, channel->get());
+  if (status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED && options.has_mesh())
+    return MeshTooLargeError(server->target(), status, options);
+  if (!status.ok()) return server->Error(status);
   return response;
 }
 
@@ -421,220 +453,6 @@ int RunInertia(const InertiaArgs& args) {
     if (response->has_errors()) std::cout << DescribeErrors(response->errors());
   }
   return std::cout ? kExitOk : kExitFailure;
-}
-
-// ------------------------------------------------------------ simulate inertia
-
-namespace {
-
-absl::StatusOr<std::vector<inertia::SinusoidComponent>> ParseComponents(const io::JsonValue& v,
-                                                                         const std::string& where) {
-  if (!v.is_array()) return absl::InvalidArgumentError(absl::StrCat(where, ": expected an array"));
-  std::vector<inertia::SinusoidComponent> out;
-  for (size_t i = 0; i < v.array().size(); ++i) {
-    const io::JsonValue& c = v.array()[i];
-    const std::string at = absl::StrCat(where, "[", i, "]");
-    if (!c.is_object()) return absl::InvalidArgumentError(absl::StrCat(at, ": expected an object"));
-    inertia::SinusoidComponent s;
-    for (const auto& [key, value] : c.members()) {
-      if (!value.is_number() || !std::isfinite(value.number()))
-        return absl::InvalidArgumentError(absl::StrCat(at, ".", key, ": expected a number"));
-      const double x = value.number();
-      if (key == "axis") {
-        if (x != 0 && x != 1 && x != 2)
-          return absl::InvalidArgumentError(absl::StrCat(at, ".axis: must be 0, 1 or 2"));
-        s.axis = static_cast<int>(x);
-      } else if (key == "amplitude") {
-        s.amplitude = x;
-      } else if (key == "frequency_hz") {
-        if (x < 0) return absl::InvalidArgumentError(absl::StrCat(at, ".frequency_hz: must be >= 0"));
-        s.frequency_hz = x;
-      } else if (key == "phase") {
-        s.phase = x;
-      } else {
-        return absl::InvalidArgumentError(absl::StrCat(
-            at, ": unknown key '", key, "' (expected axis, amplitude, frequency_hz, phase)"));
-      }
-    }
-    out.push_back(s);
-  }
-  return out;
-}
-
-absl::StatusOr<Vec3> ParseTriple(const io::JsonValue& v, const std::string& where) {
-  if (!v.is_array() || v.array().size() != 3 ||
-      !std::all_of(v.array().begin(), v.array().end(), [](const io::JsonValue& x) { return x.is_number(); }))
-    return absl::InvalidArgumentError(absl::StrCat(where, ": expected an array of 3 numbers"));
-  return Vec3(v.array()[0].number(), v.array()[1].number(), v.array()[2].number());
-}
-
-// {"position_offset": [x,y,z], "orientation_offset": [yaw,pitch,roll],
-//  "position": [{"axis","amplitude","frequency_hz","phase"}...], "orientation": [...]}
-absl::StatusOr<inertia::ExcitationTrajectory> ReadTrajectory(const std::string& path) {
-  absl::StatusOr<std::string> text = ReadInput(path, "--trajectory");
-  if (!text.ok()) return text.status();
-  absl::StatusOr<io::JsonValue> root = io::ParseJson(*text, path);
-  if (!root.ok()) return root.status();
-  if (!root->is_object()) return absl::InvalidArgumentError(absl::StrCat(path, ": expected a JSON object"));
-  inertia::ExcitationTrajectory t;
-  for (const auto& [key, value] : root->members()) {
-    const std::string where = absl::StrCat(path, ": ", key);
-    absl::Status s;
-    if (key == "position_offset" || key == "orientation_offset") {
-      absl::StatusOr<Vec3> v = ParseTriple(value, where);
-      if (!v.ok()) return v.status();
-      (key == "position_offset" ? t.position_offset : t.orientation_offset) = *v;
-    } else if (key == "position" || key == "orientation") {
-      absl::StatusOr<std::vector<inertia::SinusoidComponent>> c = ParseComponents(value, where);
-      if (!c.ok()) return c.status();
-      (key == "position" ? t.position : t.orientation) = *c;
-    } else {
-      return absl::InvalidArgumentError(absl::StrCat(
-          where, ": unknown key (expected position_offset, orientation_offset, position, orientation)"));
-    }
-  }
-  return t;
-}
-
-// Binary STL (little-endian float32; normals from the winding), the format
-// `tactforce inertia --mesh` reads back.
-absl::Status WriteBinaryStl(const io::TriangleMesh& mesh, const std::string& path, const std::string& label) {
-  std::string bytes(80, '\0');
-  const std::string header = absl::StrCat("tactforce simulate inertia: ", label, " (object frame, m)");
-  std::memcpy(bytes.data(), header.data(), std::min<size_t>(header.size(), 80));
-  auto put32 = [&bytes](uint32_t v) {
-    for (int i = 0; i < 4; ++i) bytes.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
-  };
-  auto put_float = [&put32](double x) {
-    const float f = static_cast<float>(x);
-    uint32_t v = 0;
-    std::memcpy(&v, &f, sizeof v);
-    put32(v);
-  };
-  put32(static_cast<uint32_t>(mesh.triangles.size()));
-  for (const auto& t : mesh.triangles) {
-    const Vec3& a = mesh.vertices[t[0]];
-    const Vec3& b = mesh.vertices[t[1]];
-    const Vec3& c = mesh.vertices[t[2]];
-    Vec3 cross = (b - a).cross(c - a);
-    if (cross.norm() > 0) cross.normalize();
-    const Vec3 normal = cross;
-    for (const Vec3* v : {&normal, &a, &b, &c})
-      for (int k = 0; k < 3; ++k) put_float((*v)(k));
-    bytes.push_back('\0');  // attribute byte count
-    bytes.push_back('\0');
-  }
-  std::ofstream out(path, std::ios::binary);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  out.close();
-  if (!out) return absl::InvalidArgumentError(absl::StrCat("--out: cannot write '", path, "'"));
-  return absl::OkStatus();
-}
-
-}  // namespace
-
-CLI::App* AddSimulateInertiaCommand(CLI::App& simulate, SimulateInertiaArgs& args) {
-  CLI::App* cmd = simulate.add_subcommand(
-      "inertia", "Simulate an object moved along an exciting trajectory: inertia.csv + truth.json");
-  auto* object = cmd->add_option("--object", args.object, "Built-in object: seed-table1 (the paper's) or box")
-                     ->check(CLI::IsMember(inertia::BuiltInObjectNames()))
-                     ->capture_default_str();
-  cmd->add_option("--params", args.params_path, "Custom object: truth JSON (mass, com, inertia_com)")
-      ->type_name("FILE")
-      ->excludes(object);
-  cmd->add_option("--mode", args.mode, "in-hand (fingertip contact forces) or wrist (wrench sensor)")
-      ->check(CLI::IsMember({"in-hand", "wrist"}))
-      ->capture_default_str();
-  cmd->add_option("--contacts", args.contacts, "in-hand: number of fingertips (2-4)")->capture_default_str();
-  cmd->add_option("--seconds", args.seconds, "Duration (s)")->capture_default_str();
-  cmd->add_option("--rate", args.rate, "Sample rate (Hz)")->capture_default_str();
-  auto* variance = cmd->add_option("--force-variance", args.force_variance,
-                                   "Force noise variance per component (N^2; the paper used 0-1)")
-                       ->capture_default_str();
-  cmd->add_option("--torque-sigma", args.torque_sigma, "wrist: torque noise std. dev. (N m)");
-  cmd->add_option("--position-sigma", args.position_sigma, "Pose position noise std. dev. (m)");
-  cmd->add_option("--orientation-sigma", args.orientation_sigma, "Pose orientation noise std. dev. (rad)");
-  cmd->add_option("--noise-level", args.noise_level,
-                  "Nadeau et al. 2023 level (wrist, with measured kinematics): low, moderate, high")
-      ->check(CLI::IsMember({"low", "moderate", "high"}))
-      ->excludes(variance);
-  cmd->add_flag("--kinematics", args.kinematics, "Write measured kinematics columns (w, v, dw, a)");
-  auto* amp = cmd->add_option("--amplitude-scale", args.amplitude_scale, "Scale the default excitation amplitudes")
-                  ->capture_default_str();
-  auto* freq = cmd->add_option("--frequency-scale", args.frequency_scale, "Scale the default excitation frequencies")
-                   ->capture_default_str();
-  cmd->add_option("--trajectory", args.trajectory_path, "Excitation trajectory JSON instead of the default")
-      ->type_name("FILE")
-      ->excludes(amp)
-      ->excludes(freq);
-  cmd->add_option("--seed", args.seed, "Random seed")->capture_default_str();
-  cmd->add_option("--out", args.out_dir,
-                  "Output directory: inertia.csv, truth.json and mesh.stl (the object's closed solid, object frame, "
-                  "m: inertia --mesh OUT/mesh.stl)")
-      ->required();
-  return cmd;
-}
-
-int RunSimulateInertia(const SimulateInertiaArgs& args) {
-  inertia::SimulationOptions o;
-  o.object = args.object;
-  if (!args.params_path.empty()) {
-    absl::StatusOr<inertia::InertiaTruth> params = inertia::ReadTruthJsonFile(args.params_path);
-    if (!params.ok()) return ReportError(params.status());
-    absl::StatusOr<inertia::SimulatedObject> custom =
-        inertia::ObjectFromParameters(std::filesystem::path(args.params_path).stem().string(), params->params);
-    if (!custom.ok()) return ReportError(custom.status());
-    o.custom = *custom;
-    if (params->gravity_world) o.gravity = *params->gravity_world;
-  }
-  o.mode = args.mode == "wrist" ? inertia::SimulationMode::kWristWrench : inertia::SimulationMode::kInHand;
-  o.num_contacts = args.contacts;
-  o.duration = args.seconds;
-  o.rate_hz = args.rate;
-  if (!(args.force_variance >= 0) || !std::isfinite(args.force_variance))
-    return ReportError(absl::InvalidArgumentError("--force-variance: must be finite and >= 0 (N^2)"));
-  if (!args.noise_level.empty()) {
-    absl::StatusOr<inertia::SimulationNoise> level = inertia::NadeauNoise(args.noise_level);
-    if (!level.ok()) return ReportError(level.status());
-    o.noise = *level;
-    o.write_kinematics = true;  // the levels are noise on measured accelerations
-  }
-  if (args.force_variance > 0) o.noise.force_sigma = std::sqrt(args.force_variance);
-  if (args.torque_sigma != 0) o.noise.torque_sigma = args.torque_sigma;
-  o.noise.position_sigma = args.position_sigma;
-  o.noise.orientation_sigma = args.orientation_sigma;
-  o.write_kinematics = o.write_kinematics || args.kinematics;
-  if (!args.trajectory_path.empty()) {
-    absl::StatusOr<inertia::ExcitationTrajectory> t = ReadTrajectory(args.trajectory_path);
-    if (!t.ok()) return ReportError(t.status());
-    o.trajectory = *t;
-  } else {
-    if (!(args.amplitude_scale > 0) || !(args.frequency_scale > 0))
-      return ReportError(absl::InvalidArgumentError("--amplitude-scale, --frequency-scale: must be > 0"));
-    for (auto* list : {&o.trajectory.position, &o.trajectory.orientation}) {
-      for (inertia::SinusoidComponent& c : *list) {
-        c.amplitude *= args.amplitude_scale;
-        c.frequency_hz *= args.frequency_scale;
-      }
-    }
-  }
-  o.seed = args.seed;
-  absl::StatusOr<inertia::SimulationResult> result = inertia::SimulateInertia(o);
-  if (!result.ok()) return ReportError(result.status());
-  std::error_code ec;
-  std::filesystem::create_directories(args.out_dir, ec);
-  if (ec) return ReportError(absl::InvalidArgumentError(absl::StrCat("--out: cannot create '", args.out_dir, "': ", ec.message())));
-  const std::string csv = (std::filesystem::path(args.out_dir) / "inertia.csv").string();
-  const std::string truth = (std::filesystem::path(args.out_dir) / "truth.json").string();
-  if (absl::Status s = inertia::WriteSimulation(*result, csv, truth); !s.ok()) return ReportError(s);
-  const std::string mesh = (std::filesystem::path(args.out_dir) / "mesh.stl").string();
-  const bool has_mesh = !result->object.mesh.triangles.empty();
-  if (has_mesh) {
-    if (absl::Status s = WriteBinaryStl(result->object.mesh, mesh, result->object.name); !s.ok()) return ReportError(s);
-  }
-  std::cerr << "wrote " << result->samples.samples.size() << " samples of '" << result->object.name << "' to "
-            << csv << " (+ truth.json" << (has_mesh ? ", mesh.stl" : "") << ")\n";
-  return kExitOk;
 }
 
 }  // namespace tactforce::cli

@@ -1,10 +1,10 @@
-// `tactforce inertia` (fit mass, CoM and inertia to a CSV log, locally or
-// through Estimator.FitInertia) and `tactforce simulate inertia` (write a
-// simulated log and its truth). Thin over tactforce::api and the inertia
-// library.
+// `tactforce inertia`: fit mass, CoM and inertia to a CSV log, locally or
+// streamed to Estimator.FitInertia, optionally on the object's mesh (DENSITY,
+// or the mesh as CONSTRAINED's prior) with an SVG plot. Thin over
+// tactforce::api and the inertia library. (`simulate inertia`:
+// simulate_inertia_command.h.)
 #pragma once
 
-#include <cstdint>
 #include <string>
 
 #include "CLI/CLI.hpp"
@@ -46,27 +46,5 @@ struct InertiaArgs {
 };
 CLI::App* AddInertiaCommand(CLI::App& app, InertiaArgs& args);
 int RunInertia(const InertiaArgs& args);
-
-struct SimulateInertiaArgs {
-  std::string object = "seed-table1";
-  std::string params_path;          // custom object: truth JSON format
-  std::string mode = "in-hand";     // in-hand | wrist
-  int contacts = 4;
-  double seconds = 10.0;
-  double rate = 100.0;
-  double force_variance = 0.0;      // N^2 (the paper's noise unit)
-  double torque_sigma = 0.0;
-  double position_sigma = 0.0;
-  double orientation_sigma = 0.0;
-  std::string noise_level;          // Nadeau et al.: low | moderate | high (wrist mode)
-  bool kinematics = false;          // write measured kinematics columns
-  double amplitude_scale = 1.0;     // scales the default excitation amplitudes
-  double frequency_scale = 1.0;     // scales its frequencies
-  std::string trajectory_path;      // JSON excitation trajectory instead of the default
-  uint64_t seed = 1;
-  std::string out_dir;              // writes inertia.csv, truth.json and mesh.stl
-};
-CLI::App* AddSimulateInertiaCommand(CLI::App& simulate, SimulateInertiaArgs& args);
-int RunSimulateInertia(const SimulateInertiaArgs& args);
 
 }  // namespace tactforce::cli

@@ -1,3 +1,6 @@
+// The log-linear latency histogram of `tactforce load`: bucket layout
+// (exact below 2^kSubBucketBits ns, then kHalf buckets per power of two),
+// lock-free recording and quantiles.
 #include "latency_histogram.h"
 
 #include <algorithm>

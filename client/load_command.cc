@@ -1,3 +1,6 @@
+// `tactforce load`: the flags to a LoadSpec, Ctrl-C and the progress line
+// around RunLoad (load_generator.h), the report, and the exit code of the
+// most frequent failure.
 #include "load_command.h"
 
 #include <unistd.h>
@@ -58,10 +61,64 @@ class ProgressPrinter {
 };
 
 absl::StatusOr<LoadRpc> ParseRpc(const std::string& name) {
-  if (name == "plan") return LoadRpc::kPlan;
-  if (name == "stream") return LoadRpc::kStream;
-  if (name == "health") return LoadRpc::kHealth;
+  for (LoadRpc rpc : {LoadRpc::kPlan, LoadRpc::kStream, LoadRpc::kHealth}) {
+    if (name == ToString(rpc)) return rpc;
+  }
   return absl::InvalidArgumentError("--rpc: expected plan, stream or health");
+}
+
+// The run the flags ask for (requests read or generated); InvalidArgument
+// naming the flag for combinations that cannot run.
+absl::StatusOr<LoadSpec> LoadSpecFromFlags(const LoadArgs& args) {
+  LoadSpec spec;
+  absl::StatusOr<LoadRpc> rpc = ParseRpc(args.rpc);
+  if (!rpc.ok()) return rpc.status();
+  spec.rpc = *rpc;
+  spec.engine = args.engine == "sync" ? LoadEngine::kSync : LoadEngine::kCallback;
+  spec.rate = args.rate;
+  spec.concurrency =
+      args.concurrency > 0 ? args.concurrency : (args.rate > 0 ? kOpenLoopDefaultInFlight : 1);
+  spec.max_requests = args.requests;
+  spec.duration_s = args.duration_s > 0 ? args.duration_s
+                                        : (args.requests > 0 ? 0.0 : kDefaultDurationS);
+  spec.deadline_ms = args.connection.deadline_ms;
+  spec.health_service = args.service;
+
+  if (spec.rpc != LoadRpc::kHealth) {
+    if (!args.request_path.empty()) {
+      absl::StatusOr<std::string> text = ReadInput(args.request_path);
+      if (!text.ok()) return text.status();
+      absl::StatusOr<v1::PlanRequest> request = api::ParsePlanRequestJson(*text);
+      if (!request.ok()) return request.status();
+      spec.requests.push_back(*std::move(request));
+    } else {
+      spec.requests = RandomRequestMix(args.seed, args.mix_size);
+    }
+  }
+  if (spec.rate > 0 && spec.rpc == LoadRpc::kStream) {
+    return absl::InvalidArgumentError(
+        "--rate: open loop is for --rpc plan or health; streams run closed loop");
+  }
+  if (spec.rate > 0 && spec.engine == LoadEngine::kSync) {
+    return absl::InvalidArgumentError("--rate: open loop needs --engine callback");
+  }
+  return spec;
+}
+
+// 0 when every call succeeded; otherwise one line on stderr and the exit
+// code of the most frequent failure (cli_common.h).
+int ExitCodeForFailedCalls(const LoadReport& report) {
+  if (report.ok == report.requests) return kExitOk;
+  auto worst = std::max_element(report.errors.begin(), report.errors.end(),
+                                [](const auto& a, const auto& b) { return a.second < b.second; });
+  std::cerr << "error: " << (report.requests - report.ok) << " of " << report.requests
+            << " calls failed, most with " << worst->first << std::endl;
+  for (int code = 0; code <= static_cast<int>(absl::StatusCode::kUnauthenticated); ++code) {
+    if (StatusCodeName(static_cast<grpc::StatusCode>(code)) == worst->first) {
+      return ExitCodeFor(static_cast<absl::StatusCode>(code));
+    }
+  }
+  return kExitFailure;
 }
 
 }  // namespace
@@ -134,52 +191,21 @@ CLI::App* AddLoadCommand(CLI::App& app, LoadArgs& args) {
 }
 
 int RunLoadCommand(const LoadArgs& args) {
-  LoadSpec spec;
-  absl::StatusOr<LoadRpc> rpc = ParseRpc(args.rpc);
-  if (!rpc.ok()) return ReportError(rpc.status());
-  spec.rpc = *rpc;
-  spec.engine = args.engine == "sync" ? LoadEngine::kSync : LoadEngine::kCallback;
-  spec.rate = args.rate;
-  spec.concurrency =
-      args.concurrency > 0 ? args.concurrency : (args.rate > 0 ? kOpenLoopDefaultInFlight : 1);
-  spec.max_requests = args.requests;
-  spec.duration_s = args.duration_s > 0 ? args.duration_s
-                                        : (args.requests > 0 ? 0.0 : kDefaultDurationS);
-  spec.deadline_ms = args.connection.deadline_ms;
-  spec.health_service = args.service;
-
-  if (spec.rpc != LoadRpc::kHealth) {
-    if (!args.request_path.empty()) {
-      absl::StatusOr<std::string> text = ReadInput(args.request_path);
-      if (!text.ok()) return ReportError(text.status());
-      absl::StatusOr<v1::PlanRequest> request = api::ParsePlanRequestJson(*text);
-      if (!request.ok()) return ReportError(request.status());
-      spec.requests.push_back(*std::move(request));
-    } else {
-      spec.requests = RandomRequestMix(args.seed, args.mix_size);
-    }
-  }
-  if (spec.rate > 0 && spec.rpc == LoadRpc::kStream) {
-    return ReportError(absl::InvalidArgumentError(
-        "--rate: open loop is for --rpc plan or health; streams run closed loop"));
-  }
-  if (spec.rate > 0 && spec.engine == LoadEngine::kSync) {
-    return ReportError(absl::InvalidArgumentError("--rate: open loop needs --engine callback"));
-  }
-
+  absl::StatusOr<LoadSpec> spec = LoadSpecFromFlags(args);
+  if (!spec.ok()) return ReportError(spec.status());
   absl::StatusOr<std::vector<std::shared_ptr<grpc::Channel>>> channels =
-      ConnectLoadChannels(args.connection, args.connection.server, args.channels, spec);
+      ConnectLoadChannels(args.connection, args.connection.server, args.channels, *spec);
   if (!channels.ok()) return ReportError(channels.status());
 
   const bool tty = isatty(STDERR_FILENO) == 1;
   ProgressPrinter printer(tty);
   if (tty || args.progress) {
-    spec.progress = [&printer](const LoadProgress& p) { printer.Update(p); };
+    spec->progress = [&printer](const LoadProgress& p) { printer.Update(p); };
   }
   g_interrupted = 0;
-  spec.interrupted = [] { return g_interrupted != 0; };
+  spec->interrupted = [] { return g_interrupted != 0; };
   const auto previous = std::signal(SIGINT, OnInterrupt);
-  absl::StatusOr<LoadReport> report = RunLoad(spec, *channels);
+  absl::StatusOr<LoadReport> report = RunLoad(*spec, *channels);
   std::signal(SIGINT, previous);
   printer.Finish();
   if (!report.ok()) return ReportError(report.status());
@@ -188,21 +214,7 @@ int RunLoadCommand(const LoadArgs& args) {
                           : FormatLoadText(*report, args.connection.server));
   std::cout.flush();
   if (!std::cout) return kExitFailure;
-
-  if (report->ok == report->requests) return kExitOk;
-  // The most frequent failure decides the exit code.
-  auto worst = std::max_element(report->errors.begin(), report->errors.end(),
-                                [](const auto& a, const auto& b) { return a.second < b.second; });
-  std::cerr << "error: " << (report->requests - report->ok) << " of " << report->requests
-            << " calls failed, most with " << worst->first << std::endl;
-  static const std::vector<std::pair<std::string, absl::StatusCode>> kCodes = {
-      {"INVALID_ARGUMENT", absl::StatusCode::kInvalidArgument},
-      {"UNAVAILABLE", absl::StatusCode::kUnavailable},
-      {"DEADLINE_EXCEEDED", absl::StatusCode::kDeadlineExceeded}};
-  for (const auto& [name, code] : kCodes) {
-    if (worst->first == name) return ExitCodeFor(code);
-  }
-  return kExitFailure;
+  return ExitCodeForFailedCalls(*report);
 }
 
 }  // namespace tactforce::cli

@@ -1,11 +1,14 @@
-// tactforce: plan fingertip contact forces from the command line.
+// tactforce: the command line. Registers every subcommand (plan, demo,
+// health, load, estimate, friction, simulate friction|sensor|inertia, audit,
+// experiment, inertia), parses the arguments (a parse error is one line and
+// exit 2) and runs the chosen one; an escaping exception is exit 1.
 #include <exception>
 #include <iostream>
 #include <string>
 
 #include "CLI/CLI.hpp"
-#include "cli_common.h"
 #include "audit_command.h"
+#include "cli_common.h"
 #include "demo_command.h"
 #include "estimate_command.h"
 #include "experiment_command.h"
@@ -13,6 +16,7 @@
 #include "inertia_command.h"
 #include "load_command.h"
 #include "plan_command.h"
+#include "simulate_inertia_command.h"
 
 #ifndef TACTFORCE_VERSION
 #define TACTFORCE_VERSION "unknown"

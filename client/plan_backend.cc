@@ -1,10 +1,12 @@
+// The two PlanBackends: in this process through the api layer's HandlePlan,
+// or one unary Planner/Plan per request through CallUnary on a stub kept for
+// the backend's life.
 #include "plan_backend.h"
 
 #include <utility>
 
-#include <grpcpp/grpcpp.h>
-
-#include "tactforce/api/handler.h"
+#include "remote_call.h"
+#include "tactforce/api/services.h"
 #include "tactforce/v1/planner.grpc.pb.h"
 
 namespace tactforce::cli {
@@ -13,35 +15,25 @@ namespace {
 class LocalBackend final : public PlanBackend {
  public:
   absl::StatusOr<v1::PlanResponse> Plan(const v1::PlanRequest& request) override {
-    return api::HandlePlan(request);
+    return api::HandlePlan(request, api::CallLimits{});
   }
   std::string Describe() const override { return "local"; }
 };
 
 class RemoteBackend final : public PlanBackend {
  public:
-  RemoteBackend(std::shared_ptr<grpc::Channel> channel, std::string target, int deadline_ms)
-      : channel_(std::move(channel)),
-        stub_(v1::Planner::NewStub(channel_)),
-        target_(std::move(target)),
-        deadline_ms_(deadline_ms) {}
+  explicit RemoteBackend(RemoteServer server)
+      : server_(std::move(server)), stub_(server_.channel()) {}
 
   absl::StatusOr<v1::PlanResponse> Plan(const v1::PlanRequest& request) override {
-    grpc::ClientContext context;
-    SetDeadline(&context, deadline_ms_);
-    v1::PlanResponse response;
-    const grpc::Status status = stub_->Plan(&context, request, &response);
-    if (!status.ok()) return RpcError(status, target_, deadline_ms_, channel_.get());
-    return response;
+    return CallUnary(server_, stub_, &v1::Planner::Stub::Plan, request);
   }
 
-  std::string Describe() const override { return target_; }
+  std::string Describe() const override { return server_.target(); }
 
  private:
-  std::shared_ptr<grpc::Channel> channel_;
-  std::unique_ptr<v1::Planner::Stub> stub_;
-  std::string target_;
-  int deadline_ms_;
+  RemoteServer server_;
+  v1::Planner::Stub stub_;
 };
 
 }  // namespace
@@ -49,9 +41,9 @@ class RemoteBackend final : public PlanBackend {
 std::unique_ptr<PlanBackend> MakeLocalBackend() { return std::make_unique<LocalBackend>(); }
 
 absl::StatusOr<std::unique_ptr<PlanBackend>> MakeRemoteBackend(const ConnectionArgs& args) {
-  absl::StatusOr<std::shared_ptr<grpc::Channel>> channel = MakeChannel(args, args.server);
-  if (!channel.ok()) return channel.status();
-  return std::make_unique<RemoteBackend>(*std::move(channel), args.server, args.deadline_ms);
+  absl::StatusOr<RemoteServer> server = RemoteServer::Open(args);
+  if (!server.ok()) return server.status();
+  return std::make_unique<RemoteBackend>(*std::move(server));
 }
 
 }  // namespace tactforce::cli

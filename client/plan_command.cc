@@ -1,17 +1,22 @@
+// `tactforce plan`: one PlanRequest through a PlanBackend (local or
+// remote), or a TrajectoryRequest (--trajectory) planned here or through
+// Planner.PlanTrajectory; JSON or a table out.
 #include "plan_command.h"
 
 #include <iostream>
 #include <memory>
 
 #include "absl/status/statusor.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 #include "cli_common.h"
 #include "plan_backend.h"
+#include "remote_call.h"
 #include "tactforce/api/json.h"
+#include "tactforce/api/names.h"
 #include "tactforce/api/services.h"
 #include "tactforce/api/table.h"
 #include "tactforce/v1/planner.grpc.pb.h"
-#include "absl/strings/str_cat.h"
-#include "absl/strings/str_format.h"
 
 namespace tactforce::cli {
 namespace {
@@ -19,6 +24,38 @@ namespace {
 absl::StatusOr<std::unique_ptr<PlanBackend>> SelectBackend(const PlanArgs& args) {
   if (args.local) return MakeLocalBackend();
   return MakeRemoteBackend(args.connection);
+}
+
+// One line per step (status, normal forces, solve time) and the totals.
+std::string FormatTrajectoryTable(const v1::TrajectoryResponse& response) {
+  std::string out = absl::StrFormat("%5s  %-14s  %-40s  %9s\n", "step", "status",
+                                    "normal forces (N)", "time (us)");
+  for (int k = 0; k < response.steps_size(); ++k) {
+    const v1::PlanResponse& step = response.steps(k);
+    std::string normals;
+    for (double f : step.normal_forces()) absl::StrAppend(&normals, absl::StrFormat("%7.3f ", f));
+    absl::StrAppendFormat(&out, "%5d  %-14s  %-40s  %9d\n", k, api::StatusName(step.status()),
+                          normals, step.solve_time_us());
+  }
+  absl::StrAppendFormat(&out, "%d steps: %d optimal, %d infeasible, %d failed; total %d us\n",
+                        response.steps_size(), response.optimal_steps(),
+                        response.infeasible_steps(), response.failed_steps(),
+                        response.total_time_us());
+  return out;
+}
+
+// --trajectory: the TrajectoryRequest planned here (--local) or by the server.
+int RunTrajectory(const PlanArgs& args) {
+  absl::StatusOr<std::string> text = ReadInput(args.trajectory_path, "--trajectory");
+  if (!text.ok()) return ReportError(text.status());
+  v1::TrajectoryRequest request;
+  if (absl::Status s = api::ParseJson(*text, &request, "trajectory JSON"); !s.ok()) return ReportError(s);
+  absl::StatusOr<v1::TrajectoryResponse> response =
+      args.local ? api::HandleTrajectory(request)
+                 : CallUnary(args.connection, &v1::Planner::Stub::PlanTrajectory, request);
+  if (!response.ok()) return ReportError(response.status());
+  std::cout << (args.format == "table" ? FormatTrajectoryTable(*response) : api::ToJson(*response));
+  return std::cout ? kExitOk : kExitFailure;
 }
 
 }  // namespace
@@ -49,50 +86,6 @@ CLI::App* AddPlanCommand(CLI::App& app, PlanArgs& args) {
       "field), 3 when the server cannot be reached, 4 when it did not answer within\n"
       "--deadline-ms, 1 otherwise.");
   return cmd;
-}
-
-int RunTrajectory(const PlanArgs& args) {
-  absl::StatusOr<std::string> text = ReadInput(args.trajectory_path, "--trajectory");
-  if (!text.ok()) return ReportError(text.status());
-  v1::TrajectoryRequest request;
-  if (absl::Status s = api::ParseJson(*text, &request, "trajectory JSON"); !s.ok()) return ReportError(s);
-  absl::StatusOr<v1::TrajectoryResponse> response;
-  if (args.local) {
-    response = api::HandleTrajectory(request);
-  } else {
-    absl::StatusOr<std::shared_ptr<grpc::Channel>> channel =
-        MakeChannel(args.connection, args.connection.server);
-    if (!channel.ok()) return ReportError(channel.status());
-    auto stub = v1::Planner::NewStub(*channel);
-    grpc::ClientContext context;
-    SetDeadline(&context, args.connection.deadline_ms);
-    v1::TrajectoryResponse remote;
-    const grpc::Status status = stub->PlanTrajectory(&context, request, &remote);
-    if (!status.ok()) {
-      return ReportError(
-          RpcError(status, args.connection.server, args.connection.deadline_ms, channel->get()));
-    }
-    response = std::move(remote);
-  }
-  if (!response.ok()) return ReportError(response.status());
-  if (args.format == "table") {
-    std::cout << absl::StrFormat("%5s  %-14s  %-40s  %9s\n", "step", "status", "normal forces (N)",
-                                 "time (us)");
-    for (int k = 0; k < response->steps_size(); ++k) {
-      const v1::PlanResponse& step = response->steps(k);
-      std::string normals;
-      for (double f : step.normal_forces()) absl::StrAppend(&normals, absl::StrFormat("%7.3f ", f));
-      std::cout << absl::StrFormat("%5d  %-14s  %-40s  %9d\n", k, api::StatusName(step.status()),
-                                   normals, step.solve_time_us());
-    }
-    std::cout << absl::StrFormat("%d steps: %d optimal, %d infeasible, %d failed; total %d us\n",
-                                 response->steps_size(), response->optimal_steps(),
-                                 response->infeasible_steps(), response->failed_steps(),
-                                 response->total_time_us());
-  } else {
-    std::cout << api::ToJson(*response);
-  }
-  return std::cout ? kExitOk : kExitFailure;
 }
 
 int RunPlan(const PlanArgs& args) {

@@ -1,3 +1,5 @@
+// The stderr progress bar: redrawn in place on a terminal (at most every
+// 100 ms), one line per 10 % step otherwise.
 #include "progress.h"
 
 #include <unistd.h>

@@ -1,3 +1,6 @@
+// Proto <-> planner conversions (convert.h). Unset request fields keep the
+// planner's own defaults (a default-constructed PlanOptions / ObjectModel);
+// only enum numbers the API does not define are rejected here.
 #include "tactforce/api/convert.h"
 
 #include <limits>
@@ -8,9 +11,6 @@
 
 namespace tactforce::api {
 namespace {
-
-constexpr int kDefaultConeSides = 12;
-constexpr double kDefaultConfidence = 1.0;
 
 absl::Status UnknownValue(const std::string& field, int value) {
   return absl::InvalidArgumentError(absl::StrCat(field, ": unknown value ", value));
@@ -104,20 +104,18 @@ absl::StatusOr<planner::PlanProblem> ToProblem(const v1::PlanRequest& request) {
 }
 
 absl::StatusOr<planner::PlanOptions> ToOptions(const v1::PlanRequest& request) {
-  planner::PlanOptions options;
+  planner::PlanOptions options;  // unset fields keep these defaults
   absl::StatusOr<planner::ConeModel> cone = ConeFromProto(request.cone());
   if (!cone.ok()) return cone.status();
   options.cone = *cone;
-  if (request.cone_sides() == 0) {
-    options.cone_sides = kDefaultConeSides;
-  } else if (request.cone_sides() > static_cast<uint32_t>(std::numeric_limits<int>::max())) {
+  if (request.cone_sides() > static_cast<uint32_t>(std::numeric_limits<int>::max())) {
     // Would wrap to a negative int; the planner's range check sees the rest.
-    return absl::InvalidArgumentError(
-        absl::StrCat("cone_sides: must be in 3..64, got ", request.cone_sides()));
-  } else {
-    options.cone_sides = static_cast<int>(request.cone_sides());
+    return absl::InvalidArgumentError(absl::StrCat(
+        "cone_sides: must be in ", planner::PlanOptions::kMinConeSides, "..",
+        planner::PlanOptions::kMaxConeSides, ", got ", request.cone_sides()));
   }
-  options.confidence = request.has_confidence() ? request.confidence() : kDefaultConfidence;
+  if (request.cone_sides() != 0) options.cone_sides = static_cast<int>(request.cone_sides());
+  if (request.has_confidence()) options.confidence = request.confidence();
   return options;
 }
 

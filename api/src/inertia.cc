@@ -1,3 +1,6 @@
+// Estimator.FitInertia over the API (inertia.h): options, samples, meshes
+// and fits between inertia.proto and the inertia library, and the request
+// stream with its per-sample field paths.
 #include "tactforce/api/inertia.h"
 
 #include <algorithm>
@@ -54,6 +57,8 @@ absl::StatusOr<inertia::RegionScheme> RegionSchemeFromProto(v1::RegionScheme sch
   return absl::InvalidArgumentError(absl::StrCat("options.regions: unknown value ", static_cast<int>(scheme)));
 }
 
+// UNSPECIFIED and unknown numbers: CONSTRAINED (a response's method; a
+// request's is checked by InertiaOptionsFromProto first).
 inertia::InertiaMethod InertiaMethodFromProto(v1::InertiaMethod method) {
   switch (method) {
     case v1::INERTIA_METHOD_BASELINE_LS: return inertia::InertiaMethod::kBaselineLs;
@@ -163,6 +168,10 @@ v1::InertiaMethod InertiaMethodToProto(inertia::InertiaMethod method) {
   return v1::INERTIA_METHOD_UNSPECIFIED;
 }
 
+std::string InertiaMethodName(inertia::InertiaMethod method) {
+  return v1::InertiaMethod_Name(InertiaMethodToProto(method));
+}
+
 inertia::InertialParameters InertialParametersFromProto(const v1::InertialParameters& p) {
   inertia::InertialParameters out;
   out.mass = p.mass();
@@ -181,16 +190,12 @@ v1::InertialParameters InertialParametersToProto(const inertia::InertialParamete
 
 absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::InertiaFitOptions& o) {
   inertia::InertiaOptions out;
-  switch (o.method()) {
-    case v1::INERTIA_METHOD_UNSPECIFIED:
-      out.method = o.has_mesh() ? inertia::InertiaMethod::kDensity : inertia::InertiaMethod::kConstrained;
-      break;
-    case v1::INERTIA_METHOD_CONSTRAINED: out.method = inertia::InertiaMethod::kConstrained; break;
-    case v1::INERTIA_METHOD_BASELINE_LS: out.method = inertia::InertiaMethod::kBaselineLs; break;
-    case v1::INERTIA_METHOD_FACTOR_GRAPH: out.method = inertia::InertiaMethod::kFactorGraph; break;
-    case v1::INERTIA_METHOD_DENSITY: out.method = inertia::InertiaMethod::kDensity; break;
-    default:
-      return absl::InvalidArgumentError(absl::StrCat("options.method: unknown value ", o.method()));
+  if (!v1::InertiaMethod_IsValid(o.method()))
+    return absl::InvalidArgumentError(absl::StrCat("options.method: unknown value ", o.method()));
+  if (o.method() == v1::INERTIA_METHOD_UNSPECIFIED) {
+    out.method = o.has_mesh() ? inertia::InertiaMethod::kDensity : inertia::InertiaMethod::kConstrained;
+  } else {
+    out.method = InertiaMethodFromProto(o.method());
   }
   if (o.has_gravity()) out.gravity = FromProto(o.gravity());
   for (const v1::Vec3& v : o.hull()) out.hull.push_back(FromProto(v));

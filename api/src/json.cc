@@ -1,3 +1,5 @@
+// JSON of API messages (json.h): protobuf's JSON parser and printer, with
+// its error messages reduced to one line that names the field.
 #include "tactforce/api/json.h"
 
 #include "tactforce/io/json.h"

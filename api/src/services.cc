@@ -1,3 +1,5 @@
+// The request handlers of services.h: each converts its request (field
+// paths in errors), calls one library entry point and converts the answer.
 #include "tactforce/api/services.h"
 
 #include "absl/strings/str_cat.h"
@@ -11,15 +13,6 @@
 
 namespace tactforce::api {
 namespace {
-
-absl::StatusOr<PlanCall> LimitedCall(const v1::PlanRequest& request, const CallLimits& limits) {
-  absl::StatusOr<PlanCall> call = FromProto(request);
-  if (!call.ok()) return call.status();
-  call->options.max_contacts = limits.max_contacts;
-  call->options.ipopt_max_cpu_seconds = limits.ipopt_max_cpu_seconds;
-  call->options.interrupt = limits.interrupt;
-  return call;
-}
 
 // Prefixes field paths of a nested message ("plan." + "contacts[1].normal").
 absl::Status Nested(const absl::Status& s, const char* prefix) {
@@ -48,19 +41,31 @@ v1::EstimateStatus ToProto(estimator::EstimateStatus s) {
 
 }  // namespace
 
-absl::StatusOr<v1::PlanResponse> HandlePlan(const v1::PlanRequest& request,
-                                            const CallLimits& limits) {
-  absl::StatusOr<PlanCall> call = LimitedCall(request, limits);
+absl::StatusOr<PlanCall> PreparePlan(const v1::PlanRequest& request, const CallLimits& limits) {
+  absl::StatusOr<PlanCall> call = FromProto(request);
   if (!call.ok()) return call.status();
-  absl::StatusOr<planner::PlanResult> result =
-      planner::Plan(call->problem, call->options, call->solver);
+  call->options.max_contacts = limits.max_contacts;
+  call->options.ipopt_max_cpu_seconds = limits.ipopt_max_cpu_seconds;
+  call->options.interrupt = limits.interrupt;
+  return call;
+}
+
+absl::StatusOr<v1::PlanResponse> SolvePlan(const PlanCall& call) {
+  absl::StatusOr<planner::PlanResult> result = planner::Plan(call.problem, call.options, call.solver);
   if (!result.ok()) return result.status();
   return api::ToProto(*result);
 }
 
+absl::StatusOr<v1::PlanResponse> HandlePlan(const v1::PlanRequest& request,
+                                            const CallLimits& limits) {
+  absl::StatusOr<PlanCall> call = PreparePlan(request, limits);
+  if (!call.ok()) return call.status();
+  return SolvePlan(*call);
+}
+
 absl::StatusOr<v1::TrajectoryResponse> HandleTrajectory(const v1::TrajectoryRequest& request,
                                                         const CallLimits& limits) {
-  absl::StatusOr<PlanCall> call = LimitedCall(request.plan(), limits);
+  absl::StatusOr<PlanCall> call = PreparePlan(request.plan(), limits);
   if (!call.ok()) return Nested(call.status(), "plan.");
   planner::TrajectoryProblem t;
   t.base = call->problem;
@@ -98,7 +103,7 @@ absl::StatusOr<v1::TrajectoryResponse> HandleTrajectory(const v1::TrajectoryRequ
 
 absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
     const v1::FrictionProbeRequest& request, const CallLimits& limits) {
-  absl::StatusOr<PlanCall> call = LimitedCall(request.plan(), limits);
+  absl::StatusOr<PlanCall> call = PreparePlan(request.plan(), limits);
   if (!call.ok()) return Nested(call.status(), "plan.");
   planner::FrictionProbe probe;
   probe.position = FromProto(request.position());

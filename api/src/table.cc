@@ -1,3 +1,4 @@
+// The plan table for people (table.h): fixed-width columns, "-" for absent values.
 #include "tactforce/api/table.h"
 
 #include <algorithm>
@@ -25,26 +26,6 @@ std::string ContactName(const v1::PlanRequest& request, int i) {
 }
 
 }  // namespace
-
-std::string StatusName(v1::PlanStatus status) {
-  switch (status) {
-    case v1::PLAN_STATUS_OPTIMAL: return "OPTIMAL";
-    case v1::PLAN_STATUS_INFEASIBLE: return "INFEASIBLE";
-    case v1::PLAN_STATUS_SOLVER_FAILURE: return "SOLVER_FAILURE";
-    case v1::PLAN_STATUS_UNSPECIFIED: return "UNSPECIFIED";
-    default: return absl::StrCat("UNKNOWN(", static_cast<int>(status), ")");
-  }
-}
-
-std::string SolverName(v1::Solver solver) {
-  switch (solver) {
-    case v1::SOLVER_GEOMETRIC: return "GEOMETRIC";
-    case v1::SOLVER_IPOPT: return "IPOPT";
-    case v1::SOLVER_CROSS_CHECK: return "CROSS_CHECK";
-    case v1::SOLVER_UNSPECIFIED: return "UNSPECIFIED";
-    default: return absl::StrCat("UNKNOWN(", static_cast<int>(solver), ")");
-  }
-}
 
 std::string FormatPlanTable(const v1::PlanRequest& request,
                             const v1::PlanResponse& response) {

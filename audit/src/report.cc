@@ -1,3 +1,7 @@
+// The audit's outputs (audit.h): report.json through io::JsonWriter, the
+// plain-text summary, and three SVG plots drawn with io/svg.h (reading vs
+// reference, residual vs reference, residual vs time with the held-out
+// split). What to plot is decided here; how to draw it is io's.
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -5,13 +9,12 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "tactforce/audit/audit.h"
-#include "tactforce/io/text_file.h"
 #include "tactforce/io/json.h"
+#include "tactforce/io/svg.h"
+#include "tactforce/io/text_file.h"
 
 namespace tactforce::audit {
 namespace {
-
-using io::JsonWriter;
 
 void WriteDiagnostics(io::JsonWriter& w, const Diagnostics& d) {
   w.BeginObject();
@@ -73,105 +76,116 @@ void WriteParameters(io::JsonWriter& w, const std::string& form, const std::map<
   w.EndObject();
 }
 
+void WriteCauses(io::JsonWriter& w, const std::vector<Cause>& causes) {
+  w.Key("causes");
+  w.BeginArray();
+  for (const auto& c : causes) {
+    w.BeginObject();
+    w.Field("effect", c.effect);
+    WriteParameters(w, c.form, c.parameters, c.array_parameters);
+    WriteMap(w, "uncertainties", c.uncertainties);
+    w.Field("heldout_rms_before", c.heldout_rms_before);
+    w.Field("heldout_rms_after", c.heldout_rms_after);
+    w.Field("gain", c.gain);
+    w.Field("delta_bic", c.delta_bic);
+    w.EndObject();
+  }
+  w.EndArray();
+}
+
+void WriteClockOffset(io::JsonWriter& w, const AuditReport& r) {
+  w.Key("clock_offset_s");
+  if (r.clock_offset_s) w.Number(*r.clock_offset_s);
+  else w.Null();
+  if (r.clock_offset_s) {
+    w.Key("clock_offset");
+    w.BeginObject();
+    w.Field("mode", r.clock_offset_mode);
+    if (r.clock_offset_mode == "estimated") {
+      w.Field("cross_correlation_s", r.clock_offset_xcorr_s);
+      w.Field("refinement_s", r.clock_offset_refinement_s);
+      w.Field("peak_correlation", r.clock_offset_correlation);
+      w.Field("note",
+              "reading clock minus reference clock; includes any constant sensor delay (indistinguishable from two "
+              "streams)");
+    }
+    w.EndObject();
+  }
+}
+
+void WriteCandidates(io::JsonWriter& w, const std::vector<CandidateScore>& candidates) {
+  w.Key("candidates");
+  w.BeginArray();
+  for (const auto& c : candidates) {
+    w.BeginObject();
+    w.FieldInt("round", c.round);
+    w.Field("effect", c.effect);
+    WriteParameters(w, c.form, c.parameters, c.array_parameters);
+    w.Field("heldout_rms", c.heldout_rms);
+    w.Field("bic", c.bic);
+    w.FieldBool("accepted", c.accepted);
+    w.EndObject();
+  }
+  w.EndArray();
+}
+
+void WriteDownstream(io::JsonWriter& w, const std::optional<DownstreamGain>& downstream) {
+  w.Key("downstream");
+  if (downstream) {
+    w.BeginObject();
+    w.FieldInt("grasps", downstream->grasps);
+    w.Field("method", downstream->method);
+    w.Field("error_nominal", downstream->error_nominal);
+    w.Field("error_extended", downstream->error_extended);
+    w.Field("gain", downstream->gain);
+    w.Field("error_exact_readings", downstream->error_exact_readings);
+    w.EndObject();
+  } else {
+    w.Null();
+  }
+}
+
 // ---- SVG ------------------------------------------------------------------
 
 struct Series {
   std::string label, color;
   std::vector<double> x, y;
-  bool line = false;
+  bool line = false;  // a line through the points; otherwise dots
 };
 
-std::string Fmt(double v) { return absl::StrFormat("%.4g", v); }
-
-std::vector<double> Ticks(double lo, double hi) {
-  const double span = hi - lo;
-  if (!(span > 0)) return {lo};
-  const double raw = span / 5;
-  const double mag = std::pow(10, std::floor(std::log10(raw)));
-  double step = mag;
-  for (double m : {1.0, 2.0, 5.0, 10.0})
-    if (m * mag >= raw) {
-      step = m * mag;
-      break;
-    }
-  std::vector<double> t;
-  for (double v = std::ceil(lo / step) * step; v <= hi + 1e-9 * span; v += step) t.push_back(v);
-  return t;
-}
-
+// One 800 x 520 plot of `series` (the data's extent, y padded by 5 %), with a
+// dashed "held-out" rule at x = `vline` when it is finite.
 std::string Plot(const std::string& title, const std::string& xlabel, const std::string& ylabel,
                  const std::vector<Series>& series, double vline = NAN) {
-  const double W = 800, H = 520, L = 80, Rm = 20, T = 40, B = 60;
-  double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
-  for (const auto& s : series)
-    for (size_t i = 0; i < s.x.size(); ++i) {
-      if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
-      x0 = std::min(x0, s.x[i]);
-      x1 = std::max(x1, s.x[i]);
-      y0 = std::min(y0, s.y[i]);
-      y1 = std::max(y1, s.y[i]);
-    }
-  if (!(x1 > x0)) x1 = x0 + 1;
-  if (!(y1 > y0)) y1 = y0 + 1;
-  const double py = 0.05 * (y1 - y0);
-  y0 -= py;
-  y1 += py;
-  auto X = [&](double v) { return L + (v - x0) / (x1 - x0) * (W - L - Rm); };
-  auto Y = [&](double v) { return H - B - (v - y0) / (y1 - y0) * (H - T - B); };
-  std::string s = absl::StrFormat(
-      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%g\" height=\"%g\" viewBox=\"0 0 %g %g\" "
-      "font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n",
-      W, H, W, H);
-  absl::StrAppendFormat(&s, "<text x=\"%g\" y=\"24\" text-anchor=\"middle\" font-size=\"15\">%s</text>\n", W / 2,
-                        title);
-  absl::StrAppendFormat(&s, "<rect x=\"%g\" y=\"%g\" width=\"%g\" height=\"%g\" fill=\"none\" stroke=\"black\"/>\n",
-                        L, T, W - L - Rm, H - T - B);
-  for (double v : Ticks(x0, x1)) {
-    absl::StrAppendFormat(&s, "<line x1=\"%.1f\" y1=\"%g\" x2=\"%.1f\" y2=\"%g\" stroke=\"#ddd\"/>\n", X(v), T, X(v),
-                          H - B);
-    absl::StrAppendFormat(&s, "<text x=\"%.1f\" y=\"%g\" text-anchor=\"middle\">%s</text>\n", X(v), H - B + 16,
-                          Fmt(v));
+  constexpr double kWidth = 800, kHeight = 520, kLeft = 80, kRight = 20, kTop = 40, kBottom = 60;
+  io::Range x, y;
+  for (const Series& s : series)
+    for (size_t i = 0; i < s.x.size() && i < s.y.size(); ++i)
+      if (std::isfinite(s.x[i]) && std::isfinite(s.y[i])) x.Include(s.x[i]), y.Include(s.y[i]);
+  x = x.ForAxis();
+  y = y.ForAxis(0.05);
+  const io::PlotFrame frame{kLeft, kTop, kWidth - kLeft - kRight, kHeight - kTop - kBottom, x.lo, x.hi, y.lo, y.hi};
+  io::SvgCanvas canvas(kWidth, kHeight, 12);
+  canvas.Text(kWidth / 2, 24, title, {.size = 15, .anchor = io::TextAnchor::kMiddle});
+  io::DrawAxes(canvas, frame, io::NiceTicks(x.lo, x.hi), {.title = xlabel, .title_offset = 40},
+               io::NiceTicks(y.lo, y.hi), {.title = ylabel, .title_offset = 62});
+  io::DrawVerticalRule(canvas, frame, vline, io::Stroke{"black", 1, "5,4"}, "held-out");
+  std::vector<io::LegendEntry> legend;
+  for (const Series& s : series) {
+    if (s.line) io::DrawLineTrace(canvas, frame, s.x, s.y, io::Stroke{s.color, 1.5, ""});
+    else io::DrawScatter(canvas, frame, s.x, s.y, s.color);
+    legend.push_back({.label = s.label,
+                      .swatch = s.line ? io::LegendEntry::Swatch::kLine : io::LegendEntry::Swatch::kBox,
+                      .line = io::Stroke{s.color, 2, ""},
+                      .color = s.color});
   }
-  for (double v : Ticks(y0, y1)) {
-    absl::StrAppendFormat(&s, "<line x1=\"%g\" y1=\"%.1f\" x2=\"%g\" y2=\"%.1f\" stroke=\"#ddd\"/>\n", L, Y(v),
-                          W - Rm, Y(v));
-    absl::StrAppendFormat(&s, "<text x=\"%g\" y=\"%.1f\" text-anchor=\"end\">%s</text>\n", L - 6, Y(v) + 4, Fmt(v));
-  }
-  absl::StrAppendFormat(&s, "<text x=\"%g\" y=\"%g\" text-anchor=\"middle\">%s</text>\n", (L + W - Rm) / 2, H - 20,
-                        xlabel);
-  absl::StrAppendFormat(&s,
-                        "<text x=\"18\" y=\"%g\" text-anchor=\"middle\" transform=\"rotate(-90 18 %g)\">%s</text>\n",
-                        (T + H - B) / 2, (T + H - B) / 2, ylabel);
-  if (std::isfinite(vline) && vline >= x0 && vline <= x1)
-    absl::StrAppendFormat(&s,
-                          "<line x1=\"%.1f\" y1=\"%g\" x2=\"%.1f\" y2=\"%g\" stroke=\"black\" "
-                          "stroke-dasharray=\"5,4\"/><text x=\"%.1f\" y=\"%g\">held-out</text>\n",
-                          X(vline), T, X(vline), H - B, X(vline) + 4, T + 14);
-  for (const auto& se : series) {
-    const size_t n = se.x.size();
-    const size_t stride = std::max<size_t>(1, n / 2500);
-    if (se.line) {
-      s += "<polyline fill=\"none\" stroke-width=\"1.5\" stroke=\"" + se.color + "\" points=\"";
-      for (size_t i = 0; i < n; i += stride) absl::StrAppendFormat(&s, "%.1f,%.1f ", X(se.x[i]), Y(se.y[i]));
-      s += "\"/>\n";
-    } else {
-      s += "<g fill=\"" + se.color + "\" fill-opacity=\"0.6\">\n";
-      for (size_t i = 0; i < n; i += stride)
-        if (std::isfinite(se.y[i]))
-          absl::StrAppendFormat(&s, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"1.6\"/>\n", X(se.x[i]), Y(se.y[i]));
-      s += "</g>\n";
-    }
-  }
-  double ly = T + 16;
-  for (const auto& se : series) {
-    absl::StrAppendFormat(&s, "<rect x=\"%g\" y=\"%g\" width=\"12\" height=\"8\" fill=\"%s\"/>", L + 10, ly - 8,
-                          se.color);
-    absl::StrAppendFormat(&s, "<text x=\"%g\" y=\"%g\">%s</text>\n", L + 28, ly, se.label);
-    ly += 16;
-  }
-  s += "</svg>\n";
-  return s;
+  io::DrawFrameOutline(canvas, frame, io::Stroke{});
+  io::DrawLegend(canvas, kLeft + 10, kTop + 16, legend);
+  return canvas.Finish();
 }
+
+// Numbers in the summary text.
+std::string Fmt(double v) { return absl::StrFormat("%.4g", v); }
 
 std::string CauseLine(const Cause& c) {
   std::string p;
@@ -198,20 +212,7 @@ std::string AuditReportJson(const AuditReport& r, const std::string& extended_mo
   w.Field("format", "tactforce.audit_report.v1");
   w.Field("source", r.source);
   w.FieldBool("nominal_adequate", r.nominal_adequate);
-  w.Key("causes");
-  w.BeginArray();
-  for (const auto& c : r.causes) {
-    w.BeginObject();
-    w.Field("effect", c.effect);
-    WriteParameters(w, c.form, c.parameters, c.array_parameters);
-    WriteMap(w, "uncertainties", c.uncertainties);
-    w.Field("heldout_rms_before", c.heldout_rms_before);
-    w.Field("heldout_rms_after", c.heldout_rms_after);
-    w.Field("gain", c.gain);
-    w.Field("delta_bic", c.delta_bic);
-    w.EndObject();
-  }
-  w.EndArray();
+  WriteCauses(w, r.causes);
   w.Field("extended_model", extended_model_path);
   w.Field("heldout_rms_before", r.heldout_rms_before);
   w.Field("heldout_rms_after", r.heldout_rms_after);
@@ -222,23 +223,7 @@ std::string AuditReportJson(const AuditReport& r, const std::string& extended_mo
   w.FieldInt("n_heldout", r.n_heldout);
   w.FieldInt("skipped_nan_rows", r.skipped_nan_rows);
   w.Field("split_time", r.split_time);
-  w.Key("clock_offset_s");
-  if (r.clock_offset_s) w.Number(*r.clock_offset_s);
-  else w.Null();
-  if (r.clock_offset_s) {
-    w.Key("clock_offset");
-    w.BeginObject();
-    w.Field("mode", r.clock_offset_mode);
-    if (r.clock_offset_mode == "estimated") {
-      w.Field("cross_correlation_s", r.clock_offset_xcorr_s);
-      w.Field("refinement_s", r.clock_offset_refinement_s);
-      w.Field("peak_correlation", r.clock_offset_correlation);
-      w.Field("note",
-              "reading clock minus reference clock; includes any constant sensor delay (indistinguishable from two "
-              "streams)");
-    }
-    w.EndObject();
-  }
+  WriteClockOffset(w, r);
   w.Key("nominal_model");
   w.BeginObject();
   w.Field("gain", r.nominal_model.gain);
@@ -253,32 +238,8 @@ std::string AuditReportJson(const AuditReport& r, const std::string& extended_mo
   w.Key("extended");
   WriteDiagnostics(w, r.extended);
   w.EndObject();
-  w.Key("candidates");
-  w.BeginArray();
-  for (const auto& c : r.candidates) {
-    w.BeginObject();
-    w.FieldInt("round", c.round);
-    w.Field("effect", c.effect);
-    WriteParameters(w, c.form, c.parameters, c.array_parameters);
-    w.Field("heldout_rms", c.heldout_rms);
-    w.Field("bic", c.bic);
-    w.FieldBool("accepted", c.accepted);
-    w.EndObject();
-  }
-  w.EndArray();
-  w.Key("downstream");
-  if (r.downstream) {
-    w.BeginObject();
-    w.FieldInt("grasps", r.downstream->grasps);
-    w.Field("method", r.downstream->method);
-    w.Field("error_nominal", r.downstream->error_nominal);
-    w.Field("error_extended", r.downstream->error_extended);
-    w.Field("gain", r.downstream->gain);
-    w.Field("error_exact_readings", r.downstream->error_exact_readings);
-    w.EndObject();
-  } else {
-    w.Null();
-  }
+  WriteCandidates(w, r.candidates);
+  WriteDownstream(w, r.downstream);
   w.Key("notes");
   w.BeginArray();
   for (const auto& n : r.notes) w.String(n);

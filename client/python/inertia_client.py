@@ -36,23 +36,12 @@ import math
 import os
 import sys
 
-from client_env import EXIT_BAD_INPUT, EXIT_OK, EXIT_RPC_FAILED, load
+from client_env import EXIT_BAD_INPUT, EXIT_OK, load, print_json, report_rpc_error, wire_choices
 
 grpc, json_format, (estimator_pb2_grpc, inertia_pb2) = load("estimator_pb2_grpc", "inertia_pb2")
 
-METHODS = {
-    "baseline-ls": inertia_pb2.INERTIA_METHOD_BASELINE_LS,
-    "factor-graph": inertia_pb2.INERTIA_METHOD_FACTOR_GRAPH,
-    "constrained": inertia_pb2.INERTIA_METHOD_CONSTRAINED,
-    "density": inertia_pb2.INERTIA_METHOD_DENSITY,
-}
-
-REGIONS = {
-    "auto": inertia_pb2.REGION_SCHEME_AUTO,
-    "grid": inertia_pb2.REGION_SCHEME_GRID,
-    "colors": inertia_pb2.REGION_SCHEME_COLORS,
-    "single": inertia_pb2.REGION_SCHEME_SINGLE,
-}
+METHODS = wire_choices(inertia_pb2.InertiaMethod, "INERTIA_METHOD_")
+REGIONS = wire_choices(inertia_pb2.RegionScheme, "REGION_SCHEME_")
 
 MESH_FORMATS = {".stl": "stl", ".obj": "obj", ".ply": "ply"}
 
@@ -243,7 +232,7 @@ def requests(samples, options, batch):
         yield message
 
 
-def main():
+def parse_args():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--server", default="localhost:50051", help="HOST:PORT")
     parser.add_argument("--csv", required=True, help="inertia CSV")
@@ -261,72 +250,95 @@ def main():
     args = parser.parse_args()
     if args.batch < 1:
         parser.error("--batch: must be >= 1")
-
     if args.mesh is None and (args.mesh_scale is not None or args.mesh_pose is not None):
         parser.error("--mesh-scale and --mesh-pose need --mesh")
     if args.mesh_scale is not None and not args.mesh_scale > 0:
         parser.error(f"--mesh-scale: must be > 0 (got {args.mesh_scale:g})")
     if not 0 <= args.target_regions <= 512:
         parser.error("--target-regions: must be in 1..512 (0 = 12)")
+    return args
 
+
+def fit_options(args):
+    """InertiaFitOptions from the flags: the method, regions, the mesh file's
+    bytes (--mesh) and the truth (--truth); BadInput names the file or flag."""
     options = inertia_pb2.InertiaFitOptions()
     method = args.method or ("density" if args.mesh else "constrained")
     options.method = METHODS[method]
     options.regions = REGIONS[args.regions]
     options.target_regions = args.target_regions
+    if args.mesh:
+        pose = parse_numbers(args.mesh_pose, 7, "--mesh-pose", "x,y,z,qw,qx,qy,qz") if args.mesh_pose else None
+        options.mesh.CopyFrom(read_mesh(args.mesh, args.mesh_scale, pose))
+    if args.truth:
+        params, gravity = read_truth(args.truth)
+        options.truth.CopyFrom(params)
+        if gravity:
+            set_vec(options.gravity, [float(v) for v in gravity])
+    return options
+
+
+def fit(args, options):
+    """Streams --csv to Estimator.FitInertia; a bad row ends the stream with
+    its BadInput (not gRPC's report that the iteration failed)."""
+    samples = read_samples(args.csv)
+    with grpc.insecure_channel(args.server) as channel:
+        stub = estimator_pb2_grpc.EstimatorStub(channel)
+        stream = RequestStream(samples, options, args.batch)
+        try:
+            return stub.FitInertia(iter(stream), timeout=args.deadline)
+        except grpc.RpcError:
+            if stream.error is not None:
+                raise stream.error from None
+            raise
+
+
+def mesh_hint(error, options):
+    """For RESOURCE_EXHAUSTED with a mesh: the first message carries it."""
+    if error.code() != grpc.StatusCode.RESOURCE_EXHAUSTED or not options.HasField("mesh"):
+        return ""
+    return (f" (the first message carries the mesh {options.mesh.name}, {len(options.mesh.data)} bytes: "
+            "start tactforce-server with a larger --max-message-bytes, or give a smaller mesh)")
+
+
+def print_summary(response):
+    c, i = response.com, response.inertia
+    print(f"mass: {response.mass:.6g} kg, com: ({c.x:.6g}, {c.y:.6g}, {c.z:.6g}) m")
+    print(f"inertia about the CoM: Ixx {i.ixx:.6g}, Iyy {i.iyy:.6g}, Izz {i.izz:.6g}, "
+          f"Ixy {i.ixy:.6g}, Ixz {i.ixz:.6g}, Iyz {i.iyz:.6g} kg m^2")
+    print(f"physically consistent: {'yes' if response.physically_consistent else 'NO'}; "
+          f"{response.samples_received} samples, {response.time_seconds * 1e3:.1f} ms")
+    if len(response.densities):
+        realizable = "yes" if response.density_realizable else "NO"
+        print(f"density-realizable: {realizable}; regulariser {response.density_regularization:.3g} "
+              f"({response.density_regularization_rule})")
+        for region in response.densities:
+            print(f"  {region.label:<18} {region.density:10.5g} kg/m^3 (se {region.standard_error:.2g})  "
+                  f"volume {region.volume:.4g} m^3")
+    if response.mesh_contradicted:
+        print(response.mesh_contradiction)
+    if response.HasField("errors"):
+        e = response.errors
+        print(f"errors: paper metric {e.paper_metric:.4g}, Riemannian {e.riemannian:.4g}, "
+              f"mass {e.mass_percent:.3g} %, CoM {e.com_mm:.3g} mm")
+
+
+def main():
+    args = parse_args()
+    options = inertia_pb2.InertiaFitOptions()
     try:
-        if args.mesh:
-            pose = parse_numbers(args.mesh_pose, 7, "--mesh-pose", "x,y,z,qw,qx,qy,qz") if args.mesh_pose else None
-            options.mesh.CopyFrom(read_mesh(args.mesh, args.mesh_scale, pose))
-        if args.truth:
-            params, gravity = read_truth(args.truth)
-            options.truth.CopyFrom(params)
-            if gravity:
-                set_vec(options.gravity, [float(v) for v in gravity])
-        samples = read_samples(args.csv)
-        with grpc.insecure_channel(args.server) as channel:
-            stub = estimator_pb2_grpc.EstimatorStub(channel)
-            stream = RequestStream(samples, options, args.batch)
-            try:
-                response = stub.FitInertia(iter(stream), timeout=args.deadline)
-            except grpc.RpcError:
-                if stream.error is not None:
-                    raise stream.error from None
-                raise
+        options = fit_options(args)
+        response = fit(args, options)
     except (BadInput, OSError, json.JSONDecodeError) as error:
         print(f"error: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except grpc.RpcError as error:
-        hint = ""
-        if error.code() == grpc.StatusCode.RESOURCE_EXHAUSTED and options.HasField("mesh"):
-            hint = (f" (the first message carries the mesh {options.mesh.name}, {len(options.mesh.data)} bytes: "
-                    "start tactforce-server with a larger --max-message-bytes, or give a smaller mesh)")
-        print(f"error: {error.code().name}: {error.details()}{hint}", file=sys.stderr)
-        return EXIT_BAD_INPUT if error.code() == grpc.StatusCode.INVALID_ARGUMENT else EXIT_RPC_FAILED
+        return report_rpc_error(grpc, error, mesh_hint(error, options))
 
     if args.json:
-        print(json_format.MessageToJson(response, preserving_proto_field_name=True,
-                                        including_default_value_fields=True))
+        print_json(json_format, response)
     else:
-        c, i = response.com, response.inertia
-        print(f"mass: {response.mass:.6g} kg, com: ({c.x:.6g}, {c.y:.6g}, {c.z:.6g}) m")
-        print(f"inertia about the CoM: Ixx {i.ixx:.6g}, Iyy {i.iyy:.6g}, Izz {i.izz:.6g}, "
-              f"Ixy {i.ixy:.6g}, Ixz {i.ixz:.6g}, Iyz {i.iyz:.6g} kg m^2")
-        print(f"physically consistent: {'yes' if response.physically_consistent else 'NO'}; "
-              f"{response.samples_received} samples, {response.time_seconds * 1e3:.1f} ms")
-        if len(response.densities):
-            realizable = "yes" if response.density_realizable else "NO"
-            print(f"density-realizable: {realizable}; regulariser {response.density_regularization:.3g} "
-                  f"({response.density_regularization_rule})")
-            for region in response.densities:
-                print(f"  {region.label:<18} {region.density:10.5g} kg/m^3 (se {region.standard_error:.2g})  "
-                      f"volume {region.volume:.4g} m^3")
-        if response.mesh_contradicted:
-            print(response.mesh_contradiction)
-        if response.HasField("errors"):
-            e = response.errors
-            print(f"errors: paper metric {e.paper_metric:.4g}, Riemannian {e.riemannian:.4g}, "
-                  f"mass {e.mass_percent:.3g} %, CoM {e.com_mm:.3g} mm")
+        print_summary(response)
     return EXIT_OK
 
 

@@ -23,15 +23,12 @@ deadline, ...), 2 bad command line or invalid request (INVALID_ARGUMENT).
 import argparse
 import sys
 
-from client_env import EXIT_BAD_INPUT, EXIT_OK, EXIT_RPC_FAILED, load
+from client_env import (EXIT_BAD_INPUT, EXIT_OK, EXIT_RPC_FAILED, load, print_json,
+                        report_rpc_error, wire_choices)
 
 grpc, json_format, (planner_pb2, planner_pb2_grpc) = load("planner_pb2", "planner_pb2_grpc")
 
-SOLVERS = {
-    "geometric": planner_pb2.SOLVER_GEOMETRIC,
-    "ipopt": planner_pb2.SOLVER_IPOPT,
-    "cross-check": planner_pb2.SOLVER_CROSS_CHECK,
-}
+SOLVERS = wire_choices(planner_pb2.Solver, "SOLVER_")
 
 
 def wrench_grasp():
@@ -172,14 +169,10 @@ def main(argv=None):
         print(f"error: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except grpc.RpcError as error:
-        print(f"error: {error.code().name}: {error.details()}", file=sys.stderr)
-        if error.code() == grpc.StatusCode.INVALID_ARGUMENT:
-            return EXIT_BAD_INPUT
-        return EXIT_RPC_FAILED
+        return report_rpc_error(grpc, error)
 
     if args.json:
-        print(json_format.MessageToJson(response, preserving_proto_field_name=True,
-                                        including_default_value_fields=True))
+        print_json(json_format, response)
     else:
         print_table(request, response, sys.stdout)
     return EXIT_OK

@@ -1,3 +1,8 @@
+// Force estimation from tactile readings (force_estimation.h): GeoDEx's
+// projection onto the force-equilibrium plane (Problem 1, and Problem 2 with
+// extrinsic contacts as a QP) and NORMAL_LSQ, which fits only the sensed
+// normal components inside the friction cones; both with the planner's
+// dense QP.
 #include "tactforce/estimator/force_estimation.h"
 
 #include <chrono>

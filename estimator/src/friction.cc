@@ -1,3 +1,7 @@
+// Friction from slip (friction.h, Sundaralingam & Hermans): per trial the
+// slip onset from the contact point's motion, the force just before it and
+// mu = tan(acos(f_hat . n)); robust statistics over trials; the trial CSV;
+// and simulated trials for tests and benchmarks.
 #include "tactforce/estimator/friction.h"
 
 #include <algorithm>

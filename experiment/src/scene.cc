@@ -1,3 +1,6 @@
+// MuJoCo scenes from MJCF text (scene.h): the physics settings as MJCF, a
+// model compiled from an in-memory VFS file under one lock (MuJoCo's parser
+// keeps global state), name look-ups, and the force between two geoms.
 #include "scene.h"
 
 #include <cstring>

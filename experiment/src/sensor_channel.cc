@@ -1,3 +1,6 @@
+// SensorChannel (sensor_channel.h): the sensor model evaluated one sample at
+// a time inside the control loop, with its own noise stream and the state of
+// hysteresis, delay, lag and drift; and the GeoDEx error-range draws.
 #include "tactforce/experiment/sensor_channel.h"
 
 #include <algorithm>

@@ -1,3 +1,8 @@
+// The slope method and the probe in MuJoCo (slope.h): a fingertip on a plate
+// that a mocap body tilts slowly until the fingertip slides (mu_slope =
+// tan(tilt)), then the same fingertip pushed along a level plate while its
+// normal force ramps down, the contact forces going to EstimateFriction; and
+// the creep a fingertip shows on a plate tilted inside its friction cone.
 #include "tactforce/experiment/slope.h"
 
 #include <cmath>
@@ -61,6 +66,72 @@ void PlaceTip(Scene& s, double theta, double radius) {
   mj_forward(s.m, s.d);
 }
 
+// Slope: the tilt (rad) at which the fingertip has slid `slip_distance`.
+absl::StatusOr<double> SlipTilt(const SlopeConfig& c, double mu) {
+  const double r = c.fingertip_radius;
+  auto sc = Scene::FromMjcf(PlateMjcf(c.physics, mu, c.fingertip_mass, r, true));
+  if (!sc.ok()) return sc.status();
+  Scene& s = **sc;
+  const double theta0 = std::max(0.0, std::atan(mu) - c.start_margin_deg * kDeg);
+  PlaceTip(s, theta0, r);
+  const double dt = s.m->opt.timestep;
+  for (double t = 0; t < c.settle; t += dt) mj_step(s.m, s.d);
+  const double start = AlongPlate(TipPos(s, r), theta0);
+  const double rate = c.tilt_rate_deg * kDeg;
+  const double theta_max = std::atan(mu) + 10 * kDeg;
+  double theta = theta0;
+  for (double t = 0; theta < theta_max; t += dt) {
+    theta = theta0 + rate * t;
+    SetTilt(s, theta);
+    mj_step(s.m, s.d);
+    if (AlongPlate(TipPos(s, r), theta) - start > c.slip_distance) return theta;
+  }
+  return absl::InternalError(absl::StrFormat("slope: no slip up to %.1f deg at mu %g", theta_max / kDeg, mu));
+}
+
+// Probe: the contact force and point, sampled at `sample_rate` after the
+// settle, while the normal force ramps down at `probe_ramp` under a constant
+// tangential force; until 0.3 s after the slip or the normal force is gone.
+absl::StatusOr<estimator::FrictionTrial> ProbeTrial(const SlopeConfig& c, double mu) {
+  auto sc = Scene::FromMjcf(PlateMjcf(c.physics, mu, c.fingertip_mass, c.fingertip_radius, false));
+  if (!sc.ok()) return sc.status();
+  Scene& s = **sc;
+  mj_forward(s.m, s.d);
+  const int plate = s.Geom("plate"), tip = s.Geom("tip");
+  const double dt = s.m->opt.timestep;
+  const double ft = c.probe_tangential;
+  const double fn0 = c.probe_start_ratio * ft / mu;
+  const double settle = 0.3;
+  const int every = std::max(1, static_cast<int>(std::lround(1.0 / (c.sample_rate * dt))));
+  estimator::FrictionTrial trial;
+  trial.name = absl::StrFormat("mujoco mu %g", mu);
+  trial.normal = Eigen::Vector3d(0, 0, -1);
+  double slip_at = -1;
+  const double t_end = settle + fn0 / c.probe_ramp;
+  for (int k = 0;; ++k) {
+    const double t = k * dt;
+    if (t > t_end || (slip_at >= 0 && t > slip_at + 0.3)) break;
+    // Normal force: ramp in over the settle time, then down at `probe_ramp`.
+    const double fn = t < settle ? fn0 * t / settle : std::max(0.0, fn0 - c.probe_ramp * (t - settle));
+    const double tangential = t < settle ? ft * t / settle : ft;
+    s.d->qfrc_applied[0] = tangential;
+    s.d->qfrc_applied[1] = 0;
+    s.d->qfrc_applied[2] = -fn + c.fingertip_mass * 9.81;
+    mj_step(s.m, s.d);
+    if (slip_at < 0 && std::abs(s.d->qpos[0]) > 0.005) slip_at = t;
+    if (t >= settle && k % every == 0) {
+      double f[3], p[3];
+      if (PairForce(s.m, s.d, plate, tip, f, p) == 0) continue;
+      estimator::FrictionSample smp;
+      smp.t = t - settle;
+      smp.force = Eigen::Vector3d(f[0], f[1], f[2]);
+      smp.contact_point = Eigen::Vector3d(p[0], p[1], p[2]);
+      trial.samples.push_back(smp);
+    }
+  }
+  return trial;
+}
+
 }  // namespace
 
 absl::Status ValidateSlopeConfig(const SlopeConfig& c) {
@@ -90,80 +161,18 @@ absl::StatusOr<SlopeRow> RunSlopeAndProbe(const SlopeConfig& c, double mu) {
   if (absl::Status s = ValidateSlopeConfig(one); !s.ok()) return s;
   SlopeRow row;
   row.mu = mu;
-  const double r = c.fingertip_radius;
-  // ---- slope
-  {
-    auto sc = Scene::FromMjcf(PlateMjcf(c.physics, mu, c.fingertip_mass, r, true));
-    if (!sc.ok()) return sc.status();
-    Scene& s = **sc;
-    const double theta0 = std::max(0.0, std::atan(mu) - c.start_margin_deg * kDeg);
-    PlaceTip(s, theta0, r);
-    const double dt = s.m->opt.timestep;
-    for (double t = 0; t < c.settle; t += dt) mj_step(s.m, s.d);
-    const double start = AlongPlate(TipPos(s, r), theta0);
-    const double rate = c.tilt_rate_deg * kDeg;
-    const double theta_max = std::atan(mu) + 10 * kDeg;
-    double theta = theta0;
-    bool slipped = false;
-    for (double t = 0; theta < theta_max; t += dt) {
-      theta = theta0 + rate * t;
-      SetTilt(s, theta);
-      mj_step(s.m, s.d);
-      if (AlongPlate(TipPos(s, r), theta) - start > c.slip_distance) {
-        slipped = true;
-        break;
-      }
-    }
-    if (!slipped)
-      return absl::InternalError(absl::StrFormat("slope: no slip up to %.1f deg at mu %g", theta_max / kDeg, mu));
-    row.slip_tilt_deg = theta / kDeg;
-    row.mu_slope = std::tan(theta);
-  }
-  // ---- probe
-  {
-    auto sc = Scene::FromMjcf(PlateMjcf(c.physics, mu, c.fingertip_mass, r, false));
-    if (!sc.ok()) return sc.status();
-    Scene& s = **sc;
-    mj_forward(s.m, s.d);
-    const int plate = s.Geom("plate"), tip = s.Geom("tip");
-    const double dt = s.m->opt.timestep;
-    const double ft = c.probe_tangential;
-    const double fn0 = c.probe_start_ratio * ft / mu;
-    const double settle = 0.3;
-    const int every = std::max(1, static_cast<int>(std::lround(1.0 / (c.sample_rate * dt))));
-    estimator::FrictionTrial trial;
-    trial.name = absl::StrFormat("mujoco mu %g", mu);
-    trial.normal = Eigen::Vector3d(0, 0, -1);
-    double slip_at = -1;
-    const double t_end = settle + fn0 / c.probe_ramp;
-    for (int k = 0;; ++k) {
-      const double t = k * dt;
-      if (t > t_end || (slip_at >= 0 && t > slip_at + 0.3)) break;
-      // Normal force: ramp in over the settle time, then down at `probe_ramp`.
-      const double fn = t < settle ? fn0 * t / settle : std::max(0.0, fn0 - c.probe_ramp * (t - settle));
-      const double tangential = t < settle ? ft * t / settle : ft;
-      s.d->qfrc_applied[0] = tangential;
-      s.d->qfrc_applied[1] = 0;
-      s.d->qfrc_applied[2] = -fn + c.fingertip_mass * 9.81;
-      mj_step(s.m, s.d);
-      if (slip_at < 0 && std::abs(s.d->qpos[0]) > 0.005) slip_at = t;
-      if (t >= settle && k % every == 0) {
-        double f[3], p[3];
-        if (PairForce(s.m, s.d, plate, tip, f, p) == 0) continue;
-        estimator::FrictionSample smp;
-        smp.t = t - settle;
-        smp.force = Eigen::Vector3d(f[0], f[1], f[2]);
-        smp.contact_point = Eigen::Vector3d(p[0], p[1], p[2]);
-        trial.samples.push_back(smp);
-      }
-    }
-    auto est = estimator::EstimateFriction({trial}, c.friction);
-    if (!est.ok()) return est.status();
-    const estimator::TrialFriction& tr = est->trials[0];
-    row.probe_valid = tr.valid && tr.slipped;
-    row.mu_probe = tr.mu;
-    row.probe_message = tr.message;
-  }
+  absl::StatusOr<double> theta = SlipTilt(c, mu);
+  if (!theta.ok()) return theta.status();
+  row.slip_tilt_deg = *theta / kDeg;
+  row.mu_slope = std::tan(*theta);
+  absl::StatusOr<estimator::FrictionTrial> trial = ProbeTrial(c, mu);
+  if (!trial.ok()) return trial.status();
+  auto est = estimator::EstimateFriction({*trial}, c.friction);
+  if (!est.ok()) return est.status();
+  const estimator::TrialFriction& tr = est->trials[0];
+  row.probe_valid = tr.valid && tr.slipped;
+  row.mu_probe = tr.mu;
+  row.probe_message = tr.message;
   return row;
 }
 

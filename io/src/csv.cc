@@ -1,13 +1,15 @@
+// Numeric CSV (csv.h): a header row, comma-separated cells trimmed of blanks,
+// '#' comment lines and blank lines skipped; every error names file:line.
 #include "tactforce/io/csv.h"
 
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
 #include <sstream>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
+#include "tactforce/io/text_file.h"
 
 namespace tactforce::io {
 namespace {
@@ -113,11 +115,9 @@ absl::StatusOr<CsvTable> ParseCsv(const std::string& text, const std::string& so
 }
 
 absl::StatusOr<CsvTable> ReadCsvFile(const std::string& path, const CsvOptions& options) {
-  std::ifstream in(path);
-  if (!in) return absl::InvalidArgumentError(absl::StrCat(path, ": cannot open"));
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return ParseCsv(buffer.str(), path, options);
+  absl::StatusOr<std::string> text = ReadTextFile(path);
+  if (!text.ok()) return text.status();
+  return ParseCsv(*text, path, options);
 }
 
 }  // namespace tactforce::io

@@ -1,12 +1,221 @@
+// JSON on nlohmann-json3 (json.h). Reading runs nlohmann's SAX parser over an
+// iterator that counts what the lexer consumes: when the parser reports a
+// value, the last non-blank byte read is that value's last byte ('{' or '['
+// for containers, the closing quote of a string, a number's last digit or
+// the byte right after it, which is on the same line), so its line is the
+// value's line (no JSON token spans lines). JsonTreeBuilder turns the events
+// into JsonValues and adds what nlohmann does not check (duplicate keys,
+// depth); parse errors become "source:line: message (column c)". Writing
+// keeps tactforce's layout and number format (nlohmann would print 1e6 as
+// 1000000.0) and uses nlohmann's string escaping.
 #include "tactforce/io/json.h"
 
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <iterator>
+#include <optional>
 
+#include <nlohmann/json.hpp>
+
+#include "absl/container/flat_hash_set.h"
 #include "absl/strings/str_cat.h"
+#include "absl/strings/match.h"
+#include "absl/strings/string_view.h"
+#include "absl/strings/strip.h"
+#include "tactforce/io/text_file.h"
 
 namespace tactforce::io {
+namespace {
+
+using Json = nlohmann::json;
+
+// What the lexer has consumed so far.
+struct ReadProgress {
+  const char* begin = nullptr;
+  size_t last_significant = 0;  // offset of the last non-blank byte read
+  int last_significant_line = 1;
+  int line = 1;                 // line of the next byte
+};
+
+// A byte iterator over the text that records each byte the lexer reads.
+class CountingIterator {
+ public:
+  using iterator_category = std::input_iterator_tag;
+  using value_type = char;
+  using difference_type = std::ptrdiff_t;
+  using pointer = const char*;
+  using reference = const char&;
+
+  CountingIterator(const char* at, ReadProgress* progress) : at_(at), progress_(progress) {}
+  reference operator*() const { return *at_; }
+  CountingIterator& operator++() {
+    const char c = *at_;
+    if (c == '\n') {
+      ++progress_->line;
+    } else if (c != ' ' && c != '\t' && c != '\r') {
+      progress_->last_significant = static_cast<size_t>(at_ - progress_->begin);
+      progress_->last_significant_line = progress_->line;
+    }
+    ++at_;
+    return *this;
+  }
+  CountingIterator operator++(int) {
+    CountingIterator before = *this;
+    ++*this;
+    return before;
+  }
+  bool operator==(const CountingIterator& other) const { return at_ == other.at_; }
+  bool operator!=(const CountingIterator& other) const { return at_ != other.at_; }
+
+ private:
+  const char* at_;
+  ReadProgress* progress_;
+};
+
+// At most 40 bytes of a token for a message.
+std::string Shortened(absl::string_view token) {
+  if (token.size() <= 40) return std::string(token);
+  return absl::StrCat(token.substr(0, 37), "...");
+}
+
+// nlohmann's reason without its prefixes, as "expected X, found Y 'token'"
+// or "<lexer error> (read 'token')". `what` is e.what(), e.g.
+// "[json.exception.parse_error.101] parse error at line 1, column 9: syntax
+// error while parsing object separator - unexpected number literal; expected ':'".
+std::string Reason(absl::string_view what, absl::string_view token) {
+  if (const size_t p = what.find("] "); p != absl::string_view::npos) what.remove_prefix(p + 2);
+  if (absl::ConsumePrefix(&what, "parse error")) {
+    if (const size_t p = what.find(": "); p != absl::string_view::npos) what.remove_prefix(p + 2);
+  }
+  if (!absl::ConsumePrefix(&what, "syntax error")) return std::string(what);
+  if (const size_t p = what.find(" - "); p != absl::string_view::npos) what.remove_prefix(p + 3);
+  absl::string_view expected, last_read;
+  if (const size_t p = what.find("; expected "); p != absl::string_view::npos) {
+    expected = what.substr(p + 2);
+    what = what.substr(0, p);
+  }
+  if (const size_t p = what.find("; last read: "); p != absl::string_view::npos) {
+    last_read = what.substr(p + 13);
+    what = what.substr(0, p);
+  }
+  std::string found(what);
+  if (absl::ConsumePrefix(&what, "unexpected ")) {
+    found = std::string(what);
+    // Literals show their text; punctuation and "end of input" name themselves.
+    if (absl::EndsWith(what, "literal") && !token.empty())
+      absl::StrAppend(&found, token.front() == '"' ? " " : " '", Shortened(token), token.front() == '"' ? "" : "'");
+  } else if (!last_read.empty()) {
+    absl::StrAppend(&found, " (read ", Shortened(last_read), ")");
+  }
+  if (expected.empty()) return found;
+  return absl::StrCat(expected, ", found ", found);
+}
+
+}  // namespace
+
+// Builds the JsonValue tree from nlohmann's SAX events (see the file comment).
+class JsonTreeBuilder {
+ public:
+  JsonTreeBuilder(std::string_view text, const std::string& source, const ReadProgress* progress)
+      : text_(text), source_(source), progress_(progress) {}
+
+  bool null() { return Add(JsonValue()); }
+  bool boolean(bool v) { return Add(JsonValue::Bool(v)); }
+  bool number_integer(std::int64_t v) { return Add(JsonValue::Number(static_cast<double>(v))); }
+  bool number_unsigned(std::uint64_t v) { return Add(JsonValue::Number(static_cast<double>(v))); }
+  bool number_float(double v, const std::string& /*text*/) { return Add(JsonValue::Number(v)); }
+  bool string(std::string& v) { return Add(JsonValue::String(std::move(v))); }
+  bool binary(Json::binary_t& /*bytes*/) { return Fail("binary values are not JSON", progress_->last_significant); }
+  bool start_object(std::size_t /*size*/) { return Open(JsonValue::Type::kObject); }
+  bool start_array(std::size_t /*size*/) { return Open(JsonValue::Type::kArray); }
+  bool end_object() { return Close(); }
+  bool end_array() { return Close(); }
+  bool key(std::string& k) {
+    Container& object = open_.back();
+    if (!object.keys.insert(k).second)
+      return Fail(absl::StrCat("duplicate key '", Shortened(k), "'"), KeyStart(progress_->last_significant));
+    object.key = std::move(k);
+    return true;
+  }
+  bool parse_error(std::size_t position, const std::string& last_token, const Json::exception& e) {
+    // `position` counts the bytes read, the offending one last.
+    return Fail(Reason(e.what(), last_token), position > 0 ? position - 1 : 0);
+  }
+
+  absl::StatusOr<JsonValue> Finish(bool parsed) {
+    if (!error_.ok()) return error_;
+    if (!parsed || !root_) return Error("no JSON value", text_.size());
+    return *std::move(root_);
+  }
+
+ private:
+  struct Container {
+    JsonValue value;
+    std::string key;                       // objects: the key of the next member
+    absl::flat_hash_set<std::string> keys; // objects: keys so far
+  };
+
+  JsonValue At(JsonValue value) const {
+    value.line_ = progress_->last_significant_line;
+    return value;
+  }
+  // A scalar, at the line of its last byte (its only line).
+  bool Add(JsonValue value) { return Place(At(std::move(value))); }
+  // Into the open container, or as the document.
+  bool Place(JsonValue value) {
+    if (open_.empty()) {
+      root_ = std::move(value);
+    } else if (Container& parent = open_.back(); parent.value.is_array()) {
+      parent.value.array_.push_back(std::move(value));
+    } else {
+      parent.value.members_.emplace_back(std::move(parent.key), std::move(value));
+    }
+    return true;
+  }
+  bool Open(JsonValue::Type type) {
+    if (static_cast<int>(open_.size()) >= kMaxJsonDepth)
+      return Fail(absl::StrCat("nesting deeper than ", kMaxJsonDepth, " levels"), progress_->last_significant);
+    Container c;
+    c.value.type_ = type;
+    c.value = At(std::move(c.value));
+    open_.push_back(std::move(c));
+    return true;
+  }
+  // The innermost container is complete (it keeps the line of its '{' or '[').
+  bool Close() {
+    JsonValue value = std::move(open_.back().value);
+    open_.pop_back();
+    return Place(std::move(value));
+  }
+  // Offset of the opening quote of the string whose closing quote is at `end`.
+  size_t KeyStart(size_t end) const {
+    for (size_t i = end; i-- > 0;) {
+      if (text_[i] != '"') continue;
+      size_t backslashes = 0;
+      while (backslashes < i && text_[i - 1 - backslashes] == '\\') ++backslashes;
+      if (backslashes % 2 == 0) return i;
+    }
+    return end;
+  }
+  absl::Status Error(absl::string_view what, size_t offset) const {
+    const TextPosition p = PositionInText(text_, offset);
+    return absl::InvalidArgumentError(absl::StrCat(source_, ":", p.line, ": ", what, " (column ", p.column, ")"));
+  }
+  bool Fail(absl::string_view what, size_t offset) {
+    if (error_.ok()) error_ = Error(what, offset);
+    return false;
+  }
+
+  std::string_view text_;
+  const std::string& source_;
+  const ReadProgress* progress_;
+  std::vector<Container> open_;
+  std::optional<JsonValue> root_;
+  absl::Status error_;
+};
 
 JsonValue JsonValue::Number(double v) {
   JsonValue j;
@@ -33,226 +242,22 @@ const JsonValue* JsonValue::Find(std::string_view key) const {
   return nullptr;
 }
 
-class JsonParser {
- public:
-  JsonParser(std::string_view text, const std::string& source) : s_(text), source_(source) {}
-
-  absl::StatusOr<JsonValue> ParseDocument() {
-    JsonValue v;
-    if (auto st = ParseValue(&v, 0); !st.ok()) return st;
-    SkipSpace();
-    if (pos_ != s_.size()) return Error("unexpected text after the JSON value");
-    return v;
-  }
-
- private:
-  absl::Status Error(std::string_view what) const {
-    return absl::InvalidArgumentError(absl::StrCat(source_, ":", line_, ": ", std::string(what)));
-  }
-  void SkipSpace() {
-    while (pos_ < s_.size()) {
-      char c = s_[pos_];
-      if (c == '\n') {
-        ++line_;
-      } else if (c != ' ' && c != '\t' && c != '\r') {
-        break;
-      }
-      ++pos_;
-    }
-  }
-  bool Consume(std::string_view word) {
-    if (s_.substr(pos_, word.size()) == word) {
-      pos_ += word.size();
-      return true;
-    }
-    return false;
-  }
-
-  absl::Status ParseString(std::string* out) {
-    // s_[pos_] == '"'
-    ++pos_;
-    out->clear();
-    while (true) {
-      if (pos_ >= s_.size()) return Error("unterminated string");
-      char c = s_[pos_++];
-      if (c == '"') return absl::OkStatus();
-      if (c == '\n') return Error("newline inside a string");
-      if (c != '\\') {
-        out->push_back(c);
-        continue;
-      }
-      if (pos_ >= s_.size()) return Error("unterminated string");
-      char e = s_[pos_++];
-      switch (e) {
-        case '"': out->push_back('"'); break;
-        case '\\': out->push_back('\\'); break;
-        case '/': out->push_back('/'); break;
-        case 'b': out->push_back('\b'); break;
-        case 'f': out->push_back('\f'); break;
-        case 'n': out->push_back('\n'); break;
-        case 'r': out->push_back('\r'); break;
-        case 't': out->push_back('\t'); break;
-        case 'u': {
-          if (pos_ + 4 > s_.size()) return Error("bad \\u escape");
-          unsigned code = 0;
-          for (int i = 0; i < 4; ++i) {
-            char h = s_[pos_++];
-            code <<= 4;
-            if (h >= '0' && h <= '9') code |= h - '0';
-            else if (h >= 'a' && h <= 'f') code |= h - 'a' + 10;
-            else if (h >= 'A' && h <= 'F') code |= h - 'A' + 10;
-            else return Error("bad \\u escape");
-          }
-          if (code < 0x80) {
-            out->push_back(static_cast<char>(code));
-          } else if (code < 0x800) {
-            out->push_back(static_cast<char>(0xC0 | (code >> 6)));
-            out->push_back(static_cast<char>(0x80 | (code & 0x3F)));
-          } else {
-            out->push_back(static_cast<char>(0xE0 | (code >> 12)));
-            out->push_back(static_cast<char>(0x80 | ((code >> 6) & 0x3F)));
-            out->push_back(static_cast<char>(0x80 | (code & 0x3F)));
-          }
-          break;
-        }
-        default: return Error(absl::StrCat("bad escape '\\", std::string(1, e), "'"));
-      }
-    }
-  }
-
-  absl::Status ParseValue(JsonValue* v, int depth) {
-    if (depth > 64) return Error("nesting too deep");
-    SkipSpace();
-    if (pos_ >= s_.size()) return Error("unexpected end of input, expected a value");
-    v->line_ = line_;
-    char c = s_[pos_];
-    if (c == '{') {
-      ++pos_;
-      v->type_ = JsonValue::Type::kObject;
-      SkipSpace();
-      if (pos_ < s_.size() && s_[pos_] == '}') {
-        ++pos_;
-        return absl::OkStatus();
-      }
-      while (true) {
-        SkipSpace();
-        if (pos_ >= s_.size() || s_[pos_] != '"') return Error("expected a string key");
-        std::string key;
-        if (auto st = ParseString(&key); !st.ok()) return st;
-        if (v->Find(key) != nullptr) return Error(absl::StrCat("duplicate key '", key, "'"));
-        SkipSpace();
-        if (pos_ >= s_.size() || s_[pos_] != ':') return Error("expected ':'");
-        ++pos_;
-        JsonValue member;
-        if (auto st = ParseValue(&member, depth + 1); !st.ok()) return st;
-        v->members_.emplace_back(std::move(key), std::move(member));
-        SkipSpace();
-        if (pos_ < s_.size() && s_[pos_] == ',') {
-          ++pos_;
-          continue;
-        }
-        if (pos_ < s_.size() && s_[pos_] == '}') {
-          ++pos_;
-          return absl::OkStatus();
-        }
-        return Error("expected ',' or '}'");
-      }
-    }
-    if (c == '[') {
-      ++pos_;
-      v->type_ = JsonValue::Type::kArray;
-      SkipSpace();
-      if (pos_ < s_.size() && s_[pos_] == ']') {
-        ++pos_;
-        return absl::OkStatus();
-      }
-      while (true) {
-        JsonValue item;
-        if (auto st = ParseValue(&item, depth + 1); !st.ok()) return st;
-        v->array_.push_back(std::move(item));
-        SkipSpace();
-        if (pos_ < s_.size() && s_[pos_] == ',') {
-          ++pos_;
-          continue;
-        }
-        if (pos_ < s_.size() && s_[pos_] == ']') {
-          ++pos_;
-          return absl::OkStatus();
-        }
-        return Error("expected ',' or ']'");
-      }
-    }
-    if (c == '"') {
-      v->type_ = JsonValue::Type::kString;
-      return ParseString(&v->string_);
-    }
-    if (Consume("true")) {
-      v->type_ = JsonValue::Type::kBool;
-      v->bool_ = true;
-      return absl::OkStatus();
-    }
-    if (Consume("false")) {
-      v->type_ = JsonValue::Type::kBool;
-      v->bool_ = false;
-      return absl::OkStatus();
-    }
-    if (Consume("null")) {
-      v->type_ = JsonValue::Type::kNull;
-      return absl::OkStatus();
-    }
-    if (c == '-' || (c >= '0' && c <= '9')) {
-      size_t start = pos_;
-      while (pos_ < s_.size()) {
-        char d = s_[pos_];
-        if ((d >= '0' && d <= '9') || d == '-' || d == '+' || d == '.' || d == 'e' || d == 'E') {
-          ++pos_;
-        } else {
-          break;
-        }
-      }
-      std::string num(s_.substr(start, pos_ - start));
-      char* end = nullptr;
-      double x = std::strtod(num.c_str(), &end);
-      if (end == nullptr || *end != '\0') return Error(absl::StrCat("bad number '", num, "'"));
-      v->type_ = JsonValue::Type::kNumber;
-      v->number_ = x;
-      return absl::OkStatus();
-    }
-    return Error(absl::StrCat("unexpected character '", std::string(1, c), "'"));
-  }
-
-  std::string_view s_;
-  const std::string& source_;
-  size_t pos_ = 0;
-  int line_ = 1;
-};
-
 absl::StatusOr<JsonValue> ParseJson(std::string_view text, const std::string& source) {
-  JsonParser p(text, source);
-  return p.ParseDocument();
+  ReadProgress progress;
+  progress.begin = text.data();
+  JsonTreeBuilder builder(text, source, &progress);
+  bool parsed = false;
+  try {
+    parsed = Json::sax_parse(CountingIterator(text.data(), &progress),
+                             CountingIterator(text.data() + text.size(), &progress), &builder);
+  } catch (const std::exception& e) {  // nlohmann reports through parse_error; this is a backstop
+    return absl::InvalidArgumentError(absl::StrCat(source, ": JSON: ", e.what()));
+  }
+  return builder.Finish(parsed);
 }
 
 std::string JsonEscape(std::string_view s) {
-  std::string out = "\"";
-  for (char c : s) {
-    switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\r': out += "\\r"; break;
-      case '\t': out += "\\t"; break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          char buf[8];
-          std::snprintf(buf, sizeof buf, "\\u%04x", c);
-          out += buf;
-        } else {
-          out.push_back(c);
-        }
-    }
-  }
-  out += '"';
-  return out;
+  return Json(std::string(s)).dump(-1, ' ', false, Json::error_handler_t::replace);
 }
 
 std::string JsonNumber(double v) {
@@ -287,12 +292,10 @@ void JsonWriter::BeginObject() {
   BeforeValue();
   out_ += '{';
   first_.push_back(true);
-  is_obj_.push_back(true);
 }
 void JsonWriter::EndObject() {
-  bool empty = first_.back();
+  const bool empty = first_.back();
   first_.pop_back();
-  is_obj_.pop_back();
   if (!empty) Newline();
   out_ += '}';
   if (first_.empty()) out_ += '\n';
@@ -301,12 +304,10 @@ void JsonWriter::BeginArray() {
   BeforeValue();
   out_ += '[';
   first_.push_back(true);
-  is_obj_.push_back(false);
 }
 void JsonWriter::EndArray() {
-  bool empty = first_.back();
+  const bool empty = first_.back();
   first_.pop_back();
-  is_obj_.pop_back();
   if (!empty) Newline();
   out_ += ']';
 }

@@ -1,3 +1,6 @@
+// Meshes in the object frame (mesh.h): validation, placement (scale and pose),
+// descriptor JSON read with nlohmann's DOM, LoadMesh for the CLI's --mesh,
+// and the nearest triangle to a point.
 #include "tactforce/io/mesh.h"
 
 #include <cmath>
@@ -9,7 +12,7 @@
 
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
-#include "mesh_internal.h"
+#include "tactforce/io/text_file.h"
 
 namespace tactforce::io {
 namespace {
@@ -82,24 +85,17 @@ absl::StatusOr<std::vector<double>> Numbers(const Json& j, size_t n, const std::
   return out;
 }
 
-// Line and column (1-based) of byte offset `byte` (1-based, as nlohmann reports it).
-std::pair<int, int> LineColumn(const std::string& text, size_t byte) {
-  int line = 1, column = 1;
-  for (size_t i = 0; i + 1 < byte && i < text.size(); ++i) {
-    if (text[i] == '\n') ++line, column = 1;
-    else ++column;
-  }
-  return {line, column};
-}
-
-absl::StatusOr<Json> ParseJson(const std::string& text, const std::string& path) {
+// The descriptor as nlohmann's DOM; a syntax error is
+// "path:line:column: JSON syntax error ..." (nlohmann's wording).
+absl::StatusOr<Json> ParseDescriptorJson(const std::string& text, const std::string& path) {
   try {
     return Json::parse(text);
   } catch (const Json::parse_error& e) {
-    const auto [line, column] = LineColumn(text, e.byte);
+    // e.byte counts the bytes read, the offending one last.
+    const TextPosition at = PositionInText(text, e.byte > 0 ? e.byte - 1 : 0);
     std::string what = e.what();
     if (const size_t p = what.find("syntax error"); p != std::string::npos) what = what.substr(p);
-    return absl::InvalidArgumentError(absl::StrCat(path, ":", line, ":", column, ": JSON ", what));
+    return absl::InvalidArgumentError(absl::StrCat(path, ":", at.line, ":", at.column, ": JSON ", what));
   } catch (const std::exception& e) {
     return absl::InvalidArgumentError(absl::StrCat(path, ": JSON: ", e.what()));
   }
@@ -144,9 +140,9 @@ TriangleMesh TransformToObjectFrame(const TriangleMesh& mesh, const MeshPlacemen
 }
 
 absl::StatusOr<MeshDescriptor> ReadMeshDescriptor(const std::string& path) {
-  absl::StatusOr<std::string> text = internal::ReadWholeFile(path);
+  absl::StatusOr<std::string> text = ReadTextFile(path);
   if (!text.ok()) return text.status();
-  absl::StatusOr<Json> json = ParseJson(*text, path);
+  absl::StatusOr<Json> json = ParseDescriptorJson(*text, path);
   if (!json.ok()) return json.status();
   const Json& j = *json;
   if (!j.is_object()) return KeyError(path, absl::StrCat("expected a JSON object (got ", j.type_name(), ")"));

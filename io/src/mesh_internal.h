@@ -3,16 +3,10 @@
 
 #include <cstdint>
 #include <optional>
-#include <string>
 #include <string_view>
 #include <vector>
 
-#include "absl/status/statusor.h"
-
 namespace tactforce::io::internal {
-
-// The whole file; InvalidArgument "path: cannot open: <reason>" otherwise.
-absl::StatusOr<std::string> ReadWholeFile(const std::string& path);
 
 // One colour (0xRRGGBB) per triangle of a PLY file's faces (a polygon of n
 // corners gives n - 2), from the face element's red/green/blue properties;

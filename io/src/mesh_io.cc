@@ -2,10 +2,7 @@
 // vertices welded by exact position.
 #include <algorithm>
 #include <array>
-#include <cerrno>
 #include <cmath>
-#include <cstdio>
-#include <cstring>
 #include <exception>
 #include <filesystem>
 #include <optional>
@@ -20,6 +17,7 @@
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "tactforce/io/mesh.h"
+#include "tactforce/io/text_file.h"
 #include "mesh_internal.h"
 
 namespace tactforce::io {
@@ -125,26 +123,9 @@ absl::StatusOr<TriangleMesh> ReadMeshBytes(std::string_view bytes, std::string_v
 absl::StatusOr<TriangleMesh> ReadMeshFile(const std::string& path) {
   absl::StatusOr<std::string> format = MeshFormatFromPath(path);
   if (!format.ok()) return format.status();
-  absl::StatusOr<std::string> bytes = internal::ReadWholeFile(path);
+  absl::StatusOr<std::string> bytes = ReadTextFile(path);
   if (!bytes.ok()) return bytes.status();
   return ReadMeshBytes(*bytes, *format, path);
 }
-
-namespace internal {
-
-absl::StatusOr<std::string> ReadWholeFile(const std::string& path) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (f == nullptr) return absl::InvalidArgumentError(absl::StrCat(path, ": cannot open: ", std::strerror(errno)));
-  std::string bytes;
-  char buffer[1 << 16];
-  size_t n = 0;
-  while ((n = std::fread(buffer, 1, sizeof(buffer), f)) > 0) bytes.append(buffer, n);
-  const int error = std::ferror(f) ? errno : 0;
-  std::fclose(f);
-  if (error != 0) return absl::InvalidArgumentError(absl::StrCat(path, ": cannot read: ", std::strerror(error)));
-  return bytes;
-}
-
-}  // namespace internal
 
 }  // namespace tactforce::io

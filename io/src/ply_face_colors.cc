@@ -103,31 +103,34 @@ uint32_t Channel(double v, bool is_float) {
   return static_cast<uint32_t>(std::clamp(std::lround(scaled), 0L, 255L));
 }
 
-}  // namespace
+struct Header {
+  Encoding encoding = Encoding::kAscii;
+  std::vector<Element> elements;
+  size_t body_start = 0;  // offset of the first byte after "end_header\n"
+};
 
-std::optional<std::vector<uint32_t>> PlyFaceColors(std::string_view bytes_std) {
-  const absl::string_view bytes(bytes_std.data(), bytes_std.size());
+// The header's format and elements; nullopt when it is not understood.
+std::optional<Header> ReadHeader(absl::string_view bytes) {
   // Header: lines up to "end_header" (LF or CRLF).
   const size_t end = bytes.find("end_header");
   if (bytes.substr(0, 3) != "ply" || end == absl::string_view::npos) return std::nullopt;
-  size_t body_start = bytes.find('\n', end);
-  if (body_start == absl::string_view::npos) return std::nullopt;
-  ++body_start;
-  Encoding encoding = Encoding::kAscii;
-  std::vector<Element> elements;
+  Header h;
+  h.body_start = bytes.find('\n', end);
+  if (h.body_start == absl::string_view::npos) return std::nullopt;
+  ++h.body_start;
   for (absl::string_view line : absl::StrSplit(bytes.substr(0, end), '\n')) {
     const std::vector<absl::string_view> w = absl::StrSplit(absl::StripAsciiWhitespace(line), ' ', absl::SkipEmpty());
     if (w.empty()) continue;
     if (w[0] == "format" && w.size() >= 2) {
-      if (w[1] == "binary_little_endian") encoding = Encoding::kLittle;
-      else if (w[1] == "binary_big_endian") encoding = Encoding::kBig;
+      if (w[1] == "binary_little_endian") h.encoding = Encoding::kLittle;
+      else if (w[1] == "binary_big_endian") h.encoding = Encoding::kBig;
       else if (w[1] != "ascii") return std::nullopt;
     } else if (w[0] == "element" && w.size() == 3) {
       Element e;
       e.name = std::string(w[1]);
       if (!absl::SimpleAtoi(w[2], &e.count)) return std::nullopt;
-      elements.push_back(std::move(e));
-    } else if (w[0] == "property" && !elements.empty()) {
+      h.elements.push_back(std::move(e));
+    } else if (w[0] == "property" && !h.elements.empty()) {
       Property p;
       if (w.size() == 5 && w[1] == "list") {
         p = ScalarType(w[3]);
@@ -140,48 +143,78 @@ std::optional<std::vector<uint32_t>> PlyFaceColors(std::string_view bytes_std) {
       }
       if (p.size == 0) return std::nullopt;
       p.name = std::string(w.back());
-      elements.back().properties.push_back(std::move(p));
+      h.elements.back().properties.push_back(std::move(p));
     }
   }
-  const auto face = std::find_if(elements.begin(), elements.end(), [](const Element& e) { return e.name == "face"; });
-  if (face == elements.end()) return std::nullopt;
-  auto find = [&](absl::string_view name) {
-    for (size_t i = 0; i < face->properties.size(); ++i)
-      if (face->properties[i].name == name) return static_cast<int>(i);
-    return -1;
-  };
-  const int red = find("red"), green = find("green"), blue = find("blue");
-  int indices = find("vertex_indices");
-  if (indices < 0) indices = find("vertex_index");
-  if (red < 0 || green < 0 || blue < 0 || indices < 0 || face->properties[indices].count_size == 0)
+  return h;
+}
+
+// Index of the property `name` of `e`; -1 when absent.
+int PropertyIndex(const Element& e, absl::string_view name) {
+  for (size_t i = 0; i < e.properties.size(); ++i)
+    if (e.properties[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
+// Where the colour and the corners are in the face element.
+struct FaceLayout {
+  int rgb[3] = {-1, -1, -1};  // property indices of red, green, blue
+  int indices = -1;           // the vertex index list
+};
+
+// One item of an element: its colour channels and its list length at
+// `layout` (for the face element; other elements are only skipped). False
+// when the body ends early or a list length is negative.
+bool ReadItem(BodyReader& reader, const Element& e, const FaceLayout& layout, double rgb[3], size_t* corners) {
+  for (size_t k = 0; k < e.properties.size(); ++k) {
+    const Property& p = e.properties[k];
+    if (p.count_size > 0) {
+      const std::optional<double> n = reader.Read(p.count_size, false, false);
+      if (!n || *n < 0) return false;
+      for (size_t j = 0; j < static_cast<size_t>(*n); ++j)
+        if (!reader.Read(p.size, p.is_float, p.is_signed)) return false;
+      if (static_cast<int>(k) == layout.indices) *corners = static_cast<size_t>(*n);
+      continue;
+    }
+    const std::optional<double> v = reader.Read(p.size, p.is_float, p.is_signed);
+    if (!v) return false;
+    for (int c = 0; c < 3; ++c)
+      if (static_cast<int>(k) == layout.rgb[c]) rgb[c] = *v;
+  }
+  return true;
+}
+
+}  // namespace
+
+std::optional<std::vector<uint32_t>> PlyFaceColors(std::string_view bytes_std) {
+  const absl::string_view bytes(bytes_std.data(), bytes_std.size());
+  const std::optional<Header> header = ReadHeader(bytes);
+  if (!header) return std::nullopt;
+  const auto face = std::find_if(header->elements.begin(), header->elements.end(),
+                                 [](const Element& e) { return e.name == "face"; });
+  if (face == header->elements.end()) return std::nullopt;
+  FaceLayout layout;
+  layout.rgb[0] = PropertyIndex(*face, "red");
+  layout.rgb[1] = PropertyIndex(*face, "green");
+  layout.rgb[2] = PropertyIndex(*face, "blue");
+  layout.indices = PropertyIndex(*face, "vertex_indices");
+  if (layout.indices < 0) layout.indices = PropertyIndex(*face, "vertex_index");
+  if (*std::min_element(layout.rgb, layout.rgb + 3) < 0 || layout.indices < 0 ||
+      face->properties[layout.indices].count_size == 0)
     return std::nullopt;
 
-  BodyReader reader(bytes.substr(body_start), encoding);
+  BodyReader reader(bytes.substr(header->body_start), header->encoding);
+  const bool is_float = face->properties[layout.rgb[0]].is_float;
   std::vector<uint32_t> colors;  // one per triangle, polygons fanned as assimp does
-  for (auto e = elements.begin(); e != elements.end(); ++e) {
+  for (auto e = header->elements.begin(); e != header->elements.end(); ++e) {
     const bool is_face = e == face;
     if (is_face) colors.reserve(e->count);
     for (size_t item = 0; item < e->count; ++item) {
       double rgb[3] = {0, 0, 0};
       size_t corners = 0;
-      for (size_t k = 0; k < e->properties.size(); ++k) {
-        const Property& p = e->properties[k];
-        if (p.count_size > 0) {
-          const std::optional<double> n = reader.Read(p.count_size, false, false);
-          if (!n || *n < 0) return std::nullopt;
-          for (size_t j = 0; j < static_cast<size_t>(*n); ++j)
-            if (!reader.Read(p.size, p.is_float, p.is_signed)) return std::nullopt;
-          if (static_cast<int>(k) == indices) corners = static_cast<size_t>(*n);
-          continue;
-        }
-        const std::optional<double> v = reader.Read(p.size, p.is_float, p.is_signed);
-        if (!v) return std::nullopt;
-        const int channel = static_cast<int>(k) == red ? 0 : static_cast<int>(k) == green ? 1 : static_cast<int>(k) == blue ? 2 : -1;
-        if (channel >= 0) rgb[channel] = *v;
-      }
+      if (!ReadItem(reader, *e, layout, rgb, &corners)) return std::nullopt;
       if (!is_face) continue;
-      const Property& r = face->properties[red];
-      const uint32_t c = Channel(rgb[0], r.is_float) << 16 | Channel(rgb[1], r.is_float) << 8 | Channel(rgb[2], r.is_float);
+      const uint32_t c = Channel(rgb[0], is_float) << 16 | Channel(rgb[1], is_float) << 8 | Channel(rgb[2], is_float);
       for (size_t t = 2; t < corners; ++t) colors.push_back(c);
     }
     if (is_face) return colors;

@@ -1,122 +1,150 @@
-#include "tactforce/io/svg.h"
-
+// The SVG basics of svg.h: escaping, colours, the one tick algorithm (1-2-5
+// steps, ticks as integer multiples of the step so that labels carry no
+// rounding noise), data ranges and the canvas that writes the elements.
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "tactforce/io/svg.h"
 
 namespace tactforce::io {
 namespace {
 
-std::string Escape(const std::string& s) {
+std::string StrokeAttributes(const Stroke& stroke) {
+  std::string s = absl::StrCat(" stroke=\"", SvgEscape(stroke.color), "\"");
+  if (stroke.width != 1) absl::StrAppendFormat(&s, " stroke-width=\"%g\"", stroke.width);
+  if (!stroke.dash.empty()) absl::StrAppend(&s, " stroke-dasharray=\"", SvgEscape(stroke.dash), "\"");
+  return s;
+}
+
+}  // namespace
+
+std::string SvgEscape(std::string_view text) {
   std::string out;
-  for (char c : s) {
+  out.reserve(text.size());
+  for (char c : text) {
     switch (c) {
       case '&': out += "&amp;"; break;
       case '<': out += "&lt;"; break;
       case '>': out += "&gt;"; break;
       case '"': out += "&quot;"; break;
+      case '\'': out += "&#39;"; break;
       default: out += c;
     }
   }
   return out;
 }
 
-double NiceStep(double span, int target_ticks) {
-  const double raw = span / std::max(1, target_ticks);
-  const double mag = std::pow(10.0, std::floor(std::log10(raw)));
-  for (double m : {1.0, 2.0, 5.0, 10.0})
-    if (m * mag >= raw) return m * mag;
-  return 10 * mag;
+std::string HexColor(uint32_t rgb) { return absl::StrFormat("#%06x", rgb & 0xffffff); }
+
+double NiceStep(double raw) {
+  if (!(raw > 0) || !std::isfinite(raw)) return 1.0;
+  const double magnitude = std::pow(10.0, std::floor(std::log10(raw)));
+  for (double m : {1.0, 2.0, 5.0})
+    if (m * magnitude >= raw * (1 - 1e-12)) return m * magnitude;
+  return 10 * magnitude;
 }
 
-}  // namespace
+Ticks TicksAt(double lo, double hi, double step) {
+  Ticks t;
+  t.step = step > 0 && std::isfinite(step) ? step : 1.0;
+  if (!std::isfinite(lo) || !std::isfinite(hi) || hi < lo) return t;
+  const double slack = 1e-9 * std::max(hi - lo, t.step);
+  const double first = std::ceil((lo - slack) / t.step), last = std::floor((hi + slack) / t.step);
+  if (last - first > 1e4) return t;  // a step far too small for the range: no ticks rather than millions
+  for (double k = first; k <= last; ++k) t.values.push_back(k == 0 ? 0.0 : k * t.step);
+  return t;
+}
 
-std::string RenderSvg(const SvgPlot& plot, int width, int panel_height) {
-  const int left = 70, right = 150, top = 40, gap = 40, bottom = 45;
-  const int n_panels = std::max<int>(1, plot.panels.size());
-  const int height = top + n_panels * panel_height + (n_panels - 1) * gap + bottom;
-  const int plot_w = width - left - right;
-  double x0 = plot.x.empty() ? 0 : plot.x.front(), x1 = plot.x.empty() ? 1 : plot.x.back();
-  if (x1 <= x0) x1 = x0 + 1;
-  std::string s = absl::StrFormat(
-      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%d\" height=\"%d\" viewBox=\"0 0 %d %d\" "
-      "font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n",
-      width, height, width, height);
-  absl::StrAppend(&s, absl::StrFormat("<text x=\"%d\" y=\"22\" font-size=\"14\">%s</text>\n", left,
-                                      Escape(plot.title)));
-  auto sx = [&](double x) { return left + (x - x0) / (x1 - x0) * plot_w; };
-  for (int p = 0; p < static_cast<int>(plot.panels.size()); ++p) {
-    const SvgPanel& panel = plot.panels[p];
-    const int py = top + p * (panel_height + gap);
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (const SvgSeries& ser : panel.series)
-      for (double v : ser.y)
-        if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
-    if (!std::isfinite(lo)) lo = 0, hi = 1;
-    if (hi - lo < 1e-9) hi = lo + 1;
-    const double pad = 0.05 * (hi - lo);
-    lo -= pad;
-    hi += pad;
-    auto sy = [&](double y) { return py + panel_height - (y - lo) / (hi - lo) * panel_height; };
-    absl::StrAppend(&s, absl::StrFormat("<rect x=\"%d\" y=\"%d\" width=\"%d\" height=\"%d\" fill=\"none\" "
-                                        "stroke=\"#888\"/>\n",
-                                        left, py, plot_w, panel_height));
-    absl::StrAppend(&s, absl::StrFormat("<text x=\"%d\" y=\"%d\" font-weight=\"bold\">%s</text>\n", left + 4,
-                                        py - 6, Escape(panel.title)));
-    absl::StrAppend(&s, absl::StrFormat("<text x=\"14\" y=\"%d\" transform=\"rotate(-90 14 %d)\">%s</text>\n",
-                                        py + panel_height / 2 + 20, py + panel_height / 2 + 20,
-                                        Escape(panel.y_label)));
-    const double ystep = NiceStep(hi - lo, 5);
-    for (double v = std::ceil(lo / ystep) * ystep; v <= hi; v += ystep) {
-      absl::StrAppend(&s, absl::StrFormat("<line x1=\"%d\" x2=\"%d\" y1=\"%.1f\" y2=\"%.1f\" stroke=\"#eee\"/>"
-                                          "<text x=\"%d\" y=\"%.1f\" text-anchor=\"end\">%g</text>\n",
-                                          left, left + plot_w, sy(v), sy(v), left - 4, sy(v) + 4,
-                                          std::abs(v) < 1e-12 ? 0.0 : v));
-    }
-    for (const auto& [mx, label] : plot.markers) {
-      if (mx < x0 || mx > x1) continue;
-      absl::StrAppend(&s, absl::StrFormat("<line x1=\"%.1f\" x2=\"%.1f\" y1=\"%d\" y2=\"%d\" stroke=\"#bbb\" "
-                                          "stroke-dasharray=\"2,3\"/>\n",
-                                          sx(mx), sx(mx), py, py + panel_height));
-      if (p == 0)
-        absl::StrAppend(&s, absl::StrFormat("<text x=\"%.1f\" y=\"%d\" fill=\"#777\">%s</text>\n", sx(mx) + 2,
-                                            py + 12, Escape(label)));
-    }
-    int legend_y = py + 14;
-    for (const SvgSeries& ser : panel.series) {
-      std::string path;
-      bool pen = false;
-      for (size_t i = 0; i < ser.y.size() && i < plot.x.size(); ++i) {
-        if (!std::isfinite(ser.y[i])) {
-          pen = false;
-          continue;
-        }
-        absl::StrAppend(&path, pen ? "L" : "M", absl::StrFormat("%.1f,%.1f", sx(plot.x[i]), sy(ser.y[i])));
-        pen = true;
-      }
-      absl::StrAppend(&s, absl::StrFormat("<path d=\"%s\" fill=\"none\" stroke=\"%s\" stroke-width=\"1.3\"%s/>\n",
-                                          path, ser.color, ser.dashed ? " stroke-dasharray=\"6,3\"" : ""));
-      absl::StrAppend(&s, absl::StrFormat("<line x1=\"%d\" x2=\"%d\" y1=\"%d\" y2=\"%d\" stroke=\"%s\" "
-                                          "stroke-width=\"2\"%s/><text x=\"%d\" y=\"%d\">%s</text>\n",
-                                          left + plot_w + 10, left + plot_w + 30, legend_y - 4, legend_y - 4,
-                                          ser.color, ser.dashed ? " stroke-dasharray=\"6,3\"" : "",
-                                          left + plot_w + 34, legend_y, Escape(ser.name)));
-      legend_y += 16;
-    }
-    if (p + 1 == static_cast<int>(plot.panels.size())) {
-      const double xstep = NiceStep(x1 - x0, 10);
-      for (double v = std::ceil(x0 / xstep) * xstep; v <= x1 + 1e-9; v += xstep)
-        absl::StrAppend(&s, absl::StrFormat("<text x=\"%.1f\" y=\"%d\" text-anchor=\"middle\">%g</text>\n", sx(v),
-                                            py + panel_height + 15, v));
-      absl::StrAppend(&s, absl::StrFormat("<text x=\"%d\" y=\"%d\" text-anchor=\"middle\">%s</text>\n",
-                                          left + plot_w / 2, py + panel_height + 35, Escape(plot.x_label)));
-    }
-  }
-  absl::StrAppend(&s, "</svg>\n");
-  return s;
+Ticks NiceTicks(double lo, double hi, int intervals) {
+  return TicksAt(lo, hi, NiceStep((hi - lo) / std::max(1, intervals)));
+}
+
+std::string TickLabel(double value, double step) {
+  if (step > 0 && std::isfinite(step)) value = std::round(value / step) * step;
+  if (std::abs(value) < 1e-9 * step) value = 0;
+  return absl::StrFormat("%.6g", value);
+}
+
+void Range::Include(double v) {
+  if (!std::isfinite(v)) return;
+  lo = std::min(lo, v);
+  hi = std::max(hi, v);
+}
+
+void Range::Include(const std::vector<double>& values) {
+  for (double v : values) Include(v);
+}
+
+Range Range::ForAxis(double pad) const {
+  Range r = *this;
+  if (!(r.lo <= r.hi)) r.lo = 0, r.hi = 1;
+  if (!(r.hi > r.lo)) r.hi = r.lo + 1;
+  const double grow = pad * (r.hi - r.lo);
+  r.lo -= grow;
+  r.hi += grow;
+  return r;
+}
+
+SvgCanvas::SvgCanvas(double width, double height, double font_size)
+    : width_(width), height_(height), font_size_(font_size) {
+  out_ = absl::StrFormat(
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%g\" height=\"%g\" viewBox=\"0 0 %g %g\" "
+      "font-family=\"sans-serif\" font-size=\"%g\">\n<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n",
+      width, height, width, height, font_size);
+}
+
+void SvgCanvas::Text(double x, double y, std::string_view text, const TextStyle& style) {
+  absl::StrAppendFormat(&out_, "<text x=\"%.1f\" y=\"%.1f\"", x, y);
+  if (style.anchor == TextAnchor::kMiddle) out_ += " text-anchor=\"middle\"";
+  if (style.anchor == TextAnchor::kEnd) out_ += " text-anchor=\"end\"";
+  if (style.size > 0 && style.size != font_size_) absl::StrAppendFormat(&out_, " font-size=\"%g\"", style.size);
+  if (style.bold) out_ += " font-weight=\"bold\"";
+  if (!style.color.empty()) absl::StrAppend(&out_, " fill=\"", SvgEscape(style.color), "\"");
+  if (style.vertical) absl::StrAppendFormat(&out_, " transform=\"rotate(-90 %.1f %.1f)\"", x, y);
+  absl::StrAppend(&out_, ">", SvgEscape(text), "</text>\n");
+}
+
+void SvgCanvas::Line(double x1, double y1, double x2, double y2, const Stroke& stroke) {
+  absl::StrAppendFormat(&out_, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\"%s/>\n", x1, y1, x2, y2,
+                        StrokeAttributes(stroke));
+}
+
+void SvgCanvas::Rect(double x, double y, double w, double h, std::string_view fill, const Stroke* outline,
+                     std::string_view css_class) {
+  out_ += "<rect";
+  if (!css_class.empty()) absl::StrAppend(&out_, " class=\"", SvgEscape(css_class), "\"");
+  absl::StrAppendFormat(&out_, " x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"%s\"%s/>\n", x, y, w, h,
+                        SvgEscape(fill), outline != nullptr ? StrokeAttributes(*outline) : "");
+}
+
+void SvgCanvas::Circle(double cx, double cy, double r, std::string_view fill, const Stroke* outline) {
+  absl::StrAppendFormat(&out_, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"%g\" fill=\"%s\"%s/>\n", cx, cy, r,
+                        SvgEscape(fill), outline != nullptr ? StrokeAttributes(*outline) : "");
+}
+
+void SvgCanvas::Path(std::string_view d, const Stroke& stroke, std::string_view fill) {
+  absl::StrAppend(&out_, "<path d=\"", SvgEscape(d), "\" fill=\"", SvgEscape(fill), "\"", StrokeAttributes(stroke),
+                  "/>\n");
+}
+
+void SvgCanvas::OpenGroup(std::string_view attributes) {
+  absl::StrAppend(&out_, attributes.empty() ? "<g" : "<g ", std::string(attributes), ">\n");
+  ++open_groups_;
+}
+
+void SvgCanvas::CloseGroup() {
+  if (open_groups_ == 0) return;
+  out_ += "</g>\n";
+  --open_groups_;
+}
+
+void SvgCanvas::Raw(std::string_view markup) { out_.append(markup); }
+
+std::string SvgCanvas::Finish() {
+  while (open_groups_ > 0) CloseGroup();
+  return absl::StrCat(out_, "</svg>\n");
 }
 
 }  // namespace tactforce::io

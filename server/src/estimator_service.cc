@@ -1,11 +1,18 @@
+// tactforce.v1.Estimator and tactforce.v1.Audit (estimator_service.h):
+// unary RPCs through ServeOnPool; FitInertia's read reactor converts each
+// message as it arrives and fits on the pool (api::RunCall) at the
+// half-close.
 #include "tactforce/server/estimator_service.h"
 
 #include <atomic>
-#include <chrono>
+#include <utility>
 
+#include "absl/strings/str_cat.h"
+#include "tactforce/api/dispatch.h"
 #include "tactforce/api/inertia.h"
 #include "tactforce/api/services.h"
 #include "tactforce/server/pooled_unary.h"
+#include "tactforce/server/rpc_support.h"
 
 namespace tactforce::server {
 namespace {
@@ -17,14 +24,18 @@ class FitInertiaReactor final : public grpc::ServerReadReactor<v1::FitInertiaReq
  public:
   FitInertiaReactor(grpc::CallbackServerContext* context, v1::FitInertiaResponse* response,
                     WorkerPool* pool, int64_t max_samples)
-      : context_(context), response_(response), pool_(pool), stream_(max_samples),
-        peer_(spdlog::should_log(spdlog::level::info) ? context->peer() : "") {
+      : response_(response), pool_(pool), stream_(max_samples), guard_(context, &cancelled_),
+        log_("FitInertia", guard_) {
+    log_.set_pooled();  // also for a call that ends before the fit
     StartRead(&message_);
   }
 
   void OnReadDone(bool ok) override {
     if (!ok) return StartFit();  // half-close (or a broken call: the guard sees it)
-    if (absl::Status s = stream_.Add(message_); !s.ok()) return Done(ToGrpcStatus(s));
+    if (absl::Status s = stream_.Add(message_); !s.ok()) {
+      Log().Emit(s);
+      return Finish(ToGrpcStatus(s));
+    }
     message_.Clear();
     StartRead(&message_);
   }
@@ -33,33 +44,34 @@ class FitInertiaReactor final : public grpc::ServerReadReactor<v1::FitInertiaReq
 
  private:
   void StartFit() {
-    const bool queued = pool_->TrySubmit([this] {
-      RpcGuard guard(context_, &cancelled_);
-      if (guard.ShouldStop()) return Done(guard.StopStatus("before the fit started"));
+    auto fit = [this](api::CallLog&) -> absl::Status {
+      if (guard_.ShouldStop()) return guard_.StopReason("before the fit started");
       api::CallLimits limits;
-      limits.interrupt = guard.Interrupt();
+      limits.interrupt = guard_.Interrupt();
       absl::StatusOr<v1::FitInertiaResponse> result = stream_.Fit(limits);
-      if (!result.ok()) return Done(ToGrpcStatus(result.status()));
+      if (!result.ok()) return result.status();
       *response_ = *std::move(result);
-      Done(grpc::Status::OK);
-    });
-    if (!queued) Done(PoolBusyStatus(*pool_));
+      return absl::OkStatus();
+    };
+    api::RunCall(Log(), pool_, std::move(fit),
+                 [this](const absl::Status& status) { Finish(ToGrpcStatus(status)); });
   }
 
-  void Done(const grpc::Status& status) {
-    LogPoolRpc("FitInertia", status, start_, peer_,
-               absl::StrCat("messages=", stream_.messages_received(), " samples=", stream_.samples_received()));
-    Finish(status);
+  // The call's log line with what the stream has delivered so far.
+  api::CallLog Log() const {
+    api::CallLog log = log_;
+    log.set_details(absl::StrCat("messages=", stream_.messages_received(),
+                                 " samples=", stream_.samples_received()));
+    return log;
   }
 
-  grpc::CallbackServerContext* context_;
   v1::FitInertiaResponse* response_;
   WorkerPool* pool_;
   api::InertiaStream stream_;
   v1::FitInertiaRequest message_;
   std::atomic<bool> cancelled_{false};
-  const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
-  const std::string peer_;
+  const RpcGuard guard_;
+  api::CallLog log_;  // clock and peer from the start of the call
 };
 
 }  // namespace

@@ -1,30 +1,24 @@
+// Status mapping and the RPC guard (rpc_support.h).
 #include "tactforce/server/rpc_support.h"
 
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace tactforce::server {
 
 const char* StatusCodeName(grpc::StatusCode code) {
-  switch (code) {
-    case grpc::StatusCode::OK: return "OK";
-    case grpc::StatusCode::CANCELLED: return "CANCELLED";
-    case grpc::StatusCode::UNKNOWN: return "UNKNOWN";
-    case grpc::StatusCode::INVALID_ARGUMENT: return "INVALID_ARGUMENT";
-    case grpc::StatusCode::DEADLINE_EXCEEDED: return "DEADLINE_EXCEEDED";
-    case grpc::StatusCode::NOT_FOUND: return "NOT_FOUND";
-    case grpc::StatusCode::ALREADY_EXISTS: return "ALREADY_EXISTS";
-    case grpc::StatusCode::PERMISSION_DENIED: return "PERMISSION_DENIED";
-    case grpc::StatusCode::UNAUTHENTICATED: return "UNAUTHENTICATED";
-    case grpc::StatusCode::RESOURCE_EXHAUSTED: return "RESOURCE_EXHAUSTED";
-    case grpc::StatusCode::FAILED_PRECONDITION: return "FAILED_PRECONDITION";
-    case grpc::StatusCode::ABORTED: return "ABORTED";
-    case grpc::StatusCode::OUT_OF_RANGE: return "OUT_OF_RANGE";
-    case grpc::StatusCode::UNIMPLEMENTED: return "UNIMPLEMENTED";
-    case grpc::StatusCode::INTERNAL: return "INTERNAL";
-    case grpc::StatusCode::UNAVAILABLE: return "UNAVAILABLE";
-    case grpc::StatusCode::DATA_LOSS: return "DATA_LOSS";
-    default: return "UNKNOWN_CODE";
-  }
+  // absl and gRPC share the numbering 0..16; absl names every code. Built
+  // once and never freed (threads may still log during exit).
+  static const std::vector<std::string>* const kNames = [] {
+    auto* names = new std::vector<std::string>();
+    for (int c = 0; c <= static_cast<int>(absl::StatusCode::kUnauthenticated); ++c) {
+      names->push_back(absl::StatusCodeToString(static_cast<absl::StatusCode>(c)));
+    }
+    return names;
+  }();
+  const auto number = static_cast<size_t>(code);
+  return number < kNames->size() ? (*kNames)[number].c_str() : "UNKNOWN_CODE";
 }
 
 grpc::Status ToGrpcStatus(const absl::Status& status) {
@@ -55,44 +49,21 @@ bool RpcGuard::Cancelled() const {
   return context_ != nullptr && context_->IsCancelled();
 }
 
-grpc::Status RpcGuard::StopStatus(std::string_view what) const {
-  if (Expired()) {
-    return grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED,
-                        "deadline exceeded " + std::string(what));
-  }
-  return grpc::Status(grpc::StatusCode::CANCELLED, "cancelled " + std::string(what));
+absl::Status RpcGuard::StopReason(std::string_view what) const {
+  if (Expired()) return absl::DeadlineExceededError("deadline exceeded " + std::string(what));
+  return absl::CancelledError("cancelled " + std::string(what));
 }
+
+std::string RpcGuard::Peer() const { return context_ != nullptr ? context_->peer() : std::string(); }
 
 std::function<bool()> RpcGuard::Interrupt() const {
   return [guard = *this] { return guard.ShouldStop(); };
 }
 
-std::string LogValue(std::string_view text) {
-  bool bare = !text.empty();
-  for (char c : text) {
-    if (c == ' ' || c == '"' || c == '=' || c == '\\' || static_cast<unsigned char>(c) < 0x20) {
-      bare = false;
-      break;
-    }
-  }
-  if (bare) return std::string(text);
-  std::string out = "\"";
-  for (char c : text) {
-    switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          out += ' ';
-        } else {
-          out += c;
-        }
-    }
-  }
-  out += '"';
-  return out;
+api::CallDone FinishUnary(grpc::ServerUnaryReactor* reactor, std::shared_ptr<const RpcGuard> guard) {
+  return [reactor, guard = std::move(guard)](const absl::Status& status) {
+    reactor->Finish(ToGrpcStatus(status));
+  };
 }
 
 }  // namespace tactforce::server

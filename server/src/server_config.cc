@@ -1,3 +1,5 @@
+// ServerConfig (server_config.h): effective worker count, the options of
+// the host and services, and the documented, range-checked flags.
 #include "tactforce/server/server_config.h"
 
 #include <algorithm>

@@ -1,3 +1,5 @@
+// ServerHost (server_host.h): credentials from PEM files, the builder with
+// message limits, health and reflection, and the drain on shutdown.
 #include "tactforce/server/server_host.h"
 
 #include <fstream>

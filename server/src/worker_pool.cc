@@ -1,3 +1,5 @@
+// WorkerPool (worker_pool.h): threads that take tasks from one bounded FIFO
+// queue under a mutex; Shutdown runs what is queued, then joins.
 #include "tactforce/server/worker_pool.h"
 
 #include <algorithm>

@@ -135,6 +135,17 @@ TEST(InertiaStream, InconsistentMessagesAreNamed) {
   }
 }
 
+// The wire spelling comes from the proto enum (moved here from the
+// library's former inertia::ProtoName) and parses back to the method.
+TEST(InertiaMethodName, ProtoSpellingRoundTripsThroughTheLibraryParser) {
+  for (inertia::InertiaMethod m : {inertia::InertiaMethod::kBaselineLs, inertia::InertiaMethod::kFactorGraph,
+                                   inertia::InertiaMethod::kConstrained, inertia::InertiaMethod::kDensity}) {
+    EXPECT_EQ(*inertia::ParseInertiaMethod(InertiaMethodName(m)), m);
+  }
+  EXPECT_EQ(InertiaMethodName(inertia::InertiaMethod::kBaselineLs), "INERTIA_METHOD_BASELINE_LS");
+  EXPECT_EQ(InertiaMethodName(inertia::InertiaMethod::kDensity), "INERTIA_METHOD_DENSITY");
+}
+
 TEST(InertiaOptionsFromProto, ValidatesAndNamesFields) {
   v1::InertiaFitOptions o;
   o.set_method(static_cast<v1::InertiaMethod>(42));

@@ -7,7 +7,6 @@
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "tactforce/audit/measured_data.h"
-#include "tactforce/io/json.h"
 #include "tactforce/sim/simulate.h"
 
 namespace tactforce::sim {
@@ -335,20 +334,6 @@ TEST(Channel, PowerLawAndItsInverse) {
   EXPECT_LT(worst, 1e-3);  // play operators on the 4x finer simulation grid
 }
 
-TEST(Json, ParserHandlesTheBasics) {
-  auto v = io::ParseJson(R"({"a": [1, -2.5e3, true, null, "x\n\u00e9"], "b": {}})", "s");
-  ASSERT_TRUE(v.ok()) << v.status();
-  const auto* a = v->Find("a");
-  ASSERT_NE(a, nullptr);
-  ASSERT_EQ(a->array().size(), 5u);
-  EXPECT_EQ(a->array()[1].number(), -2500);
-  EXPECT_EQ(a->array()[4].string(), "x\n\xc3\xa9");
-  EXPECT_FALSE(io::ParseJson("[1,]", "s").ok());
-  EXPECT_FALSE(io::ParseJson("{\"a\":1,\"a\":2}", "s").ok());
-  EXPECT_EQ(io::JsonNumber(0.1), "0.1");
-  EXPECT_EQ(io::JsonNumber(NAN), "null");
-}
-
 TEST(Simulate, WriterProducesTheAuditFormat) {
   SensorModel m;
   m.noise = 0.01;
@@ -392,13 +377,6 @@ TEST(Channel, PredictReadingMatchesTheSimulationWithoutNoise) {
     const double r = PredictReading(s, {0.0, 3.0}, {f, f}, {})[1];
     EXPECT_NEAR(CorrectReading(s, r, 3.0, 0), f, 1e-9);
   }
-}
-
-// The one JSON string quoter of the project (io/json.h), also used by the
-// CLI's JSON output.
-TEST(Json, EscapeQuotesAndEscapes) {
-  EXPECT_EQ(io::JsonEscape("plain"), "\"plain\"");
-  EXPECT_EQ(io::JsonEscape("a\"b\\c\nd\x01"), "\"a\\\"b\\\\c\\nd\\u0001\"");
 }
 
 }  // namespace

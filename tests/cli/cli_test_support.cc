@@ -1,3 +1,6 @@
+// The client tests' helpers: running the CLI, private temporary
+// directories, JSON parsing, a closed loopback port, example and random
+// requests, and the per-suite tactforce-server.
 #include "cli_test_support.h"
 
 #include <arpa/inet.h>

@@ -1,4 +1,5 @@
-// Client pieces without a server: the latency histogram and --target parsing.
+// Client pieces without a server: the latency histogram, --target parsing
+// and the mapping of gRPC failures to the CLI's errors.
 #include <cstdint>
 #include <random>
 #include <thread>
@@ -102,6 +103,14 @@ TEST(RpcErrorTest, MapsCodesToTheDocumentedErrors) {
   EXPECT_EQ(s.code(), absl::StatusCode::kResourceExhausted);
   EXPECT_EQ(StatusCodeName(grpc::StatusCode::UNAUTHENTICATED), "UNAUTHENTICATED");
   EXPECT_EQ(StatusCodeName(grpc::StatusCode::DEADLINE_EXCEEDED), "DEADLINE_EXCEEDED");
+}
+
+TEST(RpcErrorTest, EveryCanonicalCodeHasItsNameAndOthersTheirNumber) {
+  EXPECT_EQ(StatusCodeName(grpc::StatusCode::OK), "OK");
+  EXPECT_EQ(StatusCodeName(grpc::StatusCode::CANCELLED), "CANCELLED");
+  EXPECT_EQ(StatusCodeName(grpc::StatusCode::RESOURCE_EXHAUSTED), "RESOURCE_EXHAUSTED");
+  EXPECT_EQ(StatusCodeName(grpc::StatusCode::UNAVAILABLE), "UNAVAILABLE");
+  EXPECT_EQ(StatusCodeName(static_cast<grpc::StatusCode>(17)), "CODE_17");
 }
 
 }  // namespace

@@ -1,7 +1,10 @@
 // Closed-loop grasp experiments and the slope method in MuJoCo.
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <random>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -48,6 +51,38 @@ INSTANTIATE_TEST_SUITE_P(Objects, IdealSensorTrial,
                          ::testing::Values(GraspObject::kSphere, GraspObject::kWrench, GraspObject::kCylinder,
                                            GraspObject::kCube),
                          [](const auto& info) { return std::string(ToString(info.param)); });
+
+// The object table: each object's fingers, where it rests on the table, its
+// MJCF geoms and contact pairs (every fingertip with every object geom, every
+// object geom with the table).
+TEST(GraspSetup, EveryObjectBuildsItsFingersGeomsAndPairs) {
+  struct Expected {
+    GraspObject object;
+    std::vector<std::string> fingers;
+    std::string rest;  // object origin at rest (m)
+    int geoms;
+  };
+  const Expected expected[] = {{GraspObject::kSphere, {"thumb", "index"}, "0 0 0.035", 1},
+                               {GraspObject::kWrench, {"index", "middle", "thumb"}, "0 0 0.008", 2},
+                               {GraspObject::kCylinder, {"thumb", "index", "middle", "ring"}, "0 0 0.06", 1},
+                               {GraspObject::kCube, {"thumb", "index"}, "0 0 0.04", 1}};
+  auto count = [](const std::string& text, const std::string& what) {
+    int n = 0;
+    for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+    return n;
+  };
+  ASSERT_EQ(std::size(expected), AllGraspObjects().size());
+  for (const Expected& e : expected) {
+    auto setup = GraspSetup::Create(ShortConfig(e.object));
+    ASSERT_TRUE(setup.ok()) << ToString(e.object) << ": " << setup.status();
+    EXPECT_EQ((*setup)->finger_names(), e.fingers) << ToString(e.object);
+    const std::string& mjcf = (*setup)->mjcf();
+    EXPECT_NE(mjcf.find("<body name=\"object\" pos=\"" + e.rest + "\">"), std::string::npos) << mjcf;
+    EXPECT_EQ(count(mjcf, "<geom name=\"obj"), e.geoms) << ToString(e.object);
+    EXPECT_EQ(count(mjcf, "<pair "), e.geoms * (static_cast<int>(e.fingers.size()) + 1)) << ToString(e.object);
+    EXPECT_EQ(count(mjcf, "<body name=\"f"), static_cast<int>(e.fingers.size())) << ToString(e.object);
+  }
+}
 
 // The GeoDEx claim on a fixed seed set: with the default error model,
 // feedback on the estimate succeeds strictly more often than on raw readings.

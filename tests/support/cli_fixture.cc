@@ -1,3 +1,6 @@
+// CliTest: runs the built `tactforce` through the shell with its standard
+// streams redirected to files in a private temporary directory, and the
+// small file helpers the CLI suites share.
 #include "support/cli_fixture.h"
 
 #include <sys/wait.h>

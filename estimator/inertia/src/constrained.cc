@@ -207,6 +207,210 @@ void SlsqpConstraints(unsigned m, double* result, unsigned n, const double* x, d
   }
 }
 
+// Index of the scaled pseudo-inertia entry P(i, j) in p (i, j in 0..3).
+constexpr int PIndex(int i, int j) {
+  if (i > j) std::swap(i, j);
+  for (int k = 0; k < 10; ++k)
+    if (kPi[k] == i && kPj[k] == j) return k;
+  return -1;
+}
+
+// Minimum-norm solution of M x = r, M symmetric positive semi-definite:
+// eigen-directions below 1e-14 of the largest eigenvalue are dropped.
+template <typename Derived>
+Vector10d MinimumNormSolve(const Eigen::MatrixBase<Derived>& M, const Vector10d& r) {
+  Eigen::SelfAdjointEigenSolver<Matrix10d> es(M);
+  Vector10d x = Vector10d::Zero();
+  const double top = es.eigenvalues()(9);
+  for (int i = 0; i < 10; ++i) {
+    const double l = es.eigenvalues()(i);
+    if (l > 1e-14 * top) x += es.eigenvectors().col(i) * (es.eigenvectors().col(i).dot(r) / l);
+  }
+  return x;
+}
+
+// The weights q of the log-det barrier term w (q^T p - log det P) whose
+// minimum is at P0 (unscaled pseudo-inertia): q^T p = tr((D P0 D)^-1 P).
+Vector10d BarrierWeights(const Eigen::Vector4d& D, const Eigen::Matrix4d& P0) {
+  const Eigen::Matrix4d G = (D.asDiagonal() * P0 * D.asDiagonal()).inverse();
+  Vector10d q;
+  for (int k = 0; k < 10; ++k) q(k) = kPi[k] == kPj[k] ? G(kPi[k], kPi[k]) : 2.0 * G(kPi[k], kPj[k]);
+  return q;
+}
+
+// Scales of the problem: the unweighted start pi (normal equations,
+// minimum norm in scaled parameters), the mass m0 and length `len` that make
+// the scaled pseudo-inertia O(1) (from the prior when one is given), and the
+// parameter scale they imply.
+struct Scales {
+  Vector10d pi;
+  double m0 = 1, len = 0.1;
+  Vector10d parameter_scale;
+};
+
+Scales UnweightedStart(const GlsData& gls, const InertiaOptions& o, const ConvexHull* hull) {
+  auto solve_scaled = [&](const Vector10d& scale) {
+    const Matrix10d S = scale.asDiagonal();
+    return Vector10d(S * MinimumNormSolve(S * gls.YtY * S, Vector10d(S * gls.Ytb)));
+  };
+  Scales sc;
+  sc.pi = solve_scaled(Vector10d::Ones());
+  RoughScale(sc.pi, hull, &sc.m0, &sc.len);
+  if (o.prior) RoughScale(o.prior->params.ToStandard(), hull, &sc.m0, &sc.len);
+  sc.parameter_scale = ParameterScale(sc.m0, sc.len);
+  sc.pi = solve_scaled(sc.parameter_scale);
+  // Second pass for the scale from a better estimate.
+  double m1 = sc.m0, l1 = sc.len;
+  RoughScale(sc.pi, hull, &m1, &l1);
+  if (!o.prior) sc.m0 = m1, sc.len = l1;
+  sc.parameter_scale = ParameterScale(sc.m0, sc.len);
+  return sc;
+}
+
+// Scaled pseudo-inertia coordinates: p holds the entries of D P D with
+// D = diag(1/(len sqrt(m0)) x3, 1/sqrt(m0)), and pi = T p.
+struct ScaledCoordinates {
+  Eigen::Vector4d D;
+  Matrix10d T = Matrix10d::Zero();
+};
+
+ScaledCoordinates MakeScaledCoordinates(double m0, double len) {
+  ScaledCoordinates c;
+  const double dl = 1.0 / (len * std::sqrt(m0)), dm = 1.0 / std::sqrt(m0);
+  c.D = Eigen::Vector4d(dl, dl, dl, dm);
+  auto unscale = [&](int i, int j) { return 1.0 / (c.D(i) * c.D(j)); };
+  Matrix10d& T = c.T;
+  T(0, PIndex(3, 3)) = unscale(3, 3);
+  for (int i = 0; i < 3; ++i) T(1 + i, PIndex(i, 3)) = unscale(i, 3);
+  // I_o = tr(Sigma) I - Sigma
+  T(4, PIndex(1, 1)) = unscale(1, 1), T(4, PIndex(2, 2)) = unscale(2, 2);
+  T(5, PIndex(0, 0)) = unscale(0, 0), T(5, PIndex(2, 2)) = unscale(2, 2);
+  T(6, PIndex(0, 0)) = unscale(0, 0), T(6, PIndex(1, 1)) = unscale(1, 1);
+  T(7, PIndex(0, 1)) = -unscale(0, 1);
+  T(8, PIndex(0, 2)) = -unscale(0, 2);
+  T(9, PIndex(1, 2)) = -unscale(1, 2);
+  return c;
+}
+
+// The parts of the model that do not change between rounds: the prior's
+// barrier and the CoM-in-hull rows a^T p <= 0.
+Model FixedModelTerms(const ScaledCoordinates& sc, double len, const InertiaOptions& o, const ConvexHull* hull) {
+  Model model;
+  if (o.prior && o.prior->weight > 0) {
+    model.q = BarrierWeights(sc.D, PseudoInertia(o.prior->params));
+    model.w = o.prior->weight;
+  }
+  if (hull) {
+    for (size_t j = 0; j < hull->normals.size(); ++j) {
+      Vector10d a = Vector10d::Zero();
+      for (int i = 0; i < 3; ++i) a(PIndex(i, 3)) = hull->normals[j](i);
+      a(PIndex(3, 3)) = -hull->offsets[j] / len;
+      // a^T p = (n.h - d m) * dm^2 / len with h, m unscaled: <= 0 inside.
+      model.rows.push_back(a);
+    }
+  }
+  return model;
+}
+
+// Without a prior: a weak entropic regulariser towards an isotropic guess
+// (scaled units) built from the projected GLS estimate Pt (scaled).
+void AddEntropicRegulariser(const Eigen::Matrix4d& Pt, const ScaledCoordinates& sc, const Scales& scales,
+                            const InertiaOptions& o, const ConvexHull* hull, Model* model,
+                            std::vector<std::string>* notes) {
+  const double len = scales.len;
+  const Eigen::Matrix4d Pu = sc.D.asDiagonal().inverse() * Pt * sc.D.asDiagonal().inverse();
+  double mg = Pu(3, 3) > 0 && std::isfinite(Pu(3, 3)) ? Pu(3, 3) : scales.m0;
+  Vec3 cg = Pu.topRightCorner<3, 1>() / mg;
+  if (!cg.allFinite()) cg.setZero();
+  if (hull && !hull->Contains(cg, 1e-9)) {
+    cg.setZero();
+    for (const Vec3& v : hull->vertices) cg += v / static_cast<double>(hull->vertices.size());
+  }
+  double t = (Pu.topLeftCorner<3, 3>().trace() - mg * cg.squaredNorm()) / (3.0 * mg);
+  if (!(t > 1e-6 * len * len) || !std::isfinite(t)) t = hull ? std::pow(0.25 * hull->size, 2) : len * len / 3.0;
+  Eigen::Matrix4d P0 = Eigen::Matrix4d::Zero();
+  P0.topLeftCorner<3, 3>() = mg * (cg * cg.transpose() + t * Eigen::Matrix3d::Identity());
+  P0.topRightCorner<3, 1>() = mg * cg;
+  P0.bottomLeftCorner<1, 3>() = mg * cg.transpose();
+  P0(3, 3) = mg;
+  model->q = BarrierWeights(sc.D, P0);
+  model->w = o.regularization;
+  notes->push_back(absl::StrFormat(
+      "weak entropic regularisation (weight %g) towards m %.4g, c (%.4g, %.4g, %.4g), isotropic second "
+      "moment %.3g m^2 per axis",
+      o.regularization, mg, cg.x(), cg.y(), cg.z(), t));
+}
+
+// The start of the first Newton solve: the unconstrained GLS estimate of
+// the model, averaged with the prior when given, projected into the
+// positive definite cone. Adds the regulariser to the model when asked.
+Vector10d InitialTheta(const ScaledCoordinates& sc, const Scales& scales, const InertiaOptions& o,
+                       const ConvexHull* hull, Model* model, std::vector<std::string>* notes) {
+  const Vector10d p = MinimumNormSolve(model->A, model->b);
+  Eigen::Matrix4d Pt = Eigen::Matrix4d::Zero();
+  for (int k = 0; k < 10; ++k) Pt(kPi[k], kPj[k]) = Pt(kPj[k], kPi[k]) = p(k);
+  if (o.prior) Pt = 0.5 * Pt + 0.5 * sc.D.asDiagonal() * PseudoInertia(o.prior->params) * sc.D.asDiagonal();
+  if (!o.prior && o.regularization > 0) AddEntropicRegulariser(Pt, sc, scales, o, hull, model, notes);
+  Vector10d theta = ThetaFromP(Pt);
+  for (int i = 0; i < 4; ++i) theta(i) = std::max(theta(i), kMinLogDiag);
+  return theta;
+}
+
+// The CoM-in-hull rows by SLSQP (NLopt) from `theta`, when the
+// unconstrained optimum violates them. Returns the constrained optimum, or
+// `theta` (noted) when SLSQP fails.
+Vector10d EnforceHullRows(const Model& model, const Vector10d& theta, const InertiaOptions& o, bool last_round,
+                          MethodOutput* out) {
+  const Eigen::Matrix4d U = UFromTheta(theta);
+  const Vector10d p = PVec(U * U.transpose());
+  double worst = -1;
+  for (const auto& a : model.rows) worst = std::max(worst, a.dot(p) / p(PIndex(3, 3)));
+  if (!(worst > 1e-9)) return theta;
+  SlsqpData data{&model};
+  nlopt_opt opt = nlopt_create(NLOPT_LD_SLSQP, 10);
+  nlopt_set_min_objective(opt, SlsqpObjective, &data);
+  double lb[10];
+  for (int i = 0; i < 10; ++i) lb[i] = i < 4 ? kMinLogDiag : -HUGE_VAL;
+  nlopt_set_lower_bounds(opt, lb);
+  std::vector<double> tol(model.rows.size(), 1e-12);
+  nlopt_add_inequality_mconstraint(opt, static_cast<unsigned>(model.rows.size()), SlsqpConstraints, &data,
+                                   tol.data());
+  nlopt_set_ftol_rel(opt, 1e-15);
+  nlopt_set_xtol_rel(opt, 1e-12);
+  nlopt_set_maxeval(opt, 20 * o.max_iterations);
+  double x[10], fmin = 0;
+  for (int i = 0; i < 10; ++i) x[i] = theta(i);
+  const nlopt_result res = nlopt_optimize(opt, x, &fmin);
+  nlopt_destroy(opt);
+  out->iterations += data.evals;
+  const Vector10d th2 = Eigen::Map<Vector10d>(x);
+  if (res > 0 && th2.allFinite()) {
+    if (last_round) out->notes.push_back("CoM-in-hull constraint active (SLSQP)");
+    return th2;
+  }
+  out->notes.push_back(absl::StrCat("SLSQP for the hull rows failed (nlopt code ", static_cast<int>(res),
+                                    "); CoM may lie outside the hull"));
+  return theta;
+}
+
+// One GLS round's data term of the model at the current estimate pi
+// (weights and errors-in-variables bias from pi). Returns the uncorrected
+// information matrix A.
+Matrix10d UpdateDataTerm(const GlsData& gls, const Vector10d& pi, const ScaledCoordinates& sc,
+                         const Vector10d& parameter_scale, bool last_round, Model* model,
+                         std::vector<std::string>* notes) {
+  GlsSums sums;
+  AccumulateGls(gls, pi, &sums);
+  // Subtract the bias when the corrected matrix stays well positive definite.
+  bool corrected = false;
+  const Matrix10d Ause = BiasCorrected(sums, parameter_scale, &corrected);
+  if (corrected && last_round) notes->push_back("errors-in-variables bias correction applied");
+  model->A = sc.T.transpose() * Ause * sc.T;
+  model->b = sc.T.transpose() * sums.b;
+  model->scale = std::max(model->A.diagonal().cwiseAbs().maxCoeff(), 1e-300);
+  return sums.A;
+}
+
 }  // namespace
 
 GlsData PrepareGls(const InertiaSamples& s, const InertiaOptions& o, std::vector<std::string>* notes) {
@@ -330,179 +534,31 @@ absl::StatusOr<MethodOutput> FitConstrained(const InertiaSamples& s, const Inert
                                             const ConvexHull* hull) {
   MethodOutput out;
   const GlsData gls = PrepareGls(s, o, &out.notes);
-  const std::vector<KinPoint>& kin = gls.kin;
-  const std::vector<Vector6d>& wrench = gls.wrench;
-  const int n = static_cast<int>(kin.size());
-  const Matrix10d& YtY = gls.YtY;
-  const Vector10d& Ytb = gls.Ytb;
+  const Scales scales = UnweightedStart(gls, o, hull);
+  out.scale = scales.parameter_scale;
+  const ScaledCoordinates sc = MakeScaledCoordinates(scales.m0, scales.len);
+  Model model = FixedModelTerms(sc, scales.len, o, hull);
 
-  // Unweighted start (normal equations, minimum norm in scaled parameters),
-  // then scales.
-  auto solve_scaled = [&](const Vector10d& scale) {
-    const Matrix10d S = scale.asDiagonal();
-    Eigen::SelfAdjointEigenSolver<Matrix10d> es(S * YtY * S);
-    const Vector10d r = S * Ytb;
-    Vector10d x = Vector10d::Zero();
-    const double top = es.eigenvalues()(9);
-    for (int i = 0; i < 10; ++i) {
-      const double l = es.eigenvalues()(i);
-      if (l > 1e-14 * top) x += es.eigenvectors().col(i) * (es.eigenvectors().col(i).dot(r) / l);
-    }
-    return Vector10d(S * x);
-  };
-  Vector10d pi = solve_scaled(Vector10d::Ones());
-  double m0 = 1, len = 0.1;
-  RoughScale(pi, hull, &m0, &len);
-  if (o.prior) RoughScale(o.prior->params.ToStandard(), hull, &m0, &len);
-  out.scale = ParameterScale(m0, len);
-  pi = solve_scaled(out.scale);
-  {  // second pass for the scale from a better estimate
-    double m1 = m0, l1 = len;
-    RoughScale(pi, hull, &m1, &l1);
-    if (!o.prior) m0 = m1, len = l1;
-    out.scale = ParameterScale(m0, len);
-  }
-
-  // Linear map from scaled pseudo-inertia entries p to pi.
-  const double dl = 1.0 / (len * std::sqrt(m0)), dm = 1.0 / std::sqrt(m0);
-  const Eigen::Vector4d D(dl, dl, dl, dm);
-  Matrix10d T = Matrix10d::Zero();  // pi = T p
-  auto pidx = [](int i, int j) {
-    if (i > j) std::swap(i, j);
-    for (int k = 0; k < 10; ++k)
-      if (kPi[k] == i && kPj[k] == j) return k;
-    return -1;
-  };
-  auto unscale = [&](int i, int j) { return 1.0 / (D(i) * D(j)); };
-  T(0, pidx(3, 3)) = unscale(3, 3);
-  for (int i = 0; i < 3; ++i) T(1 + i, pidx(i, 3)) = unscale(i, 3);
-  // I_o = tr(Sigma) I - Sigma
-  T(4, pidx(1, 1)) = unscale(1, 1), T(4, pidx(2, 2)) = unscale(2, 2);
-  T(5, pidx(0, 0)) = unscale(0, 0), T(5, pidx(2, 2)) = unscale(2, 2);
-  T(6, pidx(0, 0)) = unscale(0, 0), T(6, pidx(1, 1)) = unscale(1, 1);
-  T(7, pidx(0, 1)) = -unscale(0, 1);
-  T(8, pidx(0, 2)) = -unscale(0, 2);
-  T(9, pidx(1, 2)) = -unscale(1, 2);
-
-  Model model;
-  if (o.prior && o.prior->weight > 0) {
-    const Eigen::Matrix4d P0 = D.asDiagonal() * PseudoInertia(o.prior->params) * D.asDiagonal();
-    const Eigen::Matrix4d G = P0.inverse();
-    for (int k = 0; k < 10; ++k) model.q(k) = kPi[k] == kPj[k] ? G(kPi[k], kPi[k]) : 2.0 * G(kPi[k], kPj[k]);
-    model.w = o.prior->weight;
-  }
-  if (hull) {
-    for (size_t j = 0; j < hull->normals.size(); ++j) {
-      Vector10d a = Vector10d::Zero();
-      for (int i = 0; i < 3; ++i) a(pidx(i, 3)) = hull->normals[j](i);
-      a(pidx(3, 3)) = -hull->offsets[j] / len;
-      // a^T p = (n.h - d m) * dm^2 / len with h, m unscaled: <= 0 inside.
-      model.rows.push_back(a);
-    }
-  }
-
+  Vector10d pi = scales.pi;
   Vector10d theta;
-  bool have_theta = false;
   Matrix10d A = Matrix10d::Zero();
   for (int round = 0; round < o.reweighting_rounds; ++round) {
     if (o.interrupt && o.interrupt()) return absl::CancelledError("interrupted");
-    GlsSums sums;
-    AccumulateGls(gls, pi, &sums);
-    A = sums.A;
-    const Vector10d& bvec = sums.b;
-    // Subtract the bias when the corrected matrix stays well positive definite.
-    bool corrected = false;
-    const Matrix10d Ause = BiasCorrected(sums, out.scale, &corrected);
-    if (corrected && round == o.reweighting_rounds - 1) out.notes.push_back("errors-in-variables bias correction applied");
-    model.A = T.transpose() * Ause * T;
-    model.b = T.transpose() * bvec;
-    model.scale = std::max(model.A.diagonal().cwiseAbs().maxCoeff(), 1e-300);
-    if (!have_theta) {
-      // Unconstrained GLS estimate, projected into the positive definite cone.
-      Eigen::SelfAdjointEigenSolver<Matrix10d> es(model.A);
-      Vector10d p = Vector10d::Zero();
-      const double top = es.eigenvalues()(9);
-      for (int i = 0; i < 10; ++i) {
-        const double l = es.eigenvalues()(i);
-        if (l > 1e-14 * top) p += es.eigenvectors().col(i) * (es.eigenvectors().col(i).dot(model.b) / l);
-      }
-      Eigen::Matrix4d Pt = Eigen::Matrix4d::Zero();
-      for (int k = 0; k < 10; ++k) Pt(kPi[k], kPj[k]) = Pt(kPj[k], kPi[k]) = p(k);
-      if (o.prior) Pt = 0.5 * Pt + 0.5 * D.asDiagonal() * PseudoInertia(o.prior->params) * D.asDiagonal();
-      if (!o.prior && o.regularization > 0) {
-        // Weak entropic regulariser towards an isotropic guess (scaled units).
-        const Eigen::Matrix4d Pu = D.asDiagonal().inverse() * Pt * D.asDiagonal().inverse();
-        double mg = Pu(3, 3) > 0 && std::isfinite(Pu(3, 3)) ? Pu(3, 3) : m0;
-        Vec3 cg = Pu.topRightCorner<3, 1>() / mg;
-        if (!cg.allFinite()) cg.setZero();
-        if (hull && !hull->Contains(cg, 1e-9)) {
-          cg.setZero();
-          for (const Vec3& v : hull->vertices) cg += v / static_cast<double>(hull->vertices.size());
-        }
-        double t = (Pu.topLeftCorner<3, 3>().trace() - mg * cg.squaredNorm()) / (3.0 * mg);
-        if (!(t > 1e-6 * len * len) || !std::isfinite(t)) t = hull ? std::pow(0.25 * hull->size, 2) : len * len / 3.0;
-        Eigen::Matrix4d P0 = Eigen::Matrix4d::Zero();
-        P0.topLeftCorner<3, 3>() = mg * (cg * cg.transpose() + t * Eigen::Matrix3d::Identity());
-        P0.topRightCorner<3, 1>() = mg * cg;
-        P0.bottomLeftCorner<1, 3>() = mg * cg.transpose();
-        P0(3, 3) = mg;
-        const Eigen::Matrix4d G = (D.asDiagonal() * P0 * D.asDiagonal()).inverse();
-        for (int k = 0; k < 10; ++k) model.q(k) = kPi[k] == kPj[k] ? G(kPi[k], kPi[k]) : 2.0 * G(kPi[k], kPj[k]);
-        model.w = o.regularization;
-        out.notes.push_back(absl::StrFormat(
-            "weak entropic regularisation (weight %g) towards m %.4g, c (%.4g, %.4g, %.4g), isotropic second "
-            "moment %.3g m^2 per axis",
-            o.regularization, mg, cg.x(), cg.y(), cg.z(), t));
-      }
-      theta = ThetaFromP(Pt);
-      for (int i = 0; i < 4; ++i) theta(i) = std::max(theta(i), kMinLogDiag);
-      have_theta = true;
-    }
+    const bool last_round = round == o.reweighting_rounds - 1;
+    A = UpdateDataTerm(gls, pi, sc, out.scale, last_round, &model, &out.notes);
+    if (round == 0) theta = InitialTheta(sc, scales, o, hull, &model, &out.notes);
     theta = Newton(model, theta, o.max_iterations, &out.iterations);
-    // CoM-in-hull rows: SLSQP when the unconstrained optimum violates them.
-    if (!model.rows.empty()) {
-      const Eigen::Matrix4d U = UFromTheta(theta);
-      const Vector10d p = PVec(U * U.transpose());
-      double worst = -1;
-      for (const auto& a : model.rows) worst = std::max(worst, a.dot(p) / p(pidx(3, 3)));
-      if (worst > 1e-9) {
-        SlsqpData data{&model};
-        nlopt_opt opt = nlopt_create(NLOPT_LD_SLSQP, 10);
-        nlopt_set_min_objective(opt, SlsqpObjective, &data);
-        double lb[10];
-        for (int i = 0; i < 10; ++i) lb[i] = i < 4 ? kMinLogDiag : -HUGE_VAL;
-        nlopt_set_lower_bounds(opt, lb);
-        std::vector<double> tol(model.rows.size(), 1e-12);
-        nlopt_add_inequality_mconstraint(opt, static_cast<unsigned>(model.rows.size()), SlsqpConstraints, &data,
-                                         tol.data());
-        nlopt_set_ftol_rel(opt, 1e-15);
-        nlopt_set_xtol_rel(opt, 1e-12);
-        nlopt_set_maxeval(opt, 20 * o.max_iterations);
-        double x[10], fmin = 0;
-        for (int i = 0; i < 10; ++i) x[i] = theta(i);
-        const nlopt_result res = nlopt_optimize(opt, x, &fmin);
-        nlopt_destroy(opt);
-        out.iterations += data.evals;
-        Vector10d th2 = Eigen::Map<Vector10d>(x);
-        if (res > 0 && th2.allFinite()) {
-          theta = th2;
-          if (round == o.reweighting_rounds - 1) out.notes.push_back("CoM-in-hull constraint active (SLSQP)");
-        } else {
-          out.notes.push_back(absl::StrCat("SLSQP for the hull rows failed (nlopt code ", static_cast<int>(res),
-                                           "); CoM may lie outside the hull"));
-        }
-      }
-    }
+    if (!model.rows.empty()) theta = EnforceHullRows(model, theta, o, last_round, &out);
     const Eigen::Matrix4d U = UFromTheta(theta);
-    pi = T * PVec(U * U.transpose());
+    pi = sc.T * PVec(U * U.transpose());
     if (o.progress) o.progress(0.9 * (round + 1) / o.reweighting_rounds);
   }
   out.pi = pi;
   out.info = A;
   // Covariance of pi: (A)^+ (the unconstrained GLS information).
   out.cov = ScaledPseudoInverse(A, out.scale, 1e-14);
-  out.samples_used = n;
-  ResidualRms(kin, wrench, pi, &out.rms_force, &out.rms_torque);
+  out.samples_used = static_cast<int>(gls.kin.size());
+  ResidualRms(gls.kin, gls.wrench, pi, &out.rms_force, &out.rms_torque);
   return out;
 }
 

@@ -120,6 +120,187 @@ absl::Status CheckComInBoundingBox(const GlsSums& sums, const Vector10d& scale, 
   return absl::OkStatus();
 }
 
+// The unknowns u = rho / rho_ref of the fit: pi = Phi_u u, with rho_ref the
+// uniform density that fits the unweighted equations best; the smoothness
+// penalty u^T L u between neighbouring regions; the parameter scale.
+struct DensityBasis {
+  int K = 0;
+  double rho_ref = 0;
+  MatrixXd Phi_u;                // 10 x K
+  Vector10d pi_uniform;          // the uniform solid at rho_ref
+  MatrixXd L;                    // K x K
+  double l_scale = 1;            // mean diagonal of L (1 without neighbours)
+  Vector10d parameter_scale;
+};
+
+absl::StatusOr<DensityBasis> MakeDensityBasis(const GlsData& gls, const RegionModel& regions,
+                                              const InertiaOptions& o) {
+  DensityBasis b;
+  b.K = static_cast<int>(regions.regions.size());
+  const int K = b.K;
+  const double volume = regions.total.volume;
+  // Columns: standard parameters of each region at 1 kg/m^3.
+  MatrixXd Phi(10, K);
+  for (int r = 0; r < K; ++r) Phi.col(r) = regions.regions[r].moments.Standard(1.0);
+  const Vector10d phi_total = regions.total.Standard(1.0);
+  // Reference density: the uniform solid fitted to the unweighted equations.
+  b.rho_ref = phi_total.dot(gls.Ytb) / std::max(phi_total.dot(gls.YtY * phi_total), 1e-300);
+  if (!(b.rho_ref > 0) || !std::isfinite(b.rho_ref)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        o.mesh_name, ": the data give a non-positive mass for the mesh (", b.rho_ref * volume,
+        " kg): check the force signs, gravity and the mesh's scale"));
+  }
+  const double length = std::sqrt(std::max(regions.total.second.trace() / volume, 1e-12));
+  b.parameter_scale = ParameterScale(b.rho_ref * volume, length);
+  // Smoothness penalty sum_ij w_ij (u_i - u_j)^2 = u^T L u.
+  b.L = MatrixXd::Zero(K, K);
+  for (size_t e = 0; e < regions.neighbours.size(); ++e) {
+    const int i = regions.neighbours[e][0], j = regions.neighbours[e][1];
+    const double w = regions.neighbour_weights[e];
+    b.L(i, i) += w, b.L(j, j) += w, b.L(i, j) -= w, b.L(j, i) -= w;
+  }
+  b.l_scale = b.L.trace() > 0 ? b.L.trace() / K : 1.0;
+  b.Phi_u = Phi * b.rho_ref;
+  b.pi_uniform = phi_total * b.rho_ref;
+  return b;
+}
+
+// The fit's state across re-weighting rounds; after the last round, that
+// round's sums and quadratics (for the covariance and the contradiction test).
+struct DensityState {
+  Vector10d pi;
+  VectorXd u;
+  double lambda_rel = 0;  // smoothness strength relative to the data's curvature
+  int qp_iterations = 0;
+  GlsSums total;
+  std::vector<GlsSums> blocks;      // per held-out time block
+  std::vector<Matrix6d> whiteners;  // per sample (last round)
+  Quadratic full;
+  std::vector<Quadratic> train, held;  // per fold: the other blocks, the block
+  MatrixXd Hreg;                        // full.H + penalty + ridge
+};
+
+// Per fold: the data term of the other blocks (bias-corrected) and of the
+// held-out block.
+void FoldQuadratics(const DensityBasis& b, int folds, DensityState* st) {
+  st->train.assign(folds, Quadratic());
+  st->held.assign(folds, Quadratic());
+  for (int f = 0; f < folds; ++f) {
+    const GlsSums& blk = st->blocks[f];
+    GlsSums rest = st->total;
+    rest.A -= blk.A, rest.b -= blk.b, rest.c -= blk.c, rest.bias -= blk.bias;
+    bool fold_corrected = false;
+    st->train[f] = Project(BiasCorrected(rest, b.parameter_scale, &fold_corrected), rest.b, rest.c, b.Phi_u);
+    st->held[f] = Project(blk.A, blk.b, blk.c, b.Phi_u);
+  }
+}
+
+// Held-out weighted residual over a log grid of strengths (relative to the
+// data's mean curvature per region); the smallest wins, ties go to the
+// smoother fit.
+double ChooseStrength(const DensityBasis& b, const MatrixXd& ridge, DensityState* st) {
+  const int K = b.K, folds = static_cast<int>(st->train.size());
+  double best = std::numeric_limits<double>::infinity();
+  double chosen = st->lambda_rel;
+  for (int e = 12; e >= -7; --e) {
+    const double rel = e == -7 ? 0.0 : std::pow(10.0, e);
+    double cv = 0;
+    for (int f = 0; f < folds; ++f) {
+      const double tr_scale = std::max(st->train[f].H.trace() / K, 1e-300);
+      const VectorXd uf = NonNegativeQp(st->train[f].H + rel * tr_scale / b.l_scale * b.L + ridge, st->train[f].g,
+                                        &st->qp_iterations);
+      cv += st->held[f].Value(uf);
+    }
+    if (cv < best * (1 - 1e-9)) best = cv, chosen = rel;
+  }
+  return chosen;
+}
+
+// One re-weighting round: GLS sums at the current pi, the data term, the
+// strength (when chosen), and the non-negative solve.
+absl::Status DensityRound(const GlsData& gls, const DensityBasis& b, const RegionModel& regions,
+                          const InertiaOptions& o, int round, int folds, bool choose, DensityState* st,
+                          MethodOutput* out) {
+  const int K = b.K;
+  const bool last = round == o.reweighting_rounds - 1;
+  AccumulateGls(gls, st->pi, &st->total, folds, &st->blocks, last ? &st->whiteners : nullptr);
+  if (round == 0) {
+    if (absl::Status s = CheckComInBoundingBox(st->total, b.parameter_scale, o); !s.ok()) return s;
+  }
+  bool corrected = false;
+  const Matrix10d A = BiasCorrected(st->total, b.parameter_scale, &corrected);
+  if (corrected && last) out->notes.push_back("errors-in-variables bias correction applied");
+  st->full = Project(A, st->total.b, st->total.c, b.Phi_u);
+  out->info = st->total.A;
+  // A small ridge keeps the QP strictly convex when K exceeds what the
+  // data determine and no smoothing is used.
+  const double h_scale = std::max(st->full.H.trace() / K, 1e-300);
+  const MatrixXd ridge = 1e-10 * h_scale * MatrixXd::Identity(K, K);
+  FoldQuadratics(b, folds, st);
+  if (choose && K > 1 && !regions.neighbours.empty()) st->lambda_rel = ChooseStrength(b, ridge, st);
+  st->Hreg = st->full.H + st->lambda_rel * h_scale / b.l_scale * b.L + ridge;
+  st->u = NonNegativeQp(st->Hreg, st->full.g, &st->qp_iterations);
+  st->pi = b.Phi_u * st->u;
+  return absl::OkStatus();
+}
+
+// Standard errors of the densities and the covariance of pi on the free set
+// (u > 0): Q^-1 H Q^-1 with Q = H + lambda L.
+void DensityCovariance(const DensityBasis& b, const DensityState& st, MethodOutput* out) {
+  std::vector<int> idx;
+  for (int r = 0; r < b.K; ++r)
+    if (st.u(r) > 0) idx.push_back(r);
+  const int m = static_cast<int>(idx.size());
+  MatrixXd Qf(m, m), Hf(m, m);
+  for (int a = 0; a < m; ++a)
+    for (int c = 0; c < m; ++c) Qf(a, c) = st.Hreg(idx[a], idx[c]), Hf(a, c) = st.full.H(idx[a], idx[c]);
+  out->density_se.assign(b.K, 0.0);
+  if (m == 0) return;
+  const MatrixXd Qi = Qf.ldlt().solve(MatrixXd::Identity(m, m));
+  const MatrixXd cov_u = Qi * Hf * Qi;
+  MatrixXd Pf(10, m);
+  for (int a = 0; a < m; ++a) {
+    out->density_se[idx[a]] = b.rho_ref * std::sqrt(std::max(cov_u(a, a), 0.0));
+    Pf.col(a) = b.Phi_u.col(idx[a]);
+  }
+  out->cov = Pf * cov_u * Pf.transpose();
+}
+
+// Contradiction statistic: held-out residual per sample of DENSITY against
+// the free 10-parameter GLS fit (the model CONSTRAINED regularises), each
+// fitted on the other blocks with the last round's weights.
+void HeldOutContradiction(const GlsData& gls, const DensityBasis& b, int folds, DensityState* st,
+                          MethodOutput* out) {
+  const int n = static_cast<int>(gls.kin.size()), K = b.K;
+  std::vector<Vector10d> pi_density(folds), pi_free(folds);
+  for (int f = 0; f < folds; ++f) {
+    const double tr_scale = std::max(st->train[f].H.trace() / K, 1e-300);
+    const double h_scale = std::max(st->full.H.trace() / K, 1e-300);
+    const VectorXd uf = NonNegativeQp(st->train[f].H + st->lambda_rel * tr_scale / b.l_scale * b.L +
+                                          1e-10 * h_scale * MatrixXd::Identity(K, K),
+                                      st->train[f].g, &st->qp_iterations);
+    pi_density[f] = b.Phi_u * uf;
+    pi_free[f] = FreeGls(st->total.A - st->blocks[f].A, st->total.b - st->blocks[f].b, b.parameter_scale);
+  }
+  double sum_d = 0, sum_d2 = 0, res_density = 0, res_free = 0;
+  double raw_density = 0, raw_free = 0, raw_wrench = 0;  // unweighted, for the physical size
+  for (int k = 0; k < n; ++k) {
+    const int f = BlockOf(k, n, folds);
+    const Vector6d ed = gls.Y[k] * pi_density[f] - gls.wrench[k];
+    const Vector6d ef = gls.Y[k] * pi_free[f] - gls.wrench[k];
+    const double rd = (st->whiteners[k] * ed).squaredNorm();
+    const double rf = (st->whiteners[k] * ef).squaredNorm();
+    res_density += rd, res_free += rf;
+    sum_d += rd - rf, sum_d2 += (rd - rf) * (rd - rf);
+    raw_density += ed.squaredNorm(), raw_free += ef.squaredNorm(), raw_wrench += gls.wrench[k].squaredNorm();
+  }
+  out->heldout_excess = raw_wrench > 0 ? (std::sqrt(raw_density) - std::sqrt(raw_free)) / std::sqrt(raw_wrench) : 0;
+  const double mean = sum_d / n;
+  const double var = std::max(sum_d2 / n - mean * mean, 0.0);
+  out->heldout_ratio = res_free > 0 ? res_density / res_free : (res_density > 0 ? HUGE_VAL : 1.0);
+  out->heldout_z = var > 0 ? mean / std::sqrt(var / n) : (mean > 0 ? HUGE_VAL : 0.0);
+}
+
 }  // namespace
 
 absl::StatusOr<MethodOutput> FitDensity(const InertiaSamples& s, const InertiaOptions& o, const RegionModel& regions) {
@@ -127,159 +308,31 @@ absl::StatusOr<MethodOutput> FitDensity(const InertiaSamples& s, const InertiaOp
   for (const std::string& n : regions.notes) out.notes.push_back(n);
   const GlsData gls = PrepareGls(s, o, &out.notes);
   const int n = static_cast<int>(gls.kin.size());
-  const int K = static_cast<int>(regions.regions.size());
-  const double volume = regions.total.volume;
-
-  // Columns: standard parameters of each region at 1 kg/m^3.
-  MatrixXd Phi(10, K);
-  for (int r = 0; r < K; ++r) Phi.col(r) = regions.regions[r].moments.Standard(1.0);
-  const Vector10d phi_total = regions.total.Standard(1.0);
-
-  // Reference density: the uniform solid fitted to the unweighted equations.
-  double rho_ref = phi_total.dot(gls.Ytb) / std::max(phi_total.dot(gls.YtY * phi_total), 1e-300);
-  if (!(rho_ref > 0) || !std::isfinite(rho_ref)) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        o.mesh_name, ": the data give a non-positive mass for the mesh (", rho_ref * volume,
-        " kg): check the force signs, gravity and the mesh's scale"));
-  }
-  const double length = std::sqrt(std::max(regions.total.second.trace() / volume, 1e-12));
-  out.scale = ParameterScale(rho_ref * volume, length);
-
-  // Smoothness penalty sum_ij w_ij (u_i - u_j)^2 = u^T L u.
-  MatrixXd L = MatrixXd::Zero(K, K);
-  for (size_t e = 0; e < regions.neighbours.size(); ++e) {
-    const int i = regions.neighbours[e][0], j = regions.neighbours[e][1];
-    const double w = regions.neighbour_weights[e];
-    L(i, i) += w, L(j, j) += w, L(i, j) -= w, L(j, i) -= w;
-  }
-  const double l_scale = L.trace() > 0 ? L.trace() / K : 1.0;
-  const MatrixXd Phi_u = Phi * rho_ref;  // pi = Phi_u u
+  absl::StatusOr<DensityBasis> basis = MakeDensityBasis(gls, regions, o);
+  if (!basis.ok()) return basis.status();
+  out.scale = basis->parameter_scale;
 
   const int folds = std::clamp(o.density_folds, 2, std::max(2, n / 10));
   const bool choose = o.density_regularization < 0;
-  Vector10d pi = phi_total * rho_ref;
-  VectorXd u = VectorXd::Ones(K);
-  double lambda_rel = choose ? 0.0 : o.density_regularization;
-  std::vector<GlsSums> blocks;
-  GlsSums last_total;
-  std::vector<Matrix6d> whiteners;
-  Quadratic full;
-  std::vector<Quadratic> train, held;
-  MatrixXd Hreg;
-  int qp_iterations = 0;
+  DensityState st;
+  st.pi = basis->pi_uniform;
+  st.u = VectorXd::Ones(basis->K);
+  st.lambda_rel = choose ? 0.0 : o.density_regularization;
   for (int round = 0; round < o.reweighting_rounds; ++round) {
     if (o.interrupt && o.interrupt()) return absl::CancelledError("interrupted");
-    const bool last = round == o.reweighting_rounds - 1;
-    GlsSums total;
-    AccumulateGls(gls, pi, &total, folds, &blocks, last ? &whiteners : nullptr);
-    last_total = total;
-    if (round == 0) {
-      if (absl::Status st = CheckComInBoundingBox(total, out.scale, o); !st.ok()) return st;
-    }
-    bool corrected = false;
-    const Matrix10d A = BiasCorrected(total, out.scale, &corrected);
-    if (corrected && last) out.notes.push_back("errors-in-variables bias correction applied");
-    full = Project(A, total.b, total.c, Phi_u);
-    out.info = total.A;
-    // A small ridge keeps the QP strictly convex when K exceeds what the
-    // data determine and no smoothing is used.
-    const double h_scale = std::max(full.H.trace() / K, 1e-300);
-    const MatrixXd ridge = 1e-10 * h_scale * MatrixXd::Identity(K, K);
-    train.assign(folds, Quadratic());
-    held.assign(folds, Quadratic());
-    for (int f = 0; f < folds; ++f) {
-      GlsSums rest = total;
-      rest.A -= blocks[f].A, rest.b -= blocks[f].b, rest.c -= blocks[f].c, rest.bias -= blocks[f].bias;
-      bool fold_corrected = false;
-      train[f] = Project(BiasCorrected(rest, out.scale, &fold_corrected), rest.b, rest.c, Phi_u);
-      held[f] = Project(blocks[f].A, blocks[f].b, blocks[f].c, Phi_u);
-    }
-    if (choose && K > 1 && !regions.neighbours.empty()) {
-      // Held-out weighted residual over a log grid of strengths (relative to
-      // the data's mean curvature per region); the smallest wins, ties go to
-      // the smoother fit.
-      double best = std::numeric_limits<double>::infinity();
-      for (int e = 12; e >= -7; --e) {
-        const double rel = e == -7 ? 0.0 : std::pow(10.0, e);
-        double cv = 0;
-        for (int f = 0; f < folds; ++f) {
-          const double tr_scale = std::max(train[f].H.trace() / K, 1e-300);
-          const VectorXd uf =
-              NonNegativeQp(train[f].H + rel * tr_scale / l_scale * L + ridge, train[f].g, &qp_iterations);
-          cv += held[f].Value(uf);
-        }
-        if (cv < best * (1 - 1e-9)) best = cv, lambda_rel = rel;
-      }
-    }
-    Hreg = full.H + lambda_rel * h_scale / l_scale * L + ridge;
-    u = NonNegativeQp(Hreg, full.g, &qp_iterations);
-    pi = Phi_u * u;
+    if (absl::Status r = DensityRound(gls, *basis, regions, o, round, folds, choose, &st, &out); !r.ok()) return r;
     if (o.progress) o.progress(0.9 * (round + 1) / o.reweighting_rounds);
   }
-  out.pi = pi;
-  out.iterations = qp_iterations;
+  out.pi = st.pi;
+  out.iterations = st.qp_iterations;  // the fit's own solves (not the contradiction test's)
   out.samples_used = n;
-  out.regularization = lambda_rel;
+  out.regularization = st.lambda_rel;
   out.regularization_rule = choose ? absl::StrCat("held-out time blocks (", folds, " folds)") : "given";
-  out.densities.resize(K);
-  for (int r = 0; r < K; ++r) out.densities[r] = rho_ref * u(r);
-
-  // Covariance of the densities on the free set: Q^-1 H Q^-1 (Q = H + lambda L).
-  {
-    std::vector<int> idx;
-    for (int r = 0; r < K; ++r)
-      if (u(r) > 0) idx.push_back(r);
-    const int m = static_cast<int>(idx.size());
-    MatrixXd Qf(m, m), Hf(m, m);
-    for (int a = 0; a < m; ++a)
-      for (int b = 0; b < m; ++b) Qf(a, b) = Hreg(idx[a], idx[b]), Hf(a, b) = full.H(idx[a], idx[b]);
-    out.density_se.assign(K, 0.0);
-    if (m > 0) {
-      const MatrixXd Qi = Qf.ldlt().solve(MatrixXd::Identity(m, m));
-      const MatrixXd cov_u = Qi * Hf * Qi;
-      MatrixXd Pf(10, m);
-      for (int a = 0; a < m; ++a) {
-        out.density_se[idx[a]] = rho_ref * std::sqrt(std::max(cov_u(a, a), 0.0));
-        Pf.col(a) = Phi_u.col(idx[a]);
-      }
-      out.cov = Pf * cov_u * Pf.transpose();
-    }
-  }
-
-  // Contradiction statistic: held-out residual per sample of DENSITY against
-  // the free 10-parameter GLS fit (the model CONSTRAINED regularises), each
-  // fitted on the other blocks.
-  {
-    std::vector<Vector10d> pi_density(folds), pi_free(folds);
-    for (int f = 0; f < folds; ++f) {
-      const double tr_scale = std::max(train[f].H.trace() / K, 1e-300);
-      const double h_scale = std::max(full.H.trace() / K, 1e-300);
-      const VectorXd uf = NonNegativeQp(train[f].H + lambda_rel * tr_scale / l_scale * L +
-                                            1e-10 * h_scale * MatrixXd::Identity(K, K),
-                                        train[f].g, &qp_iterations);
-      pi_density[f] = Phi_u * uf;
-      // The free model on the same (last round's) weights.
-      pi_free[f] = FreeGls(last_total.A - blocks[f].A, last_total.b - blocks[f].b, out.scale);
-    }
-    double sum_d = 0, sum_d2 = 0, res_density = 0, res_free = 0;
-    double raw_density = 0, raw_free = 0, raw_wrench = 0;  // unweighted, for the physical size
-    for (int k = 0; k < n; ++k) {
-      const int f = BlockOf(k, n, folds);
-      const Vector6d ed = gls.Y[k] * pi_density[f] - gls.wrench[k];
-      const Vector6d ef = gls.Y[k] * pi_free[f] - gls.wrench[k];
-      const double rd = (whiteners[k] * ed).squaredNorm();
-      const double rf = (whiteners[k] * ef).squaredNorm();
-      res_density += rd, res_free += rf;
-      sum_d += rd - rf, sum_d2 += (rd - rf) * (rd - rf);
-      raw_density += ed.squaredNorm(), raw_free += ef.squaredNorm(), raw_wrench += gls.wrench[k].squaredNorm();
-    }
-    out.heldout_excess = raw_wrench > 0 ? (std::sqrt(raw_density) - std::sqrt(raw_free)) / std::sqrt(raw_wrench) : 0;
-    const double mean = sum_d / n;
-    const double var = std::max(sum_d2 / n - mean * mean, 0.0);
-    out.heldout_ratio = res_free > 0 ? res_density / res_free : (res_density > 0 ? HUGE_VAL : 1.0);
-    out.heldout_z = var > 0 ? mean / std::sqrt(var / n) : (mean > 0 ? HUGE_VAL : 0.0);
-  }
-  ResidualRms(gls.kin, gls.wrench, pi, &out.rms_force, &out.rms_torque);
+  out.densities.resize(basis->K);
+  for (int r = 0; r < basis->K; ++r) out.densities[r] = basis->rho_ref * st.u(r);
+  DensityCovariance(*basis, st, &out);
+  HeldOutContradiction(gls, *basis, folds, &st, &out);
+  ResidualRms(gls.kin, gls.wrench, st.pi, &out.rms_force, &out.rms_torque);
   return out;
 }
 

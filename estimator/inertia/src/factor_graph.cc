@@ -310,103 +310,15 @@ class Problem {
     if (in_.R.determinant() < 0) in_.R.col(2) = -in_.R.col(2);
   }
 
-  // Cost; with `ne`, also the Gauss-Newton normal equations.
+  // Cost; with `ne`, also the Gauss-Newton normal equations. The factors
+  // are added in a fixed order (dynamics, poses, constraints, prior).
   double Evaluate(NormalEquations* ne) const {
     double cost = 0;
     if (ne) ne->Reset(n_);
-    const Vec3& g = o_.gravity;
-    for (int k = 0; k + 2 < n_; ++k) {
-      const double dt1 = s_.samples[k + 1].t - s_.samples[k].t, dt2 = s_.samples[k + 2].t - s_.samples[k + 1].t;
-      const Pose &a = poses_[k], &b = poses_[k + 1], &cpose = poses_[k + 2];
-      Vector6d e;
-      if (!ne) {
-        e = Dynamics<double>(a.R, a.p, b.R, b.p, cpose.R, cpose.p, dt1, dt2, in_.m, in_.c, in_.L, in_.R, g,
-                             wrench_[k]);
-        cost += 0.5 * (whiten_[k] * e).squaredNorm();
-        continue;
-      }
-      M3<Jet> R[3];
-      V3<Jet> P[3];
-      const Pose* ps[3] = {&a, &b, &cpose};
-      for (int q = 0; q < 3; ++q) {
-        V3<Jet> d(Var(0, 6 * q), Var(0, 6 * q + 1), Var(0, 6 * q + 2));
-        R[q] = ps[q]->R.cast<Jet>() * (M3<Jet>::Identity() + Hat<Jet>(d));
-        P[q] = ps[q]->p.cast<Jet>() + V3<Jet>(Var(0, 6 * q + 3), Var(0, 6 * q + 4), Var(0, 6 * q + 5));
-      }
-      const Jet m = Var(in_.m, 18);
-      const V3<Jet> c(Var(in_.c(0), 19), Var(in_.c(1), 20), Var(in_.c(2), 21));
-      const V3<Jet> L(Var(in_.L(0), 22), Var(in_.L(1), 23), Var(in_.L(2), 24));
-      const V3<Jet> dr(Var(0, 25), Var(0, 26), Var(0, 27));
-      const M3<Jet> Rl = in_.R.cast<Jet>() * (M3<Jet>::Identity() + Hat<Jet>(dr));
-      const Eigen::Matrix<Jet, 6, 1> ej =
-          Dynamics<Jet>(R[0], P[0], R[1], P[1], R[2], P[2], dt1, dt2, m, c, L, Rl, g, wrench_[k]);
-      Eigen::Matrix<double, 6, kLocal> Jl;
-      for (int i = 0; i < 6; ++i) e(i) = ej(i).value(), Jl.row(i) = ej(i).derivatives().transpose();
-      const Eigen::Matrix<double, 6, kLocal> Jw = whiten_[k] * Jl;
-      const Vector6d ew = whiten_[k] * e;
-      cost += 0.5 * ew.squaredNorm();
-      const Eigen::Matrix<double, kLocal, kLocal> JtJ = Jw.transpose() * Jw;
-      const Eigen::Matrix<double, kLocal, 1> Jte = Jw.transpose() * ew;
-      for (int q = 0; q < 3; ++q) {
-        for (int q2 = q; q2 < 3; ++q2) ne->B[k + q][q2 - q] += JtJ.block<6, 6>(6 * q, 6 * q2);
-        ne->E[k + q] += JtJ.block<6, 10>(6 * q, 18);
-        ne->gp[k + q] += Jte.segment<6>(6 * q);
-      }
-      ne->C += JtJ.block<10, 10>(18, 18);
-      ne->gi += Jte.segment<10>(18);
-    }
-    // Pose measurement factors.
-    for (int k = 0; k < n_; ++k) {
-      const Vec3 phi = LogSO3(meas_[k].R.transpose() * poses_[k].R);
-      const Vec3 dp = poses_[k].p - meas_[k].p;
-      cost += 0.5 * (phi.squaredNorm() / (sig_r_ * sig_r_) + dp.squaredNorm() / (sig_p_ * sig_p_));
-      if (ne) {
-        const Eigen::Matrix3d Jr = InvRightJacobian(phi) / sig_r_;
-        ne->B[k][0].topLeftCorner<3, 3>() += Jr.transpose() * Jr;
-        ne->B[k][0].bottomRightCorner<3, 3>().diagonal().array() += 1.0 / (sig_p_ * sig_p_);
-        ne->gp[k].head<3>() += Jr.transpose() * (phi / sig_r_);
-        ne->gp[k].tail<3>() += dp / (sig_p_ * sig_p_);
-      }
-    }
-    // Constraint factors on the inertial block, active only when violated.
-    auto add_inertial = [&](double r, const Vector10d& j) {
-      cost += 0.5 * r * r;
-      if (ne) {
-        ne->C += j * j.transpose();
-        ne->gi += j * r;
-      }
-    };
-    const double sm = o_.fg_constraint_sigma * m_scale_, sl = o_.fg_constraint_sigma * m_scale_ * l_scale_ * l_scale_,
-                 sc = o_.fg_constraint_sigma * l_scale_;
-    const double m_min = 1e-6 * m_scale_;
-    if (in_.m < m_min) add_inertial((m_min - in_.m) / sm, -Vector10d::Unit(0) / sm);
-    for (int i = 0; i < 3; ++i)
-      if (in_.L(i) < 0) add_inertial(-in_.L(i) / sl, -Vector10d::Unit(4 + i) / sl);
-    if (hull_) {
-      for (size_t j = 0; j < hull_->normals.size(); ++j) {
-        const double v = hull_->normals[j].dot(in_.c) - hull_->offsets[j];
-        if (v > 0) {
-          Vector10d jac = Vector10d::Zero();
-          jac.segment<3>(1) = hull_->normals[j] / sc;
-          add_inertial(v / sc, jac);
-        }
-      }
-    }
-    // Trace prior (eq. 20).
-    if (o_.prior && o_.prior->weight > 0) {
-      const double sw = std::sqrt(o_.prior->weight);
-      const Eigen::Matrix4d P0inv = PseudoInertia(o_.prior->params).inverse();
-      const Jet m = Var(in_.m, 18);
-      const V3<Jet> c(Var(in_.c(0), 19), Var(in_.c(1), 20), Var(in_.c(2), 21));
-      const V3<Jet> L(Var(in_.L(0), 22), Var(in_.L(1), 23), Var(in_.L(2), 24));
-      const V3<Jet> dr(Var(0, 25), Var(0, 26), Var(0, 27));
-      const M3<Jet> Rl = in_.R.cast<Jet>() * (M3<Jet>::Identity() + Hat<Jet>(dr));
-      const Eigen::Matrix<Jet, 4, 4> P = Pseudo<Jet>(m, c, L, Rl);
-      Jet tr = Const(0);
-      for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j) tr += P0inv(i, j) * P(j, i);
-      add_inertial(sw * (tr.value() - 4.0), sw * tr.derivatives().segment<10>(18));
-    }
+    for (int k = 0; k + 2 < n_; ++k) AddDynamicsFactor(k, ne, &cost);
+    AddPoseFactors(ne, &cost);
+    AddConstraintFactors(ne, &cost);
+    AddTracePrior(ne, &cost);
     return cost;
   }
 
@@ -441,6 +353,111 @@ class Problem {
   std::vector<Pose> poses_;
 
  private:
+  // Dynamics factor D_k from poses k, k+1, k+2 (with `ne`: its Jacobian by
+  // forward-mode AutoDiff into the normal equations).
+  void AddDynamicsFactor(int k, NormalEquations* ne, double* cost) const {
+    const Vec3& g = o_.gravity;
+    const double dt1 = s_.samples[k + 1].t - s_.samples[k].t, dt2 = s_.samples[k + 2].t - s_.samples[k + 1].t;
+    const Pose &a = poses_[k], &b = poses_[k + 1], &cpose = poses_[k + 2];
+    Vector6d e;
+    if (!ne) {
+      e = Dynamics<double>(a.R, a.p, b.R, b.p, cpose.R, cpose.p, dt1, dt2, in_.m, in_.c, in_.L, in_.R, g,
+                           wrench_[k]);
+      *cost += 0.5 * (whiten_[k] * e).squaredNorm();
+      return;
+    }
+    M3<Jet> R[3];
+    V3<Jet> P[3];
+    const Pose* ps[3] = {&a, &b, &cpose};
+    for (int q = 0; q < 3; ++q) {
+      V3<Jet> d(Var(0, 6 * q), Var(0, 6 * q + 1), Var(0, 6 * q + 2));
+      R[q] = ps[q]->R.cast<Jet>() * (M3<Jet>::Identity() + Hat<Jet>(d));
+      P[q] = ps[q]->p.cast<Jet>() + V3<Jet>(Var(0, 6 * q + 3), Var(0, 6 * q + 4), Var(0, 6 * q + 5));
+    }
+    const Jet m = Var(in_.m, 18);
+    const V3<Jet> c(Var(in_.c(0), 19), Var(in_.c(1), 20), Var(in_.c(2), 21));
+    const V3<Jet> L(Var(in_.L(0), 22), Var(in_.L(1), 23), Var(in_.L(2), 24));
+    const V3<Jet> dr(Var(0, 25), Var(0, 26), Var(0, 27));
+    const M3<Jet> Rl = in_.R.cast<Jet>() * (M3<Jet>::Identity() + Hat<Jet>(dr));
+    const Eigen::Matrix<Jet, 6, 1> ej =
+        Dynamics<Jet>(R[0], P[0], R[1], P[1], R[2], P[2], dt1, dt2, m, c, L, Rl, g, wrench_[k]);
+    Eigen::Matrix<double, 6, kLocal> Jl;
+    for (int i = 0; i < 6; ++i) e(i) = ej(i).value(), Jl.row(i) = ej(i).derivatives().transpose();
+    const Eigen::Matrix<double, 6, kLocal> Jw = whiten_[k] * Jl;
+    const Vector6d ew = whiten_[k] * e;
+    *cost += 0.5 * ew.squaredNorm();
+    const Eigen::Matrix<double, kLocal, kLocal> JtJ = Jw.transpose() * Jw;
+    const Eigen::Matrix<double, kLocal, 1> Jte = Jw.transpose() * ew;
+    for (int q = 0; q < 3; ++q) {
+      for (int q2 = q; q2 < 3; ++q2) ne->B[k + q][q2 - q] += JtJ.block<6, 6>(6 * q, 6 * q2);
+      ne->E[k + q] += JtJ.block<6, 10>(6 * q, 18);
+      ne->gp[k + q] += Jte.segment<6>(6 * q);
+    }
+    ne->C += JtJ.block<10, 10>(18, 18);
+    ne->gi += Jte.segment<10>(18);
+  }
+
+  // Pose measurement factors.
+  void AddPoseFactors(NormalEquations* ne, double* cost) const {
+    for (int k = 0; k < n_; ++k) {
+      const Vec3 phi = LogSO3(meas_[k].R.transpose() * poses_[k].R);
+      const Vec3 dp = poses_[k].p - meas_[k].p;
+      *cost += 0.5 * (phi.squaredNorm() / (sig_r_ * sig_r_) + dp.squaredNorm() / (sig_p_ * sig_p_));
+      if (ne) {
+        const Eigen::Matrix3d Jr = InvRightJacobian(phi) / sig_r_;
+        ne->B[k][0].topLeftCorner<3, 3>() += Jr.transpose() * Jr;
+        ne->B[k][0].bottomRightCorner<3, 3>().diagonal().array() += 1.0 / (sig_p_ * sig_p_);
+        ne->gp[k].head<3>() += Jr.transpose() * (phi / sig_r_);
+        ne->gp[k].tail<3>() += dp / (sig_p_ * sig_p_);
+      }
+    }
+  }
+
+  // A residual r on the inertial block with Jacobian j.
+  static void AddInertialResidual(double r, const Vector10d& j, NormalEquations* ne, double* cost) {
+    *cost += 0.5 * r * r;
+    if (ne) {
+      ne->C += j * j.transpose();
+      ne->gi += j * r;
+    }
+  }
+
+  // Constraint factors on the inertial block, active only when violated.
+  void AddConstraintFactors(NormalEquations* ne, double* cost) const {
+    const double sm = o_.fg_constraint_sigma * m_scale_, sl = o_.fg_constraint_sigma * m_scale_ * l_scale_ * l_scale_,
+                 sc = o_.fg_constraint_sigma * l_scale_;
+    const double m_min = 1e-6 * m_scale_;
+    if (in_.m < m_min) AddInertialResidual((m_min - in_.m) / sm, -Vector10d::Unit(0) / sm, ne, cost);
+    for (int i = 0; i < 3; ++i)
+      if (in_.L(i) < 0) AddInertialResidual(-in_.L(i) / sl, -Vector10d::Unit(4 + i) / sl, ne, cost);
+    if (!hull_) return;
+    for (size_t j = 0; j < hull_->normals.size(); ++j) {
+      const double v = hull_->normals[j].dot(in_.c) - hull_->offsets[j];
+      if (v > 0) {
+        Vector10d jac = Vector10d::Zero();
+        jac.segment<3>(1) = hull_->normals[j] / sc;
+        AddInertialResidual(v / sc, jac, ne, cost);
+      }
+    }
+  }
+
+  // Trace prior (eq. 20).
+  void AddTracePrior(NormalEquations* ne, double* cost) const {
+    if (!o_.prior || !(o_.prior->weight > 0)) return;
+    const double sw = std::sqrt(o_.prior->weight);
+    const Eigen::Matrix4d P0inv = PseudoInertia(o_.prior->params).inverse();
+    const Jet m = Var(in_.m, 18);
+    const V3<Jet> c(Var(in_.c(0), 19), Var(in_.c(1), 20), Var(in_.c(2), 21));
+    const V3<Jet> L(Var(in_.L(0), 22), Var(in_.L(1), 23), Var(in_.L(2), 24));
+    const V3<Jet> dr(Var(0, 25), Var(0, 26), Var(0, 27));
+    const M3<Jet> Rl = in_.R.cast<Jet>() * (M3<Jet>::Identity() + Hat<Jet>(dr));
+    const Eigen::Matrix<Jet, 4, 4> P = Pseudo<Jet>(m, c, L, Rl);
+    Jet tr = Const(0);
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) tr += P0inv(i, j) * P(j, i);
+    AddInertialResidual(sw * (tr.value() - 4.0), sw * tr.derivatives().segment<10>(18), ne, cost);
+  }
+
   const InertiaSamples& s_;
   const InertiaOptions& o_;
   const ConvexHull* hull_;
@@ -453,14 +470,10 @@ class Problem {
   Inertial in_;
 };
 
-}  // namespace
-
-absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const InertiaOptions& o,
-                                            const ConvexHull* hull) {
-  MethodOutput out;
+// The factor graph's finite differences need rotations below 90 degrees
+// between consecutive samples.
+absl::Status CheckRotationSteps(const InertiaSamples& s) {
   const int n = static_cast<int>(s.samples.size());
-  out.notes.push_back("kinematics: three consecutive poses per dynamics factor (eq. 10-17)");
-  if (s.HasKinematics()) out.notes.push_back("measured kinematics ignored by factor-graph (poses only, as the paper)");
   for (int k = 0; k + 1 < n; ++k) {
     const Eigen::Matrix3d Rr =
         s.samples[k].orientation.toRotationMatrix().transpose() * s.samples[k + 1].orientation.toRotationMatrix();
@@ -472,9 +485,19 @@ absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const Inert
           "finite differences need a higher sample rate"));
     }
   }
+  return absl::OkStatus();
+}
 
-  // Initial m, m c from the force rows with three-point kinematics.
-  const std::vector<KinPoint> kin = FiniteDifferenceKinematics(s, o.gravity);
+// Neutral initial values: m and m c from the force rows with three-point
+// kinematics (the prior's when given), a ball of radius `len` around c.
+struct InitialInertial {
+  double m0 = 1;
+  Vec3 c0 = Vec3::Zero();
+  double len = 0.1;
+};
+
+InitialInertial InitialFromForces(const InertiaSamples& s, const InertiaOptions& o, const ConvexHull* hull,
+                                  const std::vector<KinPoint>& kin) {
   Eigen::MatrixXd Yf(3 * kin.size(), 4);
   Eigen::VectorXd bf(3 * kin.size());
   for (size_t i = 0; i < kin.size(); ++i) {
@@ -482,42 +505,38 @@ absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const Inert
     Yf.middleRows<3>(3 * i) = Y.topLeftCorner<3, 4>();
     bf.segment<3>(3 * i) = SampleWrench(s.samples[kin[i].index], s.source).head<3>();
   }
+  InitialInertial init;
   Eigen::Vector4d mh = Yf.colPivHouseholderQr().solve(bf);
-  double m0 = mh(0);
-  if (!(m0 > 0) || !std::isfinite(m0)) {
-    m0 = std::max(bf.norm() / std::sqrt(static_cast<double>(kin.size())) / std::max(o.gravity.norm(), 1e-9), 1e-3);
+  init.m0 = mh(0);
+  if (!(init.m0 > 0) || !std::isfinite(init.m0)) {
+    init.m0 =
+        std::max(bf.norm() / std::sqrt(static_cast<double>(kin.size())) / std::max(o.gravity.norm(), 1e-9), 1e-3);
     mh.tail<3>().setZero();
   }
-  Vec3 c0 = mh.tail<3>() / m0;
-  if (!c0.allFinite()) c0.setZero();
-  double len = hull ? 0.25 * hull->size : std::max(0.05, 0.5 * c0.norm());
+  init.c0 = mh.tail<3>() / init.m0;
+  if (!init.c0.allFinite()) init.c0.setZero();
+  init.len = hull ? 0.25 * hull->size : std::max(0.05, 0.5 * init.c0.norm());
   if (o.prior) {
-    m0 = o.prior->params.mass;
-    c0 = o.prior->params.com;
+    init.m0 = o.prior->params.mass;
+    init.c0 = o.prior->params.com;
   }
-  Problem prob(s, o, hull);
-  prob.SetScales(m0, std::max(len, c0.norm()));
-  prob.Initialise(m0, c0, len);
-  if (o.prior) {
-    // Start from the prior's inertia.
-    const Eigen::Matrix4d P0 = PseudoInertia(o.prior->params);
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(P0.topLeftCorner<3, 3>());
-    prob.inertial().L = es.eigenvalues();
-    prob.inertial().R = es.eigenvectors();
-    if (prob.inertial().R.determinant() < 0) prob.inertial().R.col(2) *= -1;
-  }
+  return init;
+}
 
-  NormalEquations ne;
-  double cost = prob.Evaluate(&ne);
+// Batch Levenberg-Marquardt from the problem's current values; `ne` and
+// `cost` hold the normal equations and cost at the answer. Returns the
+// number of iterations.
+absl::StatusOr<int> LevenbergMarquardt(Problem& prob, const InertiaOptions& o, NormalEquations* ne, double* cost) {
+  *cost = prob.Evaluate(ne);
   double lambda = 1e-4;
   int it = 0;
   for (; it < o.max_iterations; ++it) {
     if (o.interrupt && o.interrupt()) return absl::CancelledError("interrupted");
     bool accepted = false;
-    double new_cost = cost;
+    double new_cost = *cost;
     for (int tries = 0; tries < 12 && !accepted; ++tries) {
       Eigen::VectorXd step;
-      if (!SolveStep(ne, lambda, &step, nullptr)) {
+      if (!SolveStep(*ne, lambda, &step, nullptr)) {
         lambda *= 10;
         continue;
       }
@@ -525,7 +544,7 @@ absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const Inert
       const std::vector<Pose> saved_poses = prob.poses_;
       prob.Retract(step);
       new_cost = prob.Evaluate(nullptr);
-      if (std::isfinite(new_cost) && new_cost < cost) {
+      if (std::isfinite(new_cost) && new_cost < *cost) {
         accepted = true;
         lambda = std::max(lambda / 3, 1e-12);
       } else {
@@ -536,34 +555,68 @@ absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const Inert
     }
     if (o.progress) o.progress(0.9 * (it + 1) / o.max_iterations);
     if (!accepted) break;
-    const double dec = cost - new_cost;
-    cost = prob.Evaluate(&ne);
-    if (dec <= 1e-10 * cost) {
+    const double dec = *cost - new_cost;
+    *cost = prob.Evaluate(ne);
+    if (dec <= 1e-10 * *cost) {
       ++it;
       break;
     }
   }
-  out.iterations = it;
+  return it;
+}
+
+// Marginal covariance of the inertial block (Gauss-Newton), mapped to pi;
+// zero when the normal equations are singular or the map is not finite.
+Matrix10d InertialCovariance(Problem& prob, const NormalEquations& ne) {
+  Matrix10d cov_t;
+  if (!SolveStep(ne, 0.0, nullptr, &cov_t)) return Matrix10d::Zero();
+  Matrix10d Jp;
+  for (int i = 0; i < 10; ++i) {
+    Inertial a = prob.inertial(), b = prob.inertial();
+    Vector10d d = Vector10d::Zero();
+    d(i) = 1e-7;
+    a.Retract(d);
+    b.Retract(-d);
+    Jp.col(i) = (a.Standard() - b.Standard()) / 2e-7;
+  }
+  const Matrix10d c = Jp * (0.5 * (cov_t + cov_t.transpose())) * Jp.transpose();
+  return c.allFinite() ? c : Matrix10d::Zero();
+}
+
+}  // namespace
+
+absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const InertiaOptions& o,
+                                            const ConvexHull* hull) {
+  MethodOutput out;
+  const int n = static_cast<int>(s.samples.size());
+  out.notes.push_back("kinematics: three consecutive poses per dynamics factor (eq. 10-17)");
+  if (s.HasKinematics()) out.notes.push_back("measured kinematics ignored by factor-graph (poses only, as the paper)");
+  if (absl::Status st = CheckRotationSteps(s); !st.ok()) return st;
+
+  const std::vector<KinPoint> kin = FiniteDifferenceKinematics(s, o.gravity);
+  const InitialInertial init = InitialFromForces(s, o, hull, kin);
+  Problem prob(s, o, hull);
+  prob.SetScales(init.m0, std::max(init.len, init.c0.norm()));
+  prob.Initialise(init.m0, init.c0, init.len);
+  if (o.prior) {
+    // Start from the prior's inertia.
+    const Eigen::Matrix4d P0 = PseudoInertia(o.prior->params);
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(P0.topLeftCorner<3, 3>());
+    prob.inertial().L = es.eigenvalues();
+    prob.inertial().R = es.eigenvectors();
+    if (prob.inertial().R.determinant() < 0) prob.inertial().R.col(2) *= -1;
+  }
+
+  NormalEquations ne;
+  double cost = 0;
+  absl::StatusOr<int> it = LevenbergMarquardt(prob, o, &ne, &cost);
+  if (!it.ok()) return it.status();
+  out.iterations = *it;
   out.pi = prob.inertial().Standard();
   out.samples_used = std::max(0, n - 2);
   prob.DynamicsRms(&out.rms_force, &out.rms_torque);
-  out.notes.push_back(absl::StrFormat("Levenberg-Marquardt: %d iterations, final cost %.6g", it, cost));
-
-  // Marginal covariance of the inertial block (Gauss-Newton), mapped to pi.
-  Matrix10d cov_t;
-  if (SolveStep(ne, 0.0, nullptr, &cov_t)) {
-    Matrix10d Jp;
-    for (int i = 0; i < 10; ++i) {
-      Inertial a = prob.inertial(), b = prob.inertial();
-      Vector10d d = Vector10d::Zero();
-      d(i) = 1e-7;
-      a.Retract(d);
-      b.Retract(-d);
-      Jp.col(i) = (a.Standard() - b.Standard()) / 2e-7;
-    }
-    const Matrix10d c = Jp * (0.5 * (cov_t + cov_t.transpose())) * Jp.transpose();
-    if (c.allFinite()) out.cov = c;
-  }
+  out.notes.push_back(absl::StrFormat("Levenberg-Marquardt: %d iterations, final cost %.6g", *it, cost));
+  out.cov = InertialCovariance(prob, ne);
   // Excitation: three-point regressors whitened like the dynamics factors.
   double ms = 1, ls = 0.1;
   RoughScale(out.pi, hull, &ms, &ls);

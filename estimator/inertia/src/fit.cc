@@ -1,3 +1,9 @@
+// FitInertia (fit.h): validation of the samples and options, the method's
+// run (CONSTRAINED with the mesh as a prior; DENSITY with its fallback to
+// CONSTRAINED when the data contradict the mesh), and what every fit reports
+// besides the parameters: consistency, standard errors, excitation; the
+// text of DescribeFit; and two helpers the methods share (ResidualRms,
+// RoughScale).
 #include "tactforce/inertia/fit.h"
 
 #include <algorithm>
@@ -36,16 +42,6 @@ const char* ToString(InertiaMethod m) {
     case InertiaMethod::kFactorGraph: return "factor-graph";
     case InertiaMethod::kConstrained: return "constrained";
     case InertiaMethod::kDensity: return "density";
-  }
-  return "?";
-}
-
-const char* ProtoName(InertiaMethod m) {
-  switch (m) {
-    case InertiaMethod::kBaselineLs: return "INERTIA_METHOD_BASELINE_LS";
-    case InertiaMethod::kFactorGraph: return "INERTIA_METHOD_FACTOR_GRAPH";
-    case InertiaMethod::kConstrained: return "INERTIA_METHOD_CONSTRAINED";
-    case InertiaMethod::kDensity: return "INERTIA_METHOD_DENSITY";
   }
   return "?";
 }
@@ -357,6 +353,48 @@ absl::StatusOr<internal::MethodOutput> FitDensityOrFallBack(const InertiaSamples
   return c;
 }
 
+// Standard errors of (m, c, H_c) from the covariance of pi (first order).
+void SetStandardErrors(const internal::MethodOutput& r, InertiaFit* fit) {
+  auto reported = [](const Vector10d& pi) {
+    const InertialParameters p = InertialParameters::FromStandard(pi);
+    Vector10d out;
+    const auto in = p.inertia_com.ToArray();
+    out << p.mass, p.com, in[0], in[1], in[2], in[3], in[4], in[5];
+    return out;
+  };
+  internal::Matrix10d J;
+  for (int i = 0; i < 10; ++i) {
+    const double h = 1e-6 * r.scale(i);
+    Vector10d a = r.pi, b = r.pi;
+    a(i) += h;
+    b(i) -= h;
+    J.col(i) = (reported(a) - reported(b)) / (2 * h);
+  }
+  const internal::Matrix10d c = J * r.cov * J.transpose();
+  const Vector10d se = c.diagonal().cwiseMax(0.0).cwiseSqrt();
+  fit->mass_se = se(0);
+  fit->com_se = se.segment<3>(1);
+  fit->inertia_se = InertiaTensor::FromArray({se(4), se(5), se(6), se(7), se(8), se(9)});
+}
+
+// Excitation: eigen-decomposition of S info S (S = parameter scale); the
+// relative singular values, and the directions below `threshold` named.
+void SetExcitation(const internal::MethodOutput& r, double threshold, InertiaFit* fit) {
+  const internal::Matrix10d S = r.scale.asDiagonal();
+  const internal::Matrix10d M = S * r.info * S;
+  Eigen::SelfAdjointEigenSolver<internal::Matrix10d> es(0.5 * (M + M.transpose()));
+  const double top = std::max(es.eigenvalues()(9), 0.0);
+  for (int i = 9; i >= 0; --i) {
+    const double sv = std::sqrt(std::max(es.eigenvalues()(i), 0.0));
+    const double rel = top > 0 ? sv / std::sqrt(top) : 0.0;
+    fit->singular_values.push_back(rel);
+    if (rel < threshold) {
+      fit->poorly_excited.push_back(
+          absl::StrFormat("%s (relative singular value %.2g)", NameDirection(es.eigenvectors().col(i)), rel));
+    }
+  }
+}
+
 }  // namespace
 
 absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in, const InertiaOptions& options) {
@@ -402,46 +440,8 @@ absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in, const In
   fit.samples_used = r->samples_used;
   fit.notes = r->notes;
 
-  // Standard errors of (m, c, H_c) from the covariance of pi (first-order).
-  if (r->cov.allFinite() && r->cov.norm() > 0 && fit.params.mass != 0) {
-    auto reported = [](const Vector10d& pi) {
-      const InertialParameters p = InertialParameters::FromStandard(pi);
-      Vector10d out;
-      const auto in = p.inertia_com.ToArray();
-      out << p.mass, p.com, in[0], in[1], in[2], in[3], in[4], in[5];
-      return out;
-    };
-    internal::Matrix10d J;
-    for (int i = 0; i < 10; ++i) {
-      const double h = 1e-6 * r->scale(i);
-      Vector10d a = r->pi, b = r->pi;
-      a(i) += h;
-      b(i) -= h;
-      J.col(i) = (reported(a) - reported(b)) / (2 * h);
-    }
-    const internal::Matrix10d c = J * r->cov * J.transpose();
-    const Vector10d se = c.diagonal().cwiseMax(0.0).cwiseSqrt();
-    fit.mass_se = se(0);
-    fit.com_se = se.segment<3>(1);
-    fit.inertia_se = InertiaTensor::FromArray({se(4), se(5), se(6), se(7), se(8), se(9)});
-  }
-
-  // Excitation: eigen-decomposition of S info S (S = parameter scale).
-  {
-    const internal::Matrix10d S = r->scale.asDiagonal();
-    const internal::Matrix10d M = S * r->info * S;
-    Eigen::SelfAdjointEigenSolver<internal::Matrix10d> es(0.5 * (M + M.transpose()));
-    const double top = std::max(es.eigenvalues()(9), 0.0);
-    for (int i = 9; i >= 0; --i) {
-      const double sv = std::sqrt(std::max(es.eigenvalues()(i), 0.0));
-      const double rel = top > 0 ? sv / std::sqrt(top) : 0.0;
-      fit.singular_values.push_back(rel);
-      if (rel < options.excitation_threshold) {
-        fit.poorly_excited.push_back(
-            absl::StrFormat("%s (relative singular value %.2g)", NameDirection(es.eigenvectors().col(i)), rel));
-      }
-    }
-  }
+  if (r->cov.allFinite() && r->cov.norm() > 0 && fit.params.mass != 0) SetStandardErrors(*r, &fit);
+  SetExcitation(*r, options.excitation_threshold, &fit);
   fit.time_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   fit.cpu_seconds = ThreadCpuSeconds() - cpu_start;

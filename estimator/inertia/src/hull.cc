@@ -1,3 +1,6 @@
+// Convex hulls of the object's points (hull.h) with Debian's reentrant qhull:
+// the input is checked (enough finite points, not flat), each merged facet
+// becomes one half-space, and containment is tested against them.
 #include "tactforce/inertia/hull.h"
 
 #include <algorithm>

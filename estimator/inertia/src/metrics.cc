@@ -1,3 +1,6 @@
+// Metrics on inertial parameters (metrics.h): the pseudo-inertia and its
+// consistency test, the paper's error (eq. 38), the Riemannian distance,
+// the comparison against a truth, principal axes and the equivalent box.
 #include "tactforce/inertia/metrics.h"
 
 #include <cmath>

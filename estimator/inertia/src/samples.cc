@@ -1,5 +1,10 @@
+// The inertia CSV (samples.h): which force source and which optional
+// columns a table holds, one InertiaSample per row, the checks every sample
+// must pass (errors name the file, line and column, or the struct field) and
+// the writer of the same format.
 #include "tactforce/inertia/samples.h"
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -50,99 +55,97 @@ bool Finite(const Vec3& v) { return v.allFinite(); }
 
 std::string Fmt(double v) { return absl::StrFormat("%.6g", v); }
 
-}  // namespace
+// Time, position and orientation of sample i.
+absl::Status ValidatePose(const Locator& loc, const InertiaSamples& s, int i) {
+  const InertiaSample& x = s.samples[i];
+  if (!std::isfinite(x.t)) return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "t", "t"), ": not finite"));
+  if (i > 0 && !(x.t > s.samples[i - 1].t)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        loc.At(i, "t", "t"), ": time ", Fmt(x.t),
+        x.t == s.samples[i - 1].t ? " duplicates" : " is before", " the previous sample's ",
+        Fmt(s.samples[i - 1].t), " (times must be strictly increasing)"));
+  }
+  if (!Finite(x.position))
+    return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "px,py,pz", "position"), ": not finite"));
+  const double qn = x.orientation.coeffs().norm();
+  if (!std::isfinite(qn))
+    return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "qw,qx,qy,qz", "orientation"), ": not finite"));
+  if (qn < kMinQuaternionNorm) {
+    return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "qw,qx,qy,qz", "orientation"),
+                                                   ": quaternion norm ", Fmt(qn),
+                                                   " is near zero (not a rotation)"));
+  }
+  return absl::OkStatus();
+}
 
-absl::Status ValidateInertiaSamples(const InertiaSamples& s) {
-  const Locator loc{s};
-  const std::string src = s.source_name.empty() ? "samples" : s.source_name;
-  if (s.source == ForceSource::kContacts && s.num_contacts < 1)
-    return absl::InvalidArgumentError(absl::StrCat(src, ": contact source with no contacts"));
-  const int n = static_cast<int>(s.samples.size());
-  const bool kin = s.HasKinematics();
-  for (int i = 0; i < n; ++i) {
-    const InertiaSample& x = s.samples[i];
-    if (!std::isfinite(x.t)) return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "t", "t"), ": not finite"));
-    if (i > 0 && !(x.t > s.samples[i - 1].t)) {
+// The wrench of sample i and its sigmas.
+absl::Status ValidateWrench(const Locator& loc, const InertiaSample& x, int i) {
+  if (!Finite(x.force))
+    return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "fx,fy,fz", "force"), ": not finite"));
+  if (!Finite(x.torque))
+    return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "tx,ty,tz", "torque"), ": not finite"));
+  if (!(x.force_sigma >= 0) || !std::isfinite(x.force_sigma))
+    return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "f_sigma", "force_sigma"), ": must be finite and >= 0"));
+  if (!(x.torque_sigma >= 0) || !std::isfinite(x.torque_sigma))
+    return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "t_sigma", "torque_sigma"), ": must be finite and >= 0"));
+  return absl::OkStatus();
+}
+
+// The contact readings of sample i: the same contact set as every sample.
+absl::Status ValidateContacts(const Locator& loc, const InertiaSamples& s, int i) {
+  const InertiaSample& x = s.samples[i];
+  if (static_cast<int>(x.contacts.size()) != s.num_contacts) {
+    return absl::InvalidArgumentError(absl::StrCat(loc.Sample(i), ": ", x.contacts.size(),
+                                                   " contacts, expected ", s.num_contacts,
+                                                   " (the same contact set in every sample)"));
+  }
+  for (int c = 0; c < s.num_contacts; ++c) {
+    const ContactReading& r = x.contacts[c];
+    const std::string pfx = absl::StrCat("c", c, "_");
+    if (!Finite(r.point))
       return absl::InvalidArgumentError(absl::StrCat(
-          loc.At(i, "t", "t"), ": time ", Fmt(x.t),
-          x.t == s.samples[i - 1].t ? " duplicates" : " is before", " the previous sample's ",
-          Fmt(s.samples[i - 1].t), " (times must be strictly increasing)"));
-    }
-    if (!Finite(x.position))
-      return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "px,py,pz", "position"), ": not finite"));
-    const double qn = x.orientation.coeffs().norm();
-    if (!std::isfinite(qn))
-      return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "qw,qx,qy,qz", "orientation"), ": not finite"));
-    if (qn < kMinQuaternionNorm) {
-      return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "qw,qx,qy,qz", "orientation"),
-                                                     ": quaternion norm ", Fmt(qn),
-                                                     " is near zero (not a rotation)"));
-    }
-    if (s.source == ForceSource::kWrench) {
-      if (!Finite(x.force))
-        return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "fx,fy,fz", "force"), ": not finite"));
-      if (!Finite(x.torque))
-        return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "tx,ty,tz", "torque"), ": not finite"));
-      if (!(x.force_sigma >= 0) || !std::isfinite(x.force_sigma))
-        return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "f_sigma", "force_sigma"), ": must be finite and >= 0"));
-      if (!(x.torque_sigma >= 0) || !std::isfinite(x.torque_sigma))
-        return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "t_sigma", "torque_sigma"), ": must be finite and >= 0"));
-    } else {
-      if (static_cast<int>(x.contacts.size()) != s.num_contacts) {
-        return absl::InvalidArgumentError(absl::StrCat(loc.Sample(i), ": ", x.contacts.size(),
-                                                       " contacts, expected ", s.num_contacts,
-                                                       " (the same contact set in every sample)"));
-      }
-      for (int c = 0; c < s.num_contacts; ++c) {
-        const ContactReading& r = x.contacts[c];
-        const std::string pfx = absl::StrCat("c", c, "_");
-        if (!Finite(r.point))
-          return absl::InvalidArgumentError(absl::StrCat(
-              loc.At(i, absl::StrCat(pfx, "px,", pfx, "py,", pfx, "pz"), absl::StrCat("contacts[", c, "].point")),
-              ": not finite"));
-        if (!Finite(r.force))
-          return absl::InvalidArgumentError(absl::StrCat(
-              loc.At(i, absl::StrCat(pfx, "fx,", pfx, "fy,", pfx, "fz"), absl::StrCat("contacts[", c, "].force")),
-              ": not finite"));
-        if (!(r.sigma >= 0) || !std::isfinite(r.sigma))
-          return absl::InvalidArgumentError(absl::StrCat(
-              loc.At(i, absl::StrCat(pfx, "sigma"), absl::StrCat("contacts[", c, "].sigma")),
-              ": must be finite and >= 0"));
-      }
-    }
-    if (x.kinematics.has_value() != kin) {
+          loc.At(i, absl::StrCat(pfx, "px,", pfx, "py,", pfx, "pz"), absl::StrCat("contacts[", c, "].point")),
+          ": not finite"));
+    if (!Finite(r.force))
       return absl::InvalidArgumentError(absl::StrCat(
-          loc.Sample(i), ": measured kinematics must be given for all samples or for none"));
-    }
-    if (kin) {
-      const MeasuredKinematics& k = *x.kinematics;
-      const std::pair<const char*, const Vec3*> fields[] = {
-          {"wx,wy,wz|angular_velocity", &k.angular_velocity},
-          {"vx,vy,vz|velocity", &k.velocity},
-          {"dwx,dwy,dwz|angular_acceleration", &k.angular_acceleration},
-          {"ax,ay,az|acceleration", &k.acceleration}};
-      for (const auto& [names, v] : fields) {
-        if (!Finite(*v)) {
-          const std::string both(names);
-          const size_t bar = both.find('|');
-          return absl::InvalidArgumentError(absl::StrCat(
-              loc.At(i, both.substr(0, bar), "kinematics." + both.substr(bar + 1)), ": not finite"));
-        }
-      }
+          loc.At(i, absl::StrCat(pfx, "fx,", pfx, "fy,", pfx, "fz"), absl::StrCat("contacts[", c, "].force")),
+          ": not finite"));
+    if (!(r.sigma >= 0) || !std::isfinite(r.sigma))
+      return absl::InvalidArgumentError(absl::StrCat(
+          loc.At(i, absl::StrCat(pfx, "sigma"), absl::StrCat("contacts[", c, "].sigma")),
+          ": must be finite and >= 0"));
+  }
+  return absl::OkStatus();
+}
+
+// Measured kinematics of sample i: present in all samples or none, finite.
+absl::Status ValidateKinematics(const Locator& loc, const InertiaSample& x, int i, bool expected) {
+  if (x.kinematics.has_value() != expected) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        loc.Sample(i), ": measured kinematics must be given for all samples or for none"));
+  }
+  if (!expected) return absl::OkStatus();
+  const MeasuredKinematics& k = *x.kinematics;
+  const std::pair<const char*, const Vec3*> fields[] = {
+      {"wx,wy,wz|angular_velocity", &k.angular_velocity},
+      {"vx,vy,vz|velocity", &k.velocity},
+      {"dwx,dwy,dwz|angular_acceleration", &k.angular_acceleration},
+      {"ax,ay,az|acceleration", &k.acceleration}};
+  for (const auto& [names, v] : fields) {
+    if (!Finite(*v)) {
+      const std::string both(names);
+      const size_t bar = both.find('|');
+      return absl::InvalidArgumentError(absl::StrCat(
+          loc.At(i, both.substr(0, bar), "kinematics." + both.substr(bar + 1)), ": not finite"));
     }
   }
   return absl::OkStatus();
 }
 
-void NormalizeOrientations(InertiaSamples& s) {
-  for (InertiaSample& x : s.samples) x.orientation.normalize();
-}
-
-absl::StatusOr<InertiaSamples> InertiaSamplesFromCsv(const io::CsvTable& table) {
+// The force source from the columns: wrench columns or contact columns
+// c0_.. c{n-1}_.., not both; sets out->source and out->num_contacts.
+absl::Status DetectForceSource(const io::CsvTable& table, InertiaSamples* out) {
   const std::string& src = table.source;
-  if (absl::Status st = table.Require(kPoseColumns); !st.ok()) return st;
-
-  // Force source: wrench columns or contact columns, not both.
   std::set<int> contact_ids;
   for (const std::string& c : table.columns) {
     if (c.size() > 1 && c[0] == 'c' && std::isdigit(static_cast<unsigned char>(c[1]))) {
@@ -155,8 +158,6 @@ absl::StatusOr<InertiaSamples> InertiaSamplesFromCsv(const io::CsvTable& table) 
   }
   bool any_wrench = false;
   for (const auto& c : kWrenchColumns) any_wrench = any_wrench || table.Has(c);
-  InertiaSamples out;
-  out.source_name = src;
   if (any_wrench && !contact_ids.empty()) {
     return absl::InvalidArgumentError(absl::StrCat(
         src, ": both wrench columns (fx..tz) and contact columns (c", *contact_ids.begin(),
@@ -164,119 +165,180 @@ absl::StatusOr<InertiaSamples> InertiaSamplesFromCsv(const io::CsvTable& table) 
   }
   if (any_wrench) {
     if (absl::Status st = table.Require(kWrenchColumns); !st.ok()) return st;
-    out.source = ForceSource::kWrench;
-  } else if (!contact_ids.empty()) {
-    out.source = ForceSource::kContacts;
-    const int n = *contact_ids.rbegin() + 1;
-    for (int i = 0; i < n; ++i) {
-      if (!contact_ids.count(i)) {
-        return absl::InvalidArgumentError(absl::StrCat(
-            src, ": inconsistent contact columns: contact ", i, " has no columns but contact ",
-            *contact_ids.rbegin(), " does (contacts must be numbered 0..n-1)"));
-      }
-      std::vector<std::string> missing;
-      for (const auto& c : ContactColumns(i))
-        if (!table.Has(c)) missing.push_back(c);
-      if (!missing.empty()) {
-        return absl::InvalidArgumentError(absl::StrCat(src, ": inconsistent contact columns: contact ", i,
-                                                       ": missing column(s) ", absl::StrJoin(missing, ", ")));
-      }
-    }
-    out.num_contacts = n;
-  } else {
+    out->source = ForceSource::kWrench;
+    return absl::OkStatus();
+  }
+  if (contact_ids.empty()) {
     return absl::InvalidArgumentError(absl::StrCat(
         src, ": missing force columns: need fx,fy,fz,tx,ty,tz (wrench) or c0_px..c0_fz (contacts)"));
   }
-
-  // Measured kinematics: any of the columns present -> the required set.
-  bool any_kin = false;
-  for (const auto& c : kKinematicsRequired) any_kin = any_kin || table.Has(c);
-  for (const auto& c : kVelocityColumns) any_kin = any_kin || table.Has(c);
-  bool has_v = false;
-  if (any_kin) {
+  out->source = ForceSource::kContacts;
+  const int n = *contact_ids.rbegin() + 1;
+  for (int i = 0; i < n; ++i) {
+    if (!contact_ids.count(i)) {
+      return absl::InvalidArgumentError(absl::StrCat(
+          src, ": inconsistent contact columns: contact ", i, " has no columns but contact ",
+          *contact_ids.rbegin(), " does (contacts must be numbered 0..n-1)"));
+    }
     std::vector<std::string> missing;
-    for (const auto& c : kKinematicsRequired)
+    for (const auto& c : ContactColumns(i))
       if (!table.Has(c)) missing.push_back(c);
     if (!missing.empty()) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          src, ": incomplete measured kinematics: missing column(s) ", absl::StrJoin(missing, ", "),
-          " (give wx..wz, dwx..dwz, ax..az, optionally vx..vz, or none of them)"));
+      return absl::InvalidArgumentError(absl::StrCat(src, ": inconsistent contact columns: contact ", i,
+                                                     ": missing column(s) ", absl::StrJoin(missing, ", ")));
     }
-    int nv = 0;
-    for (const auto& c : kVelocityColumns) nv += table.Has(c);
-    if (nv != 0 && nv != 3) {
-      std::vector<std::string> m;
-      for (const auto& c : kVelocityColumns)
-        if (!table.Has(c)) m.push_back(c);
-      return absl::InvalidArgumentError(
-          absl::StrCat(src, ": incomplete velocity: missing column(s) ", absl::StrJoin(m, ", ")));
-    }
-    has_v = nv == 3;
   }
+  out->num_contacts = n;
+  return absl::OkStatus();
+}
 
+// Measured kinematics: any of the columns present -> the required set, and
+// the velocity either complete or absent.
+struct KinematicsColumns {
+  bool present = false;
+  bool velocity = false;
+};
+
+absl::StatusOr<KinematicsColumns> DetectKinematics(const io::CsvTable& table) {
+  const std::string& src = table.source;
+  KinematicsColumns k;
+  for (const auto& c : kKinematicsRequired) k.present = k.present || table.Has(c);
+  for (const auto& c : kVelocityColumns) k.present = k.present || table.Has(c);
+  if (!k.present) return k;
+  std::vector<std::string> missing;
+  for (const auto& c : kKinematicsRequired)
+    if (!table.Has(c)) missing.push_back(c);
+  if (!missing.empty()) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        src, ": incomplete measured kinematics: missing column(s) ", absl::StrJoin(missing, ", "),
+        " (give wx..wz, dwx..dwz, ax..az, optionally vx..vz, or none of them)"));
+  }
+  int nv = 0;
+  for (const auto& c : kVelocityColumns) nv += table.Has(c);
+  if (nv != 0 && nv != 3) {
+    std::vector<std::string> m;
+    for (const auto& c : kVelocityColumns)
+      if (!table.Has(c)) m.push_back(c);
+    return absl::InvalidArgumentError(
+        absl::StrCat(src, ": incomplete velocity: missing column(s) ", absl::StrJoin(m, ", ")));
+  }
+  k.velocity = nv == 3;
+  return k;
+}
+
+// Column indices of every field a row fills (-1: absent).
+struct RowLayout {
+  int t = -1;
+  int p[3], q[4];
+  int wrench[6] = {-1, -1, -1, -1, -1, -1};
+  int force_sigma = -1, torque_sigma = -1;
+  std::vector<std::array<int, 7>> contacts;  // point, force, sigma
+  std::array<int, 3> w, v, dw, a;
+  KinematicsColumns kinematics;
+};
+
+RowLayout LayoutRows(const io::CsvTable& table, const InertiaSamples& out, const KinematicsColumns& kin) {
   auto col = [&](const std::string& name) { return table.ColumnIndex(name); };
-  const int it = col("t");
-  const int ip[3] = {col("px"), col("py"), col("pz")};
-  const int iq[4] = {col("qw"), col("qx"), col("qy"), col("qz")};
-  int iw[6] = {-1, -1, -1, -1, -1, -1};
-  for (int k = 0; k < 6 && out.source == ForceSource::kWrench; ++k) iw[k] = col(kWrenchColumns[k]);
-  const int ifs = col("f_sigma"), its = col("t_sigma");
-  std::vector<std::array<int, 7>> ic;
+  RowLayout l;
+  l.t = col("t");
+  for (int k = 0; k < 3; ++k) l.p[k] = col(kPoseColumns[1 + k]);
+  for (int k = 0; k < 4; ++k) l.q[k] = col(kPoseColumns[4 + k]);
+  for (int k = 0; k < 6 && out.source == ForceSource::kWrench; ++k) l.wrench[k] = col(kWrenchColumns[k]);
+  l.force_sigma = col("f_sigma"), l.torque_sigma = col("t_sigma");
   for (int i = 0; i < out.num_contacts; ++i) {
     std::array<int, 7> a;
     const auto names = ContactColumns(i);
     for (int k = 0; k < 6; ++k) a[k] = col(names[k]);
     a[6] = col(absl::StrCat("c", i, "_sigma"));
-    ic.push_back(a);
+    l.contacts.push_back(a);
   }
   auto kc = [&](const char* a, const char* b, const char* c) {
     return std::array<int, 3>{col(a), col(b), col(c)};
   };
-  const auto kw = kc("wx", "wy", "wz"), kv = kc("vx", "vy", "vz"), kdw = kc("dwx", "dwy", "dwz"),
-             ka = kc("ax", "ay", "az");
+  l.w = kc("wx", "wy", "wz"), l.v = kc("vx", "vy", "vz"), l.dw = kc("dwx", "dwy", "dwz"), l.a = kc("ax", "ay", "az");
+  l.kinematics = kin;
+  return l;
+}
 
-  out.samples.reserve(table.rows.size());
-  out.line_numbers = table.line_numbers;
-  for (size_t r = 0; r < table.rows.size(); ++r) {
-    const std::vector<double>& row = table.rows[r];
-    auto v3 = [&](const int* idx) { return Vec3(row[idx[0]], row[idx[1]], row[idx[2]]); };
-    InertiaSample s;
-    s.t = row[it];
-    s.position = v3(ip);
-    s.orientation = Eigen::Quaterniond(row[iq[0]], row[iq[1]], row[iq[2]], row[iq[3]]);
-    if (out.source == ForceSource::kWrench) {
-      s.force = v3(iw);
-      s.torque = v3(iw + 3);
-      if (ifs >= 0) s.force_sigma = row[ifs];
-      if (its >= 0) s.torque_sigma = row[its];
-    } else {
-      for (const auto& a : ic) {
-        ContactReading c;
-        c.point = v3(a.data());
-        c.force = v3(a.data() + 3);
-        if (a[6] >= 0) c.sigma = row[a[6]];
-        s.contacts.push_back(c);
-      }
+InertiaSample ReadRow(const std::vector<double>& row, const RowLayout& l, ForceSource source) {
+  auto v3 = [&](const int* idx) { return Vec3(row[idx[0]], row[idx[1]], row[idx[2]]); };
+  InertiaSample s;
+  s.t = row[l.t];
+  s.position = v3(l.p);
+  s.orientation = Eigen::Quaterniond(row[l.q[0]], row[l.q[1]], row[l.q[2]], row[l.q[3]]);
+  if (source == ForceSource::kWrench) {
+    s.force = v3(l.wrench);
+    s.torque = v3(l.wrench + 3);
+    if (l.force_sigma >= 0) s.force_sigma = row[l.force_sigma];
+    if (l.torque_sigma >= 0) s.torque_sigma = row[l.torque_sigma];
+  } else {
+    for (const auto& a : l.contacts) {
+      ContactReading c;
+      c.point = v3(a.data());
+      c.force = v3(a.data() + 3);
+      if (a[6] >= 0) c.sigma = row[a[6]];
+      s.contacts.push_back(c);
     }
-    if (any_kin) {
-      MeasuredKinematics k;
-      k.angular_velocity = v3(kw.data());
-      if (has_v) k.velocity = v3(kv.data());
-      k.angular_acceleration = v3(kdw.data());
-      k.acceleration = v3(ka.data());
-      s.kinematics = k;
-    }
-    out.samples.push_back(std::move(s));
   }
-  // NaN cells: io::ParseCsv normally rejects them; a table built otherwise may hold them.
+  if (l.kinematics.present) {
+    MeasuredKinematics k;
+    k.angular_velocity = v3(l.w.data());
+    if (l.kinematics.velocity) k.velocity = v3(l.v.data());
+    k.angular_acceleration = v3(l.dw.data());
+    k.acceleration = v3(l.a.data());
+    s.kinematics = k;
+  }
+  return s;
+}
+
+// NaN cells: io::ParseCsv normally rejects them; a table built otherwise may hold them.
+absl::Status RejectNan(const io::CsvTable& table) {
   for (size_t r = 0; r < table.rows.size(); ++r) {
     for (size_t c = 0; c < table.rows[r].size(); ++c) {
       if (std::isnan(table.rows[r][c])) {
-        return absl::InvalidArgumentError(absl::StrCat(src, ":", table.line_numbers[r], ": column '",
+        return absl::InvalidArgumentError(absl::StrCat(table.source, ":", table.line_numbers[r], ": column '",
                                                        table.columns[c], "': NaN"));
       }
     }
   }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::Status ValidateInertiaSamples(const InertiaSamples& s) {
+  const Locator loc{s};
+  const std::string src = s.source_name.empty() ? "samples" : s.source_name;
+  if (s.source == ForceSource::kContacts && s.num_contacts < 1)
+    return absl::InvalidArgumentError(absl::StrCat(src, ": contact source with no contacts"));
+  const bool kin = s.HasKinematics();
+  for (int i = 0; i < static_cast<int>(s.samples.size()); ++i) {
+    const InertiaSample& x = s.samples[i];
+    if (absl::Status st = ValidatePose(loc, s, i); !st.ok()) return st;
+    absl::Status forces = s.source == ForceSource::kWrench ? ValidateWrench(loc, x, i) : ValidateContacts(loc, s, i);
+    if (!forces.ok()) return forces;
+    if (absl::Status st = ValidateKinematics(loc, x, i, kin); !st.ok()) return st;
+  }
+  return absl::OkStatus();
+}
+
+void NormalizeOrientations(InertiaSamples& s) {
+  for (InertiaSample& x : s.samples) x.orientation.normalize();
+}
+
+absl::StatusOr<InertiaSamples> InertiaSamplesFromCsv(const io::CsvTable& table) {
+  const std::string& src = table.source;
+  if (absl::Status st = table.Require(kPoseColumns); !st.ok()) return st;
+  InertiaSamples out;
+  out.source_name = src;
+  if (absl::Status st = DetectForceSource(table, &out); !st.ok()) return st;
+  absl::StatusOr<KinematicsColumns> kin = DetectKinematics(table);
+  if (!kin.ok()) return kin.status();
+  const RowLayout layout = LayoutRows(table, out, *kin);
+  out.samples.reserve(table.rows.size());
+  out.line_numbers = table.line_numbers;
+  for (const std::vector<double>& row : table.rows) out.samples.push_back(ReadRow(row, layout, out.source));
+  if (absl::Status st = RejectNan(table); !st.ok()) return st;
   if (absl::Status st = ValidateInertiaSamples(out); !st.ok()) return st;
   const int need = MinimumSamples(out, InertiaMethod::kBaselineLs);  // the least of the methods
   if (static_cast<int>(out.samples.size()) < need) {

@@ -1,3 +1,7 @@
+// Simulated inertia logs (simulate.h): the built-in objects and objects
+// from parameters (a box with the same inertia, its mesh and contact points),
+// the excitation trajectory, the wrench a wrist sensor measures or the
+// fingertip forces the planner gives along it, and seeded noise.
 #include "tactforce/inertia/simulate.h"
 
 #include <cmath>
@@ -162,14 +166,7 @@ void NoisySample(std::mt19937_64& rng, const SimulationNoise& n, ForceSource src
   }
 }
 
-}  // namespace
-
-void AddNoise(InertiaSamples& samples, const SimulationNoise& noise, uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  for (InertiaSample& s : samples.samples) NoisySample(rng, noise, samples.source, s);
-}
-
-absl::StatusOr<SimulationResult> SimulateInertia(const SimulationOptions& o) {
+absl::Status ValidateSimulationOptions(const SimulationOptions& o) {
   if (!(o.rate_hz > 0) || !std::isfinite(o.rate_hz)) return absl::InvalidArgumentError("rate_hz: must be > 0");
   if (!(o.duration > 0) || !std::isfinite(o.duration)) return absl::InvalidArgumentError("duration: must be > 0");
   if (!o.gravity.allFinite()) return absl::InvalidArgumentError("gravity: not finite");
@@ -185,6 +182,67 @@ absl::StatusOr<SimulationResult> SimulateInertia(const SimulationOptions& o) {
         return absl::InvalidArgumentError("trajectory: components must be finite");
     }
   }
+  return absl::OkStatus();
+}
+
+// In hand: the object and its fingertip contacts as a planner trajectory
+// problem (the steps are added per sample).
+planner::TrajectoryProblem InHandProblem(const SimulatedObject& object, const SimulationOptions& o) {
+  const InertialParameters& p = object.params;
+  planner::TrajectoryProblem traj;
+  traj.base.object.mass = p.mass;
+  traj.base.object.com = p.com;
+  for (int i = 0; i < o.num_contacts; ++i) {
+    planner::Contact c;
+    c.name = absl::StrCat("c", i);
+    c.position = object.contact_points[i];
+    c.normal = object.contact_normals[i];
+    c.friction = o.friction;
+    c.min_normal_force = o.min_normal_force;
+    traj.base.contacts.push_back(c);
+  }
+  planner::Inertia in;
+  in.ixx = p.inertia_com.ixx, in.iyy = p.inertia_com.iyy, in.izz = p.inertia_com.izz;
+  in.ixy = p.inertia_com.ixy, in.ixz = p.inertia_com.ixz, in.iyz = p.inertia_com.iyz;
+  traj.inertia = in;
+  return traj;
+}
+
+// The fingertip forces of every sample: one warm-started geometric plan per
+// sample along the trajectory's steps.
+absl::Status AddInHandForces(const planner::TrajectoryProblem& traj, const SimulatedObject& object,
+                             const SimulationOptions& o, InertiaSamples* s) {
+  planner::PlanOptions po;
+  absl::StatusOr<planner::TrajectoryResult> r =
+      planner::PlanTrajectory(traj, po, planner::SolverKind::kGeometric, /*warm_start=*/true);
+  if (!r.ok()) return absl::InvalidArgumentError(absl::StrCat("in-hand forces: ", r.status().message()));
+  for (size_t k = 0; k < s->samples.size(); ++k) {
+    const planner::PlanResult& pr = r->steps[k];
+    if (pr.status != planner::PlanStatus::kOptimal) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "in-hand forces infeasible at t = %.4g s (%s): raise friction or min_normal_force, or slow the "
+          "trajectory",
+          s->samples[k].t, pr.message));
+    }
+    for (int i = 0; i < o.num_contacts; ++i) {
+      ContactReading c;
+      c.point = object.contact_points[i];
+      c.force = pr.forces[i];
+      s->samples[k].contacts.push_back(c);
+    }
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+void AddNoise(InertiaSamples& samples, const SimulationNoise& noise, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  for (InertiaSample& s : samples.samples) NoisySample(rng, noise, samples.source, s);
+}
+
+absl::StatusOr<SimulationResult> SimulateInertia(const SimulationOptions& o) {
+  if (absl::Status st = ValidateSimulationOptions(o); !st.ok()) return st;
   SimulatedObject object;
   if (o.custom) {
     object = *o.custom;
@@ -214,23 +272,7 @@ absl::StatusOr<SimulationResult> SimulateInertia(const SimulationOptions& o) {
   s.samples.resize(steps);
 
   planner::TrajectoryProblem traj;
-  if (in_hand) {
-    traj.base.object.mass = p.mass;
-    traj.base.object.com = p.com;
-    for (int i = 0; i < o.num_contacts; ++i) {
-      planner::Contact c;
-      c.name = absl::StrCat("c", i);
-      c.position = object.contact_points[i];
-      c.normal = object.contact_normals[i];
-      c.friction = o.friction;
-      c.min_normal_force = o.min_normal_force;
-      traj.base.contacts.push_back(c);
-    }
-    planner::Inertia in;
-    in.ixx = p.inertia_com.ixx, in.iyy = p.inertia_com.iyy, in.izz = p.inertia_com.izz;
-    in.ixy = p.inertia_com.ixy, in.ixz = p.inertia_com.ixz, in.iyz = p.inertia_com.iyz;
-    traj.inertia = in;
-  }
+  if (in_hand) traj = InHandProblem(object, o);
   for (int k = 0; k < steps; ++k) {
     const double t = k / o.rate_hz;
     Vec3 pos, vel, acc, w, dw;
@@ -259,25 +301,7 @@ absl::StatusOr<SimulationResult> SimulateInertia(const SimulationOptions& o) {
     }
   }
   if (in_hand) {
-    planner::PlanOptions po;
-    absl::StatusOr<planner::TrajectoryResult> r =
-        planner::PlanTrajectory(traj, po, planner::SolverKind::kGeometric, /*warm_start=*/true);
-    if (!r.ok()) return absl::InvalidArgumentError(absl::StrCat("in-hand forces: ", r.status().message()));
-    for (int k = 0; k < steps; ++k) {
-      const planner::PlanResult& pr = r->steps[k];
-      if (pr.status != planner::PlanStatus::kOptimal) {
-        return absl::InvalidArgumentError(absl::StrFormat(
-            "in-hand forces infeasible at t = %.4g s (%s): raise friction or min_normal_force, or slow the "
-            "trajectory",
-            s.samples[k].t, pr.message));
-      }
-      for (int i = 0; i < o.num_contacts; ++i) {
-        ContactReading c;
-        c.point = object.contact_points[i];
-        c.force = pr.forces[i];
-        s.samples[k].contacts.push_back(c);
-      }
-    }
+    if (absl::Status st = AddInHandForces(traj, object, o, &s); !st.ok()) return st;
   }
   std::mt19937_64 rng(o.seed);
   for (InertiaSample& x : s.samples) NoisySample(rng, o.noise, s.source, x);

@@ -1,3 +1,5 @@
+// Truth / prior JSON (truth.h) read with the io JSON reader (unknown keys
+// ignored, missing ones named) and written back.
 #include "tactforce/inertia/truth.h"
 
 #include <cmath>

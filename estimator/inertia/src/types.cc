@@ -1,3 +1,5 @@
+// The inertial parameter types (types.h): the inertia tensor as a matrix and
+// an array, and the standard parameters [m, m c, I about the origin] and back.
 #include "tactforce/inertia/types.h"
 
 namespace tactforce::inertia {

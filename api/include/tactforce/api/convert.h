@@ -2,8 +2,9 @@
 // types.
 //
 // Only the mapping is done here: enum defaults (UNSPECIFIED -> INTRINSIC /
-// PYRAMID / GEOMETRIC), cone_sides 0 -> 12, confidence absent -> 1.0,
-// gravity absent -> (0, 0, -9.81), and unknown numeric enum values are
+// PYRAMID / GEOMETRIC), cone_sides 0, confidence absent and gravity absent
+// -> the planner's defaults (planner::PlanOptions{}: 12 sides, kappa 1.0;
+// ObjectModel{}: (0, 0, -9.81)), and unknown numeric enum values are
 // rejected naming the field ("contacts[1].kind: unknown value 7"). Numeric
 // range checks (NaN, zero normals, negative friction, ...) are the planner's
 // ValidateProblem, which every Solve() runs with the same field paths.

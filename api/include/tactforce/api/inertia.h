@@ -28,6 +28,9 @@ inline constexpr int64_t kDefaultMaxInertiaSamples = 1'000'000;
 // mesh is given, else CONSTRAINED.
 absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::InertiaFitOptions& options);
 v1::InertiaMethod InertiaMethodToProto(inertia::InertiaMethod method);
+// Wire spelling, "INERTIA_METHOD_DENSITY" (v1::InertiaMethod_Name); the
+// library's inertia::ToString is the CLI spelling ("density").
+std::string InertiaMethodName(inertia::InertiaMethod method);
 v1::RegionScheme RegionSchemeToProto(inertia::RegionScheme scheme);
 
 // The mesh of a MeshInput in the object frame (m), and its name for

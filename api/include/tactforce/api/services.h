@@ -1,12 +1,15 @@
-// Request -> response paths of every RPC beyond Plan, shared by the CLI's
-// local mode and the gRPC service: convert, call the library, convert back.
-// !ok(): invalid request (InvalidArgument naming the field path). ok(): a
-// computed answer; infeasibility is a status inside the response.
+// Request -> response paths of every RPC, shared by the CLI's local mode and
+// the gRPC service (which runs them through dispatch.h): convert, call the
+// library, convert back. !ok(): invalid request (InvalidArgument naming the
+// field path). ok(): a computed answer; infeasibility and solver failures
+// are statuses inside the response, not errors.
 #pragma once
 
 #include <functional>
 
 #include "absl/status/statusor.h"
+#include "tactforce/api/convert.h"
+#include "tactforce/planner/types.h"
 #include "tactforce/v1/audit.pb.h"
 #include "tactforce/v1/estimator.pb.h"
 #include "tactforce/v1/planner.pb.h"
@@ -15,13 +18,21 @@ namespace tactforce::api {
 
 // Limits a service imposes on every call (the CLI uses the defaults).
 struct CallLimits {
-  int max_contacts = 64;
+  int max_contacts = planner::PlanOptions{}.max_contacts;
   double ipopt_max_cpu_seconds = 0.0;  // 0 = none
   std::function<bool()> interrupt;     // deadline / cancellation
 };
 
+// A PlanRequest converted (FromProto) with `limits` applied to its options.
+// Errors: InvalidArgument("<field path>: unknown value N"); the numeric
+// checks are planner::ValidateProblem's, which every solve runs.
+absl::StatusOr<PlanCall> PreparePlan(const v1::PlanRequest& request, const CallLimits& limits);
+// Plans a prepared request (validation included) and converts the answer.
+absl::StatusOr<v1::PlanResponse> SolvePlan(const PlanCall& call);
+
+// PreparePlan + SolvePlan.
 absl::StatusOr<v1::PlanResponse> HandlePlan(const v1::PlanRequest& request,
-                                            const CallLimits& limits);
+                                            const CallLimits& limits = {});
 absl::StatusOr<v1::TrajectoryResponse> HandleTrajectory(const v1::TrajectoryRequest& request,
                                                         const CallLimits& limits = {});
 absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(

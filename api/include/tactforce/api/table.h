@@ -3,6 +3,7 @@
 
 #include <string>
 
+#include "tactforce/api/names.h"  // StatusName, SolverName (also for the table's readers)
 #include "tactforce/v1/planner.pb.h"
 
 namespace tactforce::api {
@@ -13,9 +14,5 @@ namespace tactforce::api {
 // request (index when unnamed). Ends with a newline.
 std::string FormatPlanTable(const v1::PlanRequest& request,
                             const v1::PlanResponse& response);
-
-// Short names for people: "OPTIMAL", "GEOMETRIC", ...
-std::string StatusName(v1::PlanStatus status);
-std::string SolverName(v1::Solver solver);
 
 }  // namespace tactforce::api

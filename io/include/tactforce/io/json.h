@@ -1,23 +1,30 @@
-// Minimal JSON for tactforce's flat files (sensor model JSON, audit
-// report.json, inertia truth files, trajectory JSON). This is the ONE
-// hand-written JSON reader/writer of the project (the API messages use
-// protobuf's JSON mapping); JsonEscape is also the CLI's string quoter.
+// JSON for tactforce's flat files (sensor model JSON, audit report.json,
+// inertia truth files, trajectory JSON), read and written through Debian's
+// nlohmann-json3 (the API messages use protobuf's JSON mapping instead).
+// JsonEscape is also the CLI's string quoter.
 //
-// Reader: objects, arrays, strings (\uXXXX escapes for the BMP), numbers,
-// true/false/null. Errors name the source and line ("m.json:3: expected ':'").
+// Reader: RFC 8259 JSON (objects, arrays, strings with \uXXXX escapes
+// including surrogate pairs, numbers, true/false/null), UTF-8. Every value
+// knows the line it starts on, object members keep their file order, and a
+// duplicate key or nesting deeper than kMaxJsonDepth is an error. Errors are
+// InvalidArgument naming the source, line and column:
+//   "m.json:1: expected ':', found number literal '1' (column 9)"
+// (line first, column last: the sensor-model tests read "m.json:1: expected ':'").
 // Writer: JsonWriter emits pretty-printed JSON; non-finite numbers are written
 // as null (JSON has no NaN/Infinity).
 #pragma once
 
-#include <map>
-#include <memory>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "absl/status/statusor.h"
 
 namespace tactforce::io {
+
+// At most this many objects and arrays open at once ([[1]] has two).
+inline constexpr int kMaxJsonDepth = 64;
 
 class JsonValue {
  public:
@@ -36,17 +43,17 @@ class JsonValue {
   bool is_object() const { return type_ == Type::kObject; }
   bool is_array() const { return type_ == Type::kArray; }
 
-  double number() const { return number_; }
+  double number() const { return number_; }  // integers too (exact up to 2^53)
   bool boolean() const { return bool_; }
-  const std::string& string() const { return string_; }
+  const std::string& string() const { return string_; }  // UTF-8
   const std::vector<JsonValue>& array() const { return array_; }
   // Object members in file order (keys unique; a duplicate key is an error).
   const std::vector<std::pair<std::string, JsonValue>>& members() const { return members_; }
   const JsonValue* Find(std::string_view key) const;  // nullptr when absent
-  int line() const { return line_; }                  // 1-based line where it starts
+  int line() const { return line_; }                  // 1-based line where it starts; 0 if built in code
 
  private:
-  friend class JsonParser;
+  friend class JsonTreeBuilder;  // json.cc: builds values from the parser's events
   Type type_ = Type::kNull;
   double number_ = 0;
   bool bool_ = false;
@@ -56,11 +63,13 @@ class JsonValue {
   int line_ = 0;
 };
 
+// The one JSON document in `text`; `source` names it in errors (a file name).
 absl::StatusOr<JsonValue> ParseJson(std::string_view text, const std::string& source);
 
-// Streaming pretty writer. Usage:
+// Streaming pretty writer (two-space indent, one member or element a line,
+// NumberArray on one line). Usage:
 //   JsonWriter w; w.BeginObject(); w.Key("a"); w.Number(1); w.EndObject();
-//   std::string s = w.str();
+//   std::string s = w.str();   // "{\n  \"a\": 1\n}\n"
 class JsonWriter {
  public:
   void BeginObject();
@@ -88,12 +97,14 @@ class JsonWriter {
   void Newline();
   std::string out_;
   std::vector<bool> first_;   // per open container: no element written yet
-  std::vector<bool> is_obj_;
   bool after_key_ = false;
 };
 
+// `s` as a quoted JSON string (nlohmann's escaping: \" \\ \b \f \n \r \t,
+// other control characters as \u00XX; invalid UTF-8 becomes U+FFFD).
 std::string JsonEscape(std::string_view s);
-// Shortest round-trip formatting of a double ("%.17g" trimmed); "null" if not finite.
+// Shortest round-trip formatting of a double ("%.17g" trimmed: 0.1, 1e-05,
+// 2500, 1e+06); "null" if not finite.
 std::string JsonNumber(double v);
 
 }  // namespace tactforce::io

@@ -1,8 +1,11 @@
-// Reading and writing whole text files (CSV, JSON, SVG) for the sim, audit
-// and inertia libraries. Errors are InvalidArgument naming the path:
-// "<path>: cannot open", "<path>: cannot open for writing", "<path>: write failed".
+// Whole files in and out (CSV, JSON, SVG, meshes), and where a byte offset
+// sits in a text (for file:line:column messages). Errors are InvalidArgument
+// naming the path:
+//   "<path>: cannot open: <reason>", "<path>: cannot read: <reason>",
+//   "<path>: cannot open for writing", "<path>: write failed".
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <string_view>
 
@@ -11,7 +14,17 @@
 
 namespace tactforce::io {
 
+// The file's bytes exactly as stored (binary-safe: no newline translation,
+// NUL bytes kept), text or binary (STL, PLY).
 absl::StatusOr<std::string> ReadTextFile(const std::string& path);
 absl::Status WriteTextFile(const std::string& path, std::string_view text);
+
+// 1-based line and column (in bytes) of the byte at `offset` in `text`; an
+// offset at or past the end names the position just after the last byte.
+struct TextPosition {
+  int line = 1;
+  int column = 1;
+};
+TextPosition PositionInText(std::string_view text, size_t offset);
 
 }  // namespace tactforce::io

@@ -10,6 +10,8 @@
 #include <cstdint>
 #include <string>
 
+#include "tactforce/api/inertia.h"
+#include "tactforce/api/services.h"
 #include "tactforce/server/server_host.h"
 #include "tactforce/server/worker_pool.h"
 #include "tactforce/v1/audit.grpc.pb.h"
@@ -18,8 +20,8 @@
 namespace tactforce::server {
 
 struct EstimatorServiceOptions {
-  int max_contacts = 64;
-  int64_t max_inertia_samples = 1'000'000;  // per FitInertia stream
+  int max_contacts = api::CallLimits{}.max_contacts;
+  int64_t max_inertia_samples = api::kDefaultMaxInertiaSamples;  // per FitInertia stream
 };
 
 class EstimatorService final : public v1::Estimator::CallbackService, public HostedService {

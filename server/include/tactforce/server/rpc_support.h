@@ -1,30 +1,37 @@
 // Small pieces shared by every service of tactforce-server: status mapping,
-// deadline / cancellation checks, and the per-request log line.
+// the RPC's side of a call for api:: dispatch (deadline, cancellation,
+// peer) and the end of a unary call. The per-call log line and its logfmt
+// quoting are api::CallLog's.
 #pragma once
 
 #include <atomic>
 #include <chrono>
-#include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
 
 #include <grpcpp/grpcpp.h>
 
 #include "absl/status/status.h"
+#include "tactforce/api/dispatch.h"
 
 namespace tactforce::server {
 
-// "OK", "INVALID_ARGUMENT", ...
+// "OK", "INVALID_ARGUMENT", ... (absl's names: absl and gRPC share the
+// numbering); "UNKNOWN_CODE" for a number neither defines.
 const char* StatusCodeName(grpc::StatusCode code);
 
 // Same code (absl and gRPC share the numbering), same message.
 grpc::Status ToGrpcStatus(const absl::Status& status);
 
+// logfmt value (api::LogValue): bare when safe, else double-quoted.
+using api::LogValue;
+
 // Deadline and cancellation of one RPC, safe to poll from any thread while
 // the RPC is not finished. The deadline is converted to the steady clock
 // when the guard is made, so wall-clock jumps do not matter.
-class RpcGuard {
+class RpcGuard final : public api::CallControl {
  public:
   // `cancelled`: an extra flag set by a reactor's OnCancel (may be null).
   explicit RpcGuard(const grpc::CallbackServerContext* context,
@@ -32,12 +39,17 @@ class RpcGuard {
 
   bool Expired() const;
   bool Cancelled() const;
-  bool ShouldStop() const { return Expired() || Cancelled(); }
-  // DEADLINE_EXCEEDED if expired, else CANCELLED; `what` says where.
-  grpc::Status StopStatus(std::string_view what) const;
+  bool ShouldStop() const override { return Expired() || Cancelled(); }
+  // DEADLINE_EXCEEDED "deadline exceeded <what>" if expired, else CANCELLED
+  // "cancelled <what>".
+  absl::Status StopReason(std::string_view what) const override;
+  grpc::Status StopStatus(std::string_view what) const { return ToGrpcStatus(StopReason(what)); }
+  // The context's peer ("ipv4:127.0.0.1:40512"); "" without a context.
+  std::string Peer() const override;
 
-  // For PlanOptions::interrupt: true once the RPC should stop.
-  std::function<bool()> Interrupt() const;
+  // For PlanOptions::interrupt: true once the RPC should stop (a copy of
+  // the guard, usable after this object is gone).
+  std::function<bool()> Interrupt() const override;
 
   bool has_deadline() const { return has_deadline_; }
 
@@ -48,7 +60,9 @@ class RpcGuard {
   std::chrono::steady_clock::time_point deadline_{};
 };
 
-// logfmt value: bare when safe, else double-quoted with escapes.
-std::string LogValue(std::string_view text);
+// The `done` of a unary call dispatched through api::: finishes `reactor`
+// with the call's status and keeps `guard` (the call's CallControl) alive
+// until then.
+api::CallDone FinishUnary(grpc::ServerUnaryReactor* reactor, std::shared_ptr<const RpcGuard> guard);
 
 }  // namespace tactforce::server

@@ -16,10 +16,10 @@ struct ServerConfig {
   int workers = 0;  // 0 = std::thread::hardware_concurrency()
   int queue = 64;   // solves waiting for a worker, beyond which RESOURCE_EXHAUSTED
   int max_message_bytes = 4 << 20;
-  int max_contacts = 64;
-  int solve_timeout_ms = 10'000;
-  int inline_max_contacts = 8;
-  int64_t max_inertia_samples = 1'000'000;  // per FitInertia stream
+  int max_contacts = PlannerServiceOptions{}.max_contacts;
+  int solve_timeout_ms = PlannerServiceOptions{}.solve_timeout_ms;
+  int inline_max_contacts = PlannerServiceOptions{}.inline_max_contacts;
+  int64_t max_inertia_samples = EstimatorServiceOptions{}.max_inertia_samples;  // per FitInertia stream
   std::string tls_cert;
   std::string tls_key;
   std::string tls_client_ca;

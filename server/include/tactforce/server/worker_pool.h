@@ -4,7 +4,7 @@
 // Overload policy: TrySubmit() never blocks; it accepts a task while fewer
 // than `workers + max_queued` accepted tasks are unfinished (one running per
 // worker, up to `max_queued` waiting) and returns false otherwise; the
-// caller turns that into RESOURCE_EXHAUSTED.
+// caller turns that into RESOURCE_EXHAUSTED (api::RunCall does).
 #pragma once
 
 #include <condition_variable>
@@ -15,28 +15,30 @@
 #include <thread>
 #include <vector>
 
+#include "tactforce/api/dispatch.h"
+
 namespace tactforce::server {
 
-class WorkerPool {
+class WorkerPool final : public api::Executor {
  public:
   // workers >= 1 (smaller values mean 1), max_queued >= 0 (0: a task is
   // accepted only while a worker is free for it).
   WorkerPool(int workers, int max_queued);
-  ~WorkerPool();  // Shutdown()
+  ~WorkerPool() override;  // Shutdown()
 
   WorkerPool(const WorkerPool&) = delete;
   WorkerPool& operator=(const WorkerPool&) = delete;
 
   // Queues `task`; false (task dropped) when the queue is full or the pool
   // is shut down. Thread-safe.
-  bool TrySubmit(std::function<void()> task);
+  bool TrySubmit(std::function<void()> task) override;
 
   // Stops accepting tasks, runs every task already queued, joins the
   // threads. Idempotent; must not be called from a worker.
   void Shutdown();
 
-  int workers() const { return workers_; }
-  int max_queued() const { return max_queued_; }
+  int workers() const override { return workers_; }
+  int max_queued() const override { return max_queued_; }
 
   struct Stats {
     int queued = 0;  // accepted tasks beyond one per worker (waiting)

@@ -62,8 +62,6 @@ enum class InertiaMethod { kBaselineLs, kFactorGraph, kConstrained, kDensity };
 
 // "baseline-ls", "factor-graph", "constrained", "density" (CLI spelling).
 const char* ToString(InertiaMethod method);
-// "INERTIA_METHOD_BASELINE_LS", ... (proto enum names).
-const char* ProtoName(InertiaMethod method);
 // Accepts either spelling, case-insensitive, '_' or '-'.
 absl::StatusOr<InertiaMethod> ParseInertiaMethod(std::string_view text);
 

@@ -1,5 +1,6 @@
-// The full request -> response path through the planner.
-#include "tactforce/api/handler.h"
+// The full request -> response path through the planner (api::HandlePlan,
+// services.h; formerly handler.h's one-argument forwarder).
+#include "tactforce/api/services.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

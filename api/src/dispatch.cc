@@ -1,0 +1,151 @@
+// The one path of a service call (dispatch.h): RunCall places the work
+// (inline or on the pool, refused when the pool is full), logs one line and
+// ends the call; PlanDispatcher adds the Plan-specific steps in front of it
+// (conversion with limits, the inline-or-pool choice, validation before
+// queueing) and the solve with its deadline and cancellation checks.
+#include "tactforce/api/dispatch.h"
+
+#include <memory>
+#include <string>
+#include <utility>
+
+#include "absl/strings/str_cat.h"
+#include "spdlog/spdlog.h"
+#include "tactforce/api/names.h"
+#include "tactforce/planner/validation.h"
+
+namespace tactforce::api {
+namespace {
+
+int64_t MicrosSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() -
+                                                               start)
+      .count();
+}
+
+// Solves a prepared request (the pool task or the inline call).
+absl::Status ExecutePlan(PlanCall& call, const CallControl& control, v1::PlanResponse* response,
+                         CallLog& log) {
+  if (control.ShouldStop()) return control.StopReason("before the solve started");
+  call.options.interrupt = control.Interrupt();
+  absl::StatusOr<v1::PlanResponse> planned = SolvePlan(call);
+  if (!planned.ok()) return planned.status();
+  if (control.ShouldStop()) {
+    return control.StopReason(absl::StrCat("after ", planned->solve_time_us(), " us of solving"));
+  }
+  *response = *std::move(planned);
+  log.set_results(absl::StrCat("plan_status=", StatusName(response->status()),
+                               " solve_us=", response->solve_time_us()));
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+CallLog::CallLog(std::string_view rpc, const CallControl& control, int64_t index)
+    : rpc_(rpc), index_(index) {
+  if (spdlog::should_log(spdlog::level::info)) peer_ = control.Peer();
+}
+
+void CallLog::Emit(const absl::Status& status) const {
+  if (!spdlog::should_log(spdlog::level::info)) return;
+  std::string line = absl::StrCat("rpc=", rpc_);
+  if (index_ >= 0) absl::StrAppend(&line, " index=", index_);
+  absl::StrAppend(&line, " code=", absl::StatusCodeToString(status.code()));
+  if (!details_.empty()) absl::StrAppend(&line, " ", details_);
+  absl::StrAppend(&line, " where=", pooled_ ? "pool" : "inline");
+  if (status.ok() && !results_.empty()) absl::StrAppend(&line, " ", results_);
+  absl::StrAppend(&line, " total_us=", MicrosSince(start_), " peer=", LogValue(peer_));
+  if (!status.ok()) absl::StrAppend(&line, " message=", LogValue(std::string(status.message())));
+  spdlog::info("{}", line);
+}
+
+std::string LogValue(std::string_view text) {
+  bool bare = !text.empty();
+  for (char c : text) {
+    if (c == ' ' || c == '"' || c == '=' || c == '\\' || static_cast<unsigned char>(c) < 0x20) {
+      bare = false;
+      break;
+    }
+  }
+  if (bare) return std::string(text);
+  std::string out = "\"";
+  for (char c : text) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      default: out += static_cast<unsigned char>(c) < 0x20 ? ' ' : c;
+    }
+  }
+  out += '"';
+  return out;
+}
+
+absl::Status BusyStatus(const Executor& pool, const PoolWords& words) {
+  return absl::ResourceExhaustedError(absl::StrCat("server busy: all ", pool.workers(), " ",
+                                                   words.workers, " busy and ", pool.max_queued(),
+                                                   " ", words.queued, " queued; retry later"));
+}
+
+bool RunCall(CallLog log, Executor* pool, CallWork work, CallDone done, const PoolWords& words) {
+  if (pool == nullptr) {
+    const absl::Status status = work(log);
+    log.Emit(status);
+    done(status);
+    return true;
+  }
+  log.set_pooled();
+  // The pool task owns the log, the work and `done`: the caller's objects may
+  // be gone once `done` has run, possibly before TrySubmit returns.
+  auto task = std::make_shared<std::pair<CallLog, CallWork>>(std::move(log), std::move(work));
+  const bool queued = pool->TrySubmit([task, done] {
+    const absl::Status status = task->second(task->first);
+    task->first.Emit(status);
+    done(status);
+  });
+  if (!queued) {  // the pool dropped its copy; `task` and `done` are still ours
+    const absl::Status status = BusyStatus(*pool, words);
+    task->first.Emit(status);
+    done(status);
+  }
+  return queued;
+}
+
+bool PlanDispatcher::RunsInline(const PlanCall& call) const {
+  return call.solver == planner::SolverKind::kGeometric &&
+         static_cast<int>(call.problem.contacts.size()) <= settings_.inline_max_contacts;
+}
+
+void PlanDispatcher::Dispatch(const v1::PlanRequest& request, v1::PlanResponse* response,
+                              CallLog log, const CallControl& control, CallDone done) const {
+  absl::StatusOr<PlanCall> call = PreparePlan(request, settings_.limits);
+  const std::string details =
+      absl::StrCat("solver=", call.ok() ? planner::ToString(call->solver) : "-",
+                   " contacts=", request.contacts_size());
+  log.set_details(details);
+  const bool inline_solve = call.ok() && RunsInline(*call);
+  if (call.ok() && !inline_solve) {
+    if (absl::Status valid = planner::ValidateProblem(call->problem, call->options).status();
+        !valid.ok()) {
+      call = valid;
+    }
+  }
+  if (!call.ok()) {
+    log.Emit(call.status());
+    done(call.status());
+    return;
+  }
+  // From here on `log` may be logged (and `response` freed) on a worker
+  // thread before RunCall returns: only locals are used after it.
+  const std::string queued_line = absl::StrCat("event=queued ", details);
+  const std::string rpc_name = log.rpc();
+  auto work = [prepared = *std::move(call), &control, response](CallLog& call_log) mutable {
+    return ExecutePlan(prepared, control, response, call_log);
+  };
+  const bool queued = RunCall(std::move(log), inline_solve ? nullptr : pool_, std::move(work),
+                              std::move(done), kSolveWords);
+  if (queued && !inline_solve) spdlog::debug("rpc={} {}", rpc_name, queued_line);
+}
+
+}  // namespace tactforce::api

@@ -1,0 +1,115 @@
+// The grasp experiment's configuration: the names of its enums (CLI and JSON
+// spellings) and ValidateGraspConfig, whose errors name the config field.
+#include "tactforce/experiment/grasp.h"
+
+#include <cmath>
+#include <utility>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+
+namespace tactforce::experiment {
+
+const char* ToString(GraspObject o) {
+  switch (o) {
+    case GraspObject::kSphere: return "sphere";
+    case GraspObject::kWrench: return "wrench";
+    case GraspObject::kCylinder: return "cylinder";
+    case GraspObject::kCube: return "cube";
+  }
+  return "?";
+}
+
+absl::StatusOr<GraspObject> ParseGraspObject(std::string_view name) {
+  for (GraspObject o : AllGraspObjects())
+    if (name == ToString(o)) return o;
+  return absl::InvalidArgumentError(
+      absl::StrCat("object: unknown '", std::string(name), "' (expected sphere, wrench, cylinder or cube)"));
+}
+
+std::vector<GraspObject> AllGraspObjects() {
+  return {GraspObject::kSphere, GraspObject::kWrench, GraspObject::kCylinder, GraspObject::kCube};
+}
+
+const char* ToString(Feedback f) { return f == Feedback::kRaw ? "raw" : "estimated"; }
+
+absl::StatusOr<Feedback> ParseFeedback(std::string_view name) {
+  if (name == "raw") return Feedback::kRaw;
+  if (name == "estimated") return Feedback::kEstimated;
+  return absl::InvalidArgumentError(absl::StrCat("feedback: unknown '", std::string(name), "' (expected raw or estimated)"));
+}
+
+const char* ToString(Admittance a) { return a == Admittance::kFull ? "full" : "normal"; }
+
+absl::StatusOr<Admittance> ParseAdmittance(std::string_view name) {
+  if (name == "full") return Admittance::kFull;
+  if (name == "normal") return Admittance::kNormal;
+  return absl::InvalidArgumentError(
+      absl::StrCat("admittance: unknown '", std::string(name), "' (expected full or normal)"));
+}
+
+const char* ToString(Phase p) {
+  switch (p) {
+    case Phase::kClose: return "close";
+    case Phase::kSettle: return "settle";
+    case Phase::kHold: return "hold";
+    case Phase::kLift: return "lift";
+    case Phase::kHoldLifted: return "hold";
+    case Phase::kPlace: return "place";
+  }
+  return "?";
+}
+
+absl::Status ValidateGraspConfig(const GraspConfig& c) {
+  auto bad = [](const std::string& field, const std::string& why) {
+    return absl::InvalidArgumentError(absl::StrCat(field, ": ", why));
+  };
+  auto positive = [&](const char* field, double v) -> absl::Status {
+    if (!(v > 0 && std::isfinite(v))) return bad(field, absl::StrFormat("must be > 0, got %g", v));
+    return absl::OkStatus();
+  };
+  const PhaseDurations& p = c.phases;
+  for (auto [name, v] : {std::pair{"phases.close", p.close}, {"phases.settle", p.settle}, {"phases.hold", p.hold},
+                         {"phases.lift", p.lift}, {"phases.hold_lifted", p.hold_lifted}}) {
+    if (auto s = positive(name, v); !s.ok()) return s;
+  }
+  if (!(p.place >= 0 && std::isfinite(p.place))) return bad("phases.place", absl::StrFormat("must be >= 0, got %g", p.place));
+  if (!(c.lift_height >= 0 && c.lift_height <= 0.5))
+    return bad("lift_height", absl::StrFormat("must be in [0, 0.5] m, got %g", c.lift_height));
+  if (!(c.pivot_angle_deg >= 0 && c.pivot_angle_deg <= 40))
+    return bad("pivot_angle_deg", absl::StrFormat("must be in [0, 40], got %g", c.pivot_angle_deg));
+  if (auto s = positive("control_rate", c.control_rate); !s.ok()) return s;
+  if (auto s = ValidatePhysics(c.physics); !s.ok()) return s;
+  if (c.control_rate * c.physics.timestep > 1.0 + 1e-9)
+    return bad("control_rate", absl::StrFormat("%g Hz is faster than the physics (timestep %g s)", c.control_rate,
+                                               c.physics.timestep));
+  if (!(c.admittance_gain > 0 && c.admittance_gain <= 1))
+    return bad("admittance_gain", absl::StrFormat("must be in (0, 1], got %g", c.admittance_gain));
+  if (auto s = positive("kp", c.kp); !s.ok()) return s;
+  if (auto s = positive("damping_ratio", c.damping_ratio); !s.ok()) return s;
+  if (auto s = positive("fingertip_mass", c.fingertip_mass); !s.ok()) return s;
+  if (std::sqrt(c.kp / c.fingertip_mass) * c.physics.timestep > 1.0)
+    return bad("kp", absl::StrFormat("too stiff for fingertip_mass %g kg at timestep %g s (sqrt(kp/m) dt = %.2f > 1: "
+                                     "the explicit PD would be unstable)",
+                                     c.fingertip_mass, c.physics.timestep,
+                                     std::sqrt(c.kp / c.fingertip_mass) * c.physics.timestep));
+  if (!(c.fingertip_radius >= 0.003 && c.fingertip_radius <= 0.03))
+    return bad("fingertip_radius", absl::StrFormat("must be in [0.003, 0.03] m, got %g", c.fingertip_radius));
+  if (!(c.confidence >= 0 && std::isfinite(c.confidence)))
+    return bad("confidence", absl::StrFormat("must be >= 0, got %g", c.confidence));
+  if (auto s = positive("max_rotation_deg", c.max_rotation_deg); !s.ok()) return s;
+  if (auto s = positive("max_slip", c.max_slip); !s.ok()) return s;
+  if (!(c.drop_distance > c.max_slip))
+    return bad("drop_distance", absl::StrFormat("must exceed max_slip (%g m), got %g", c.max_slip, c.drop_distance));
+  if (c.sensors == SensorMode::kGeoDexRandom) {
+    if (auto s = ValidateErrorRanges(c.error_ranges, "error_ranges."); !s.ok()) return s;
+  }
+  if (c.sensors == SensorMode::kModel) {
+    if (auto s = sim::ValidateSensorModel(c.sensor_model); !s.ok())
+      return absl::InvalidArgumentError(absl::StrCat("sensor_model.", s.message()));
+    if (c.sensor_model.gain == 0) return bad("sensor_model.gain", "must not be 0");
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace tactforce::experiment

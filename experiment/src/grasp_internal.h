@@ -1,0 +1,63 @@
+// Internal (not installed): what GraspSetup::Create prepares once per object
+// and RunGraspTrial reads every tick — the phase timeline, the hand's rigid
+// motion and the per-tick force plans (GraspSetup::Impl).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "tactforce/experiment/grasp.h"
+#include "tactforce/planner/types.h"
+
+namespace tactforce::experiment {
+
+// Minimum-jerk profile s(tau), tau clamped to [0, 1], and its first and
+// second derivatives with respect to tau.
+void MinJerk(double tau, double* s, double* ds, double* dds);
+
+// Start times (s) of the phases after `close`, and the end of the trial.
+struct Timeline {
+  double t_settle, t_hold, t_lift, t_hold_lifted, t_place, t_end;
+  explicit Timeline(const PhaseDurations& p);
+  Phase At(double t) const;
+};
+
+// The hand's rigid motion relative to its pose at rest (identity before the
+// lift): x_world = R (x0 - pivot) + pivot + p.
+struct HandMotion {
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  planner::Vec3 p = planner::Vec3::Zero();   // m
+  planner::Vec3 v = planner::Vec3::Zero();   // translation velocity (m/s)
+  planner::Vec3 a = planner::Vec3::Zero();   // m/s^2
+  planner::Vec3 w = planner::Vec3::Zero();   // angular velocity (world, rad/s)
+  planner::Vec3 dw = planner::Vec3::Zero();  // rad/s^2
+};
+
+struct GraspSetup::Impl {
+  std::vector<std::string> finger_names;
+  planner::PlanProblem base;        // object frame, intrinsic contacts first
+  planner::Inertia inertia;         // about the CoM (kg m^2)
+  int n_fingers = 0;
+  planner::Vec3 rest_origin = planner::Vec3::Zero();  // object origin (world) at rest
+  bool pivot = false;               // cube: rotate about `pivot_point` around +x
+  planner::Vec3 pivot_point = planner::Vec3::Zero();  // world
+  double amplitude = 0;             // m (lift) or rad (pivot)
+  PhaseDurations phases;
+  Timeline timeline{PhaseDurations{}};
+  int ticks = 0;
+  std::vector<planner::PlanProblem> tick_problem;  // per control tick (estimation)
+  std::vector<std::vector<double>> tick_desired;   // per tick, per finger (N)
+  std::vector<std::vector<planner::Vec3>> tick_force;  // per tick, per finger, object frame (N)
+
+  // The hand's motion at time t (lift, hold, place; or the pivot).
+  HandMotion Motion(double t) const;
+  // Where the hand moves a world point that was at x0 at rest, its velocity
+  // and its acceleration.
+  planner::Vec3 Apply(const HandMotion& h, const planner::Vec3& x0) const;
+  planner::Vec3 Velocity(const HandMotion& h, const planner::Vec3& x0) const;
+  planner::Vec3 Acceleration(const HandMotion& h, const planner::Vec3& x0) const;
+};
+
+}  // namespace tactforce::experiment
