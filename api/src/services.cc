@@ -142,7 +142,9 @@ absl::StatusOr<v1::EstimateResponse> HandleEstimate(const v1::EstimateRequest& r
           absl::StrCat("method: unknown value ", static_cast<int>(request.method())));
   }
   if (request.has_origin_weight()) o.origin_weight = request.origin_weight();
-  if (request.cone_sides() > 64) return absl::InvalidArgumentError("cone_sides: must be in 3..64");
+  if (request.cone_sides() > planner::PlanOptions::kMaxConeSides)
+    return absl::InvalidArgumentError(absl::StrCat("cone_sides: must be in ", planner::PlanOptions::kMinConeSides,
+                                                   "..", planner::PlanOptions::kMaxConeSides));
   if (request.cone_sides() != 0) o.cone_sides = static_cast<int>(request.cone_sides());
   o.max_contacts = limits.max_contacts;
   const std::vector<double> readings(request.readings().begin(), request.readings().end());
