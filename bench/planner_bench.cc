@@ -2,8 +2,19 @@
 //
 //   build/bin/planner_bench [--benchmark_repetitions=5]
 //
-// After the Google Benchmark output it prints the speed ratio per n
-// (median time per solve of IPOPT / GEOMETRIC).
+// Rows per n:
+//   BM_Geometric   ForceSolver::Solve(problem, options): a fresh result and
+//                  workspace per call (the one-off API)
+//   BM_Workspace   the in-place Solve with one PlanningWorkspace and
+//                  PlanResult (what the server, PlanStream, trajectories use)
+//   BM_QpOnly      only the dense QP of the same grasps (SolveDenseQp in
+//                  place), so the cost of preparation stays visible
+//   BM_Ipopt       the Ipopt SOCP reference
+// Counters: allocs = heap allocations per solve (operator new is counted in
+// this binary), instr = user-space instructions per solve from
+// perf_event_open (n/a where the kernel refuses it; then see
+// instruction_counter.h for the callgrind command).
+// After the Google Benchmark output it prints the table of medians.
 #include <benchmark/benchmark.h>
 
 #include <cstdio>
@@ -12,8 +23,12 @@
 #include <string>
 #include <vector>
 
+#include "instruction_counter.h"
+#include "support/allocation_counter.h"
+#include "tactforce/planner/dense_qp.h"
 #include "tactforce/planner/random_grasps.h"
 #include "tactforce/planner/solver.h"
+#include "tactforce/planner/workspace.h"
 
 namespace tactforce::planner {
 namespace {
@@ -37,6 +52,29 @@ const std::vector<PlanProblem>& Grasps(int n) {
   return out;
 }
 
+// Per-iteration counters measured over the timed loop.
+class Counters {
+ public:
+  void Start() {
+    allocations_ = tactforce::testing::AllocationCount();
+    instructions_ = counter_.Read();
+  }
+  void Stop(benchmark::State& state, int n) {
+    const double iterations = static_cast<double>(state.iterations());
+    state.counters["contacts"] = n;
+    state.counters["allocs"] =
+        (tactforce::testing::AllocationCount() - allocations_) / iterations;
+    if (counter_.available()) {
+      state.counters["instr"] = (counter_.Read() - instructions_) / iterations;
+    }
+  }
+
+ private:
+  bench::InstructionCounter counter_;
+  long allocations_ = 0;
+  uint64_t instructions_ = 0;
+};
+
 void BM_Plan(benchmark::State& state, SolverKind kind) {
   const int n = static_cast<int>(state.range(0));
   const auto& grasps = Grasps(n);
@@ -44,18 +82,86 @@ void BM_Plan(benchmark::State& state, SolverKind kind) {
   const PlanOptions options;
   size_t i = 0;
   int failures = 0;
+  Counters counters;
+  counters.Start();
   for (auto _ : state) {
     absl::StatusOr<PlanResult> r = solver->Solve(grasps[i++ % grasps.size()], options);
     if (!r.ok() || r->status != PlanStatus::kOptimal) ++failures;
     benchmark::DoNotOptimize(r);
   }
-  state.counters["contacts"] = n;
+  counters.Stop(state, n);
+  state.counters["failures"] = failures;
+}
+
+// The timed call of BM_Workspace, kept out of line so that callgrind can
+// count exactly it: --toggle-collect='*TimedWorkspaceSolve*'.
+[[gnu::noinline]] bool TimedWorkspaceSolve(const ForceSolver& solver, const PlanProblem& problem,
+                                           const PlanOptions& options,
+                                           PlanningWorkspace* workspace, PlanResult* result) {
+  return solver.Solve(problem, options, workspace, result).ok() &&
+         result->status == PlanStatus::kOptimal;
+}
+
+void BM_Workspace(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const auto& grasps = Grasps(n);
+  const auto solver = MakeSolver(SolverKind::kGeometric);
+  const PlanOptions options;
+  PlanningWorkspace workspace;
+  PlanResult result;
+  for (const PlanProblem& p : grasps) (void)solver->Solve(p, options, &workspace, &result);
+  size_t i = 0;
+  int failures = 0;
+  Counters counters;
+  counters.Start();
+  for (auto _ : state) {
+    if (!TimedWorkspaceSolve(*solver, grasps[i++ % grasps.size()], options, &workspace, &result)) {
+      ++failures;
+    }
+    benchmark::DoNotOptimize(result);
+  }
+  counters.Stop(state, n);
+  state.counters["failures"] = failures;
+}
+
+// The FE-plane QPs the geometric backend solved for these grasps.
+const std::vector<DenseQp>& PlaneQps(int n) {
+  static std::map<int, std::vector<DenseQp>> cache;
+  auto& out = cache[n];
+  if (!out.empty()) return out;
+  const auto solver = MakeSolver(SolverKind::kGeometric);
+  PlanningWorkspace workspace;
+  PlanResult result;
+  for (const PlanProblem& p : Grasps(n)) {
+    if (solver->Solve(p, PlanOptions{}, &workspace, &result).ok()) out.push_back(workspace.qp);
+  }
+  return out;
+}
+
+void BM_QpOnly(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const auto& qps = PlaneQps(n);
+  DenseQpWorkspace workspace;
+  DenseQpResult result;
+  for (const DenseQp& qp : qps) SolveDenseQp(qp, {}, &workspace, &result);
+  size_t i = 0;
+  int failures = 0;
+  Counters counters;
+  counters.Start();
+  for (auto _ : state) {
+    SolveDenseQp(qps[i++ % qps.size()], {}, &workspace, &result);
+    if (result.status != DenseQpStatus::kOptimal) ++failures;
+    benchmark::DoNotOptimize(result);
+  }
+  counters.Stop(state, n);
   state.counters["failures"] = failures;
 }
 
 void BM_Geometric(benchmark::State& s) { BM_Plan(s, SolverKind::kGeometric); }
 void BM_Ipopt(benchmark::State& s) { BM_Plan(s, SolverKind::kIpopt); }
 BENCHMARK(BM_Geometric)->DenseRange(2, 6)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Workspace)->DenseRange(2, 6)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_QpOnly)->DenseRange(2, 6)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Ipopt)->DenseRange(2, 6)->Unit(benchmark::kMicrosecond);
 
 // Console output as usual, plus the per-n times for the ratio table.
@@ -67,23 +173,36 @@ class RatioReporter : public benchmark::ConsoleReporter {
       if (run.error_occurred) continue;
       // Single runs, or the median aggregate when repeated.
       if (run.run_type == Run::RT_Aggregate && run.aggregate_name != "median") continue;
-      const std::string name = run.run_name.function_name;
       const int n = std::stoi(run.run_name.args);
-      (name == "BM_Geometric" ? geometric_ : ipopt_)[n] = run.GetAdjustedRealTime();
+      Row& row = rows_[run.run_name.function_name][n];
+      row.us = run.GetAdjustedRealTime();
+      for (const char* key : {"allocs", "instr"}) {
+        auto it = run.counters.find(key);
+        (std::string(key) == "allocs" ? row.allocs : row.instructions) =
+            it == run.counters.end() ? -1.0 : double(it->second);
+      }
     }
   }
   void Finalize() override {
     ConsoleReporter::Finalize();
-    std::printf("\n| contacts | geometric (us) | ipopt (us) | ipopt / geometric |\n");
-    std::printf("|---:|---:|---:|---:|\n");
-    for (const auto& [n, g] : geometric_) {
-      if (!ipopt_.count(n)) continue;
-      std::printf("| %d | %.1f | %.1f | %.0fx |\n", n, g, ipopt_[n], ipopt_[n] / g);
+    std::printf(
+        "\n| contacts | one-off Solve (us) | workspace Solve (us) | QP alone (us) | ipopt (us) |"
+        " ipopt / workspace | allocs per solve (one-off / workspace) | instructions per "
+        "workspace solve |\n|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    for (const auto& [n, w] : rows_["BM_Workspace"]) {
+      const Row g = rows_["BM_Geometric"][n], q = rows_["BM_QpOnly"][n], i = rows_["BM_Ipopt"][n];
+      char instructions[32] = "n/a";
+      if (w.instructions >= 0) std::snprintf(instructions, sizeof(instructions), "%.0f", w.instructions);
+      std::printf("| %d | %.2f | %.2f | %.2f | %.1f | %.0fx | %.1f / %.1f | %s |\n", n, g.us, w.us,
+                  q.us, i.us, i.us / w.us, g.allocs, w.allocs, instructions);
     }
   }
 
  private:
-  std::map<int, double> geometric_, ipopt_;
+  struct Row {
+    double us = 0, allocs = -1, instructions = -1;
+  };
+  std::map<std::string, std::map<int, Row>> rows_;
 };
 
 }  // namespace

@@ -23,19 +23,23 @@ int64_t MicrosSince(std::chrono::steady_clock::time_point start) {
       .count();
 }
 
-// Solves a prepared request (the pool task or the inline call).
-absl::Status ExecutePlan(PlanCall& call, const CallControl& control, v1::PlanResponse* response,
-                         CallLog& log) {
+// Solves a prepared request (the pool task or the inline call) with the
+// stream's buffers, or the running thread's when `buffers` is null.
+absl::Status ExecutePlan(PlanCall& call, const CallControl& control, PlanBuffers* buffers,
+                         v1::PlanResponse* response, CallLog& log) {
   if (control.ShouldStop()) return control.StopReason("before the solve started");
   call.options.interrupt = control.Interrupt();
-  absl::StatusOr<v1::PlanResponse> planned = SolvePlan(call);
+  absl::StatusOr<v1::PlanResponse> planned =
+      SolvePlan(call, buffers != nullptr ? buffers : &ThreadPlanBuffers());
   if (!planned.ok()) return planned.status();
   if (control.ShouldStop()) {
     return control.StopReason(absl::StrCat("after ", planned->solve_time_us(), " us of solving"));
   }
   *response = *std::move(planned);
-  log.set_results(absl::StrCat("plan_status=", StatusName(response->status()),
-                               " solve_us=", response->solve_time_us()));
+  if (spdlog::should_log(spdlog::level::info)) {
+    log.set_results(absl::StrCat("plan_status=", StatusName(response->status()),
+                                 " solve_us=", response->solve_time_us()));
+  }
   return absl::OkStatus();
 }
 
@@ -118,12 +122,17 @@ bool PlanDispatcher::RunsInline(const PlanCall& call) const {
 }
 
 void PlanDispatcher::Dispatch(const v1::PlanRequest& request, v1::PlanResponse* response,
-                              CallLog log, const CallControl& control, CallDone done) const {
+                              CallLog log, const CallControl& control, CallDone done,
+                              PlanBuffers* buffers) const {
   absl::StatusOr<PlanCall> call = PreparePlan(request, settings_.limits);
-  const std::string details =
-      absl::StrCat("solver=", call.ok() ? planner::ToString(call->solver) : "-",
-                   " contacts=", request.contacts_size());
-  log.set_details(details);
+  // Log text is formatted only when its level is on.
+  const bool debug = spdlog::should_log(spdlog::level::debug);
+  std::string details;
+  if (debug || spdlog::should_log(spdlog::level::info)) {
+    details = absl::StrCat("solver=", call.ok() ? planner::ToString(call->solver) : "-",
+                           " contacts=", request.contacts_size());
+    log.set_details(details);
+  }
   const bool inline_solve = call.ok() && RunsInline(*call);
   if (call.ok() && !inline_solve) {
     if (absl::Status valid = planner::ValidateProblem(call->problem, call->options).status();
@@ -138,14 +147,14 @@ void PlanDispatcher::Dispatch(const v1::PlanRequest& request, v1::PlanResponse* 
   }
   // From here on `log` may be logged (and `response` freed) on a worker
   // thread before RunCall returns: only locals are used after it.
-  const std::string queued_line = absl::StrCat("event=queued ", details);
-  const std::string rpc_name = log.rpc();
-  auto work = [prepared = *std::move(call), &control, response](CallLog& call_log) mutable {
-    return ExecutePlan(prepared, control, response, call_log);
+  std::string rpc_name;
+  if (debug && !inline_solve) rpc_name = log.rpc();
+  auto work = [prepared = *std::move(call), &control, buffers, response](CallLog& call_log) mutable {
+    return ExecutePlan(prepared, control, buffers, response, call_log);
   };
   const bool queued = RunCall(std::move(log), inline_solve ? nullptr : pool_, std::move(work),
                               std::move(done), kSolveWords);
-  if (queued && !inline_solve) spdlog::debug("rpc={} {}", rpc_name, queued_line);
+  if (debug && queued && !inline_solve) spdlog::debug("rpc={} event=queued {}", rpc_name, details);
 }
 
 }  // namespace tactforce::api

@@ -50,10 +50,27 @@ absl::StatusOr<PlanCall> PreparePlan(const v1::PlanRequest& request, const CallL
   return call;
 }
 
+PlanBuffers& ThreadPlanBuffers() {
+  thread_local PlanBuffers buffers;
+  return buffers;
+}
+
+absl::StatusOr<v1::PlanResponse> SolvePlan(const PlanCall& call, PlanBuffers* buffers) {
+  static const auto* solvers = new std::unique_ptr<planner::ForceSolver>[3]{
+      planner::MakeSolver(planner::SolverKind::kGeometric),
+      planner::MakeSolver(planner::SolverKind::kIpopt),
+      planner::MakeSolver(planner::SolverKind::kCrossCheck)};
+  const planner::ForceSolver& solver = *solvers[static_cast<int>(call.solver)];
+  if (absl::Status s = solver.Solve(call.problem, call.options, &buffers->workspace,
+                                    &buffers->result);
+      !s.ok()) {
+    return s;
+  }
+  return api::ToProto(buffers->result);
+}
+
 absl::StatusOr<v1::PlanResponse> SolvePlan(const PlanCall& call) {
-  absl::StatusOr<planner::PlanResult> result = planner::Plan(call.problem, call.options, call.solver);
-  if (!result.ok()) return result.status();
-  return api::ToProto(*result);
+  return SolvePlan(call, &ThreadPlanBuffers());
 }
 
 absl::StatusOr<v1::PlanResponse> HandlePlan(const v1::PlanRequest& request,

@@ -24,25 +24,20 @@ using planner::DenseQpStatus;
 using planner::ForceEquilibrium;
 using planner::PlanProblem;
 
-struct Layout {
-  std::vector<int> intrinsic, extrinsic;  // contact indices
-};
-
-Layout Classify(const PlanProblem& p) {
-  Layout l;
+void Classify(const PlanProblem& p, EstimationWorkspace* ws) {
+  ws->intrinsic.clear();
+  ws->extrinsic.clear();
   for (int i = 0; i < static_cast<int>(p.contacts.size()); ++i) {
-    (p.contacts[i].kind == ContactKind::kIntrinsic ? l.intrinsic : l.extrinsic).push_back(i);
+    (p.contacts[i].kind == ContactKind::kIntrinsic ? ws->intrinsic : ws->extrinsic).push_back(i);
   }
-  return l;
 }
 
 // Columns: unit normals placed at their contacts' rows (3n x |indices|).
-MatrixXd PlacedNormals(const PlanProblem& p, const std::vector<int>& indices) {
-  MatrixXd out = MatrixXd::Zero(3 * p.contacts.size(), indices.size());
+void PlaceNormals(const PlanProblem& p, const std::vector<int>& indices, MatrixXd* out) {
+  out->setZero(3 * p.contacts.size(), indices.size());
   for (size_t j = 0; j < indices.size(); ++j) {
-    out.block<3, 1>(3 * indices[j], j) = p.contacts[indices[j]].normal;
+    out->block<3, 1>(3 * indices[j], j) = p.contacts[indices[j]].normal;
   }
-  return out;
 }
 
 const char* QpFailure(DenseQpStatus s) {
@@ -50,12 +45,25 @@ const char* QpFailure(DenseQpStatus s) {
                                              : "numerical failure in the active-set QP";
 }
 
+// f = f0 + B x into planning.forces.
+void ForcesFromPlane(const ForceEquilibrium& eq, const VectorXd& x, planner::PlanningWorkspace* w) {
+  w->forces = eq.particular;
+  w->forces.noalias() += eq.null_basis * x;
+}
+
 // GeoDEx Problem 1 (closed form) and Problem 2 (QP over x and w >= 0).
-void Project(const PlanProblem& p, const ForceEquilibrium& eq, const Layout& l,
-             const VectorXd& measured, double lambda, ForceEstimate* out, VectorXd* f) {
+void Project(const PlanProblem& p, const std::vector<double>& readings, double lambda,
+             EstimationWorkspace* ws, ForceEstimate* out) {
+  planner::PlanningWorkspace& pw = ws->planning;
+  const ForceEquilibrium& eq = pw.prepared.equilibrium;
   const MatrixXd& B = eq.null_basis;
-  if (l.extrinsic.empty()) {
-    *f = eq.particular + B * (B.transpose() * (measured - eq.particular));
+  PlaceNormals(p, ws->intrinsic, &ws->placed);
+  ws->measured.noalias() =
+      ws->placed * Eigen::Map<const VectorXd>(readings.data(), readings.size());
+  ws->measured -= eq.particular;  // r = f_m - f0
+  if (ws->extrinsic.empty()) {
+    ws->coordinates.noalias() = B.transpose() * ws->measured;
+    ForcesFromPlane(eq, ws->coordinates, &pw);
     out->status = EstimateStatus::kOk;
     return;
   }
@@ -63,67 +71,81 @@ void Project(const PlanProblem& p, const ForceEquilibrium& eq, const Layout& l,
   // With B^T B = I and B^T f0 = 0 the Hessian (times 1/2) is
   // [(1+lambda) I, -B^T N_E; -N_E^T B, N_E^T N_E], strictly convex for lambda > 0.
   const int d = static_cast<int>(B.cols());
-  const int e = static_cast<int>(l.extrinsic.size());
-  const MatrixXd n_e = PlacedNormals(p, l.extrinsic);
-  const VectorXd r = eq.particular - measured;
-  DenseQp qp;
+  const int e = static_cast<int>(ws->extrinsic.size());
+  PlaceNormals(p, ws->extrinsic, &ws->placed);  // now N_E
+  ws->reduced.noalias() = B.transpose() * ws->placed;  // B^T N_E
+  DenseQp& qp = pw.qp;
+  qp.identity_hessian = false;
   qp.hessian.resize(d + e, d + e);
-  qp.hessian << (1.0 + lambda) * MatrixXd::Identity(d, d), -B.transpose() * n_e,
-      -n_e.transpose() * B, n_e.transpose() * n_e;
-  qp.hessian *= 2.0;
+  qp.hessian.topLeftCorner(d, d).setIdentity();
+  qp.hessian.topLeftCorner(d, d) *= 2.0 * (1.0 + lambda);
+  qp.hessian.topRightCorner(d, e) = -2.0 * ws->reduced;
+  qp.hessian.bottomLeftCorner(e, d) = -2.0 * ws->reduced.transpose();
+  qp.hessian.bottomRightCorner(e, e).noalias() = 2.0 * ws->placed.transpose() * ws->placed;
+  // r = f0 - f_m = -measured.
   qp.gradient.resize(d + e);
-  qp.gradient << 2.0 * (B.transpose() * r + lambda * B.transpose() * eq.particular),
-      -2.0 * n_e.transpose() * r;
+  qp.gradient.head(d).noalias() = -2.0 * B.transpose() * ws->measured;
+  qp.gradient.head(d).noalias() += (2.0 * lambda) * B.transpose() * eq.particular;
+  qp.gradient.tail(e).noalias() = 2.0 * ws->placed.transpose() * ws->measured;
   qp.eq_matrix.resize(0, d + e);
   qp.eq_rhs.resize(0);
-  qp.in_matrix = MatrixXd::Zero(e, d + e);
-  qp.in_matrix.rightCols(e) = -MatrixXd::Identity(e, e);
-  qp.in_rhs = VectorXd::Zero(e);
-  const planner::DenseQpResult qr = planner::SolveDenseQp(qp);
-  out->iterations = qr.iterations;
-  if (qr.status != DenseQpStatus::kOptimal) {
+  qp.in_matrix.setZero(e, d + e);
+  qp.in_matrix.rightCols(e).diagonal().setConstant(-1.0);
+  qp.in_rhs.setZero(e);
+  planner::SolveDenseQp(qp, {}, &pw.qp_workspace, &pw.qp_result);
+  out->iterations = pw.qp_result.iterations;
+  if (pw.qp_result.status != DenseQpStatus::kOptimal) {
     out->status = EstimateStatus::kSolverFailure;
-    out->message = QpFailure(qr.status);
+    out->message = QpFailure(pw.qp_result.status);
     return;
   }
-  *f = eq.particular + B * qr.x.head(d);
+  ws->coordinates = pw.qp_result.x.head(d);
+  ForcesFromPlane(eq, ws->coordinates, &pw);
   out->status = EstimateStatus::kOk;
 }
 
-void NormalLeastSquares(const PlanProblem& p, const ForceEquilibrium& eq, const Layout& l,
-                        const std::vector<double>& readings, const EstimateOptions& o,
-                        ForceEstimate* out, VectorXd* f) {
+void NormalLeastSquares(PlanProblem& p, const std::vector<double>& readings,
+                        const EstimateOptions& o, EstimationWorkspace* ws, ForceEstimate* out) {
+  planner::PlanningWorkspace& pw = ws->planning;
+  const ForceEquilibrium& eq = pw.prepared.equilibrium;
   const MatrixXd& B = eq.null_basis;
   const int d = static_cast<int>(B.cols());
-  // M f = the intrinsic normal components; W = diag(1 / sigma^2).
-  const MatrixXd m = PlacedNormals(p, l.intrinsic).transpose();
-  VectorXd w(l.intrinsic.size()), y(l.intrinsic.size());
-  for (size_t j = 0; j < l.intrinsic.size(); ++j) {
-    const double s = std::max(p.contacts[l.intrinsic[j]].sigma, o.min_sigma);
-    w(j) = 1.0 / (s * s);
-    y(j) = readings[j];
+  const int k = static_cast<int>(ws->intrinsic.size());
+  // M = placed^T: f -> the intrinsic normal components; W = diag(1 / sigma^2).
+  PlaceNormals(p, ws->intrinsic, &ws->placed);
+  ws->reduced.noalias() = ws->placed.transpose() * B;  // M B
+  ws->measured.resize(k);                              // here: the weights
+  ws->values.noalias() = ws->placed.transpose() * eq.particular;  // M f0 - y
+  for (int j = 0; j < k; ++j) {
+    const double s = std::max(p.contacts[ws->intrinsic[j]].sigma, o.min_sigma);
+    ws->measured(j) = 1.0 / (s * s);
+    ws->values(j) = ws->measured(j) * (ws->values(j) - readings[j]);
   }
-  const MatrixXd mb = m * B;
-  DenseQp qp;
-  qp.hessian = 2.0 * (mb.transpose() * w.asDiagonal() * mb +
-                      o.origin_weight * MatrixXd::Identity(d, d));
-  qp.gradient = 2.0 * (mb.transpose() * w.asDiagonal() * (m * eq.particular - y) +
-                       o.origin_weight * B.transpose() * eq.particular);
+  ws->weighted.noalias() = ws->measured.asDiagonal() * ws->reduced;
+  DenseQp& qp = pw.qp;
+  qp.identity_hessian = false;
+  qp.hessian.noalias() = ws->reduced.transpose() * ws->weighted;
+  qp.hessian.diagonal().array() += o.origin_weight;
+  qp.hessian *= 2.0;
+  qp.gradient.noalias() = ws->reduced.transpose() * ws->values;
+  qp.gradient.noalias() += o.origin_weight * B.transpose() * eq.particular;
+  qp.gradient *= 2.0;
   qp.eq_matrix.resize(0, d);
   qp.eq_rhs.resize(0);
-  // Untightened pyramid and n . f >= 0 for every contact.
-  PlanProblem admissible = p;
-  for (auto& c : admissible.contacts) c.min_normal_force = c.max_normal_force = 0.0;
-  const planner::MeasurementEllipsoid no_noise{MatrixXd::Zero(3 * p.contacts.size(), 0)};
-  const planner::ConstraintRows rows =
-      planner::BuildConstraintRows(admissible, no_noise, o.cone_sides, 0.0, true);
-  qp.in_matrix = rows.matrix * B;
-  qp.in_rhs = rows.rhs - rows.matrix * eq.particular;
-  const planner::DenseQpResult qr = planner::SolveDenseQp(qp);
+  // Untightened pyramid and n . f >= 0 for every contact (the workspace's
+  // copy of the problem loses its force bounds; the rows see no noise).
+  for (auto& c : p.contacts) c.min_normal_force = c.max_normal_force = 0.0;
+  planner::MeasurementEllipsoid& no_noise = pw.prepared.ellipsoid;
+  no_noise.factor.resize(3 * p.contacts.size(), 0);
+  planner::ConstraintRows& rows = pw.prepared.rows;
+  planner::BuildConstraintRows(p, no_noise, o.cone_sides, 0.0, true, &rows);
+  planner::RowsOnPlane(rows, eq, &qp.in_matrix, &qp.in_rhs);
+  planner::SolveDenseQp(qp, {}, &pw.qp_workspace, &pw.qp_result);
+  const planner::DenseQpResult& qr = pw.qp_result;
   out->iterations = qr.iterations;
   switch (qr.status) {
     case DenseQpStatus::kOptimal:
-      *f = eq.particular + B * qr.x;
+      ForcesFromPlane(eq, qr.x, &pw);
       out->status = EstimateStatus::kOk;
       return;
     case DenseQpStatus::kInfeasible:
@@ -154,69 +176,106 @@ const char* ToString(EstimateMethod method) {
   return method == EstimateMethod::kProjection ? "PROJECTION" : "NORMAL_LSQ";
 }
 
-absl::StatusOr<ForceEstimate> EstimateForces(const PlanProblem& problem,
-                                             const std::vector<double>& readings,
-                                             const EstimateOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
+namespace {
+
+// Validates into the workspace and checks the readings; fills
+// out->negative_readings.
+absl::Status CheckRequest(const PlanProblem& problem, const std::vector<double>& readings,
+                          const EstimateOptions& options, EstimationWorkspace* ws,
+                          ForceEstimate* out) {
   if (!std::isfinite(options.origin_weight) || options.origin_weight < 0.0)
     return absl::InvalidArgumentError("origin_weight: must be finite and >= 0");
   planner::PlanOptions plan_options;
   plan_options.cone_sides = options.cone_sides;
   plan_options.rank_tolerance = options.rank_tolerance;
   plan_options.max_contacts = options.max_contacts;
-  absl::StatusOr<PlanProblem> validated = planner::ValidateProblem(problem, plan_options);
-  if (!validated.ok()) return validated.status();
-  const PlanProblem& p = *validated;
-  const Layout layout = Classify(p);
-  if (readings.size() != layout.intrinsic.size()) {
+  PlanProblem& p = ws->planning.prepared.problem;
+  if (absl::Status s = planner::ValidateProblem(problem, plan_options, &p); !s.ok()) return s;
+  Classify(p, ws);
+  if (readings.size() != ws->intrinsic.size()) {
     return absl::InvalidArgumentError(
-        absl::StrCat("readings: expected ", layout.intrinsic.size(),
+        absl::StrCat("readings: expected ", ws->intrinsic.size(),
                      " values (one per intrinsic contact, in request order), got ",
                      readings.size()));
   }
-  ForceEstimate out;
-  out.method = options.method;
   for (size_t j = 0; j < readings.size(); ++j) {
     if (!std::isfinite(readings[j]))
       return absl::InvalidArgumentError(absl::StrCat("readings[", j, "]: not a finite number"));
-    if (readings[j] < 0.0) out.negative_readings.push_back(static_cast<int>(j));
+    if (readings[j] < 0.0) out->negative_readings.push_back(static_cast<int>(j));
   }
-  if (options.method == EstimateMethod::kProjection && !layout.extrinsic.empty() &&
+  if (options.method == EstimateMethod::kProjection && !ws->extrinsic.empty() &&
       options.origin_weight <= 0.0) {
     return absl::InvalidArgumentError(
         "origin_weight: must be > 0 for PROJECTION with extrinsic contacts (Problem 2)");
   }
+  return absl::OkStatus();
+}
 
-  const ForceEquilibrium eq = planner::ComputeForceEquilibrium(p, options.rank_tolerance);
-  VectorXd f;
+void Reset(ForceEstimate* out, EstimateMethod method) {
+  out->status = EstimateStatus::kSolverFailure;
+  out->message.clear();
+  out->method = method;
+  out->forces.clear();
+  out->normal_forces.clear();
+  out->residuals.clear();
+  out->negative_readings.clear();
+  out->iterations = 0;
+  out->solve_time_us = 0;
+}
+
+}  // namespace
+
+absl::Status EstimateForces(const PlanProblem& problem, const std::vector<double>& readings,
+                            const EstimateOptions& options, EstimationWorkspace* ws,
+                            ForceEstimate* out) {
+  const auto start = std::chrono::steady_clock::now();
+  Reset(out, options.method);
+  if (absl::Status s = CheckRequest(problem, readings, options, ws, out); !s.ok()) return s;
+  PlanProblem& p = ws->planning.prepared.problem;
+  ForceEquilibrium& eq = ws->planning.prepared.equilibrium;
+  planner::ComputeForceEquilibrium(p, options.rank_tolerance,
+                                   &ws->planning.equilibrium_scratch, &eq);
   if (!eq.consistent) {
-    out.status = EstimateStatus::kInfeasible;
-    out.message = absl::StrCat("the contacts cannot resist this wrench: G has rank ", eq.rank,
-                               " and the required wrench leaves a residual of ", eq.residual);
+    out->status = EstimateStatus::kInfeasible;
+    out->message = absl::StrCat("the contacts cannot resist this wrench: G has rank ", eq.rank,
+                                " and the required wrench leaves a residual of ", eq.residual);
   } else if (options.method == EstimateMethod::kProjection) {
-    VectorXd measured = PlacedNormals(p, layout.intrinsic) *
-                        Eigen::Map<const VectorXd>(readings.data(), readings.size());
-    Project(p, eq, layout, measured, options.origin_weight, &out, &f);
+    Project(p, readings, options.origin_weight, ws, out);
   } else {
-    NormalLeastSquares(p, eq, layout, readings, options, &out, &f);
+    NormalLeastSquares(p, readings, options, ws, out);
   }
-  if (out.status == EstimateStatus::kOk) {
+  if (out->status == EstimateStatus::kOk) {
+    const VectorXd& f = ws->planning.forces;
+    out->forces.resize(p.contacts.size());
+    out->normal_forces.resize(p.contacts.size());
     for (size_t i = 0; i < p.contacts.size(); ++i) {
-      out.forces.push_back(f.segment<3>(3 * i));
-      out.normal_forces.push_back(p.contacts[i].normal.dot(out.forces.back()));
+      out->forces[i] = f.segment<3>(3 * i);
+      out->normal_forces[i] = p.contacts[i].normal.dot(out->forces[i]);
     }
-    for (size_t j = 0; j < layout.intrinsic.size(); ++j) {
-      out.residuals.push_back(out.normal_forces[layout.intrinsic[j]] - readings[j]);
+    out->residuals.resize(ws->intrinsic.size());
+    for (size_t j = 0; j < ws->intrinsic.size(); ++j) {
+      out->residuals[j] = out->normal_forces[ws->intrinsic[j]] - readings[j];
     }
   }
-  if (!out.negative_readings.empty()) {
-    absl::StrAppend(&out.message, out.message.empty() ? "" : "; ", out.negative_readings.size(),
-                    " negative reading(s) used as given (first: readings[",
-                    out.negative_readings.front(), "])");
+  if (!out->negative_readings.empty()) {
+    absl::StrAppend(&out->message, out->message.empty() ? "" : "; ",
+                    out->negative_readings.size(), " negative reading(s) used as given (first: readings[",
+                    out->negative_readings.front(), "])");
   }
-  out.solve_time_us = std::chrono::duration_cast<std::chrono::microseconds>(
-                          std::chrono::steady_clock::now() - start)
-                          .count();
+  out->solve_time_us = std::chrono::duration_cast<std::chrono::microseconds>(
+                           std::chrono::steady_clock::now() - start)
+                           .count();
+  return absl::OkStatus();
+}
+
+absl::StatusOr<ForceEstimate> EstimateForces(const PlanProblem& problem,
+                                             const std::vector<double>& readings,
+                                             const EstimateOptions& options) {
+  EstimationWorkspace workspace;
+  ForceEstimate out;
+  if (absl::Status s = EstimateForces(problem, readings, options, &workspace, &out); !s.ok()) {
+    return s;
+  }
   return out;
 }
 

@@ -25,7 +25,13 @@ class CrossCheckSolver final : public ForceSolver {
     return absl::OkStatus();
   }
 
-  PlanResult DoSolve(const PreparedProblem& prepared, const PlanOptions& options) const override {
+  void DoSolve(const PlanOptions& options, PlanningWorkspace* workspace,
+               PlanResult* out) const override {
+    *out = Compare(workspace->prepared, options);
+  }
+
+ private:
+  PlanResult Compare(const PreparedProblem& prepared, const PlanOptions& options) const {
     absl::StatusOr<PlanResult> geometric = geometric_->Solve(prepared.problem, options);
     absl::StatusOr<PlanResult> ipopt = ipopt_->Solve(prepared.problem, options);
     if (!geometric.ok() || !ipopt.ok()) {  // cannot happen after validation
@@ -60,7 +66,6 @@ class CrossCheckSolver final : public ForceSolver {
     return result;
   }
 
- private:
   std::unique_ptr<ForceSolver> geometric_;
   std::unique_ptr<ForceSolver> ipopt_;
 };

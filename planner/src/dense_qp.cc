@@ -3,8 +3,10 @@
 // Constraints are kept in the form a^T x <= b. The method starts at the
 // unconstrained minimum and adds violated constraints one at a time while
 // keeping the dual feasible; it maintains J = L^-T Q and the upper
-// triangular R of the QR factorisation of L^-1 N_active (H = L L^T), so each
-// step costs O(n^2).
+// triangular R of the QR factorisation of L^-1 N_active (H = L L^T), updated
+// by Givens rotations when a constraint enters or leaves, so each step costs
+// O(n^2). With H = I (identity_hessian) there is nothing to factorise: J
+// starts as I. Every buffer lives in the caller's DenseQpWorkspace.
 #include "tactforce/planner/dense_qp.h"
 
 #include <algorithm>
@@ -34,128 +36,134 @@ void Givens(double a, double b, double* c, double* s, double* h) {
   }
 }
 
+// One solve over the buffers of a DenseQpWorkspace. The active set has at
+// most n constraints; r and u use their leading q = active.size() entries.
 class ActiveSetSolver {
  public:
-  ActiveSetSolver(const DenseQp& qp, const DenseQpSettings& settings)
-      : qp_(qp), settings_(settings), n_(static_cast<int>(qp.gradient.size())),
+  ActiveSetSolver(const DenseQp& qp, const DenseQpSettings& settings, DenseQpWorkspace* ws)
+      : qp_(qp), settings_(settings), w_(*ws), n_(static_cast<int>(qp.gradient.size())),
         p_(static_cast<int>(qp.eq_matrix.rows())), m_(static_cast<int>(qp.in_matrix.rows())) {}
 
-  DenseQpResult Run();
+  void Run(DenseQpResult* out);
 
  private:
   // Constraint k of the stacked set (equalities first, then inequalities),
-  // as a contiguous column of normals_.
-  auto Normal(int k) const { return normals_.col(k); }
-  double Rhs(int k) const { return rhs_(k); }
-  double Slack(int k) const { return rhs_(k) - normals_.col(k).dot(x_); }
+  // as a contiguous column of the normals.
+  auto Normal(int k) const { return w_.normals.col(k); }
+  double Slack(int k) const { return w_.rhs(k) - w_.normals.col(k).dot(w_.x); }
   double Scale(int k) const {
-    return std::max({1.0, std::abs(rhs_(k)), normal_norms_(k) * x_.norm()});
+    return std::max({1.0, std::abs(w_.rhs(k)), w_.normal_norms(k) * w_.x.norm()});
   }
-  // Normals, right-hand sides, the factorisation J = L^-T and the
-  // unconstrained minimum; false if H is not positive definite.
+  int Active() const { return static_cast<int>(w_.active.size()); }
+  // Normals, right-hand sides, J = L^-T and the unconstrained minimum;
+  // false if H is not positive definite.
   bool Initialize();
   // Makes every equality active; returns the first inconsistent one, or -1.
   int AddEqualities();
   // Adds inequality k (stacked index), dropping blocking constraints on the
   // way; nullopt once added, else why the solve ends.
   std::optional<DenseQpStatus> AddInequality(int k, int max_iterations);
-  // Active inequality limiting the partial step (its position in active_, or
+  // Active inequality limiting the partial step (its position in active, or
   // -1) and that step length (infinite if none).
   int BlockingActive(double* step) const;
   // Direction in primal (z) and dual (r) spaces for adding constraint k.
   void Directions(int k);
   void AddToFactorization();
   void DropFromFactorization(int position);
-  int MostViolated() const;
-  DenseQpResult Finish(DenseQpStatus status, int blocking);
+  // Appends stacked constraint k to the active set with multiplier `u`.
+  void Activate(int k, double u);
+  int MostViolated();
+  void Finish(DenseQpStatus status, int blocking, DenseQpResult* out);
 
   const DenseQp& qp_;
   const DenseQpSettings& settings_;
+  DenseQpWorkspace& w_;
   const int n_, p_, m_;
-  MatrixXd normals_;  // n x (p + m): constraint normals as columns
-  VectorXd rhs_, normal_norms_;
-
-  VectorXd x_;
-  MatrixXd J_;  // n x n
-  MatrixXd R_;  // n x n, upper triangular in its leading q x q block
-  VectorXd d_, z_, r_;
-  std::vector<int> active_;  // stacked indices, in factorisation order
-  VectorXd u_;               // multipliers of active_, same order
-  std::vector<char> is_active_;
   int iterations_ = 0;
 };
 
 void ActiveSetSolver::Directions(int k) {
-  const int q = static_cast<int>(active_.size());
-  d_ = J_.transpose() * Normal(k);
-  z_ = J_.rightCols(n_ - q) * d_.tail(n_ - q);
+  const int q = Active();
+  w_.d.noalias() = w_.J.transpose() * Normal(k);
+  w_.z.noalias() = w_.J.rightCols(n_ - q) * w_.d.tail(n_ - q);
   if (q > 0) {
-    r_ = R_.topLeftCorner(q, q).triangularView<Eigen::Upper>().solve(d_.head(q));
-  } else {
-    r_.resize(0);
+    w_.r.head(q) = w_.d.head(q);
+    w_.R.topLeftCorner(q, q).triangularView<Eigen::Upper>().solveInPlace(w_.r.head(q));
   }
 }
 
 void ActiveSetSolver::AddToFactorization() {
-  const int q = static_cast<int>(active_.size());  // before adding
+  const int q = Active();  // before adding
+  Eigen::VectorXd& d = w_.d;
+  Eigen::MatrixXd& J = w_.J;
   for (int j = n_ - 1; j > q; --j) {
     double c, s, h;
-    Givens(d_(j - 1), d_(j), &c, &s, &h);
+    Givens(d(j - 1), d(j), &c, &s, &h);
     if (s == 0.0) continue;
-    d_(j - 1) = h;
-    d_(j) = 0.0;
+    d(j - 1) = h;
+    d(j) = 0.0;
     for (int row = 0; row < n_; ++row) {
-      const double a = J_(row, j - 1), b = J_(row, j);
-      J_(row, j - 1) = c * a + s * b;
-      J_(row, j) = -s * a + c * b;
+      const double a = J(row, j - 1), b = J(row, j);
+      J(row, j - 1) = c * a + s * b;
+      J(row, j) = -s * a + c * b;
     }
   }
-  R_.col(q).head(q + 1) = d_.head(q + 1);
+  w_.R.col(q).head(q + 1) = d.head(q + 1);
+}
+
+void ActiveSetSolver::Activate(int k, double u) {
+  w_.u(Active()) = u;
+  w_.active.push_back(k);
+  w_.is_active[k] = 1;
 }
 
 void ActiveSetSolver::DropFromFactorization(int position) {
-  const int q = static_cast<int>(active_.size());  // before removal
-  for (int col = position; col < q - 1; ++col) R_.col(col) = R_.col(col + 1);
-  R_.col(q - 1).setZero();
+  const int q = Active();  // before removal
+  Eigen::MatrixXd& R = w_.R;
+  Eigen::MatrixXd& J = w_.J;
+  w_.is_active[w_.active[position]] = 0;
+  for (int col = position; col < q - 1; ++col) R.col(col) = R.col(col + 1);
+  R.col(q - 1).setZero();
   for (int j = position; j < q - 1; ++j) {
     double c, s, h;
-    Givens(R_(j, j), R_(j + 1, j), &c, &s, &h);
+    Givens(R(j, j), R(j + 1, j), &c, &s, &h);
     if (s == 0.0) continue;
     for (int col = j; col < q - 1; ++col) {
-      const double a = R_(j, col), b = R_(j + 1, col);
-      R_(j, col) = c * a + s * b;
-      R_(j + 1, col) = -s * a + c * b;
+      const double a = R(j, col), b = R(j + 1, col);
+      R(j, col) = c * a + s * b;
+      R(j + 1, col) = -s * a + c * b;
     }
     for (int row = 0; row < n_; ++row) {
-      const double a = J_(row, j), b = J_(row, j + 1);
-      J_(row, j) = c * a + s * b;
-      J_(row, j + 1) = -s * a + c * b;
+      const double a = J(row, j), b = J(row, j + 1);
+      J(row, j) = c * a + s * b;
+      J(row, j + 1) = -s * a + c * b;
     }
   }
-  active_.erase(active_.begin() + position);
-  for (int k = position; k < q - 1; ++k) u_(k) = u_(k + 1);
-  u_.conservativeResize(q - 1);
+  w_.active.erase(w_.active.begin() + position);
+  for (int k = position; k < q - 1; ++k) w_.u(k) = w_.u(k + 1);
 }
 
-int ActiveSetSolver::MostViolated() const {
+int ActiveSetSolver::MostViolated() {
   // Relative violation: slack / max(1, |b|, |a| |x|).
-  const double x_norm = x_.norm();
+  const double x_norm = w_.x.norm();
   auto violation = [&](int k, double slack) {
-    return slack / std::max({1.0, std::abs(rhs_(k)), normal_norms_(k) * x_norm});
+    return slack / std::max({1.0, std::abs(w_.rhs(k)), w_.normal_norms(k) * x_norm});
   };
   for (int row : settings_.warm_start) {
     const int k = p_ + row;
-    if (row >= 0 && row < m_ && !is_active_[k] &&
+    if (row >= 0 && row < m_ && !w_.is_active[k] &&
         violation(k, Slack(k)) < -settings_.tolerance)
       return k;
   }
   if (m_ == 0) return -1;
-  const VectorXd slack = rhs_.tail(m_) - normals_.rightCols(m_).transpose() * x_;
+  Eigen::VectorXd& slack = w_.slack;
+  slack = qp_.in_rhs;
+  for (int j = 0; j < n_; ++j) slack -= w_.x(j) * qp_.in_matrix.col(j);  // m x n, by columns
   int worst = -1;
   double worst_ratio = -settings_.tolerance;
   for (int i = 0; i < m_; ++i) {
     const int k = p_ + i;
-    if (is_active_[k] || slack(i) >= 0.0) continue;
+    if (w_.is_active[k] || slack(i) >= 0.0) continue;
     const double ratio = violation(k, slack(i));
     if (ratio < worst_ratio) {
       worst_ratio = ratio;
@@ -165,44 +173,61 @@ int ActiveSetSolver::MostViolated() const {
   return worst;
 }
 
-DenseQpResult ActiveSetSolver::Finish(DenseQpStatus status, int blocking) {
-  DenseQpResult out;
-  out.status = status;
-  out.x = x_;
-  out.objective = 0.5 * x_.dot(qp_.hessian * x_) + qp_.gradient.dot(x_);
-  out.in_multipliers = VectorXd::Zero(m_);
-  out.eq_multipliers = VectorXd::Zero(p_);
-  for (int i = 0; i < static_cast<int>(active_.size()); ++i) {
-    if (active_[i] < p_) {
-      out.eq_multipliers(active_[i]) = u_(i);
+void ActiveSetSolver::Finish(DenseQpStatus status, int blocking, DenseQpResult* out) {
+  out->status = status;
+  out->x = w_.x;
+  if (qp_.identity_hessian) {
+    out->objective = 0.5 * w_.x.squaredNorm() + qp_.gradient.dot(w_.x);
+  } else {
+    w_.hx.noalias() = qp_.hessian * w_.x;
+    out->objective = 0.5 * w_.x.dot(w_.hx) + qp_.gradient.dot(w_.x);
+  }
+  out->in_multipliers.setZero(m_);
+  out->eq_multipliers.setZero(p_);
+  out->active_set.clear();
+  for (int i = 0; i < Active(); ++i) {
+    const int k = w_.active[i];
+    if (k < p_) {
+      out->eq_multipliers(k) = w_.u(i);
     } else {
-      out.in_multipliers(active_[i] - p_) = u_(i);
-      out.active_set.push_back(active_[i] - p_);
+      out->in_multipliers(k - p_) = w_.u(i);
+      out->active_set.push_back(k - p_);
     }
   }
-  out.iterations = iterations_;
-  out.blocking_row = blocking < 0 ? -1 : (blocking < p_ ? -1 - blocking : blocking - p_);
-  return out;
+  out->iterations = iterations_;
+  out->blocking_row = blocking < 0 ? -1 : (blocking < p_ ? -1 - blocking : blocking - p_);
 }
 
 bool ActiveSetSolver::Initialize() {
-  is_active_.assign(p_ + m_, 0);
-  u_.resize(0);
-  normals_.resize(n_, p_ + m_);
-  if (p_ > 0) normals_.leftCols(p_) = qp_.eq_matrix.transpose();
-  if (m_ > 0) normals_.rightCols(m_) = qp_.in_matrix.transpose();
-  rhs_.resize(p_ + m_);
-  rhs_ << qp_.eq_rhs, qp_.in_rhs;
-  normal_norms_ = normals_.colwise().norm().transpose();
-  Eigen::LLT<MatrixXd> llt(qp_.hessian);
-  if (llt.info() != Eigen::Success) {
-    x_ = VectorXd::Zero(n_);
+  w_.is_active.assign(p_ + m_, 0);
+  w_.active.clear();
+  w_.active.reserve(n_ + 1);
+  w_.normals.resize(n_, p_ + m_);
+  if (p_ > 0) w_.normals.leftCols(p_) = qp_.eq_matrix.transpose();
+  if (m_ > 0) w_.normals.rightCols(m_) = qp_.in_matrix.transpose();
+  w_.rhs.resize(p_ + m_);
+  w_.rhs.head(p_) = qp_.eq_rhs;
+  w_.rhs.tail(m_) = qp_.in_rhs;
+  w_.normal_norms.resize(p_ + m_);
+  for (int k = 0; k < p_ + m_; ++k) w_.normal_norms(k) = w_.normals.col(k).norm();
+  w_.slack.resize(m_);
+  for (Eigen::VectorXd* v : {&w_.x, &w_.d, &w_.z, &w_.r, &w_.u, &w_.hx}) v->resize(n_);
+  w_.R.setZero(n_, n_);
+  if (qp_.identity_hessian) {  // L = I: J = I, x = -g
+    w_.J.setIdentity(n_, n_);
+    w_.x = -qp_.gradient;
+    return true;
+  }
+  w_.llt.compute(qp_.hessian);
+  if (w_.llt.info() != Eigen::Success) {
+    w_.x.setZero();
     return false;
   }
   // J = L^-T; unconstrained minimum x = -H^-1 g.
-  J_ = llt.matrixU().solve(MatrixXd::Identity(n_, n_));
-  R_ = MatrixXd::Zero(n_, n_);
-  x_ = -llt.solve(qp_.gradient);
+  w_.J.setIdentity(n_, n_);
+  w_.llt.matrixU().solveInPlace(w_.J);
+  w_.x = -qp_.gradient;
+  w_.llt.solveInPlace(w_.x);
   return true;
 }
 
@@ -210,20 +235,18 @@ int ActiveSetSolver::AddEqualities() {
   const double tol = settings_.tolerance;
   for (int k = 0; k < p_; ++k) {
     Directions(k);
-    const double zn = z_.dot(Normal(k));
-    if (z_.norm() <= tol * std::max(1.0, Normal(k).norm()) || std::abs(zn) <= tol) {
+    const double zn = w_.z.dot(Normal(k));
+    if (w_.z.norm() <= tol * std::max(1.0, Normal(k).norm()) || std::abs(zn) <= tol) {
       // Dependent on earlier equalities: redundant if already satisfied.
       if (std::abs(Slack(k)) <= 1e3 * tol * Scale(k)) continue;
       return k;
     }
     const double t = -Slack(k) / zn;  // moves x onto the hyperplane
-    x_ -= t * z_;
-    if (r_.size() > 0) u_ -= t * r_;
+    const int q = Active();
+    w_.x -= t * w_.z;
+    if (q > 0) w_.u.head(q) -= t * w_.r.head(q);
     AddToFactorization();
-    active_.push_back(k);
-    is_active_[k] = 1;
-    u_.conservativeResize(u_.size() + 1);
-    u_(u_.size() - 1) = t;
+    Activate(k, t);
   }
   return -1;
 }
@@ -232,9 +255,9 @@ int ActiveSetSolver::BlockingActive(double* step) const {
   // Along the step x -= t z the multipliers move as u -= t r.
   *step = kInf;
   int drop = -1;
-  for (int i = 0; i < static_cast<int>(active_.size()); ++i) {
-    if (active_[i] < p_ || r_(i) <= settings_.tolerance) continue;
-    const double ratio = u_(i) / r_(i);
+  for (int i = 0; i < Active(); ++i) {
+    if (w_.active[i] < p_ || w_.r(i) <= settings_.tolerance) continue;
+    const double ratio = w_.u(i) / w_.r(i);
     if (ratio < *step) {
       *step = ratio;
       drop = i;
@@ -249,61 +272,63 @@ std::optional<DenseQpStatus> ActiveSetSolver::AddInequality(int k, int max_itera
   while (true) {
     if (++iterations_ > max_iterations) return DenseQpStatus::kIterationLimit;
     Directions(k);
-    const int q = static_cast<int>(active_.size());
+    const int q = Active();
     double t1;  // partial step length
     const int drop = BlockingActive(&t1);
-    const double zn = z_.dot(Normal(k));
+    const double zn = w_.z.dot(Normal(k));
     double t2 = kInf;  // full step length
-    if (z_.norm() > tol * std::max(1.0, Normal(k).norm()) && zn > tol * tol) {
+    if (w_.z.norm() > tol * std::max(1.0, Normal(k).norm()) && zn > tol * tol) {
       t2 = -Slack(k) / zn;
     }
     if (t1 == kInf && t2 == kInf) return DenseQpStatus::kInfeasible;
     if (t2 == kInf) {  // dual-only step, then drop
-      if (q > 0) u_ -= t1 * r_;
+      if (q > 0) w_.u.head(q) -= t1 * w_.r.head(q);
       u_new += t1;
-      is_active_[active_[drop]] = 0;
       DropFromFactorization(drop);
       continue;
     }
     const double t = std::min(t1, t2);
-    x_ -= t * z_;
-    if (q > 0) u_ -= t * r_;
+    w_.x -= t * w_.z;
+    if (q > 0) w_.u.head(q) -= t * w_.r.head(q);
     u_new += t;
     if (t2 <= t1) {
       AddToFactorization();
-      active_.push_back(k);
-      is_active_[k] = 1;
-      u_.conservativeResize(q + 1);
-      u_(q) = u_new;
+      Activate(k, u_new);
       return std::nullopt;
     }
-    is_active_[active_[drop]] = 0;
     DropFromFactorization(drop);
   }
 }
 
-DenseQpResult ActiveSetSolver::Run() {
-  if (!Initialize()) return Finish(DenseQpStatus::kNumericalError, -1);
+void ActiveSetSolver::Run(DenseQpResult* out) {
+  if (!Initialize()) return Finish(DenseQpStatus::kNumericalError, -1, out);
   const int max_iterations =
       settings_.max_iterations > 0 ? settings_.max_iterations : 5 * (n_ + m_ + p_) + 20;
   // Equalities first: each becomes active with a multiplier of either sign.
   if (const int inconsistent = AddEqualities(); inconsistent >= 0) {
-    return Finish(DenseQpStatus::kInfeasible, inconsistent);
+    return Finish(DenseQpStatus::kInfeasible, inconsistent, out);
   }
   while (true) {
     const int k = MostViolated();
-    if (k < 0) return Finish(DenseQpStatus::kOptimal, -1);
+    if (k < 0) return Finish(DenseQpStatus::kOptimal, -1, out);
     if (const std::optional<DenseQpStatus> stop = AddInequality(k, max_iterations)) {
-      return Finish(*stop, k);
+      return Finish(*stop, k, out);
     }
   }
 }
 
 }  // namespace
 
+void SolveDenseQp(const DenseQp& qp, const DenseQpSettings& settings,
+                  DenseQpWorkspace* workspace, DenseQpResult* result) {
+  ActiveSetSolver(qp, settings, workspace).Run(result);
+}
+
 DenseQpResult SolveDenseQp(const DenseQp& qp, const DenseQpSettings& settings) {
-  ActiveSetSolver solver(qp, settings);
-  return solver.Run();
+  DenseQpWorkspace workspace;
+  DenseQpResult result;
+  SolveDenseQp(qp, settings, &workspace, &result);
+  return result;
 }
 
 }  // namespace tactforce::planner

@@ -6,7 +6,6 @@
 #include <cmath>
 #include <numbers>
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 
 #include "absl/strings/str_cat.h"
@@ -20,38 +19,152 @@ Eigen::Matrix3d Skew(const Vec3& v) {
   return s;
 }
 
-}  // namespace
+// Householder QR in place: `a` (rows x cols, rows >= cols or not) becomes R
+// in its upper part; reflector k (unit, zero above row k) goes to
+// reflectors.col(k), a zero column meaning "no reflection". Then Q = H_0 ...
+// H_{c-1} is accumulated into `q` (rows x rows).
+// y -= 2 (v . y) v over `length` contiguous entries.
+inline void Reflect(const double* v, double* y, int length) {
+  double dot = 0.0;
+  for (int r = 0; r < length; ++r) dot += v[r] * y[r];
+  dot *= 2.0;
+  for (int r = 0; r < length; ++r) y[r] -= dot * v[r];
+}
 
-ForceEquilibrium ComputeForceEquilibrium(const PlanProblem& problem,
-                                         double rank_tolerance) {
+void HouseholderQr(MatrixXd& a, MatrixXd& reflectors, MatrixXd& q) {
+  const int rows = static_cast<int>(a.rows());
+  const int cols = static_cast<int>(a.cols());
+  const int steps = std::min(rows, cols);
+  reflectors.resize(rows, cols);
+  for (int k = 0; k < steps; ++k) {
+    double* v = reflectors.col(k).data() + k;
+    const double* x = a.col(k).data() + k;
+    double norm2 = 0.0;
+    for (int r = 0; r < rows - k; ++r) norm2 += x[r] * x[r];
+    const double norm = std::sqrt(norm2);
+    if (norm == 0.0) {  // nothing to reflect: mark with a zero vector
+      std::fill(v, v + rows - k, 0.0);
+      continue;
+    }
+    std::copy(x, x + rows - k, v);
+    // v = x - alpha e1, alpha = -sign(x0) |x|, then normalised.
+    const double v0 = v[0] + (v[0] >= 0.0 ? norm : -norm);
+    const double v_norm = std::sqrt(norm2 - v[0] * v[0] + v0 * v0);
+    v[0] = v0;
+    for (int r = 0; r < rows - k; ++r) v[r] /= v_norm;
+    for (int j = k; j < cols; ++j) Reflect(v, a.col(j).data() + k, rows - k);
+  }
+  q.setIdentity(rows, rows);
+  for (int k = steps - 1; k >= 0; --k) {
+    const double* v = reflectors.col(k).data() + k;
+    if (v[0] == 0.0 && std::all_of(v, v + rows - k, [](double e) { return e == 0.0; })) continue;
+    for (int j = k; j < rows; ++j) Reflect(v, q.col(j).data() + k, rows - k);
+  }
+}
+
+// Fills G (6 x 3n) and b.
+void FillGraspMatrixAndWrench(const PlanProblem& problem, ForceEquilibrium* eq) {
   const int n = static_cast<int>(problem.contacts.size());
-  ForceEquilibrium eq;
-  eq.grasp_matrix.setZero(6, 3 * n);
+  eq->grasp_matrix.resize(6, 3 * n);
   for (int i = 0; i < n; ++i) {
-    eq.grasp_matrix.block<3, 3>(0, 3 * i).setIdentity();
-    eq.grasp_matrix.block<3, 3>(3, 3 * i) = Skew(problem.contacts[i].position);
+    eq->grasp_matrix.block<3, 3>(0, 3 * i).setIdentity();
+    eq->grasp_matrix.block<3, 3>(3, 3 * i) = Skew(problem.contacts[i].position);
   }
   const ObjectModel& o = problem.object;
   const Vec3 weight = o.mass * o.gravity;
-  eq.wrench.head<3>() = -(weight + problem.external_wrench.force);
-  eq.wrench.tail<3>() = -(o.com.cross(weight) + problem.external_wrench.torque);
+  eq->wrench.head<3>() = -(weight + problem.external_wrench.force);
+  eq->wrench.tail<3>() = -(o.com.cross(weight) + problem.external_wrench.torque);
+}
 
-  Eigen::JacobiSVD<MatrixXd> svd(eq.grasp_matrix, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const VectorXd& s = svd.singularValues();
-  const double cutoff = rank_tolerance * std::max(1.0, s(0));
-  int rank = 0;
-  while (rank < s.size() && s(rank) > cutoff) ++rank;
-  eq.rank = rank;
+// |G f - b| from the structure of G (sum of forces, sum of moments).
+double EquilibriumResidual(const PlanProblem& problem, const VectorXd& f, const Vector6d& b) {
+  Vec3 force = -b.head<3>();
+  Vec3 torque = -b.tail<3>();
+  for (int i = 0; i < static_cast<int>(problem.contacts.size()); ++i) {
+    const Vec3 fi = f.segment<3>(3 * i);
+    force += fi;
+    torque += problem.contacts[i].position.cross(fi);
+  }
+  return std::sqrt(force.squaredNorm() + torque.squaredNorm());
+}
 
-  const MatrixXd& U = svd.matrixU();
-  const MatrixXd& V = svd.matrixV();
-  eq.null_basis = V.rightCols(3 * n - rank);
-  const VectorXd projected = U.leftCols(rank).transpose() * eq.wrench;  // U_r^T b
-  eq.particular = V.leftCols(rank) * (projected.array() / s.head(rank).array()).matrix();
-  eq.residual = (eq.grasp_matrix * eq.particular - eq.wrench).norm();
-  eq.consistent = eq.residual <= 1e-8 * std::max(1.0, eq.wrench.norm());
-  eq.independent_rows = s.head(rank).asDiagonal() * V.leftCols(rank).transpose();
-  eq.independent_rhs = projected;
+}  // namespace
+
+void ComputeForceEquilibrium(const PlanProblem& problem, double rank_tolerance,
+                             EquilibriumScratch* scratch, ForceEquilibrium* eq) {
+  const int n = static_cast<int>(problem.contacts.size());
+  const int dim = 3 * n;
+  FillGraspMatrixAndWrench(problem, eq);
+
+  // G_c^T about the centroid, reduced to R: [R_f R_ft; 0 R_t] (3 + 3 rows
+  // when 3n >= 6; a single contact has only the force block).
+  Vec3 centroid = Vec3::Zero();
+  for (const Contact& c : problem.contacts) centroid += c.position;
+  centroid /= n;
+  MatrixXd& a = scratch->reflected;
+  a.resize(dim, 6);
+  for (int i = 0; i < n; ++i) {
+    a.block<3, 3>(3 * i, 0).setIdentity();
+    a.block<3, 3>(3 * i, 3) = Skew(problem.contacts[i].position - centroid).transpose();
+  }
+  HouseholderQr(a, scratch->reflectors, scratch->orthogonal);
+  const MatrixXd& q = scratch->orthogonal;
+  const bool has_torque_block = dim >= 6;
+
+  // Rank: the force block always has rank 3 (singular values sqrt(n)).
+  Eigen::Matrix3d torque_u = Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d torque_w = Eigen::Matrix3d::Identity();
+  Vec3 torque_s = Vec3::Zero();
+  if (has_torque_block) {
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(a.block<3, 3>(3, 3),
+                                                Eigen::ComputeFullU | Eigen::ComputeFullV);
+    torque_u = svd.matrixU();
+    torque_w = svd.matrixV();
+    torque_s = svd.singularValues();
+  }
+  const double cutoff = rank_tolerance * std::max({1.0, std::sqrt(double(n)), torque_s(0)});
+  int torque_rank = 0;
+  while (torque_rank < 3 && torque_s(torque_rank) > cutoff) ++torque_rank;
+  eq->rank = 3 + torque_rank;
+
+  // Range basis [Q_f, Q_t U_r] and null basis [Q_t U_lost, Q_rest].
+  const int lost = has_torque_block ? 3 - torque_rank : 0;
+  const int rest = has_torque_block ? dim - 6 : dim - 3;
+  eq->independent_rows.resize(eq->rank, dim);
+  eq->independent_rows.topRows<3>() = q.leftCols<3>().transpose();
+  eq->null_basis.resize(dim, lost + rest);
+  if (has_torque_block) {
+    const auto q_torque = q.middleCols<3>(3);
+    eq->independent_rows.bottomRows(torque_rank).noalias() =
+        (q_torque * torque_u.leftCols(torque_rank)).transpose();
+    eq->null_basis.leftCols(lost).noalias() = q_torque * torque_u.rightCols(lost);
+  }
+  eq->null_basis.rightCols(rest) = q.rightCols(rest);
+
+  // f0 = Q_f y_f + Q_t y_t from R^T y = b_c (minimum norm): R_f^T y_f = b_f,
+  // y_t = pinv(R_t^T)(b_c,t - R_ft^T y_f), b_c,t = b_t - c x b_f.
+  const Vec3 b_force = eq->wrench.head<3>();
+  const Vec3 b_torque = eq->wrench.tail<3>() - centroid.cross(b_force);
+  const Vec3 y_force =
+      a.block<3, 3>(0, 0).transpose().triangularView<Eigen::Lower>().solve(b_force);
+  eq->particular.noalias() = q.leftCols<3>() * y_force;
+  if (has_torque_block && torque_rank > 0) {
+    const Vec3 rhs = b_torque - a.block<3, 3>(0, 3).transpose() * y_force;
+    Vec3 y_torque = Vec3::Zero();
+    for (int k = 0; k < torque_rank; ++k) {
+      y_torque += (torque_w.col(k).dot(rhs) / torque_s(k)) * torque_u.col(k);
+    }
+    eq->particular.noalias() += q.middleCols<3>(3) * y_torque;
+  }
+  eq->independent_rhs.noalias() = eq->independent_rows * eq->particular;
+  eq->residual = EquilibriumResidual(problem, eq->particular, eq->wrench);
+  eq->consistent = eq->residual <= 1e-8 * std::max(1.0, eq->wrench.norm());
+}
+
+ForceEquilibrium ComputeForceEquilibrium(const PlanProblem& problem, double rank_tolerance) {
+  EquilibriumScratch scratch;
+  ForceEquilibrium eq;
+  ComputeForceEquilibrium(problem, rank_tolerance, &scratch, &eq);
   return eq;
 }
 
@@ -60,32 +173,44 @@ double MeasurementEllipsoid::Support(const VectorXd& a) const {
 }
 
 Eigen::Matrix3d MeasurementEllipsoid::ContactCovariance(int contact) const {
-  if (factor.cols() == 0) return Eigen::Matrix3d::Zero();
-  const auto block = factor.middleRows<3>(3 * contact);
-  return block * block.transpose();
+  // Sum of l l^T over the factor's columns (a few 3-vectors): cheaper than a
+  // general product of a 3 x k block with its transpose.
+  Eigen::Matrix3d s = Eigen::Matrix3d::Zero();
+  for (int j = 0; j < factor.cols(); ++j) {
+    const Vec3 l = factor.col(j).segment<3>(3 * contact);
+    s.noalias() += l * l.transpose();
+  }
+  return s;
+}
+
+void ComputeMeasurementEllipsoid(const PlanProblem& problem, const ForceEquilibrium& eq,
+                                 MeasurementEllipsoid* out) {
+  const int n = static_cast<int>(problem.contacts.size());
+  const auto noisy = [](const Contact& c) {
+    return c.kind == ContactKind::kIntrinsic && c.sigma > 0.0;
+  };
+  int count = 0;
+  for (const Contact& c : problem.contacts) count += noisy(c) ? 1 : 0;
+  const int d = static_cast<int>(eq.null_basis.cols());
+  if (count == 0 || d == 0) count = 0;
+  // E diag(sigma) = B^T N_I diag(sigma): one column per intrinsic contact
+  // with sigma > 0, from that contact's three rows of B.
+  out->plane_factor.resize(d, count);
+  for (int i = 0, j = 0; i < n && j < count; ++i) {
+    const Contact& c = problem.contacts[i];
+    if (!noisy(c)) continue;
+    out->plane_factor.col(j++).noalias() =
+        eq.null_basis.middleRows<3>(3 * i).transpose() * (c.sigma * c.normal);
+  }
+  // L = B E diag(sigma): the FE-plane projection of the reading noise.
+  out->factor.resize(3 * n, count);
+  if (count > 0) out->factor.noalias() = eq.null_basis.lazyProduct(out->plane_factor);
 }
 
 MeasurementEllipsoid ComputeMeasurementEllipsoid(const PlanProblem& problem,
                                                  const ForceEquilibrium& eq) {
-  const int n = static_cast<int>(problem.contacts.size());
-  // N_I diag(sigma): one column per intrinsic contact with sigma > 0.
-  std::vector<int> noisy;
-  for (int i = 0; i < n; ++i) {
-    const Contact& c = problem.contacts[i];
-    if (c.kind == ContactKind::kIntrinsic && c.sigma > 0.0) noisy.push_back(i);
-  }
   MeasurementEllipsoid ellipsoid;
-  if (noisy.empty() || eq.null_basis.cols() == 0) {
-    ellipsoid.factor.setZero(3 * n, 0);
-    return ellipsoid;
-  }
-  MatrixXd scaled_normals = MatrixXd::Zero(3 * n, static_cast<int>(noisy.size()));
-  for (int j = 0; j < static_cast<int>(noisy.size()); ++j) {
-    const Contact& c = problem.contacts[noisy[j]];
-    scaled_normals.block<3, 1>(3 * noisy[j], j) = c.sigma * c.normal;
-  }
-  // L = B (B^T N_I diag(sigma)): the FE-plane projection of the reading noise.
-  ellipsoid.factor = eq.null_basis * (eq.null_basis.transpose() * scaled_normals);
+  ComputeMeasurementEllipsoid(problem, eq, &ellipsoid);
   return ellipsoid;
 }
 
@@ -121,21 +246,51 @@ std::string ConstraintRows::Describe(int row, const PlanProblem& problem) const 
   return who;
 }
 
-ConstraintRows BuildConstraintRows(const PlanProblem& problem,
-                                   const MeasurementEllipsoid& ellipsoid,
-                                   int cone_sides, double confidence,
-                                   bool with_friction_facets) {
+namespace {
+
+// cos and sin of 2 pi j / k for every k in kMinConeSides..kMaxConeSides,
+// built once: no trigonometry per request.
+struct FacetTable {
+  std::vector<double> cos_theta, sin_theta;
+  std::vector<int> offset;  // first entry of k
+  FacetTable() {
+    offset.assign(PlanOptions::kMaxConeSides + 1, 0);
+    for (int k = PlanOptions::kMinConeSides; k <= PlanOptions::kMaxConeSides; ++k) {
+      offset[k] = static_cast<int>(cos_theta.size());
+      for (int j = 0; j < k; ++j) {
+        const double theta = 2.0 * std::numbers::pi * j / k;
+        cos_theta.push_back(std::cos(theta));
+        sin_theta.push_back(std::sin(theta));
+      }
+    }
+  }
+};
+
+const FacetTable& Facets() {
+  static const FacetTable* table = new FacetTable();
+  return *table;
+}
+
+}  // namespace
+
+void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid,
+                         int cone_sides, double confidence, bool with_friction_facets,
+                         ConstraintRows* out) {
   const int n = static_cast<int>(problem.contacts.size());
   int m = 0;
   for (const Contact& c : problem.contacts) {
     m += (with_friction_facets ? cone_sides : 0) + 1 + (c.max_normal_force > 0.0 ? 1 : 0);
   }
-  ConstraintRows rows;
+  ConstraintRows& rows = *out;
   rows.matrix.setZero(m, 3 * n);
   rows.rhs.resize(m);
   rows.nominal_rhs.resize(m);
+  rows.info.clear();
   rows.info.reserve(m);
 
+  const FacetTable& facets = Facets();
+  const bool table = cone_sides >= PlanOptions::kMinConeSides &&
+                     cone_sides <= PlanOptions::kMaxConeSides;
   const double cos_half = std::cos(std::numbers::pi / cone_sides);
   int r = 0;
   Eigen::Matrix3d s_ii;  // covariance block of the contact being added
@@ -153,47 +308,97 @@ ConstraintRows BuildConstraintRows(const PlanProblem& problem,
       const auto [t1, t2] = TangentBasis(c.normal);
       for (int j = 0; j < cone_sides; ++j) {
         const double theta = 2.0 * std::numbers::pi * j / cone_sides;
-        const Vec3 u = std::cos(theta) * t1 + std::sin(theta) * t2;
+        const double cos_t = table ? facets.cos_theta[facets.offset[cone_sides] + j] : std::cos(theta);
+        const double sin_t = table ? facets.sin_theta[facets.offset[cone_sides] + j] : std::sin(theta);
+        const Vec3 u = cos_t * t1 + sin_t * t2;
         add(i, u - c.friction * cos_half * c.normal, 0.0, RowKind::kFrictionFacet, j);
       }
     }
     add(i, -c.normal, -c.min_normal_force, RowKind::kMinNormal, 0);
     if (c.max_normal_force > 0.0) add(i, c.normal, c.max_normal_force, RowKind::kMaxNormal, 0);
   }
+}
+
+ConstraintRows BuildConstraintRows(const PlanProblem& problem,
+                                   const MeasurementEllipsoid& ellipsoid,
+                                   int cone_sides, double confidence,
+                                   bool with_friction_facets) {
+  ConstraintRows rows;
+  BuildConstraintRows(problem, ellipsoid, cone_sides, confidence, with_friction_facets, &rows);
   return rows;
+}
+
+void RowsOnPlane(const ConstraintRows& rows, const ForceEquilibrium& eq, MatrixXd* plane_matrix,
+                 VectorXd* plane_rhs) {
+  const int m = static_cast<int>(rows.info.size());
+  plane_matrix->resize(m, eq.null_basis.cols());
+  *plane_rhs = rows.rhs;
+  // A contact's rows are consecutive: one small product per contact.
+  for (int first = 0; first < m;) {
+    const int i = rows.info[first].contact;
+    int count = 1;
+    while (first + count < m && rows.info[first + count].contact == i) ++count;
+    const auto a = rows.matrix.block(first, 3 * i, count, 3);
+    plane_matrix->middleRows(first, count).noalias() =
+        a.lazyProduct(eq.null_basis.middleRows<3>(3 * i));
+    plane_rhs->segment(first, count).noalias() -= a * eq.particular.segment<3>(3 * i);
+    first += count;
+  }
+}
+
+void NormalForceSigma(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid,
+                      std::vector<double>* out) {
+  out->resize(problem.contacts.size());
+  for (int i = 0; i < static_cast<int>(problem.contacts.size()); ++i) {
+    const Vec3& nrm = problem.contacts[i].normal;
+    (*out)[i] = std::sqrt(std::max(0.0, nrm.dot(ellipsoid.ContactCovariance(i) * nrm)));
+  }
 }
 
 std::vector<double> NormalForceSigma(const PlanProblem& problem,
                                      const MeasurementEllipsoid& ellipsoid) {
   std::vector<double> out;
-  for (int i = 0; i < static_cast<int>(problem.contacts.size()); ++i) {
-    const Vec3& nrm = problem.contacts[i].normal;
-    out.push_back(std::sqrt(std::max(0.0, nrm.dot(ellipsoid.ContactCovariance(i) * nrm))));
-  }
+  NormalForceSigma(problem, ellipsoid, &out);
   return out;
+}
+
+void TangentialForceSigma(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid,
+                          std::vector<double>* out) {
+  out->resize(problem.contacts.size());
+  for (int i = 0; i < static_cast<int>(problem.contacts.size()); ++i) {
+    // P S P has the normal in its kernel; its other eigenvalues are those of
+    // the 2x2 block [t1 t2]^T S [t1 t2].
+    const auto [t1, t2] = TangentBasis(problem.contacts[i].normal);
+    const Eigen::Matrix3d s = ellipsoid.ContactCovariance(i);
+    const double a = t1.dot(s * t1), b = t1.dot(s * t2), c = t2.dot(s * t2);
+    const double lambda_max = 0.5 * (a + c) + std::hypot(0.5 * (a - c), b);
+    (*out)[i] = std::sqrt(std::max(0.0, lambda_max));
+  }
 }
 
 std::vector<double> TangentialForceSigma(const PlanProblem& problem,
                                          const MeasurementEllipsoid& ellipsoid) {
   std::vector<double> out;
-  for (int i = 0; i < static_cast<int>(problem.contacts.size()); ++i) {
-    const Vec3& nrm = problem.contacts[i].normal;
-    const Eigen::Matrix3d p = Eigen::Matrix3d::Identity() - nrm * nrm.transpose();
-    const Eigen::Matrix3d s = p * ellipsoid.ContactCovariance(i) * p;
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(s, Eigen::EigenvaluesOnly);
-    out.push_back(std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff())));
-  }
+  TangentialForceSigma(problem, ellipsoid, &out);
   return out;
+}
+
+void ExactConeShift(const PlanProblem& problem, const std::vector<double>& normal_sigma,
+                    const std::vector<double>& tangential_sigma, double confidence,
+                    std::vector<double>* out) {
+  out->resize(problem.contacts.size());
+  for (size_t i = 0; i < out->size(); ++i) {
+    (*out)[i] =
+        confidence * (problem.contacts[i].friction * normal_sigma[i] + tangential_sigma[i]);
+  }
 }
 
 std::vector<double> ExactConeShift(const PlanProblem& problem,
                                    const std::vector<double>& normal_sigma,
                                    const std::vector<double>& tangential_sigma,
                                    double confidence) {
-  std::vector<double> out(problem.contacts.size());
-  for (size_t i = 0; i < out.size(); ++i) {
-    out[i] = confidence * (problem.contacts[i].friction * normal_sigma[i] + tangential_sigma[i]);
-  }
+  std::vector<double> out;
+  ExactConeShift(problem, normal_sigma, tangential_sigma, confidence, &out);
   return out;
 }
 
@@ -202,19 +407,27 @@ double ExactConeSlack(const Vec3& normal, double mu, double shift, const Vec3& f
   return (mu * normal.dot(force) - shift) - tangential.norm();
 }
 
+void PrepareInPlace(const PlanOptions& options, EquilibriumScratch* scratch,
+                    PreparedProblem* p) {
+  ComputeForceEquilibrium(p->problem, options.rank_tolerance, scratch, &p->equilibrium);
+  ComputeMeasurementEllipsoid(p->problem, p->equilibrium, &p->ellipsoid);
+  BuildConstraintRows(p->problem, p->ellipsoid, options.cone_sides, options.confidence,
+                      options.cone == ConeModel::kPyramid, &p->rows);
+  NormalForceSigma(p->problem, p->ellipsoid, &p->normal_sigma);
+  TangentialForceSigma(p->problem, p->ellipsoid, &p->tangential_sigma);
+  if (options.cone == ConeModel::kExact) {
+    ExactConeShift(p->problem, p->normal_sigma, p->tangential_sigma, options.confidence,
+                   &p->cone_shift);
+  } else {
+    p->cone_shift.clear();
+  }
+}
+
 PreparedProblem Prepare(PlanProblem validated, const PlanOptions& options) {
   PreparedProblem p;
   p.problem = std::move(validated);
-  p.equilibrium = ComputeForceEquilibrium(p.problem, options.rank_tolerance);
-  p.ellipsoid = ComputeMeasurementEllipsoid(p.problem, p.equilibrium);
-  p.rows = BuildConstraintRows(p.problem, p.ellipsoid, options.cone_sides, options.confidence,
-                               options.cone == ConeModel::kPyramid);
-  p.normal_sigma = NormalForceSigma(p.problem, p.ellipsoid);
-  p.tangential_sigma = TangentialForceSigma(p.problem, p.ellipsoid);
-  if (options.cone == ConeModel::kExact) {
-    p.cone_shift =
-        ExactConeShift(p.problem, p.normal_sigma, p.tangential_sigma, options.confidence);
-  }
+  EquilibriumScratch scratch;
+  PrepareInPlace(options, &scratch, &p);
   return p;
 }
 

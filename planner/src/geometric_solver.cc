@@ -7,6 +7,7 @@
 #include "absl/strings/str_cat.h"
 #include "planner/src/backends.h"
 #include "tactforce/planner/dense_qp.h"
+#include "tactforce/planner/workspace.h"
 
 namespace tactforce::planner::internal {
 namespace {
@@ -19,6 +20,18 @@ std::string DescribeActive(const PreparedProblem& prepared, const std::vector<in
   }
   if (static_cast<int>(rows.size()) > shown) absl::StrAppend(&out, "; ...");
   return out;
+}
+
+// min 0.5 |x|^2 + (B^T f0)^T x  s.t. (A B) x <= d - A f0.
+void FillPlaneQp(const PreparedProblem& prepared, DenseQp* qp) {
+  const ForceEquilibrium& eq = prepared.equilibrium;
+  const int d = static_cast<int>(eq.null_basis.cols());
+  qp->identity_hessian = true;
+  qp->hessian.resize(0, 0);
+  qp->gradient.noalias() = eq.null_basis.transpose() * eq.particular;  // zero up to round-off
+  qp->eq_matrix.resize(0, d);
+  qp->eq_rhs.resize(0);
+  RowsOnPlane(prepared.rows, eq, &qp->in_matrix, &qp->in_rhs);
 }
 
 class GeometricSolver final : public ForceSolver {
@@ -35,57 +48,53 @@ class GeometricSolver final : public ForceSolver {
     return absl::OkStatus();
   }
 
-  PlanResult DoSolve(const PreparedProblem& prepared, const PlanOptions& options) const override {
-    PlanResult result;
+  void DoSolve(const PlanOptions& options, PlanningWorkspace* workspace,
+               PlanResult* result) const override {
+    const PreparedProblem& prepared = workspace->prepared;
     const ForceEquilibrium& eq = prepared.equilibrium;
     if (!eq.consistent) {
-      result.status = PlanStatus::kInfeasible;
-      result.message = absl::StrCat(
+      result->status = PlanStatus::kInfeasible;
+      result->message = absl::StrCat(
           "the contacts cannot resist this wrench: G has rank ", eq.rank,
           " and the required wrench leaves a residual of ", eq.residual);
-      return result;
+      return;
     }
-    const ConstraintRows& rows = prepared.rows;
-    DenseQp qp;
-    const int d = static_cast<int>(eq.null_basis.cols());
-    qp.hessian = Eigen::MatrixXd::Identity(d, d);
-    qp.gradient = eq.null_basis.transpose() * eq.particular;  // zero up to round-off
-    qp.eq_matrix.resize(0, d);
-    qp.eq_rhs.resize(0);
-    qp.in_matrix = rows.matrix * eq.null_basis;
-    qp.in_rhs = rows.rhs - rows.matrix * eq.particular;
-
+    FillPlaneQp(prepared, &workspace->qp);
     DenseQpSettings settings;
     settings.warm_start = options.warm_start;
-    const DenseQpResult qp_result = SolveDenseQp(qp, settings);
-    result.iterations = qp_result.iterations;
-    result.active_set = qp_result.active_set;
+    DenseQpResult& qp_result = workspace->qp_result;
+    SolveDenseQp(workspace->qp, settings, &workspace->qp_workspace, &qp_result);
+    result->iterations = qp_result.iterations;
+    result->active_set = qp_result.active_set;
     switch (qp_result.status) {
       case DenseQpStatus::kOptimal: {
-        result.status = PlanStatus::kOptimal;
-        const Eigen::VectorXd f = eq.particular + eq.null_basis * qp_result.x;
-        for (int i = 0; i < prepared.num_contacts(); ++i) result.forces.push_back(f.segment<3>(3 * i));
+        result->status = PlanStatus::kOptimal;
+        Eigen::VectorXd& f = workspace->forces;
+        f = eq.particular;
+        f.noalias() += eq.null_basis * qp_result.x;
+        result->forces.resize(prepared.num_contacts());
+        for (int i = 0; i < prepared.num_contacts(); ++i) result->forces[i] = f.segment<3>(3 * i);
         break;
       }
       case DenseQpStatus::kInfeasible:
-        result.status = PlanStatus::kInfeasible;
-        result.message = absl::StrCat(
-            "no equilibrium force satisfies ", rows.Describe(qp_result.blocking_row, prepared.problem),
+        result->status = PlanStatus::kInfeasible;
+        result->message = absl::StrCat(
+            "no equilibrium force satisfies ",
+            prepared.rows.Describe(qp_result.blocking_row, prepared.problem),
             qp_result.active_set.empty()
                 ? std::string()
                 : absl::StrCat(" together with ", DescribeActive(prepared, qp_result.active_set)));
         break;
       case DenseQpStatus::kIterationLimit:
-        result.status = PlanStatus::kSolverFailure;
-        result.message = absl::StrCat("active-set iteration limit reached after ",
-                                      qp_result.iterations, " iterations");
+        result->status = PlanStatus::kSolverFailure;
+        result->message = absl::StrCat("active-set iteration limit reached after ",
+                                       qp_result.iterations, " iterations");
         break;
       case DenseQpStatus::kNumericalError:
-        result.status = PlanStatus::kSolverFailure;
-        result.message = "numerical failure in the active-set QP";
+        result->status = PlanStatus::kSolverFailure;
+        result->message = "numerical failure in the active-set QP";
         break;
     }
-    return result;
   }
 };
 

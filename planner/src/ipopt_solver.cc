@@ -468,7 +468,13 @@ class IpoptSolver final : public ForceSolver {
   IpoptSolver() : ForceSolver(SolverKind::kIpopt) {}
 
  protected:
-  PlanResult DoSolve(const PreparedProblem& prepared, const PlanOptions& options) const override {
+  void DoSolve(const PlanOptions& options, PlanningWorkspace* workspace,
+               PlanResult* result) const override {
+    *result = Run(workspace->prepared, options);
+  }
+
+ private:
+  static PlanResult Run(const PreparedProblem& prepared, const PlanOptions& options) {
     try {
       return SolveOrThrow(prepared, options);
     } catch (const Ipopt::IpoptException& e) {

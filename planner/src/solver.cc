@@ -15,11 +15,15 @@ namespace {
 
 // Smallest slack (N) of the tightened rows and, for ConeModel::kExact, of the
 // robust exact cones at the stacked forces f; 0 when there is nothing to meet.
+// Each row touches one contact's three coordinates.
 double MinMargin(const PreparedProblem& prepared, const PlanOptions& options,
-                 const std::vector<Vec3>& forces, const Eigen::VectorXd& stacked) {
+                 const std::vector<Vec3>& forces) {
   double margin = std::numeric_limits<double>::infinity();
-  if (prepared.rows.matrix.rows() > 0) {
-    margin = (prepared.rows.rhs - prepared.rows.matrix * stacked).minCoeff();
+  const ConstraintRows& rows = prepared.rows;
+  for (int r = 0; r < static_cast<int>(rows.info.size()); ++r) {
+    const int i = rows.info[r].contact;
+    margin = std::min(margin,
+                      rows.rhs(r) - rows.matrix.block<1, 3>(r, 3 * i).dot(forces[i].transpose()));
   }
   if (options.cone == ConeModel::kExact) {
     for (int i = 0; i < prepared.num_contacts(); ++i) {
@@ -29,6 +33,18 @@ double MinMargin(const PreparedProblem& prepared, const PlanOptions& options,
     }
   }
   return std::isfinite(margin) ? margin : 0.0;
+}
+
+void ResetResult(PlanResult* result) {
+  result->status = PlanStatus::kSolverFailure;
+  result->message.clear();
+  result->forces.clear();
+  result->normal_forces.clear();
+  result->objective = 0.0;
+  result->min_margin = 0.0;
+  result->iterations = 0;
+  result->cross_check.reset();
+  result->active_set.clear();
 }
 
 // Fills the quantities every backend reports the same way.
@@ -48,33 +64,42 @@ void FinishResult(const PreparedProblem& prepared, const PlanOptions& options,
     result->min_margin = 0.0;
     return;
   }
-  Eigen::VectorXd stacked(3 * n);
   result->normal_forces.resize(n);
   result->objective = 0.0;
   for (int i = 0; i < n; ++i) {
-    stacked.segment<3>(3 * i) = result->forces[i];
     result->normal_forces[i] = problem.contacts[i].normal.dot(result->forces[i]);
     result->objective += result->forces[i].squaredNorm();
   }
-  result->min_margin = MinMargin(prepared, options, result->forces, stacked);
+  result->min_margin = MinMargin(prepared, options, result->forces);
 }
 
 }  // namespace
 
-absl::StatusOr<PlanResult> ForceSolver::Solve(const PlanProblem& problem,
-                                              const PlanOptions& options) const {
+absl::Status ForceSolver::Solve(const PlanProblem& problem, const PlanOptions& options,
+                                PlanningWorkspace* workspace, PlanResult* result) const {
   const auto start = std::chrono::steady_clock::now();
-  absl::StatusOr<PlanProblem> validated = ValidateProblem(problem, options);
-  if (!validated.ok()) return validated.status();
+  PreparedProblem& prepared = workspace->prepared;
+  if (absl::Status valid = ValidateProblem(problem, options, &prepared.problem); !valid.ok()) {
+    return valid;
+  }
   if (absl::Status supported = CheckSupported(options); !supported.ok()) return supported;
 
-  const PreparedProblem prepared = Prepare(*std::move(validated), options);
-  PlanResult result = DoSolve(prepared, options);
-  result.solver = kind_;
-  FinishResult(prepared, options, &result);
-  result.solve_time_us = std::chrono::duration_cast<std::chrono::microseconds>(
-                             std::chrono::steady_clock::now() - start)
-                             .count();
+  PrepareInPlace(options, &workspace->equilibrium_scratch, &prepared);
+  ResetResult(result);
+  DoSolve(options, workspace, result);
+  result->solver = kind_;
+  FinishResult(prepared, options, result);
+  result->solve_time_us = std::chrono::duration_cast<std::chrono::microseconds>(
+                              std::chrono::steady_clock::now() - start)
+                              .count();
+  return absl::OkStatus();
+}
+
+absl::StatusOr<PlanResult> ForceSolver::Solve(const PlanProblem& problem,
+                                              const PlanOptions& options) const {
+  PlanningWorkspace workspace;
+  PlanResult result;
+  if (absl::Status s = Solve(problem, options, &workspace, &result); !s.ok()) return s;
   return result;
 }
 

@@ -80,24 +80,24 @@ absl::StatusOr<TrajectoryResult> PlanTrajectory(const TrajectoryProblem& t,
   TrajectoryResult out;
   out.steps.reserve(t.steps.size());
   PlanOptions step_options = options;
+  PlanningWorkspace workspace;  // one for the whole motion
   for (int i = 0; i < static_cast<int>(t.steps.size()); ++i) {
     if (absl::Status s = CheckStep(t, i); !s.ok()) return s;
-    absl::StatusOr<PlanResult> r = solver->Solve(StepProblem(t, i), step_options);
-    if (!r.ok()) {
-      const std::string msg(r.status().message());
+    PlanResult& r = out.steps.emplace_back();
+    if (absl::Status s = solver->Solve(StepProblem(t, i), step_options, &workspace, &r);
+        !s.ok()) {
+      const std::string msg(s.message());
       // Field paths of a step's own contacts are reported under the step.
       const bool own_contacts = t.steps[i].contacts.has_value() && msg.rfind("contacts", 0) == 0;
-      return absl::Status(r.status().code(),
-                          own_contacts ? absl::StrCat("steps[", i, "].", msg)
-                                       : absl::StrCat(msg, " (at steps[", i, "])"));
+      return absl::Status(s.code(), own_contacts ? absl::StrCat("steps[", i, "].", msg)
+                                                 : absl::StrCat(msg, " (at steps[", i, "])"));
     }
-    if (warm_start && r->status == PlanStatus::kOptimal) step_options.warm_start = r->active_set;
-    switch (r->status) {
+    if (warm_start && r.status == PlanStatus::kOptimal) step_options.warm_start = r.active_set;
+    switch (r.status) {
       case PlanStatus::kOptimal: ++out.optimal; break;
       case PlanStatus::kInfeasible: ++out.infeasible; break;
       case PlanStatus::kSolverFailure: ++out.failed; break;
     }
-    out.steps.push_back(*std::move(r));
   }
   out.total_time_us = std::chrono::duration_cast<std::chrono::microseconds>(
                           std::chrono::steady_clock::now() - start)

@@ -17,6 +17,7 @@
 #include "tactforce/server/planner_service.h"
 #include "tactforce/server/server_config.h"
 #include "tactforce/server/server_host.h"
+#include "absl/synchronization/mutex.h"
 #include "tactforce/server/worker_pool.h"
 #include "tactforce/server/estimator_service.h"
 
@@ -59,6 +60,12 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("tactforce-server ") + TACTFORCE_VERSION);
   tactforce::server::RegisterFlags(app, &config);
   CLI11_PARSE(app, argc, argv);
+
+  // Debian's Abseil is built with Mutex deadlock detection on (no NDEBUG),
+  // and gRPC's locks are absl::Mutex: every lock would update a global
+  // lock-order graph (GraphCycles), measurable under load. Off before any
+  // thread starts.
+  absl::SetMutexDeadlockDetectionMode(absl::OnDeadlockCycle::kIgnore);
 
   // Block the shutdown signals before any thread exists, so every thread
   // (gRPC's included) inherits the mask and only sigwait() below sees them.

@@ -69,11 +69,13 @@ class PlanStreamReactor final
   // finished. So no lock is needed around request_/response_.
   void Dispatch() {
     refs_.fetch_add(1, std::memory_order_relaxed);  // held until `done` has run
-    plans_->Dispatch(request_, &response_, api::CallLog("PlanStream", guard_, index_), guard_,
-                     [this](const absl::Status& status) {
-                       Complete(ToGrpcStatus(status));
-                       Unref();
-                     });
+    plans_->Dispatch(
+        request_, &response_, api::CallLog("PlanStream", guard_, index_), guard_,
+        [this](const absl::Status& status) {
+          Complete(ToGrpcStatus(status));
+          Unref();
+        },
+        &buffers_);
   }
 
   grpc::Status Indexed(const grpc::Status& status) const {
@@ -122,6 +124,7 @@ class PlanStreamReactor final
   const Clock::time_point start_ = Clock::now();
   v1::PlanRequest request_;
   v1::PlanResponse response_;
+  api::PlanBuffers buffers_;  // the stream's workspace: one solve at a time
 };
 
 }  // namespace

@@ -156,10 +156,13 @@ class PlanDispatcher {
   PlanDispatcher(Executor* pool, PlanSettings settings)
       : pool_(pool), settings_(std::move(settings)) {}
 
-  // `request` is read before Dispatch returns; `response` and `control`
-  // must stay valid until done(status) has run.
+  // `request` is read before Dispatch returns; `response`, `control` and
+  // `buffers` must stay valid until done(status) has run. `buffers`: the
+  // stream's own (PlanStream), or nullptr for the solving thread's
+  // (ThreadPlanBuffers()). Log text is formatted only at enabled levels.
   void Dispatch(const v1::PlanRequest& request, v1::PlanResponse* response, CallLog log,
-                const CallControl& control, CallDone done) const;
+                const CallControl& control, CallDone done,
+                PlanBuffers* buffers = nullptr) const;
 
   const PlanSettings& settings() const { return settings_; }
 

@@ -10,6 +10,7 @@
 #include "absl/status/statusor.h"
 #include "tactforce/api/convert.h"
 #include "tactforce/planner/types.h"
+#include "tactforce/planner/workspace.h"
 #include "tactforce/v1/audit.pb.h"
 #include "tactforce/v1/estimator.pb.h"
 #include "tactforce/v1/planner.pb.h"
@@ -29,6 +30,19 @@ struct CallLimits {
 absl::StatusOr<PlanCall> PreparePlan(const v1::PlanRequest& request, const CallLimits& limits);
 // Plans a prepared request (validation included) and converts the answer.
 absl::StatusOr<v1::PlanResponse> SolvePlan(const PlanCall& call);
+
+// What a plan reuses from call to call: the planner's workspace and result.
+// One per thread (the default) or per stream (PlanStream: one solve at a
+// time per stream).
+struct PlanBuffers {
+  planner::PlanningWorkspace workspace;
+  planner::PlanResult result;
+};
+// The calling thread's PlanBuffers.
+PlanBuffers& ThreadPlanBuffers();
+// SolvePlan with `buffers` (a warm GEOMETRIC solve allocates only the
+// response).
+absl::StatusOr<v1::PlanResponse> SolvePlan(const PlanCall& call, PlanBuffers* buffers);
 
 // PreparePlan + SolvePlan.
 absl::StatusOr<v1::PlanResponse> HandlePlan(const v1::PlanRequest& request,

@@ -10,8 +10,11 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "absl/status/statusor.h"
 #include "tactforce/planner/types.h"
+#include "tactforce/planner/workspace.h"
 
 namespace tactforce::estimator {
 
@@ -61,5 +64,24 @@ struct ForceEstimate {
 absl::StatusOr<ForceEstimate> EstimateForces(const planner::PlanProblem& problem,
                                              const std::vector<double>& readings,
                                              const EstimateOptions& options = {});
+
+// Buffers of EstimateForces kept between calls, one per thread: the
+// planner's workspace (validated problem, FE-plane, rows, QP) and the
+// readings' placement. Once warm, a PROJECTION or NORMAL_LSQ estimate of a
+// problem of the same sizes allocates nothing (messages aside).
+struct EstimationWorkspace {
+  planner::PlanningWorkspace planning;
+  std::vector<int> intrinsic, extrinsic;  // contact indices
+  Eigen::MatrixXd placed;    // unit normals placed at their contacts' rows (3n x k)
+  Eigen::MatrixXd reduced;   // placed^T B or B^T N_E
+  Eigen::MatrixXd weighted;  // W (placed^T B)
+  Eigen::VectorXd measured, values, coordinates;
+};
+
+// The same estimate in place: `out` is overwritten (storage reused) and
+// meaningful only when the returned status is OK.
+absl::Status EstimateForces(const planner::PlanProblem& problem,
+                            const std::vector<double>& readings, const EstimateOptions& options,
+                            EstimationWorkspace* workspace, ForceEstimate* out);
 
 }  // namespace tactforce::estimator

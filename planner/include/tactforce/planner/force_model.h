@@ -4,6 +4,11 @@
 // robustly tightened linear constraint rows A f <= d.
 //
 // f stacks the n contact forces (3n, object frame, N) in request order.
+//
+// Each step has two forms: a value-returning one for one-off use and an
+// in-place one (`..., Out* out`) that reuses the storage of `out` (and of a
+// scratch), so that a PlanningWorkspace solving problems of one size
+// allocates nothing.
 #pragma once
 
 #include <string>
@@ -35,15 +40,34 @@ struct ForceEquilibrium {
   VectorXd independent_rhs;
 };
 
-// Builds G and b; SVD with relative tolerance `rank_tolerance`.
+// Buffers ComputeForceEquilibrium reuses (contents are scratch).
+struct EquilibriumScratch {
+  MatrixXd reflected;   // G_c^T (3n x 6), reduced in place to R
+  MatrixXd reflectors;  // Householder vectors, 3n x 6
+  MatrixXd orthogonal;  // Q (3n x 3n)
+};
+
+// Builds G and b and the FE-plane in closed form: about the contacts'
+// centroid c the force rows of the centred G_c = [I ...; [p_i - c]x ...]
+// are orthogonal to its torque rows, and G_c has the same null space and
+// equilibrium set as G (G = T G_c, T invertible). A Householder QR of G_c^T
+// (3n x 6) gives Q = [range | null]; only the 3x3 torque block R_t needs an
+// SVD, for the rank: a torque direction counts when its singular value
+// exceeds rank_tolerance * max(1, sqrt(n), sigma_max(R_t)) (the singular
+// values of G_c). Lost rotations (collinear or coincident contacts) move
+// their directions from the range to the null space. independent_rows are
+// then the orthonormal range basis (rank x 3n), independent_rhs = rows f0.
 ForceEquilibrium ComputeForceEquilibrium(const PlanProblem& problem,
                                          double rank_tolerance);
+void ComputeForceEquilibrium(const PlanProblem& problem, double rank_tolerance,
+                             EquilibriumScratch* scratch, ForceEquilibrium* out);
 
 // Trusted measurement ellipsoid (GeoDEx Def. 5, Prop. 3) in force space:
 // S_f = B E diag(sigma^2) E^T B^T with E = B^T N_I, stored as the factor
 // L = B E diag(sigma) (3n x n_I), so S_f = L L^T.
 struct MeasurementEllipsoid {
   MatrixXd factor;
+  MatrixXd plane_factor;  // E diag(sigma) = B^T N_I diag(sigma): L in FE-plane coordinates (d x n_I)
   // sqrt(a^T S_f a): the support function of the unit ellipsoid along a.
   double Support(const VectorXd& a) const;
   MatrixXd ForceCovariance() const { return factor * factor.transpose(); }
@@ -53,6 +77,8 @@ struct MeasurementEllipsoid {
 
 MeasurementEllipsoid ComputeMeasurementEllipsoid(const PlanProblem& problem,
                                                  const ForceEquilibrium& eq);
+void ComputeMeasurementEllipsoid(const PlanProblem& problem, const ForceEquilibrium& eq,
+                                 MeasurementEllipsoid* out);
 
 // Fixed tangent basis: e = coordinate axis with the smallest |e . n| (first
 // on ties), t1 = normalize(e - (e . n) n), t2 = n x t1.
@@ -82,18 +108,33 @@ struct ConstraintRows {
 
 // Pyramid facets (when `with_friction_facets`) and normal-force bounds of
 // every contact, tightened by `confidence` times the ellipsoid support.
+// Facet directions come from a table built once per process.
 ConstraintRows BuildConstraintRows(const PlanProblem& problem,
                                    const MeasurementEllipsoid& ellipsoid,
                                    int cone_sides, double confidence,
                                    bool with_friction_facets);
+void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid,
+                         int cone_sides, double confidence, bool with_friction_facets,
+                         ConstraintRows* out);
+
+// The rows on the FE-plane f = f0 + B x: plane_matrix = A B (m x d),
+// plane_rhs = d - A f0, formed contact by contact (each row of A touches
+// one contact's three coordinates).
+void RowsOnPlane(const ConstraintRows& rows, const ForceEquilibrium& eq, MatrixXd* plane_matrix,
+                 VectorXd* plane_rhs);
 
 // Per-contact normal-force std. dev. rho_n,i = sqrt(n_i^T S_ii n_i) (N).
 std::vector<double> NormalForceSigma(const PlanProblem& problem,
                                      const MeasurementEllipsoid& ellipsoid);
+void NormalForceSigma(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid,
+                      std::vector<double>* out);
 
-// Tangential spread rho_t,i = sqrt(lambda_max(P_t S_ii P_t)) (N).
+// Tangential spread rho_t,i = sqrt(lambda_max(P_t S_ii P_t)) (N), in closed
+// form: the larger eigenvalue of the 2x2 block of S_ii in TangentBasis().
 std::vector<double> TangentialForceSigma(const PlanProblem& problem,
                                          const MeasurementEllipsoid& ellipsoid);
+void TangentialForceSigma(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid,
+                          std::vector<double>* out);
 
 // Robust tightening of each contact's exact (circular) friction cone (N):
 // shift_i = kappa (mu_i rho_n,i + rho_t,i), so the cone every force the
@@ -104,6 +145,9 @@ std::vector<double> ExactConeShift(const PlanProblem& problem,
                                    const std::vector<double>& normal_sigma,
                                    const std::vector<double>& tangential_sigma,
                                    double confidence);
+void ExactConeShift(const PlanProblem& problem, const std::vector<double>& normal_sigma,
+                    const std::vector<double>& tangential_sigma, double confidence,
+                    std::vector<double>* out);
 
 // Slack (N) of that robust cone at the force f of a contact with unit
 // normal n and friction mu: mu n . f - shift - |P f|; >= 0 inside.
@@ -125,5 +169,9 @@ struct PreparedProblem {
 };
 
 PreparedProblem Prepare(PlanProblem validated, const PlanOptions& options);
+// In place: `prepared->problem` already holds the validated problem; every
+// other member is recomputed, reusing its storage.
+void PrepareInPlace(const PlanOptions& options, EquilibriumScratch* scratch,
+                    PreparedProblem* prepared);
 
 }  // namespace tactforce::planner

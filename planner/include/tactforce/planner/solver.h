@@ -7,6 +7,10 @@
 //   absl::StatusOr<PlanResult> r = solver->Solve(problem, options);
 //   // !r.ok(): bad input (InvalidArgument naming the field)
 //   // r->status: kOptimal, kInfeasible (with a message), kSolverFailure
+//
+// In a control loop, keep a PlanningWorkspace and a PlanResult and use the
+// in-place Solve: same validation, answers and result, no allocation once
+// warm (see workspace.h).
 #pragma once
 
 #include <memory>
@@ -14,6 +18,7 @@
 #include "absl/status/statusor.h"
 #include "tactforce/planner/force_model.h"
 #include "tactforce/planner/types.h"
+#include "tactforce/planner/workspace.h"
 
 namespace tactforce::planner {
 
@@ -27,6 +32,11 @@ class ForceSolver {
 
   absl::StatusOr<PlanResult> Solve(const PlanProblem& problem,
                                    const PlanOptions& options) const;
+  // In place: `result` is overwritten (its storage reused) and is
+  // meaningful only when the returned status is OK. `problem` must not live
+  // inside `workspace`.
+  absl::Status Solve(const PlanProblem& problem, const PlanOptions& options,
+                     PlanningWorkspace* workspace, PlanResult* result) const;
 
  protected:
   explicit ForceSolver(SolverKind kind) : kind_(kind) {}
@@ -35,10 +45,12 @@ class ForceSolver {
   virtual absl::Status CheckSupported(const PlanOptions& options) const {
     return absl::OkStatus();
   }
-  // Fills status, message, forces (one per contact; empty unless optimal),
-  // iterations and, where meaningful, active_set / cross_check.
-  virtual PlanResult DoSolve(const PreparedProblem& prepared,
-                             const PlanOptions& options) const = 0;
+  // From workspace->prepared, fills status, message, forces (one per
+  // contact; empty unless optimal), iterations and, where meaningful,
+  // active_set / cross_check. `result` arrives reset (status
+  // kSolverFailure, empty vectors and message).
+  virtual void DoSolve(const PlanOptions& options, PlanningWorkspace* workspace,
+                       PlanResult* result) const = 0;
 
  private:
   SolverKind kind_;

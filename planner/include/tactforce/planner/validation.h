@@ -11,5 +11,9 @@ namespace tactforce::planner {
 // absl::InvalidArgumentError("<field path>: <what is wrong>").
 absl::StatusOr<PlanProblem> ValidateProblem(const PlanProblem& problem,
                                             const PlanOptions& options);
+// The same into `validated` (which must not alias `problem`), reusing its
+// storage; on error its contents are unspecified.
+absl::Status ValidateProblem(const PlanProblem& problem, const PlanOptions& options,
+                             PlanProblem* validated);
 
 }  // namespace tactforce::planner
