@@ -112,15 +112,18 @@ void BM_Workspace(benchmark::State& state) {
   for (const PlanProblem& p : grasps) (void)solver->Solve(p, options, &workspace, &result);
   size_t i = 0;
   int failures = 0;
+  int64_t qp_iterations = 0;
   Counters counters;
   counters.Start();
   for (auto _ : state) {
     if (!TimedWorkspaceSolve(*solver, grasps[i++ % grasps.size()], options, &workspace, &result)) {
       ++failures;
     }
+    qp_iterations += result.iterations;
     benchmark::DoNotOptimize(result);
   }
   counters.Stop(state, n);
+  state.counters["qp_iter"] = static_cast<double>(qp_iterations) / state.iterations();
   state.counters["failures"] = failures;
 }
 

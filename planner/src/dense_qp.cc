@@ -36,13 +36,35 @@ void Givens(double a, double b, double* c, double* s, double* h) {
   }
 }
 
-// One solve over the buffers of a DenseQpWorkspace. The active set has at
-// most n constraints; r and u use their leading q = active.size() entries.
+// The iterate and the factorisation of one solve. Up to MaxN variables they
+// live in fixed-capacity storage on the stack, whose small products Eigen
+// evaluates inline; beyond that, in the DenseQpWorkspace (WorkspaceFactors).
+template <int MaxN>
+struct SmallFactors {
+  using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, MaxN, MaxN>;
+  using Vector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, MaxN, 1>;
+  Matrix J, R;  // n x n
+  Vector x, d, z, r, u, hx;
+};
+
+struct WorkspaceFactors {
+  explicit WorkspaceFactors(DenseQpWorkspace& w)
+      : J(w.J), R(w.R), x(w.x), d(w.d), z(w.z), r(w.r), u(w.u), hx(w.hx) {}
+  MatrixXd &J, &R;
+  VectorXd &x, &d, &z, &r, &u, &hx;
+};
+
+// One solve: constraint data in the DenseQpWorkspace, iterate and factors in
+// `Factors`. The active set has at most n constraints; r and u use their
+// leading q = active.size() entries.
+template <class Factors>
 class ActiveSetSolver {
  public:
-  ActiveSetSolver(const DenseQp& qp, const DenseQpSettings& settings, DenseQpWorkspace* ws)
-      : qp_(qp), settings_(settings), w_(*ws), n_(static_cast<int>(qp.gradient.size())),
-        p_(static_cast<int>(qp.eq_matrix.rows())), m_(static_cast<int>(qp.in_matrix.rows())) {}
+  ActiveSetSolver(const DenseQp& qp, const DenseQpSettings& settings, DenseQpWorkspace* ws,
+                  Factors* factors)
+      : qp_(qp), settings_(settings), w_(*ws), f_(*factors),
+        n_(static_cast<int>(qp.gradient.size())), p_(static_cast<int>(qp.eq_matrix.rows())),
+        m_(static_cast<int>(qp.in_matrix.rows())) {}
 
   void Run(DenseQpResult* out);
 
@@ -50,9 +72,9 @@ class ActiveSetSolver {
   // Constraint k of the stacked set (equalities first, then inequalities),
   // as a contiguous column of the normals.
   auto Normal(int k) const { return w_.normals.col(k); }
-  double Slack(int k) const { return w_.rhs(k) - w_.normals.col(k).dot(w_.x); }
+  double Slack(int k) const { return w_.rhs(k) - w_.normals.col(k).dot(f_.x); }
   double Scale(int k) const {
-    return std::max({1.0, std::abs(w_.rhs(k)), w_.normal_norms(k) * w_.x.norm()});
+    return std::max({1.0, std::abs(w_.rhs(k)), w_.normal_norms(k) * f_.x.norm()});
   }
   int Active() const { return static_cast<int>(w_.active.size()); }
   // Normals, right-hand sides, J = L^-T and the unconstrained minimum;
@@ -78,24 +100,27 @@ class ActiveSetSolver {
   const DenseQp& qp_;
   const DenseQpSettings& settings_;
   DenseQpWorkspace& w_;
+  Factors& f_;
   const int n_, p_, m_;
   int iterations_ = 0;
 };
 
-void ActiveSetSolver::Directions(int k) {
+template <class Factors>
+void ActiveSetSolver<Factors>::Directions(int k) {
   const int q = Active();
-  w_.d.noalias() = w_.J.transpose() * Normal(k);
-  w_.z.noalias() = w_.J.rightCols(n_ - q) * w_.d.tail(n_ - q);
+  f_.d.noalias() = f_.J.transpose() * Normal(k);
+  f_.z.noalias() = f_.J.rightCols(n_ - q) * f_.d.tail(n_ - q);
   if (q > 0) {
-    w_.r.head(q) = w_.d.head(q);
-    w_.R.topLeftCorner(q, q).triangularView<Eigen::Upper>().solveInPlace(w_.r.head(q));
+    f_.r.head(q) = f_.d.head(q);
+    f_.R.topLeftCorner(q, q).template triangularView<Eigen::Upper>().solveInPlace(f_.r.head(q));
   }
 }
 
-void ActiveSetSolver::AddToFactorization() {
+template <class Factors>
+void ActiveSetSolver<Factors>::AddToFactorization() {
   const int q = Active();  // before adding
-  Eigen::VectorXd& d = w_.d;
-  Eigen::MatrixXd& J = w_.J;
+  auto& d = f_.d;
+  auto& J = f_.J;
   for (int j = n_ - 1; j > q; --j) {
     double c, s, h;
     Givens(d(j - 1), d(j), &c, &s, &h);
@@ -108,19 +133,21 @@ void ActiveSetSolver::AddToFactorization() {
       J(row, j) = -s * a + c * b;
     }
   }
-  w_.R.col(q).head(q + 1) = d.head(q + 1);
+  f_.R.col(q).head(q + 1) = d.head(q + 1);
 }
 
-void ActiveSetSolver::Activate(int k, double u) {
-  w_.u(Active()) = u;
+template <class Factors>
+void ActiveSetSolver<Factors>::Activate(int k, double u) {
+  f_.u(Active()) = u;
   w_.active.push_back(k);
   w_.is_active[k] = 1;
 }
 
-void ActiveSetSolver::DropFromFactorization(int position) {
+template <class Factors>
+void ActiveSetSolver<Factors>::DropFromFactorization(int position) {
   const int q = Active();  // before removal
-  Eigen::MatrixXd& R = w_.R;
-  Eigen::MatrixXd& J = w_.J;
+  auto& R = f_.R;
+  auto& J = f_.J;
   w_.is_active[w_.active[position]] = 0;
   for (int col = position; col < q - 1; ++col) R.col(col) = R.col(col + 1);
   R.col(q - 1).setZero();
@@ -140,12 +167,13 @@ void ActiveSetSolver::DropFromFactorization(int position) {
     }
   }
   w_.active.erase(w_.active.begin() + position);
-  for (int k = position; k < q - 1; ++k) w_.u(k) = w_.u(k + 1);
+  for (int k = position; k < q - 1; ++k) f_.u(k) = f_.u(k + 1);
 }
 
-int ActiveSetSolver::MostViolated() {
+template <class Factors>
+int ActiveSetSolver<Factors>::MostViolated() {
   // Relative violation: slack / max(1, |b|, |a| |x|).
-  const double x_norm = w_.x.norm();
+  const double x_norm = f_.x.norm();
   auto violation = [&](int k, double slack) {
     return slack / std::max({1.0, std::abs(w_.rhs(k)), w_.normal_norms(k) * x_norm});
   };
@@ -158,7 +186,7 @@ int ActiveSetSolver::MostViolated() {
   if (m_ == 0) return -1;
   Eigen::VectorXd& slack = w_.slack;
   slack = qp_.in_rhs;
-  for (int j = 0; j < n_; ++j) slack -= w_.x(j) * qp_.in_matrix.col(j);  // m x n, by columns
+  for (int j = 0; j < n_; ++j) slack -= f_.x(j) * qp_.in_matrix.col(j);  // m x n, by columns
   int worst = -1;
   double worst_ratio = -settings_.tolerance;
   for (int i = 0; i < m_; ++i) {
@@ -173,14 +201,15 @@ int ActiveSetSolver::MostViolated() {
   return worst;
 }
 
-void ActiveSetSolver::Finish(DenseQpStatus status, int blocking, DenseQpResult* out) {
+template <class Factors>
+void ActiveSetSolver<Factors>::Finish(DenseQpStatus status, int blocking, DenseQpResult* out) {
   out->status = status;
-  out->x = w_.x;
+  out->x = f_.x;
   if (qp_.identity_hessian) {
-    out->objective = 0.5 * w_.x.squaredNorm() + qp_.gradient.dot(w_.x);
+    out->objective = 0.5 * f_.x.squaredNorm() + qp_.gradient.dot(f_.x);
   } else {
-    w_.hx.noalias() = qp_.hessian * w_.x;
-    out->objective = 0.5 * w_.x.dot(w_.hx) + qp_.gradient.dot(w_.x);
+    f_.hx.noalias() = qp_.hessian * f_.x;
+    out->objective = 0.5 * f_.x.dot(f_.hx) + qp_.gradient.dot(f_.x);
   }
   out->in_multipliers.setZero(m_);
   out->eq_multipliers.setZero(p_);
@@ -188,9 +217,9 @@ void ActiveSetSolver::Finish(DenseQpStatus status, int blocking, DenseQpResult* 
   for (int i = 0; i < Active(); ++i) {
     const int k = w_.active[i];
     if (k < p_) {
-      out->eq_multipliers(k) = w_.u(i);
+      out->eq_multipliers(k) = f_.u(i);
     } else {
-      out->in_multipliers(k - p_) = w_.u(i);
+      out->in_multipliers(k - p_) = f_.u(i);
       out->active_set.push_back(k - p_);
     }
   }
@@ -198,7 +227,8 @@ void ActiveSetSolver::Finish(DenseQpStatus status, int blocking, DenseQpResult* 
   out->blocking_row = blocking < 0 ? -1 : (blocking < p_ ? -1 - blocking : blocking - p_);
 }
 
-bool ActiveSetSolver::Initialize() {
+template <class Factors>
+bool ActiveSetSolver<Factors>::Initialize() {
   w_.is_active.assign(p_ + m_, 0);
   w_.active.clear();
   w_.active.reserve(n_ + 1);
@@ -211,53 +241,60 @@ bool ActiveSetSolver::Initialize() {
   w_.normal_norms.resize(p_ + m_);
   for (int k = 0; k < p_ + m_; ++k) w_.normal_norms(k) = w_.normals.col(k).norm();
   w_.slack.resize(m_);
-  for (Eigen::VectorXd* v : {&w_.x, &w_.d, &w_.z, &w_.r, &w_.u, &w_.hx}) v->resize(n_);
-  w_.R.setZero(n_, n_);
+  f_.x.resize(n_);
+  f_.d.resize(n_);
+  f_.z.resize(n_);
+  f_.r.resize(n_);
+  f_.u.resize(n_);
+  f_.hx.resize(n_);
+  f_.R.setZero(n_, n_);
   if (qp_.identity_hessian) {  // L = I: J = I, x = -g
-    w_.J.setIdentity(n_, n_);
-    w_.x = -qp_.gradient;
+    f_.J.setIdentity(n_, n_);
+    f_.x = -qp_.gradient;
     return true;
   }
   w_.llt.compute(qp_.hessian);
   if (w_.llt.info() != Eigen::Success) {
-    w_.x.setZero();
+    f_.x.setZero();
     return false;
   }
   // J = L^-T; unconstrained minimum x = -H^-1 g.
-  w_.J.setIdentity(n_, n_);
-  w_.llt.matrixU().solveInPlace(w_.J);
-  w_.x = -qp_.gradient;
-  w_.llt.solveInPlace(w_.x);
+  f_.J.setIdentity(n_, n_);
+  w_.llt.matrixU().solveInPlace(f_.J);
+  f_.x = -qp_.gradient;
+  w_.llt.solveInPlace(f_.x);
   return true;
 }
 
-int ActiveSetSolver::AddEqualities() {
+template <class Factors>
+int ActiveSetSolver<Factors>::AddEqualities() {
   const double tol = settings_.tolerance;
   for (int k = 0; k < p_; ++k) {
     Directions(k);
-    const double zn = w_.z.dot(Normal(k));
-    if (w_.z.norm() <= tol * std::max(1.0, Normal(k).norm()) || std::abs(zn) <= tol) {
+    const double zn = f_.z.dot(Normal(k));
+    if (f_.z.norm() <= tol * std::max(1.0, Normal(k).norm()) || std::abs(zn) <= tol) {
       // Dependent on earlier equalities: redundant if already satisfied.
       if (std::abs(Slack(k)) <= 1e3 * tol * Scale(k)) continue;
       return k;
     }
     const double t = -Slack(k) / zn;  // moves x onto the hyperplane
     const int q = Active();
-    w_.x -= t * w_.z;
-    if (q > 0) w_.u.head(q) -= t * w_.r.head(q);
+    f_.x -= t * f_.z;
+    if (q > 0) f_.u.head(q) -= t * f_.r.head(q);
     AddToFactorization();
     Activate(k, t);
   }
   return -1;
 }
 
-int ActiveSetSolver::BlockingActive(double* step) const {
+template <class Factors>
+int ActiveSetSolver<Factors>::BlockingActive(double* step) const {
   // Along the step x -= t z the multipliers move as u -= t r.
   *step = kInf;
   int drop = -1;
   for (int i = 0; i < Active(); ++i) {
-    if (w_.active[i] < p_ || w_.r(i) <= settings_.tolerance) continue;
-    const double ratio = w_.u(i) / w_.r(i);
+    if (w_.active[i] < p_ || f_.r(i) <= settings_.tolerance) continue;
+    const double ratio = f_.u(i) / f_.r(i);
     if (ratio < *step) {
       *step = ratio;
       drop = i;
@@ -266,7 +303,8 @@ int ActiveSetSolver::BlockingActive(double* step) const {
   return drop;
 }
 
-std::optional<DenseQpStatus> ActiveSetSolver::AddInequality(int k, int max_iterations) {
+template <class Factors>
+std::optional<DenseQpStatus> ActiveSetSolver<Factors>::AddInequality(int k, int max_iterations) {
   const double tol = settings_.tolerance;
   double u_new = 0.0;  // multiplier of the constraint being added
   while (true) {
@@ -275,21 +313,21 @@ std::optional<DenseQpStatus> ActiveSetSolver::AddInequality(int k, int max_itera
     const int q = Active();
     double t1;  // partial step length
     const int drop = BlockingActive(&t1);
-    const double zn = w_.z.dot(Normal(k));
+    const double zn = f_.z.dot(Normal(k));
     double t2 = kInf;  // full step length
-    if (w_.z.norm() > tol * std::max(1.0, Normal(k).norm()) && zn > tol * tol) {
+    if (f_.z.norm() > tol * std::max(1.0, Normal(k).norm()) && zn > tol * tol) {
       t2 = -Slack(k) / zn;
     }
     if (t1 == kInf && t2 == kInf) return DenseQpStatus::kInfeasible;
     if (t2 == kInf) {  // dual-only step, then drop
-      if (q > 0) w_.u.head(q) -= t1 * w_.r.head(q);
+      if (q > 0) f_.u.head(q) -= t1 * f_.r.head(q);
       u_new += t1;
       DropFromFactorization(drop);
       continue;
     }
     const double t = std::min(t1, t2);
-    w_.x -= t * w_.z;
-    if (q > 0) w_.u.head(q) -= t * w_.r.head(q);
+    f_.x -= t * f_.z;
+    if (q > 0) f_.u.head(q) -= t * f_.r.head(q);
     u_new += t;
     if (t2 <= t1) {
       AddToFactorization();
@@ -300,7 +338,8 @@ std::optional<DenseQpStatus> ActiveSetSolver::AddInequality(int k, int max_itera
   }
 }
 
-void ActiveSetSolver::Run(DenseQpResult* out) {
+template <class Factors>
+void ActiveSetSolver<Factors>::Run(DenseQpResult* out) {
   if (!Initialize()) return Finish(DenseQpStatus::kNumericalError, -1, out);
   const int max_iterations =
       settings_.max_iterations > 0 ? settings_.max_iterations : 5 * (n_ + m_ + p_) + 20;
@@ -317,11 +356,27 @@ void ActiveSetSolver::Run(DenseQpResult* out) {
   }
 }
 
+template <class Factors>
+void Solve(const DenseQp& qp, const DenseQpSettings& settings, DenseQpWorkspace* workspace,
+           Factors* factors, DenseQpResult* result) {
+  ActiveSetSolver<Factors>(qp, settings, workspace, factors).Run(result);
+}
+
 }  // namespace
 
 void SolveDenseQp(const DenseQp& qp, const DenseQpSettings& settings,
                   DenseQpWorkspace* workspace, DenseQpResult* result) {
-  ActiveSetSolver(qp, settings, workspace).Run(result);
+  const int n = static_cast<int>(qp.gradient.size());
+  if (n <= 8) {
+    SmallFactors<8> factors;
+    Solve(qp, settings, workspace, &factors, result);
+  } else if (n <= 16) {
+    SmallFactors<16> factors;
+    Solve(qp, settings, workspace, &factors, result);
+  } else {
+    WorkspaceFactors factors(*workspace);
+    Solve(qp, settings, workspace, &factors, result);
+  }
 }
 
 DenseQpResult SolveDenseQp(const DenseQp& qp, const DenseQpSettings& settings) {
