@@ -2,10 +2,9 @@
 // perf_event_open counter (Linux; needs perf_event_paranoid <= 2, the
 // default). When the counter is unavailable (containers, other kernels)
 // available() is false and benches print "n/a"; then count with callgrind:
-//   valgrind --tool=callgrind --toggle-collect='*TimedWorkspaceSolve*' \
-//     build/bin/planner_bench --benchmark_filter='BM_Workspace/4$' --benchmark_min_time=0.01
-// and divide the total Ir by the calls of TimedWorkspaceSolve
-// (scripts/count_instructions.sh does both).
+// scripts/count_instructions.sh [CONTACTS] [SOLVES] runs
+//   planner_bench --callgrind-run=SOLVES,CONTACTS
+// under valgrind --toggle-collect='*TimedWorkspaceSolve*' and divides.
 #pragma once
 
 #include <cstdint>

@@ -13,7 +13,7 @@
 // Counters: allocs = heap allocations per solve (operator new is counted in
 // this binary), instr = user-space instructions per solve from
 // perf_event_open (n/a where the kernel refuses it; then see
-// instruction_counter.h for the callgrind command).
+// scripts/count_instructions.sh).
 // After the Google Benchmark output it prints the table of medians.
 #include <benchmark/benchmark.h>
 
@@ -211,7 +211,42 @@ class RatioReporter : public benchmark::ConsoleReporter {
 }  // namespace
 }  // namespace tactforce::planner
 
+namespace tactforce::planner {
+namespace {
+
+// --callgrind-run=N,C: no Google Benchmark; N workspace solves of the
+// C-contact grasps (cycling over all 64, after one warm-up pass), for
+// scripts/count_instructions.sh to count under callgrind.
+int CallgrindRun(const std::string& spec) {
+  const size_t comma = spec.find(',');
+  const int solves = std::stoi(spec.substr(0, comma));
+  const int contacts = comma == std::string::npos ? 4 : std::stoi(spec.substr(comma + 1));
+  const auto& grasps = Grasps(contacts);
+  const auto solver = MakeSolver(SolverKind::kGeometric);
+  PlanningWorkspace workspace;
+  PlanResult result;
+  for (const PlanProblem& p : grasps) (void)solver->Solve(p, PlanOptions{}, &workspace, &result);
+  int failures = 0;
+  for (int i = 0; i < solves; ++i) {
+    if (!TimedWorkspaceSolve(*solver, grasps[i % grasps.size()], PlanOptions{}, &workspace,
+                             &result)) {
+      ++failures;
+    }
+  }
+  std::printf("%d solves of %d contacts, %d failures\n", solves, contacts, failures);
+  return failures == 0 ? 0 : 1;
+}
+
+}  // namespace
+}  // namespace tactforce::planner
+
 int main(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg.rfind("--callgrind-run=", 0) == 0) {
+      return tactforce::planner::CallgrindRun(arg.substr(16));
+    }
+  }
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   tactforce::planner::RatioReporter reporter;

@@ -165,8 +165,14 @@ absl::StatusOr<v1::EstimateResponse> HandleEstimate(const v1::EstimateRequest& r
   if (request.cone_sides() != 0) o.cone_sides = static_cast<int>(request.cone_sides());
   o.max_contacts = limits.max_contacts;
   const std::vector<double> readings(request.readings().begin(), request.readings().end());
-  absl::StatusOr<estimator::ForceEstimate> e = estimator::EstimateForces(*problem, readings, o);
-  if (!e.ok()) return e.status();
+  // The worker thread's buffers: warm estimates allocate only the response.
+  thread_local estimator::EstimationWorkspace workspace;
+  thread_local estimator::ForceEstimate estimate;
+  if (absl::Status s = estimator::EstimateForces(*problem, readings, o, &workspace, &estimate);
+      !s.ok()) {
+    return s;
+  }
+  const estimator::ForceEstimate* e = &estimate;
   v1::EstimateResponse out;
   out.set_status(ToProto(e->status));
   out.set_message(e->message);

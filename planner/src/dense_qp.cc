@@ -105,14 +105,32 @@ class ActiveSetSolver {
   int iterations_ = 0;
 };
 
+// Plain loops over contiguous columns: for the few variables of these QPs a
+// general matrix-vector kernel costs more in set-up than in arithmetic.
 template <class Factors>
 void ActiveSetSolver<Factors>::Directions(int k) {
   const int q = Active();
-  f_.d.noalias() = f_.J.transpose() * Normal(k);
-  f_.z.noalias() = f_.J.rightCols(n_ - q) * f_.d.tail(n_ - q);
-  if (q > 0) {
-    f_.r.head(q) = f_.d.head(q);
-    f_.R.topLeftCorner(q, q).template triangularView<Eigen::Upper>().solveInPlace(f_.r.head(q));
+  const double* a = w_.normals.col(k).data();
+  // d = J^T a
+  for (int i = 0; i < n_; ++i) {
+    const double* column = f_.J.col(i).data();
+    double sum = 0.0;
+    for (int row = 0; row < n_; ++row) sum += column[row] * a[row];
+    f_.d(i) = sum;
+  }
+  // z = J_2 d_2 (the columns after the active ones)
+  double* z = f_.z.data();
+  std::fill(z, z + n_, 0.0);
+  for (int c = q; c < n_; ++c) {
+    const double dc = f_.d(c);
+    const double* column = f_.J.col(c).data();
+    for (int row = 0; row < n_; ++row) z[row] += dc * column[row];
+  }
+  // r = R^-1 d_1 (R upper triangular, q x q): back substitution
+  for (int i = q - 1; i >= 0; --i) {
+    double sum = f_.d(i);
+    for (int c = i + 1; c < q; ++c) sum -= f_.R(i, c) * f_.r(c);
+    f_.r(i) = sum / f_.R(i, i);
   }
 }
 
@@ -184,15 +202,21 @@ int ActiveSetSolver<Factors>::MostViolated() {
       return k;
   }
   if (m_ == 0) return -1;
-  Eigen::VectorXd& slack = w_.slack;
-  slack = qp_.in_rhs;
-  for (int j = 0; j < n_; ++j) slack -= f_.x(j) * qp_.in_matrix.col(j);  // m x n, by columns
+  // slack = b - A x, column by column (A is m x n, column-major)
+  double* __restrict slack = w_.slack.data();
+  const double* __restrict b = qp_.in_rhs.data();
+  std::copy(b, b + m_, slack);
+  for (int j = 0; j < n_; ++j) {
+    const double xj = f_.x(j);
+    const double* __restrict column = qp_.in_matrix.col(j).data();
+    for (int i = 0; i < m_; ++i) slack[i] -= xj * column[i];
+  }
   int worst = -1;
   double worst_ratio = -settings_.tolerance;
   for (int i = 0; i < m_; ++i) {
     const int k = p_ + i;
-    if (w_.is_active[k] || slack(i) >= 0.0) continue;
-    const double ratio = violation(k, slack(i));
+    if (slack[i] >= 0.0 || w_.is_active[k]) continue;
+    const double ratio = violation(k, slack[i]);
     if (ratio < worst_ratio) {
       worst_ratio = ratio;
       worst = k;

@@ -24,11 +24,16 @@ Eigen::Matrix3d Skew(const Vec3& v) {
 // reflectors.col(k), a zero column meaning "no reflection". Then Q = H_0 ...
 // H_{c-1} is accumulated into `q` (rows x rows).
 // y -= 2 (v . y) v over `length` contiguous entries.
-inline void Reflect(const double* v, double* y, int length) {
-  double dot = 0.0;
-  for (int r = 0; r < length; ++r) dot += v[r] * y[r];
-  dot *= 2.0;
-  for (int r = 0; r < length; ++r) y[r] -= dot * v[r];
+inline void Reflect(const double* __restrict v, double* __restrict y, int length) {
+  double dot0 = 0.0, dot1 = 0.0;  // two chains: pairs of lanes
+  int r = 0;
+  for (; r + 1 < length; r += 2) {
+    dot0 += v[r] * y[r];
+    dot1 += v[r + 1] * y[r + 1];
+  }
+  if (r < length) dot0 += v[r] * y[r];
+  const double scale = 2.0 * (dot0 + dot1);
+  for (r = 0; r < length; ++r) y[r] -= scale * v[r];
 }
 
 void HouseholderQr(MatrixXd& a, MatrixXd& reflectors, MatrixXd& q) {
@@ -273,6 +278,18 @@ const FacetTable& Facets() {
 
 }  // namespace
 
+// Zeroes `matrix` (m x cols) for new rows. When the shape is unchanged only
+// the blocks the previous rows wrote are cleared: every row is zero outside
+// its contact's three columns.
+void ClearRowBlocks(int m, int cols, ConstraintRows* rows) {
+  if (rows->matrix.rows() != m || rows->matrix.cols() != cols ||
+      static_cast<int>(rows->info.size()) != m) {
+    rows->matrix.setZero(m, cols);
+    return;
+  }
+  for (int r = 0; r < m; ++r) rows->matrix.block<1, 3>(r, 3 * rows->info[r].contact).setZero();
+}
+
 void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid,
                          int cone_sides, double confidence, bool with_friction_facets,
                          ConstraintRows* out) {
@@ -282,7 +299,7 @@ void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid&
     m += (with_friction_facets ? cone_sides : 0) + 1 + (c.max_normal_force > 0.0 ? 1 : 0);
   }
   ConstraintRows& rows = *out;
-  rows.matrix.setZero(m, 3 * n);
+  ClearRowBlocks(m, 3 * n, &rows);
   rows.rhs.resize(m);
   rows.nominal_rhs.resize(m);
   rows.info.clear();
@@ -293,29 +310,43 @@ void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid&
                      cone_sides <= PlanOptions::kMaxConeSides;
   const double cos_half = std::cos(std::numbers::pi / cone_sides);
   int r = 0;
-  Eigen::Matrix3d s_ii;  // covariance block of the contact being added
-  auto add = [&](int contact, const Vec3& a, double d, RowKind kind, int facet) {
+  auto add = [&](int contact, const Vec3& a, double d, double support, RowKind kind, int facet) {
     rows.matrix.block<1, 3>(r, 3 * contact) = a.transpose();
     rows.nominal_rhs(r) = d;
-    rows.rhs(r) = d - confidence * std::sqrt(std::max(0.0, a.dot(s_ii * a)));
+    rows.rhs(r) = d - confidence * support;
     rows.info.push_back({contact, kind, facet});
     ++r;
   };
   for (int i = 0; i < n; ++i) {
     const Contact& c = problem.contacts[i];
-    s_ii = ellipsoid.ContactCovariance(i);
+    const Vec3& nrm = c.normal;
+    const Eigen::Matrix3d s = confidence > 0.0 ? ellipsoid.ContactCovariance(i)
+                                               : Eigen::Matrix3d::Zero();
+    const Vec3 sn = s * nrm;
+    const double snn = nrm.dot(sn);
     if (with_friction_facets) {
-      const auto [t1, t2] = TangentBasis(c.normal);
+      // a = cos t1 + sin t2 - k n with k = mu cos(pi/K); a^T S a expands into
+      // six quadratic forms of (t1, t2, n) computed once per contact.
+      const auto [t1, t2] = TangentBasis(nrm);
+      const double k = c.friction * cos_half;
+      const Vec3 s1 = s * t1, s2 = s * t2;
+      const double s11 = t1.dot(s1), s22 = t2.dot(s2), s12 = t1.dot(s2);
+      const double s1n = t1.dot(sn), s2n = t2.dot(sn);
       for (int j = 0; j < cone_sides; ++j) {
         const double theta = 2.0 * std::numbers::pi * j / cone_sides;
-        const double cos_t = table ? facets.cos_theta[facets.offset[cone_sides] + j] : std::cos(theta);
-        const double sin_t = table ? facets.sin_theta[facets.offset[cone_sides] + j] : std::sin(theta);
-        const Vec3 u = cos_t * t1 + sin_t * t2;
-        add(i, u - c.friction * cos_half * c.normal, 0.0, RowKind::kFrictionFacet, j);
+        const double co = table ? facets.cos_theta[facets.offset[cone_sides] + j] : std::cos(theta);
+        const double si = table ? facets.sin_theta[facets.offset[cone_sides] + j] : std::sin(theta);
+        const double quadratic = co * co * s11 + si * si * s22 + 2.0 * co * si * s12 -
+                                 2.0 * k * (co * s1n + si * s2n) + k * k * snn;
+        add(i, co * t1 + si * t2 - k * nrm, 0.0, std::sqrt(std::max(0.0, quadratic)),
+            RowKind::kFrictionFacet, j);
       }
     }
-    add(i, -c.normal, -c.min_normal_force, RowKind::kMinNormal, 0);
-    if (c.max_normal_force > 0.0) add(i, c.normal, c.max_normal_force, RowKind::kMaxNormal, 0);
+    const double normal_support = std::sqrt(std::max(0.0, snn));
+    add(i, -nrm, -c.min_normal_force, normal_support, RowKind::kMinNormal, 0);
+    if (c.max_normal_force > 0.0) {
+      add(i, nrm, c.max_normal_force, normal_support, RowKind::kMaxNormal, 0);
+    }
   }
 }
 

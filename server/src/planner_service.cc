@@ -130,7 +130,9 @@ class PlanStreamReactor final
 }  // namespace
 
 PlannerService::PlannerService(WorkerPool* pool, PlannerServiceOptions options)
-    : pool_(pool), plans_(pool, ToPlanSettings(options)) {}
+    : pool_(pool), plans_(pool, ToPlanSettings(options)) {
+  SetMessageAllocatorFor_Plan(&plan_messages_);
+}
 
 std::string PlannerService::service_name() const {
   return std::string(v1::Planner::service_full_name());

@@ -32,6 +32,7 @@
 
 #include "tactforce/api/dispatch.h"
 #include "tactforce/api/services.h"
+#include "tactforce/server/rpc_support.h"
 #include "tactforce/server/server_host.h"
 #include "tactforce/server/worker_pool.h"
 #include "tactforce/v1/planner.grpc.pb.h"
@@ -68,6 +69,8 @@ class PlannerService final : public v1::Planner::CallbackService, public HostedS
  private:
   WorkerPool* pool_;
   api::PlanDispatcher plans_;  // its settings' limits serve every Planner RPC
+  // Plan's request and response on one arena per call.
+  ArenaMessageAllocator<v1::PlanRequest, v1::PlanResponse> plan_messages_;
 };
 
 }  // namespace tactforce::server

@@ -11,7 +11,9 @@
 #include <string>
 #include <string_view>
 
+#include <google/protobuf/arena.h>
 #include <grpcpp/grpcpp.h>
+#include <grpcpp/support/message_allocator.h>
 
 #include "absl/status/status.h"
 #include "tactforce/api/dispatch.h"
@@ -64,5 +66,38 @@ class RpcGuard final : public api::CallControl {
 // with the call's status and keeps `guard` (the call's CallControl) alive
 // until then.
 api::CallDone FinishUnary(grpc::ServerUnaryReactor* reactor, std::shared_ptr<const RpcGuard> guard);
+
+// Request and response of a unary callback RPC on one protobuf Arena whose
+// first block lives inside the holder: one heap allocation per call instead
+// of one per (sub-)message; larger messages spill into blocks the arena
+// allocates. Register with the generated SetMessageAllocatorFor_<Method>();
+// the allocator must outlive the service.
+template <class Request, class Response>
+class ArenaMessageAllocator final : public grpc::MessageAllocator<Request, Response> {
+ public:
+  grpc::MessageHolder<Request, Response>* AllocateMessages() override { return new Holder(); }
+
+ private:
+  static constexpr size_t kInlineBytes = 4096;
+
+  class Holder final : public grpc::MessageHolder<Request, Response> {
+   public:
+    Holder() : arena_(Options(block_)) {
+      this->set_request(google::protobuf::Arena::CreateMessage<Request>(&arena_));
+      this->set_response(google::protobuf::Arena::CreateMessage<Response>(&arena_));
+    }
+    void Release() override { delete this; }
+
+   private:
+    static google::protobuf::ArenaOptions Options(char* block) {
+      google::protobuf::ArenaOptions options;
+      options.initial_block = block;
+      options.initial_block_size = kInlineBytes;
+      return options;
+    }
+    alignas(16) char block_[kInlineBytes];
+    google::protobuf::Arena arena_;  // after block_: destroyed before it
+  };
+};
 
 }  // namespace tactforce::server
