@@ -52,9 +52,12 @@ std::vector<Case> MakeCases(int count, bool with_extrinsic) {
     Eigen::VectorXd f(3 * g.problem.contacts.size());
     for (size_t i = 0; i < plan->forces.size(); ++i) f.segment<3>(3 * i) = plan->forces[i];
     for (int attempt = 0; attempt < 20; ++attempt) {
-      Eigen::VectorXd x(eq.null_basis.cols());
-      for (int k = 0; k < x.size(); ++k) x(k) = 0.5 * gauss(rng);
-      const Eigen::VectorXd candidate = f + eq.null_basis * x;
+      // An isotropic step on the FE-plane, drawn in force space and
+      // projected (B B^T step), so the data do not depend on which orthonormal
+      // basis B the planner happens to compute.
+      Eigen::VectorXd step(f.size());
+      for (int k = 0; k < step.size(); ++k) step(k) = 0.5 * gauss(rng);
+      const Eigen::VectorXd candidate = f + eq.null_basis * (eq.null_basis.transpose() * step);
       bool inside = true;
       for (size_t i = 0; i < g.problem.contacts.size() && inside; ++i) {
         const auto& c = g.problem.contacts[i];
