@@ -56,13 +56,8 @@ PlanBuffers& ThreadPlanBuffers() {
 }
 
 absl::StatusOr<v1::PlanResponse> SolvePlan(const PlanCall& call, PlanBuffers* buffers) {
-  static const auto* solvers = new std::unique_ptr<planner::ForceSolver>[3]{
-      planner::MakeSolver(planner::SolverKind::kGeometric),
-      planner::MakeSolver(planner::SolverKind::kIpopt),
-      planner::MakeSolver(planner::SolverKind::kCrossCheck)};
-  const planner::ForceSolver& solver = *solvers[static_cast<int>(call.solver)];
-  if (absl::Status s = solver.Solve(call.problem, call.options, &buffers->workspace,
-                                    &buffers->result);
+  if (absl::Status s = planner::Plan(call.problem, call.options, call.solver, &buffers->workspace,
+                                     &buffers->result);
       !s.ok()) {
     return s;
   }

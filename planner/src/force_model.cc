@@ -36,6 +36,9 @@ inline void Reflect(const double* __restrict v, double* __restrict y, int length
   for (r = 0; r < length; ++r) y[r] -= scale * v[r];
 }
 
+// Written out rather than Eigen::HouseholderQR because forming Q through
+// Eigen's public API (householderQ() into a matrix) allocates a workspace on
+// every call, and the planning workspace must not allocate once warm.
 void HouseholderQr(MatrixXd& a, MatrixXd& reflectors, MatrixXd& q) {
   const int rows = static_cast<int>(a.rows());
   const int cols = static_cast<int>(a.cols());
@@ -61,8 +64,7 @@ void HouseholderQr(MatrixXd& a, MatrixXd& reflectors, MatrixXd& q) {
   }
   q.setIdentity(rows, rows);
   for (int k = steps - 1; k >= 0; --k) {
-    const double* v = reflectors.col(k).data() + k;
-    if (v[0] == 0.0 && std::all_of(v, v + rows - k, [](double e) { return e == 0.0; })) continue;
+    const double* v = reflectors.col(k).data() + k;  // zero: reflects nothing
     for (int j = k; j < rows; ++j) Reflect(v, q.col(j).data() + k, rows - k);
   }
 }
@@ -333,7 +335,7 @@ void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid&
       const double s11 = t1.dot(s1), s22 = t2.dot(s2), s12 = t1.dot(s2);
       const double s1n = t1.dot(sn), s2n = t2.dot(sn);
       for (int j = 0; j < cone_sides; ++j) {
-        const double theta = 2.0 * std::numbers::pi * j / cone_sides;
+        const double theta = table ? 0.0 : 2.0 * std::numbers::pi * j / cone_sides;
         const double co = table ? facets.cos_theta[facets.offset[cone_sides] + j] : std::cos(theta);
         const double si = table ? facets.sin_theta[facets.offset[cone_sides] + j] : std::sin(theta);
         const double quadratic = co * co * s11 + si * si * s22 + 2.0 * co * si * s12 -

@@ -112,17 +112,26 @@ std::unique_ptr<ForceSolver> MakeSolver(SolverKind kind) {
   return internal::MakeGeometricSolver();
 }
 
-absl::StatusOr<PlanResult> Plan(const PlanProblem& problem, const PlanOptions& options,
-                                SolverKind kind) {
+const ForceSolver& CachedSolver(SolverKind kind) {
   static const auto* geometric = MakeSolver(SolverKind::kGeometric).release();
   static const auto* ipopt = MakeSolver(SolverKind::kIpopt).release();
   static const auto* cross_check = MakeSolver(SolverKind::kCrossCheck).release();
   switch (kind) {
-    case SolverKind::kGeometric: return geometric->Solve(problem, options);
-    case SolverKind::kIpopt: return ipopt->Solve(problem, options);
-    case SolverKind::kCrossCheck: return cross_check->Solve(problem, options);
+    case SolverKind::kGeometric: return *geometric;
+    case SolverKind::kIpopt: return *ipopt;
+    case SolverKind::kCrossCheck: return *cross_check;
   }
-  return geometric->Solve(problem, options);
+  return *geometric;
+}
+
+absl::StatusOr<PlanResult> Plan(const PlanProblem& problem, const PlanOptions& options,
+                                SolverKind kind) {
+  return CachedSolver(kind).Solve(problem, options);
+}
+
+absl::Status Plan(const PlanProblem& problem, const PlanOptions& options, SolverKind kind,
+                  PlanningWorkspace* workspace, PlanResult* result) {
+  return CachedSolver(kind).Solve(problem, options, workspace, result);
 }
 
 }  // namespace tactforce::planner

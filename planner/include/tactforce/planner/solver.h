@@ -59,8 +59,13 @@ class ForceSolver {
 // Backends. All are stateless and safe to share between threads.
 std::unique_ptr<ForceSolver> MakeSolver(SolverKind kind);
 
-// Convenience: MakeSolver(kind)->Solve(problem, options) with a cached solver.
+// The process's shared solver of each kind (stateless, thread-safe).
+const ForceSolver& CachedSolver(SolverKind kind);
+
+// Convenience: CachedSolver(kind).Solve(problem, options), one-off or in place.
 absl::StatusOr<PlanResult> Plan(const PlanProblem& problem,
                                 const PlanOptions& options, SolverKind kind);
+absl::Status Plan(const PlanProblem& problem, const PlanOptions& options, SolverKind kind,
+                  PlanningWorkspace* workspace, PlanResult* result);
 
 }  // namespace tactforce::planner
