@@ -17,11 +17,11 @@ namespace tactforce::cli {
 CLI::App* AddAuditCommand(CLI::App& app, AuditArgs& args) {
   CLI::App* cmd = app.add_subcommand(
       "audit", "Show what the sensor model gets wrong on measured data, name the cause, extend it");
-  auto* csv = cmd->add_option("--csv", args.csv, "Measured data: t,reference,reading[,shear][,trial]")
+  auto* csv = cmd->add_option("--csv", args.csv, "Measured data: t,reference,reading[,shear][,trial]; - = stdin")
                   ->type_name("FILE");
-  auto* ref = cmd->add_option("--reference", args.reference_path, "Reference stream: t,value[,shear]")
+  auto* ref = cmd->add_option("--reference", args.reference_path, "Reference stream: t,value[,shear]; - = stdin")
                   ->type_name("FILE");
-  auto* reading = cmd->add_option("--reading", args.reading_path, "Reading stream: t,value")
+  auto* reading = cmd->add_option("--reading", args.reading_path, "Reading stream: t,value; - = stdin")
                       ->type_name("FILE");
   csv->excludes(ref)->excludes(reading);
   ref->needs(reading);
@@ -34,6 +34,7 @@ CLI::App* AddAuditCommand(CLI::App& app, AuditArgs& args) {
                              "Two streams: no clock-offset estimation (offset 0; a clock offset then shows as 'delay')");
   auto* search = cmd->add_option("--max-clock-offset", args.max_clock_offset,
                                  "Two streams: estimate the clock offset within +/- this (s; default estimation)")
+                     ->check(GreaterThan(0))
                      ->capture_default_str();
   auto* centre = cmd->add_option("--clock-offset-centre", args.clock_offset_centre,
                                  "Two streams: centre of the clock-offset search (s), e.g. when the clocks have "
@@ -48,9 +49,20 @@ CLI::App* AddAuditCommand(CLI::App& app, AuditArgs& args) {
       ->required();
   cmd->add_option("--units", args.units, "Name of the reading's units, for the report")->capture_default_str();
   cmd->add_option("--heldout", args.heldout_fraction, "Fraction of the run (the later block) held out")
+      ->check(Between(0.05, 0.9))
       ->capture_default_str();
-  cmd->add_option("--max-causes", args.max_causes, "At most this many causes")->capture_default_str();
+  cmd->add_option("--max-causes", args.max_causes, "At most this many causes")
+      ->check(Between(0, 20))
+      ->capture_default_str();
   cmd->add_flag("--quiet", args.quiet, "Do not print the summary");
+  AddOutputFlags(cmd, &args.output, "report.json");
+  cmd->footer(
+      "Writes OUT/report.json, summary.txt, extended_model.json and SVG plots, and\n"
+      "prints the summary. Examples:\n"
+      "  tactforce simulate sensor --model client/examples/sensor_model.json --out /tmp/run\n"
+      "  tactforce audit --csv /tmp/run/run.csv --out /tmp/audit\n"
+      "  tactforce audit --reference client/examples/reference.csv --reading client/examples/reading.csv \\\n"
+      "    --out /tmp/audit2 --json");
   return cmd;
 }
 
@@ -87,8 +99,16 @@ int RunAuditCommand(const AuditArgs& args) {
   }
   absl::StatusOr<audit::AuditReport> report = audit::RunAudit(*data, options);
   if (!report.ok()) return ReportError(report.status());
-  if (absl::Status s = audit::WriteAuditReport(*report, args.out_dir); !s.ok()) return ReportError(s);
-  if (!args.quiet) std::cout << audit::FormatAuditSummary(*report);
+  // An existing folder is fine: the report's files are replaced whole.
+  if (absl::Status s = PrepareOutputDir(args.out_dir, /*force=*/true, {}); !s.ok()) return ReportError(s);
+  if (absl::Status s = audit::WriteAuditReport(*report, args.out_dir); !s.ok()) {
+    return ReportError(absl::InvalidArgumentError(absl::StrCat("--out: ", s.message())));
+  }
+  if (args.output.json()) {
+    std::cout << audit::AuditReportJson(*report);
+  } else if (!args.quiet) {
+    std::cout << audit::FormatAuditSummary(*report);
+  }
   std::cerr << "report written to " << args.out_dir << "/report.json\n";
   return std::cout ? kExitOk : kExitFailure;
 }
@@ -100,10 +120,15 @@ CLI::App* AddSimulateSensorCommand(CLI::App& simulate, SimulateSensorArgs& args)
   cmd->add_option("--profile", args.profile, "Force profile")
       ->check(CLI::IsMember({"press-release", "ramp", "random"}))
       ->capture_default_str();
-  cmd->add_option("--seconds", args.seconds, "Duration (s)")->capture_default_str();
-  cmd->add_option("--rate", args.rate, "Sample rate (Hz)")->capture_default_str();
+  cmd->add_option("--seconds", args.seconds, "Duration (s)")->check(Between(0.1, 86400))->capture_default_str();
+  cmd->add_option("--rate", args.rate, "Sample rate (Hz)")->check(Between(1, 1e5))->capture_default_str();
   cmd->add_option("--seed", args.seed, "Random seed")->capture_default_str();
-  cmd->add_option("--out", args.out_dir, "Output directory")->required();
+  cmd->add_option("--out", args.out_dir, "Output directory (created; must be empty unless --force)")->required();
+  cmd->add_flag("--force", args.force, "Replace the run.csv, fingertip.csv and model.json of an earlier run in --out");
+  cmd->footer(
+      "Writes OUT/run.csv (t,reference,reading), OUT/fingertip.csv and OUT/model.json. Example:\n"
+      "  tactforce simulate sensor --model client/examples/sensor_model.json --out /tmp/run && \\\n"
+      "    tactforce audit --csv /tmp/run/run.csv --out /tmp/audit");
   return cmd;
 }
 
@@ -121,6 +146,10 @@ int RunSimulateSensor(const SimulateSensorArgs& args) {
   options.seconds = args.seconds;
   options.rate = args.rate;
   options.seed = args.seed;
+  if (absl::Status s = PrepareOutputDir(args.out_dir, args.force, {"run.csv", "fingertip.csv", "model.json"});
+      !s.ok()) {
+    return ReportError(s);
+  }
   absl::StatusOr<sim::SimRun> run = sim::SimulateSensor(model, options);
   if (!run.ok()) return ReportError(run.status());
   if (absl::Status s = sim::WriteSimRun(*run, args.out_dir); !s.ok()) return ReportError(s);

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "CLI/CLI.hpp"
+#include "cli_common.h"
 
 namespace tactforce::cli {
 
@@ -28,6 +29,7 @@ struct AuditArgs {
   double heldout_fraction = 0.35;
   int max_causes = 3;
   bool quiet = false;
+  OutputFormat output;  // table: the summary; json: report.json
 };
 CLI::App* AddAuditCommand(CLI::App& app, AuditArgs& args);
 int RunAuditCommand(const AuditArgs& args);
@@ -39,6 +41,7 @@ struct SimulateSensorArgs {
   double rate = 200.0;
   uint64_t seed = 1;
   std::string out_dir;
+  bool force = false;  // replace an earlier run's files in out_dir
 };
 CLI::App* AddSimulateSensorCommand(CLI::App& simulate, SimulateSensorArgs& args);
 int RunSimulateSensor(const SimulateSensorArgs& args);

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <iostream>
 #include <iterator>
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
 
 namespace tactforce::cli {
 
@@ -39,10 +41,95 @@ absl::StatusOr<std::string> ReadInput(const std::string& path, const std::string
   std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
   if (file.bad()) {
     return absl::InvalidArgumentError(
-        absl::StrCat("--request: error while reading '", path, "'"));
+        absl::StrCat(flag, ": error while reading '", path, "'"));
   }
   return text;
 }
+
+void AddOutputFlags(CLI::App* cmd, OutputFormat* out, const std::string& json_what) {
+  CLI::Option* json = cmd->add_flag("--json", out->json_flag, "Print " + json_what + " as JSON instead of a table");
+  cmd->add_option("--format", out->format, "Output: table or json (--json)")
+      ->check(CLI::IsMember({"table", "json"}))
+      ->capture_default_str()
+      ->excludes(json);
+}
+
+namespace {
+
+// A validator of finite numbers for which `ok` holds; `rule` is "must be >= 1".
+CLI::Validator NumberCheck(std::function<bool(double)> ok, const std::string& rule, const std::string& name) {
+  return CLI::Validator(
+      [ok, rule](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double x = std::strtod(text.c_str(), &end);
+        if (text.empty() || end != text.c_str() + text.size()) return absl::StrCat("'", text, "' is not a number");
+        if (!std::isfinite(x) || !ok(x)) return absl::StrCat(rule, ", got ", text);
+        return std::string();
+      },
+      rule, name);
+}
+
+std::string Number(double x) { return absl::StrFormat("%g", x); }
+
+bool Matches(const std::string& name, const std::string& pattern) {
+  const size_t star = pattern.find('*');
+  if (star == std::string::npos) return name == pattern;
+  const std::string prefix = pattern.substr(0, star), suffix = pattern.substr(star + 1);
+  return name.size() >= prefix.size() + suffix.size() && name.compare(0, prefix.size(), prefix) == 0 &&
+         name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+}  // namespace
+
+CLI::Validator AtLeast(double min) {
+  return NumberCheck([min](double x) { return x >= min; }, "must be >= " + Number(min), "AT_LEAST");
+}
+CLI::Validator GreaterThan(double min) {
+  return NumberCheck([min](double x) { return x > min; }, "must be > " + Number(min), "GREATER_THAN");
+}
+CLI::Validator Between(double min, double max) {
+  return NumberCheck([min, max](double x) { return x >= min && x <= max; },
+                     absl::StrCat("must be in [", Number(min), ", ", Number(max), "]"), "BETWEEN");
+}
+
+absl::Status PrepareOutputDir(const std::string& dir, bool force, const std::vector<std::string>& patterns,
+                              const std::string& flag) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec)) {
+    return absl::InvalidArgumentError(absl::StrCat(flag, ": '", dir, "' exists and is not a folder"));
+  }
+  fs::create_directories(dir, ec);
+  if (ec) return absl::InvalidArgumentError(absl::StrCat(flag, ": cannot create '", dir, "': ", ec.message()));
+  std::vector<fs::path> ours;
+  int others = 0;
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    bool match = false;
+    for (const std::string& p : patterns) match = match || Matches(name, p);
+    if (match && entry.is_regular_file()) {
+      ours.push_back(entry.path());
+    } else {
+      ++others;
+    }
+  }
+  if (ec) return absl::InvalidArgumentError(absl::StrCat(flag, ": cannot list '", dir, "': ", ec.message()));
+  if (ours.empty() && others == 0) return absl::OkStatus();
+  if (!force) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        flag, ": '", dir, "' is not empty (", ours.size() + others, " entries",
+        ours.empty() ? "" : absl::StrCat(", e.g. ", ours.front().filename().string()),
+        "); choose an empty folder, or --force to replace this simulation's files"));
+  }
+  for (const fs::path& p : ours) {
+    if (!fs::remove(p, ec) || ec) {
+      return absl::InvalidArgumentError(absl::StrCat(flag, ": cannot remove '", p.string(), "': ", ec.message()));
+    }
+  }
+  return absl::OkStatus();
+}
+
+std::string InputName(const std::string& path) { return path == "-" ? "<stdin>" : path; }
 
 int ExitCodeFor(absl::StatusCode code) {
   switch (code) {

@@ -2,8 +2,11 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
+
+#include "CLI/CLI.hpp"
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
@@ -37,6 +40,34 @@ int ExitCodeFor(absl::StatusCode code);
 // Whole contents of `path`; "-" reads standard input. Errors name the path.
 absl::StatusOr<std::string> ReadInput(const std::string& path,
                                       const std::string& flag = "--request");
+
+// Output of every subcommand: a human table by default, JSON with --json;
+// --format table|json is accepted as a synonym.
+struct OutputFormat {
+  bool json_flag = false;
+  std::string format = "table";
+  bool json() const { return json_flag || format == "json"; }
+};
+// Adds --json and --format; `json_what` says what the JSON is ("the
+// PlanResponse").
+void AddOutputFlags(CLI::App* cmd, OutputFormat* out, const std::string& json_what);
+
+// Numeric flag checks; a failure is a usage error (exit 2) naming the flag:
+// "--window: must be >= 1, got 0".
+CLI::Validator AtLeast(double min);             // finite and >= min
+CLI::Validator GreaterThan(double min);         // finite and > min
+CLI::Validator Between(double min, double max); // finite and in [min, max]
+
+// Makes `dir` ready for a simulation's files: created when missing; when it
+// already holds files, InvalidArgument naming `flag` unless `force`, which
+// first removes only the files the simulation writes (names matching one of
+// `patterns`, "*" a wildcard: "trial*.csv"), so an earlier run's files can
+// never be mixed with the new ones. Other files are left alone.
+absl::Status PrepareOutputDir(const std::string& dir, bool force, const std::vector<std::string>& patterns,
+                              const std::string& flag = "--out");
+
+// How an input is named in messages: its path, "<stdin>" for "-".
+std::string InputName(const std::string& path);
 
 // "x,y,z" (three finite numbers) as a vector; errors name the flag.
 absl::StatusOr<Eigen::Vector3d> ParseVec3(const std::string& text, const std::string& flag);

@@ -18,13 +18,8 @@ namespace tactforce::cli {
 namespace {
 
 absl::StatusOr<std::string> ReadPem(const std::string& path, const char* flag) {
-  absl::StatusOr<std::string> text = ReadInput(path);
-  if (!text.ok()) {
-    // ReadInput names --request; say which flag instead.
-    absl::string_view message = text.status().message();
-    absl::ConsumePrefix(&message, "--request: ");
-    return absl::InvalidArgumentError(absl::StrCat(flag, ": ", message));
-  }
+  absl::StatusOr<std::string> text = ReadInput(path, flag);
+  if (!text.ok()) return text.status();
   if (text->find("-----BEGIN ") == std::string::npos) {
     return absl::InvalidArgumentError(absl::StrCat(flag, ": '", path, "' is not a PEM file"));
   }

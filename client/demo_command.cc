@@ -310,9 +310,7 @@ std::string FormatRemoteJson(const RemoteResult& r) {
 CLI::App* AddDemoCommand(CLI::App& app, DemoArgs& args) {
   CLI::App* cmd = app.add_subcommand(
       "demo", "Plan the built-in grasps with the geometric planner and Ipopt and compare");
-  cmd->add_option("--format", args.format, "Output: table or json")
-      ->check(CLI::IsMember({"table", "json"}))
-      ->capture_default_str();
+  AddOutputFlags(cmd, &args.output, "the comparison");
   cmd->add_option("--repeat", args.repeat, "Solves per grasp; the fastest times are shown")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
@@ -355,19 +353,19 @@ int RunDemo(const DemoArgs& args) {
     rows.push_back(*std::move(row));
   }
   if (args.server.empty()) {
-    std::cout << (args.format == "json" ? FormatJson(rows, args.repeat, "")
+    std::cout << (args.output.json() ? FormatJson(rows, args.repeat, "")
                                         : FormatTable(rows, args.repeat, tolerance));
     std::cout.flush();
     return std::cout ? kExitOk : kExitFailure;
   }
 
   // The local table first, so that it is there even if the server is not.
-  if (args.format != "json") {
+  if (!args.output.json()) {
     std::cout << FormatTable(rows, args.repeat, tolerance) << std::flush;
   }
   absl::StatusOr<RemoteResult> remote = RunRemote(args, rows);
   if (!remote.ok()) return ReportError(remote.status());
-  std::cout << (args.format == "json" ? FormatJson(rows, args.repeat, FormatRemoteJson(*remote))
+  std::cout << (args.output.json() ? FormatJson(rows, args.repeat, FormatRemoteJson(*remote))
                                       : FormatRemoteTable(*remote, args));
   std::cout.flush();
   if (!std::cout) return kExitFailure;

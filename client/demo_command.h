@@ -6,12 +6,13 @@
 #include <string>
 
 #include "CLI/CLI.hpp"
+#include "cli_common.h"
 #include "connection.h"
 
 namespace tactforce::cli {
 
 struct DemoArgs {
-  std::string format = "table";  // table | json
+  OutputFormat output;           // table | json
   int repeat = 3;                // solves per grasp; the fastest times count
   std::string server;            // empty: local only
   ConnectionArgs connection;     // --tls-*, --deadline-ms (server taken from `server`)

@@ -14,6 +14,7 @@
 #include "remote_call.h"
 #include "tactforce/api/convert.h"
 #include "tactforce/api/json.h"
+#include "tactforce/api/names.h"
 #include "tactforce/api/services.h"
 #include "tactforce/estimator/friction.h"
 #include "tactforce/io/csv.h"
@@ -33,40 +34,77 @@ CLI::App* AddEstimateCommand(CLI::App& app, EstimateArgs& args) {
                   "EstimateRequest as JSON (object, contacts, readings, method, ...); - = stdin")
       ->required()
       ->type_name("FILE");
-  cmd->footer("Output: EstimateResponse as JSON (forces per contact, in request order).");
+  AddOutputFlags(cmd, &args.output, "the EstimateResponse");
+  cmd->footer(
+      "Prints the force of every contact (request order, object frame, N) and the\n"
+      "residual of every reading. Examples:\n"
+      "  tactforce estimate --local --request client/examples/estimate_request.json\n"
+      "  tactforce estimate --server localhost:50051 --request client/examples/estimate_request.json --json\n"
+      "  cat client/examples/estimate_request.json | tactforce estimate --local --request -");
   return cmd;
 }
+
+namespace {
+
+// One line per contact and per reading.
+std::string FormatEstimateTable(const v1::EstimateRequest& request, const v1::EstimateResponse& response) {
+  std::string out = absl::StrFormat("status: %s%s%s  (method %s, %d us)\n", api::ShortEnumName(response.status()),
+                                    response.message().empty() ? "" : ": ", response.message(),
+                                    api::ShortEnumName(response.method()), response.solve_time_us());
+  absl::StrAppendFormat(&out, "%-4s %-12s %10s %10s %10s %12s\n", "#", "contact", "fx (N)", "fy (N)", "fz (N)",
+                        "normal (N)");
+  for (int i = 0; i < response.forces_size(); ++i) {
+    const v1::Vec3& f = response.forces(i);
+    const std::string name = i < request.contacts_size() ? request.contacts(i).name() : "";
+    absl::StrAppendFormat(&out, "%-4d %-12s %10.4f %10.4f %10.4f %12.4f\n", i, name, f.x(), f.y(), f.z(),
+                          i < response.normal_forces_size() ? response.normal_forces(i) : 0.0);
+  }
+  for (int k = 0; k < response.residuals_size(); ++k) {
+    absl::StrAppendFormat(&out, "reading %d: residual %+.4f N\n", k, response.residuals(k));
+  }
+  return out;
+}
+
+}  // namespace
 
 int RunEstimate(const EstimateArgs& args) {
   absl::StatusOr<std::string> text = ReadInput(args.request_path);
   if (!text.ok()) return ReportError(text.status());
   v1::EstimateRequest request;
-  if (absl::Status s = api::ParseJson(*text, &request, "request JSON"); !s.ok()) return ReportError(s);
+  if (absl::Status s = api::ParseJson(*text, &request, InputName(args.request_path)); !s.ok()) return ReportError(s);
   absl::StatusOr<v1::EstimateResponse> response =
       args.local ? api::HandleEstimate(request)
                  : CallUnary(args.connection, &v1::Estimator::Stub::EstimateForces, request);
   if (!response.ok()) return ReportError(response.status());
-  std::cout << api::ToJson(*response);
+  std::cout << (args.output.json() ? api::ToJson(*response) : FormatEstimateTable(request, *response));
   return std::cout ? kExitOk : kExitFailure;
 }
 
 CLI::App* AddFrictionCommand(CLI::App& app, FrictionArgs& args) {
   CLI::App* cmd = app.add_subcommand(
       "friction", "Estimate static friction from probing trials that end in slip");
-  cmd->add_option("trials", args.trial_paths, "Trial CSV files: t,fx,fy,fz,px,py,pz[,slip]")
+  cmd->add_option("trials", args.trial_paths, "Trial CSV files: t,fx,fy,fz,px,py,pz[,slip]; - = stdin")
       ->required()
       ->type_name("TRIAL.csv");
   auto* normal = cmd->add_option("--normal", args.normal, "Surface normal into the object, x,y,z");
   auto* mesh = cmd->add_option("--mesh", args.mesh_path,
                                "Object mesh (STL, OBJ or PLY; object frame, m): nearest-triangle normal");
   normal->excludes(mesh);
-  cmd->add_flag("--json", args.json, "Print the FrictionResponse as JSON");
+  AddOutputFlags(cmd, &args.output, "the FrictionResponse");
   cmd->add_flag("--linear-fit", args.linear_fit,
                 "Pre-slip force from line fits (ours) instead of the 5-sample average (paper)");
   cmd->add_option("--slip-distance", args.slip_distance, "Tangential travel that means slip (m)")
+      ->check(GreaterThan(0))
       ->capture_default_str();
-  cmd->add_option("--window", args.window, "Pre-slip samples averaged")->capture_default_str();
-  cmd->add_option("--min-normal-force", args.min_normal_force, "N")->capture_default_str();
+  cmd->add_option("--window", args.window, "Pre-slip samples averaged")->check(Between(1, 1000))->capture_default_str();
+  cmd->add_option("--min-normal-force", args.min_normal_force, "Samples below this normal force are ignored (N)")
+      ->check(AtLeast(0))
+      ->capture_default_str();
+  cmd->footer(
+      "Prints mu per trial and their median, mean and IQR. Examples:\n"
+      "  tactforce simulate friction --mu 0.3 --out /tmp/friction\n"
+      "  tactforce friction /tmp/friction/trial*.csv --normal 0,0,-1\n"
+      "  tactforce friction /tmp/friction/trial*.csv --normal 0,0,-1 --linear-fit --json");
   return cmd;
 }
 
@@ -80,7 +118,7 @@ int RunFriction(const FrictionArgs& args) {
     absl::StatusOr<estimator::FrictionTrial> trial = estimator::FrictionTrialFromCsv(*table);
     if (!trial.ok()) return ReportError(trial.status());
     v1::FrictionTrial* out = request.add_trials();
-    out->set_name(path);
+    out->set_name(io::SourceName(path));
     for (const auto& s : trial->samples) {
       v1::FrictionSample* smp = out->add_samples();
       smp->set_t(s.t);
@@ -105,12 +143,12 @@ int RunFriction(const FrictionArgs& args) {
     }
   }
   request.set_slip_distance(args.slip_distance);
-  request.set_window(static_cast<uint32_t>(std::max(1, args.window)));
+  request.set_window(static_cast<uint32_t>(args.window));
   request.set_min_normal_force(args.min_normal_force);
   request.set_pre_slip(args.linear_fit ? v1::PRE_SLIP_FORCE_LINEAR_FIT : v1::PRE_SLIP_FORCE_WINDOW_AVERAGE);
   absl::StatusOr<v1::FrictionResponse> response = api::HandleFriction(request);
   if (!response.ok()) return ReportError(response.status());
-  if (args.json) {
+  if (args.output.json()) {
     std::cout << api::ToJson(*response);
     return std::cout ? kExitOk : kExitFailure;
   }
@@ -128,24 +166,31 @@ int RunFriction(const FrictionArgs& args) {
 CLI::App* AddSimulateFrictionCommand(CLI::App& simulate, SimulateFrictionArgs& args) {
   CLI::App* cmd = simulate.add_subcommand(
       "friction", "Write simulated probing trials (CSV per trial) and truth.json");
-  cmd->add_option("--mu", args.mu, "True static friction coefficient")->capture_default_str();
-  cmd->add_option("--trials", args.trials, "Number of trials")->capture_default_str();
-  cmd->add_option("--noise", args.noise, "Force noise std. dev. per component (N)")->capture_default_str();
-  cmd->add_option("--rate", args.rate, "Sample rate (Hz)")->capture_default_str();
-  cmd->add_option("--ramp", args.ramp, "Normal-force ramp-down rate (N/s)")->capture_default_str();
+  cmd->add_option("--mu", args.mu, "True static friction coefficient")->check(Between(0.01, 10))->capture_default_str();
+  cmd->add_option("--trials", args.trials, "Number of trials")->check(Between(1, 10000))->capture_default_str();
+  cmd->add_option("--noise", args.noise, "Force noise std. dev. per component (N)")
+      ->check(AtLeast(0))
+      ->capture_default_str();
+  cmd->add_option("--rate", args.rate, "Sample rate (Hz)")->check(Between(1, 1e5))->capture_default_str();
+  cmd->add_option("--ramp", args.ramp, "Normal-force ramp-down rate (N/s)")->check(GreaterThan(0))->capture_default_str();
   cmd->add_option("--tangential-force", args.tangential_force, "Held tangential force (N)")
+      ->check(GreaterThan(0))
       ->capture_default_str();
   cmd->add_flag("--slip-flags", args.slip_flags, "Also write a slip column (0/1)");
   cmd->add_option("--seed", args.seed, "Random seed")->capture_default_str();
-  cmd->add_option("--out", args.out_dir, "Output directory (created)")->required();
+  cmd->add_option("--out", args.out_dir, "Output directory (created; must be empty unless --force)")->required();
+  cmd->add_flag("--force", args.force, "Replace the trial*.csv and truth.json of an earlier run in --out");
+  cmd->footer(
+      "Writes OUT/trial<i>.csv and OUT/truth.json. Example:\n"
+      "  tactforce simulate friction --mu 0.3 --trials 10 --out /tmp/friction && \\\n"
+      "    tactforce friction /tmp/friction/trial*.csv --normal 0,0,-1");
   return cmd;
 }
 
 int RunSimulateFriction(const SimulateFrictionArgs& args) {
-  if (!(args.mu > 0) || args.trials < 1 || !(args.noise >= 0) || !(args.rate > 0) || !(args.ramp > 0) ||
-      !(args.tangential_force > 0))
-    return ReportError(absl::InvalidArgumentError(
-        "need --mu > 0, --trials >= 1, --noise >= 0, --rate > 0, --ramp > 0, --tangential-force > 0"));
+  if (absl::Status s = PrepareOutputDir(args.out_dir, args.force, {"trial*.csv", "truth.json"}); !s.ok()) {
+    return ReportError(s);
+  }
   estimator::FrictionSimOptions sim;
   sim.mu = args.mu;
   sim.trials = args.trials;
@@ -156,9 +201,6 @@ int RunSimulateFriction(const SimulateFrictionArgs& args) {
   sim.write_slip_flags = args.slip_flags;
   sim.seed = args.seed;
   const estimator::SimulatedFriction data = estimator::SimulateFriction(sim);
-  std::error_code ec;
-  std::filesystem::create_directories(args.out_dir, ec);
-  if (ec) return ReportError(absl::InvalidArgumentError(absl::StrCat(args.out_dir, ": ", ec.message())));
   for (size_t i = 0; i < data.trials.size(); ++i) {
     std::string csv = absl::StrCat("t,fx,fy,fz,px,py,pz", args.slip_flags ? ",slip" : "", "\n");
     for (const auto& s : data.trials[i].samples) {

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "CLI/CLI.hpp"
+#include "cli_common.h"
 #include "connection.h"
 
 namespace tactforce::cli {
@@ -13,6 +14,7 @@ struct EstimateArgs {
   bool local = false;
   ConnectionArgs connection;  // --server, TLS, --deadline-ms
   std::string request_path;   // EstimateRequest JSON, "-" = stdin
+  OutputFormat output;
 };
 CLI::App* AddEstimateCommand(CLI::App& app, EstimateArgs& args);
 int RunEstimate(const EstimateArgs& args);
@@ -21,7 +23,7 @@ struct FrictionArgs {
   std::vector<std::string> trial_paths;  // CSV: t,fx,fy,fz,px,py,pz[,slip]
   std::string normal;                    // "x,y,z"
   std::string mesh_path;                 // STL or OBJ
-  bool json = false;
+  OutputFormat output;
   bool linear_fit = false;
   double slip_distance = 1e-3;
   int window = 5;
@@ -40,6 +42,7 @@ struct SimulateFrictionArgs {
   bool slip_flags = false;
   uint64_t seed = 1;
   std::string out_dir;
+  bool force = false;  // replace an earlier run's files in out_dir
 };
 // Adds `friction` under the given `simulate` command.
 CLI::App* AddSimulateFrictionCommand(CLI::App& simulate, SimulateFrictionArgs& args);

@@ -148,7 +148,7 @@ absl::StatusOr<std::vector<ex::BatchSummary>> RunGraspBatches(const ExperimentAr
       if (!a.plots_dir.empty() && !b->results.empty()) {
         if (absl::Status s = WriteTracePlot(a.plots_dir, c, b->results[0]); !s.ok()) return s;
       }
-      if (a.details && !a.json) PrintTrialDetails(c, *b);
+      if (a.details && !a.output.json()) PrintTrialDetails(c, *b);
       b->results.clear();
       rows.push_back(std::move(*b));
     }
@@ -207,7 +207,7 @@ int RunGrasp(const ExperimentArgs& a) {
   if (!rows.ok()) return ReportError(rows.status());
   bar.Finish();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  if (a.json) {
+  if (a.output.json()) {
     std::cout << GraspJson(a, *rows, wall) << std::endl;
   } else {
     std::cout << GraspTable(a, *rows, wall);
@@ -303,7 +303,7 @@ int RunSlope(const ExperimentArgs& a) {
     if (!r.ok()) return ReportError(r.status());
     default_rows = *r;
   }
-  if (a.json) {
+  if (a.output.json()) {
     std::cout << SlopeJson(*rows, default_rows, creep) << std::endl;
     return kExitOk;
   }
@@ -325,14 +325,21 @@ CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args) {
   cmd->require_subcommand(1);
   CLI::App* g = cmd->add_subcommand(
       "grasp", "Grasp-and-lift trials with force feedback on raw or estimated tactile forces (GeoDEx Table III)");
-  g->add_option("--object", args.object, "sphere|wrench|cylinder|cube|all")->capture_default_str();
-  g->add_option("--trials", args.trials, "Seeded trials per object and feedback mode")->capture_default_str();
-  g->add_option("--feedback", args.feedback, "estimated|raw|both")->capture_default_str();
+  g->add_option("--object", args.object, "sphere|wrench|cylinder|cube|all")
+      ->check(CLI::IsMember({"sphere", "wrench", "cylinder", "cube", "all"}))
+      ->capture_default_str();
+  g->add_option("--trials", args.trials, "Seeded trials per object and feedback mode")
+      ->check(Between(1, 10000))
+      ->capture_default_str();
+  g->add_option("--feedback", args.feedback, "estimated|raw|both")
+      ->check(CLI::IsMember({"estimated", "raw", "both"}))
+      ->capture_default_str();
   g->add_option("--seed", args.seed, "Seed of the per-trial sensor-error draws")->capture_default_str();
-  g->add_flag("--json", args.json, "Print {\"results\":[...]} instead of a table");
+  AddOutputFlags(g, &args.output, "{\"results\":[...]}");
   g->add_option("--plots", args.plots_dir, "Write an SVG force-trace plot of trial 0 per object and mode here")
       ->type_name("DIR");
   g->add_option("--estimator", args.estimator, "Estimate for estimated feedback: normal-lsq (ours) | projection (GeoDEx)")
+      ->check(CLI::IsMember({"normal-lsq", "projection"}))
       ->capture_default_str();
   g->add_option("--admittance", args.admittance,
                 "full: target += K^-1 (f_desired - f_observed), 3D (the paper's loop); normal: along the sensed "
@@ -344,13 +351,23 @@ CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args) {
   g->add_flag("--ideal-sensors", args.ideal, "Readings are the true normal forces");
   g->add_flag("--no-progress", args.no_progress, "No progress bar on stderr");
   g->add_flag("--details", args.details, "Also print one line per trial (outcome, slip, rotation) on stderr");
+  g->footer(
+      "Prints success rates per object and feedback mode. Examples:\n"
+      "  tactforce experiment grasp --object wrench --trials 5\n"
+      "  tactforce experiment grasp --object all --trials 20 --plots /tmp/plots --json");
   args.grasp = g;
   CLI::App* s = cmd->add_subcommand(
       "slope", "Friction by the slope method vs the probing estimate, and MuJoCo's creep under static friction");
-  s->add_option("--mu", args.mus, "MJCF friction coefficients")->delimiter(',')->capture_default_str();
-  s->add_option("--tilt-rate", args.tilt_rate, "Plate tilt rate (deg/s)")->capture_default_str();
+  s->add_option("--mu", args.mus, "MJCF friction coefficients")
+      ->delimiter(',')
+      ->capture_default_str();
+  s->add_option("--tilt-rate", args.tilt_rate, "Plate tilt rate (deg/s)")->check(Between(0.01, 90))->capture_default_str();
   s->add_flag("--creep,!--no-creep", args.creep, "Also measure creep and repeat with MuJoCo's default settings");
-  s->add_flag("--json", args.json, "JSON output");
+  AddOutputFlags(s, &args.output, "the slope results");
+  s->footer(
+      "Examples:\n"
+      "  tactforce experiment slope --mu 0.3,0.5 --no-creep\n"
+      "  tactforce experiment slope --json");
   args.slope = s;
   return cmd;
 }

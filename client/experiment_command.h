@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "CLI/CLI.hpp"
+#include "cli_common.h"
 
 namespace tactforce::cli {
 
@@ -16,7 +17,7 @@ struct ExperimentArgs {
   int trials = 20;
   std::string feedback = "both";    // estimated|raw|both
   uint64_t seed = 1;
-  bool json = false;
+  OutputFormat output;              // --json / --format json
   std::string plots_dir;
   std::string estimator = "normal-lsq";  // normal-lsq|projection
   std::string admittance = "full";       // full|normal

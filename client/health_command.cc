@@ -10,6 +10,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "cli_common.h"
+#include "tactforce/io/json.h"
 #include "grpc/health/v1/health.grpc.pb.h"
 
 namespace tactforce::cli {
@@ -51,8 +52,12 @@ CLI::App* AddHealthCommand(CLI::App& app, HealthArgs& args) {
                   "Ask again every 0.2 s until SERVING, for up to this many seconds")
       ->type_name("SECONDS")
       ->check(CLI::Range(0.0, 3600.0));
+  AddOutputFlags(cmd, &args.output, "{\"service\": ..., \"status\": ...}");
   cmd->footer(
       "Prints SERVING, NOT_SERVING, UNKNOWN or SERVICE_UNKNOWN on stdout.\n"
+      "Examples:\n"
+      "  tactforce health --server localhost:50051\n"
+      "  tactforce health --server localhost:50051 --service tactforce.v1.Planner --wait 10 --json\n"
       "Exit status: 0 only when SERVING; 3 when not serving or the server cannot be\n"
       "reached; 2 for an unknown --service; 4 when it did not answer within\n"
       "--deadline-ms; 1 otherwise.");
@@ -87,7 +92,12 @@ int RunHealth(const HealthArgs& args) {
   }
   if (!state.ok()) return ReportError(state.status());
 
-  std::cout << *state << std::endl;
+  if (args.output.json()) {
+    std::cout << "{\"service\": " << io::JsonEscape(args.service) << ", \"status\": " << io::JsonEscape(*state)
+              << "}" << std::endl;
+  } else {
+    std::cout << *state << std::endl;
+  }
   if (*state == "SERVING") return kExitOk;
   if (*state == "SERVICE_UNKNOWN") return ReportError(UnknownServiceError(connection.server, args.service));
   return kExitUnavailable;

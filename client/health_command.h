@@ -4,6 +4,7 @@
 #include <string>
 
 #include "CLI/CLI.hpp"
+#include "cli_common.h"
 #include "absl/status/statusor.h"
 #include "connection.h"
 #include "remote_call.h"
@@ -14,6 +15,7 @@ struct HealthArgs {
   ConnectionArgs connection;  // --server, --tls-*, --deadline-ms
   std::string service;        // "" = the server as a whole
   double wait_s = 0;          // keep asking until SERVING, up to this long
+  OutputFormat output;        // json: {"service": ..., "status": ...}
 };
 
 CLI::App* AddHealthCommand(CLI::App& app, HealthArgs& args);

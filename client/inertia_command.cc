@@ -10,17 +10,20 @@
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
+#include <initializer_list>
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <tuple>
 #include <vector>
 
 #include "absl/strings/ascii.h"
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
 #include "cli_common.h"
+#include "inertia_stream.h"
 #include "progress.h"
 #include "remote_call.h"
 #include "tactforce/api/convert.h"
@@ -33,6 +36,7 @@
 #include "tactforce/inertia/truth.h"
 #include "tactforce/io/csv.h"
 #include "tactforce/io/mesh.h"
+#include "tactforce/io/text_file.h"
 #include "tactforce/v1/estimator.grpc.pb.h"
 
 namespace tactforce::cli {
@@ -264,38 +268,26 @@ absl::Status WritePlot(const InertiaArgs& args, const FlagMesh& mesh, inertia::I
   if (options.has_truth()) plot.true_com = api::FromProto(options.truth().com());
   absl::StatusOr<std::string> svg = inertia::DensityPlotSvg(mesh.loaded.mesh, fit, plot);
   if (!svg.ok()) return absl::Status(svg.status().code(), absl::StrCat("--plot: ", svg.status().message()));
-  std::ofstream out(args.plot_path, std::ios::binary);
-  out << *svg;
-  out.close();
-  if (!out) return absl::InvalidArgumentError(absl::StrCat("--plot: cannot write '", args.plot_path, "'"));
+  if (absl::Status written = io::WriteTextFile(args.plot_path, *svg); !written.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat("--plot: ", written.message()));
+  }
   return absl::OkStatus();
 }
 
-// Writes the FitInertia stream: the options (alone first when they carry
-// the mesh), then the samples in messages of `batch`; at least one message,
-// even for an empty log. Stops early when the server ends the call
-// (Finish() says why).
+// Writes the FitInertia stream (inertia_stream.h: the options, alone first
+// when they carry the mesh, then the samples in messages of `batch`). Stops
+// early when the server ends the call (Finish() says why).
 void WriteFitStream(grpc::ClientWriter<v1::FitInertiaRequest>& writer, const inertia::InertiaSamples& samples,
                     const v1::InertiaFitOptions& options, size_t batch, ProgressBar& upload) {
-  const size_t n = samples.samples.size();
+  FitInertiaMessages stream(samples, options, batch);
+  const size_t n = stream.samples_total();
   v1::FitInertiaRequest message;
-  *message.mutable_options() = options;
-  if (options.has_mesh() && n > 0) {
-    // The mesh makes the options big: they travel alone, so that only the
-    // mesh counts against the server's --max-message-bytes.
-    if (writer.Write(message)) message.Clear();
-  }
-  size_t sent = 0;
-  do {
-    const size_t end = std::min(n, sent + batch);
-    for (size_t i = sent; i < end; ++i)
-      *message.add_samples() = api::InertiaSampleToProto(samples.samples[i], samples.source);
+  while (stream.Next(&message)) {
     if (!writer.Write(message)) break;
-    sent = end;
-    upload.Update(static_cast<double>(sent) / static_cast<double>(std::max<size_t>(n, 1)),
-                  absl::StrCat(sent, "/", n, " samples"));
-    message.Clear();
-  } while (sent < n);
+    if (message.samples_size() == 0 && n > 0) continue;  // the options alone
+    upload.Update(static_cast<double>(stream.samples_sent()) / static_cast<double>(std::max<size_t>(n, 1)),
+                  absl::StrCat(stream.samples_sent(), "/", n, " samples"));
+  }
   writer.WritesDone();
 }
 
@@ -339,24 +331,8 @@ std::string DescribeErrors(const v1::InertiaErrors& e) {
       e.paper_metric(), e.riemannian(), e.mass_percent(), e.com_mm(), e.consistent() ? "yes" : "NO");
 }
 
-}  // namespace
-
-CLI::App* AddInertiaCommand(CLI::App& app, InertiaArgs& args) {
-  CLI::App* cmd = app.add_subcommand(
-      "inertia", "Fit mass, centre of mass and inertia to object poses and applied forces");
-  cmd->add_option("--csv", args.csv, "Samples: t,px..pz,qw..qz and a wrench (fx..tz) or contacts (c{i}_px..c{i}_fz)")
-      ->type_name("FILE")
-      ->required();
-  cmd->add_option("--method", args.method,
-                  "baseline-ls, factor-graph, constrained or density (default: density with --mesh, else constrained)")
-      ->check(CLI::IsMember({"baseline-ls", "factor-graph", "constrained", "density"}));
-  cmd->add_option("--gravity", args.gravity, "Gravity in the world, gx,gy,gz (m/s^2); default: the truth's or 0,0,-9.81");
-  cmd->add_option("--truth", args.truth_path, "Truth JSON (mass, com, inertia_com): print the error metrics")
-      ->type_name("FILE");
-  cmd->add_option("--hull", args.hull_path,
-                  "Object geometry for the CoM constraint: STL, OBJ, PLY (object frame, m), a mesh descriptor JSON "
-                  "or CSV x,y,z")
-      ->type_name("FILE");
+// --mesh and what refines it (scale, pose, regions, the density options, --plot).
+void AddMeshFlags(CLI::App* cmd, InertiaArgs& args) {
   CLI::Option* mesh = cmd->add_option(
                               "--mesh", args.mesh_path,
                               "The object's closed mesh: STL, OBJ or PLY in the object frame (m), or a descriptor "
@@ -398,28 +374,62 @@ CLI::App* AddInertiaCommand(CLI::App& app, InertiaArgs& args) {
                   "fitted (and with --truth the true) CoM")
       ->type_name("FILE.svg")
       ->needs(mesh);
+}
+
+}  // namespace
+
+CLI::App* AddInertiaCommand(CLI::App& app, InertiaArgs& args) {
+  CLI::App* cmd = app.add_subcommand(
+      "inertia", "Fit mass, centre of mass and inertia to object poses and applied forces");
+  cmd->add_option("--csv", args.csv, "Samples: t,px..pz,qw..qz and a wrench (fx..tz) or contacts (c{i}_px..c{i}_fz)")
+      ->type_name("FILE")
+      ->required();
+  cmd->add_option("--method", args.method,
+                  "baseline-ls, factor-graph, constrained or density (default: density with --mesh, else constrained)")
+      ->check(CLI::IsMember({"baseline-ls", "factor-graph", "constrained", "density"}));
+  cmd->add_option("--gravity", args.gravity, "Gravity in the world, gx,gy,gz (m/s^2); default: the truth's or 0,0,-9.81");
+  cmd->add_option("--truth", args.truth_path, "Truth JSON (mass, com, inertia_com): print the error metrics")
+      ->type_name("FILE");
+  cmd->add_option("--hull", args.hull_path,
+                  "Object geometry for the CoM constraint: STL, OBJ, PLY (object frame, m), a mesh descriptor JSON "
+                  "or CSV x,y,z")
+      ->type_name("FILE");
+  AddMeshFlags(cmd, args);
   cmd->add_option("--prior", args.prior_path, "Prior parameters (truth JSON format)")->type_name("FILE");
-  cmd->add_option("--prior-weight", args.prior_weight, "Weight of the prior (chi^2 units)")->capture_default_str();
-  cmd->add_flag("--json", args.json, "Print the FitInertia response as proto3 JSON");
-  cmd->add_option("--force-sigma", args.force_sigma, "Force noise std. dev. per component (N); 0 = estimate");
-  cmd->add_option("--torque-sigma", args.torque_sigma, "Torque noise std. dev. (N m)");
-  cmd->add_option("--position-sigma", args.position_sigma, "Position noise std. dev. (m)");
-  cmd->add_option("--orientation-sigma", args.orientation_sigma, "Orientation noise std. dev. (rad)");
-  cmd->add_option("--angular-velocity-sigma", args.angular_velocity_sigma, "Measured w noise (rad/s)");
-  cmd->add_option("--acceleration-sigma", args.acceleration_sigma, "Measured a noise (m/s^2)");
-  cmd->add_option("--angular-acceleration-sigma", args.angular_acceleration_sigma, "Measured dw noise (rad/s^2)");
+  cmd->add_option("--prior-weight", args.prior_weight, "Weight of the prior (chi^2 units)")
+      ->check(AtLeast(0))
+      ->capture_default_str();
+  AddOutputFlags(cmd, &args.output, "the FitInertiaResponse");
+  for (auto [flag, value, what] : std::initializer_list<std::tuple<const char*, double*, const char*>>{
+           {"--force-sigma", &args.force_sigma, "Force noise std. dev. per component (N); 0 = estimate"},
+           {"--torque-sigma", &args.torque_sigma, "Torque noise std. dev. (N m)"},
+           {"--position-sigma", &args.position_sigma, "Position noise std. dev. (m)"},
+           {"--orientation-sigma", &args.orientation_sigma, "Orientation noise std. dev. (rad)"},
+           {"--angular-velocity-sigma", &args.angular_velocity_sigma, "Measured w noise (rad/s)"},
+           {"--acceleration-sigma", &args.acceleration_sigma, "Measured a noise (m/s^2)"},
+           {"--angular-acceleration-sigma", &args.angular_acceleration_sigma, "Measured dw noise (rad/s^2)"}}) {
+    cmd->add_option(flag, *value, what)->check(AtLeast(0));
+  }
   cmd->add_flag("--savitzky-golay", args.savitzky_golay, "baseline-ls: cubic Savitzky-Golay smoothing, window 51");
-  cmd->add_option("--max-iterations", args.max_iterations, "Iteration limit (0 = 100)");
+  cmd->add_option("--max-iterations", args.max_iterations, "Iteration limit (0 = 100)")->check(Between(0, 100000));
   CLI::Option* server = AddConnectionFlags(cmd, &args.connection, "--server", /*default_deadline_ms=*/120'000);
   server->description("Fit on tactforce-server (Estimator.FitInertia, streamed) instead of locally");
   server->each([&args](const std::string&) { args.remote = true; });
-  cmd->add_option("--batch", args.batch, "Samples per streamed message")->capture_default_str();
+  cmd->add_option("--batch", args.batch, "Samples per streamed message")
+      ->check(Between(1, 100000))
+      ->capture_default_str();
   cmd->add_flag("--progress", args.progress, "Progress lines on stderr even when it is not a terminal");
+  cmd->footer(
+      "Prints mass, CoM and inertia with their standard errors (and the errors\n"
+      "against --truth); warnings also go to stderr. Examples:\n"
+      "  tactforce simulate inertia --out /tmp/inertia\n"
+      "  tactforce inertia --csv /tmp/inertia/inertia.csv --truth /tmp/inertia/truth.json\n"
+      "  tactforce inertia --csv client/examples/inertia_log.csv --hull client/examples/object.stl --json\n"
+      "  tactforce inertia --csv /tmp/inertia/inertia.csv --server localhost:50051");
   return cmd;
 }
 
 int RunInertia(const InertiaArgs& args) {
-  if (args.batch < 1) return ReportError(absl::InvalidArgumentError("--batch: must be >= 1"));
   if (absl::Status s = CheckPlotPath(args.plot_path); !s.ok()) return ReportError(s);
   std::optional<FlagMesh> mesh;
   absl::StatusOr<v1::InertiaFitOptions> options = BuildOptions(args, &mesh);
@@ -446,7 +456,10 @@ int RunInertia(const InertiaArgs& args) {
       return ReportError(s);
   }
 
-  if (args.json) {
+  for (const std::string& note : response->notes()) {
+    if (absl::StartsWith(note, "warning:")) std::cerr << note << "\n";
+  }
+  if (args.output.json()) {
     std::cout << api::ToJson(*response);
   } else {
     std::cout << inertia::DescribeFit(api::InertiaFitFromProto(*response));

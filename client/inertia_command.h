@@ -8,6 +8,7 @@
 #include <string>
 
 #include "CLI/CLI.hpp"
+#include "cli_common.h"
 #include "connection.h"
 
 namespace tactforce::cli {
@@ -20,7 +21,7 @@ struct InertiaArgs {
   std::string hull_path;             // STL/OBJ/PLY mesh, mesh descriptor JSON or CSV x,y,z: CoM constraint
   std::string prior_path;            // prior in the truth JSON format
   double prior_weight = 1.0;
-  bool json = false;                 // print the FitInertiaResponse as proto3 JSON
+  OutputFormat output;               // --json: the FitInertiaResponse as proto3 JSON
   // The object's mesh: a file in the object frame (m) or a descriptor JSON
   // ({"mesh", "scale", "object_in_mesh"}); the overrides are kept as text
   // so that errors can quote them.

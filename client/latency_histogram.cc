@@ -1,6 +1,6 @@
 // The log-linear latency histogram of `tactforce load`: bucket layout
 // (exact below 2^kSubBucketBits ns, then kHalf buckets per power of two),
-// lock-free recording and quantiles.
+// lock-free recording, quantiles and log-spaced bins.
 #include "latency_histogram.h"
 
 #include <algorithm>
@@ -78,6 +78,29 @@ double LatencyHistogram::Quantile(double q) const {
     }
   }
   return top;
+}
+
+std::vector<LatencyHistogram::Bin> LatencyHistogram::LogBins(int per_decade) const {
+  per_decade = std::max(per_decade, 1);
+  std::vector<Bin> bins;
+  int first = 0;  // log-bin index of bins[0]
+  const int buckets = BucketCount();
+  for (int i = 0; i < buckets; ++i) {
+    const int64_t count = buckets_[i].load(std::memory_order_relaxed);
+    if (count == 0) continue;
+    const double low = static_cast<double>(std::max<int64_t>(BucketLow(i), 1));
+    // Nudged up so that a lower edge exactly at a power of ten is not
+    // pushed into the bin below by rounding.
+    const int k = static_cast<int>(std::floor(std::log10(low) * per_decade + 1e-9));
+    if (bins.empty()) first = k;
+    while (first + static_cast<int>(bins.size()) <= k) {
+      const int j = first + static_cast<int>(bins.size());
+      bins.push_back({std::pow(10.0, static_cast<double>(j) / per_decade),
+                      std::pow(10.0, static_cast<double>(j + 1) / per_decade), 0});
+    }
+    bins[k - first].count += count;
+  }
+  return bins;
 }
 
 }  // namespace tactforce::cli

@@ -1,13 +1,15 @@
 // Latency recording for `tactforce load`: a log-linear histogram in the
 // style of HdrHistogram. Constant memory whatever the run length, lock-free
 // Record() from any thread, quantiles within 0.1 % of the recorded values
-// (1024 linear sub-buckets per power of two), exact maximum.
+// (1024 linear sub-buckets per power of two), exact maximum; the recorded
+// values regrouped into log-spaced bins for a plot.
 #pragma once
 
 #include <array>
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 namespace tactforce::cli {
 
@@ -27,6 +29,20 @@ class LatencyHistogram {
   // middle of v's bucket (relative error <= 1/2048) and never above max().
   // 0 when empty; q >= 1 gives max().
   double Quantile(double q) const;
+
+  // The recorded values in bins of equal width on a log scale, `per_decade`
+  // bins per factor of 10 (bin k covers [10^(k/per_decade),
+  // 10^((k+1)/per_decade)) ns; values below 1 ns count as 1 ns), from the
+  // lowest to the highest bin holding a value, empty bins between included.
+  // Each internal bucket goes whole to the bin of its lower edge (buckets
+  // are 0.1 % wide, so the bin edges are that exact). Empty when nothing
+  // was recorded. Not synchronised with concurrent Record() calls beyond
+  // each count being read atomically.
+  struct Bin {
+    double low_ns = 0, high_ns = 0;
+    int64_t count = 0;
+  };
+  std::vector<Bin> LogBins(int per_decade) const;
 
   // --- exposed for tests ---
   static constexpr int kSubBucketBits = 11;  // 2048 values below 2^11 ns are exact

@@ -1,7 +1,8 @@
-// The load generator's callback engine: closed-loop unary slots (UnarySlot),
-// closed-loop PlanStream slots (StreamCall, a bidi reactor, and StreamSlot,
-// which restarts a failed stream) and the open-loop dispatcher, all on
-// gRPC's callback API and its threads; the driving thread runs Driver.
+// The load generator's callback engine: closed-loop slots of one call at a
+// time (UnarySlot: the unary RPCs and FitInertia, load_rpcs.h), closed-loop
+// PlanStream slots (StreamCall, a bidi reactor, and StreamSlot, which
+// restarts a failed stream) and the open-loop dispatcher, all on gRPC's
+// callback API and its threads; the driving thread runs Driver.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -13,7 +14,7 @@
 #include <vector>
 
 #include "connection.h"
-#include "load_run.h"
+#include "load_rpcs.h"
 
 namespace tactforce::cli::load_engine {
 namespace {
@@ -365,13 +366,15 @@ bool RunStreamSlots(Run& run, int channels) {
 
 bool RunClosedLoopCallback(Run& run, int channels) {
   if (run.spec.rpc == LoadRpc::kStream) return RunStreamSlots(run, channels);
-  if (run.spec.rpc == LoadRpc::kHealth) return RunUnarySlots<HealthRpc>(run, channels);
-  return RunUnarySlots<PlanRpc>(run, channels);
+  return VisitRpc(run.spec.rpc, [&](auto rpc) {
+    return RunUnarySlots<decltype(rpc)>(run, channels);
+  });
 }
 
 bool RunOpenLoop(Run& run, int channels) {
-  if (run.spec.rpc == LoadRpc::kHealth) return OpenLoop<HealthRpc>(run, channels).Dispatch();
-  return OpenLoop<PlanRpc>(run, channels).Dispatch();
+  return VisitRpc(run.spec.rpc, [&](auto rpc) {
+    return OpenLoop<decltype(rpc)>(run, channels).Dispatch();
+  });
 }
 
 }  // namespace tactforce::cli::load_engine

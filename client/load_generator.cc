@@ -1,7 +1,8 @@
 // The load generator's front: checking a LoadSpec, choosing the engine
 // (load_callback_engine.cc, load_sync_engine.cc), the report from the run's
-// counters; connecting and warming up the channels; the seeded request mix;
-// the text and JSON reports.
+// counters, latency histogram and timeline; connecting and warming up the
+// channels (load_rpcs.h); the seeded request mix; the text and JSON
+// reports.
 #include "load_generator.h"
 
 #include <algorithm>
@@ -10,8 +11,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "health_command.h"
-#include "load_run.h"
+#include "load_rpcs.h"
 #include "remote_call.h"
 #include "tactforce/api/convert.h"
 #include "tactforce/io/json.h"
@@ -24,6 +24,24 @@ using load_engine::Run;
 
 constexpr int kMaxSyncThreads = 1024;
 
+// Whether `spec` has what its RPC sends.
+bool HasRequests(const LoadSpec& spec) {
+  switch (spec.rpc) {
+    case LoadRpc::kPlan:
+    case LoadRpc::kStream:
+      return !spec.requests.empty();
+    case LoadRpc::kHealth:
+      return true;
+    case LoadRpc::kEstimate:
+      return !spec.estimate_requests.empty();
+    case LoadRpc::kFitInertia:
+      return !spec.fit_inertia_stream.empty();
+    case LoadRpc::kAudit:
+      return !spec.audit_requests.empty();
+  }
+  return false;
+}
+
 // InvalidArgument naming the flag when `spec` cannot run.
 absl::Status CheckSpec(const LoadSpec& spec, size_t channels) {
   if (channels == 0) return absl::InvalidArgumentError("load: no target");
@@ -31,13 +49,12 @@ absl::Status CheckSpec(const LoadSpec& spec, size_t channels) {
   if (spec.max_requests <= 0 && spec.duration_s <= 0) {
     return absl::InvalidArgumentError("load: give --requests and/or --duration");
   }
-  if (spec.rpc != LoadRpc::kHealth && spec.requests.empty()) {
-    return absl::InvalidArgumentError("load: no request to send");
-  }
+  if (!HasRequests(spec)) return absl::InvalidArgumentError("load: no request to send");
   const bool open_loop = spec.rate > 0;
   if (open_loop && spec.rpc == LoadRpc::kStream) {
     return absl::InvalidArgumentError(
-        "--rate: open loop is for unary RPCs (plan, health); streams run closed loop");
+        "--rate: open loop is for one call per request (not --rpc stream); streams run closed "
+        "loop");
   }
   if (open_loop && spec.engine == LoadEngine::kSync) {
     return absl::InvalidArgumentError("--rate: open loop needs --engine callback");
@@ -61,7 +78,8 @@ LoadReport MakeReport(const LoadSpec& spec, const Run& run, int channels, bool i
   report.requests = run.completed.load();
   report.ok = run.ok.load();
   const int64_t last = run.last_done_ns.load();
-  report.duration_s = ((last > 0 ? last : load_engine::NowNs()) - run.start_ns) * 1e-9;
+  const int64_t end_ns = last > 0 ? last : load_engine::NowNs();
+  report.duration_s = (end_ns - run.start_ns) * 1e-9;
   report.qps = report.duration_s > 0 ? report.ok / report.duration_s : 0.0;
   const LatencyHistogram& h = run.histogram;
   report.p50_us = h.Quantile(0.50) * 1e-3;
@@ -76,22 +94,15 @@ LoadReport MakeReport(const LoadSpec& spec, const Run& run, int channels, bool i
     }
   }
   report.interrupted = interrupted;
+  report.latency_bins = h.LogBins(kLatencyBinsPerDecade);
+  report.timeline = run.timeline.Counts(end_ns - run.start_ns);
   return report;
 }
 
-// One unmeasured call of the kind `spec` makes (Plan with the first request
-// for plan and stream); a health service the server does not know is
-// InvalidArgument naming --service.
+// One unmeasured call of the kind `spec` makes (load_rpcs.h).
 absl::Status WarmUpCall(const RemoteServer& server, const LoadSpec& spec) {
-  if (spec.rpc == LoadRpc::kHealth) {
-    absl::StatusOr<std::string> state = CheckHealth(server, spec.health_service);
-    if (state.ok() && *state == "SERVICE_UNKNOWN") {
-      return UnknownServiceError(server.target(), spec.health_service);
-    }
-    return state.status();
-  }
-  if (spec.requests.empty()) return absl::InvalidArgumentError("load: no request to send");
-  return CallUnary(server, &v1::Planner::Stub::Plan, spec.requests.front()).status();
+  return load_engine::VisitRpc(spec.rpc,
+                               [&](auto rpc) { return decltype(rpc)::WarmUp(server, spec); });
 }
 
 std::string Number(double value) {
@@ -109,6 +120,12 @@ const char* ToString(LoadRpc rpc) {
       return "stream";
     case LoadRpc::kHealth:
       return "health";
+    case LoadRpc::kEstimate:
+      return "estimate";
+    case LoadRpc::kFitInertia:
+      return "fit-inertia";
+    case LoadRpc::kAudit:
+      return "audit";
   }
   return "?";
 }

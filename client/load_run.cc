@@ -1,6 +1,6 @@
-// The shared state of one load run (tickets, outcome counters, latency) and
-// the driving thread's loop (Driver): deferred work, stream deadlines,
-// progress once a second, Ctrl-C.
+// The shared state of one load run (tickets, outcome counters, latency,
+// completions over time) and the driving thread's loop (Driver): deferred
+// work, stream deadlines, progress once a second, Ctrl-C.
 #include "load_run.h"
 
 #include <limits>
@@ -18,6 +18,8 @@ Run::Run(const LoadSpec& spec, const std::vector<std::shared_ptr<grpc::Channel>>
   for (const auto& channel : channels) {
     planners.push_back(v1::Planner::NewStub(channel));
     health.push_back(grpc::health::v1::Health::NewStub(channel));
+    estimators.push_back(v1::Estimator::NewStub(channel));
+    audits.push_back(v1::Audit::NewStub(channel));
   }
   health_request.set_service(spec.health_service);
   start_ns = NowNs();
@@ -48,6 +50,7 @@ void Run::Record(grpc::StatusCode code, int64_t started_ns) {
     const int slot = std::clamp(static_cast<int>(code), 0, kCodeSlots - 1);
     errors[slot].fetch_add(1, std::memory_order_relaxed);
   }
+  timeline.Record(now - start_ns, code == grpc::StatusCode::OK);
   completed.fetch_add(1, std::memory_order_relaxed);
   int64_t seen = last_done_ns.load(std::memory_order_relaxed);
   while (now > seen &&

@@ -1,9 +1,10 @@
 // Inside the load generator (load_generator.h): the state one run shares
-// between its slots (Run: tickets, counters, latency histogram, stubs), the
-// driving thread's loop (Driver: deferred work, stream deadlines, progress,
-// Ctrl-C), the two unary RPCs as the engines call them, and the engines'
-// entry points (callback engine in load_callback_engine.cc, sync engine in
-// load_sync_engine.cc). Only load_*.cc include this.
+// between its slots (Run: tickets, counters, latency histogram, completions
+// over time, stubs), the driving thread's loop (Driver: deferred work,
+// stream deadlines, progress, Ctrl-C), and the engines' entry points
+// (callback engine in load_callback_engine.cc, sync engine in
+// load_sync_engine.cc). How each RPC is issued: load_rpcs.h. Only load_*.cc
+// include this.
 #pragma once
 
 #include <algorithm>
@@ -23,6 +24,9 @@
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "latency_histogram.h"
 #include "load_generator.h"
+#include "load_timeline.h"
+#include "tactforce/v1/audit.grpc.pb.h"
+#include "tactforce/v1/estimator.grpc.pb.h"
 #include "tactforce/v1/planner.grpc.pb.h"
 
 namespace tactforce::cli::load_engine {
@@ -60,7 +64,7 @@ class Run {
   }
 
   // A finished call started at `started_ns`: latency when OK, else an error
-  // count under `code`.
+  // count under `code`; either way a completion in the timeline.
   void Record(grpc::StatusCode code, int64_t started_ns);
 
   // A stream response to the request sent at `sent_ns`: a late one counts
@@ -77,11 +81,15 @@ class Run {
   void Wake();
 
   const LoadSpec& spec;
+  // One of each per channel.
   std::vector<std::unique_ptr<v1::Planner::Stub>> planners;
   std::vector<std::unique_ptr<grpc::health::v1::Health::Stub>> health;
+  std::vector<std::unique_ptr<v1::Estimator::Stub>> estimators;
+  std::vector<std::unique_ptr<v1::Audit::Stub>> audits;
   grpc::health::v1::HealthCheckRequest health_request;
 
   LatencyHistogram histogram;
+  CompletionTimeline timeline;
   std::atomic<int64_t> tickets{0};
   std::atomic<int64_t> completed{0};
   std::atomic<int64_t> ok{0};
@@ -97,34 +105,6 @@ class Run {
   bool poke = false;
   std::vector<std::function<void()>> deferred;
   std::vector<StreamWatch*> watches;  // stable for the run
-};
-
-// ------------------------------------------------------------------ RPCs
-
-struct PlanRpc {
-  using Response = v1::PlanResponse;
-  static void Start(Run& run, int channel, grpc::ClientContext* context, int64_t ticket,
-                    Response* response, std::function<void(grpc::Status)> done) {
-    run.planners[channel]->async()->Plan(context, &run.PlanRequestFor(ticket), response,
-                                          std::move(done));
-  }
-  static grpc::Status Call(Run& run, int channel, grpc::ClientContext* context, int64_t ticket,
-                           Response* response) {
-    return run.planners[channel]->Plan(context, run.PlanRequestFor(ticket), response);
-  }
-};
-
-struct HealthRpc {
-  using Response = grpc::health::v1::HealthCheckResponse;
-  static void Start(Run& run, int channel, grpc::ClientContext* context, int64_t /*ticket*/,
-                    Response* response, std::function<void(grpc::Status)> done) {
-    run.health[channel]->async()->Check(context, &run.health_request, response,
-                                        std::move(done));
-  }
-  static grpc::Status Call(Run& run, int channel, grpc::ClientContext* context,
-                           int64_t /*ticket*/, Response* response) {
-    return run.health[channel]->Check(context, run.health_request, response);
-  }
 };
 
 // ------------------------------------------------------------ the driver

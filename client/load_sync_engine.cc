@@ -1,14 +1,14 @@
 // The load generator's sync engine: one thread per slot with blocking stubs,
-// unary calls in a loop or one PlanStream at a time (a new one after a
-// failure); SyncStreamWatch lets the driving thread cancel a stream whose
-// response is overdue.
+// calls of one of load_rpcs.h's RPCs in a loop, or one PlanStream at a time
+// (a new one after a failure); SyncStreamWatch lets the driving thread
+// cancel a stream whose response is overdue.
 #include <memory>
 #include <mutex>
 #include <thread>
 #include <vector>
 
 #include "connection.h"
-#include "load_run.h"
+#include "load_rpcs.h"
 
 namespace tactforce::cli::load_engine {
 namespace {
@@ -115,16 +115,12 @@ bool RunSync(Run& run, int channels) {
   Driver driver(&run);
   for (int i = 0; i < run.spec.concurrency; ++i) {
     const int channel = i % channels;
-    switch (run.spec.rpc) {
-      case LoadRpc::kPlan:
-        threads.emplace_back(SyncUnaryLoop<PlanRpc>, &run, channel);
-        break;
-      case LoadRpc::kHealth:
-        threads.emplace_back(SyncUnaryLoop<HealthRpc>, &run, channel);
-        break;
-      case LoadRpc::kStream:
-        threads.emplace_back(SyncStreamLoop, &run, channel, watches[i].get());
-        break;
+    if (run.spec.rpc == LoadRpc::kStream) {
+      threads.emplace_back(SyncStreamLoop, &run, channel, watches[i].get());
+    } else {
+      VisitRpc(run.spec.rpc, [&](auto rpc) {
+        threads.emplace_back(SyncUnaryLoop<decltype(rpc)>, &run, channel);
+      });
     }
   }
   const bool interrupted = driver.RunUntilSlotsFinish();

@@ -17,10 +17,7 @@
 #include "load_command.h"
 #include "plan_command.h"
 #include "simulate_inertia_command.h"
-
-#ifndef TACTFORCE_VERSION
-#define TACTFORCE_VERSION "unknown"
-#endif
+#include "tactforce/api/version.h"
 
 namespace {
 
@@ -28,18 +25,8 @@ int Main(int argc, char** argv) {
   using namespace tactforce::cli;
 
   CLI::App app{"tactforce: robust fingertip contact-force planning (GeoDEx)", "tactforce"};
-  app.set_version_flag("--version", std::string("tactforce ") + TACTFORCE_VERSION);
+  app.set_version_flag("--version", std::string("tactforce ") + tactforce::api::kVersion);
   app.require_subcommand(1);
-  app.footer(
-      "Examples:\n"
-      "  tactforce plan --local --request client/examples/sphere_pinch.json --format table\n"
-      "  cat request.json | tactforce plan --local --request -\n"
-      "  tactforce plan --server localhost:50051 --request client/examples/sphere_pinch.json\n"
-      "  tactforce health --server localhost:50051\n"
-      "  tactforce load --target localhost:50051 --rpc plan --concurrency 8 --duration 5\n"
-      "  tactforce demo [--server localhost:50051]\n"
-      "  tactforce simulate inertia --out sim/ && tactforce inertia --csv sim/inertia.csv --truth sim/truth.json\n"
-      "Run 'tactforce COMMAND --help' for the options of a command.");
 
   PlanArgs plan_args;
   CLI::App* plan = AddPlanCommand(app, plan_args);
@@ -67,6 +54,23 @@ int Main(int argc, char** argv) {
   CLI::App* inertia = AddInertiaCommand(app, inertia_args);
   SimulateInertiaArgs simulate_inertia_args;
   CLI::App* simulate_inertia = AddSimulateInertiaCommand(*simulate, simulate_inertia_args);
+
+  // Set last: a subcommand copies its parent's footer when it is created,
+  // and each has its own examples.
+  app.footer(
+      "Examples:\n"
+      "  tactforce plan --local --request client/examples/sphere_pinch.json\n"
+      "  cat client/examples/sphere_pinch.json | tactforce plan --local --request -\n"
+      "  tactforce plan --server localhost:50051 --request client/examples/sphere_pinch.json\n"
+      "  tactforce health --server localhost:50051\n"
+      "  tactforce load --target localhost:50051 --rpc plan --concurrency 8 --duration 5\n"
+      "  tactforce demo [--server localhost:50051]\n"
+      "  tactforce simulate inertia --out sim/ && tactforce inertia --csv sim/inertia.csv --truth sim/truth.json\n"
+      "Run 'tactforce COMMAND --help' for the options of a command.");
+  if (argc <= 1) {  // bare `tactforce`: the command list
+    std::cout << app.help();
+    return kExitOk;
+  }
 
   try {
     app.parse(argc, argv);

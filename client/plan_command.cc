@@ -3,6 +3,11 @@
 // Planner.PlanTrajectory; JSON or a table out.
 #include "plan_command.h"
 
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 
@@ -14,16 +19,74 @@
 #include "remote_call.h"
 #include "tactforce/api/json.h"
 #include "tactforce/api/names.h"
+#include "tactforce/api/plan_plot.h"
 #include "tactforce/api/services.h"
 #include "tactforce/api/table.h"
+#include "tactforce/io/text_file.h"
 #include "tactforce/v1/planner.grpc.pb.h"
 
 namespace tactforce::cli {
 namespace {
 
+// --solver and the solver options; each overrides the request's field.
+void AddSolverFlags(CLI::App* cmd, PlanArgs* args) {
+  cmd->add_option("--solver", args->solver, "Override the request's solver: geometric, ipopt or cross-check")
+      ->check(CLI::IsMember({"geometric", "ipopt", "cross-check"}));
+  cmd->add_option("--ipopt-tol", args->ipopt_tolerance, "Ipopt's convergence tolerance (> 0; default 1e-9)")
+      ->check(GreaterThan(0));
+  cmd->add_option("--max-iterations", args->max_iterations, "Ipopt iteration limit (>= 1; default 3000)")
+      ->check(Between(1, 1e6));
+  cmd->add_option("--ipopt-max-seconds", args->ipopt_max_seconds, "Ipopt CPU-time limit (s, >= 0; 0 = none)")
+      ->check(AtLeast(0));
+  cmd->add_option("--rank-tol", args->rank_tolerance,
+                  "Relative singular-value cut-off of the grasp matrix's null space (0 < x < 1e-2; default 1e-9)")
+      ->check(GreaterThan(0));
+  cmd->add_option("--agreement-tol", args->agreement_tolerance,
+                  "cross-check: largest force difference (N) counted as agreement (> 0; default 1e-5)")
+      ->check(GreaterThan(0));
+}
+
+void ApplySolverFlags(const PlanArgs& args, v1::PlanRequest* request) {
+  if (args.solver == "geometric") request->set_solver(v1::SOLVER_GEOMETRIC);
+  if (args.solver == "ipopt") request->set_solver(v1::SOLVER_IPOPT);
+  if (args.solver == "cross-check") request->set_solver(v1::SOLVER_CROSS_CHECK);
+  v1::SolverOptions* o = request->mutable_solver_options();
+  if (args.ipopt_tolerance) o->set_ipopt_tolerance(*args.ipopt_tolerance);
+  if (args.max_iterations) o->set_ipopt_max_iterations(static_cast<uint32_t>(*args.max_iterations));
+  if (args.ipopt_max_seconds) o->set_ipopt_max_cpu_seconds(*args.ipopt_max_seconds);
+  if (args.rank_tolerance) o->set_rank_tolerance(*args.rank_tolerance);
+  if (args.agreement_tolerance) o->set_agreement_tolerance(*args.agreement_tolerance);
+}
+
 absl::StatusOr<std::unique_ptr<PlanBackend>> SelectBackend(const PlanArgs& args) {
   if (args.local) return MakeLocalBackend();
   return MakeRemoteBackend(args.connection);
+}
+
+// --plot before any work: a usage error naming --plot when the file could
+// not be written (a directory, or a folder that is missing or read-only).
+absl::Status CheckPlotPath(const std::string& path) {
+  if (path.empty()) return absl::OkStatus();
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    return absl::InvalidArgumentError(absl::StrCat("--plot: cannot write '", path, "': it is a directory"));
+  }
+  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+  const std::string folder = parent.empty() ? "." : parent.string();
+  if (::access(folder.c_str(), W_OK) != 0) {
+    return absl::InvalidArgumentError(absl::StrCat("--plot: cannot write '", path, "': ", std::strerror(errno)));
+  }
+  return absl::OkStatus();
+}
+
+// The picture, written to a temporary name and renamed when complete
+// (io::WriteTextFile); errors name --plot.
+absl::Status WritePlot(const std::string& path, const absl::StatusOr<std::string>& svg) {
+  if (!svg.ok()) return absl::Status(svg.status().code(), absl::StrCat("--plot: ", svg.status().message()));
+  if (absl::Status written = io::WriteTextFile(path, *svg); !written.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat("--plot: ", written.message()));
+  }
+  return absl::OkStatus();
 }
 
 // One line per step (status, normal forces, solve time) and the totals.
@@ -49,12 +112,16 @@ int RunTrajectory(const PlanArgs& args) {
   absl::StatusOr<std::string> text = ReadInput(args.trajectory_path, "--trajectory");
   if (!text.ok()) return ReportError(text.status());
   v1::TrajectoryRequest request;
-  if (absl::Status s = api::ParseJson(*text, &request, "trajectory JSON"); !s.ok()) return ReportError(s);
+  if (absl::Status s = api::ParseJson(*text, &request, InputName(args.trajectory_path)); !s.ok()) return ReportError(s);
+  ApplySolverFlags(args, request.mutable_plan());
   absl::StatusOr<v1::TrajectoryResponse> response =
       args.local ? api::HandleTrajectory(request)
                  : CallUnary(args.connection, &v1::Planner::Stub::PlanTrajectory, request);
   if (!response.ok()) return ReportError(response.status());
-  std::cout << (args.format == "table" ? FormatTrajectoryTable(*response) : api::ToJson(*response));
+  if (!args.plot_path.empty()) {
+    if (absl::Status s = WritePlot(args.plot_path, api::TrajectorySvg(request, *response)); !s.ok()) return ReportError(s);
+  }
+  std::cout << (args.output.json() ? api::ToJson(*response) : FormatTrajectoryTable(*response));
   return std::cout ? kExitOk : kExitFailure;
 }
 
@@ -75,20 +142,30 @@ CLI::App* AddPlanCommand(CLI::App& app, PlanArgs& args) {
                       "TrajectoryRequest as JSON (plan + steps): one PlanResponse per step plus totals")
           ->type_name("FILE");
   request->excludes(trajectory);
-  cmd->add_option("--format", args.format, "Output: json (PlanResponse) or table")
-      ->check(CLI::IsMember({"json", "table"}))
-      ->capture_default_str();
+  AddOutputFlags(cmd, &args.output, "the PlanResponse (TrajectoryResponse)");
+  AddSolverFlags(cmd, &args);
+  cmd->add_option("--plot", args.plot_path,
+                  "Also draw the plan as SVG: contacts, normals, robust friction cones, forces (arrows), "
+                  "their 1-sigma spread, CoM and gravity in three orthographic views (x-y, x-z, y-z). "
+                  "With --trajectory: small multiples, one panel per step (at most " +
+                      std::to_string(api::kMaxPlotSteps) + ", evenly subsampled and named in the figure)")
+      ->type_name("FILE.svg");
   cmd->footer(
       "Sends the request to tactforce-server (--server, default " + std::string(kDefaultServer) +
       ") unless\n"
       "--local is given. Exit status: 0 when a plan was computed (optimal, infeasible\n"
       "or solver failure; see its status), 2 for bad input (the message names the\n"
       "field), 3 when the server cannot be reached, 4 when it did not answer within\n"
-      "--deadline-ms, 1 otherwise.");
+      "--deadline-ms, 1 otherwise. Examples:\n"
+      "  tactforce plan --local --request client/examples/sphere_pinch.json\n"
+      "  tactforce plan --local --request client/examples/sphere_pinch.json --solver cross-check --json\n"
+      "  tactforce plan --server localhost:50051 --request client/examples/sphere_pinch.json --plot plan.svg\n"
+      "  tactforce plan --local --trajectory client/examples/wrench_lift_trajectory.json");
   return cmd;
 }
 
 int RunPlan(const PlanArgs& args) {
+  if (absl::Status s = CheckPlotPath(args.plot_path); !s.ok()) return ReportError(s);
   if (!args.trajectory_path.empty()) return RunTrajectory(args);
   if (args.request_path.empty()) {
     return ReportError(absl::InvalidArgumentError("give --request FILE or --trajectory FILE"));
@@ -99,16 +176,20 @@ int RunPlan(const PlanArgs& args) {
   absl::StatusOr<std::string> text = ReadInput(args.request_path);
   if (!text.ok()) return ReportError(text.status());
 
-  absl::StatusOr<v1::PlanRequest> request = api::ParsePlanRequestJson(*text);
+  absl::StatusOr<v1::PlanRequest> request = api::ParsePlanRequestJson(*text, InputName(args.request_path));
   if (!request.ok()) return ReportError(request.status());
+  ApplySolverFlags(args, &*request);
 
   absl::StatusOr<v1::PlanResponse> response = (*backend)->Plan(*request);
   if (!response.ok()) return ReportError(response.status());
+  if (!args.plot_path.empty()) {
+    if (absl::Status s = WritePlot(args.plot_path, api::PlanSvg(*request, *response)); !s.ok()) return ReportError(s);
+  }
 
-  if (args.format == "table") {
-    std::cout << api::FormatPlanTable(*request, *response);
-  } else {
+  if (args.output.json()) {
     std::cout << api::ToJson(*response);
+  } else {
+    std::cout << api::FormatPlanTable(*request, *response);
   }
   std::cout.flush();
   return std::cout ? kExitOk : kExitFailure;

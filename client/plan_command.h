@@ -2,9 +2,11 @@
 // tactforce-server (default, --server ADDR) or in this process (--local).
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "CLI/CLI.hpp"
+#include "cli_common.h"
 #include "connection.h"
 
 namespace tactforce::cli {
@@ -14,7 +16,12 @@ struct PlanArgs {
   ConnectionArgs connection;    // --server, --tls-*, --deadline-ms
   std::string request_path;     // "-" = stdin
   std::string trajectory_path;  // TrajectoryRequest JSON instead of --request
-  std::string format = "json";  // json | table
+  OutputFormat output;          // table (default) | json
+  // Solver overrides of the request (absent: the request's own values).
+  std::string solver;           // geometric | ipopt | cross-check
+  std::optional<double> ipopt_tolerance, ipopt_max_seconds, rank_tolerance, agreement_tolerance;
+  std::optional<int> max_iterations;
+  std::string plot_path;        // --plot: an SVG picture of the plan (or trajectory) too
 };
 
 CLI::App* AddPlanCommand(CLI::App& app, PlanArgs& args);

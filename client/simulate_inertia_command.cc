@@ -10,7 +10,6 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <vector>
 
@@ -20,6 +19,7 @@
 #include "tactforce/inertia/truth.h"
 #include "tactforce/io/json.h"
 #include "tactforce/io/mesh.h"
+#include "tactforce/io/text_file.h"
 
 namespace tactforce::cli {
 namespace {
@@ -72,7 +72,7 @@ absl::StatusOr<Vec3> ParseTriple(const io::JsonValue& v, const std::string& wher
 absl::StatusOr<inertia::ExcitationTrajectory> ReadTrajectory(const std::string& path) {
   absl::StatusOr<std::string> text = ReadInput(path, "--trajectory");
   if (!text.ok()) return text.status();
-  absl::StatusOr<io::JsonValue> root = io::ParseJson(*text, path);
+  absl::StatusOr<io::JsonValue> root = io::ParseJson(*text, InputName(path));
   if (!root.ok()) return root.status();
   if (!root->is_object()) return absl::InvalidArgumentError(absl::StrCat(path, ": expected a JSON object"));
   inertia::ExcitationTrajectory t;
@@ -123,10 +123,9 @@ absl::Status WriteBinaryStl(const io::TriangleMesh& mesh, const std::string& pat
     bytes.push_back('\0');  // attribute byte count
     bytes.push_back('\0');
   }
-  std::ofstream out(path, std::ios::binary);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  out.close();
-  if (!out) return absl::InvalidArgumentError(absl::StrCat("--out: cannot write '", path, "'"));
+  if (absl::Status written = io::WriteTextFile(path, bytes); !written.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat("--out: ", written.message()));
+  }
   return absl::OkStatus();
 }
 
@@ -201,9 +200,6 @@ absl::StatusOr<inertia::SimulationOptions> SimulationOptionsFromFlags(const Simu
 // OUT/inertia.csv, OUT/truth.json and, when the object has a solid,
 // OUT/mesh.stl (OUT created); one line on stderr says what was written.
 absl::Status WriteSimulationFiles(const inertia::SimulationResult& result, const std::string& out_dir) {
-  std::error_code ec;
-  std::filesystem::create_directories(out_dir, ec);
-  if (ec) return absl::InvalidArgumentError(absl::StrCat("--out: cannot create '", out_dir, "': ", ec.message()));
   const std::string csv = (std::filesystem::path(out_dir) / "inertia.csv").string();
   const std::string truth = (std::filesystem::path(out_dir) / "truth.json").string();
   if (absl::Status s = inertia::WriteSimulation(result, csv, truth); !s.ok()) return s;
@@ -231,23 +227,29 @@ CLI::App* AddSimulateInertiaCommand(CLI::App& simulate, SimulateInertiaArgs& arg
   cmd->add_option("--mode", args.mode, "in-hand (fingertip contact forces) or wrist (wrench sensor)")
       ->check(CLI::IsMember({"in-hand", "wrist"}))
       ->capture_default_str();
-  cmd->add_option("--contacts", args.contacts, "in-hand: number of fingertips (2-4)")->capture_default_str();
-  cmd->add_option("--seconds", args.seconds, "Duration (s)")->capture_default_str();
-  cmd->add_option("--rate", args.rate, "Sample rate (Hz)")->capture_default_str();
+  cmd->add_option("--contacts", args.contacts, "in-hand: number of fingertips (2-4)")
+      ->check(Between(2, 4))
+      ->capture_default_str();
+  cmd->add_option("--seconds", args.seconds, "Duration (s)")->check(Between(0.1, 86400))->capture_default_str();
+  cmd->add_option("--rate", args.rate, "Sample rate (Hz)")->check(Between(1, 1e5))->capture_default_str();
   auto* variance = cmd->add_option("--force-variance", args.force_variance,
                                    "Force noise variance per component (N^2; the paper used 0-1)")
+                       ->check(AtLeast(0))
                        ->capture_default_str();
-  cmd->add_option("--torque-sigma", args.torque_sigma, "wrist: torque noise std. dev. (N m)");
-  cmd->add_option("--position-sigma", args.position_sigma, "Pose position noise std. dev. (m)");
-  cmd->add_option("--orientation-sigma", args.orientation_sigma, "Pose orientation noise std. dev. (rad)");
+  cmd->add_option("--torque-sigma", args.torque_sigma, "wrist: torque noise std. dev. (N m)")->check(AtLeast(0));
+  cmd->add_option("--position-sigma", args.position_sigma, "Pose position noise std. dev. (m)")->check(AtLeast(0));
+  cmd->add_option("--orientation-sigma", args.orientation_sigma, "Pose orientation noise std. dev. (rad)")
+      ->check(AtLeast(0));
   cmd->add_option("--noise-level", args.noise_level,
                   "Nadeau et al. 2023 level (wrist, with measured kinematics): low, moderate, high")
       ->check(CLI::IsMember({"low", "moderate", "high"}))
       ->excludes(variance);
   cmd->add_flag("--kinematics", args.kinematics, "Write measured kinematics columns (w, v, dw, a)");
   auto* amp = cmd->add_option("--amplitude-scale", args.amplitude_scale, "Scale the default excitation amplitudes")
+                  ->check(Between(0.01, 100))
                   ->capture_default_str();
   auto* freq = cmd->add_option("--frequency-scale", args.frequency_scale, "Scale the default excitation frequencies")
+                   ->check(Between(0.01, 100))
                    ->capture_default_str();
   cmd->add_option("--trajectory", args.trajectory_path, "Excitation trajectory JSON instead of the default")
       ->type_name("FILE")
@@ -256,14 +258,23 @@ CLI::App* AddSimulateInertiaCommand(CLI::App& simulate, SimulateInertiaArgs& arg
   cmd->add_option("--seed", args.seed, "Random seed")->capture_default_str();
   cmd->add_option("--out", args.out_dir,
                   "Output directory: inertia.csv, truth.json and mesh.stl (the object's closed solid, object frame, "
-                  "m: inertia --mesh OUT/mesh.stl)")
+                  "m: inertia --mesh OUT/mesh.stl); must be empty unless --force")
       ->required();
+  cmd->add_flag("--force", args.force, "Replace the inertia.csv, truth.json and mesh.stl of an earlier run in --out");
+  cmd->footer(
+      "Writes OUT/inertia.csv, OUT/truth.json and OUT/mesh.stl. Examples:\n"
+      "  tactforce simulate inertia --out /tmp/inertia\n"
+      "  tactforce simulate inertia --mode wrist --noise-level moderate --kinematics --out /tmp/wrist\n"
+      "  tactforce inertia --csv /tmp/inertia/inertia.csv --truth /tmp/inertia/truth.json");
   return cmd;
 }
 
 int RunSimulateInertia(const SimulateInertiaArgs& args) {
   absl::StatusOr<inertia::SimulationOptions> options = SimulationOptionsFromFlags(args);
   if (!options.ok()) return ReportError(options.status());
+  if (absl::Status s = PrepareOutputDir(args.out_dir, args.force, {"inertia.csv", "truth.json", "mesh.stl"}); !s.ok()) {
+    return ReportError(s);
+  }
   absl::StatusOr<inertia::SimulationResult> result = inertia::SimulateInertia(*options);
   if (!result.ok()) return ReportError(result.status());
   if (absl::Status s = WriteSimulationFiles(*result, args.out_dir); !s.ok()) return ReportError(s);

@@ -28,6 +28,7 @@ struct SimulateInertiaArgs {
   std::string trajectory_path;      // JSON excitation trajectory instead of the default
   uint64_t seed = 1;
   std::string out_dir;              // writes inertia.csv, truth.json and mesh.stl
+  bool force = false;               // replace an earlier run's files in out_dir
 };
 CLI::App* AddSimulateInertiaCommand(CLI::App& simulate, SimulateInertiaArgs& args);
 int RunSimulateInertia(const SimulateInertiaArgs& args);

@@ -15,7 +15,7 @@ PACKAGES=(
   libbenchmark-dev
   libcli11-dev
   libspdlog-dev libfmt-dev
-  python3 python3-grpcio python3-protobuf
+  python3 python3-grpcio python3-protobuf python3-venv python3-pip python3-setuptools python3-wheel
   grpc-proto
   libmujoco-dev
   libassimp-dev libqhull-dev nlohmann-json3-dev

@@ -3,10 +3,14 @@
 // only enum numbers the API does not define are rejected here.
 #include "tactforce/api/convert.h"
 
+#include <algorithm>
 #include <limits>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "absl/status/status.h"
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 
 namespace tactforce::api {
@@ -116,7 +120,29 @@ absl::StatusOr<planner::PlanOptions> ToOptions(const v1::PlanRequest& request) {
   }
   if (request.cone_sides() != 0) options.cone_sides = static_cast<int>(request.cone_sides());
   if (request.has_confidence()) options.confidence = request.confidence();
+  if (absl::Status s = ApplySolverOptions(request.solver_options(), &options); !s.ok()) return s;
   return options;
+}
+
+absl::Status ApplySolverOptions(const v1::SolverOptions& in, planner::PlanOptions* options) {
+  if (in.has_ipopt_tolerance()) options->ipopt_tolerance = in.ipopt_tolerance();
+  if (in.has_ipopt_max_iterations()) {
+    // uint32 beyond int's range would wrap negative.
+    options->ipopt_max_iterations =
+        static_cast<int>(std::min<uint32_t>(in.ipopt_max_iterations(), std::numeric_limits<int>::max()));
+  }
+  if (in.has_ipopt_max_cpu_seconds()) options->ipopt_max_cpu_seconds = in.ipopt_max_cpu_seconds();
+  if (in.has_rank_tolerance()) options->rank_tolerance = in.rank_tolerance();
+  if (in.has_agreement_tolerance()) options->agreement_tolerance = in.agreement_tolerance();
+  // Only the solver fields are named here; the request's other settings
+  // (cone_sides, confidence) are checked where the planner validates them.
+  std::string error;
+  if (!options->IsValid(&error)) {
+    for (const char* field : {"ipopt_", "rank_tolerance", "agreement_tolerance"}) {
+      if (absl::StartsWith(error, field)) return absl::InvalidArgumentError(absl::StrCat("solver_options.", error));
+    }
+  }
+  return absl::OkStatus();
 }
 
 absl::StatusOr<planner::SolverKind> ToSolverKind(const v1::PlanRequest& request) {
@@ -209,6 +235,20 @@ v1::PlanRequest ToRequest(const planner::PlanProblem& problem,
   request.set_cone_sides(options.cone_sides > 0 ? static_cast<uint32_t>(options.cone_sides) : 0u);
   request.set_confidence(options.confidence);
   request.set_solver(ToProto(solver));
+  const planner::PlanOptions defaults;
+  v1::SolverOptions* solver_options = request.mutable_solver_options();
+  if (options.ipopt_tolerance != defaults.ipopt_tolerance) solver_options->set_ipopt_tolerance(options.ipopt_tolerance);
+  if (options.ipopt_max_iterations != defaults.ipopt_max_iterations && options.ipopt_max_iterations > 0) {
+    solver_options->set_ipopt_max_iterations(static_cast<uint32_t>(options.ipopt_max_iterations));
+  }
+  if (options.ipopt_max_cpu_seconds != defaults.ipopt_max_cpu_seconds) {
+    solver_options->set_ipopt_max_cpu_seconds(options.ipopt_max_cpu_seconds);
+  }
+  if (options.rank_tolerance != defaults.rank_tolerance) solver_options->set_rank_tolerance(options.rank_tolerance);
+  if (options.agreement_tolerance != defaults.agreement_tolerance) {
+    solver_options->set_agreement_tolerance(options.agreement_tolerance);
+  }
+  if (solver_options->ByteSizeLong() == 0) request.clear_solver_options();
   return request;
 }
 
@@ -236,6 +276,38 @@ v1::PlanResponse ToProto(const planner::PlanResult& result) {
     out->set_ipopt_message(in.ipopt_message);
   }
   return response;
+}
+
+absl::StatusOr<planner::TrajectoryProblem> ToTrajectoryProblem(const v1::TrajectoryRequest& request,
+                                                               const planner::PlanProblem& base) {
+  planner::TrajectoryProblem t;
+  t.base = base;
+  if (request.plan().object().has_inertia()) {
+    const v1::Inertia& in = request.plan().object().inertia();
+    t.inertia = planner::Inertia{in.ixx(), in.iyy(), in.izz(), in.ixy(), in.ixz(), in.iyz()};
+  }
+  for (int k = 0; k < request.steps_size(); ++k) {
+    const v1::TrajectoryStep& in = request.steps(k);
+    planner::TrajectoryStep step;
+    step.gravity = in.has_gravity() ? FromProto(in.gravity()) : t.base.object.gravity;
+    step.linear_acceleration = FromProto(in.linear_acceleration());
+    step.angular_velocity = FromProto(in.angular_velocity());
+    step.angular_acceleration = FromProto(in.angular_acceleration());
+    step.external_wrench = {FromProto(in.external_wrench().force()),
+                            FromProto(in.external_wrench().torque())};
+    if (in.contacts_size() > 0) {
+      std::vector<planner::Contact> contacts;
+      for (int i = 0; i < in.contacts_size(); ++i) {
+        absl::StatusOr<planner::Contact> c =
+            ContactFromProto(in.contacts(i), absl::StrCat("steps[", k, "].contacts[", i, "]"));
+        if (!c.ok()) return c.status();
+        contacts.push_back(*std::move(c));
+      }
+      step.contacts = std::move(contacts);
+    }
+    t.steps.push_back(std::move(step));
+  }
+  return t;
 }
 
 }  // namespace tactforce::api

@@ -1,16 +1,23 @@
-// JSON of API messages (json.h): protobuf's JSON parser and printer, with
-// its error messages reduced to one line that names the field.
+// JSON of API messages (json.h). Before protobuf's parser sees the text, the
+// io/ reader checks its syntax and the fields are walked against the message
+// descriptors, so both kinds of error name file:line:column (and suggest the
+// nearest valid names); what protobuf still rejects (a value of the wrong
+// type) is reduced to one line that names the field.
 #include "tactforce/api/json.h"
 
 #include "tactforce/io/json.h"
+#include "tactforce/io/suggest.h"
 
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "absl/status/status.h"
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/match.h"
+#include "google/protobuf/descriptor.h"
 #include "google/protobuf/util/json_util.h"
 
 namespace tactforce::api {
@@ -32,20 +39,108 @@ std::string OneLine(std::string text) {
   return out;
 }
 
+using google::protobuf::Descriptor;
+using google::protobuf::EnumDescriptor;
+using google::protobuf::FieldDescriptor;
+
+// Checks field names, containers and enum names of a parsed JSON document
+// against a message's descriptor; errors are "source:line:column: path:
+// what" with the nearest valid names.
+class FieldChecker {
+ public:
+  explicit FieldChecker(std::string source) : source_(std::move(source)) {}
+
+  absl::Status Message(const io::JsonValue& value, const Descriptor* type, const std::string& path) {
+    if (!value.is_object()) return Error(value.line(), value.column(), path, "expected a JSON object");
+    for (size_t i = 0; i < value.members().size(); ++i) {
+      const auto& [key, member] = value.members()[i];
+      const FieldDescriptor* field = FindField(type, key);
+      if (field == nullptr) {
+        const io::JsonValue::Position at = value.KeyPosition(i);
+        return Error(at.line, at.column, path,
+                     absl::StrCat("unknown field '", key, "' in ", type->name(), io::DidYouMean(key, FieldNames(type))));
+      }
+      if (member.is_null()) continue;
+      const std::string where = path.empty() ? field->name() : absl::StrCat(path, ".", field->name());
+      if (absl::Status s = Field(member, field, where); !s.ok()) return s;
+    }
+    return absl::OkStatus();
+  }
+
+ private:
+  absl::Status Field(const io::JsonValue& value, const FieldDescriptor* field, const std::string& path) {
+    if (field->is_map()) {
+      if (!value.is_object()) return Error(value.line(), value.column(), path, "expected a JSON object (a map)");
+      const FieldDescriptor* mapped = field->message_type()->map_value();
+      for (const auto& [key, entry] : value.members()) {
+        if (entry.is_null()) continue;
+        if (absl::Status s = Element(entry, mapped, absl::StrCat(path, "[\"", key, "\"]")); !s.ok()) return s;
+      }
+      return absl::OkStatus();
+    }
+    if (!field->is_repeated()) return Element(value, field, path);
+    if (!value.is_array()) return Error(value.line(), value.column(), path, "expected a JSON array");
+    for (size_t k = 0; k < value.array().size(); ++k) {
+      if (absl::Status s = Element(value.array()[k], field, absl::StrCat(path, "[", k, "]")); !s.ok()) return s;
+    }
+    return absl::OkStatus();
+  }
+
+  // One value of `field` (an element when it is repeated).
+  absl::Status Element(const io::JsonValue& value, const FieldDescriptor* field, const std::string& path) {
+    if (field->type() == FieldDescriptor::TYPE_MESSAGE &&
+        !absl::StartsWith(field->message_type()->full_name(), "google.protobuf.")) {
+      return Message(value, field->message_type(), path);
+    }
+    if (field->type() != FieldDescriptor::TYPE_ENUM) return absl::OkStatus();  // protobuf checks scalars
+    if (value.is_number()) return absl::OkStatus();                           // numeric enum values
+    if (!value.is_string()) return Error(value.line(), value.column(), path, "expected an enum name (a string)");
+    const EnumDescriptor* type = field->enum_type();
+    if (type->FindValueByName(value.string()) != nullptr) return absl::OkStatus();
+    std::vector<std::string> names;
+    for (int k = 0; k < type->value_count(); ++k) names.push_back(type->value(k)->name());
+    return Error(value.line(), value.column(), path,
+                 absl::StrCat("unknown ", type->name(), " value '", value.string(), "'",
+                              io::DidYouMean(value.string(), names)));
+  }
+
+  static const FieldDescriptor* FindField(const Descriptor* type, const std::string& key) {
+    for (int k = 0; k < type->field_count(); ++k) {
+      const FieldDescriptor* field = type->field(k);
+      if (field->name() == key || field->json_name() == key) return field;
+    }
+    return nullptr;
+  }
+  static std::vector<std::string> FieldNames(const Descriptor* type) {
+    std::vector<std::string> names;
+    for (int k = 0; k < type->field_count(); ++k) names.push_back(type->field(k)->name());
+    return names;
+  }
+  absl::Status Error(int line, int column, const std::string& path, const std::string& what) const {
+    return absl::InvalidArgumentError(
+        absl::StrCat(source_, ":", line, ":", column, ": ", path.empty() ? "" : absl::StrCat(path, ": "), what));
+  }
+
+  std::string source_;
+};
+
 }  // namespace
 
 absl::Status ParseJson(std::string_view json, google::protobuf::Message* message,
-                       std::string_view label) {
+                       std::string_view source) {
   const std::string what =
-      label.empty() ? absl::StrCat(message->GetDescriptor()->name(), " JSON") : std::string(label);
+      source.empty() ? absl::StrCat(message->GetDescriptor()->name(), " JSON") : std::string(source);
+  message->Clear();
   // absl::string_view is not std::string_view in Debian 12's Abseil.
   if (absl::StripAsciiWhitespace(absl::string_view(json.data(), json.size())).empty()) {
     return absl::InvalidArgumentError(absl::StrCat(what, ": empty input"));
   }
+  absl::StatusOr<io::JsonValue> tree = io::ParseJson(json, what);
+  if (!tree.ok()) return tree.status();
+  if (absl::Status s = FieldChecker(what).Message(*tree, message->GetDescriptor(), ""); !s.ok()) return s;
   google::protobuf::util::JsonParseOptions options;
   options.ignore_unknown_fields = false;  // a misspelt field is an error
   options.case_insensitive_enum_parsing = false;
-  message->Clear();
   const auto status = google::protobuf::util::JsonStringToMessage(
       google::protobuf::StringPiece(json.data(), json.size()), message, options);
   if (!status.ok()) {
@@ -56,9 +151,9 @@ absl::Status ParseJson(std::string_view json, google::protobuf::Message* message
   return absl::OkStatus();
 }
 
-absl::StatusOr<v1::PlanRequest> ParsePlanRequestJson(std::string_view json) {
+absl::StatusOr<v1::PlanRequest> ParsePlanRequestJson(std::string_view json, std::string_view source) {
   v1::PlanRequest request;
-  absl::Status status = ParseJson(json, &request, "request JSON");
+  absl::Status status = ParseJson(json, &request, source.empty() ? "request JSON" : source);
   if (!status.ok()) return status;
   return request;
 }

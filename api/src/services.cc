@@ -45,7 +45,11 @@ absl::StatusOr<PlanCall> PreparePlan(const v1::PlanRequest& request, const CallL
   absl::StatusOr<PlanCall> call = FromProto(request);
   if (!call.ok()) return call.status();
   call->options.max_contacts = limits.max_contacts;
-  call->options.ipopt_max_cpu_seconds = limits.ipopt_max_cpu_seconds;
+  // The tighter of the request's and the server's CPU limits (0 = none).
+  const double asked = call->options.ipopt_max_cpu_seconds;
+  if (limits.ipopt_max_cpu_seconds > 0 && (asked == 0 || limits.ipopt_max_cpu_seconds < asked)) {
+    call->options.ipopt_max_cpu_seconds = limits.ipopt_max_cpu_seconds;
+  }
   call->options.interrupt = limits.interrupt;
   return call;
 }
@@ -79,36 +83,11 @@ absl::StatusOr<v1::TrajectoryResponse> HandleTrajectory(const v1::TrajectoryRequ
                                                         const CallLimits& limits) {
   absl::StatusOr<PlanCall> call = PreparePlan(request.plan(), limits);
   if (!call.ok()) return Nested(call.status(), "plan.");
-  planner::TrajectoryProblem t;
-  t.base = call->problem;
-  if (request.plan().object().has_inertia()) {
-    const v1::Inertia& in = request.plan().object().inertia();
-    t.inertia = planner::Inertia{in.ixx(), in.iyy(), in.izz(), in.ixy(), in.ixz(), in.iyz()};
-  }
-  for (int k = 0; k < request.steps_size(); ++k) {
-    const v1::TrajectoryStep& in = request.steps(k);
-    planner::TrajectoryStep step;
-    step.gravity = in.has_gravity() ? FromProto(in.gravity()) : t.base.object.gravity;
-    step.linear_acceleration = FromProto(in.linear_acceleration());
-    step.angular_velocity = FromProto(in.angular_velocity());
-    step.angular_acceleration = FromProto(in.angular_acceleration());
-    step.external_wrench = {FromProto(in.external_wrench().force()),
-                            FromProto(in.external_wrench().torque())};
-    if (in.contacts_size() > 0) {
-      std::vector<planner::Contact> contacts;
-      for (int i = 0; i < in.contacts_size(); ++i) {
-        absl::StatusOr<planner::Contact> c =
-            ContactFromProto(in.contacts(i), absl::StrCat("steps[", k, "].contacts[", i, "]"));
-        if (!c.ok()) return c.status();
-        contacts.push_back(*std::move(c));
-      }
-      step.contacts = std::move(contacts);
-    }
-    t.steps.push_back(std::move(step));
-  }
+  absl::StatusOr<planner::TrajectoryProblem> t = ToTrajectoryProblem(request, call->problem);
+  if (!t.ok()) return t.status();
   const bool warm = !request.has_warm_start() || request.warm_start();
   absl::StatusOr<planner::TrajectoryResult> r =
-      planner::PlanTrajectory(t, call->options, call->solver, warm);
+      planner::PlanTrajectory(*t, call->options, call->solver, warm);
   if (!r.ok()) return r.status();
   return ToProto(*r);
 }

@@ -1,182 +1,28 @@
 #!/usr/bin/python3
 """Plan fingertip contact forces on a running tactforce-server.
 
-Sends one PlanRequest (the built-in 3-finger wrench grasp, or a PlanRequest
-JSON file) to tactforce.v1.Planner and prints the force of every contact.
-
-The gRPC stubs are generated at build time (client/python/CMakeLists.txt)
-into <build>/python; point PYTHONPATH there:
+A thin wrapper of the tactforce package's `tactforce.plan` (the same as
+`python3 -m tactforce.plan` or, once pip-installed, `tactforce-plan-py`):
 
     PYTHONPATH=build/python /usr/bin/python3 client/python/plan_client.py \\
-        --server 127.0.0.1:50051
-    PYTHONPATH=build/python /usr/bin/python3 client/python/plan_client.py \\
-        --server 127.0.0.1:50051 --request client/examples/sphere_pinch.json \\
-        --solver ipopt --json
+        --server 127.0.0.1:50051 [--request client/examples/sphere_pinch.json] \\
+        [--solver ipopt] [--stream] [--json]
 
-Uses Debian's python3-grpcio and python3-protobuf (hence /usr/bin/python3).
-
-Exit codes: 0 an answer was computed (optimal, infeasible or solver
-failure: see the status line), 1 the RPC failed (unreachable server,
-deadline, ...), 2 bad command line or invalid request (INVALID_ARGUMENT).
+The package comes from `pip install ./client/python` or, without
+installing, from <build>/python (the CMake target tactforce_python_stubs
+puts the package and its generated stubs there). Exit codes are those of
+the `tactforce` CLI: 0 answer, 1 failure, 2 bad input, 3 unavailable,
+4 deadline exceeded.
 """
 
-import argparse
 import sys
 
-from client_env import (EXIT_BAD_INPUT, EXIT_OK, EXIT_RPC_FAILED, load, print_json,
-                        report_rpc_error, wire_choices)
-
-grpc, json_format, (planner_pb2, planner_pb2_grpc) = load("planner_pb2", "planner_pb2_grpc")
-
-SOLVERS = wire_choices(planner_pb2.Solver, "SOLVER_")
-
-
-def wrench_grasp():
-    """3-finger grasp of a 0.3 kg wrench handle (the planner's 'wrench-3f').
-
-    Handle along x, 24 mm wide, centre of mass 1 cm towards the head;
-    mu 0.9, reading sigma 0.5 N, minimum normal force 0.3 N per finger.
-    """
-    request = planner_pb2.PlanRequest()
-    request.object.mass = 0.3
-    request.object.com.x = 0.01
-    half_width = 0.012
-    fingers = [
-        ("index", (0.02, half_width, 0.0), (0.0, -1.0, 0.0)),
-        ("middle", (-0.02, half_width, 0.0), (0.0, -1.0, 0.0)),
-        ("thumb", (0.0, -half_width, 0.0), (0.0, 1.0, 0.0)),
-    ]
-    for name, position, normal in fingers:
-        contact = request.contacts.add()
-        contact.name = name
-        contact.position.x, contact.position.y, contact.position.z = position
-        contact.normal.x, contact.normal.y, contact.normal.z = normal
-        contact.friction = 0.9
-        contact.kind = planner_pb2.CONTACT_KIND_INTRINSIC
-        contact.sigma = 0.5
-        contact.min_normal_force = 0.3
-    request.solver = planner_pb2.SOLVER_GEOMETRIC
-    return request
-
-
-def load_request(path):
-    text = sys.stdin.read() if path == "-" else open(path, encoding="utf-8").read()
-    return json_format.Parse(text, planner_pb2.PlanRequest())
-
-
-def make_channel(args):
-    if not (args.tls_ca or args.tls_cert or args.tls_key):
-        return grpc.insecure_channel(args.server)
-
-    def read(path):
-        if not path:
-            return None
-        with open(path, "rb") as file:
-            return file.read()
-
-    credentials = grpc.ssl_channel_credentials(
-        root_certificates=read(args.tls_ca),
-        private_key=read(args.tls_key),
-        certificate_chain=read(args.tls_cert))
-    options = []
-    if args.tls_server_name:
-        options.append(("grpc.ssl_target_name_override", args.tls_server_name))
-    return grpc.secure_channel(args.server, credentials, options=options)
-
-
-def status_name(value):
-    return planner_pb2.PlanStatus.Name(value).removeprefix("PLAN_STATUS_")
-
-
-def solver_name(value):
-    return planner_pb2.Solver.Name(value).removeprefix("SOLVER_")
-
-
-def print_table(request, response, out):
-    print(f"status: {status_name(response.status)}"
-          f"  solver: {solver_name(response.solver)}"
-          f"  time: {response.solve_time_us} us"
-          f"  iterations: {response.iterations}", file=out)
-    if response.message:
-        print(f"message: {response.message}", file=out)
-    if response.forces:
-        print(f"{'contact':<10} {'fx [N]':>11} {'fy [N]':>11} {'fz [N]':>11}"
-              f" {'fn [N]':>11} {'sigma [N]':>10}", file=out)
-        for i, force in enumerate(response.forces):
-            name = request.contacts[i].name if i < len(request.contacts) else ""
-            normal = response.normal_forces[i] if i < len(response.normal_forces) else 0.0
-            sigma = (response.normal_force_sigma[i]
-                     if i < len(response.normal_force_sigma) else 0.0)
-            print(f"{name or str(i):<10} {force.x:11.6f} {force.y:11.6f} {force.z:11.6f}"
-                  f" {normal:11.6f} {sigma:10.6f}", file=out)
-        print(f"objective: {response.objective:.6g} N^2"
-              f"  min margin: {response.min_margin:.6g} N", file=out)
-    if response.solver == planner_pb2.SOLVER_CROSS_CHECK:
-        check = response.cross_check
-        print(f"cross-check: {'agree' if check.agree else 'DISAGREE'}"
-              f"  max |df| {check.max_force_diff:.3g} N"
-              f"  ipopt {status_name(check.ipopt_status)} in {check.ipopt_time_us} us",
-              file=out)
-
-
-def parse_args(argv):
-    parser = argparse.ArgumentParser(
-        description="Plan contact forces on a tactforce-server and print them.")
-    parser.add_argument("--server", default="127.0.0.1:50051",
-                        help="host:port of tactforce-server (default %(default)s)")
-    parser.add_argument("--request", metavar="FILE",
-                        help="PlanRequest JSON ('-' = stdin); default: the built-in "
-                             "3-finger wrench grasp")
-    parser.add_argument("--solver", choices=sorted(SOLVERS),
-                        help="override the request's solver")
-    parser.add_argument("--timeout", type=float, default=10.0,
-                        help="RPC deadline in seconds (default %(default)s)")
-    parser.add_argument("--stream", action="store_true",
-                        help="send the request over PlanStream instead of Plan")
-    parser.add_argument("--json", action="store_true",
-                        help="print the PlanResponse as JSON instead of a table")
-    parser.add_argument("--tls-ca", metavar="PEM", help="CA that signed the server certificate")
-    parser.add_argument("--tls-cert", metavar="PEM", help="client certificate (mutual TLS)")
-    parser.add_argument("--tls-key", metavar="PEM", help="client private key (mutual TLS)")
-    parser.add_argument("--tls-server-name", metavar="NAME",
-                        help="expected server name in its certificate, if not the host")
-    return parser.parse_args(argv)
-
-
-def main(argv=None):
-    args = parse_args(argv)
-    try:
-        request = load_request(args.request) if args.request else wrench_grasp()
-    except (OSError, json_format.ParseError) as error:
-        print(f"error: {args.request}: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    if args.solver:
-        request.solver = SOLVERS[args.solver]
-
-    try:
-        with make_channel(args) as channel:
-            stub = planner_pb2_grpc.PlannerStub(channel)
-            if args.stream:
-                responses = list(stub.PlanStream(iter([request]), timeout=args.timeout))
-                if len(responses) != 1:
-                    print(f"error: PlanStream returned {len(responses)} responses for 1 request",
-                          file=sys.stderr)
-                    return EXIT_RPC_FAILED
-                response = responses[0]
-            else:
-                response = stub.Plan(request, timeout=args.timeout)
-    except OSError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except grpc.RpcError as error:
-        return report_rpc_error(grpc, error)
-
-    if args.json:
-        print_json(json_format, response)
-    else:
-        print_table(request, response, sys.stdout)
-    return EXIT_OK
-
+try:
+    from tactforce.plan import main
+except ImportError as error:  # pragma: no cover - environment problem
+    sys.exit(f"error: {error}: install the tactforce package (pip install ./client/python, "
+             "see client/README.md) or set PYTHONPATH=<build>/python (target tactforce_python_stubs); "
+             "it needs Debian's python3-grpcio and python3-protobuf")
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -117,7 +117,7 @@ absl::StatusOr<CsvTable> ParseCsv(const std::string& text, const std::string& so
 absl::StatusOr<CsvTable> ReadCsvFile(const std::string& path, const CsvOptions& options) {
   absl::StatusOr<std::string> text = ReadTextFile(path);
   if (!text.ok()) return text.status();
-  return ParseCsv(*text, path, options);
+  return ParseCsv(*text, SourceName(path), options);
 }
 
 }  // namespace tactforce::io

@@ -5,7 +5,7 @@
 // the byte right after it, which is on the same line), so its line is the
 // value's line (no JSON token spans lines). JsonTreeBuilder turns the events
 // into JsonValues and adds what nlohmann does not check (duplicate keys,
-// depth); parse errors become "source:line: message (column c)". Writing
+// depth); parse errors become "source:line:column: message". Writing
 // keeps tactforce's layout and number format (nlohmann would print 1e6 as
 // 1000000.0) and uses nlohmann's string escaping.
 #include "tactforce/io/json.h"
@@ -37,7 +37,9 @@ struct ReadProgress {
   const char* begin = nullptr;
   size_t last_significant = 0;  // offset of the last non-blank byte read
   int last_significant_line = 1;
+  size_t last_significant_line_start = 0;  // offset of the first byte of that line
   int line = 1;                 // line of the next byte
+  size_t line_start = 0;        // offset of the first byte of `line`
 };
 
 // A byte iterator over the text that records each byte the lexer reads.
@@ -53,11 +55,14 @@ class CountingIterator {
   reference operator*() const { return *at_; }
   CountingIterator& operator++() {
     const char c = *at_;
+    const size_t offset = static_cast<size_t>(at_ - progress_->begin);
     if (c == '\n') {
       ++progress_->line;
+      progress_->line_start = offset + 1;
     } else if (c != ' ' && c != '\t' && c != '\r') {
-      progress_->last_significant = static_cast<size_t>(at_ - progress_->begin);
+      progress_->last_significant = offset;
       progress_->last_significant_line = progress_->line;
+      progress_->last_significant_line_start = progress_->line_start;
     }
     ++at_;
     return *this;
@@ -138,6 +143,9 @@ class JsonTreeBuilder {
     if (!object.keys.insert(k).second)
       return Fail(absl::StrCat("duplicate key '", Shortened(k), "'"), KeyStart(progress_->last_significant));
     object.key = std::move(k);
+    // The key token ends at the last byte read, on the current line.
+    object.key_line = progress_->last_significant_line;
+    object.key_column = Column(KeyStart(progress_->last_significant));
     return true;
   }
   bool parse_error(std::size_t position, const std::string& last_token, const Json::exception& e) {
@@ -155,11 +163,17 @@ class JsonTreeBuilder {
   struct Container {
     JsonValue value;
     std::string key;                       // objects: the key of the next member
+    int key_line = 0, key_column = 0;      // objects: where that key starts
     absl::flat_hash_set<std::string> keys; // objects: keys so far
   };
 
+  // 1-based byte column of `offset`, which is on the last significant line.
+  int Column(size_t offset) const {
+    return static_cast<int>(offset - progress_->last_significant_line_start) + 1;
+  }
   JsonValue At(JsonValue value) const {
     value.line_ = progress_->last_significant_line;
+    value.column_ = Column(progress_->last_significant);
     return value;
   }
   // A scalar, at the line of its last byte (its only line).
@@ -172,6 +186,7 @@ class JsonTreeBuilder {
       parent.value.array_.push_back(std::move(value));
     } else {
       parent.value.members_.emplace_back(std::move(parent.key), std::move(value));
+      parent.value.key_positions_.push_back({parent.key_line, parent.key_column});
     }
     return true;
   }
@@ -202,7 +217,7 @@ class JsonTreeBuilder {
   }
   absl::Status Error(absl::string_view what, size_t offset) const {
     const TextPosition p = PositionInText(text_, offset);
-    return absl::InvalidArgumentError(absl::StrCat(source_, ":", p.line, ": ", what, " (column ", p.column, ")"));
+    return absl::InvalidArgumentError(absl::StrCat(source_, ":", p.line, ":", p.column, ": ", what));
   }
   bool Fail(absl::string_view what, size_t offset) {
     if (error_.ok()) error_ = Error(what, offset);

@@ -3,6 +3,7 @@
 // rounding noise), data ranges and the canvas that writes the elements.
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
@@ -122,6 +123,30 @@ void SvgCanvas::Rect(double x, double y, double w, double h, std::string_view fi
 void SvgCanvas::Circle(double cx, double cy, double r, std::string_view fill, const Stroke* outline) {
   absl::StrAppendFormat(&out_, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"%g\" fill=\"%s\"%s/>\n", cx, cy, r,
                         SvgEscape(fill), outline != nullptr ? StrokeAttributes(*outline) : "");
+}
+
+void SvgCanvas::Ellipse(double cx, double cy, double rx, double ry, double angle_deg, std::string_view fill,
+                        const Stroke* outline) {
+  rx = std::abs(rx), ry = std::abs(ry);
+  if (rx == 0 || ry == 0) {  // a degenerate ellipse is the segment of its longer axis
+    const double r = std::max(rx, ry), a = (rx > 0 ? angle_deg : angle_deg + 90) * std::numbers::pi / 180;
+    const Stroke fallback{std::string(fill == "none" ? "black" : fill), 1, ""};
+    Line(cx - r * std::cos(a), cy - r * std::sin(a), cx + r * std::cos(a), cy + r * std::sin(a),
+         outline != nullptr ? *outline : fallback);
+    return;
+  }
+  absl::StrAppendFormat(&out_, "<ellipse cx=\"%.1f\" cy=\"%.1f\" rx=\"%.2f\" ry=\"%.2f\"", cx, cy, rx, ry);
+  if (angle_deg != 0) absl::StrAppendFormat(&out_, " transform=\"rotate(%.2f %.1f %.1f)\"", angle_deg, cx, cy);
+  absl::StrAppendFormat(&out_, " fill=\"%s\"%s/>\n", SvgEscape(fill), outline != nullptr ? StrokeAttributes(*outline) : "");
+}
+
+void SvgCanvas::Polygon(const std::vector<std::pair<double, double>>& points, const Stroke& stroke,
+                        std::string_view fill) {
+  if (points.empty()) return;
+  std::string d;
+  for (size_t i = 0; i < points.size(); ++i)
+    absl::StrAppendFormat(&d, "%s%.1f,%.1f", i == 0 ? "M" : "L", points[i].first, points[i].second);
+  Path(d + "Z", stroke, fill);
 }
 
 void SvgCanvas::Path(std::string_view d, const Stroke& stroke, std::string_view fill) {

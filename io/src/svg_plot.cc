@@ -121,6 +121,22 @@ void DrawMarker(SvgCanvas& canvas, double x, double y, const MarkerStyle& style)
   if (!style.css_class.empty()) canvas.CloseGroup();
 }
 
+void DrawArrow(SvgCanvas& canvas, double x1, double y1, double x2, double y2, const Stroke& stroke,
+               double head) {
+  const double dx = x2 - x1, dy = y2 - y1, length = std::hypot(dx, dy);
+  if (!(length >= 0.5)) {
+    if (std::isfinite(length)) canvas.Circle(x2, y2, std::max(1.0, stroke.width), stroke.color);
+    return;
+  }
+  head = std::min(head, 0.6 * length);
+  const double ux = dx / length, uy = dy / length, half = 0.45 * head;
+  const double bx = x2 - head * ux, by = y2 - head * uy;  // where the head meets the shaft
+  canvas.Line(x1, y1, bx, by, stroke);
+  canvas.Path(absl::StrFormat("M%.1f,%.1fL%.1f,%.1fL%.1f,%.1fZ", x2, y2, bx - half * uy, by + half * ux,
+                              bx + half * uy, by - half * ux),
+              Stroke{stroke.color, 1, ""}, stroke.color);
+}
+
 double DrawLegend(SvgCanvas& canvas, double x, double y, const std::vector<LegendEntry>& entries, double row) {
   for (const LegendEntry& e : entries) {
     const double mid = y - 4;

@@ -14,6 +14,8 @@
 #include "CLI/CLI.hpp"
 #include "spdlog/sinks/stdout_sinks.h"
 #include "spdlog/spdlog.h"
+#include "tactforce/api/version.h"
+#include "tactforce/server/info_service.h"
 #include "tactforce/server/planner_service.h"
 #include "tactforce/server/server_config.h"
 #include "tactforce/server/server_host.h"
@@ -52,12 +54,12 @@ bool AllInterfaces(const std::string& address) {
 int main(int argc, char** argv) {
   ServerConfig config;
   CLI::App app{
-      "tactforce-server: gRPC service tactforce.v1.Planner (Plan, PlanStream) with the "
-      "standard health service and server reflection.\n"
+      "tactforce-server: gRPC services tactforce.v1.Planner, Estimator, Audit and Info with "
+      "the standard health service and server reflection.\n"
       "SIGINT/SIGTERM drain in-flight calls (--grace-ms) and exit 0; a second signal "
       "exits at once.",
       "tactforce-server"};
-  app.set_version_flag("--version", std::string("tactforce-server ") + TACTFORCE_VERSION);
+  app.set_version_flag("--version", std::string("tactforce-server ") + tactforce::api::kVersion);
   tactforce::server::RegisterFlags(app, &config);
   CLI11_PARSE(app, argc, argv);
 
@@ -85,6 +87,7 @@ int main(int argc, char** argv) {
   host.AddService(std::make_unique<tactforce::server::EstimatorService>(
       &pool, config.ToEstimatorOptions()));
   host.AddService(std::make_unique<tactforce::server::AuditService>(&pool));
+  host.AddService(std::make_unique<tactforce::server::InfoService>(&host));
 
   if (absl::Status started = host.Start(); !started.ok()) {
     std::fprintf(stderr, "tactforce-server: %s\n", std::string(started.message()).c_str());

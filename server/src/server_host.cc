@@ -73,6 +73,12 @@ void ServerHost::AddService(std::unique_ptr<HostedService> service) {
   services_.push_back(std::move(service));
 }
 
+std::vector<std::string> ServerHost::service_names() const {
+  std::vector<std::string> names = {kHealthServiceName, kReflectionServiceName};
+  for (const auto& service : services_) names.push_back(service->service_name());
+  return names;
+}
+
 absl::Status ServerHost::Start() {
   if (server_ != nullptr) return absl::FailedPreconditionError("server already started");
   absl::StatusOr<std::shared_ptr<grpc::ServerCredentials>> credentials =

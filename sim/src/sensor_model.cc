@@ -11,6 +11,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "tactforce/io/json.h"
+#include "tactforce/io/suggest.h"
 #include "tactforce/io/text_file.h"
 
 namespace tactforce::sim {
@@ -51,6 +52,13 @@ double& FieldRef(SensorModel& m, const NumField& f) {
 double FieldVal(const SensorModel& m, const NumField& f) {
   return f.model_field ? m.*(f.model_field) : m.effects.*(f.effect_field);
 }
+// Every key a sensor-model JSON may have, for "did you mean" suggestions.
+std::vector<std::string> ModelKeys() {
+  std::vector<std::string> keys = {"format", "units", "source", "uncertainty", "pi_thresholds", "pi_weights"};
+  for (const auto& f : NumFields()) keys.emplace_back(f.name);
+  return keys;
+}
+
 bool IsField(std::string_view name) {
   for (const auto& f : NumFields())
     if (name == f.name) return true;
@@ -182,7 +190,7 @@ absl::StatusOr<SensorModel> SensorModelFromJson(const std::string& text, const s
       if (!v.is_number()) return absl::InvalidArgumentError(absl::StrCat(where, ": expected a number"));
       FieldRef(m, f) = v.number();
     }
-    if (!found) return absl::InvalidArgumentError(absl::StrCat(where, ": unknown field"));
+    if (!found) return absl::InvalidArgumentError(absl::StrCat(where, ": unknown field", io::DidYouMean(key, ModelKeys())));
   }
   if (auto st = ValidateSensorModel(m); !st.ok())
     return absl::InvalidArgumentError(absl::StrCat(source, ": ", st.message()));
@@ -192,7 +200,7 @@ absl::StatusOr<SensorModel> SensorModelFromJson(const std::string& text, const s
 absl::StatusOr<SensorModel> LoadSensorModel(const std::string& path) {
   absl::StatusOr<std::string> text = io::ReadTextFile(path);
   if (!text.ok()) return text.status();
-  return SensorModelFromJson(*text, path);
+  return SensorModelFromJson(*text, io::SourceName(path));
 }
 
 std::string SensorModelToJson(const SensorModel& m) {

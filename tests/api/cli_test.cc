@@ -48,7 +48,7 @@ class CliTest : public testing::CliTest {
 };
 
 TEST_F(CliTest, PlanFromFilePrintsJson) {
-  const CliRun run = Tactforce({"plan", "--local", "--request", Write("pinch.json", kPinch).string()});
+  const CliRun run = Tactforce({"plan", "--json", "--local", "--request", Write("pinch.json", kPinch).string()});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_EQ(run.err, "");
   EXPECT_THAT(run.out, HasSubstr(R"("status": "PLAN_STATUS_OPTIMAL")"));
@@ -68,7 +68,7 @@ TEST_F(CliTest, PlanFromStdin) {
 TEST_F(CliTest, ShippedExampleRequestPlans) {
   const fs::path example = fs::path(EnvOr("TACTFORCE_SOURCE_DIR", TACTFORCE_DEFAULT_SOURCE_DIR)) /
                            "client" / "examples" / "sphere_pinch.json";
-  const CliRun run = Tactforce({"plan", "--local", "--request", example.string()});
+  const CliRun run = Tactforce({"plan", "--json", "--local", "--request", example.string()});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_EQ(ParseResponse(run.out).status(), v1::PLAN_STATUS_OPTIMAL);
 }
@@ -85,7 +85,7 @@ TEST_F(CliTest, TableFormat) {
 TEST_F(CliTest, CrossCheckRequestReportsComparison) {
   std::string request = kPinch;
   request.insert(request.rfind('}'), R"(, "solver": "SOLVER_CROSS_CHECK")");
-  const CliRun run = Tactforce({"plan", "--local", "--request", "-"}, request);
+  const CliRun run = Tactforce({"plan", "--json", "--local", "--request", "-"}, request);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const v1::PlanResponse response = ParseResponse(run.out);
   EXPECT_TRUE(response.has_cross_check()) << run.out;
@@ -93,7 +93,7 @@ TEST_F(CliTest, CrossCheckRequestReportsComparison) {
 }
 
 TEST_F(CliTest, InfeasibleIsAnAnswer) {
-  const CliRun run = Tactforce({"plan", "--local", "--request", "-"}, R"({
+  const CliRun run = Tactforce({"plan", "--json", "--local", "--request", "-"}, R"({
     "object": {"mass": 1.0},
     "contacts": [{"name": "palm", "normal": {"z": 1}, "friction": 0.5,
                   "max_normal_force": 1.0}]})");
@@ -102,7 +102,7 @@ TEST_F(CliTest, InfeasibleIsAnAnswer) {
 }
 
 TEST_F(CliTest, ZeroNormalIsBadInputNamingTheField) {
-  const CliRun run = Tactforce({"plan", "--local", "--request", "-"}, R"({
+  const CliRun run = Tactforce({"plan", "--json", "--local", "--request", "-"}, R"({
     "object": {"mass": 0.1},
     "contacts": [{"name": "thumb", "position": {"x": 0.03}, "normal": {"x": 0},
                   "friction": 0.8}]})");
@@ -111,19 +111,19 @@ TEST_F(CliTest, ZeroNormalIsBadInputNamingTheField) {
 }
 
 TEST_F(CliTest, UnknownEnumValueIsBadInputNamingTheField) {
-  const CliRun run = Tactforce({"plan", "--local", "--request", "-"},
+  const CliRun run = Tactforce({"plan", "--json", "--local", "--request", "-"},
                             R"({"contacts": [{"normal": {"z": 1}, "kind": 7}]})");
   ExpectBadInput(run);
   EXPECT_THAT(run.err, HasSubstr("contacts[0].kind: unknown value 7"));
 }
 
 TEST_F(CliTest, MalformedJsonIsBadInput) {
-  ExpectBadInput(Tactforce({"plan", "--local", "--request", "-"}, R"({"contacts": [)"));
-  ExpectBadInput(Tactforce({"plan", "--local", "--request", "-"}, ""));
+  ExpectBadInput(Tactforce({"plan", "--json", "--local", "--request", "-"}, R"({"contacts": [)"));
+  ExpectBadInput(Tactforce({"plan", "--json", "--local", "--request", "-"}, ""));
 }
 
 TEST_F(CliTest, MisspeltFieldIsBadInputNamingIt) {
-  const CliRun run = Tactforce({"plan", "--local", "--request", "-"},
+  const CliRun run = Tactforce({"plan", "--json", "--local", "--request", "-"},
                             R"({"contacts": [{"normal": {"z": 1}, "frictoin": 0.5}]})");
   ExpectBadInput(run);
   EXPECT_THAT(run.err, HasSubstr("frictoin"));
@@ -131,16 +131,17 @@ TEST_F(CliTest, MisspeltFieldIsBadInputNamingIt) {
 
 TEST_F(CliTest, MissingFileIsBadInput) {
   const CliRun run =
-      Tactforce({"plan", "--local", "--request", (dir_ / "no_such_file.json").string()});
+      Tactforce({"plan", "--json", "--local", "--request", (dir_ / "no_such_file.json").string()});
   ExpectBadInput(run);
   EXPECT_THAT(run.err, HasSubstr("no_such_file.json"));
 }
 
 TEST_F(CliTest, BadCommandLineIsBadInput) {
-  ExpectBadInput(Tactforce({"plan", "--local"}));  // --request missing
+  ExpectBadInput(Tactforce({"plan", "--json", "--local"}));  // --request missing
   ExpectBadInput(Tactforce({"plan", "--local", "--request", "-", "--format", "xml"}));
   ExpectBadInput(Tactforce({"frobnicate"}));
-  ExpectBadInput(Tactforce({}));
+  // A bare `tactforce` is not an error: it lists the commands
+  // (CliConventionsTest.HelpShowsTheCommandsOwnExamplesAndBareTactforceListsCommands).
 }
 
 TEST_F(CliTest, Demo) {

@@ -1,5 +1,7 @@
 #include "tactforce/api/convert.h"
 
+#include <cmath>
+
 #include <gtest/gtest.h>
 
 #include "google/protobuf/util/message_differencer.h"
@@ -160,6 +162,50 @@ TEST(ConvertTest, HugeConeSidesIsRejectedNotWrapped) {
   absl::StatusOr<planner::PlanOptions> options = ToOptions(request);
   ASSERT_FALSE(options.ok());
   EXPECT_NE(options.status().message().find("cone_sides"), absl::string_view::npos);
+}
+
+TEST(ConvertTest, SolverOptionsReachThePlannerAndAreValidated) {
+  v1::PlanRequest request;
+  v1::SolverOptions* o = request.mutable_solver_options();
+  o->set_ipopt_tolerance(1e-7);
+  o->set_ipopt_max_iterations(50);
+  o->set_ipopt_max_cpu_seconds(0.5);
+  o->set_rank_tolerance(1e-8);
+  o->set_agreement_tolerance(1e-4);
+  absl::StatusOr<planner::PlanOptions> options = ToOptions(request);
+  ASSERT_TRUE(options.ok()) << options.status();
+  EXPECT_EQ(options->ipopt_tolerance, 1e-7);
+  EXPECT_EQ(options->ipopt_max_iterations, 50);
+  EXPECT_EQ(options->ipopt_max_cpu_seconds, 0.5);
+  EXPECT_EQ(options->rank_tolerance, 1e-8);
+  EXPECT_EQ(options->agreement_tolerance, 1e-4);
+  // Round trip through the proto keeps them; defaults are not written.
+  const v1::PlanRequest back = ToRequest(planner::PlanProblem{}, *options, planner::SolverKind::kIpopt);
+  EXPECT_EQ(back.solver_options().ipopt_max_iterations(), 50u);
+  EXPECT_EQ(back.solver_options().agreement_tolerance(), 1e-4);
+  EXPECT_FALSE(ToRequest(planner::PlanProblem{}, planner::PlanOptions{}, planner::SolverKind::kIpopt)
+                   .has_solver_options());
+
+  struct Bad {
+    void (*set)(v1::SolverOptions*);
+    const char* field;
+  };
+  const Bad bad[] = {
+      {[](v1::SolverOptions* s) { s->set_ipopt_tolerance(0); }, "solver_options.ipopt_tolerance"},
+      {[](v1::SolverOptions* s) { s->set_ipopt_tolerance(std::nan("")); }, "solver_options.ipopt_tolerance"},
+      {[](v1::SolverOptions* s) { s->set_ipopt_max_iterations(0); }, "solver_options.ipopt_max_iterations"},
+      {[](v1::SolverOptions* s) { s->set_ipopt_max_cpu_seconds(-1); }, "solver_options.ipopt_max_cpu_seconds"},
+      {[](v1::SolverOptions* s) { s->set_rank_tolerance(0.5); }, "solver_options.rank_tolerance"},
+      {[](v1::SolverOptions* s) { s->set_agreement_tolerance(-1e-3); }, "solver_options.agreement_tolerance"},
+  };
+  for (const Bad& b : bad) {
+    v1::PlanRequest r;
+    b.set(r.mutable_solver_options());
+    absl::StatusOr<planner::PlanOptions> o2 = ToOptions(r);
+    ASSERT_FALSE(o2.ok()) << b.field;
+    EXPECT_EQ(o2.status().code(), absl::StatusCode::kInvalidArgument);
+    EXPECT_EQ(std::string(o2.status().message()).rfind(b.field, 0), 0u) << o2.status();
+  }
 }
 
 TEST(ConvertTest, ResultToProto) {

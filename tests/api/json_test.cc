@@ -107,9 +107,45 @@ TEST(JsonTest, MalformedJsonIsAnErrorOnOneLine) {
     ASSERT_FALSE(r.ok());
     EXPECT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument);
     const std::string message(r.status().message());
-    EXPECT_THAT(message, HasSubstr("request JSON: "));
+    EXPECT_THAT(message, HasSubstr("request JSON:"));
     EXPECT_THAT(message, Not(HasSubstr("\n")));
   }
+}
+
+// "<source>:<line>:<column>: <what>" for syntax errors, unknown fields and
+// enum names, with the nearest valid names.
+TEST(JsonTest, ErrorsNameFileLineColumnAndSuggestNames) {
+  struct Case {
+    const char* text;
+    const char* located;  // "line:column: " after the source
+    const char* what;
+  };
+  const Case cases[] = {
+      {"{\n  \"object\": {\"mas\": 0.1}\n}", "2:14: ",
+       "object: unknown field 'mas' in ObjectModel; did you mean 'mass'?"},
+      {"{\"contacts\": [{}, {\"nromal\": {\"x\": 1}}]}", "1:20: ",
+       "contacts[1]: unknown field 'nromal' in Contact; did you mean 'normal'?"},
+      {"{\"cone\": \"CONE_MODEL_PYRAMD\"}", "1:", "cone: unknown ConeModel value 'CONE_MODEL_PYRAMD'; did you mean "
+                                              "'CONE_MODEL_PYRAMID'?"},
+      {"{\n\n  \"contacts\": [\n    {\"position\": {\"x\": 1,}}]}", "4:", "expected"},
+      {"{\"contacts\": {\"name\": \"a\"}}", "1:14: ", "contacts: expected a JSON array"},
+      {"{\"zzzzzzzz\": 1}", "1:2: ", "unknown field 'zzzzzzzz' in PlanRequest; expected one of: object, contacts"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.text);
+    v1::PlanRequest request;
+    absl::Status status = ParseJson(c.text, &request, "grasp.json");
+    ASSERT_FALSE(status.ok());
+    EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+    const std::string message(status.message());
+    EXPECT_EQ(message.rfind(std::string("grasp.json:") + c.located, 0), 0u) << message;
+    EXPECT_THAT(message, HasSubstr(c.what));
+  }
+  // lowerCamelCase names are fields too, and a wrong value type still names its field.
+  v1::PlanRequest request;
+  EXPECT_TRUE(ParseJson(R"({"coneSides": 8, "contacts": [{"minNormalForce": 1}]})", &request, "a.json").ok());
+  absl::Status wrong_type = ParseJson(R"({"cone_sides": "many"})", &request, "a.json");
+  EXPECT_THAT(std::string(wrong_type.message()), HasSubstr("cone_sides"));
 }
 
 TEST(JsonTest, RequestJsonRoundTrip) {

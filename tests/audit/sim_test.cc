@@ -218,13 +218,13 @@ TEST(ModelJson, RoundTripAndErrors) {
   EXPECT_EQ(back->uncertainty, m.uncertainty);
 
   auto unknown = SensorModelFromJson("{\n  \"gain\": 1,\n  \"treshold\": 0.2\n}", "m.json");
-  EXPECT_THAT(std::string(unknown.status().message()), HasSubstr("m.json:3: field 'treshold': unknown field"));
+  EXPECT_THAT(std::string(unknown.status().message()), HasSubstr("m.json:3: field 'treshold': unknown field; did you mean 'threshold'?"));
   auto bad = SensorModelFromJson("{\"lag\": \"fast\"}", "m.json");
   EXPECT_THAT(std::string(bad.status().message()), HasSubstr("field 'lag': expected a number"));
   auto range = SensorModelFromJson("{\"threshold_shift\": 2}", "m.json");
   EXPECT_THAT(std::string(range.status().message()), HasSubstr("threshold_shift"));
   auto syntax = SensorModelFromJson("{\"gain\" 1}", "m.json");
-  EXPECT_THAT(std::string(syntax.status().message()), HasSubstr("m.json:1: expected ':'"));
+  EXPECT_THAT(std::string(syntax.status().message()), HasSubstr("m.json:1:9: expected ':'"));
   EXPECT_TRUE(SensorModelFromJson("{}", "m.json").ok());  // all off = ideal
 }
 

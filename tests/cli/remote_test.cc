@@ -52,8 +52,8 @@ TEST_F(RemotePlanTest, NetworkPlanEqualsLocalPlan) {
   for (size_t i = 0; i < requests.size(); ++i) {
     SCOPED_TRACE("request " + std::to_string(i));
     const std::string path = dir_.Write("request" + std::to_string(i) + ".json", requests[i]);
-    const ProcessResult remote = Tactforce({"plan", "--server", address(), "--request", path});
-    const ProcessResult local = Tactforce({"plan", "--local", "--request", path});
+    const ProcessResult remote = Tactforce({"plan", "--json", "--server", address(), "--request", path});
+    const ProcessResult local = Tactforce({"plan", "--json", "--local", "--request", path});
     ASSERT_EQ(remote.exit_code, 0) << Describe(remote);
     ASSERT_EQ(local.exit_code, 0) << Describe(local);
     absl::StatusOr<v1::PlanResponse> r = ParsePlanResponse(remote.out);
@@ -80,7 +80,7 @@ TEST_F(RemotePlanTest, InvalidRequestIsExit2WithTheServersFieldPath) {
   v1::PlanRequest request = RandomRequest(21, 3, v1::SOLVER_GEOMETRIC);
   request.mutable_contacts(1)->mutable_normal()->Clear();  // zero length
   const std::string path = dir_.Write("bad.json", RequestJson(request));
-  const ProcessResult run = Tactforce({"plan", "--server", address(), "--request", path});
+  const ProcessResult run = Tactforce({"plan", "--json", "--server", address(), "--request", path});
   EXPECT_EQ(run.exit_code, kExitBadInput) << Describe(run);
   EXPECT_THAT(run.err, HasSubstr("contacts[1].normal"));
   ExpectOneLineError(run);
@@ -93,7 +93,7 @@ TEST_F(RemotePlanTest, DeadlineExceededIsExit4) {
   const std::string path =
       dir_.Write("slow.json", RequestJson(RandomRequest(31, 64, v1::SOLVER_IPOPT)));
   const ProcessResult run =
-      Tactforce({"plan", "--server", address(), "--request", path, "--deadline-ms", "20"});
+      Tactforce({"plan", "--json", "--server", address(), "--request", path, "--deadline-ms", "20"});
   EXPECT_EQ(run.exit_code, kExitDeadline) << Describe(run);
   EXPECT_THAT(run.err, HasSubstr("no answer within 20 ms"));
   ExpectOneLineError(run);
@@ -157,7 +157,7 @@ TEST_F(UnreachableTest, PlanIsExit3Quickly) {
   const std::string path = dir_.Write("pinch.json", ExampleRequestJson());
   const auto start = std::chrono::steady_clock::now();
   const ProcessResult run =
-      Tactforce({"plan", "--server", address_, "--request", path, "--deadline-ms", "2000"});
+      Tactforce({"plan", "--json", "--server", address_, "--request", path, "--deadline-ms", "2000"});
   const auto elapsed = std::chrono::steady_clock::now() - start;
   EXPECT_EQ(run.exit_code, kExitUnavailable) << Describe(run);
   EXPECT_THAT(run.err, StartsWith("error: cannot reach " + address_ + ": "));
@@ -182,7 +182,7 @@ TEST_F(UnreachableTest, PlanUsesTheServerByDefault) {
   // Without --local and --server the CLI asks localhost:50051. Whatever
   // listens there (usually nothing), a failure must name that address.
   const std::string path = dir_.Write("pinch.json", ExampleRequestJson());
-  const ProcessResult run = Tactforce({"plan", "--request", path, "--deadline-ms", "2000"});
+  const ProcessResult run = Tactforce({"plan", "--json", "--request", path, "--deadline-ms", "2000"});
   if (run.exit_code != 0) {
     EXPECT_THAT(run.err, HasSubstr("localhost:50051")) << Describe(run);
     ExpectOneLineError(run);
@@ -191,11 +191,11 @@ TEST_F(UnreachableTest, PlanUsesTheServerByDefault) {
 
 TEST_F(UnreachableTest, BadConnectionFlagsAreExit2) {
   const std::string path = dir_.Write("pinch.json", ExampleRequestJson());
-  ProcessResult run = Tactforce({"plan", "--local", "--server", address_, "--request", path});
+  ProcessResult run = Tactforce({"plan", "--json", "--local", "--server", address_, "--request", path});
   EXPECT_EQ(run.exit_code, kExitBadInput) << Describe(run);
-  run = Tactforce({"plan", "--server", address_, "--request", path, "--tls-cert", path});
+  run = Tactforce({"plan", "--json", "--server", address_, "--request", path, "--tls-cert", path});
   EXPECT_EQ(run.exit_code, kExitBadInput) << Describe(run);  // needs --tls-key
-  run = Tactforce({"plan", "--server", address_, "--request", path, "--tls-ca", path});
+  run = Tactforce({"plan", "--json", "--server", address_, "--request", path, "--tls-ca", path});
   EXPECT_EQ(run.exit_code, kExitBadInput) << Describe(run);  // not PEM
   EXPECT_THAT(run.err, HasSubstr("--tls-ca"));
 }
@@ -242,7 +242,7 @@ TEST(RemoteTlsTest, MutualTls) {
 
   ProcessResult run = Tactforce(with_tls({"health", "--server", server->address()}));
   EXPECT_EQ(run.exit_code, 0) << Describe(run);
-  run = Tactforce(with_tls({"plan", "--server", server->address(), "--request", request}));
+  run = Tactforce(with_tls({"plan", "--json", "--server", server->address(), "--request", request}));
   EXPECT_EQ(run.exit_code, 0) << Describe(run);
   run = Tactforce(
       with_tls({"load", "--target", server->address(), "--requests", "200", "-c", "2", "--json"}));

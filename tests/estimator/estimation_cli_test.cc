@@ -19,7 +19,7 @@ constexpr char kEstimate[] = R"({
 })";
 
 TEST_F(CliTest, EstimateLocalPrintsForcesInRequestOrder) {
-  const CliRun run = Tactforce({"estimate", "--local", "--request", Write("e.json", kEstimate).string()});
+  const CliRun run = Tactforce({"estimate", "--local", "--json", "--request", Write("e.json", kEstimate).string()});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   v1::EstimateResponse r;
   ASSERT_TRUE(api::ParseJson(run.out, &r).ok()) << run.out;
@@ -98,7 +98,7 @@ namespace {
 
 TEST_F(CliTest, PlanTrajectoryLocal) {
   const std::string example = SourceDir() + "/client/examples/wrench_lift_trajectory.json";
-  const CliRun run = Tactforce({"plan", "--local", "--trajectory", example});
+  const CliRun run = Tactforce({"plan", "--json", "--local", "--trajectory", example});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   v1::TrajectoryResponse r;
   ASSERT_TRUE(api::ParseJson(run.out, &r).ok()) << run.out;
@@ -116,7 +116,7 @@ TEST_F(CliTest, PlanTrajectoryLocal) {
   // A rotating step without inertia names the field.
   std::string text = ReadFile(example);
   text.replace(text.find("\"inertia\""), std::string("\"inertia\": {\"ixx\": 0.0004, \"iyy\": 0.0025, \"izz\": 0.0027}").size(), "\"mass\": 0.3");
-  const CliRun bad = Tactforce({"plan", "--local", "--trajectory", Write("t.json", text).string()});
+  const CliRun bad = Tactforce({"plan", "--json", "--local", "--trajectory", Write("t.json", text).string()});
   EXPECT_EQ(bad.exit_code, 2) << bad.err;
 }
 

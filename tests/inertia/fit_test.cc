@@ -246,6 +246,37 @@ TEST(FitInertia, ConstrainedStepsNoteOncePerFit) {
   EXPECT_EQ(count(*fit, "CoM-in-hull constraint active"), 0);
 }
 
+// A hull that does not contain the object's CoM contradicts the data: the
+// fit says so with the distance; a CoM just outside (noise) does not warn.
+TEST(FitInertia, WarnsWhenTheDataPutTheComOutsideTheHull) {
+  absl::StatusOr<SimulationResult> sim = SimulateInertia(ShortSimulation("box", SimulationMode::kInHand, false));
+  ASSERT_TRUE(sim.ok()) << sim.status();
+  const Vec3 c = sim->truth.params.com;
+  auto warnings = [&](double short_by, std::string* text) {
+    InertiaOptions o;
+    o.method = InertiaMethod::kConstrained;
+    for (double x : {c.x() - 0.1, c.x() - short_by})
+      for (double y : {c.y() - 0.1, c.y() + 0.1})
+        for (double z : {c.z() - 0.1, c.z() + 0.1}) o.hull.push_back(Vec3(x, y, z));
+    absl::StatusOr<InertiaFit> fit = FitInertia(sim->samples, o);
+    EXPECT_TRUE(fit.ok()) << fit.status();
+    int n = 0;
+    for (const std::string& note : fit->notes) {
+      if (note.rfind("warning: the data put the CoM", 0) == 0) {
+        ++n;
+        *text = note;
+      }
+    }
+    return n;
+  };
+  std::string text;
+  EXPECT_EQ(warnings(0.003, &text), 0) << text;
+  ASSERT_EQ(warnings(0.04, &text), 1);
+  // "... 40.1 mm outside ...": the distance the data ask for, within 2 mm.
+  const double mm = std::stod(text.substr(text.find("CoM ") + 4));
+  EXPECT_NEAR(mm, 40.0, 2.0) << text;
+}
+
 TEST(FitInertia, OptionErrorsNameTheField) {
   absl::StatusOr<SimulationResult> sim = SimulateInertia(ShortSimulation("box", SimulationMode::kInHand, false));
   ASSERT_TRUE(sim.ok());

@@ -41,18 +41,18 @@ struct Located {
   std::string what;
 };
 
-// The parts of "in.json:<line>: <what> (column <column>)".
+// The parts of "in.json:<line>:<column>: <what>".
 Located ErrorOf(const std::string& text) {
   absl::StatusOr<JsonValue> v = ParseJson(text, "in.json");
   EXPECT_FALSE(v.ok()) << text;
   if (v.ok()) return {};
   EXPECT_EQ(v.status().code(), absl::StatusCode::kInvalidArgument);
   const std::string message(v.status().message());
-  static const std::regex format(R"(^in\.json:([0-9]+): (.*) \(column ([0-9]+)\)$)");
+  static const std::regex format(R"(^in\.json:([0-9]+):([0-9]+): (.*)$)");
   std::smatch m;
   EXPECT_TRUE(std::regex_match(message, m, format)) << message;
   if (m.empty()) return {0, 0, message};
-  return {std::stoi(m[1]), std::stoi(m[3]), m[2]};
+  return {std::stoi(m[1]), std::stoi(m[2]), m[3]};
 }
 
 TEST(JsonErrors, NameTheLineAndColumnOfTheOffendingToken) {

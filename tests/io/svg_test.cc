@@ -180,6 +180,52 @@ TEST(SvgPlot, MarkersColourBarAndGroups) {
   EXPECT_EQ(svg.substr(svg.size() - 7), "</svg>\n");
 }
 
+TEST(SvgShapes, EllipseTurnsAboutItsCentreAndDegeneratesToALine) {
+  SvgCanvas canvas(200, 200);
+  const Stroke blue{"#00f", 1.5, ""};
+  canvas.Ellipse(50, 60, 20, 5, 30, "none", &blue);
+  canvas.Ellipse(100, 100, 10, 4, 0, "#ccc");
+  canvas.Ellipse(100, 100, 10, 0, 90, "none", &blue);  // a vertical segment of length 20
+  const std::string svg = canvas.Finish();
+  EXPECT_NE(svg.find("<ellipse cx=\"50.0\" cy=\"60.0\" rx=\"20.00\" ry=\"5.00\" transform=\"rotate(30.00 50.0 60.0)\" "
+                     "fill=\"none\" stroke=\"#00f\" stroke-width=\"1.5\"/>"),
+            std::string::npos)
+      << svg;
+  EXPECT_NE(svg.find("<ellipse cx=\"100.0\" cy=\"100.0\" rx=\"10.00\" ry=\"4.00\" fill=\"#ccc\"/>"), std::string::npos);
+  EXPECT_EQ(Count(svg, "<ellipse"), 2);
+  EXPECT_NE(svg.find("<line x1=\"100.0\" y1=\"90.0\" x2=\"100.0\" y2=\"110.0\""), std::string::npos) << svg;
+}
+
+TEST(SvgShapes, PolygonIsOneClosedPath) {
+  SvgCanvas canvas(100, 100);
+  canvas.Polygon({{0, 0}, {10, 0}, {10, 10}}, {"red", 1, ""}, "#fee");
+  canvas.Polygon({}, {"red", 1, ""});
+  const std::string svg = canvas.Finish();
+  EXPECT_EQ(Count(svg, "<path"), 1);
+  EXPECT_NE(svg.find("<path d=\"M0.0,0.0L10.0,0.0L10.0,10.0Z\" fill=\"#fee\" stroke=\"red\"/>"), std::string::npos)
+      << svg;
+}
+
+TEST(SvgShapes, ArrowHasAShaftAndAHeadAtItsTip) {
+  SvgCanvas canvas(200, 200);
+  DrawArrow(canvas, 10, 50, 110, 50, {"#c00", 2, ""}, 10);
+  const std::string svg = canvas.Finish();
+  // Shaft up to the head's base, head tip at the arrow's end.
+  EXPECT_NE(svg.find("<line x1=\"10.0\" y1=\"50.0\" x2=\"100.0\" y2=\"50.0\" stroke=\"#c00\" stroke-width=\"2\"/>"),
+            std::string::npos)
+      << svg;
+  EXPECT_NE(svg.find("<path d=\"M110.0,50.0L100.0,54.5L100.0,45.5Z\" fill=\"#c00\" stroke=\"#c00\"/>"),
+            std::string::npos)
+      << svg;
+  // A short arrow gets a proportionally short head; a zero arrow is a dot.
+  SvgCanvas small(100, 100);
+  DrawArrow(small, 0, 0, 0, 5, {"black", 1, ""}, 10);
+  DrawArrow(small, 20, 20, 20, 20, {"black", 1, ""});
+  const std::string s = small.Finish();
+  EXPECT_NE(s.find("<line x1=\"0.0\" y1=\"0.0\" x2=\"0.0\" y2=\"2.0\""), std::string::npos) << s;
+  EXPECT_EQ(Count(s, "<circle cx=\"20.0\" cy=\"20.0\""), 1) << s;
+}
+
 TEST(SvgPlot, RenderSvgStacksPanelsOverOneTimeAxis) {
   SvgPlot plot;
   plot.title = "grasp <sphere>";

@@ -52,6 +52,26 @@ TEST_F(IoTextFile, ErrorsNameThePathAndTheReason) {
   EXPECT_EQ(w.message(), nowhere + ": cannot open for writing");
 }
 
+// Written to a temporary name and renamed: a replaced file is whole, no
+// temporary is left behind, a failed write keeps the old contents, and a
+// device is written in place.
+TEST_F(IoTextFile, WritesAtomicallyAndLeavesNoTemporaries) {
+  const std::string path = Path("out.csv");
+  ASSERT_TRUE(WriteTextFile(path, "old\n").ok());
+  ASSERT_TRUE(WriteTextFile(path, "new\n").ok());
+  EXPECT_EQ(*ReadTextFile(path), "new\n");
+  int entries = 0;
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    ++entries;
+    EXPECT_EQ(entry.path().filename(), "out.csv");
+  }
+  EXPECT_EQ(entries, 1);
+  fs::create_directories(Path("folder"));
+  EXPECT_FALSE(WriteTextFile(Path("folder"), "x").ok());  // cannot replace a folder by a file
+  EXPECT_TRUE(fs::is_directory(Path("folder")));
+  EXPECT_TRUE(WriteTextFile("/dev/null", "discarded").ok());
+}
+
 // The CSV and mesh readers read through ReadTextFile: one wording.
 TEST_F(IoTextFile, CsvAndMeshReadersShareTheWording) {
   const std::string csv = Path("run.csv");

@@ -1,5 +1,6 @@
-// client/python/plan_client.py (python3 + the stubs generated into
-// <build>/python) against the live server.
+// client/python/plan_client.py and inertia_client.py (python3 + the
+// tactforce package assembled in <build>/python by tactforce_python_stubs)
+// against the live server; exit codes are those of the `tactforce` CLI.
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -81,7 +82,7 @@ TEST_F(PythonClientTest, ReportsInvalidRequestsAndUnreachableServers) {
   ASSERT_EQ(server_->Stop(), 0);
   server_.reset();
   run = Python({"--server", address, "--timeout", "2"});
-  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_EQ(run.exit_code, 3);  // the CLI's "unavailable"
   EXPECT_THAT(run.err, HasSubstr("UNAVAILABLE"));
 }
 

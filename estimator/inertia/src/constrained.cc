@@ -44,6 +44,8 @@ struct Model {
   Vector10d q = Vector10d::Zero();
   double scale = 1.0;           // objective divisor (conditioning)
   std::vector<Vector10d> rows;  // hull rows a^T p <= 0
+  double row_length = 1.0;      // (a^T p / p_mass) * row_length = signed distance to the hull (m)
+  double hull_size = 0.0;       // the hull's bounding-box diagonal (m)
 
   double F(const Vector10d& th) const {
     const Eigen::Matrix4d U = UFromTheta(th);
@@ -301,6 +303,8 @@ Model FixedModelTerms(const ScaledCoordinates& sc, double len, const InertiaOpti
     model.w = o.prior->weight;
   }
   if (hull) {
+    model.row_length = len;
+    model.hull_size = hull->size;
     for (size_t j = 0; j < hull->normals.size(); ++j) {
       Vector10d a = Vector10d::Zero();
       for (int i = 0; i < 3; ++i) a(PIndex(i, 3)) = hull->normals[j](i);
@@ -356,6 +360,10 @@ Vector10d InitialTheta(const ScaledCoordinates& sc, const Scales& scales, const 
   return theta;
 }
 
+// A CoM the data place outside the hull by more than this fraction of the
+// hull's size gets a warning note.
+constexpr double kHullContradiction = 0.02;
+
 // The CoM-in-hull rows by SLSQP (NLopt) from `theta`, when the
 // unconstrained optimum violates them. Returns the constrained optimum, or
 // `theta` (noted) when SLSQP fails.
@@ -366,6 +374,16 @@ Vector10d EnforceHullRows(const Model& model, const Vector10d& theta, const Iner
   double worst = -1;
   for (const auto& a : model.rows) worst = std::max(worst, a.dot(p) / p(PIndex(3, 3)));
   if (!(worst > 1e-9)) return theta;
+  // The data put the CoM this far outside: more than a sliver means the hull
+  // probably does not contain the object's CoM, and the fit held on its
+  // boundary has biased mass and inertia.
+  const double outside = worst * model.row_length;
+  if (last_round && outside > kHullContradiction * model.hull_size) {
+    out->notes.push_back(absl::StrFormat(
+        "warning: the data put the CoM %.1f mm outside the given hull (%.0f%% of its size); the fit is held on "
+        "the hull's boundary, so mass, CoM and inertia are biased if the hull is wrong: check it",
+        1e3 * outside, 100 * outside / model.hull_size));
+  }
   SlsqpData data{&model};
   nlopt_opt opt = nlopt_create(NLOPT_LD_SLSQP, 10);
   nlopt_set_min_objective(opt, SlsqpObjective, &data);

@@ -54,7 +54,7 @@ absl::StatusOr<InertiaTruth> ParseTruthJson(const std::string& text, const std::
 absl::StatusOr<InertiaTruth> ReadTruthJsonFile(const std::string& path) {
   absl::StatusOr<std::string> text = io::ReadTextFile(path);
   if (!text.ok()) return text.status();
-  return ParseTruthJson(*text, path);
+  return ParseTruthJson(*text, io::SourceName(path));
 }
 
 std::string TruthToJson(const InertiaTruth& t) {

@@ -13,6 +13,7 @@
 #include <string>
 
 #include "absl/status/statusor.h"
+#include "tactforce/planner/trajectory.h"
 #include "tactforce/planner/types.h"
 #include "tactforce/v1/planner.pb.h"
 
@@ -34,6 +35,16 @@ absl::StatusOr<PlanCall> FromProto(const v1::PlanRequest& request);
 absl::StatusOr<planner::PlanProblem> ToProblem(const v1::PlanRequest& request);
 absl::StatusOr<planner::PlanOptions> ToOptions(const v1::PlanRequest& request);
 absl::StatusOr<planner::SolverKind> ToSolverKind(const v1::PlanRequest& request);
+// The given fields of `in` over `options`, then PlanOptions::IsValid:
+// InvalidArgument("solver_options.ipopt_tolerance: must be finite and > 0").
+absl::Status ApplySolverOptions(const v1::SolverOptions& in, planner::PlanOptions* options);
+
+// The motion of a TrajectoryRequest over `base` (FromProto(request.plan())'s
+// problem): inertia, and per step gravity (absent: base's), accelerations,
+// velocities, replacement contacts ("steps[3].contacts[1]..." in errors) and
+// the extra external wrench.
+absl::StatusOr<planner::TrajectoryProblem> ToTrajectoryProblem(const v1::TrajectoryRequest& request,
+                                                               const planner::PlanProblem& base);
 
 // Planner -> wire. Every field is written explicitly (UNSPECIFIED enums are
 // never produced), so a request round-trips through FromProto unchanged.

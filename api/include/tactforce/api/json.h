@@ -15,11 +15,16 @@
 
 namespace tactforce::api {
 
-// InvalidArgument("<label>: <what protobuf reports>") on bad input; the
-// label defaults to "<MessageName> JSON" ("request JSON" for PlanRequest).
+// InvalidArgument on bad input, naming `source` (a file name; defaults to
+// "<MessageName> JSON", "request JSON" for PlanRequest) and, for syntax
+// errors, unknown fields and enum names, the position and the nearest valid
+// names:
+//   "grasp.json:4:7: object: unknown field 'mas' in ObjectProperties; did you mean 'mass'?"
+// Values of the wrong type: "<source>: <what protobuf reports>".
 absl::Status ParseJson(std::string_view json, google::protobuf::Message* message,
-                       std::string_view label = {});
-absl::StatusOr<v1::PlanRequest> ParsePlanRequestJson(std::string_view json);
+                       std::string_view source = {});
+absl::StatusOr<v1::PlanRequest> ParsePlanRequestJson(std::string_view json,
+                                                     std::string_view source = {});
 
 // Pretty-printed (two-space indent) unless `compact`; ends with a newline
 // when pretty-printed.

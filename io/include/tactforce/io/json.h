@@ -7,9 +7,8 @@
 // including surrogate pairs, numbers, true/false/null), UTF-8. Every value
 // knows the line it starts on, object members keep their file order, and a
 // duplicate key or nesting deeper than kMaxJsonDepth is an error. Errors are
-// InvalidArgument naming the source, line and column:
-//   "m.json:1: expected ':', found number literal '1' (column 9)"
-// (line first, column last: the sensor-model tests read "m.json:1: expected ':'").
+// InvalidArgument naming the source, line and column (bytes), compiler style:
+//   "m.json:1:9: expected ':', found number literal '1'"
 // Writer: JsonWriter emits pretty-printed JSON; non-finite numbers are written
 // as null (JSON has no NaN/Infinity).
 #pragma once
@@ -51,6 +50,16 @@ class JsonValue {
   const std::vector<std::pair<std::string, JsonValue>>& members() const { return members_; }
   const JsonValue* Find(std::string_view key) const;  // nullptr when absent
   int line() const { return line_; }                  // 1-based line where it starts; 0 if built in code
+  // 1-based byte column of its last byte on that line (scalars) or of its
+  // '{' / '[' (containers); 0 if built in code.
+  int column() const { return column_; }
+  struct Position {
+    int line = 0, column = 0;  // 1-based; 0 if built in code
+  };
+  // Where the key of members()[i] starts (its opening quote).
+  Position KeyPosition(size_t i) const {
+    return i < key_positions_.size() ? key_positions_[i] : Position{};
+  }
 
  private:
   friend class JsonTreeBuilder;  // json.cc: builds values from the parser's events
@@ -60,7 +69,9 @@ class JsonValue {
   std::string string_;
   std::vector<JsonValue> array_;
   std::vector<std::pair<std::string, JsonValue>> members_;
+  std::vector<Position> key_positions_;  // parallel to members_
   int line_ = 0;
+  int column_ = 0;
 };
 
 // The one JSON document in `text`; `source` names it in errors (a file name).

@@ -99,8 +99,17 @@ class SvgCanvas {
   void Rect(double x, double y, double w, double h, std::string_view fill, const Stroke* outline = nullptr,
             std::string_view css_class = "");
   void Circle(double cx, double cy, double r, std::string_view fill, const Stroke* outline = nullptr);
+  // An ellipse of semi-axes rx, ry px centred on (cx, cy), its rx axis turned
+  // `angle_deg` degrees from +x (clockwise on screen, as SVG's rotate());
+  // filled with `fill` ("none" for an outline) and stroked when `outline` is
+  // set. A semi-axis of 0 is drawn as a line (SVG would not draw it at all).
+  void Ellipse(double cx, double cy, double rx, double ry, double angle_deg, std::string_view fill,
+               const Stroke* outline = nullptr);
   // A path (SVG path data `d`), not filled unless `fill` is given.
   void Path(std::string_view d, const Stroke& stroke, std::string_view fill = "none");
+  // A closed polygon through the points (x[i], y[i]) px.
+  void Polygon(const std::vector<std::pair<double, double>>& points, const Stroke& stroke,
+               std::string_view fill = "none");
   // <g> with the given raw attributes (e.g. id="view-1"); groups nest.
   void OpenGroup(std::string_view attributes = "");
   void CloseGroup();
@@ -184,6 +193,13 @@ struct MarkerStyle {
 
 // One marker centred on (x, y) px.
 void DrawMarker(SvgCanvas& canvas, double x, double y, const MarkerStyle& style);
+
+// An arrow from (x1, y1) to (x2, y2) px: the shaft in `stroke` and a filled
+// triangular head of length `head` px (at most 0.6 x the arrow's length) in
+// the stroke's colour. An arrow shorter than 0.5 px is a dot of the stroke's
+// width (a zero vector seen end on).
+void DrawArrow(SvgCanvas& canvas, double x1, double y1, double x2, double y2, const Stroke& stroke,
+               double head = 8);
 
 // ---- Legends and colour bars ------------------------------------------------------
 

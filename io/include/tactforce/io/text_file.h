@@ -15,8 +15,14 @@
 namespace tactforce::io {
 
 // The file's bytes exactly as stored (binary-safe: no newline translation,
-// NUL bytes kept), text or binary (STL, PLY).
+// NUL bytes kept), text or binary (STL, PLY). "-" reads standard input (to
+// its end; a second "-" then reads nothing).
 absl::StatusOr<std::string> ReadTextFile(const std::string& path);
+// How `path` is named in messages: "<stdin>" for "-", else the path.
+std::string SourceName(const std::string& path);
+// Writes to "<path>.tmp-<pid>-<n>" and renames it over `path` when complete,
+// so a reader never sees a half-written file and a failed write leaves the
+// old file; devices and pipes (not regular files) are written directly.
 absl::Status WriteTextFile(const std::string& path, std::string_view text);
 
 // 1-based line and column (in bytes) of the byte at `offset` in `text`; an

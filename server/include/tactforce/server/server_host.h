@@ -7,6 +7,7 @@
 //   ServerHost host(options);
 //   host.AddService(std::make_unique<PlannerService>(&pool, planner_options));
 //   host.AddService(std::make_unique<EstimatorService>(...));
+//   host.AddService(std::make_unique<InfoService>(&host));  // lists them all
 //   absl::Status s = host.Start();   // health: SERVING for "" and each name
 //   ...
 //   host.Shutdown(grace);            // NOT_SERVING, drain, cancel the rest
@@ -65,6 +66,11 @@ class ServerHost {
   int bound_port() const { return bound_port_; }
   bool tls() const { return !options_.tls.cert.empty(); }
 
+  // Fully-qualified names of every service served: the added ones plus the
+  // standard health and reflection services (what reflection's
+  // list_services answers; tests/server/info_rpc_test.cc compares the two).
+  std::vector<std::string> service_names() const;
+
   // Health NOT_SERVING, stop accepting calls, let in-flight calls finish for
   // up to `grace`, then cancel what is left and wait for it. Idempotent.
   void Shutdown(std::chrono::milliseconds grace);
@@ -77,6 +83,10 @@ class ServerHost {
   int bound_port_ = 0;
   bool shut_down_ = false;
 };
+
+// The standard services every ServerHost serves besides its own.
+inline constexpr char kHealthServiceName[] = "grpc.health.v1.Health";
+inline constexpr char kReflectionServiceName[] = "grpc.reflection.v1alpha.ServerReflection";
 
 // Replaces a trailing ":0" port with `port` ("127.0.0.1:0" -> "127.0.0.1:43211",
 // "[::1]:0" -> "[::1]:43211"); other addresses are returned unchanged.
