@@ -333,7 +333,9 @@ CLI::App* AddDemoCommand(CLI::App& app, DemoArgs& args) {
       "grasp exactly as this process did, and the load test must have no failed call.\n"
       "Exit status: 0 when all of that holds (Ipopt agreement is reported, not\n"
       "enforced); 3 when the server cannot be reached or is not serving, 4 when it\n"
-      "did not answer within --deadline-ms, 1 otherwise.");
+      "did not answer within --deadline-ms, 1 otherwise. Examples:\n"
+      "  tactforce demo\n"
+      "  tactforce demo --server localhost:50051 --load-seconds 3 --json");
   return cmd;
 }
 

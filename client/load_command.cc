@@ -266,9 +266,9 @@ CLI::App* AddLoadCommand(CLI::App& app, LoadArgs& args) {
   AddConnectionFlags(cmd, &args.connection, "--target,--server", /*default_deadline_ms=*/10'000);
   AddWorkloadFlags(cmd, args);
   AddRequestFlags(cmd, args);
-  cmd->add_flag("--json", args.json,
-                "Print one JSON object: {rpc, concurrency, requests, duration_s, qps, "
-                "latency_us: {p50, p90, p99, p999, max}, errors: {CODE: n}, ...}");
+  AddOutputFlags(cmd, &args.output,
+                 "one object {rpc, concurrency, requests, duration_s, qps, latency_us: {p50, p90, p99, p999, "
+                 "max}, errors: {CODE: n}, ...}");
   cmd->add_option("--plot", args.plot_path,
                   "Also write an SVG: the latency histogram (log scale) and calls/s over "
                   "time (0.1 s intervals; 1 s for runs over 20 s); the directory must exist")
@@ -286,7 +286,10 @@ CLI::App* AddLoadCommand(CLI::App& app, LoadArgs& args) {
       "Exit status: 0 when every call succeeded; otherwise the code of the most\n"
       "frequent failure (3 unavailable, 4 deadline exceeded, 2 invalid request, 1\n"
       "other); 2 for a bad flag (the message names it); 3 when a target cannot be\n"
-      "reached before the run.");
+      "reached before the run. Examples:\n"
+      "  tactforce load --target localhost:50051 --rpc plan --mix -c 8 --duration 5\n"
+      "  tactforce load --target localhost:50051 --rpc estimate -c 4 --duration 3 --plot latency.svg --json\n"
+      "  tactforce load --target localhost:50051 --rpc fit-inertia --request client/examples/inertia_log.csv -n 20");
   return cmd;
 }
 
@@ -313,7 +316,7 @@ int RunLoadCommand(const LoadArgs& args) {
   printer.Finish();
   if (!report.ok()) return ReportError(report.status());
 
-  std::cout << (args.json ? FormatLoadJson(*report, args.connection.server)
+  std::cout << (args.output.json() ? FormatLoadJson(*report, args.connection.server)
                           : FormatLoadText(*report, args.connection.server));
   std::cout.flush();
   if (!std::cout) return kExitFailure;

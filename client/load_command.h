@@ -7,6 +7,7 @@
 #include <string>
 
 #include "CLI/CLI.hpp"
+#include "cli_common.h"
 #include "connection.h"
 
 namespace tactforce::cli {
@@ -26,7 +27,7 @@ struct LoadArgs {
   int batch = 0;                // fit-inertia CSV: samples per message; 0 = 500
   std::string service;          // health: service asked about
   int channels = 1;             // channels (connections) per target
-  bool json = false;
+  OutputFormat output;  // table (default) | json
   std::string plot_path;        // --plot: SVG of the run; empty = none
   bool progress = false;        // progress line on stderr even when not a TTY
 };
