@@ -12,6 +12,7 @@
 #include "absl/status/status.h"
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
+#include "tactforce/planner/validation.h"
 
 namespace tactforce::api {
 namespace {
@@ -93,6 +94,14 @@ absl::StatusOr<planner::PlanProblem> ToProblem(const v1::PlanRequest& request) {
   problem.object.com = FromProto(object.com());
   if (object.has_gravity()) problem.object.gravity = FromProto(object.gravity());
   // else: the planner's default (0, 0, -9.81).
+  // A single plan does not use the inertia, but a given one must be physical.
+  if (object.has_inertia()) {
+    const v1::Inertia& in = object.inertia();
+    if (absl::Status s = planner::ValidateInertia({in.ixx(), in.iyy(), in.izz(), in.ixy(), in.ixz(), in.iyz()});
+        !s.ok()) {
+      return s;
+    }
+  }
 
   problem.contacts.reserve(request.contacts_size());
   for (int i = 0; i < request.contacts_size(); ++i) {

@@ -2,6 +2,9 @@
 // paths in errors), calls one library entry point and converts the answer.
 #include "tactforce/api/services.h"
 
+#include <cmath>
+#include <cstdint>
+
 #include "absl/strings/str_cat.h"
 #include "tactforce/api/convert.h"
 #include "tactforce/audit/audit.h"
@@ -37,6 +40,35 @@ v1::EstimateStatus ToProto(estimator::EstimateStatus s) {
     case estimator::EstimateStatus::kSolverFailure: return v1::ESTIMATE_STATUS_SOLVER_FAILURE;
   }
   return v1::ESTIMATE_STATUS_UNSPECIFIED;
+}
+
+// Work and response size of a motion, bounded before any step is solved: an
+// unauthenticated client must not buy minutes of CPU, and an answer too big
+// to send must not be computed first.
+absl::Status CheckTrajectorySize(const planner::TrajectoryProblem& t, const planner::PlanOptions& options,
+                                 const CallLimits& limits) {
+  int64_t contacts = 0;
+  for (const planner::TrajectoryStep& step : t.steps) {
+    contacts += step.contacts ? static_cast<int64_t>(step.contacts->size())
+                              : static_cast<int64_t>(t.base.contacts.size());
+  }
+  const int64_t work = contacts * options.cone_sides;
+  if (work > limits.max_trajectory_work) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "steps: ", t.steps.size(), " steps with ", contacts, " contacts in all at ", options.cone_sides,
+        " cone sides exceed the limit of ", limits.max_trajectory_work,
+        " (steps x contacts x cone sides; the server's --max-trajectory-work)"));
+  }
+  // A PlanResponse per step: status, solver, times (about 40 bytes) and per
+  // contact a force (3 doubles), its normal force and sigma, with tags.
+  constexpr int64_t kStepBytes = 40, kContactBytes = 60;
+  const int64_t bytes = static_cast<int64_t>(t.steps.size()) * kStepBytes + contacts * kContactBytes;
+  if (limits.max_response_bytes > 0 && bytes > limits.max_response_bytes) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "steps: the response of ", t.steps.size(), " steps would be about ", bytes, " bytes, over the limit of ",
+        limits.max_response_bytes, " (the server's --max-message-bytes)"));
+  }
+  return absl::OkStatus();
 }
 
 }  // namespace
@@ -85,6 +117,7 @@ absl::StatusOr<v1::TrajectoryResponse> HandleTrajectory(const v1::TrajectoryRequ
   if (!call.ok()) return Nested(call.status(), "plan.");
   absl::StatusOr<planner::TrajectoryProblem> t = ToTrajectoryProblem(request, call->problem);
   if (!t.ok()) return t.status();
+  if (absl::Status s = CheckTrajectorySize(*t, call->options, limits); !s.ok()) return s;
   const bool warm = !request.has_warm_start() || request.warm_start();
   absl::StatusOr<planner::TrajectoryResult> r =
       planner::PlanTrajectory(*t, call->options, call->solver, warm);
@@ -105,6 +138,17 @@ absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
   probe.final_normal_force = request.final_normal_force();
   probe.ramp_rate = request.ramp_rate();
   probe.sample_rate = request.sample_rate();
+  // The same work bound as a trajectory, on the step count the ramp implies
+  // (in double: nonsense rates are the planner's to name).
+  const double steps = std::floor((probe.initial_normal_force - probe.final_normal_force) / probe.ramp_rate *
+                                  probe.sample_rate) + 1;
+  const double work = steps * static_cast<double>(call->problem.contacts.size()) * call->options.cone_sides;
+  if (std::isfinite(work) && steps >= 1 && work > static_cast<double>(limits.max_trajectory_work)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "sample_rate: ", steps, " probe steps with ", call->problem.contacts.size(), " holding contacts at ",
+        call->options.cone_sides, " cone sides exceed the limit of ", limits.max_trajectory_work,
+        " (steps x contacts x cone sides; the server's --max-trajectory-work)"));
+  }
   absl::StatusOr<planner::ProbePlan> plan =
       planner::PlanFrictionProbe(call->problem, probe, call->options, call->solver);
   if (!plan.ok()) return plan.status();

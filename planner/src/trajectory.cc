@@ -1,11 +1,13 @@
 // Force plans along a motion and friction-probe plans (trajectory.h).
 #include "tactforce/planner/trajectory.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
 #include "absl/strings/str_cat.h"
 #include "tactforce/planner/solver.h"
+#include "tactforce/planner/validation.h"
 
 namespace tactforce::planner {
 
@@ -47,6 +49,8 @@ PlanProblem StepProblem(const TrajectoryProblem& t, int step) {
 
 namespace {
 
+constexpr double kMaxProbeSteps = 100000;
+
 absl::Status CheckStep(const TrajectoryProblem& t, int i) {
   const TrajectoryStep& s = t.steps[i];
   const std::string path = absl::StrCat("steps[", i, "]");
@@ -71,10 +75,7 @@ absl::StatusOr<TrajectoryResult> PlanTrajectory(const TrajectoryProblem& t,
   const auto start = std::chrono::steady_clock::now();
   if (t.steps.empty()) return absl::InvalidArgumentError("steps: at least one step is required");
   if (t.inertia) {
-    const Inertia& in = *t.inertia;
-    for (double v : {in.ixx, in.iyy, in.izz, in.ixy, in.ixz, in.iyz}) {
-      if (!std::isfinite(v)) return absl::InvalidArgumentError("object.inertia: not finite");
-    }
+    if (absl::Status s = ValidateInertia(*t.inertia); !s.ok()) return s;
   }
   const std::unique_ptr<ForceSolver> solver = MakeSolver(kind);
   TrajectoryResult out;
@@ -82,6 +83,10 @@ absl::StatusOr<TrajectoryResult> PlanTrajectory(const TrajectoryProblem& t,
   PlanOptions step_options = options;
   PlanningWorkspace workspace;  // one for the whole motion
   for (int i = 0; i < static_cast<int>(t.steps.size()); ++i) {
+    // Deadlines, cancellation and shutdown end a long motion between steps.
+    if (options.interrupt && options.interrupt()) {
+      return absl::CancelledError(absl::StrCat("interrupted after ", i, " of ", t.steps.size(), " steps"));
+    }
     if (absl::Status s = CheckStep(t, i); !s.ok()) return s;
     PlanResult& r = out.steps.emplace_back();
     if (absl::Status s = solver->Solve(StepProblem(t, i), step_options, &workspace, &r);
@@ -126,8 +131,12 @@ absl::StatusOr<ProbePlan> PlanFrictionProbe(const PlanProblem& holding_grasp,
   if (!std::isfinite(probe.ramp_rate) || probe.ramp_rate <= 0) return invalid("probe.ramp_rate: must be > 0");
   if (!std::isfinite(probe.sample_rate) || probe.sample_rate <= 0) return invalid("probe.sample_rate: must be > 0");
   const double duration = (probe.initial_normal_force - probe.final_normal_force) / probe.ramp_rate;
-  const int steps = static_cast<int>(std::floor(duration * probe.sample_rate)) + 1;
-  if (steps > 100000) return invalid("probe.sample_rate: more than 100000 steps; ramp faster or sample slower");
+  // Counted in double first: the product can exceed any int (UB to cast).
+  const double step_count = std::floor(duration * probe.sample_rate) + 1;
+  if (!(step_count <= kMaxProbeSteps)) {
+    return invalid("probe.sample_rate: more than 100000 steps; ramp faster or sample slower");
+  }
+  const int steps = static_cast<int>(step_count);
 
   ProbePlan plan;
   TrajectoryProblem trajectory;

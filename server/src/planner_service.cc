@@ -27,6 +27,8 @@ api::PlanSettings ToPlanSettings(const PlannerServiceOptions& options) {
   settings.limits.max_contacts = options.max_contacts;
   settings.limits.ipopt_max_cpu_seconds = options.solve_timeout_ms / 1000.0;
   settings.inline_max_contacts = options.inline_max_contacts;
+  settings.limits.max_trajectory_work = options.max_trajectory_work;
+  settings.limits.max_response_bytes = options.max_response_bytes;
   return settings;
 }
 

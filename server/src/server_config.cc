@@ -27,6 +27,8 @@ PlannerServiceOptions ServerConfig::ToPlannerOptions() const {
   options.max_contacts = max_contacts;
   options.solve_timeout_ms = solve_timeout_ms;
   options.inline_max_contacts = inline_max_contacts;
+  options.max_trajectory_work = max_trajectory_work;
+  options.max_response_bytes = max_message_bytes;
   return options;
 }
 
@@ -61,6 +63,10 @@ void RegisterFlags(CLI::App& app, ServerConfig* c) {
   app.add_option("--max-inertia-samples", c->max_inertia_samples,
                  "Most samples one FitInertia stream may carry (INVALID_ARGUMENT 'samples: ...' beyond)")
       ->check(CLI::Range(int64_t{10}, int64_t{100'000'000}));
+  app.add_option("--max-trajectory-work", c->max_trajectory_work,
+                 "Most steps x contacts x cone sides one PlanTrajectory or PlanFrictionProbe may ask "
+                 "for (INVALID_ARGUMENT 'steps: ...' beyond, before any solve)")
+      ->check(CLI::Range(int64_t{1}, int64_t{1'000'000'000}));
   app.add_option("--solve-timeout-ms", c->solve_timeout_ms,
                  "CPU-time cap of one Ipopt solve in ms (0 = none); a solve that hits it "
                  "returns PLAN_STATUS_SOLVER_FAILURE")

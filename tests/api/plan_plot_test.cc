@@ -143,10 +143,18 @@ TEST(PlanPlot, EveryContactHasOneOfEachGlyphInEveryView) {
     int views = 0;
     for (const Glyph& g : glyphs) {
       if (g.css_class == "view") ++views;
-      if (g.css_class == "force-arrow") EXPECT_EQ(g.body, "line path ") << "shaft and head";
-      if (g.css_class == "spread-ellipse") EXPECT_EQ(g.body, "ellipse ");
-      if (g.css_class == "cone") EXPECT_EQ(g.body, "path path ") << "rim and edges";
-      if (g.css_class == "gravity") EXPECT_THAT(g.body, HasSubstr("path")) << "an arrow head or the away cross";
+      if (g.css_class == "force-arrow") {
+        EXPECT_EQ(g.body, "line path ") << "shaft and head";
+      }
+      if (g.css_class == "spread-ellipse") {
+        EXPECT_EQ(g.body, "ellipse ");
+      }
+      if (g.css_class == "cone") {
+        EXPECT_EQ(g.body, "path path ") << "rim and edges";
+      }
+      if (g.css_class == "gravity") {
+        EXPECT_THAT(g.body, HasSubstr("path")) << "an arrow head or the away cross";
+      }
     }
     EXPECT_EQ(views, 3);
     EXPECT_EQ(CountOf(*svg, "id=\"legend\""), 1);
@@ -234,8 +242,11 @@ TEST(PlanPlot, AResponseWithoutForcesDrawsNoArrows) {
   v1::PlanResponse response;
   response.set_status(v1::PLAN_STATUS_INFEASIBLE);
   const std::string svg = *PlanSvg(request, response);
-  for (const Glyph& g : Walk(svg))
-    if (g.css_class == "force-arrow") EXPECT_EQ(g.body, "");
+  for (const Glyph& g : Walk(svg)) {
+    if (g.css_class == "force-arrow") {
+      EXPECT_EQ(g.body, "");
+    }
+  }
   EXPECT_THAT(svg, HasSubstr("no forces in the response"));
   EXPECT_THAT(svg, HasSubstr("Plan: INFEASIBLE"));
 }

@@ -83,3 +83,55 @@ TEST(HandlerTest, InfeasibilityIsAnAnswerNotAnError) {
 
 }  // namespace
 }  // namespace tactforce::api
+
+namespace tactforce::api {
+namespace {
+
+// Issue 16: a motion's work and its answer's size are bounded before any
+// step is solved (a 3,000-step, 64-contact request used 67 s of CPU and then
+// could not be sent).
+TEST(HandlerTest, TrajectoryWorkAndResponseSizeAreBoundedUpFront) {
+  const planner::ExampleGrasp grasp = planner::BuiltInGrasps().front();
+  v1::TrajectoryRequest request;
+  *request.mutable_plan() = ToRequest(grasp.problem, grasp.options, planner::SolverKind::kGeometric);
+  for (int k = 0; k < 100; ++k) request.add_steps();
+  const int contacts = static_cast<int>(grasp.problem.contacts.size());
+  CallLimits limits;
+  ASSERT_TRUE(HandleTrajectory(request, limits).ok());
+
+  limits.max_trajectory_work = 100 * contacts * grasp.options.cone_sides - 1;
+  absl::StatusOr<v1::TrajectoryResponse> r = HandleTrajectory(request, limits);
+  ASSERT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(r.status().message()), ::testing::StartsWith("steps: 100 steps with "));
+  EXPECT_THAT(std::string(r.status().message()), ::testing::HasSubstr("--max-trajectory-work"));
+
+  limits = CallLimits{};
+  limits.max_response_bytes = 1000;
+  r = HandleTrajectory(request, limits);
+  ASSERT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(r.status().message()), ::testing::HasSubstr("--max-message-bytes"));
+  // The estimate is an upper bound of what is sent.
+  limits.max_response_bytes = 0;
+  r = HandleTrajectory(request, limits);
+  ASSERT_TRUE(r.ok());
+  EXPECT_LE(static_cast<int64_t>(r->ByteSizeLong()), 100 * 40 + 100 * contacts * 60);
+
+  v1::FrictionProbeRequest probe;
+  *probe.mutable_plan() = request.plan();
+  probe.mutable_position()->set_z(0.02);
+  probe.mutable_normal()->set_z(-1);
+  probe.mutable_tangent()->set_x(1);
+  probe.set_tangential_force(1);
+  probe.set_initial_normal_force(3);
+  probe.set_final_normal_force(0.5);
+  probe.set_ramp_rate(1);
+  probe.set_sample_rate(1000);  // 2,501 steps
+  limits = CallLimits{};
+  limits.max_trajectory_work = 1000;
+  absl::StatusOr<v1::FrictionProbeResponse> p = HandleFrictionProbe(probe, limits);
+  ASSERT_EQ(p.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(std::string(p.status().message()), ::testing::StartsWith("sample_rate: 2501 probe steps"));
+}
+
+}  // namespace
+}  // namespace tactforce::api

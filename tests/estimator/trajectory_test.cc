@@ -117,6 +117,30 @@ TEST(FrictionProbe, HoldingFingersBalanceTheProbe) {
   probe.tangent = probe.normal;
   EXPECT_EQ(PlanFrictionProbe(hold, probe, PlanOptions{}, SolverKind::kGeometric).status().message(),
             "probe.tangent: zero length after projection onto the tangent plane");
+  // Issue 16: 2.5e18 steps were cast to int (undefined behaviour) and
+  // answered "at least one step is required".
+  probe.tangent = Vec3(1, 0, 0);
+  probe.ramp_rate = 1e-9;
+  probe.sample_rate = 1e9;
+  EXPECT_EQ(PlanFrictionProbe(hold, probe, PlanOptions{}, SolverKind::kGeometric).status().message(),
+            "probe.sample_rate: more than 100000 steps; ramp faster or sample slower");
+}
+
+// Issue 16: deadlines, cancellation and shutdown reach a long motion between
+// its steps (only Ipopt polled the interrupt before).
+TEST(Trajectory, InterruptEndsTheMotionBetweenSteps) {
+  const TrajectoryProblem t = LiftAndRotate(200);
+  int polls = 0;
+  PlanOptions o;
+  o.interrupt = [&polls] { return ++polls > 3; };
+  absl::StatusOr<TrajectoryResult> r = PlanTrajectory(t, o, SolverKind::kGeometric);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().code(), absl::StatusCode::kCancelled);
+  EXPECT_EQ(r.status().message(), "interrupted after 3 of 200 steps");
+  TrajectoryProblem bad = t;
+  bad.inertia->ixx = -1e-4;
+  EXPECT_EQ(PlanTrajectory(bad, PlanOptions{}, SolverKind::kGeometric).status().message().substr(0, 16),
+            "object.inertia: ");
 }
 
 }  // namespace

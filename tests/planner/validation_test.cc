@@ -96,6 +96,68 @@ TEST(Validation, EveryBadInputNamesItsField) {
   }
 }
 
+// Issue 16 reproducers: finite inputs whose intermediate products overflow.
+TEST(Validation, HugeFiniteInputsAreNamedNotSilentlyWrong) {
+  // A normal longer than ~1.3e154 overflowed |n| to inf and became (0,0,0):
+  // INFEASIBLE instead of the plan of the same, shorter normal.
+  PlanProblem p = Valid();
+  p.contacts[0].normal = Vec3(0, 0, 0);
+  p.contacts[0].normal(0) = -1e155;
+  PlanProblem q = Valid();
+  q.contacts[0].normal = Vec3(-1, 0, 0);
+  absl::StatusOr<PlanProblem> v = ValidateProblem(p, PlanOptions{});
+  ASSERT_TRUE(v.ok()) << v.status();
+  EXPECT_EQ(v->contacts[0].normal, Vec3(-1, 0, 0));
+  const absl::StatusOr<PlanResult> huge = MakeSolver(SolverKind::kGeometric)->Solve(p, PlanOptions{});
+  const absl::StatusOr<PlanResult> unit = MakeSolver(SolverKind::kGeometric)->Solve(q, PlanOptions{});
+  ASSERT_TRUE(huge.ok() && unit.ok()) << huge.status() << unit.status();
+  EXPECT_EQ(huge->status, PlanStatus::kOptimal);
+  ASSERT_EQ(huge->forces.size(), unit->forces.size());
+  for (size_t i = 0; i < huge->forces.size(); ++i) EXPECT_EQ(huge->forces[i], unit->forces[i]);
+  // The largest finite components normalise too; a tiny one is still zero.
+  p.contacts[0].normal = Vec3(std::numeric_limits<double>::max(), std::numeric_limits<double>::max(), 0);
+  v = ValidateProblem(p, PlanOptions{});
+  ASSERT_TRUE(v.ok()) << v.status();
+  EXPECT_NEAR(v->contacts[0].normal.norm(), 1.0, 1e-15);
+  p.contacts[0].normal = Vec3(1e-200, 0, 0);
+  EXPECT_EQ(ValidateProblem(p, PlanOptions{}).status().message(), "contacts[0].normal: zero length");
+
+  // Magnitudes no grasp has: InvalidArgument naming the field (mass 1e308
+  // gave OK with "residual of nan").
+  const BadCase huge_cases[] = {
+      {"mass", [](PlanProblem& x, PlanOptions&) { x.object.mass = 1e308; }, "object.mass"},
+      {"com", [](PlanProblem& x, PlanOptions&) { x.object.com.x() = 1e200; }, "object.com"},
+      {"gravity", [](PlanProblem& x, PlanOptions&) { x.object.gravity.z() = -1e300; }, "object.gravity"},
+      {"wrench", [](PlanProblem& x, PlanOptions&) { x.external_wrench.force.y() = 1e160; }, "external_wrench.force"},
+      {"torque", [](PlanProblem& x, PlanOptions&) { x.external_wrench.torque.y() = -1e160; }, "external_wrench.torque"},
+      {"position", [](PlanProblem& x, PlanOptions&) { x.contacts[1].position.z() = 1e155; }, "contacts[1].position"},
+      {"friction", [](PlanProblem& x, PlanOptions&) { x.contacts[2].friction = 1e300; }, "contacts[2].friction"},
+      {"sigma", [](PlanProblem& x, PlanOptions&) { x.contacts[0].sigma = 1e200; }, "contacts[0].sigma"},
+      {"max force", [](PlanProblem& x, PlanOptions&) { x.contacts[0].max_normal_force = 1e300; },
+       "contacts[0].max_normal_force"},
+  };
+  for (const BadCase& c : huge_cases) {
+    PlanProblem bad = Valid();
+    PlanOptions o;
+    c.spoil(bad, o);
+    absl::StatusOr<PlanProblem> r = ValidateProblem(bad, o);
+    ASSERT_FALSE(r.ok()) << c.name;
+    EXPECT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument);
+    EXPECT_EQ(std::string(r.status().message()).rfind(std::string(c.field) + ": ", 0), 0u) << r.status();
+  }
+}
+
+TEST(Validation, InertiaMustBePhysical) {
+  EXPECT_TRUE(ValidateInertia({1e-3, 2e-3, 2.5e-3, 0, 0, 0}).ok());
+  EXPECT_TRUE(ValidateInertia({0, 0, 0, 0, 0, 0}).ok());  // a point mass
+  for (const Inertia& bad : {Inertia{-1e-3, 2e-3, 2e-3, 0, 0, 0}, Inertia{1e-3, 1e-3, 5e-3, 0, 0, 0},
+                             Inertia{std::nan(""), 1e-3, 1e-3, 0, 0, 0}, Inertia{1e-3, 1e-3, 1e-3, 1e-2, 0, 0}}) {
+    const absl::Status s = ValidateInertia(bad);
+    EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument) << bad.ixx << " " << bad.izz;
+    EXPECT_EQ(std::string(s.message()).rfind("object.inertia: ", 0), 0u) << s;
+  }
+}
+
 TEST(Validation, GeometricBackendRejectsExactCone) {
   PlanOptions o;
   o.cone = ConeModel::kExact;

@@ -5,6 +5,7 @@
 // are statuses inside the response, not errors.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 
 #include "absl/status/statusor.h"
@@ -22,6 +23,12 @@ struct CallLimits {
   int max_contacts = planner::PlanOptions{}.max_contacts;
   double ipopt_max_cpu_seconds = 0.0;  // 0 = none
   std::function<bool()> interrupt;     // deadline / cancellation
+  // PlanTrajectory / PlanFrictionProbe: at most this many steps x contacts x
+  // cone sides, checked before any solve (the server's --max-trajectory-work).
+  int64_t max_trajectory_work = 4'000'000;
+  // Largest response the caller can send (bytes; 0 = no limit): a
+  // trajectory whose answer cannot fit is refused before solving.
+  int64_t max_response_bytes = 0;
 };
 
 // A PlanRequest converted (FromProto) with `limits` applied to its options.

@@ -43,6 +43,8 @@ struct PlannerServiceOptions {
   int max_contacts = api::CallLimits{}.max_contacts;  // PlanOptions::max_contacts
   int solve_timeout_ms = 10'000;  // PlanOptions::ipopt_max_cpu_seconds; 0 = none
   int inline_max_contacts = api::PlanSettings{}.inline_max_contacts;  // 0 = never inline
+  int64_t max_trajectory_work = api::CallLimits{}.max_trajectory_work;  // steps x contacts x cone sides
+  int64_t max_response_bytes = 0;  // the server's --max-message-bytes (0 = unchecked)
 };
 
 class PlannerService final : public v1::Planner::CallbackService, public HostedService {

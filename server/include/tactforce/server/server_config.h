@@ -20,6 +20,7 @@ struct ServerConfig {
   int solve_timeout_ms = PlannerServiceOptions{}.solve_timeout_ms;
   int inline_max_contacts = PlannerServiceOptions{}.inline_max_contacts;
   int64_t max_inertia_samples = EstimatorServiceOptions{}.max_inertia_samples;  // per FitInertia stream
+  int64_t max_trajectory_work = PlannerServiceOptions{}.max_trajectory_work;  // steps x contacts x cone sides
   std::string tls_cert;
   std::string tls_key;
   std::string tls_client_ca;
