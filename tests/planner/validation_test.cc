@@ -77,6 +77,21 @@ TEST(Validation, EveryBadInputNamesItsField) {
       {"too many contacts", [](PlanProblem& p, PlanOptions&) {
          while (p.contacts.size() <= 64) p.contacts.push_back(p.contacts[0]);
        }, "contacts:"},
+      // Issue 16: finite magnitudes no grasp has (mass 1e308 gave OK with
+      // "residual of nan").
+      {"huge mass", [](PlanProblem& x, PlanOptions&) { x.object.mass = 1e308; }, "object.mass:"},
+      {"huge com", [](PlanProblem& x, PlanOptions&) { x.object.com.x() = 1e200; }, "object.com:"},
+      {"huge gravity", [](PlanProblem& x, PlanOptions&) { x.object.gravity.z() = -1e300; }, "object.gravity:"},
+      {"huge wrench", [](PlanProblem& x, PlanOptions&) { x.external_wrench.force.y() = 1e160; },
+       "external_wrench.force:"},
+      {"huge torque", [](PlanProblem& x, PlanOptions&) { x.external_wrench.torque.y() = -1e160; },
+       "external_wrench.torque:"},
+      {"huge position", [](PlanProblem& x, PlanOptions&) { x.contacts[1].position.z() = 1e155; },
+       "contacts[1].position:"},
+      {"huge friction", [](PlanProblem& x, PlanOptions&) { x.contacts[2].friction = 1e300; }, "contacts[2].friction:"},
+      {"huge sigma", [](PlanProblem& x, PlanOptions&) { x.contacts[0].sigma = 1e200; }, "contacts[0].sigma:"},
+      {"huge max force", [](PlanProblem& x, PlanOptions&) { x.contacts[0].max_normal_force = 1e300; },
+       "contacts[0].max_normal_force:"},
   };
   for (const BadCase& c : cases) {
     PlanProblem p = Valid();
@@ -121,30 +136,6 @@ TEST(Validation, HugeFiniteInputsAreNamedNotSilentlyWrong) {
   EXPECT_NEAR(v->contacts[0].normal.norm(), 1.0, 1e-15);
   p.contacts[0].normal = Vec3(1e-200, 0, 0);
   EXPECT_EQ(ValidateProblem(p, PlanOptions{}).status().message(), "contacts[0].normal: zero length");
-
-  // Magnitudes no grasp has: InvalidArgument naming the field (mass 1e308
-  // gave OK with "residual of nan").
-  const BadCase huge_cases[] = {
-      {"mass", [](PlanProblem& x, PlanOptions&) { x.object.mass = 1e308; }, "object.mass"},
-      {"com", [](PlanProblem& x, PlanOptions&) { x.object.com.x() = 1e200; }, "object.com"},
-      {"gravity", [](PlanProblem& x, PlanOptions&) { x.object.gravity.z() = -1e300; }, "object.gravity"},
-      {"wrench", [](PlanProblem& x, PlanOptions&) { x.external_wrench.force.y() = 1e160; }, "external_wrench.force"},
-      {"torque", [](PlanProblem& x, PlanOptions&) { x.external_wrench.torque.y() = -1e160; }, "external_wrench.torque"},
-      {"position", [](PlanProblem& x, PlanOptions&) { x.contacts[1].position.z() = 1e155; }, "contacts[1].position"},
-      {"friction", [](PlanProblem& x, PlanOptions&) { x.contacts[2].friction = 1e300; }, "contacts[2].friction"},
-      {"sigma", [](PlanProblem& x, PlanOptions&) { x.contacts[0].sigma = 1e200; }, "contacts[0].sigma"},
-      {"max force", [](PlanProblem& x, PlanOptions&) { x.contacts[0].max_normal_force = 1e300; },
-       "contacts[0].max_normal_force"},
-  };
-  for (const BadCase& c : huge_cases) {
-    PlanProblem bad = Valid();
-    PlanOptions o;
-    c.spoil(bad, o);
-    absl::StatusOr<PlanProblem> r = ValidateProblem(bad, o);
-    ASSERT_FALSE(r.ok()) << c.name;
-    EXPECT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument);
-    EXPECT_EQ(std::string(r.status().message()).rfind(std::string(c.field) + ": ", 0), 0u) << r.status();
-  }
 }
 
 TEST(Validation, InertiaMustBePhysical) {
