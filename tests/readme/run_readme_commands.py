@@ -69,9 +69,10 @@ def start_server(bin_dir):
 
 
 def adapt(code, bin_dir, address, tmp):
-    code = code.replace("build/bin", bin_dir)
+    # /tmp/ first: the binary folder (and the private folder) may be under /tmp.
+    code = code.replace("/tmp/", tmp + "/")
     code = re.sub(r"(127\.0\.0\.1|localhost):50051", address, code)
-    return code.replace("/tmp/", tmp + "/")
+    return code.replace("build/bin", bin_dir)
 
 
 def main():
