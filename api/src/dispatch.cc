@@ -5,6 +5,7 @@
 // queueing) and the solve with its deadline and cancellation checks.
 #include "tactforce/api/dispatch.h"
 
+#include <cmath>
 #include <memory>
 #include <string>
 #include <utility>
@@ -90,6 +91,31 @@ absl::Status BusyStatus(const Executor& pool, const PoolWords& words) {
   return absl::ResourceExhaustedError(absl::StrCat("server busy: all ", pool.workers(), " ",
                                                    words.workers, " busy and ", pool.max_queued(),
                                                    " ", words.queued, " queued; retry later"));
+}
+
+WorkBudget::WorkBudget(double seconds, std::function<bool()> interrupt)
+    : seconds_(seconds > 0 ? seconds : 0.0), interrupt_(std::move(interrupt)) {
+  if (seconds_ > 0) {
+    end_ = std::chrono::steady_clock::now() +
+           std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+               std::chrono::duration<double>(seconds_));
+  }
+}
+
+std::function<bool()> WorkBudget::Interrupt() const {
+  if (seconds_ == 0) return interrupt_;
+  return [end = end_, inner = interrupt_] {
+    return (inner && inner()) || std::chrono::steady_clock::now() >= end;
+  };
+}
+
+bool WorkBudget::Spent() const { return seconds_ > 0 && std::chrono::steady_clock::now() >= end_; }
+
+absl::Status WorkBudget::Explain(absl::Status status) const {
+  if (status.ok() || !Spent()) return status;
+  return absl::ResourceExhaustedError(absl::StrCat(
+      "stopped at the server's limit of ", std::llround(seconds_ * 1000),
+      " ms of work per call (--solve-timeout-ms): ", status.message()));
 }
 
 bool RunCall(CallLog log, Executor* pool, CallWork work, CallDone done, const PoolWords& words) {

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <utility>
 
@@ -214,6 +215,15 @@ absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::Inerti
   out.noise.linear_acceleration_sigma = n.linear_acceleration_sigma();
   out.noise.angular_acceleration_sigma = n.angular_acceleration_sigma();
   out.savitzky_golay = o.savitzky_golay();
+  // uint32 counts past int's range are named here, not wrapped negative.
+  for (const auto& [value, field] : {std::pair{o.savitzky_golay_window(), "savitzky_golay_window"},
+                                     std::pair{o.smoothing_window(), "smoothing_window"},
+                                     std::pair{o.max_iterations(), "max_iterations"}}) {
+    if (value > static_cast<uint32_t>(std::numeric_limits<int>::max())) {
+      return absl::InvalidArgumentError(absl::StrCat("options.", field, ": ", value, " is out of range (at most ",
+                                                     std::numeric_limits<int>::max(), ")"));
+    }
+  }
   if (o.savitzky_golay_window() != 0) out.savitzky_golay_window = static_cast<int>(o.savitzky_golay_window());
   out.smoothing_window = static_cast<int>(o.smoothing_window());
   if (o.max_iterations() != 0) out.max_iterations = static_cast<int>(o.max_iterations());

@@ -205,7 +205,8 @@ absl::StatusOr<v1::EstimateResponse> HandleEstimate(const v1::EstimateRequest& r
   return out;
 }
 
-absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& request) {
+absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& request,
+                                                    const CallLimits& limits) {
   std::vector<estimator::FrictionTrial> trials;
   for (int i = 0; i < request.trials_size(); ++i) {
     const v1::FrictionTrial& in = request.trials(i);
@@ -223,6 +224,7 @@ absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& r
     trials.push_back(std::move(trial));
   }
   estimator::FrictionOptions o;
+  o.interrupt = limits.interrupt;
   if (request.mesh().triangles_size() > 0 || request.mesh().vertices_size() > 0) {
     io::TriangleMesh mesh;
     for (const auto& v : request.mesh().vertices()) mesh.vertices.push_back(FromProto(v));
@@ -266,7 +268,12 @@ absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& r
   return out;
 }
 
-absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request) {
+absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request, const CallLimits& limits) {
+  if (request.samples_size() > limits.max_audit_samples) {
+    return absl::InvalidArgumentError(absl::StrCat("samples: ", request.samples_size(),
+                                                   " samples exceed the limit of ", limits.max_audit_samples,
+                                                   " per request (the server's --max-audit-samples)"));
+  }
   audit::MeasuredData data;
   data.source = request.source().empty() ? "request" : request.source();
   bool any_shear = false;
@@ -286,6 +293,7 @@ absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request) {
   }
   if (absl::Status valid = audit::ValidateMeasuredData(data); !valid.ok()) return valid;
   audit::AuditOptions options;
+  options.interrupt = limits.interrupt;
   if (request.has_heldout_fraction()) options.heldout_fraction = request.heldout_fraction();
   if (request.has_max_causes()) options.max_causes = request.max_causes();
   if (!request.reading_units().empty()) options.reading_units = request.reading_units();

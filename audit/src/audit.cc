@@ -198,11 +198,19 @@ absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOption
   std::vector<Effect> candidates = ChooseCandidates(o, st, &rep.notes);
   std::vector<Effect> nuisance = MakeDelayNuisance(data, eng, st, o, &candidates, &base, &rep.notes);
 
+  auto interrupted = [&o](const char* stage) -> absl::Status {
+    if (o.interrupt && o.interrupt()) return absl::CancelledError(absl::StrCat("interrupted ", stage));
+    return absl::OkStatus();
+  };
+  if (auto stop = interrupted("before the cause selection"); !stop.ok()) return stop;
   Selection s = internal::StartSelection(eng, base, std::move(nuisance));
   internal::SelectCauses(eng, candidates, st, o, &s, &rep);
+  if (auto stop = interrupted("during the cause selection"); !stop.ok()) return stop;
   rep.nominal_adequate = s.named.empty();
   internal::RefitJointly(eng, st, o, &s, &rep.causes);
+  if (auto stop = interrupted("after the joint refit"); !stop.ok()) return stop;
   if (o.uncertainties && !s.named.empty()) internal::EstimateUncertainties(eng, st, o, s, &rep.causes);
+  if (auto stop = interrupted("after the uncertainties"); !stop.ok()) return stop;
 
   BuildModels(data, o, eng, base, s, &rep);
   Resimulate(data, o, &rep);

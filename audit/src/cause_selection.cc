@@ -162,6 +162,7 @@ bool AcceptBest(const RoundBest& best, const std::vector<Effect>& candidates, in
 void SelectCauses(ChannelEvaluator& eng, const std::vector<Effect>& candidates, const RunStats& st,
                   const AuditOptions& o, Selection* s, AuditReport* rep) {
   for (int round = 1; round <= o.max_causes; ++round) {
+    if (o.interrupt && o.interrupt()) return;  // RunAudit reports it
     if (!s->named.empty()) ReconvergeNamed(eng, st, o, s);
     const RoundBest best = ScoreRound(eng, candidates, round, st, o, *s, rep);
     if (best.candidate < 0) break;

@@ -29,9 +29,18 @@ double internal::MedianStep(const std::vector<double>& t, double fallback) {
 
 namespace {
 
-std::string Where(const MeasuredData& d, int i) {
-  if (i >= 0 && i < static_cast<int>(d.line.size())) return absl::StrCat(d.source, ":", d.line[i]);
-  return absl::StrCat(d.source, ": sample ", i);
+// Sample i's value in column `col`: "<file>:<line>: column 'col'" for a
+// CSV, the message path "samples[i].col" otherwise (no line numbers).
+std::string Where(const MeasuredData& d, int i, const char* col) {
+  if (i >= 0 && i < static_cast<int>(d.line.size()))
+    return absl::StrCat(d.source, ":", d.line[i], ": column '", col, "'");
+  return absl::StrCat("samples[", i, "].", col);
+}
+
+// A whole column: "<file>: column 'col'" or "samples[*].col".
+std::string Column(const MeasuredData& d, const char* col) {
+  if (!d.line.empty()) return absl::StrCat(d.source, ": column '", col, "'");
+  return absl::StrCat("samples[*].", col);
 }
 
 }  // namespace
@@ -41,7 +50,7 @@ absl::Status ValidateMeasuredData(const MeasuredData& d, int min_samples) {
   if (d.reference.size() != n || d.reading.size() != n)
     return absl::InvalidArgumentError(absl::StrCat(d.source, ": columns t, reference, reading differ in length"));
   if (!d.shear.empty() && d.shear.size() != n)
-    return absl::InvalidArgumentError(absl::StrCat(d.source, ": column 'shear' differs in length"));
+    return absl::InvalidArgumentError(absl::StrCat(Column(d, "shear"), " differs in length"));
   if (static_cast<int>(n) < min_samples) {
     return absl::InvalidArgumentError(absl::StrCat(
         d.source, ": too few samples: ", n, " valid rows",
@@ -51,7 +60,7 @@ absl::Status ValidateMeasuredData(const MeasuredData& d, int min_samples) {
   auto check_finite = [&](const std::vector<double>& v, const char* col) -> absl::Status {
     for (size_t i = 0; i < v.size(); ++i)
       if (!std::isfinite(v[i]))
-        return absl::InvalidArgumentError(absl::StrCat(Where(d, i), ": column '", col, "': not a finite number"));
+        return absl::InvalidArgumentError(absl::StrCat(Where(d, i, col), ": not a finite number"));
     return absl::OkStatus();
   };
   for (auto st : {check_finite(d.t, "t"), check_finite(d.reference, "reference"),
@@ -61,14 +70,14 @@ absl::Status ValidateMeasuredData(const MeasuredData& d, int min_samples) {
   for (size_t i = 1; i < n; ++i) {
     if (std::binary_search(starts.begin(), starts.end(), static_cast<int>(i))) continue;
     if (!(d.t[i] > d.t[i - 1]))
-      return absl::InvalidArgumentError(absl::StrCat(Where(d, i), ": column 't': time not increasing (", d.t[i],
+      return absl::InvalidArgumentError(absl::StrCat(Where(d, i, "t"), ": time not increasing (", d.t[i],
                                                      " after ", d.t[i - 1], "); sort the rows by time"));
   }
   auto check_const = [&](const std::vector<double>& v, const char* col, const char* why) -> absl::Status {
     auto [lo, hi] = std::minmax_element(v.begin(), v.end());
     if (*hi - *lo <= 1e-12 * std::max(1.0, std::abs(*hi)))
       return absl::InvalidArgumentError(
-          absl::StrCat(d.source, ": column '", col, "' is constant (", *lo, "): ", why));
+          absl::StrCat(Column(d, col), " is constant (", *lo, "): ", why));
     return absl::OkStatus();
   };
   if (auto st = check_const(d.reference, "reference",

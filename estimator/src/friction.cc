@@ -158,20 +158,35 @@ TrialFriction EstimateTrial(const FrictionTrial& trial, const Vec3& n, const Fri
   return out;
 }
 
+// Each option by its name (the FrictionRequest field), with its value.
+absl::Status ValidateOptions(const FrictionOptions& o) {
+  auto bad = [](const char* field, const char* rule, double value) {
+    return absl::InvalidArgumentError(absl::StrCat(field, ": must be ", rule, " (got ", value, ")"));
+  };
+  if (!(o.slip_distance > 0) || !std::isfinite(o.slip_distance))
+    return bad("slip_distance", "finite and > 0 m", o.slip_distance);
+  if (o.window < 1) return bad("window", ">= 1 sample", o.window);
+  if (o.fit_window < 3) return bad("fit_window", ">= 3 samples", o.fit_window);
+  if (!(o.min_normal_force >= 0) || !std::isfinite(o.min_normal_force))
+    return bad("min_normal_force", "finite and >= 0 N", o.min_normal_force);
+  if (!(o.noise_k > 0) || !std::isfinite(o.noise_k)) return bad("noise_k", "finite and > 0", o.noise_k);
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 absl::StatusOr<FrictionEstimate> EstimateFriction(const std::vector<FrictionTrial>& trials,
                                                   const FrictionOptions& o) {
   if (trials.empty()) return absl::InvalidArgumentError("trials: empty");
-  if (!(o.slip_distance > 0) || o.window < 1 || o.fit_window < 3 || !(o.min_normal_force >= 0) ||
-      !(o.noise_k > 0))
-    return absl::InvalidArgumentError(
-        "options: need slip_distance > 0, window >= 1, fit_window >= 3, min_normal_force >= 0");
+  if (absl::Status s = ValidateOptions(o); !s.ok()) return s;
   if (o.mesh) {
     if (absl::Status s = io::ValidateMesh(*o.mesh); !s.ok()) return s;
   }
   FrictionEstimate out;
   for (int i = 0; i < static_cast<int>(trials.size()); ++i) {
+    if (o.interrupt && o.interrupt()) {
+      return absl::CancelledError(absl::StrCat("interrupted after ", i, " of ", trials.size(), " trials"));
+    }
     const FrictionTrial& trial = trials[i];
     if (absl::Status s = ValidateTrial(trial, i, 3); !s.ok()) return s;
     Vec3 n;

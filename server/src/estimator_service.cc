@@ -5,6 +5,8 @@
 #include "tactforce/server/estimator_service.h"
 
 #include <atomic>
+#include <chrono>
+#include <mutex>
 #include <utility>
 
 #include "absl/strings/str_cat.h"
@@ -19,42 +21,112 @@ namespace {
 
 // Reads the FitInertia stream message by message into an api::InertiaStream;
 // a bad message ends the call at once with INVALID_ARGUMENT; at the
-// half-close the fit runs on the pool. Deletes itself in OnDone.
-class FitInertiaReactor final : public grpc::ServerReadReactor<v1::FitInertiaRequest> {
+// half-close the fit runs on the pool. Admitted, timed out and held to the
+// in-flight sample budget by the StreamRegistry. Deletes itself once gRPC
+// (OnDone) and the registry have let go.
+class FitInertiaReactor final : public grpc::ServerReadReactor<v1::FitInertiaRequest>,
+                                public IdleEndable {
  public:
   FitInertiaReactor(grpc::CallbackServerContext* context, v1::FitInertiaResponse* response,
-                    WorkerPool* pool, int64_t max_samples)
-      : response_(response), pool_(pool), stream_(max_samples), guard_(context, &cancelled_),
+                    WorkerPool* pool, StreamRegistry* streams, const EstimatorServiceOptions& options)
+      : response_(response), pool_(pool), streams_(streams), stream_(options.max_inertia_samples),
+        max_call_seconds_(options.solve_timeout_ms / 1000.0), guard_(context, &cancelled_),
         log_("FitInertia", guard_) {
     log_.set_pooled();  // also for a call that ends before the fit
-    StartRead(&message_);
+    if (absl::Status admitted = streams_->Open(this, "FitInertia"); !admitted.ok()) {
+      EndWith(admitted);
+      return;
+    }
+    registered_.store(true);
+    ReadNext();
   }
 
   void OnReadDone(bool ok) override {
-    if (!ok) return StartFit();  // half-close (or a broken call: the guard sees it)
-    if (absl::Status s = stream_.Add(message_); !s.ok()) {
-      Log().Emit(s);
-      return Finish(ToGrpcStatus(s));
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      if (finished_) return;  // ended for idling while this read was pending
+      waiting_ = false;
     }
+    if (!ok) return StartFit();  // half-close (or a broken call: the guard sees it)
+    absl::Status s = streams_->ReserveSamples(message_.samples_size());
+    if (s.ok()) {
+      reserved_samples_.fetch_add(message_.samples_size());
+      s = stream_.Add(message_);
+    }
+    if (!s.ok()) return EndWith(s);
     message_.Clear();
-    StartRead(&message_);
+    ReadNext();
   }
   void OnCancel() override { cancelled_.store(true); }
-  void OnDone() override { delete this; }
+  void OnDone() override {
+    ReleaseSamples();
+    Unregister();
+    Unref();
+  }
+
+  void Ref() override { refs_.fetch_add(1, std::memory_order_relaxed); }
+  void Unref() override {
+    if (refs_.fetch_sub(1, std::memory_order_acq_rel) == 1) delete this;
+  }
+  void EndIfIdleSince(std::chrono::steady_clock::time_point cutoff, const absl::Status& status) override {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      if (finished_ || !waiting_ || waiting_since_ >= cutoff) return;
+    }
+    EndWith(status);
+  }
 
  private:
+  void ReadNext() {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      waiting_ = true;
+      waiting_since_ = std::chrono::steady_clock::now();
+    }
+    StartRead(&message_);
+  }
+
+  // Logs and finishes once, whichever of reader, reaper and fit comes first.
+  void EndWith(const absl::Status& status) {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      if (finished_) return;
+      finished_ = true;
+    }
+    Log().Emit(status);
+    ReleaseSamples();
+    Unregister();
+    Finish(ToGrpcStatus(status));
+  }
+
+  // Back to the budget, and the stream's slot freed, before the client
+  // hears the end: a client that opens its next stream at once finds both.
+  void ReleaseSamples() { streams_->ReleaseSamples(reserved_samples_.exchange(0)); }
+  void Unregister() {
+    if (registered_.exchange(false)) streams_->Close(this);
+  }
+
   void StartFit() {
     auto fit = [this](api::CallLog&) -> absl::Status {
       if (guard_.ShouldStop()) return guard_.StopReason("before the fit started");
+      const api::WorkBudget budget(max_call_seconds_, guard_.Interrupt());
       api::CallLimits limits;
-      limits.interrupt = guard_.Interrupt();
+      limits.interrupt = budget.Interrupt();
       absl::StatusOr<v1::FitInertiaResponse> result = stream_.Fit(limits);
-      if (!result.ok()) return result.status();
+      if (!result.ok()) return guard_.ShouldStop() ? result.status() : budget.Explain(result.status());
       *response_ = *std::move(result);
       return absl::OkStatus();
     };
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      finished_ = true;  // from here the fit's `done` finishes the call
+    }
     api::RunCall(Log(), pool_, std::move(fit),
-                 [this](const absl::Status& status) { Finish(ToGrpcStatus(status)); });
+                 [this](const absl::Status& status) {
+                   ReleaseSamples();
+                   Unregister();
+                   Finish(ToGrpcStatus(status));
+                 });
   }
 
   // The call's log line with what the stream has delivered so far.
@@ -67,25 +139,41 @@ class FitInertiaReactor final : public grpc::ServerReadReactor<v1::FitInertiaReq
 
   v1::FitInertiaResponse* response_;
   WorkerPool* pool_;
+  StreamRegistry* streams_;
+  std::atomic<bool> registered_{false};  // admitted and not yet closed
+  std::atomic<int64_t> reserved_samples_{0};  // taken from the registry's budget
   api::InertiaStream stream_;
+  double max_call_seconds_;
   v1::FitInertiaRequest message_;
   std::atomic<bool> cancelled_{false};
+  std::atomic<int> refs_{1};  // gRPC's until OnDone; the reaper's while it looks
+  std::mutex mu_;             // guards finished_, waiting_, waiting_since_
+  bool finished_ = false;
+  bool waiting_ = false;
+  std::chrono::steady_clock::time_point waiting_since_{};
   const RpcGuard guard_;
   api::CallLog log_;  // clock and peer from the start of the call
 };
 
 }  // namespace
 
+api::CallLimits EstimatorServiceOptions::Limits() const {
+  api::CallLimits limits;
+  limits.max_contacts = max_contacts;
+  limits.max_audit_samples = max_audit_samples;
+  limits.max_call_seconds = solve_timeout_ms / 1000.0;
+  return limits;
+}
+
 grpc::ServerReadReactor<v1::FitInertiaRequest>* EstimatorService::FitInertia(
     grpc::CallbackServerContext* context, v1::FitInertiaResponse* response) {
-  return new FitInertiaReactor(context, response, pool_, options_.max_inertia_samples);
+  return new FitInertiaReactor(context, response, pool_, streams_, options_);
 }
 
 grpc::ServerUnaryReactor* EstimatorService::EstimateForces(grpc::CallbackServerContext* context,
                                                            const v1::EstimateRequest* request,
                                                            v1::EstimateResponse* response) {
-  api::CallLimits limits;
-  limits.max_contacts = options_.max_contacts;
+  api::CallLimits limits = options_.Limits();
   return ServeOnPool<v1::EstimateRequest, v1::EstimateResponse>(
       "EstimateForces", context, request, response, pool_, limits, &api::HandleEstimate);
 }
@@ -94,16 +182,16 @@ grpc::ServerUnaryReactor* EstimatorService::EstimateFriction(grpc::CallbackServe
                                                              const v1::FrictionRequest* request,
                                                              v1::FrictionResponse* response) {
   return ServeOnPool<v1::FrictionRequest, v1::FrictionResponse>(
-      "EstimateFriction", context, request, response, pool_, api::CallLimits{},
-      [](const v1::FrictionRequest& r, const api::CallLimits&) { return api::HandleFriction(r); });
+      "EstimateFriction", context, request, response, pool_, options_.Limits(),
+      [](const v1::FrictionRequest& r, const api::CallLimits& l) { return api::HandleFriction(r, l); });
 }
 
 grpc::ServerUnaryReactor* AuditService::AuditModel(grpc::CallbackServerContext* context,
                                                    const v1::AuditRequest* request,
                                                    v1::AuditResponse* response) {
   return ServeOnPool<v1::AuditRequest, v1::AuditResponse>(
-      "AuditModel", context, request, response, pool_, api::CallLimits{},
-      [](const v1::AuditRequest& r, const api::CallLimits&) { return api::HandleAudit(r); });
+      "AuditModel", context, request, response, pool_, options_.Limits(),
+      [](const v1::AuditRequest& r, const api::CallLimits& l) { return api::HandleAudit(r, l); });
 }
 
 }  // namespace tactforce::server

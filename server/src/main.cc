@@ -11,17 +11,21 @@
 #include <string>
 #include <thread>
 
+#include <grpc/support/log.h>
+
 #include "CLI/CLI.hpp"
+#include "absl/synchronization/mutex.h"
 #include "spdlog/sinks/stdout_sinks.h"
 #include "spdlog/spdlog.h"
 #include "tactforce/api/version.h"
+#include "tactforce/server/estimator_service.h"
 #include "tactforce/server/info_service.h"
 #include "tactforce/server/planner_service.h"
+#include "tactforce/server/rpc_support.h"
 #include "tactforce/server/server_config.h"
 #include "tactforce/server/server_host.h"
-#include "absl/synchronization/mutex.h"
+#include "tactforce/server/stream_registry.h"
 #include "tactforce/server/worker_pool.h"
-#include "tactforce/server/estimator_service.h"
 
 namespace {
 
@@ -35,6 +39,22 @@ spdlog::level::level_enum ParseLevel(const std::string& name) {
   return spdlog::level::warn;
 }
 
+// gRPC's own log lines (failed TLS handshakes, ...) through the same logger,
+// so --log-level governs them too (off: nothing on stderr). gRPC keeps its
+// verbosity (GRPC_VERBOSITY, default ERROR).
+void LogGrpcLine(gpr_log_func_args* args) {
+  const spdlog::level::level_enum level = args->severity == GPR_LOG_SEVERITY_ERROR  ? spdlog::level::err
+                                          : args->severity == GPR_LOG_SEVERITY_INFO ? spdlog::level::info
+                                                                                    : spdlog::level::debug;
+  if (spdlog::should_log(level)) {
+    spdlog::log(level, "source=grpc file={}:{} message={}", args->file, args->line,
+                tactforce::server::LogValue(args->message != nullptr ? args->message : ""));
+  }
+}
+
+// After main's loggers are gone, gRPC's exit-time lines are dropped.
+void DropGrpcLine(gpr_log_func_args*) {}
+
 void SetUpLogging(const std::string& level) {
   // stdout carries only the "listening on" line; logs go to stderr.
   auto logger = spdlog::stderr_logger_mt("tactforce-server");
@@ -42,6 +62,7 @@ void SetUpLogging(const std::string& level) {
   spdlog::set_pattern("ts=%Y-%m-%dT%H:%M:%S.%fZ level=%l %v", spdlog::pattern_time_type::utc);
   spdlog::set_level(ParseLevel(level));
   spdlog::flush_on(spdlog::level::trace);
+  gpr_set_log_function(&LogGrpcLine);
 }
 
 bool AllInterfaces(const std::string& address) {
@@ -81,12 +102,14 @@ int main(int argc, char** argv) {
   SetUpLogging(config.log_level);
 
   tactforce::server::WorkerPool pool(config.EffectiveWorkers(), config.queue);
+  tactforce::server::StreamRegistry streams(config.ToStreamLimits());
   tactforce::server::ServerHost host(config.ToServerOptions());
   host.AddService(std::make_unique<tactforce::server::PlannerService>(
-      &pool, config.ToPlannerOptions()));
+      &pool, &streams, config.ToPlannerOptions()));
   host.AddService(std::make_unique<tactforce::server::EstimatorService>(
+      &pool, &streams, config.ToEstimatorOptions()));
+  host.AddService(std::make_unique<tactforce::server::AuditService>(
       &pool, config.ToEstimatorOptions()));
-  host.AddService(std::make_unique<tactforce::server::AuditService>(&pool));
   host.AddService(std::make_unique<tactforce::server::InfoService>(&host));
 
   if (absl::Status started = host.Start(); !started.ok()) {
@@ -120,5 +143,6 @@ int main(int argc, char** argv) {
   host.Shutdown(std::chrono::milliseconds(config.grace_ms));
   pool.Shutdown();
   spdlog::info("event=stopped");
+  gpr_set_log_function(&DropGrpcLine);
   return 0;
 }

@@ -29,19 +29,31 @@ api::PlanSettings ToPlanSettings(const PlannerServiceOptions& options) {
   settings.inline_max_contacts = options.inline_max_contacts;
   settings.limits.max_trajectory_work = options.max_trajectory_work;
   settings.limits.max_response_bytes = options.max_response_bytes;
+  settings.limits.max_call_seconds = options.solve_timeout_ms / 1000.0;
   return settings;
 }
 
 class PlanStreamReactor final
-    : public grpc::ServerBidiReactor<v1::PlanRequest, v1::PlanResponse> {
+    : public grpc::ServerBidiReactor<v1::PlanRequest, v1::PlanResponse>, public IdleEndable {
  public:
-  PlanStreamReactor(const api::PlanDispatcher* plans, grpc::CallbackServerContext* context)
-      : plans_(plans), guard_(context, &cancelled_) {
+  PlanStreamReactor(const api::PlanDispatcher* plans, StreamRegistry* streams,
+                    grpc::CallbackServerContext* context)
+      : plans_(plans), streams_(streams), guard_(context, &cancelled_) {
     if (spdlog::should_log(spdlog::level::info)) peer_ = context->peer();
-    StartRead(&request_);
+    if (absl::Status admitted = streams_->Open(this, "PlanStream"); !admitted.ok()) {
+      FinishOnce(ToGrpcStatus(admitted));
+      return;
+    }
+    registered_.store(true);
+    ReadNext();
   }
 
   void OnReadDone(bool ok) override {
+    {
+      std::lock_guard<std::mutex> lock(finish_mu_);
+      if (finished_) return;  // ended for idling while this read was pending
+      waiting_ = false;
+    }
     if (!ok) {
       // Half-close by the client (normal end), or a broken / cancelled call.
       FinishOnce(guard_.ShouldStop() ? guard_.StopStatus("while reading") : grpc::Status::OK);
@@ -59,18 +71,46 @@ class PlanStreamReactor final
     }
     ++index_;
     request_.Clear();
-    StartRead(&request_);
+    ReadNext();
   }
 
   void OnCancel() override { cancelled_.store(true, std::memory_order_relaxed); }
 
-  void OnDone() override { Unref(); }
+  void OnDone() override {
+    Unregister();
+    Unref();
+  }
+
+  void Ref() override { refs_.fetch_add(1, std::memory_order_relaxed); }
+  // gRPC holds one reference until OnDone; a dispatched request holds
+  // another until its `done` has run, because OnDone may come first; the
+  // registry one while it looks at the stream.
+  void Unref() override {
+    if (refs_.fetch_sub(1, std::memory_order_acq_rel) == 1) delete this;
+  }
+
+  void EndIfIdleSince(Clock::time_point cutoff, const absl::Status& status) override {
+    {
+      std::lock_guard<std::mutex> lock(finish_mu_);
+      if (finished_ || !waiting_ || waiting_since_ >= cutoff) return;
+    }
+    FinishOnce(Indexed(ToGrpcStatus(status)));
+  }
 
  private:
   // Exactly one of: a read pending, a solve running, a write pending, or
   // finished. So no lock is needed around request_/response_.
+  void ReadNext() {
+    {
+      std::lock_guard<std::mutex> lock(finish_mu_);
+      waiting_ = true;
+      waiting_since_ = Clock::now();
+    }
+    StartRead(&request_);
+  }
+
   void Dispatch() {
-    refs_.fetch_add(1, std::memory_order_relaxed);  // held until `done` has run
+    Ref();  // held until `done` has run
     plans_->Dispatch(
         request_, &response_, api::CallLog("PlanStream", guard_, index_), guard_,
         [this](const absl::Status& status) {
@@ -106,21 +146,24 @@ class PlanStreamReactor final
         std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - start_).count();
     spdlog::info("rpc=PlanStream event=end code={} responses={} total_us={} peer={}",
                  StatusCodeName(status.error_code()), index_, total_us, LogValue(peer_));
+    Unregister();  // the slot is free before the client hears the end
     Finish(status);
   }
 
-  // gRPC holds one reference until OnDone; a dispatched request holds
-  // another until its `done` has run, because OnDone may come first.
-  void Unref() {
-    if (refs_.fetch_sub(1, std::memory_order_acq_rel) == 1) delete this;
+  void Unregister() {
+    if (registered_.exchange(false)) streams_->Close(this);
   }
 
   const api::PlanDispatcher* plans_;
+  StreamRegistry* streams_;
+  std::atomic<bool> registered_{false};  // admitted by streams_ and not yet closed
   std::atomic<bool> cancelled_{false};
   RpcGuard guard_;
   std::atomic<int> refs_{1};
-  std::mutex finish_mu_;
+  std::mutex finish_mu_;  // guards finished_, waiting_, waiting_since_
   bool finished_ = false;
+  bool waiting_ = false;  // a read of the client's next request is pending
+  Clock::time_point waiting_since_{};
   int64_t index_ = 0;  // requests answered so far = index of the current one
   std::string peer_;
   const Clock::time_point start_ = Clock::now();
@@ -131,8 +174,9 @@ class PlanStreamReactor final
 
 }  // namespace
 
-PlannerService::PlannerService(WorkerPool* pool, PlannerServiceOptions options)
-    : pool_(pool), plans_(pool, ToPlanSettings(options)) {
+PlannerService::PlannerService(WorkerPool* pool, StreamRegistry* streams,
+                               PlannerServiceOptions options)
+    : pool_(pool), streams_(streams), plans_(pool, ToPlanSettings(options)) {
   SetMessageAllocatorFor_Plan(&plan_messages_);
 }
 
@@ -152,7 +196,7 @@ grpc::ServerUnaryReactor* PlannerService::Plan(grpc::CallbackServerContext* cont
 
 grpc::ServerBidiReactor<v1::PlanRequest, v1::PlanResponse>* PlannerService::PlanStream(
     grpc::CallbackServerContext* context) {
-  return new PlanStreamReactor(&plans_, context);
+  return new PlanStreamReactor(&plans_, streams_, context);
 }
 
 grpc::ServerUnaryReactor* PlannerService::PlanTrajectory(grpc::CallbackServerContext* context,

@@ -19,6 +19,8 @@ ServerOptions ServerConfig::ToServerOptions() const {
   options.tls.cert = tls_cert;
   options.tls.key = tls_key;
   options.tls.client_ca = tls_client_ca;
+  options.max_streams_per_connection = max_streams_per_connection;
+  options.reflection = reflection;
   return options;
 }
 
@@ -36,7 +38,17 @@ EstimatorServiceOptions ServerConfig::ToEstimatorOptions() const {
   EstimatorServiceOptions options;
   options.max_contacts = max_contacts;
   options.max_inertia_samples = max_inertia_samples;
+  options.max_audit_samples = max_audit_samples;
+  options.solve_timeout_ms = solve_timeout_ms;
   return options;
+}
+
+StreamLimits ServerConfig::ToStreamLimits() const {
+  StreamLimits limits;
+  limits.max_streams = max_streams;
+  limits.idle_timeout = std::chrono::milliseconds(stream_idle_timeout_ms);
+  limits.max_inflight_samples = max_inflight_samples;
+  return limits;
 }
 
 void RegisterFlags(CLI::App& app, ServerConfig* c) {
@@ -68,9 +80,36 @@ void RegisterFlags(CLI::App& app, ServerConfig* c) {
                  "for (INVALID_ARGUMENT 'steps: ...' beyond, before any solve)")
       ->check(CLI::Range(int64_t{1}, int64_t{1'000'000'000}));
   app.add_option("--solve-timeout-ms", c->solve_timeout_ms,
-                 "CPU-time cap of one Ipopt solve in ms (0 = none); a solve that hits it "
-                 "returns PLAN_STATUS_SOLVER_FAILURE")
+                 "Work limit of one call in ms (0 = none), counted from when its work starts "
+                 "(queue wait excluded): PlanTrajectory, PlanFrictionProbe, FitInertia, "
+                 "AuditModel, EstimateFriction and EstimateForces stop with RESOURCE_EXHAUSTED "
+                 "when they reach it; each Ipopt solve is capped to this much CPU time and "
+                 "then returns PLAN_STATUS_SOLVER_FAILURE")
       ->check(CLI::Range(0, 3'600'000));
+  app.add_option("--max-audit-samples", c->max_audit_samples,
+                 "Most samples one AuditModel request may carry (INVALID_ARGUMENT 'samples: ...' beyond)")
+      ->check(CLI::Range(int64_t{40}, int64_t{100'000'000}));
+  app.add_option("--max-streams", c->max_streams,
+                 "Most PlanStream and FitInertia streams open at once on this server; a new one "
+                 "beyond ends at once with RESOURCE_EXHAUSTED (0 = no limit)")
+      ->check(CLI::Range(0, 10'000'000));
+  app.add_option("--stream-idle-timeout-ms", c->stream_idle_timeout_ms,
+                 "A PlanStream or FitInertia stream that waits longer than this for its next "
+                 "message is ended with UNAVAILABLE (checked once a second; 0 = never)")
+      ->check(CLI::Range(0, 86'400'000));
+  app.add_option("--max-inflight-samples", c->max_inflight_samples,
+                 "Most FitInertia samples all open streams may hold together (about 250 bytes "
+                 "each); the message that would exceed it ends its stream with RESOURCE_EXHAUSTED "
+                 "(0 = no limit)")
+      ->check(CLI::Range(int64_t{0}, int64_t{1'000'000'000}));
+  app.add_option("--max-streams-per-connection", c->max_streams_per_connection,
+                 "Calls one client connection may have in flight at once (HTTP/2 "
+                 "SETTINGS_MAX_CONCURRENT_STREAMS); further calls wait in the client")
+      ->check(CLI::Range(1, 1'000'000));
+  app.add_flag("--reflection,!--no-reflection", c->reflection,
+               "Serve gRPC server reflection (grpc.reflection.v1alpha), which lets tools such as "
+               "grpcurl list and describe the services; --reflection=false or --no-reflection "
+               "turns it off for production");
   app.add_option("--inline-max-contacts", c->inline_max_contacts,
                  "Geometric requests with at most this many contacts are solved on the gRPC "
                  "thread instead of the worker pool (0 = always use the pool)")
@@ -92,8 +131,9 @@ void RegisterFlags(CLI::App& app, ServerConfig* c) {
                  "(rpc, code, solver, contacts, time)")
       ->check(CLI::IsMember({"off", "error", "warn", "info", "debug"}));
   app.add_option("--grace-ms", c->grace_ms,
-                 "On SIGINT/SIGTERM: health goes NOT_SERVING, new calls are refused and "
-                 "in-flight calls get this long to finish before they are cancelled")
+                 "On SIGINT/SIGTERM: health Watch streams get NOT_SERVING, new calls (health Check "
+                 "included) are refused with UNAVAILABLE and in-flight calls get this long to "
+                 "finish before they are cancelled")
       ->check(CLI::Range(0, 3'600'000));
 }
 

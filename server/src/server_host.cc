@@ -2,13 +2,18 @@
 // message limits, health and reflection, and the drain on shutdown.
 #include "tactforce/server/server_host.h"
 
+#include <algorithm>
 #include <fstream>
+#include <memory>
 #include <mutex>
 #include <sstream>
 #include <utility>
+#include <vector>
 
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/health_check_service_interface.h>
+#include <grpcpp/impl/server_builder_option.h>
+#include <grpcpp/impl/server_builder_plugin.h>
 #include <grpcpp/security/server_credentials.h>
 
 #include "absl/status/statusor.h"
@@ -55,6 +60,26 @@ absl::StatusOr<std::shared_ptr<grpc::ServerCredentials>> MakeCredentials(const T
   return grpc::SslServerCredentials(ssl);
 }
 
+// Server reflection on or off for one builder. libgrpc++_reflection
+// registers its plugin for every builder of the process when it is loaded,
+// so "off" must remove it; "on" keeps exactly one.
+class ReflectionOption final : public grpc::ServerBuilderOption {
+ public:
+  explicit ReflectionOption(bool on) : on_(on) {}
+  void UpdateArguments(grpc::ChannelArguments*) override {}
+  void UpdatePlugins(std::vector<std::unique_ptr<grpc::ServerBuilderPlugin>>* plugins) override {
+    grpc::reflection::ProtoServerReflectionPlugin reflection;
+    const std::string name = reflection.name();
+    plugins->erase(std::remove_if(plugins->begin(), plugins->end(),
+                                  [&name](const auto& plugin) { return plugin->name() == name; }),
+                   plugins->end());
+    if (on_) plugins->push_back(std::make_unique<grpc::reflection::ProtoServerReflectionPlugin>());
+  }
+
+ private:
+  bool on_;
+};
+
 }  // namespace
 
 std::string WithBoundPort(const std::string& address, int port) {
@@ -74,7 +99,8 @@ void ServerHost::AddService(std::unique_ptr<HostedService> service) {
 }
 
 std::vector<std::string> ServerHost::service_names() const {
-  std::vector<std::string> names = {kHealthServiceName, kReflectionServiceName};
+  std::vector<std::string> names = {kHealthServiceName};
+  if (options_.reflection) names.push_back(kReflectionServiceName);
   for (const auto& service : services_) names.push_back(service->service_name());
   return names;
 }
@@ -85,16 +111,15 @@ absl::Status ServerHost::Start() {
       MakeCredentials(options_.tls);
   if (!credentials.ok()) return credentials.status();
 
-  // Process-wide switches; both must be set before the builder is made.
+  // Process-wide switch; must be set before the builder is made.
   static std::once_flag once;
-  std::call_once(once, [] {
-    grpc::EnableDefaultHealthCheckService(true);
-    grpc::reflection::InitProtoReflectionServerBuilderPlugin();
-  });
+  std::call_once(once, [] { grpc::EnableDefaultHealthCheckService(true); });
 
   grpc::ServerBuilder builder;
   builder.SetMaxReceiveMessageSize(options_.max_message_bytes);
   builder.SetMaxSendMessageSize(options_.max_message_bytes);
+  builder.AddChannelArgument(GRPC_ARG_MAX_CONCURRENT_STREAMS, options_.max_streams_per_connection);
+  builder.SetOption(std::make_unique<ReflectionOption>(options_.reflection));
   int selected_port = 0;
   builder.AddListeningPort(options_.listen, *credentials, &selected_port);
   for (const auto& service : services_) builder.RegisterService(service->grpc_service());

@@ -11,7 +11,9 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <thread>
 
+#include "absl/strings/str_cat.h"
 #include "spdlog/sinks/ostream_sink.h"
 #include "spdlog/spdlog.h"
 #include "tactforce/api/convert.h"
@@ -250,6 +252,54 @@ TEST(ApiDispatchOnPoolTest, StoppedCallAndFullPool) {
   pool.RunAll();
   ASSERT_EQ(stopped.calls, 1);
   EXPECT_EQ(stopped.status->message(), "deadline exceeded before the work started");
+}
+
+// A handler that loops until its interrupt fires, as the long RPCs do.
+absl::StatusOr<v1::PlanResponse> SpinUntilInterrupted(const v1::PlanRequest&, const CallLimits& limits) {
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  int steps = 0;
+  while (!(limits.interrupt && limits.interrupt())) {
+    if (std::chrono::steady_clock::now() > give_up) return v1::PlanResponse();  // never interrupted
+    ++steps;
+  }
+  return absl::CancelledError(absl::StrCat("interrupted after ", steps, " steps"));
+}
+
+TEST(ApiWorkBudgetTest, SpentBudgetBecomesResourceExhaustedNamingTheFlag) {
+  ManualPool pool(1);
+  TestCaller caller;
+  CallLimits limits;
+  limits.max_call_seconds = 0.02;
+  v1::PlanRequest request;
+  v1::PlanResponse response;
+  Outcome outcome;
+  DispatchOnPool<v1::PlanRequest, v1::PlanResponse>(request, &response, CallLog("Spin", caller), &pool,
+                                                    caller, limits, &SpinUntilInterrupted, outcome.Done());
+  pool.RunAll();
+  ASSERT_EQ(outcome.calls, 1);
+  EXPECT_EQ(outcome.status->code(), absl::StatusCode::kResourceExhausted) << *outcome.status;
+  EXPECT_THAT(std::string(outcome.status->message()),
+              StartsWith("stopped at the server's limit of 20 ms of work per call (--solve-timeout-ms): "
+                         "interrupted after "));
+}
+
+TEST(ApiWorkBudgetTest, NoBudgetAndUnspentBudgetLeaveStatusesAlone) {
+  const WorkBudget none(0.0, nullptr);
+  EXPECT_FALSE(none.Interrupt());  // nothing to poll
+  EXPECT_EQ(none.Explain(absl::CancelledError("x")).code(), absl::StatusCode::kCancelled);
+  bool caller_stopped = false;
+  const WorkBudget long_one(3600.0, [&caller_stopped] { return caller_stopped; });
+  const std::function<bool()> interrupt = long_one.Interrupt();
+  EXPECT_FALSE(interrupt());
+  caller_stopped = true;
+  EXPECT_TRUE(interrupt());  // the caller's interrupt still counts
+  EXPECT_FALSE(long_one.Spent());
+  EXPECT_EQ(long_one.Explain(absl::CancelledError("x")).code(), absl::StatusCode::kCancelled);
+  const WorkBudget tiny(1e-9, nullptr);
+  std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  EXPECT_TRUE(tiny.Spent());
+  EXPECT_TRUE(tiny.Interrupt()());
+  EXPECT_TRUE(tiny.Explain(absl::OkStatus()).ok());  // a finished call keeps its answer
 }
 
 TEST(ApiCallLogTest, FieldsInOrderAndQuotedMessage) {

@@ -5,7 +5,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "tactforce/api/convert.h"
+#include "tactforce/api/inertia.h"
 #include "tactforce/planner/examples.h"
 
 namespace tactforce::api {
@@ -131,6 +134,81 @@ TEST(HandlerTest, TrajectoryWorkAndResponseSizeAreBoundedUpFront) {
   absl::StatusOr<v1::FrictionProbeResponse> p = HandleFrictionProbe(probe, limits);
   ASSERT_EQ(p.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_THAT(std::string(p.status().message()), ::testing::StartsWith("sample_rate: 2501 probe steps"));
+}
+
+// Messages follow the proto paths; options are named one by one.
+TEST(HandlerTest, FrictionOptionsAreNamedOneByOne) {
+  v1::FrictionRequest request;
+  v1::FrictionTrial* trial = request.add_trials();
+  trial->mutable_normal()->set_z(1);
+  for (int k = 0; k < 5; ++k) trial->add_samples()->set_t(k);
+  request.set_window(0);
+  absl::StatusOr<v1::FrictionResponse> r = HandleFriction(request);
+  EXPECT_EQ(r.status().message(), "window: must be >= 1 sample (got 0)");
+  request.clear_window();
+  request.set_slip_distance(-1);
+  r = HandleFriction(request);
+  EXPECT_EQ(r.status().message(), "slip_distance: must be finite and > 0 m (got -1)");
+}
+
+v1::AuditRequest RampAudit(int n) {
+  v1::AuditRequest request;
+  for (int k = 0; k < n; ++k) {
+    v1::AuditSample* s = request.add_samples();
+    s->set_t(0.01 * k);
+    s->set_reference(std::sin(0.1 * k) + 1.5);
+    s->set_reading(2 * s->reference() + 0.1);
+  }
+  return request;
+}
+
+TEST(HandlerTest, AuditNamesSamplesByTheirPathAndBoundsTheirNumber) {
+  v1::AuditRequest request = RampAudit(100);
+  request.mutable_samples(7)->set_reference(std::nan(""));
+  EXPECT_EQ(HandleAudit(request).status().message(), "samples[7].reference: not a finite number");
+  request = RampAudit(100);
+  CallLimits limits;
+  limits.max_audit_samples = 99;
+  EXPECT_EQ(HandleAudit(request, limits).status().message(),
+            "samples: 100 samples exceed the limit of 99 per request (the server's --max-audit-samples)");
+  for (int k = 0; k < 100; ++k) request.mutable_samples(k)->set_reading(1.0);
+  EXPECT_EQ(HandleAudit(request).status().message(),
+            "samples[*].reading is constant (1): the sensor does not respond; nothing to audit");
+}
+
+TEST(HandlerTest, AuditAndFrictionStopWhenInterrupted) {
+  CallLimits limits;
+  limits.interrupt = [] { return true; };
+  const absl::Status audit = HandleAudit(RampAudit(200), limits).status();
+  EXPECT_EQ(audit.code(), absl::StatusCode::kCancelled) << audit;
+  EXPECT_THAT(std::string(audit.message()), HasSubstr("interrupted"));
+  v1::FrictionRequest request;
+  v1::FrictionTrial* trial = request.add_trials();
+  trial->mutable_normal()->set_z(1);
+  for (int k = 0; k < 5; ++k) trial->add_samples()->set_t(k);
+  EXPECT_EQ(HandleFriction(request, limits).status().message(), "interrupted after 0 of 1 trials");
+}
+
+TEST(HandlerTest, InertiaCountsPastIntRangeAreNamedNotWrapped) {
+  inertia::InertiaSamples samples;
+  v1::InertiaFitOptions options;
+  options.set_savitzky_golay_window(3'000'000'000u);
+  absl::StatusOr<v1::FitInertiaResponse> r = FitInertiaSamples(samples, options);
+  EXPECT_EQ(r.status().message(),
+            "options.savitzky_golay_window: 3000000000 is out of range (at most 2147483647)");
+}
+
+TEST(HandlerTest, FitInertiaNamesTheWrenchPath) {
+  InertiaStream stream;
+  v1::FitInertiaRequest message;
+  for (int k = 0; k < 60; ++k) {
+    v1::InertiaSample* s = message.add_samples();
+    s->set_t(0.01 * k);
+    s->mutable_orientation()->set_w(1);
+    s->mutable_wrench()->mutable_force()->set_z(k == 42 ? std::nan("") : -9.81);
+  }
+  ASSERT_TRUE(stream.Add(message).ok());
+  EXPECT_EQ(stream.Fit().status().message(), "samples[42].wrench.force: not finite");
 }
 
 }  // namespace

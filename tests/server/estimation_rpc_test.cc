@@ -7,33 +7,13 @@
 #include "tactforce/estimator/friction.h"
 #include "tactforce/planner/examples.h"
 #include "tactforce/v1/estimator.grpc.pb.h"
+#include "request_builders.h"
 #include "test_support.h"
 
 namespace tactforce::testing {
 namespace {
 
 using EstimationRpcTest = ServerTest;
-
-v1::TrajectoryRequest LiftRequest(int steps) {
-  const planner::TrajectoryProblem t = planner::WrenchLiftAndRotate(steps);
-  v1::TrajectoryRequest r;
-  *r.mutable_plan() = api::ToRequest(t.base, planner::PlanOptions{}, planner::SolverKind::kGeometric);
-  v1::Inertia* in = r.mutable_plan()->mutable_object()->mutable_inertia();
-  in->set_ixx(t.inertia->ixx);
-  in->set_iyy(t.inertia->iyy);
-  in->set_izz(t.inertia->izz);
-  in->set_ixy(t.inertia->ixy);
-  in->set_ixz(t.inertia->ixz);
-  in->set_iyz(t.inertia->iyz);
-  for (const auto& s : t.steps) {
-    v1::TrajectoryStep* out = r.add_steps();
-    *out->mutable_gravity() = api::ToProto(s.gravity);
-    *out->mutable_linear_acceleration() = api::ToProto(s.linear_acceleration);
-    *out->mutable_angular_velocity() = api::ToProto(s.angular_velocity);
-    *out->mutable_angular_acceleration() = api::ToProto(s.angular_acceleration);
-  }
-  return r;
-}
 
 grpc::ClientContext* WithDeadline(grpc::ClientContext* c) {
   c->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
@@ -42,11 +22,7 @@ grpc::ClientContext* WithDeadline(grpc::ClientContext* c) {
 
 TEST_F(EstimationRpcTest, EstimateForcesMatchesInProcess) {
   auto stub = v1::Estimator::NewStub(channel_);
-  v1::EstimateRequest request;
-  const v1::PlanRequest wrench = WrenchRequest();
-  *request.mutable_object() = wrench.object();
-  *request.mutable_contacts() = wrench.contacts();
-  for (double r : {2.0, 1.5, 3.5}) request.add_readings(r);
+  v1::EstimateRequest request = WrenchEstimateRequest();
   for (auto method : {v1::ESTIMATE_METHOD_PROJECTION, v1::ESTIMATE_METHOD_NORMAL_LSQ}) {
     request.set_method(method);
     grpc::ClientContext context;
@@ -72,21 +48,7 @@ TEST_F(EstimationRpcTest, EstimateForcesMatchesInProcess) {
 
 TEST_F(EstimationRpcTest, EstimateFrictionRecoversMu) {
   auto stub = v1::Estimator::NewStub(channel_);
-  estimator::FrictionSimOptions sim;
-  sim.mu = 0.45;
-  sim.trials = 4;
-  const estimator::SimulatedFriction data = estimator::SimulateFriction(sim);
-  v1::FrictionRequest request;
-  for (const auto& trial : data.trials) {
-    v1::FrictionTrial* t = request.add_trials();
-    *t->mutable_normal() = api::ToProto(*trial.normal);
-    for (const auto& s : trial.samples) {
-      v1::FrictionSample* out = t->add_samples();
-      out->set_t(s.t);
-      *out->mutable_force() = api::ToProto(s.force);
-      *out->mutable_contact_point() = api::ToProto(s.contact_point);
-    }
-  }
+  v1::FrictionRequest request = SimulatedFrictionRequest(0.45, 4);
   grpc::ClientContext context;
   v1::FrictionResponse response;
   ASSERT_TRUE(stub->EstimateFriction(WithDeadline(&context), request, &response).ok());
@@ -117,17 +79,7 @@ TEST_F(EstimationRpcTest, PlanTrajectoryAndProbe) {
   EXPECT_EQ(bad.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_EQ(bad.error_message(), "steps[4].angular_velocity: not a finite vector");
 
-  v1::FrictionProbeRequest probe;
-  *probe.mutable_plan() = api::ToRequest(planner::BuiltInGrasps()[2].problem, planner::PlanOptions{},
-                                         planner::SolverKind::kGeometric);
-  probe.mutable_position()->set_z(0.06);
-  probe.mutable_normal()->set_z(-1);
-  probe.mutable_tangent()->set_x(1);
-  probe.set_tangential_force(1.0);
-  probe.set_initial_normal_force(3.0);
-  probe.set_final_normal_force(1.0);
-  probe.set_ramp_rate(1.0);
-  probe.set_sample_rate(10.0);
+  const v1::FrictionProbeRequest probe = ProbeRequest();
   grpc::ClientContext context3;
   v1::FrictionProbeResponse plan;
   ASSERT_TRUE(stub_->PlanFrictionProbe(WithDeadline(&context3), probe, &plan).ok());
@@ -143,25 +95,6 @@ TEST_F(EstimationRpcTest, PlanTrajectoryAndProbe) {
 
 namespace tactforce::testing {
 namespace {
-
-// Readings of `model` against a simulated press-release reference, as an
-// AuditRequest.
-v1::AuditRequest SimulatedAuditRequest(const sim::SensorModel& model, double seconds, uint64_t seed) {
-  sim::SimOptions options;
-  options.seconds = seconds;
-  options.seed = seed;
-  absl::StatusOr<sim::SimRun> run = sim::SimulateSensor(model, options);
-  EXPECT_TRUE(run.ok()) << run.status();
-  v1::AuditRequest request;
-  if (!run.ok()) return request;
-  for (size_t k = 0; k < run->t.size(); ++k) {
-    v1::AuditSample* s = request.add_samples();
-    s->set_t(run->t[k]);
-    s->set_reference(run->reference[k]);
-    s->set_reading(run->reading[k]);
-  }
-  return request;
-}
 
 // AuditModel with a 60 s deadline.
 grpc::Status CallAudit(v1::Audit::Stub& stub, const v1::AuditRequest& request, v1::AuditResponse* response) {

@@ -18,6 +18,7 @@
 #include "tactforce/api/json.h"
 #include "tactforce/inertia/simulate.h"
 #include "tactforce/v1/estimator.grpc.pb.h"
+#include "request_builders.h"
 #include "test_support.h"
 
 namespace tactforce::testing {
@@ -36,29 +37,6 @@ inertia::SimulationResult Simulated(double force_variance) {
   return *r;
 }
 
-// Streams `samples` in batches of `batch`, options in the first message.
-grpc::Status Stream(v1::Estimator::Stub& stub, const inertia::InertiaSamples& samples,
-                    const v1::InertiaFitOptions& options, int batch, v1::FitInertiaResponse* response,
-                    int corrupt_index = -1, bool options_twice = false) {
-  grpc::ClientContext context;
-  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
-  std::unique_ptr<grpc::ClientWriter<v1::FitInertiaRequest>> writer = stub.FitInertia(&context, response);
-  v1::FitInertiaRequest message;
-  *message.mutable_options() = options;
-  for (size_t i = 0; i < samples.samples.size(); ++i) {
-    v1::InertiaSample* s = message.add_samples();
-    *s = api::InertiaSampleToProto(samples.samples[i], samples.source);
-    if (static_cast<int>(i) == corrupt_index) s->mutable_orientation()->Clear();  // zero quaternion
-    if (message.samples_size() == batch || i + 1 == samples.samples.size()) {
-      if (!writer->Write(message)) break;
-      message.Clear();
-      if (options_twice) *message.mutable_options() = options;
-    }
-  }
-  writer->WritesDone();
-  return writer->Finish();
-}
-
 TEST_F(InertiaRpcTest, StreamedFitEqualsInProcessFit) {
   const inertia::SimulationResult sim = Simulated(0.1);
   auto stub = v1::Estimator::NewStub(channel_);
@@ -68,7 +46,7 @@ TEST_F(InertiaRpcTest, StreamedFitEqualsInProcessFit) {
     options.set_method(method);
     *options.mutable_truth() = api::InertialParametersToProto(sim.truth.params);
     v1::FitInertiaResponse remote;
-    const grpc::Status status = Stream(*stub, sim.samples, options, 64, &remote);
+    const grpc::Status status = StreamInertia(*stub, sim.samples, options, 64, &remote);
     ASSERT_TRUE(status.ok()) << status.error_message();
     absl::StatusOr<v1::FitInertiaResponse> local = api::FitInertiaSamples(sim.samples, options);
     ASSERT_TRUE(local.ok()) << local.status();
@@ -89,7 +67,7 @@ TEST_F(InertiaRpcTest, BadSampleInALaterMessageIsNamed) {
   const inertia::SimulationResult sim = Simulated(0.0);
   auto stub = v1::Estimator::NewStub(channel_);
   v1::FitInertiaResponse response;
-  const grpc::Status status = Stream(*stub, sim.samples, v1::InertiaFitOptions(), 50, &response, 137);
+  const grpc::Status status = StreamInertia(*stub, sim.samples, v1::InertiaFitOptions(), 50, &response, 137);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("samples[137].orientation"), std::string::npos)
       << status.error_message();
@@ -100,7 +78,7 @@ TEST_F(InertiaRpcTest, OptionsOnlyInTheFirstMessage) {
   auto stub = v1::Estimator::NewStub(channel_);
   v1::FitInertiaResponse response;
   const grpc::Status status =
-      Stream(*stub, sim.samples, v1::InertiaFitOptions(), 100, &response, -1, /*options_twice=*/true);
+      StreamInertia(*stub, sim.samples, v1::InertiaFitOptions(), 100, &response, -1, /*options_twice=*/true);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("options: only the first message"), std::string::npos)
       << status.error_message();
@@ -121,7 +99,7 @@ TEST_F(InertiaRpcTest, EmptyStreamAndBadOptionsAreInvalidArgument) {
   v1::InertiaFitOptions options;
   options.mutable_noise()->set_force_sigma(-1.0);
   v1::FitInertiaResponse response;
-  const grpc::Status status = Stream(*stub, sim.samples, options, 200, &response);
+  const grpc::Status status = StreamInertia(*stub, sim.samples, options, 200, &response);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("options.noise.force_sigma"), std::string::npos)
       << status.error_message();
@@ -136,7 +114,7 @@ TEST_F(InertiaRpcLimitTest, StreamBeyondTheServersSampleLimitIsRejected) {
   const inertia::SimulationResult sim = Simulated(0.0);
   auto stub = v1::Estimator::NewStub(channel_);
   v1::FitInertiaResponse response;
-  const grpc::Status status = Stream(*stub, sim.samples, v1::InertiaFitOptions(), 20, &response);
+  const grpc::Status status = StreamInertia(*stub, sim.samples, v1::InertiaFitOptions(), 20, &response);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("more than 50 samples"), std::string::npos) << status.error_message();
 }
@@ -213,7 +191,7 @@ TEST_F(InertiaRpcTest, DensityFitWithTheMeshInTheFirstMessageEqualsTheLocalFit) 
   auto stub = v1::Estimator::NewStub(channel_);
   const v1::InertiaFitOptions options = DensityOptions(sim);
   v1::FitInertiaResponse remote;
-  const grpc::Status status = Stream(*stub, sim.samples, options, 100, &remote);
+  const grpc::Status status = StreamInertia(*stub, sim.samples, options, 100, &remote);
   ASSERT_TRUE(status.ok()) << status.error_message();
   absl::StatusOr<v1::FitInertiaResponse> local = api::FitInertiaSamples(sim.samples, options);
   ASSERT_TRUE(local.ok()) << local.status();
@@ -228,14 +206,14 @@ TEST_F(InertiaRpcTest, DensityFitWithTheMeshInTheFirstMessageEqualsTheLocalFit) 
   // A bad placement is INVALID_ARGUMENT naming the field; the call ends.
   v1::InertiaFitOptions bad = options;
   bad.mutable_mesh()->set_scale(-1);
-  const grpc::Status rejected = Stream(*stub, sim.samples, bad, 100, &remote);
+  const grpc::Status rejected = StreamInertia(*stub, sim.samples, bad, 100, &remote);
   EXPECT_EQ(rejected.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_EQ(rejected.error_message(), "options.mesh.scale: must be > 0 (got -1)");
   bad = options;
   bad.mutable_mesh()->set_data("solid nothing\nendsolid nothing\n");
   bad.mutable_mesh()->set_format("stl");
   bad.mutable_mesh()->set_name("empty.stl");
-  const grpc::Status unreadable = Stream(*stub, sim.samples, bad, 100, &remote);
+  const grpc::Status unreadable = StreamInertia(*stub, sim.samples, bad, 100, &remote);
   EXPECT_EQ(unreadable.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_NE(unreadable.error_message().find("options.mesh: empty.stl"), std::string::npos)
       << unreadable.error_message();
@@ -275,11 +253,11 @@ TEST_F(InertiaRpcMessageLimitTest, OversizeMeshIsRefusedAndTheServerKeepsServing
   const inertia::SimulationResult sim = SimulatedBox();
   auto stub = v1::Estimator::NewStub(channel_);
   v1::FitInertiaResponse response;
-  const grpc::Status refused = Stream(*stub, sim.samples, DensityOptions(sim, 100'000), 20, &response);
+  const grpc::Status refused = StreamInertia(*stub, sim.samples, DensityOptions(sim, 100'000), 20, &response);
   EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << refused.error_message();
   EXPECT_NE(refused.error_message().find("65536"), std::string::npos) << refused.error_message();
 
-  const grpc::Status served = Stream(*stub, sim.samples, DensityOptions(sim), 20, &response);
+  const grpc::Status served = StreamInertia(*stub, sim.samples, DensityOptions(sim), 20, &response);
   ASSERT_TRUE(served.ok()) << served.error_message();
   EXPECT_TRUE(response.density_realizable());
 
@@ -297,7 +275,7 @@ TEST_F(InertiaRpcMessageLimitTest, OversizeMeshIsRefusedAndTheServerKeepsServing
   EXPECT_NE(cli.err.find("big.obj"), std::string::npos) << cli.err;
   fs::remove_all(pattern);
 
-  const grpc::Status again = Stream(*stub, sim.samples, DensityOptions(sim), 50, &response);
+  const grpc::Status again = StreamInertia(*stub, sim.samples, DensityOptions(sim), 50, &response);
   EXPECT_TRUE(again.ok()) << again.error_message();
 }
 

@@ -130,6 +130,9 @@ TEST(TlsTest, MutualTlsAcceptsOnlyClientsSignedByTheCa) {
 
   status = PlanOnce(Connect(server->address()));  // plaintext
   EXPECT_EQ(status.error_code(), grpc::StatusCode::UNAVAILABLE) << Describe(status);
+  // gRPC's own lines about the failed handshakes go through the server's
+  // logger (the counterpart of GrpcLinesFollowLogLevelOff below).
+  EXPECT_TRUE(server->WaitForStderr("source=grpc", std::chrono::seconds(5))) << server->StderrText();
 
   // The Python client speaks mutual TLS too.
   ProcessResult python = RunProcess(
@@ -156,6 +159,24 @@ TEST(TlsTest, ServerOnlyTlsNeedsNoClientCertificate) {
   status = PlanOnce(Connect(server->address()));  // plaintext
   EXPECT_EQ(status.error_code(), grpc::StatusCode::UNAVAILABLE) << Describe(status);
   EXPECT_EQ(server->Stop(), 0) << server->StderrText();
+}
+
+// --log-level off: failed handshakes print nothing (gRPC's log lines
+// follow the server's level).
+TEST(TlsTest, GrpcLinesFollowLogLevelOff) {
+  Certificates certs;
+  ASSERT_EQ(certs.Make(), "");
+  std::string error;
+  auto server = ServerProcess::Start({"--tls-cert", certs.Path("server.crt"), "--tls-key",
+                                      certs.Path("server.key"), "--tls-client-ca",
+                                      certs.Path("ca.crt"), "--log-level", "off"},
+                                     &error);
+  ASSERT_NE(server, nullptr) << error;
+  EXPECT_EQ(PlanOnce(certs.Channel(server->address(), "")).error_code(), grpc::StatusCode::UNAVAILABLE);
+  EXPECT_EQ(PlanOnce(Connect(server->address())).error_code(), grpc::StatusCode::UNAVAILABLE);
+  EXPECT_TRUE(PlanOnce(certs.Channel(server->address(), "client")).ok());
+  EXPECT_EQ(server->Stop(), 0);
+  EXPECT_EQ(server->StderrText(), "");
 }
 
 }  // namespace

@@ -81,9 +81,9 @@ absl::Status ValidatePose(const Locator& loc, const InertiaSamples& s, int i) {
 // The wrench of sample i and its sigmas.
 absl::Status ValidateWrench(const Locator& loc, const InertiaSample& x, int i) {
   if (!Finite(x.force))
-    return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "fx,fy,fz", "force"), ": not finite"));
+    return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "fx,fy,fz", "wrench.force"), ": not finite"));
   if (!Finite(x.torque))
-    return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "tx,ty,tz", "torque"), ": not finite"));
+    return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "tx,ty,tz", "wrench.torque"), ": not finite"));
   if (!(x.force_sigma >= 0) || !std::isfinite(x.force_sigma))
     return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "f_sigma", "force_sigma"), ": must be finite and >= 0"));
   if (!(x.torque_sigma >= 0) || !std::isfinite(x.torque_sigma))

@@ -173,13 +173,35 @@ class PlanDispatcher {
   PlanSettings settings_;
 };
 
+// The time budget of one call's work (CallLimits::max_call_seconds),
+// counted from construction, i.e. from when the work starts.
+class WorkBudget {
+ public:
+  // `seconds` <= 0: no budget. `interrupt`: the caller's (may be empty).
+  WorkBudget(double seconds, std::function<bool()> interrupt);
+  // True once `interrupt` is or the budget is spent; self-contained (a
+  // copy outliving this object stays valid), for CallLimits::interrupt.
+  std::function<bool()> Interrupt() const;
+  bool Spent() const;
+  // `status` unchanged unless it failed while the budget was spent: then
+  // RESOURCE_EXHAUSTED "stopped at the server's limit of N ms of work per
+  // call (--solve-timeout-ms): <status message>".
+  absl::Status Explain(absl::Status status) const;
+
+ private:
+  double seconds_;
+  std::chrono::steady_clock::time_point end_;
+  std::function<bool()> interrupt_;
+};
+
 template <class Request, class Response>
 using UnaryHandler = std::function<absl::StatusOr<Response>(const Request&, const CallLimits&)>;
 
 // A unary request on the pool (never inline): `handler` (an api::Handle*
 // function) runs on a worker with `limits` and the CallControl as
-// interrupt; the call stops with the CallControl's reason "before the work
-// started" or "after the work finished". `request`, `response` and
+// interrupt, extended by the WorkBudget of limits.max_call_seconds; the
+// call stops with the CallControl's reason "before the work started" or
+// "after the work finished", or RESOURCE_EXHAUSTED when the budget ran out. `request`, `response` and
 // `control` must stay valid until done(status) has run.
 template <class Request, class Response>
 void DispatchOnPool(const Request& request, Response* response, CallLog log, Executor* pool,
@@ -188,9 +210,10 @@ void DispatchOnPool(const Request& request, Response* response, CallLog log, Exe
   auto work = [&request, response, &control, limits = std::move(limits),
                handler = std::move(handler)](CallLog&) mutable -> absl::Status {
     if (control.ShouldStop()) return control.StopReason("before the work started");
-    limits.interrupt = control.Interrupt();
+    const WorkBudget budget(limits.max_call_seconds, control.Interrupt());
+    limits.interrupt = budget.Interrupt();
     absl::StatusOr<Response> result = handler(request, limits);
-    if (!result.ok()) return result.status();
+    if (!result.ok()) return control.ShouldStop() ? result.status() : budget.Explain(result.status());
     if (control.ShouldStop()) return control.StopReason("after the work finished");
     *response = *std::move(result);
     return absl::OkStatus();

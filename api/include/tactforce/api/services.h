@@ -29,6 +29,15 @@ struct CallLimits {
   // Largest response the caller can send (bytes; 0 = no limit): a
   // trajectory whose answer cannot fit is refused before solving.
   int64_t max_response_bytes = 0;
+  // Time one call's work may take, in seconds (0 = none): wall clock on
+  // the thread doing it, from when the work starts (queue wait excluded);
+  // the server's --solve-timeout-ms. Long loops poll `interrupt`, which the
+  // dispatcher extends with this budget (WorkBudget, dispatch.h); a call
+  // that runs out stops with RESOURCE_EXHAUSTED naming the flag.
+  double max_call_seconds = 0.0;
+  // AuditModel: most samples one request may carry (the server's
+  // --max-audit-samples).
+  int64_t max_audit_samples = 1'000'000;
 };
 
 // A PlanRequest converted (FromProto) with `limits` applied to its options.
@@ -60,7 +69,9 @@ absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
     const v1::FrictionProbeRequest& request, const CallLimits& limits = {});
 absl::StatusOr<v1::EstimateResponse> HandleEstimate(const v1::EstimateRequest& request,
                                                     const CallLimits& limits = {});
-absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& request);
-absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request);
+absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& request,
+                                                    const CallLimits& limits = {});
+absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request,
+                                              const CallLimits& limits = {});
 
 }  // namespace tactforce::api

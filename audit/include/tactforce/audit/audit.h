@@ -28,6 +28,7 @@
 //     (sim::PredictReading), held-out RMS before/after and percent gain.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -68,6 +69,9 @@ struct AuditOptions {
   bool downstream_gain = true;
   int downstream_grasps = 20;
   uint64_t seed = 1;
+  // Polled between the audit's stages and selection rounds; once true the
+  // audit stops with absl::Cancelled("interrupted ..."). May be empty.
+  std::function<bool()> interrupt;
 };
 
 struct ForceBin {

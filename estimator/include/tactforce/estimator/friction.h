@@ -7,6 +7,7 @@
 // n is the unit surface normal pointing INTO the object.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -49,6 +50,9 @@ struct FrictionOptions {
   // tangential contact-point speeds before detection.
   double noise_k = 6.0;
   std::optional<io::TriangleMesh> mesh;
+  // Polled between trials; once true the estimate stops with
+  // absl::Cancelled("interrupted after i of N trials"). May be empty.
+  std::function<bool()> interrupt;
 };
 
 struct TrialFriction {

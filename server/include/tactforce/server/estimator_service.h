@@ -13,21 +13,28 @@
 #include "tactforce/api/inertia.h"
 #include "tactforce/api/services.h"
 #include "tactforce/server/server_host.h"
+#include "tactforce/server/stream_registry.h"
 #include "tactforce/server/worker_pool.h"
 #include "tactforce/v1/audit.grpc.pb.h"
 #include "tactforce/v1/estimator.grpc.pb.h"
 
 namespace tactforce::server {
 
+// Limits of the Estimator and Audit services (the server's flags).
 struct EstimatorServiceOptions {
   int max_contacts = api::CallLimits{}.max_contacts;
   int64_t max_inertia_samples = api::kDefaultMaxInertiaSamples;  // per FitInertia stream
+  int64_t max_audit_samples = api::CallLimits{}.max_audit_samples;  // per AuditModel request
+  int solve_timeout_ms = 10'000;  // work budget of every call (CallLimits::max_call_seconds); 0 = none
+
+  api::CallLimits Limits() const;
 };
 
 class EstimatorService final : public v1::Estimator::CallbackService, public HostedService {
  public:
-  EstimatorService(WorkerPool* pool, EstimatorServiceOptions options)
-      : pool_(pool), options_(options) {}
+  // `pool` and `streams` must outlive the service.
+  EstimatorService(WorkerPool* pool, StreamRegistry* streams, EstimatorServiceOptions options)
+      : pool_(pool), streams_(streams), options_(options) {}
 
   std::string service_name() const override {
     return std::string(v1::Estimator::service_full_name());
@@ -45,6 +52,7 @@ class EstimatorService final : public v1::Estimator::CallbackService, public Hos
 
  private:
   WorkerPool* pool_;
+  StreamRegistry* streams_;  // FitInertia's admission, idle timeout and sample budget
   EstimatorServiceOptions options_;
 };
 
@@ -52,7 +60,7 @@ class EstimatorService final : public v1::Estimator::CallbackService, public Hos
 // models: tens of milliseconds to seconds).
 class AuditService final : public v1::Audit::CallbackService, public HostedService {
  public:
-  explicit AuditService(WorkerPool* pool) : pool_(pool) {}
+  AuditService(WorkerPool* pool, EstimatorServiceOptions options) : pool_(pool), options_(options) {}
   std::string service_name() const override { return std::string(v1::Audit::service_full_name()); }
   grpc::Service* grpc_service() override { return this; }
   grpc::ServerUnaryReactor* AuditModel(grpc::CallbackServerContext* context,
@@ -61,6 +69,7 @@ class AuditService final : public v1::Audit::CallbackService, public HostedServi
 
  private:
   WorkerPool* pool_;
+  EstimatorServiceOptions options_;
 };
 
 }  // namespace tactforce::server

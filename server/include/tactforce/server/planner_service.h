@@ -24,6 +24,10 @@
 // reads the next, so at most one solve per stream is in flight and order is
 // preserved by construction. The first invalid request ends the stream with
 // INVALID_ARGUMENT "request <i>: <field path>: ..." (i counts from 0).
+// Streams are admitted and timed out by the StreamRegistry: beyond
+// --max-streams a new one ends at once with RESOURCE_EXHAUSTED, and one that
+// waits longer than --stream-idle-timeout-ms for its next request ends
+// with UNAVAILABLE "request <i>: stream idle for more than ...".
 #pragma once
 
 #include <string>
@@ -34,6 +38,7 @@
 #include "tactforce/api/services.h"
 #include "tactforce/server/rpc_support.h"
 #include "tactforce/server/server_host.h"
+#include "tactforce/server/stream_registry.h"
 #include "tactforce/server/worker_pool.h"
 #include "tactforce/v1/planner.grpc.pb.h"
 
@@ -41,7 +46,9 @@ namespace tactforce::server {
 
 struct PlannerServiceOptions {
   int max_contacts = api::CallLimits{}.max_contacts;  // PlanOptions::max_contacts
-  int solve_timeout_ms = 10'000;  // PlanOptions::ipopt_max_cpu_seconds; 0 = none
+  // Ipopt's CPU cap per solve (PlanOptions::ipopt_max_cpu_seconds) and the
+  // work budget of every call (CallLimits::max_call_seconds); 0 = none.
+  int solve_timeout_ms = 10'000;
   int inline_max_contacts = api::PlanSettings{}.inline_max_contacts;  // 0 = never inline
   int64_t max_trajectory_work = api::CallLimits{}.max_trajectory_work;  // steps x contacts x cone sides
   int64_t max_response_bytes = 0;  // the server's --max-message-bytes (0 = unchecked)
@@ -49,8 +56,9 @@ struct PlannerServiceOptions {
 
 class PlannerService final : public v1::Planner::CallbackService, public HostedService {
  public:
-  // `pool` must outlive the service (and the gRPC server it is hosted on).
-  PlannerService(WorkerPool* pool, PlannerServiceOptions options);
+  // `pool` and `streams` must outlive the service (and the gRPC server it
+  // is hosted on).
+  PlannerService(WorkerPool* pool, StreamRegistry* streams, PlannerServiceOptions options);
 
   std::string service_name() const override;
   grpc::Service* grpc_service() override { return this; }
@@ -70,6 +78,7 @@ class PlannerService final : public v1::Planner::CallbackService, public HostedS
 
  private:
   WorkerPool* pool_;
+  StreamRegistry* streams_;  // PlanStream's admission and idle timeout
   api::PlanDispatcher plans_;  // its settings' limits serve every Planner RPC
   // Plan's request and response on one arena per call.
   ArenaMessageAllocator<v1::PlanRequest, v1::PlanResponse> plan_messages_;

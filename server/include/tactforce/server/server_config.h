@@ -8,6 +8,7 @@
 #include "tactforce/server/estimator_service.h"
 #include "tactforce/server/planner_service.h"
 #include "tactforce/server/server_host.h"
+#include "tactforce/server/stream_registry.h"
 
 namespace tactforce::server {
 
@@ -21,6 +22,12 @@ struct ServerConfig {
   int inline_max_contacts = PlannerServiceOptions{}.inline_max_contacts;
   int64_t max_inertia_samples = EstimatorServiceOptions{}.max_inertia_samples;  // per FitInertia stream
   int64_t max_trajectory_work = PlannerServiceOptions{}.max_trajectory_work;  // steps x contacts x cone sides
+  int64_t max_audit_samples = EstimatorServiceOptions{}.max_audit_samples;  // per AuditModel request
+  int max_streams = StreamLimits{}.max_streams;
+  int stream_idle_timeout_ms = static_cast<int>(StreamLimits{}.idle_timeout.count());
+  int64_t max_inflight_samples = StreamLimits{}.max_inflight_samples;
+  int max_streams_per_connection = ServerOptions{}.max_streams_per_connection;
+  bool reflection = true;
   std::string tls_cert;
   std::string tls_key;
   std::string tls_client_ca;
@@ -31,6 +38,7 @@ struct ServerConfig {
   ServerOptions ToServerOptions() const;
   PlannerServiceOptions ToPlannerOptions() const;
   EstimatorServiceOptions ToEstimatorOptions() const;
+  StreamLimits ToStreamLimits() const;
 };
 
 // Adds every flag (with its documentation and range checks) to `app`.

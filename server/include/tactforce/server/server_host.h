@@ -44,6 +44,9 @@ struct ServerOptions {
   std::string listen = "127.0.0.1:50051";
   int max_message_bytes = 4 << 20;  // receive and send
   TlsFiles tls;
+  // Calls in flight per client connection (HTTP/2 SETTINGS_MAX_CONCURRENT_STREAMS).
+  int max_streams_per_connection = 128;
+  bool reflection = true;  // serve grpc.reflection.v1alpha
 };
 
 class ServerHost {
@@ -67,7 +70,7 @@ class ServerHost {
   bool tls() const { return !options_.tls.cert.empty(); }
 
   // Fully-qualified names of every service served: the added ones plus the
-  // standard health and reflection services (what reflection's
+  // standard health and (unless turned off) reflection services (what reflection's
   // list_services answers; tests/server/info_rpc_test.cc compares the two).
   std::vector<std::string> service_names() const;
 
