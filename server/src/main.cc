@@ -70,6 +70,19 @@ bool AllInterfaces(const std::string& address) {
          address.rfind(":", 0) == 0;
 }
 
+// One line with every limit in force.
+void LogStart(const ServerConfig& c, const tactforce::server::ServerHost& host,
+              const tactforce::server::WorkerPool& pool) {
+  spdlog::info("event=start address={} tls={} mtls={} reflection={} workers={} queue={} max_contacts={} "
+               "solve_timeout_ms={} inline_max_contacts={} max_message_bytes={} max_inertia_samples={} "
+               "max_inflight_samples={} max_audit_samples={} max_streams={} stream_idle_timeout_ms={} "
+               "max_streams_per_connection={} max_trajectory_work={}",
+               host.bound_address(), host.tls(), !c.tls_client_ca.empty(), c.reflection, pool.workers(),
+               pool.max_queued(), c.max_contacts, c.solve_timeout_ms, c.inline_max_contacts,
+               c.max_message_bytes, c.max_inertia_samples, c.max_inflight_samples, c.max_audit_samples,
+               c.max_streams, c.stream_idle_timeout_ms, c.max_streams_per_connection, c.max_trajectory_work);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -118,11 +131,7 @@ int main(int argc, char** argv) {
   }
   std::printf("tactforce-server listening on %s\n", host.bound_address().c_str());
   std::fflush(stdout);
-  spdlog::info("event=start address={} tls={} mtls={} workers={} queue={} max_contacts={} "
-               "solve_timeout_ms={} inline_max_contacts={} max_message_bytes={} max_inertia_samples={}",
-               host.bound_address(), host.tls(), !config.tls_client_ca.empty(), pool.workers(),
-               pool.max_queued(), config.max_contacts, config.solve_timeout_ms,
-               config.inline_max_contacts, config.max_message_bytes, config.max_inertia_samples);
+  LogStart(config, host, pool);
   if (AllInterfaces(config.listen) && !host.tls()) {
     spdlog::warn("event=plaintext_all_interfaces address={} note=\"listening on every "
                  "interface without TLS\"",

@@ -3,7 +3,7 @@
 // --max-streams, idle streams ended after --stream-idle-timeout-ms, the
 // FitInertia sample budget shared across streams (--max-inflight-samples),
 // the per-call work limit (--solve-timeout-ms) on a long trajectory, the
-// AuditModel sample limit, and reflection turned off (--no-reflection).
+// AuditModel sample limit, and reflection turned off (--reflection=false).
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -32,7 +32,7 @@ class ResourceLimitsTest : public ServerTest {
  protected:
   std::vector<std::string> server_flags() const override {
     return {"--max-streams", "2", "--stream-idle-timeout-ms", "600", "--max-inflight-samples", "300",
-            "--solve-timeout-ms", "100", "--max-audit-samples", "500", "--no-reflection"};
+            "--solve-timeout-ms", "100", "--max-audit-samples", "500", "--reflection=false"};
   }
 };
 
