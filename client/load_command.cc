@@ -233,7 +233,8 @@ void AddWorkloadFlags(CLI::App* cmd, LoadArgs& args) {
 void AddRequestFlags(CLI::App* cmd, LoadArgs& args) {
   CLI::Option* request =
       cmd->add_option("--request", args.request_path,
-                      "What every call sends (- for stdin): plan/stream a PlanRequest JSON; "
+                      "What every call sends (- for stdin): plan/stream a PlanRequest JSON (or "
+                      "a list, used in turn); "
                       "estimate an EstimateRequest JSON (or a JSON list, used in turn); audit "
                       "an AuditRequest JSON (or a list); fit-inertia a JSON list of "
                       "FitInertiaRequest messages (one call's stream) or an inertia CSV log. "
@@ -268,7 +269,7 @@ CLI::App* AddLoadCommand(CLI::App& app, LoadArgs& args) {
   AddRequestFlags(cmd, args);
   AddOutputFlags(cmd, &args.output,
                  "one object {rpc, concurrency, requests, duration_s, qps, latency_us: {p50, p90, p99, p999, "
-                 "max}, errors: {CODE: n}, ...}");
+                 "max}, latency_all_us: {p50, p90, p99, max}, errors: {CODE: n}, ...}");
   cmd->add_option("--plot", args.plot_path,
                   "Also write an SVG: the latency histogram (log scale) and calls/s over "
                   "time (0.1 s intervals; 1 s for runs over 20 s); the directory must exist")
@@ -281,7 +282,8 @@ CLI::App* AddLoadCommand(CLI::App& app, LoadArgs& args) {
       "each, calls spread round-robin by this client), or a gRPC URI such as\n"
       "ipv4:127.0.0.1:50051,127.0.0.1:50052 (one channel, gRPC's round_robin policy).\n"
       "Latency is measured per call (per response on streams; per whole stream for\n"
-      "fit-inertia) over successful calls, in microseconds; qps counts successful calls.\n"
+      "fit-inertia) over successful calls, in microseconds; qps counts successful calls;\n"
+      "--json's latency_all_us is over every call, failed ones included.\n"
       "Ctrl-C ends the run early and still prints the report (and the plot).\n"
       "Exit status: 0 when every call succeeded; otherwise the code of the most\n"
       "frequent failure (3 unavailable, 4 deadline exceeded, 2 invalid request, 1\n"

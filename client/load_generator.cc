@@ -23,6 +23,7 @@ namespace {
 using load_engine::Run;
 
 constexpr int kMaxSyncThreads = 1024;
+constexpr int kMinWarmUpDeadlineMs = 10'000;
 
 // Whether `spec` has what its RPC sends.
 bool HasRequests(const LoadSpec& spec) {
@@ -87,6 +88,11 @@ LoadReport MakeReport(const LoadSpec& spec, const Run& run, int channels, bool i
   report.p99_us = h.Quantile(0.99) * 1e-3;
   report.p999_us = h.Quantile(0.999) * 1e-3;
   report.max_us = h.max() * 1e-3;
+  const LatencyHistogram& all = run.all_histogram;
+  report.all_p50_us = all.Quantile(0.50) * 1e-3;
+  report.all_p90_us = all.Quantile(0.90) * 1e-3;
+  report.all_p99_us = all.Quantile(0.99) * 1e-3;
+  report.all_max_us = all.max() * 1e-3;
   for (int code = 0; code < load_engine::kCodeSlots; ++code) {
     const int64_t count = run.errors[code].load();
     if (count > 0) {
@@ -156,7 +162,9 @@ absl::StatusOr<std::vector<std::shared_ptr<grpc::Channel>>> ConnectLoadChannels(
   absl::StatusOr<std::vector<std::string>> targets = SplitTargets(target_list);
   if (!targets.ok()) return targets.status();
   if (per_target < 1) return absl::InvalidArgumentError("--channels: must be >= 1");
-  const int deadline_ms = connection.deadline_ms > 0 ? connection.deadline_ms : 10'000;
+  // The warm-up gets at least 10 s whatever --deadline-ms (0 = none), so a
+  // run measuring short deadlines (--deadline-ms 1) still connects.
+  const int deadline_ms = std::max(connection.deadline_ms, kMinWarmUpDeadlineMs);
   std::vector<std::shared_ptr<grpc::Channel>> channels;
   for (const std::string& target : *targets) {
     // Addresses behind one target: the entries of an ipv4:/ipv6: list.
@@ -211,6 +219,10 @@ std::string FormatLoadText(const LoadReport& r, const std::string& target) {
                         "p99.9", "max");
   absl::StrAppendFormat(&out, "               %9.1f %9.1f %9.1f %9.1f %9.1f\n", r.p50_us,
                         r.p90_us, r.p99_us, r.p999_us, r.max_us);
+  if (r.ok < r.requests) {
+    absl::StrAppendFormat(&out, "  all calls    %9.1f %9.1f %9.1f %9s %9.1f (failed included)\n",
+                          r.all_p50_us, r.all_p90_us, r.all_p99_us, "", r.all_max_us);
+  }
   if (r.errors.empty()) {
     out += "  errors      none\n";
   } else {
@@ -241,6 +253,11 @@ std::string FormatLoadJson(const LoadReport& r, const std::string& target) {
                         r.channels, r.requests, r.ok, r.duration_s, Number(r.qps),
                         Number(r.p50_us), Number(r.p90_us), Number(r.p99_us), Number(r.p999_us),
                         Number(r.max_us), errors);
+  absl::StrAppendFormat(&out,
+                        ", \"latency_all_us\": {\"p50\": %s, \"p90\": %s, \"p99\": %s, "
+                        "\"max\": %s}",
+                        Number(r.all_p50_us), Number(r.all_p90_us), Number(r.all_p99_us),
+                        Number(r.all_max_us));
   if (r.interrupted) out += ", \"interrupted\": true";
   out += "}\n";
   return out;

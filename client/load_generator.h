@@ -99,6 +99,9 @@ struct LoadReport {
   double qps = 0;         // successful calls per second
   // Successful calls only, microseconds.
   double p50_us = 0, p90_us = 0, p99_us = 0, p999_us = 0, max_us = 0;
+  // Every call whatever its status (time to completion, a DEADLINE_EXCEEDED
+  // or RESOURCE_EXHAUSTED call included), microseconds.
+  double all_p50_us = 0, all_p90_us = 0, all_p99_us = 0, all_max_us = 0;
   std::map<std::string, int64_t> errors;  // gRPC code name -> count
   bool interrupted = false;
   // For plots: successful calls' latencies in log-spaced bins
@@ -122,7 +125,8 @@ absl::StatusOr<LoadReport> RunLoad(const LoadSpec& spec,
 // entry (ipv4:127.0.0.1:50051,127.0.0.1:50052) gets gRPC's round_robin
 // policy over its addresses. Each channel is connected and warmed up with
 // one unmeasured call per address of the kind `spec` makes (its first
-// request; Plan for stream; the whole stream for fit-inertia), so an
+// request; Plan for stream; the whole stream for fit-inertia; with a
+// deadline of at least 10 s whatever connection.deadline_ms), so an
 // unreachable server or an invalid request is reported before the run
 // (errors as RpcError, connection.h).
 absl::StatusOr<std::vector<std::shared_ptr<grpc::Channel>>> ConnectLoadChannels(
@@ -135,7 +139,9 @@ std::vector<v1::PlanRequest> RandomRequestMix(uint64_t seed, int count);
 
 // Human-readable summary (several lines, ends with a newline), and the
 // one-line JSON object {rpc, concurrency, requests, duration_s, qps,
-// latency_us: {p50, p90, p99, p999, max}, errors: {CODE: n}, ...}.
+// latency_us: {p50, p90, p99, p999, max} (successful calls),
+// latency_all_us: {p50, p90, p99, max} (every call, failed ones included),
+// errors: {CODE: n}, ...}.
 std::string FormatLoadText(const LoadReport& report, const std::string& target);
 std::string FormatLoadJson(const LoadReport& report, const std::string& target);
 

@@ -141,9 +141,9 @@ absl::Status SetRequestsFromFile(const std::string& text, const LoadRequestSourc
   switch (spec->rpc) {
     case LoadRpc::kPlan:
     case LoadRpc::kStream: {
-      absl::StatusOr<v1::PlanRequest> request = api::ParsePlanRequestJson(text, name);
-      if (!request.ok()) return request.status();
-      spec->requests = {*std::move(request)};
+      auto requests = ParseJsonMessages<v1::PlanRequest>(text, name);
+      if (!requests.ok()) return requests.status();
+      spec->requests = *std::move(requests);
       return absl::OkStatus();
     }
     case LoadRpc::kEstimate: {

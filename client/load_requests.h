@@ -1,8 +1,9 @@
 // What `tactforce load` sends: the request file of each --rpc, or a built-in
 // example when there is none.
 //
-//   plan, stream  a PlanRequest JSON file, or the seeded random mix
-//                 (RandomRequestMix, load_generator.h)
+//   plan, stream  a PlanRequest JSON object or a JSON list of them (used
+//                 round-robin), or the seeded random mix (RandomRequestMix,
+//                 load_generator.h)
 //   estimate      an EstimateRequest JSON object, or a JSON list of them
 //                 (used round-robin); built in: the 3-finger wrench grasp
 //                 (planner::BuiltInGrasps "wrench-3f") with readings 2, 1.5,

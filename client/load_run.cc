@@ -43,6 +43,7 @@ bool Run::ClaimOrFinishSlot(int64_t* ticket) {
 
 void Run::Record(grpc::StatusCode code, int64_t started_ns) {
   const int64_t now = NowNs();
+  all_histogram.Record(now - started_ns);
   if (code == grpc::StatusCode::OK) {
     histogram.Record(now - started_ns);
     ok.fetch_add(1, std::memory_order_relaxed);

@@ -64,7 +64,8 @@ class Run {
   }
 
   // A finished call started at `started_ns`: latency when OK, else an error
-  // count under `code`; either way a completion in the timeline.
+  // count under `code`; either way its latency in `all_histogram` and a
+  // completion in the timeline.
   void Record(grpc::StatusCode code, int64_t started_ns);
 
   // A stream response to the request sent at `sent_ns`: a late one counts
@@ -88,7 +89,8 @@ class Run {
   std::vector<std::unique_ptr<v1::Audit::Stub>> audits;
   grpc::health::v1::HealthCheckRequest health_request;
 
-  LatencyHistogram histogram;
+  LatencyHistogram histogram;      // successful calls
+  LatencyHistogram all_histogram;  // every call, whatever its status
   CompletionTimeline timeline;
   std::atomic<int64_t> tickets{0};
   std::atomic<int64_t> completed{0};

@@ -19,6 +19,7 @@ PACKAGES=(
   grpc-proto
   libmujoco-dev
   libassimp-dev libqhull-dev nlohmann-json3-dev
+  clang libclang-rt-14-dev   # scripts/fuzz.sh: libFuzzer (libclang_rt.fuzzer), ASan, UBSan
 )
 
 missing=()

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
@@ -105,9 +106,9 @@ absl::StatusOr<MeasuredData> MeasuredDataFromCsv(const io::CsvTable& table) {
     const auto tr = table.Column("trial");
     std::vector<int> seen;
     for (size_t i = 0; i < n; ++i) {
-      if (tr[i] != std::round(tr[i]))
-        return absl::InvalidArgumentError(
-            absl::StrCat(table.source, ":", d.line[i], ": column 'trial': not an integer (", tr[i], ")"));
+      if (tr[i] != std::round(tr[i]) || std::abs(tr[i]) > std::numeric_limits<int>::max())
+        return absl::InvalidArgumentError(absl::StrCat(table.source, ":", d.line[i],
+                                                       ": column 'trial': not an integer in int's range (", tr[i], ")"));
       d.trial[i] = static_cast<int>(tr[i]);
       if (i == 0 || d.trial[i] != d.trial[i - 1]) {
         if (std::find(seen.begin(), seen.end(), d.trial[i]) != seen.end())

@@ -138,8 +138,9 @@ TrialFriction EstimateTrial(const FrictionTrial& trial, const Vec3& n, const Fri
   // sample before it; the pre-slip window ends one sample before that, which
   // also guards against a first moving sample still inside the noise.
   --onset;
-  out.slip_index = onset;
-  out.slip_time = s[onset].t;
+  // Slip flagged at the first sample: onset -1 (the csv fuzzer saw s[-1] read).
+  out.slip_index = std::max(onset, 0);
+  out.slip_time = s[out.slip_index].t;
   const int last_static = onset - 1;
   if (last_static < 0) {
     out.message = "slip at the first sample: no pre-slip force";

@@ -47,6 +47,19 @@ void ResetResult(PlanResult* result) {
   result->active_set.clear();
 }
 
+void Fail(const char* message, PlanResult* result) {
+  result->status = PlanStatus::kSolverFailure;
+  result->message = message;
+}
+
+// No forces, no derived quantities (a non-OPTIMAL answer).
+void ClearAnswer(PlanResult* result) {
+  result->forces.clear();
+  result->normal_forces.clear();
+  result->objective = 0.0;
+  result->min_margin = 0.0;
+}
+
 // Fills the quantities every backend reports the same way.
 void FinishResult(const PreparedProblem& prepared, const PlanOptions& options,
                   PlanResult* result) {
@@ -54,14 +67,8 @@ void FinishResult(const PreparedProblem& prepared, const PlanOptions& options,
   const int n = prepared.num_contacts();
   result->normal_force_sigma = prepared.normal_sigma;
   if (result->status != PlanStatus::kOptimal || static_cast<int>(result->forces.size()) != n) {
-    if (result->status == PlanStatus::kOptimal) {
-      result->status = PlanStatus::kSolverFailure;
-      result->message = "backend returned no forces";
-    }
-    result->forces.clear();
-    result->normal_forces.clear();
-    result->objective = 0.0;
-    result->min_margin = 0.0;
+    if (result->status == PlanStatus::kOptimal) Fail("backend returned no forces", result);
+    ClearAnswer(result);
     return;
   }
   result->normal_forces.resize(n);
@@ -71,6 +78,12 @@ void FinishResult(const PreparedProblem& prepared, const PlanOptions& options,
     result->objective += result->forces[i].squaredNorm();
   }
   result->min_margin = MinMargin(prepared, options, result->forces);
+  // Never an OPTIMAL answer that is not a number: overflow anywhere in a
+  // backend becomes a named failure instead of a silent wrong answer.
+  if (!std::isfinite(result->objective) || !std::isfinite(result->min_margin)) {
+    Fail("the backend's answer is not finite (numerical overflow); scale the problem down", result);
+    ClearAnswer(result);
+  }
 }
 
 }  // namespace

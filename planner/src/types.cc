@@ -16,8 +16,8 @@ bool PlanOptions::IsValid(std::string* error) const {
   if (cone_sides < kMinConeSides || cone_sides > kMaxConeSides) {
     return fail(absl::StrCat("cone_sides: must be in ", kMinConeSides, "..", kMaxConeSides));
   }
-  if (!std::isfinite(confidence) || confidence < 0.0)
-    return fail("confidence: must be finite and >= 0");
+  if (!std::isfinite(confidence) || confidence < 0.0 || confidence > kMaxConfidence)
+    return fail(absl::StrCat("confidence: must be in 0..", kMaxConfidence, " (got ", confidence, ")"));
   if (!std::isfinite(rank_tolerance) || rank_tolerance <= 0.0 || rank_tolerance >= 1e-2)
     return fail("rank_tolerance: must be in (0, 1e-2)");
   if (max_contacts < 1) return fail("max_contacts: must be >= 1");

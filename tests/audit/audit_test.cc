@@ -89,6 +89,18 @@ TEST(BadInput, UnsortedTimeNamesTheLine) {
   EXPECT_THAT(Message(d.status()), HasSubstr("run.csv:52: column 't': time not increasing"));
 }
 
+// Found by the csv fuzzer: a trial number past int's range was cast
+// (undefined behaviour) instead of named.
+TEST(BadInput, TrialOutOfIntRangeNamesTheLine) {
+  std::string csv = "t,reference,reading,trial\n";
+  for (int i = 0; i < 60; ++i) {
+    csv += std::to_string(i * 0.01) + "," + std::to_string(i % 7) + "," + std::to_string(i % 5) + "," +
+           (i == 3 ? "1e300" : "0") + "\n";
+  }
+  auto d = ParseMeasuredCsv(csv, "run.csv");
+  EXPECT_THAT(Message(d.status()), HasSubstr("run.csv:5: column 'trial': not an integer in int's range (1e+300)"));
+}
+
 TEST(BadInput, NotANumberNamesLineAndColumn) {
   auto d = ParseMeasuredCsv("t,reference,reading\n0,1,2\n0.1,abc,2\n", "run.csv");
   EXPECT_THAT(Message(d.status()), HasSubstr("run.csv:3"));

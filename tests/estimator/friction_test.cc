@@ -76,6 +76,26 @@ TEST(Friction, SlipFlagsAreUsed) {
   }
 }
 
+// Found by the csv fuzzer: slip flagged at the first sample read s[-1].
+TEST(Friction, SlipAtTheFirstSampleHasNoPreSlipForce) {
+  FrictionTrial trial;
+  trial.name = "t";
+  trial.normal = Vec3(0, 0, 1);
+  for (int k = 0; k < 3; ++k) {
+    FrictionSample s;
+    s.t = 0.1 * k;
+    s.force = Vec3(1, 0, 2 - 0.5 * k);
+    s.contact_point = Vec3(0.01 * k, 0, 0);
+    s.slip = true;
+    trial.samples.push_back(s);
+  }
+  absl::StatusOr<FrictionEstimate> e = EstimateFriction({trial});
+  ASSERT_TRUE(e.ok()) << e.status();
+  EXPECT_FALSE(e->trials[0].valid);
+  EXPECT_EQ(e->trials[0].slip_index, 0);
+  EXPECT_EQ(e->trials[0].message, "slip at the first sample: no pre-slip force");
+}
+
 TEST(Friction, UsesTheNearestMeshTriangleNormal) {
   FrictionSimOptions sim;
   sim.mu = 0.7;

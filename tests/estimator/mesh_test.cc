@@ -549,6 +549,19 @@ TEST_F(MeshFiles, ReadingErrorsNameTheFile) {
   r = io::ReadMeshBytes(ObjWithQuads(), "gltf", "memory");
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.status().message(), "memory: unknown mesh format 'gltf' (expected stl, obj or ply)");
+  // Found by the mesh fuzzer: a header cut short crashed assimp's PLY reader.
+  r = io::ReadMeshBytes(std::string("ply\nformat binary_\0\0", 20), "ply", "cut.ply");
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().message(), "cut.ply: PLY header line 2: binary bytes inside the header");
+  r = io::ReadMeshBytes("ply\nformat ascii 1.0\nelement vertex 3\n", "ply", "short.ply");
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().message(), "short.ply: not a PLY file: no 'end_header' line");
+  r = io::ReadMeshBytes("ply\nformat ascii 1.0\nelement vertex 1\nproperty floa0 z\nend_header\n0\n", "ply", "t.ply");
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().message(), "t.ply: PLY header line 4: unexpected 'property floa0 z'");
+  r = io::ReadMeshBytes("ply\nformat binary_middle_endian 1.0\nend_header\n", "ply", "odd.ply");
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().message(), "odd.ply: PLY header line 2: unexpected 'format binary_middle_endian 1.0'");
 
   const std::string missing = (dir_ / "missing.ply").string();
   r = io::ReadMeshFile(missing);

@@ -25,6 +25,12 @@ std::string Message(const std::string& csv) {
   return std::string(s.status().message());
 }
 
+// Found by the csv fuzzer: std::stoi threw (and terminated) on this column.
+TEST(InertiaCsv, ContactIndexPastTheLimitIsNamed) {
+  EXPECT_EQ(Message("t,px,py,pz,qw,qx,qy,qz,c99999999999_px\n0,0,0,0,1,0,0,0,0\n"),
+            "run.csv: column 'c99999999999_px': contact index out of range (0..9999)");
+}
+
 TEST(InertiaCsv, ParsesAWrenchFile) {
   std::string csv = kHeader;
   for (int i = 0; i < 5; ++i) csv += Row(0.01 * i, 2.0);  // non-unit quaternion: normalised

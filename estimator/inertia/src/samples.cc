@@ -11,6 +11,7 @@
 #include <map>
 #include <set>
 
+#include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
@@ -142,6 +143,9 @@ absl::Status ValidateKinematics(const Locator& loc, const InertiaSample& x, int 
   return absl::OkStatus();
 }
 
+// Contact columns c0_.. up to c9999_.. (far beyond any hand).
+constexpr int kMaxContactColumn = 9999;
+
 // The force source from the columns: wrench columns or contact columns
 // c0_.. c{n-1}_.., not both; sets out->source and out->num_contacts.
 absl::Status DetectForceSource(const io::CsvTable& table, InertiaSamples* out) {
@@ -153,7 +157,14 @@ absl::Status DetectForceSource(const io::CsvTable& table, InertiaSamples* out) {
       if (us == std::string::npos) continue;
       bool digits = true;
       for (size_t k = 1; k < us; ++k) digits = digits && std::isdigit(static_cast<unsigned char>(c[k]));
-      if (digits) contact_ids.insert(std::stoi(c.substr(1, us - 1)));
+      if (!digits) continue;
+      int id = 0;
+      // Found by the csv fuzzer: std::stoi threw on c99999999999_px.
+      if (!absl::SimpleAtoi(c.substr(1, us - 1), &id) || id > kMaxContactColumn) {
+        return absl::InvalidArgumentError(absl::StrCat(src, ": column '", c, "': contact index out of range (0..",
+                                                       kMaxContactColumn, ")"));
+      }
+      contact_ids.insert(id);
     }
   }
   bool any_wrench = false;

@@ -61,6 +61,8 @@ enum class SolverKind { kGeometric, kIpopt, kCrossCheck };
 struct PlanOptions {
   static constexpr int kMinConeSides = 3;
   static constexpr int kMaxConeSides = 64;
+  // kappa is a number of standard deviations; beyond this it only overflows.
+  static constexpr double kMaxConfidence = 1e3;
 
   ConeModel cone = ConeModel::kPyramid;
   int cone_sides = 12;       // k, facets of the inscribed pyramid, kMin..kMaxConeSides
