@@ -39,10 +39,8 @@ uint32_t PackColor(const aiColor4D& c) {
 
 // Average colour of a triangle's corners (per-vertex colours; per-face colours
 // that assimp maps to vertices, e.g. binary STL, come out exact).
-uint32_t FaceColor(const aiMesh& m, const aiFace& f) {
-  aiColor4D sum(0, 0, 0, 0);
-  for (unsigned k = 0; k < 3; ++k) sum = sum + m.mColors[0][f.mIndices[k]];
-  return PackColor(sum / 3.0f);
+uint32_t FaceColor(const aiMesh& m, unsigned a, unsigned b, unsigned c) {
+  return PackColor((m.mColors[0][a] + m.mColors[0][b] + m.mColors[0][c]) / 3.0f);
 }
 
 absl::StatusOr<TriangleMesh> FromScene(const aiScene& scene, const std::string& name) {
@@ -69,11 +67,19 @@ absl::StatusOr<TriangleMesh> FromScene(const aiScene& scene, const std::string& 
       if (added) mesh.vertices.emplace_back(key[0], key[1], key[2]);
       welded[v] = it->second;
     }
+    // Polygons as fans (assimp's own triangulation aborts on some malformed
+    // PLY faces: found by the mesh fuzzer); points and lines are not surface.
     for (unsigned t = 0; t < m.mNumFaces; ++t) {
       const aiFace& f = m.mFaces[t];
-      if (f.mNumIndices != 3) continue;  // points and lines: not surface
-      mesh.triangles.push_back({welded[f.mIndices[0]], welded[f.mIndices[1]], welded[f.mIndices[2]]});
-      if (colored) mesh.face_colors.push_back(FaceColor(m, f));
+      for (unsigned k = 0; k < f.mNumIndices; ++k) {
+        if (f.mIndices[k] >= m.mNumVertices)
+          return absl::InvalidArgumentError(absl::StrCat(name, ": face ", t, " refers to a missing vertex"));
+      }
+      for (unsigned k = 1; k + 1 < f.mNumIndices; ++k) {
+        const unsigned a = f.mIndices[0], b = f.mIndices[k], c = f.mIndices[k + 1];
+        mesh.triangles.push_back({welded[a], welded[b], welded[c]});
+        if (colored) mesh.face_colors.push_back(FaceColor(m, a, b, c));
+      }
     }
   }
   if (mesh.triangles.empty()) return absl::InvalidArgumentError(absl::StrCat(name, ": no triangles"));
@@ -161,11 +167,9 @@ absl::StatusOr<TriangleMesh> ReadMeshBytes(std::string_view bytes, std::string_v
   Assimp::Importer importer;
   const aiScene* scene = nullptr;
   try {
-    // Validation runs first: assimp's readers do not check face indices (a
-    // truncated binary PLY has faces pointing past the vertices), and
-    // triangulating or welding such faces reads out of bounds.
-    scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(),
-                                        aiProcess_ValidateDataStructure | aiProcess_Triangulate, hint.c_str());
+    // Validation: assimp's readers do not check face indices (a truncated
+    // binary PLY has faces pointing past the vertices); FromScene checks again.
+    scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(), aiProcess_ValidateDataStructure, hint.c_str());
   } catch (const std::exception& e) {
     return absl::InvalidArgumentError(absl::StrCat(name, ": assimp: ", e.what()));
   }
