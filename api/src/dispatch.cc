@@ -6,7 +6,9 @@
 #include "tactforce/api/dispatch.h"
 
 #include <cmath>
+#include <exception>
 #include <memory>
+#include <new>
 #include <string>
 #include <utility>
 
@@ -42,6 +44,21 @@ absl::Status ExecutePlan(PlanCall& call, const CallControl& control, PlanBuffers
                                  " solve_us=", response->solve_time_us()));
   }
   return absl::OkStatus();
+}
+
+// Work that throws (std::bad_alloc from an allocation a request drove, an
+// exception of a third-party library) ends its call with a status; nothing
+// escapes into gRPC's threads or the worker pool, which would abort.
+absl::Status RunGuarded(const CallWork& work, CallLog& log) {
+  try {
+    return work(log);
+  } catch (const std::bad_alloc&) {
+    return absl::ResourceExhaustedError("out of memory while serving this request");
+  } catch (const std::exception& e) {
+    return absl::InternalError(absl::StrCat("internal error: ", e.what()));
+  } catch (...) {
+    return absl::InternalError("internal error: an unknown exception");
+  }
 }
 
 }  // namespace
@@ -120,7 +137,7 @@ absl::Status WorkBudget::Explain(absl::Status status) const {
 
 bool RunCall(CallLog log, Executor* pool, CallWork work, CallDone done, const PoolWords& words) {
   if (pool == nullptr) {
-    const absl::Status status = work(log);
+    const absl::Status status = RunGuarded(work, log);
     log.Emit(status);
     done(status);
     return true;
@@ -130,7 +147,7 @@ bool RunCall(CallLog log, Executor* pool, CallWork work, CallDone done, const Po
   // be gone once `done` has run, possibly before TrySubmit returns.
   auto task = std::make_shared<std::pair<CallLog, CallWork>>(std::move(log), std::move(work));
   const bool queued = pool->TrySubmit([task, done] {
-    const absl::Status status = task->second(task->first);
+    const absl::Status status = RunGuarded(task->second, task->first);
     task->first.Emit(status);
     done(status);
   });
@@ -140,6 +157,10 @@ bool RunCall(CallLog log, Executor* pool, CallWork work, CallDone done, const Po
     done(status);
   }
   return queued;
+}
+
+bool UsesIpopt(v1::Solver solver) {
+  return solver == v1::SOLVER_IPOPT || solver == v1::SOLVER_CROSS_CHECK;
 }
 
 bool PlanDispatcher::RunsInline(const PlanCall& call) const {
@@ -178,8 +199,8 @@ void PlanDispatcher::Dispatch(const v1::PlanRequest& request, v1::PlanResponse* 
   auto work = [prepared = *std::move(call), &control, buffers, response](CallLog& call_log) mutable {
     return ExecutePlan(prepared, control, buffers, response, call_log);
   };
-  const bool queued = RunCall(std::move(log), inline_solve ? nullptr : pool_, std::move(work),
-                              std::move(done), kSolveWords);
+  Executor* where = inline_solve ? nullptr : UsesIpopt(request.solver()) ? ipopt_lane_ : pool_;
+  const bool queued = RunCall(std::move(log), where, std::move(work), std::move(done), kSolveWords);
   if (debug && queued && !inline_solve) spdlog::debug("rpc={} event=queued {}", rpc_name, details);
 }
 

@@ -390,8 +390,38 @@ absl::StatusOr<v1::FitInertiaResponse> FitInertiaSamples(const inertia::InertiaS
   return response;
 }
 
+namespace {
+
+// The sample vector's capacity once `needed` samples are held: grown
+// explicitly (doubling) so that held_bytes_after can know it in advance.
+size_t GrownCapacity(size_t capacity, size_t needed) {
+  return needed <= capacity ? capacity : std::max(needed, 2 * capacity);
+}
+
+}  // namespace
+
+int64_t InertiaStream::held_bytes() const {
+  return static_cast<int64_t>(samples_.samples.capacity() * sizeof(inertia::InertiaSample) +
+                              contacts_held_ * sizeof(inertia::ContactReading) +
+                              options_.SpaceUsedLong());
+}
+
+int64_t InertiaStream::held_bytes_after(const v1::FitInertiaRequest& message) const {
+  int64_t contacts = 0;
+  for (const v1::InertiaSample& in : message.samples()) contacts += in.contacts_size();
+  const size_t capacity = GrownCapacity(
+      samples_.samples.capacity(),
+      std::min<size_t>(samples_.samples.size() + message.samples_size(), max_samples_));
+  const size_t options = message.has_options() ? message.options().SpaceUsedLong() : options_.SpaceUsedLong();
+  return static_cast<int64_t>(capacity * sizeof(inertia::InertiaSample) +
+                              (contacts_held_ + contacts) * sizeof(inertia::ContactReading) + options);
+}
+
 absl::Status InertiaStream::Add(const v1::FitInertiaRequest& message) {
   const int index = messages_++;
+  samples_.samples.reserve(GrownCapacity(
+      samples_.samples.capacity(),
+      std::min<size_t>(samples_.samples.size() + message.samples_size(), max_samples_)));
   if (message.has_options()) {
     if (index != 0) {
       return absl::InvalidArgumentError(absl::StrCat(
@@ -428,6 +458,8 @@ absl::Status InertiaStream::Add(const v1::FitInertiaRequest& message) {
     s.torque = FromProto(in.wrench().torque());
     s.force_sigma = in.force_sigma();
     s.torque_sigma = in.torque_sigma();
+    s.contacts.reserve(in.contacts_size());
+    contacts_held_ += in.contacts_size();
     for (const v1::ContactSample& c : in.contacts()) {
       s.contacts.push_back(inertia::ContactReading{FromProto(c.point()), FromProto(c.force()), c.sigma()});
     }

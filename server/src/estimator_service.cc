@@ -21,13 +21,16 @@ namespace {
 
 // Reads the FitInertia stream message by message into an api::InertiaStream;
 // a bad message ends the call at once with INVALID_ARGUMENT; at the
-// half-close the fit runs on the pool. Admitted, timed out and held to the
-// in-flight sample budget by the StreamRegistry. Deletes itself once gRPC
-// (OnDone) and the registry have let go.
-class FitInertiaReactor final : public grpc::ServerReadReactor<v1::FitInertiaRequest>,
+// half-close the fit runs on the pool. Messages are read raw and parsed
+// here, so that one that cannot be parsed ends the call with "message <i>:
+// cannot be parsed ..." (gRPC's typed reader would report it as the
+// half-close, and a partial stream would be fitted). Admitted, timed out and
+// held to the in-flight sample and byte budgets by the StreamRegistry.
+// Deletes itself once gRPC (OnDone) and the registry have let go.
+class FitInertiaReactor final : public grpc::ServerReadReactor<grpc::ByteBuffer>,
                                 public IdleEndable {
  public:
-  FitInertiaReactor(grpc::CallbackServerContext* context, v1::FitInertiaResponse* response,
+  FitInertiaReactor(grpc::CallbackServerContext* context, grpc::ByteBuffer* response,
                     WorkerPool* pool, StreamRegistry* streams, const EstimatorServiceOptions& options)
       : response_(response), pool_(pool), streams_(streams), stream_(options.max_inertia_samples),
         max_call_seconds_(options.solve_timeout_ms / 1000.0), guard_(context, &cancelled_),
@@ -48,18 +51,12 @@ class FitInertiaReactor final : public grpc::ServerReadReactor<v1::FitInertiaReq
       waiting_ = false;
     }
     if (!ok) return StartFit();  // half-close (or a broken call: the guard sees it)
-    absl::Status s = streams_->ReserveSamples(message_.samples_size());
-    if (s.ok()) {
-      reserved_samples_.fetch_add(message_.samples_size());
-      s = stream_.Add(message_);
-    }
-    if (!s.ok()) return EndWith(s);
-    message_.Clear();
+    if (absl::Status s = AddMessage(); !s.ok()) return EndWith(s);
     ReadNext();
   }
   void OnCancel() override { cancelled_.store(true); }
   void OnDone() override {
-    ReleaseSamples();
+    ReleaseBudgets();
     Unregister();
     Unref();
   }
@@ -83,7 +80,27 @@ class FitInertiaReactor final : public grpc::ServerReadReactor<v1::FitInertiaReq
       waiting_ = true;
       waiting_since_ = std::chrono::steady_clock::now();
     }
-    StartRead(&message_);
+    StartRead(&buffer_);
+  }
+
+  // Parses the message just read and adds it to the stream, its samples
+  // and bytes taken from the server's budgets before anything is kept.
+  absl::Status AddMessage() {
+    const int index = stream_.messages_received();
+    if (absl::Status parsed = ParseMessage(&buffer_, &message_); !parsed.ok()) {
+      return absl::InvalidArgumentError(absl::StrCat("message ", index, ": ", parsed.message()));
+    }
+    absl::Status s = streams_->ReserveSamples(message_.samples_size());
+    if (!s.ok()) return s;
+    reserved_samples_.fetch_add(message_.samples_size());
+    const int64_t more_bytes = stream_.held_bytes_after(message_) - reserved_bytes_.load();
+    if (more_bytes > 0) {
+      if (s = streams_->ReserveBytes(more_bytes); !s.ok()) return s;
+      reserved_bytes_.fetch_add(more_bytes);
+    }
+    s = stream_.Add(message_);
+    message_.Clear();
+    return s;
   }
 
   // Logs and finishes once, whichever of reader, reaper and fit comes first.
@@ -94,14 +111,17 @@ class FitInertiaReactor final : public grpc::ServerReadReactor<v1::FitInertiaReq
       finished_ = true;
     }
     Log().Emit(status);
-    ReleaseSamples();
+    ReleaseBudgets();
     Unregister();
     Finish(ToGrpcStatus(status));
   }
 
-  // Back to the budget, and the stream's slot freed, before the client
+  // Back to the budgets, and the stream's slot freed, before the client
   // hears the end: a client that opens its next stream at once finds both.
-  void ReleaseSamples() { streams_->ReleaseSamples(reserved_samples_.exchange(0)); }
+  void ReleaseBudgets() {
+    streams_->ReleaseSamples(reserved_samples_.exchange(0));
+    streams_->ReleaseBytes(reserved_bytes_.exchange(0));
+  }
   void Unregister() {
     if (registered_.exchange(false)) streams_->Close(this);
   }
@@ -114,8 +134,7 @@ class FitInertiaReactor final : public grpc::ServerReadReactor<v1::FitInertiaReq
       limits.interrupt = budget.Interrupt();
       absl::StatusOr<v1::FitInertiaResponse> result = stream_.Fit(limits);
       if (!result.ok()) return guard_.ShouldStop() ? result.status() : budget.Explain(result.status());
-      *response_ = *std::move(result);
-      return absl::OkStatus();
+      return SerializeMessage(*result, response_);
     };
     {
       std::lock_guard<std::mutex> lock(mu_);
@@ -123,7 +142,7 @@ class FitInertiaReactor final : public grpc::ServerReadReactor<v1::FitInertiaReq
     }
     api::RunCall(Log(), pool_, std::move(fit),
                  [this](const absl::Status& status) {
-                   ReleaseSamples();
+                   ReleaseBudgets();
                    Unregister();
                    Finish(ToGrpcStatus(status));
                  });
@@ -137,13 +156,15 @@ class FitInertiaReactor final : public grpc::ServerReadReactor<v1::FitInertiaReq
     return log;
   }
 
-  v1::FitInertiaResponse* response_;
+  grpc::ByteBuffer* response_;
   WorkerPool* pool_;
   StreamRegistry* streams_;
   std::atomic<bool> registered_{false};  // admitted and not yet closed
-  std::atomic<int64_t> reserved_samples_{0};  // taken from the registry's budget
+  std::atomic<int64_t> reserved_samples_{0};  // taken from the registry's budgets
+  std::atomic<int64_t> reserved_bytes_{0};
   api::InertiaStream stream_;
   double max_call_seconds_;
+  grpc::ByteBuffer buffer_;
   v1::FitInertiaRequest message_;
   std::atomic<bool> cancelled_{false};
   std::atomic<int> refs_{1};  // gRPC's until OnDone; the reaper's while it looks
@@ -165,8 +186,8 @@ api::CallLimits EstimatorServiceOptions::Limits() const {
   return limits;
 }
 
-grpc::ServerReadReactor<v1::FitInertiaRequest>* EstimatorService::FitInertia(
-    grpc::CallbackServerContext* context, v1::FitInertiaResponse* response) {
+grpc::ServerReadReactor<grpc::ByteBuffer>* EstimatorService::FitInertia(
+    grpc::CallbackServerContext* context, grpc::ByteBuffer* response) {
   return new FitInertiaReactor(context, response, pool_, streams_, options_);
 }
 

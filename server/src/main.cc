@@ -73,14 +73,15 @@ bool AllInterfaces(const std::string& address) {
 // One line with every limit in force.
 void LogStart(const ServerConfig& c, const tactforce::server::ServerHost& host,
               const tactforce::server::WorkerPool& pool) {
-  spdlog::info("event=start address={} tls={} mtls={} reflection={} workers={} queue={} max_contacts={} "
-               "solve_timeout_ms={} inline_max_contacts={} max_message_bytes={} max_inertia_samples={} "
-               "max_inflight_samples={} max_audit_samples={} max_streams={} stream_idle_timeout_ms={} "
-               "max_streams_per_connection={} max_trajectory_work={}",
+  spdlog::info("event=start address={} tls={} mtls={} reflection={} workers={} ipopt_workers={} queue={} "
+               "max_contacts={} solve_timeout_ms={} inline_max_contacts={} max_message_bytes={} "
+               "max_inertia_samples={} max_inflight_samples={} max_inflight_bytes={} max_audit_samples={} "
+               "max_streams={} stream_idle_timeout_ms={} max_streams_per_connection={} max_trajectory_work={}",
                host.bound_address(), host.tls(), !c.tls_client_ca.empty(), c.reflection, pool.workers(),
-               pool.max_queued(), c.max_contacts, c.solve_timeout_ms, c.inline_max_contacts,
-               c.max_message_bytes, c.max_inertia_samples, c.max_inflight_samples, c.max_audit_samples,
-               c.max_streams, c.stream_idle_timeout_ms, c.max_streams_per_connection, c.max_trajectory_work);
+               c.ipopt_workers, pool.max_queued(), c.max_contacts, c.solve_timeout_ms, c.inline_max_contacts,
+               c.max_message_bytes, c.max_inertia_samples, c.max_inflight_samples, c.max_inflight_bytes,
+               c.max_audit_samples, c.max_streams, c.stream_idle_timeout_ms, c.max_streams_per_connection,
+               c.max_trajectory_work);
 }
 
 }  // namespace
@@ -115,10 +116,11 @@ int main(int argc, char** argv) {
   SetUpLogging(config.log_level);
 
   tactforce::server::WorkerPool pool(config.EffectiveWorkers(), config.queue);
+  tactforce::server::WorkerPool ipopt_lane(config.ipopt_workers, config.queue);
   tactforce::server::StreamRegistry streams(config.ToStreamLimits());
   tactforce::server::ServerHost host(config.ToServerOptions());
   host.AddService(std::make_unique<tactforce::server::PlannerService>(
-      &pool, &streams, config.ToPlannerOptions()));
+      &pool, &ipopt_lane, &streams, config.ToPlannerOptions()));
   host.AddService(std::make_unique<tactforce::server::EstimatorService>(
       &pool, &streams, config.ToEstimatorOptions()));
   host.AddService(std::make_unique<tactforce::server::AuditService>(
@@ -151,6 +153,7 @@ int main(int argc, char** argv) {
 
   host.Shutdown(std::chrono::milliseconds(config.grace_ms));
   pool.Shutdown();
+  ipopt_lane.Shutdown();
   spdlog::info("event=stopped");
   gpr_set_log_function(&DropGrpcLine);
   return 0;

@@ -33,12 +33,15 @@ api::PlanSettings ToPlanSettings(const PlannerServiceOptions& options) {
   return settings;
 }
 
+// Reads and writes raw messages and parses each itself: gRPC's typed
+// reader reports a message it cannot parse exactly like the end of the
+// stream, which would end a stream with a corrupt request OK.
 class PlanStreamReactor final
-    : public grpc::ServerBidiReactor<v1::PlanRequest, v1::PlanResponse>, public IdleEndable {
+    : public grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>, public IdleEndable {
  public:
   PlanStreamReactor(const api::PlanDispatcher* plans, StreamRegistry* streams,
                     grpc::CallbackServerContext* context)
-      : plans_(plans), streams_(streams), guard_(context, &cancelled_) {
+      : plans_(plans), streams_(streams), context_(context), guard_(context, &cancelled_) {
     if (spdlog::should_log(spdlog::level::info)) peer_ = context->peer();
     if (absl::Status admitted = streams_->Open(this, "PlanStream"); !admitted.ok()) {
       FinishOnce(ToGrpcStatus(admitted));
@@ -59,10 +62,18 @@ class PlanStreamReactor final
       FinishOnce(guard_.ShouldStop() ? guard_.StopStatus("while reading") : grpc::Status::OK);
       return;
     }
+    if (absl::Status parsed = ParseMessage(&read_buffer_, &request_); !parsed.ok()) {
+      FinishOnce(Indexed(ToGrpcStatus(parsed)));
+      return;
+    }
     Dispatch();
   }
 
   void OnWriteDone(bool ok) override {
+    {
+      std::lock_guard<std::mutex> lock(finish_mu_);
+      writing_ = false;
+    }
     if (!ok) {
       FinishOnce(guard_.ShouldStop() ? guard_.StopStatus("while writing")
                                      : grpc::Status(grpc::StatusCode::UNAVAILABLE,
@@ -89,12 +100,19 @@ class PlanStreamReactor final
     if (refs_.fetch_sub(1, std::memory_order_acq_rel) == 1) delete this;
   }
 
+  // Idle: waiting for the client's next request, or for the client to
+  // take a response (a client that never reads blocks the write forever;
+  // the call is then cancelled, which fails the pending write).
   void EndIfIdleSince(Clock::time_point cutoff, const absl::Status& status) override {
+    bool write_blocked = false;
     {
       std::lock_guard<std::mutex> lock(finish_mu_);
-      if (finished_ || !waiting_ || waiting_since_ >= cutoff) return;
+      if (finished_) return;
+      write_blocked = writing_ && writing_since_ < cutoff;
+      if (!write_blocked && (!waiting_ || waiting_since_ >= cutoff)) return;
     }
     FinishOnce(Indexed(ToGrpcStatus(status)));
+    if (write_blocked) context_->TryCancel();
   }
 
  private:
@@ -106,7 +124,7 @@ class PlanStreamReactor final
       waiting_ = true;
       waiting_since_ = Clock::now();
     }
-    StartRead(&request_);
+    StartRead(&read_buffer_);
   }
 
   void Dispatch() {
@@ -130,8 +148,15 @@ class PlanStreamReactor final
       FinishOnce(Indexed(status));
     } else if (guard_.ShouldStop()) {
       FinishOnce(Indexed(guard_.StopStatus("after the solve")));
+    } else if (absl::Status serialized = SerializeMessage(response_, &write_buffer_); !serialized.ok()) {
+      FinishOnce(Indexed(ToGrpcStatus(serialized)));
     } else {
-      StartWrite(&response_);
+      {
+        std::lock_guard<std::mutex> lock(finish_mu_);
+        writing_ = true;
+        writing_since_ = Clock::now();
+      }
+      StartWrite(&write_buffer_);
     }
   }
 
@@ -157,16 +182,21 @@ class PlanStreamReactor final
   const api::PlanDispatcher* plans_;
   StreamRegistry* streams_;
   std::atomic<bool> registered_{false};  // admitted by streams_ and not yet closed
+  grpc::CallbackServerContext* context_;
   std::atomic<bool> cancelled_{false};
   RpcGuard guard_;
   std::atomic<int> refs_{1};
-  std::mutex finish_mu_;  // guards finished_, waiting_, waiting_since_
+  std::mutex finish_mu_;  // guards finished_, waiting_*, writing_*
   bool finished_ = false;
   bool waiting_ = false;  // a read of the client's next request is pending
   Clock::time_point waiting_since_{};
+  bool writing_ = false;  // a response is being written
+  Clock::time_point writing_since_{};
   int64_t index_ = 0;  // requests answered so far = index of the current one
   std::string peer_;
   const Clock::time_point start_ = Clock::now();
+  grpc::ByteBuffer read_buffer_;
+  grpc::ByteBuffer write_buffer_;
   v1::PlanRequest request_;
   v1::PlanResponse response_;
   api::PlanBuffers buffers_;  // the stream's workspace: one solve at a time
@@ -174,10 +204,15 @@ class PlanStreamReactor final
 
 }  // namespace
 
-PlannerService::PlannerService(WorkerPool* pool, StreamRegistry* streams,
+PlannerService::PlannerService(WorkerPool* pool, WorkerPool* ipopt_lane, StreamRegistry* streams,
                                PlannerServiceOptions options)
-    : pool_(pool), streams_(streams), plans_(pool, ToPlanSettings(options)) {
+    : pool_(pool), ipopt_lane_(ipopt_lane), streams_(streams),
+      plans_(pool, ToPlanSettings(options), ipopt_lane) {
   SetMessageAllocatorFor_Plan(&plan_messages_);
+}
+
+WorkerPool* PlannerService::PoolFor(v1::Solver solver) const {
+  return api::UsesIpopt(solver) ? ipopt_lane_ : pool_;
 }
 
 std::string PlannerService::service_name() const {
@@ -194,7 +229,7 @@ grpc::ServerUnaryReactor* PlannerService::Plan(grpc::CallbackServerContext* cont
   return reactor;
 }
 
-grpc::ServerBidiReactor<v1::PlanRequest, v1::PlanResponse>* PlannerService::PlanStream(
+grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* PlannerService::PlanStream(
     grpc::CallbackServerContext* context) {
   return new PlanStreamReactor(&plans_, streams_, context);
 }
@@ -203,7 +238,8 @@ grpc::ServerUnaryReactor* PlannerService::PlanTrajectory(grpc::CallbackServerCon
                                                          const v1::TrajectoryRequest* request,
                                                          v1::TrajectoryResponse* response) {
   return ServeOnPool<v1::TrajectoryRequest, v1::TrajectoryResponse>(
-      "PlanTrajectory", context, request, response, pool_, plans_.settings().limits,
+      "PlanTrajectory", context, request, response, PoolFor(request->plan().solver()),
+      plans_.settings().limits,
       &api::HandleTrajectory);
 }
 
@@ -211,7 +247,8 @@ grpc::ServerUnaryReactor* PlannerService::PlanFrictionProbe(grpc::CallbackServer
                                                             const v1::FrictionProbeRequest* request,
                                                             v1::FrictionProbeResponse* response) {
   return ServeOnPool<v1::FrictionProbeRequest, v1::FrictionProbeResponse>(
-      "PlanFrictionProbe", context, request, response, pool_, plans_.settings().limits,
+      "PlanFrictionProbe", context, request, response, PoolFor(request->plan().solver()),
+      plans_.settings().limits,
       &api::HandleFrictionProbe);
 }
 

@@ -21,10 +21,22 @@ const char* StatusCodeName(grpc::StatusCode code) {
   return number < kNames->size() ? (*kNames)[number].c_str() : "UNKNOWN_CODE";
 }
 
+std::string BoundedStatusMessage(std::string_view message) {
+  if (message.size() <= kMaxStatusMessageBytes) return std::string(message);
+  const std::string_view kMarker = "... [";
+  // Room for the marker and its count ("... [12345678 bytes cut]").
+  size_t keep = kMaxStatusMessageBytes - 32;
+  // Back up over UTF-8 continuation bytes (10xxxxxx) to a character start.
+  while (keep > 0 && (static_cast<unsigned char>(message[keep]) & 0xC0) == 0x80) --keep;
+  return std::string(message.substr(0, keep)) + std::string(kMarker) +
+         std::to_string(message.size() - keep) + " bytes cut]";
+}
+
 grpc::Status ToGrpcStatus(const absl::Status& status) {
   if (status.ok()) return grpc::Status::OK;
   return grpc::Status(static_cast<grpc::StatusCode>(status.code()),
-                      std::string(status.message()));
+                      BoundedStatusMessage(std::string_view(status.message().data(),
+                                                            status.message().size())));
 }
 
 RpcGuard::RpcGuard(const grpc::CallbackServerContext* context,

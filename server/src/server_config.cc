@@ -48,6 +48,7 @@ StreamLimits ServerConfig::ToStreamLimits() const {
   limits.max_streams = max_streams;
   limits.idle_timeout = std::chrono::milliseconds(stream_idle_timeout_ms);
   limits.max_inflight_samples = max_inflight_samples;
+  limits.max_inflight_bytes = max_inflight_bytes;
   return limits;
 }
 
@@ -59,9 +60,16 @@ void RegisterFlags(CLI::App& app, ServerConfig* c) {
                  "Listening on every interface must be asked for: 0.0.0.0:50051 or [::]:50051")
       ->type_name("HOST:PORT");
   app.add_option("--workers", c->workers,
-                 "Solver threads for Ipopt, cross-check and large geometric solves "
-                 "(0 = hardware threads)")
+                 "Worker threads for large geometric solves, trajectories, estimation, inertia "
+                 "fits and audits (0 = hardware threads); Ipopt work has its own lane "
+                 "(--ipopt-workers)")
       ->check(CLI::Range(0, 1024));
+  app.add_option("--ipopt-workers", c->ipopt_workers,
+                 "Threads of the Ipopt lane: Plan, PlanStream, PlanTrajectory and PlanFrictionProbe "
+                 "requests with SOLVER_IPOPT or SOLVER_CROSS_CHECK run there, with their own queue of "
+                 "--queue, so geometric work never waits behind Ipopt (which runs one solve at a "
+                 "time per process: more than 1 only queues inside the process)")
+      ->check(CLI::Range(1, 64));
   app.add_option("--queue", c->queue,
                  "Solves that may wait for a worker; beyond that requests fail with "
                  "RESOURCE_EXHAUSTED")
@@ -102,6 +110,12 @@ void RegisterFlags(CLI::App& app, ServerConfig* c) {
                  "each); the message that would exceed it ends its stream with RESOURCE_EXHAUSTED "
                  "(0 = no limit)")
       ->check(CLI::Range(int64_t{0}, int64_t{1'000'000'000}));
+  app.add_option("--max-inflight-bytes", c->max_inflight_bytes,
+                 "Most bytes all open FitInertia streams may hold together (converted samples with "
+                 "their contacts, and the options with the mesh); the message that would exceed it "
+                 "ends its stream with RESOURCE_EXHAUSTED (0 = no limit). The default, 256 MiB, is a "
+                 "quarter of the shipped Kubernetes memory limit")
+      ->check(CLI::Range(int64_t{0}, int64_t{1} << 40));
   app.add_option("--max-streams-per-connection", c->max_streams_per_connection,
                  "Calls one client connection may have in flight at once (HTTP/2 "
                  "SETTINGS_MAX_CONCURRENT_STREAMS); further calls wait in the client")

@@ -15,7 +15,10 @@
 #include <grpcpp/impl/server_builder_option.h>
 #include <grpcpp/impl/server_builder_plugin.h>
 #include <grpcpp/security/server_credentials.h>
+#include <grpcpp/support/server_interceptor.h>
+#include <google/protobuf/descriptor.h>
 
+#include "absl/container/flat_hash_map.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/str_cat.h"
 #include "spdlog/spdlog.h"
@@ -80,6 +83,57 @@ class ReflectionOption final : public grpc::ServerBuilderOption {
   bool on_;
 };
 
+// A unary request gRPC cannot parse never reaches its handler: the
+// callback API answers UNIMPLEMENTED with an empty message, which reads as
+// "no such method". This rewrites exactly that answer, on the unary methods
+// of the hosted services, to INVALID_ARGUMENT "request cannot be parsed as
+// <type>". (No handler of ours answers UNIMPLEMENTED.)
+class UnparsedRequestInterceptor final : public grpc::experimental::Interceptor {
+ public:
+  explicit UnparsedRequestInterceptor(const std::string* message) : message_(message) {}
+  void Intercept(grpc::experimental::InterceptorBatchMethods* methods) override {
+    if (methods->QueryInterceptionHookPoint(
+            grpc::experimental::InterceptionHookPoints::PRE_SEND_STATUS)) {
+      const grpc::Status status = methods->GetSendStatus();
+      if (status.error_code() == grpc::StatusCode::UNIMPLEMENTED && status.error_message().empty()) {
+        methods->ModifySendStatus(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, *message_));
+      }
+    }
+    methods->Proceed();
+  }
+
+ private:
+  const std::string* message_;
+};
+
+class UnparsedRequestInterceptorFactory final
+    : public grpc::experimental::ServerInterceptorFactoryInterface {
+ public:
+  // `services`: fully-qualified names of the hosted services.
+  explicit UnparsedRequestInterceptorFactory(const std::vector<std::string>& services) {
+    const auto* pool = google::protobuf::DescriptorPool::generated_pool();
+    for (const std::string& name : services) {
+      const google::protobuf::ServiceDescriptor* service = pool->FindServiceByName(name);
+      if (service == nullptr) continue;
+      for (int m = 0; m < service->method_count(); ++m) {
+        const google::protobuf::MethodDescriptor* method = service->method(m);
+        if (method->client_streaming() || method->server_streaming()) continue;
+        messages_[absl::StrCat("/", name, "/", method->name())] =
+            absl::StrCat("request cannot be parsed as ", method->input_type()->full_name());
+      }
+    }
+  }
+  grpc::experimental::Interceptor* CreateServerInterceptor(
+      grpc::experimental::ServerRpcInfo* info) override {
+    if (info->type() != grpc::experimental::ServerRpcInfo::Type::UNARY) return nullptr;
+    const auto it = messages_.find(info->method());
+    return it == messages_.end() ? nullptr : new UnparsedRequestInterceptor(&it->second);
+  }
+
+ private:
+  absl::flat_hash_map<std::string, std::string> messages_;  // method path -> status message
+};
+
 }  // namespace
 
 std::string WithBoundPort(const std::string& address, int port) {
@@ -122,7 +176,14 @@ absl::Status ServerHost::Start() {
   builder.SetOption(std::make_unique<ReflectionOption>(options_.reflection));
   int selected_port = 0;
   builder.AddListeningPort(options_.listen, *credentials, &selected_port);
-  for (const auto& service : services_) builder.RegisterService(service->grpc_service());
+  std::vector<std::string> hosted;
+  for (const auto& service : services_) {
+    builder.RegisterService(service->grpc_service());
+    hosted.push_back(service->service_name());
+  }
+  std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> interceptors;
+  interceptors.push_back(std::make_unique<UnparsedRequestInterceptorFactory>(hosted));
+  builder.experimental().SetInterceptorCreators(std::move(interceptors));
 
   server_ = builder.BuildAndStart();
   if (server_ == nullptr || selected_port == 0) {

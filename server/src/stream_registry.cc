@@ -37,19 +37,35 @@ void StreamRegistry::Close(IdleEndable* stream) {
   streams_.erase(stream);
 }
 
-absl::Status StreamRegistry::ReserveSamples(int64_t n) {
-  const int64_t before = samples_.fetch_add(n);
-  if (limits_.max_inflight_samples > 0 && before + n > limits_.max_inflight_samples) {
-    samples_.fetch_sub(n);
+namespace {
+
+// Takes `n` from `held` unless that passes `limit` (> 0); RESOURCE_EXHAUSTED
+// naming what is counted and the flag otherwise.
+absl::Status Reserve(std::atomic<int64_t>& held, int64_t n, int64_t limit, const char* what,
+                     const char* flag) {
+  const int64_t before = held.fetch_add(n);
+  if (limit > 0 && before + n > limit) {
+    held.fetch_sub(n);
     return absl::ResourceExhaustedError(absl::StrCat(
-        "samples: open FitInertia streams hold ", before, " samples and this message brings ", n,
-        ", over the server's budget of ", limits_.max_inflight_samples,
-        " (--max-inflight-samples); retry later"));
+        "samples: open FitInertia streams hold ", before, " ", what, " and this message brings ", n,
+        ", over the server's budget of ", limit, " (", flag, "); retry later"));
   }
   return absl::OkStatus();
 }
 
+}  // namespace
+
+absl::Status StreamRegistry::ReserveSamples(int64_t n) {
+  return Reserve(samples_, n, limits_.max_inflight_samples, "samples", "--max-inflight-samples");
+}
+
 void StreamRegistry::ReleaseSamples(int64_t n) { samples_.fetch_sub(n); }
+
+absl::Status StreamRegistry::ReserveBytes(int64_t n) {
+  return Reserve(bytes_, n, limits_.max_inflight_bytes, "bytes", "--max-inflight-bytes");
+}
+
+void StreamRegistry::ReleaseBytes(int64_t n) { bytes_.fetch_sub(n); }
 
 int StreamRegistry::open_streams() const {
   std::lock_guard<std::mutex> lock(mu_);

@@ -117,7 +117,10 @@ using CallWork = std::function<absl::Status(CallLog& log)>;
 
 // Runs `work` inline (pool == nullptr) or on `pool`, emits `log` with its
 // status and calls done(status). A full pool drops `work` and ends the call
-// with BusyStatus(*pool, words). Returns false only then.
+// with BusyStatus(*pool, words). Returns false only then. An exception out
+// of `work` becomes the call's status (std::bad_alloc RESOURCE_EXHAUSTED
+// "out of memory while serving this request", any other INTERNAL), never
+// an abort.
 bool RunCall(CallLog log, Executor* pool, CallWork work, CallDone done,
              const PoolWords& words = kRequestWords);
 
@@ -152,9 +155,13 @@ struct PlanSettings {
 // logs "rpc=<rpc> event=queued solver=... contacts=N" at debug.
 class PlanDispatcher {
  public:
-  // `pool` must outlive the dispatcher.
-  PlanDispatcher(Executor* pool, PlanSettings settings)
-      : pool_(pool), settings_(std::move(settings)) {}
+  // `pool` (and `ipopt_lane`) must outlive the dispatcher. `ipopt_lane`:
+  // where SOLVER_IPOPT and SOLVER_CROSS_CHECK requests run, so that
+  // geometric work never waits behind Ipopt solves (which a process runs
+  // one at a time); nullptr = on `pool` with everything else.
+  PlanDispatcher(Executor* pool, PlanSettings settings, Executor* ipopt_lane = nullptr)
+      : pool_(pool), ipopt_lane_(ipopt_lane != nullptr ? ipopt_lane : pool),
+        settings_(std::move(settings)) {}
 
   // `request` is read before Dispatch returns; `response`, `control` and
   // `buffers` must stay valid until done(status) has run. `buffers`: the
@@ -170,8 +177,13 @@ class PlanDispatcher {
   bool RunsInline(const PlanCall& call) const;
 
   Executor* pool_;
+  Executor* ipopt_lane_;
   PlanSettings settings_;
 };
+
+// True when `solver` runs Ipopt (SOLVER_IPOPT, SOLVER_CROSS_CHECK): such
+// work belongs on the server's Ipopt lane.
+bool UsesIpopt(v1::Solver solver);
 
 // The time budget of one call's work (CallLimits::max_call_seconds),
 // counted from construction, i.e. from when the work starts.

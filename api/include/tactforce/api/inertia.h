@@ -80,6 +80,13 @@ class InertiaStream {
   int64_t samples_received() const { return static_cast<int64_t>(samples_.samples.size()); }
   int messages_received() const { return messages_; }
 
+  // Memory the stream holds (bytes): its samples at their vector's
+  // capacity, their contacts, the options (the mesh's bytes included).
+  int64_t held_bytes() const;
+  // What held_bytes() will be after Add(message) succeeds, known before
+  // anything is allocated: a server reserves it from its budget first.
+  int64_t held_bytes_after(const v1::FitInertiaRequest& message) const;
+
   // After the last message: validates everything and fits.
   absl::StatusOr<v1::FitInertiaResponse> Fit(const CallLimits& limits = {},
                                              std::function<void(double)> progress = {}) const;
@@ -87,6 +94,7 @@ class InertiaStream {
  private:
   int64_t max_samples_;
   int messages_ = 0;
+  int64_t contacts_held_ = 0;  // ContactReadings across samples
   v1::InertiaFitOptions options_;
   inertia::InertiaSamples samples_;
 };

@@ -30,7 +30,13 @@ struct EstimatorServiceOptions {
   api::CallLimits Limits() const;
 };
 
-class EstimatorService final : public v1::Estimator::CallbackService, public HostedService {
+// FitInertia is registered raw (its reactor parses each message itself:
+// see estimator_service.cc); the unary RPCs are typed.
+using EstimatorBase = v1::Estimator::WithCallbackMethod_EstimateForces<
+    v1::Estimator::WithCallbackMethod_EstimateFriction<
+        v1::Estimator::WithRawCallbackMethod_FitInertia<v1::Estimator::Service>>>;
+
+class EstimatorService final : public EstimatorBase, public HostedService {
  public:
   // `pool` and `streams` must outlive the service.
   EstimatorService(WorkerPool* pool, StreamRegistry* streams, EstimatorServiceOptions options)
@@ -47,8 +53,8 @@ class EstimatorService final : public v1::Estimator::CallbackService, public Hos
   grpc::ServerUnaryReactor* EstimateFriction(grpc::CallbackServerContext* context,
                                              const v1::FrictionRequest* request,
                                              v1::FrictionResponse* response) override;
-  grpc::ServerReadReactor<v1::FitInertiaRequest>* FitInertia(grpc::CallbackServerContext* context,
-                                                             v1::FitInertiaResponse* response) override;
+  grpc::ServerReadReactor<grpc::ByteBuffer>* FitInertia(grpc::CallbackServerContext* context,
+                                                        grpc::ByteBuffer* response) override;
 
  private:
   WorkerPool* pool_;

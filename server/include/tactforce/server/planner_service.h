@@ -54,11 +54,20 @@ struct PlannerServiceOptions {
   int64_t max_response_bytes = 0;  // the server's --max-message-bytes (0 = unchecked)
 };
 
-class PlannerService final : public v1::Planner::CallbackService, public HostedService {
+// PlanStream is registered raw (its reactor parses each message itself: see
+// planner_service.cc); the unary RPCs are typed.
+using PlannerBase = v1::Planner::WithCallbackMethod_Plan<v1::Planner::WithRawCallbackMethod_PlanStream<
+    v1::Planner::WithCallbackMethod_PlanTrajectory<
+        v1::Planner::WithCallbackMethod_PlanFrictionProbe<v1::Planner::Service>>>>;
+
+class PlannerService final : public PlannerBase, public HostedService {
  public:
-  // `pool` and `streams` must outlive the service (and the gRPC server it
-  // is hosted on).
-  PlannerService(WorkerPool* pool, StreamRegistry* streams, PlannerServiceOptions options);
+  // `pool`, `ipopt_lane` and `streams` must outlive the service (and the
+  // gRPC server it is hosted on). Work that runs Ipopt (SOLVER_IPOPT,
+  // SOLVER_CROSS_CHECK, in Plan, PlanStream, PlanTrajectory and
+  // PlanFrictionProbe) goes to `ipopt_lane`, everything else to `pool`.
+  PlannerService(WorkerPool* pool, WorkerPool* ipopt_lane, StreamRegistry* streams,
+                 PlannerServiceOptions options);
 
   std::string service_name() const override;
   grpc::Service* grpc_service() override { return this; }
@@ -66,7 +75,7 @@ class PlannerService final : public v1::Planner::CallbackService, public HostedS
   grpc::ServerUnaryReactor* Plan(grpc::CallbackServerContext* context,
                                  const v1::PlanRequest* request,
                                  v1::PlanResponse* response) override;
-  grpc::ServerBidiReactor<v1::PlanRequest, v1::PlanResponse>* PlanStream(
+  grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>* PlanStream(
       grpc::CallbackServerContext* context) override;
   // Whole motions and friction probes: always on the pool.
   grpc::ServerUnaryReactor* PlanTrajectory(grpc::CallbackServerContext* context,
@@ -77,7 +86,11 @@ class PlannerService final : public v1::Planner::CallbackService, public HostedS
                                               v1::FrictionProbeResponse* response) override;
 
  private:
+  // The pool for a request of `solver`'s (the Ipopt lane or the main pool).
+  WorkerPool* PoolFor(v1::Solver solver) const;
+
   WorkerPool* pool_;
+  WorkerPool* ipopt_lane_;
   StreamRegistry* streams_;  // PlanStream's admission and idle timeout
   api::PlanDispatcher plans_;  // its settings' limits serve every Planner RPC
   // Plan's request and response on one arena per call.

@@ -13,9 +13,11 @@
 
 #include <google/protobuf/arena.h>
 #include <grpcpp/grpcpp.h>
+#include <grpcpp/support/byte_buffer.h>
 #include <grpcpp/support/message_allocator.h>
 
 #include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
 #include "tactforce/api/dispatch.h"
 
 namespace tactforce::server {
@@ -24,11 +26,47 @@ namespace tactforce::server {
 // numbering); "UNKNOWN_CODE" for a number neither defines.
 const char* StatusCodeName(grpc::StatusCode code);
 
-// Same code (absl and gRPC share the numbering), same message.
+// Longest status message sent (bytes). gRPC carries the message in a
+// header (percent-encoded: up to 3x) and a C-core client refuses headers
+// over 8 KiB with RESOURCE_EXHAUSTED, which would turn an INVALID_ARGUMENT
+// that echoes a long input into a retryable code.
+inline constexpr size_t kMaxStatusMessageBytes = 2048;
+
+// `message` cut at a UTF-8 character boundary to at most
+// kMaxStatusMessageBytes, ending "... [N bytes cut]" when cut.
+std::string BoundedStatusMessage(std::string_view message);
+
+// Same code (absl and gRPC share the numbering), the message bounded
+// (BoundedStatusMessage).
 grpc::Status ToGrpcStatus(const absl::Status& status);
 
 // logfmt value (api::LogValue): bare when safe, else double-quoted.
 using api::LogValue;
+
+// Raw stream messages (the streaming reactors read and write
+// grpc::ByteBuffer so that a message that cannot be parsed is told apart
+// from the end of the stream, which gRPC's typed reader reports alike).
+// InvalidArgument "cannot be parsed as tactforce.v1.PlanRequest"; the
+// buffer is emptied either way.
+template <class Message>
+absl::Status ParseMessage(grpc::ByteBuffer* buffer, Message* message) {
+  const bool parsed = grpc::SerializationTraits<Message>::Deserialize(buffer, message).ok();
+  buffer->Clear();
+  if (parsed) return absl::OkStatus();
+  message->Clear();
+  return absl::InvalidArgumentError(
+      absl::StrCat("cannot be parsed as ", Message::descriptor()->full_name()));
+}
+template <class Message>
+absl::Status SerializeMessage(const Message& message, grpc::ByteBuffer* buffer) {
+  buffer->Clear();  // gRPC serializes only into an empty buffer
+  bool own_buffer = false;
+  if (grpc::SerializationTraits<Message>::Serialize(message, buffer, &own_buffer).ok()) {
+    return absl::OkStatus();
+  }
+  return absl::InternalError(
+      absl::StrCat("cannot serialize the ", Message::descriptor()->full_name()));
+}
 
 // Deadline and cancellation of one RPC, safe to poll from any thread while
 // the RPC is not finished. The deadline is converted to the steady clock

@@ -15,6 +15,7 @@ namespace tactforce::server {
 struct ServerConfig {
   std::string listen = "127.0.0.1:50051";
   int workers = 0;  // 0 = std::thread::hardware_concurrency()
+  int ipopt_workers = 1;  // the Ipopt lane's threads (Ipopt runs one solve at a time per process)
   int queue = 64;   // solves waiting for a worker, beyond which RESOURCE_EXHAUSTED
   int max_message_bytes = 4 << 20;
   int max_contacts = PlannerServiceOptions{}.max_contacts;
@@ -26,6 +27,7 @@ struct ServerConfig {
   int max_streams = StreamLimits{}.max_streams;
   int stream_idle_timeout_ms = static_cast<int>(StreamLimits{}.idle_timeout.count());
   int64_t max_inflight_samples = StreamLimits{}.max_inflight_samples;
+  int64_t max_inflight_bytes = StreamLimits{}.max_inflight_bytes;
   int max_streams_per_connection = ServerOptions{}.max_streams_per_connection;
   bool reflection = true;
   std::string tls_cert;

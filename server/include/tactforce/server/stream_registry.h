@@ -4,8 +4,10 @@
 //   * a stream that waits longer than `idle_timeout` for its next message
 //     is ended with UNAVAILABLE (a reaper thread checks once a second);
 //   * FitInertia samples held by all open streams together stay within
-//     `max_inflight_samples` (RESOURCE_EXHAUSTED for the message that would
-//     exceed it; the samples are released when the stream ends).
+//     `max_inflight_samples`, and the bytes they hold (converted samples,
+//     contacts included, and the options with their mesh) within
+//     `max_inflight_bytes` (RESOURCE_EXHAUSTED for the message that would
+//     exceed either; both are released when the stream ends).
 // (Per connection, HTTP/2's SETTINGS_MAX_CONCURRENT_STREAMS bounds the
 // calls in flight: ServerOptions::max_streams_per_connection.)
 #pragma once
@@ -26,6 +28,9 @@ struct StreamLimits {
   int max_streams = 1000;  // open streaming calls; 0 = no limit
   std::chrono::milliseconds idle_timeout{60'000};  // 0 = never
   int64_t max_inflight_samples = 2'000'000;  // FitInertia samples held; 0 = no limit
+  // FitInertia bytes held by all streams (api::InertiaStream::held_bytes);
+  // 0 = no limit. 256 MiB: a quarter of the shipped Kubernetes limit (1 GiB).
+  int64_t max_inflight_bytes = int64_t{256} << 20;
 };
 
 // A stream the registry may end for idling. Implementations are reactors
@@ -58,9 +63,13 @@ class StreamRegistry {
   // naming the budget and --max-inflight-samples.
   absl::Status ReserveSamples(int64_t n);
   void ReleaseSamples(int64_t n);
+  // The same for bytes (--max-inflight-bytes).
+  absl::Status ReserveBytes(int64_t n);
+  void ReleaseBytes(int64_t n);
 
   int open_streams() const;
   int64_t inflight_samples() const { return samples_.load(); }
+  int64_t inflight_bytes() const { return bytes_.load(); }
   const StreamLimits& limits() const { return limits_; }
 
  private:
@@ -72,6 +81,7 @@ class StreamRegistry {
   bool stopping_ = false;
   std::unordered_set<IdleEndable*> streams_;
   std::atomic<int64_t> samples_{0};
+  std::atomic<int64_t> bytes_{0};
   std::thread reaper_;
 };
 
