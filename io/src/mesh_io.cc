@@ -2,23 +2,23 @@
 // vertices welded by exact position.
 #include <algorithm>
 #include <array>
+#include <cstdint>
+#include <cstring>
 #include <cmath>
 #include <exception>
+#include <new>
 #include <filesystem>
-#include <optional>
+#include <numeric>
 #include <string>
 #include <vector>
 
+#include <assimp/IOSystem.hpp>
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
-#include "absl/container/flat_hash_map.h"
-#include "absl/container/flat_hash_set.h"
 #include "absl/strings/ascii.h"
-#include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
-#include "absl/strings/str_split.h"
 #include "tactforce/io/mesh.h"
 #include "tactforce/io/text_file.h"
 #include "mesh_internal.h"
@@ -43,30 +43,53 @@ uint32_t FaceColor(const aiMesh& m, unsigned a, unsigned b, unsigned c) {
   return PackColor((m.mColors[0][a] + m.mColors[0][b] + m.mColors[0][c]) / 3.0f);
 }
 
-absl::StatusOr<TriangleMesh> FromScene(const aiScene& scene, const std::string& name) {
-  size_t corners = 0;
-  bool colored = scene.mNumMeshes > 0;
-  for (unsigned i = 0; i < scene.mNumMeshes; ++i) {
-    corners += scene.mMeshes[i]->mNumVertices;
-    colored = colored && scene.mMeshes[i]->HasVertexColors(0);
-  }
-  TriangleMesh mesh;
-  absl::flat_hash_map<PositionKey, int> index_of;
-  index_of.reserve(corners);
-  mesh.vertices.reserve(corners);
-  std::vector<int> welded;
+// The vertex of every corner of the scene's meshes (meshes one after
+// another), vertices welded by exact position and numbered in order of first
+// appearance. By sorting, not with a hash map: absl's flat_hash_map is left
+// corrupt when an allocation throws (its destructor frees an invalid
+// pointer), and a read must survive running out of memory.
+absl::StatusOr<std::vector<int>> Weld(const aiScene& scene, const std::string& name,
+                                      std::vector<Eigen::Vector3d>* vertices) {
+  std::vector<PositionKey> keys;
   for (unsigned i = 0; i < scene.mNumMeshes; ++i) {
     const aiMesh& m = *scene.mMeshes[i];
-    welded.assign(m.mNumVertices, -1);
     for (unsigned v = 0; v < m.mNumVertices; ++v) {
       const aiVector3D& p = m.mVertices[v];
       const PositionKey key = {double(p.x) + 0.0, double(p.y) + 0.0, double(p.z) + 0.0};
       if (!std::isfinite(key[0]) || !std::isfinite(key[1]) || !std::isfinite(key[2]))
         return absl::InvalidArgumentError(absl::StrCat(name, ": vertex ", v, " is not finite"));
-      const auto [it, added] = index_of.try_emplace(key, static_cast<int>(mesh.vertices.size()));
-      if (added) mesh.vertices.emplace_back(key[0], key[1], key[2]);
-      welded[v] = it->second;
+      keys.push_back(key);
     }
+  }
+  std::vector<size_t> order(keys.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::sort(order.begin(), order.end(),
+            [&](size_t a, size_t b) { return keys[a] != keys[b] ? keys[a] < keys[b] : a < b; });
+  std::vector<size_t> first(keys.size());  // the first corner at the same position
+  for (size_t i = 0; i < order.size(); ++i)
+    first[order[i]] = i > 0 && keys[order[i]] == keys[order[i - 1]] ? first[order[i - 1]] : order[i];
+  std::vector<int> vertex_of(keys.size(), -1);
+  for (size_t c = 0; c < keys.size(); ++c) {
+    if (vertex_of[first[c]] < 0) {  // first[c] <= c: set here when c is the first
+      vertex_of[first[c]] = static_cast<int>(vertices->size());
+      vertices->emplace_back(keys[c][0], keys[c][1], keys[c][2]);
+    }
+    vertex_of[c] = vertex_of[first[c]];
+  }
+  return vertex_of;
+}
+
+absl::StatusOr<TriangleMesh> FromScene(const aiScene& scene, const std::string& name) {
+  bool colored = scene.mNumMeshes > 0;
+  for (unsigned i = 0; i < scene.mNumMeshes; ++i) colored = colored && scene.mMeshes[i]->HasVertexColors(0);
+  TriangleMesh mesh;
+  absl::StatusOr<std::vector<int>> vertex_of = Weld(scene, name, &mesh.vertices);
+  if (!vertex_of.ok()) return vertex_of.status();
+  size_t first_corner = 0;  // of the current mesh in vertex_of
+  for (unsigned i = 0; i < scene.mNumMeshes; ++i) {
+    const aiMesh& m = *scene.mMeshes[i];
+    const int* welded = vertex_of->data() + first_corner;
+    first_corner += m.mNumVertices;
     // Polygons as fans (assimp's own triangulation aborts on some malformed
     // PLY faces: found by the mesh fuzzer); points and lines are not surface.
     for (unsigned t = 0; t < m.mNumFaces; ++t) {
@@ -97,57 +120,84 @@ absl::StatusOr<std::string> MeshFormatFromPath(const std::string& path) {
 
 namespace {
 
-// The PLY header, checked line by line before assimp sees the bytes: its
-// PLY reader reads past the end of a header that stops early or hides
-// `end_header` inside another line (SEGV), and asserts (abort) on unknown
-// property types; all found by the mesh fuzzer. Accepted lines: "ply",
-// one "format ascii|binary_little_endian|binary_big_endian 1.0", "comment
-// ...", "obj_info ...", "element NAME COUNT", "property TYPE NAME",
-// "property list TYPE TYPE NAME", then "end_header".
-absl::Status CheckPlyHeader(std::string_view std_bytes, const std::string& name) {
-  const absl::string_view bytes(std_bytes.data(), std_bytes.size());
-  static const absl::flat_hash_set<absl::string_view> kTypes = {
-      "char", "uchar", "short", "ushort", "int", "uint", "float", "double", "int8", "uint8",
-      "int16", "uint16", "int32", "uint32", "float32", "float64"};
-  int line_number = 0;
-  bool format = false, element = false;
-  size_t pos = 0;
-  while (pos < bytes.size()) {
-    const size_t eol = bytes.find('\n', pos);
-    absl::string_view line = bytes.substr(pos, eol == absl::string_view::npos ? absl::string_view::npos : eol - pos);
-    pos = eol == absl::string_view::npos ? bytes.size() : eol + 1;
-    ++line_number;
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    auto bad = [&](const std::string& what) {
-      return absl::InvalidArgumentError(absl::StrCat(name, ": PLY header line ", line_number, ": ", what));
-    };
-    for (char c : line) {
-      if (c != '\t' && (c < ' ' || c > '~')) return bad("binary bytes inside the header");
-    }
-    const std::vector<absl::string_view> w = absl::StrSplit(line, ' ', absl::SkipEmpty());
-    if (line_number == 1) {
-      if (line != "ply") return bad("not a PLY file (the first line must be 'ply')");
-      continue;
-    }
-    if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
-    if (w[0] == "end_header" && w.size() == 1) {
-      if (!format) return bad("'end_header' before a 'format' line");
-      return absl::OkStatus();
-    }
-    uint64_t count = 0;
-    if (w[0] == "format" && !format && w.size() == 3 && w[2] == "1.0" &&
-        (w[1] == "ascii" || w[1] == "binary_little_endian" || w[1] == "binary_big_endian")) {
-      format = true;
-    } else if (w[0] == "element" && w.size() == 3 && absl::SimpleAtoi(w[2], &count)) {
-      element = true;
-    } else if (w[0] == "property" && element &&
-               ((w.size() == 3 && kTypes.contains(w[1])) ||
-                (w.size() == 5 && w[1] == "list" && kTypes.contains(w[2]) && kTypes.contains(w[3])))) {
-    } else {
-      return bad(absl::StrCat("unexpected '", line.substr(0, 40), "'"));
-    }
+// The only files assimp may open: none. ReadFileFromMemory wraps the
+// importer's IOSystem in a MemoryIOSystem that serves the buffer and hands
+// every other name (an OBJ's `mtllib /etc/passwd`, a FIFO that blocks the
+// reader forever) to this one, so request bytes never reach the file system.
+class NoFilesIOSystem : public Assimp::IOSystem {
+ public:
+  bool Exists(const char*) const override { return false; }
+  char getOsSeparator() const override { return '/'; }
+  Assimp::IOStream* Open(const char*, const char*) override { return nullptr; }
+  void Close(Assimp::IOStream*) override {}
+};
+
+// A binary STL's triangle count against the file size, before assimp reads
+// it: assimp computes 84 + 50 n in 32 bits, so a count such as 2^31 + 1
+// passes its own size check and it allocates n faces.
+absl::Status CheckStl(std::string_view bytes, const std::string& name) {
+  if (bytes.size() < 84) return absl::OkStatus();  // too short for binary; assimp tries ASCII
+  uint32_t triangles = 0;
+  std::memcpy(&triangles, bytes.data() + 80, sizeof(triangles));  // little-endian, as the format
+  const uint64_t needed = 84 + 50 * uint64_t{triangles};
+  if (needed == bytes.size()) return absl::OkStatus();
+  const absl::string_view start =
+      absl::StripLeadingAsciiWhitespace(absl::string_view(bytes.data(), std::min<size_t>(bytes.size(), 512)));
+  const bool wraps = static_cast<uint32_t>(needed) == bytes.size();
+  if (!wraps && start.substr(0, 5) == "solid") return absl::OkStatus();  // ASCII STL
+  return absl::InvalidArgumentError(absl::StrCat(name, ": binary STL header declares ", triangles,
+                                                 " triangles (", needed, " bytes) but the file has ",
+                                                 bytes.size(), " bytes"));
+}
+
+absl::Status CheckLimits(const TriangleMesh& mesh, const std::string& name) {
+  if (mesh.vertices.size() > static_cast<size_t>(kMaxMeshVertices))
+    return absl::InvalidArgumentError(absl::StrCat(name, ": ", mesh.vertices.size(),
+                                                   " vertices, more than the limit of ", kMaxMeshVertices));
+  if (mesh.triangles.size() > static_cast<size_t>(kMaxMeshTriangles))
+    return absl::InvalidArgumentError(absl::StrCat(name, ": ", mesh.triangles.size(),
+                                                   " triangles, more than the limit of ", kMaxMeshTriangles));
+  return absl::OkStatus();
+}
+
+// ReadMeshBytes without its exception guard; `hint` is "stl", "obj" or "ply".
+absl::StatusOr<TriangleMesh> ReadMesh(std::string_view bytes, const std::string& hint, const std::string& name) {
+  internal::CheckedPly ply;
+  if (hint == "ply") {
+    absl::StatusOr<internal::CheckedPly> checked = internal::CheckPly(bytes, name);
+    if (!checked.ok()) return checked.status();
+    ply = *std::move(checked);
+    if (!ply.assimp_bytes.empty()) bytes = ply.assimp_bytes;
   }
-  return absl::InvalidArgumentError(absl::StrCat(name, ": not a PLY file: no 'end_header' line"));
+  if (hint == "stl") {
+    if (absl::Status stl = CheckStl(bytes, name); !stl.ok()) return stl;
+  }
+  // No DefaultLogger is created, so assimp logs to its silent NullLogger.
+  Assimp::Importer importer;
+  NoFilesIOSystem* no_files = new NoFilesIOSystem;  // owned by the importer from here
+  importer.SetIOHandler(no_files);
+  // Validation: assimp's readers do not check face indices (a truncated
+  // binary PLY has faces pointing past the vertices); FromScene checks again.
+  const aiScene* scene =
+      importer.ReadFileFromMemory(bytes.data(), bytes.size(), aiProcess_ValidateDataStructure, hint.c_str());
+  // Had ReadFileFromMemory been left by an exception, its MemoryIOSystem
+  // would still be installed and ours orphaned: put ours back (deleting it).
+  if (importer.GetIOHandler() != no_files) importer.SetIOHandler(no_files);
+  // assimp catches what its readers throw and keeps it: std::bad_alloc
+  // becomes ResourceExhausted in ReadMeshBytes rather than a parse error.
+  if (scene == nullptr && importer.GetException()) std::rethrow_exception(importer.GetException());
+  if (scene == nullptr) {
+    std::string message = importer.GetErrorString();
+    if (message.empty()) message = "cannot read the file";
+    return absl::InvalidArgumentError(absl::StrCat(name, ": assimp: ", message));
+  }
+  absl::StatusOr<TriangleMesh> mesh = FromScene(*scene, name);
+  if (!mesh.ok()) return mesh;
+  if (absl::Status limits = CheckLimits(*mesh, name); !limits.ok()) return limits;
+  // assimp keeps the file's face order; a count mismatch means it did not.
+  if (mesh->face_colors.empty() && ply.face_colors.size() == mesh->triangles.size())
+    mesh->face_colors = std::move(ply.face_colors);
+  return mesh;
 }
 
 }  // namespace
@@ -160,31 +210,16 @@ absl::StatusOr<TriangleMesh> ReadMeshBytes(std::string_view bytes, std::string_v
     return absl::InvalidArgumentError(
         absl::StrCat(name, ": unknown mesh format '", std::string(format), "' (expected stl, obj or ply)"));
   if (bytes.empty()) return absl::InvalidArgumentError(absl::StrCat(name, ": empty file"));
-  if (hint == "ply") {
-    if (absl::Status header = CheckPlyHeader(bytes, name); !header.ok()) return header;
-  }
-  // No DefaultLogger is created, so assimp logs to its silent NullLogger.
-  Assimp::Importer importer;
-  const aiScene* scene = nullptr;
+  // No exception leaves: assimp's, our containers' and the PLY check's become a Status.
   try {
-    // Validation: assimp's readers do not check face indices (a truncated
-    // binary PLY has faces pointing past the vertices); FromScene checks again.
-    scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(), aiProcess_ValidateDataStructure, hint.c_str());
+    return ReadMesh(bytes, hint, name);
+  } catch (const std::bad_alloc&) {
+    return absl::ResourceExhaustedError(absl::StrCat(name, ": out of memory while reading the mesh"));
   } catch (const std::exception& e) {
-    return absl::InvalidArgumentError(absl::StrCat(name, ": assimp: ", e.what()));
+    return absl::InvalidArgumentError(absl::StrCat(name, ": cannot read the mesh: ", e.what()));
+  } catch (...) {
+    return absl::InvalidArgumentError(absl::StrCat(name, ": cannot read the mesh"));
   }
-  if (scene == nullptr) {
-    std::string message = importer.GetErrorString();
-    if (message.empty()) message = "cannot read the file";
-    return absl::InvalidArgumentError(absl::StrCat(name, ": assimp: ", message));
-  }
-  absl::StatusOr<TriangleMesh> mesh = FromScene(*scene, name);
-  if (mesh.ok() && hint == "ply" && mesh->face_colors.empty()) {
-    // assimp keeps the file's face order; a count mismatch means it did not.
-    std::optional<std::vector<uint32_t>> colors = internal::PlyFaceColors(bytes);
-    if (colors && colors->size() == mesh->triangles.size()) mesh->face_colors = *std::move(colors);
-  }
-  return mesh;
 }
 
 absl::StatusOr<TriangleMesh> ReadMeshFile(const std::string& path) {

@@ -155,6 +155,48 @@ def mesh_corpora():
     body = b"".join(struct.pack("<3f", *v) for v in tet)
     body += b"".join(struct.pack("<B3i", 3, *f) for f in faces)
     write("mesh", "2_tet_binary.ply", b"2" + head + body)
+    mesh_count_corpora(tet, faces)
+
+
+def mesh_count_corpora(tet, faces):
+    """Issue 23: declared counts that made assimp allocate gigabytes (PLY
+    element counts and list lengths, binary STL triangle counts), files named
+    by an OBJ (mtllib), and a binary PLY body starting with a newline byte."""
+    box = [(x, y, z) for z in (0, 1) for y in (0, 1) for x in (0, 1)]
+    quads = [(0, 4, 6, 2), (1, 3, 7, 5), (0, 1, 5, 4), (2, 6, 7, 3), (0, 2, 3, 1), (4, 5, 7, 6)]
+    tris = [t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))]
+
+    def ply_head(fmt, vertices, triangles, extra=""):
+        return (f"ply\nformat {fmt} 1.0\nelement vertex {vertices}\nproperty float x\nproperty float y\n"
+                f"property float z\nelement face {triangles}\nproperty list uchar int vertex_indices\n{extra}"
+                "end_header\n")
+
+    ascii_body = "".join(f"{x} {y} {z}\n" for x, y, z in box) + "".join(f"3 {a} {b} {c}\n" for a, b, c in tris)
+    write("mesh", "2_ply_ascii_vertex_count_1e8.ply", "2" + ply_head("ascii", 100000000, 12) + ascii_body)
+    binary_body = b"".join(struct.pack("<3f", *v) for v in box) + b"".join(struct.pack("<B3i", 3, *t) for t in tris)
+    for name, vertices, triangles in (("face_count_1e8", 8, 100000000), ("vertex_count_2e9", 2000000000, 12)):
+        write("mesh", f"2_ply_binary_{name}.ply",
+              b"2" + ply_head("binary_little_endian", vertices, triangles).encode() + binary_body)
+    extra = "element material 5000000000000\nproperty uchar id\nproperty list uint float w\n"
+    write("mesh", "2_ply_extra_element_huge_count.ply",
+          b"2" + ply_head("binary_little_endian", 8, 12, extra).encode() + binary_body + b"\x01\x00\x00\x00\x00")
+    list_bomb = b"".join(struct.pack("<3f", *v) for v in tet) + struct.pack("<I3i", 4000000000, 0, 1, 2)
+    write("mesh", "2_ply_binary_list_length_4e9.ply",
+          b"2" + ply_head("binary_little_endian", 4, 1).replace("uchar int", "uint int").encode() + list_bomb)
+    write("mesh", "2_ply_ascii_list_length_negative.ply",
+          "2" + ply_head("ascii", 4, 1).replace("uchar int", "char int") +
+          "".join(f"{x} {y} {z}\n" for x, y, z in tet) + "-1 0 1 2\n")
+    newline_first = struct.pack("<I", 0x3f80000a) + binary_body[4:]  # x of vertex 0 ends in byte 0x0a
+    write("mesh", "2_ply_binary_body_starts_with_newline.ply",
+          b"2" + ply_head("binary_little_endian", 8, 12).encode() + newline_first)
+    obj = ["mtllib /etc/hostname", "mtllib ../../../../etc/passwd", "mtllib box.mtl", "usemtl red",
+           *[f"v {x} {y} {z}" for x, y, z in tet], "usemtl missing",
+           *[f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces]]
+    write("mesh", "1_obj_mtllib_usemtl.obj", "1" + "\n".join(obj) + "\n")
+    facet = struct.pack("<12fH", 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0)
+    for name, count in (("wraps_32bit", 2**31 + 1), ("too_large", 1000)):
+        stl = b"binary".ljust(80, b" ") + struct.pack("<I", count) + facet
+        write("mesh", f"0_stl_binary_count_{name}.stl", b"0" + stl)
 
 
 def sensor_model_corpora():

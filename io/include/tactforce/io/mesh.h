@@ -35,14 +35,28 @@ struct TriangleMesh {
 // triangle ("mesh.triangles[4]: ...").
 absl::Status ValidateMesh(const TriangleMesh& mesh);
 
+// Limits of a mesh read by ReadMeshBytes/ReadMeshFile (meshes arrive in
+// requests, so they bound what a request can make the server allocate):
+// at most kMaxMeshVertices distinct vertices (after welding) and
+// kMaxMeshTriangles triangles (after triangulation). A PLY header is checked
+// before anything is read: each element (vertex, face or any other) may
+// declare at most kMaxMeshVertices vertices / kMaxMeshTriangles items, and no
+// more than the bytes after the header can hold.
+inline constexpr int64_t kMaxMeshVertices = 2'000'000;
+inline constexpr int64_t kMaxMeshTriangles = 4'000'000;
+
 // Reads STL (ASCII or binary), Wavefront OBJ or PLY (ASCII or binary) with
 // assimp; the format comes from the file's contents/extension. Polygons are
 // triangulated; vertices at identical positions are merged, so shared edges
-// are shared indices. Errors name the file ("Hammer.ply: ...").
+// are shared indices. Errors name the file ("Hammer.ply: ..."): bad or
+// oversized input is InvalidArgument, running out of memory ResourceExhausted;
+// no exception escapes.
 absl::StatusOr<TriangleMesh> ReadMeshFile(const std::string& path);
 
 // The same from memory. `format` is "stl", "obj" or "ply" (case-insensitive);
-// `name` is used in messages (e.g. "mesh" or the original file name).
+// `name` is used in messages (e.g. "mesh" or the original file name). Only
+// `bytes` are read: files the mesh refers to (an OBJ's `mtllib`) are never
+// opened, so request data cannot make the caller touch its file system.
 absl::StatusOr<TriangleMesh> ReadMeshBytes(std::string_view bytes, std::string_view format,
                                            std::string_view name);
 
