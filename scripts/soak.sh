@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Reliability runs of a local tactforce-server, driven by `tactforce load`:
 #
-#   scripts/soak.sh overload|soak|deadlines|all [--duration-scale X] [--bin DIR] [--out FILE.json]
+#   scripts/soak.sh overload|soak|deadlines|all|lane [--duration-scale X] [--bin DIR] [--out FILE.json]
 #                   [--keep-logs DIR]
 #
 #   overload   server --workers 1 --queue 4; Ipopt and cross-check Plans
@@ -19,6 +19,11 @@
 #              concurrency 4: max and p99 time to completion of every call
 #              (failed ones included). Pass: every call done by deadline + 5 ms.
 #   all        the three in turn, one JSON {overload, soak, deadlines, machine, pass}.
+#   lane       geometric Plans of 16 contacts (scripts/soak/lane_geometric_16.json,
+#              one caller, 20 s, on the worker pool) alone, then beside two
+#              callers of slow Ipopt plans (lane_ipopt_64.json: 64 contacts,
+#              exact cones). Pass: geometric p99 beside Ipopt <= 3x its p99
+#              alone, no errors (the Ipopt lane, --ipopt-workers). Not in `all`.
 #
 # Each mode starts its own server on 127.0.0.1:0 (the port it prints), samples
 # its VmRSS and runs `tactforce health` once a second. --duration-scale scales

@@ -34,6 +34,9 @@ SOAK_LOADS = [  # name, load arguments (each at concurrency 4)
     ("fit-inertia", ["--rpc", "fit-inertia"]),
 ]
 SOAK_CONCURRENCY = 4
+LANE_GEOMETRIC = os.path.join(HERE, "lane_geometric_16.json")
+LANE_IPOPT = os.path.join(HERE, "lane_ipopt_64.json")
+LANE_S, LANE_IPOPT_CALLERS, LANE_RATIO_LIMIT = 20.0, 2, 3.0
 DEADLINES_MS, DEADLINE_CALLS, DEADLINE_CONCURRENCY, DEADLINE_SLACK_MS = (1, 10, 100), 200, 4, 5.0
 MIN_CALLS = 10
 
@@ -225,6 +228,41 @@ def run_deadlines(cfg):
     return out
 
 
+def geometric_load(cfg, server, duration, name):
+    return Load(cfg.tactforce, server.address,
+                ["--rpc", "plan", "--request", LANE_GEOMETRIC, "-c", "1", "--duration",
+                 f"{duration:g}"], name, cfg.work)
+
+
+def run_lane(cfg):
+    """Pooled geometric plans (16 contacts, one caller) alone, then beside
+    two callers of slow Ipopt plans (64 contacts, exact cones): the Ipopt
+    lane keeps the geometric p99 within LANE_RATIO_LIMIT of its p99 alone."""
+    duration = max(1.0, LANE_S * cfg.scale)
+    server = Server(cfg.bin, ["--log-level", "warn"], os.path.join(cfg.work, "lane-server.log"))
+    monitor = Monitor(server, cfg.tactforce).start()
+    alone = soak_rpc_summary("alone", geometric_load(cfg, server, duration, "lane-alone")
+                             .result(duration + 120))
+    ipopt = Load(cfg.tactforce, server.address,
+                 ["--rpc", "plan", "--request", LANE_IPOPT, "-c", str(LANE_IPOPT_CALLERS),
+                  "--duration", f"{duration + 2:g}"], "lane-ipopt", cfg.work)
+    time.sleep(1.0)  # both Ipopt callers busy before the measurement starts
+    beside = soak_rpc_summary("beside", geometric_load(cfg, server, duration, "lane-beside")
+                              .result(duration + 120))
+    slow = soak_rpc_summary("ipopt", ipopt.result(duration + 120))
+    out = {"duration_s": duration, "geometric_alone": alone, "geometric_beside_ipopt": beside,
+           "ipopt": slow, "ipopt_callers": LANE_IPOPT_CALLERS, "ratio_limit": LANE_RATIO_LIMIT,
+           "requests": [os.path.relpath(f, cfg.root) for f in (LANE_GEOMETRIC, LANE_IPOPT)]}
+    out.update(stop_server(server, monitor))
+    p99_alone = alone.get("latency_ms", {}).get("p99")
+    p99_beside = beside.get("latency_ms", {}).get("p99")
+    out["p99_ratio"] = (round(p99_beside / p99_alone, 2) if p99_alone and p99_beside else None)
+    out["pass"] = (out["p99_ratio"] is not None and out["p99_ratio"] <= LANE_RATIO_LIMIT and
+                   alone["error_count"] == 0 and beside["error_count"] == 0 and
+                   slow["error_count"] == 0 and out["server_alive_at_end"] and out["clean_exit"])
+    return out
+
+
 def machine(cfg):
     model = ""
     try:
@@ -249,7 +287,8 @@ def machine(cfg):
             "duration_scale": cfg.scale, "bin_dir": cfg.bin}
 
 
-MODES = {"overload": run_overload, "soak": run_soak, "deadlines": run_deadlines}
+MODES = {"overload": run_overload, "soak": run_soak, "deadlines": run_deadlines, "lane": run_lane}
+ALL_MODES = ("overload", "soak", "deadlines")  # `all`; `lane` runs on its own
 
 
 def parse_args(argv):
@@ -284,7 +323,7 @@ def main(argv):
         if cfg.keep_logs:
             cfg.work = cfg.keep_logs
             os.makedirs(cfg.work, exist_ok=True)
-        for mode in MODES if cfg.mode == "all" else [cfg.mode]:
+        for mode in ALL_MODES if cfg.mode == "all" else [cfg.mode]:
             try:
                 summary[mode] = MODES[mode](cfg)
             except SetupError as error:

@@ -64,11 +64,23 @@ def _deadlines(s):
     return lines
 
 
+def _lane(s):
+    def p99(r):
+        return _num(r.get("latency_ms", {}).get("p99"), "{:.2f}")
+    a, b = s["geometric_alone"], s["geometric_beside_ipopt"]
+    return [f"lane       {_verdict(s)}  geometric p99 alone {p99(a)} ms ({a['calls']} calls), beside "
+            f"{s['ipopt_callers']} Ipopt callers {p99(b)} ms ({b['calls']} calls): ratio "
+            f"{_num(s['p99_ratio'], '{:.2f}')} (limit {s['ratio_limit']:g}); Ipopt calls "
+            f"{s['ipopt']['calls']}, p50 {_num(s['ipopt'].get('latency_ms', {}).get('p50'))} ms",
+            _server_line(s)]
+
+
 def format_table(summary):
     m = summary["machine"]
     lines = [f"tactforce soak: {m['cores']} cores ({m['cpu_model']}), duration scale "
              f"{m['duration_scale']:g}, {summary['wall_s']:.0f} s"]
-    for name, fn in (("overload", _overload), ("soak", _soak), ("deadlines", _deadlines)):
+    for name, fn in (("overload", _overload), ("soak", _soak), ("deadlines", _deadlines),
+                     ("lane", _lane)):
         if name in summary:
             lines += fn(summary[name])
     lines.append("overall    " + ("PASS" if summary["pass"] else "FAIL"))

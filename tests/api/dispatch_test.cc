@@ -7,9 +7,12 @@
 #include <gtest/gtest.h>
 
 #include <deque>
+#include <functional>
 #include <memory>
+#include <new>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <thread>
 
@@ -211,6 +214,74 @@ absl::StatusOr<v1::PlanResponse> EchoMaxContacts(const v1::PlanRequest&, const C
   response.set_iterations(limits.max_contacts);
   response.set_message(limits.interrupt && !limits.interrupt() ? "interruptible" : "no interrupt");
   return response;
+}
+
+TEST(ApiPlanDispatchLaneTest, IpoptAndCrossCheckGoToTheIpoptLaneGeometricToThePool) {
+  PlanSettings settings;
+  settings.inline_max_contacts = 0;  // every geometric plan pooled too
+  for (v1::Solver solver : {v1::SOLVER_GEOMETRIC, v1::SOLVER_IPOPT, v1::SOLVER_CROSS_CHECK}) {
+    ManualPool pool(4), lane(4);
+    PlanDispatcher dispatcher(&pool, settings, &lane);
+    TestCaller caller;
+    v1::PlanResponse response;
+    Outcome outcome;
+    dispatcher.Dispatch(Grasp(solver), &response, CallLog("Plan", caller), caller, outcome.Done());
+    EXPECT_EQ(lane.pending(), UsesIpopt(solver) ? 1 : 0) << v1::Solver_Name(solver);
+    EXPECT_EQ(pool.pending(), UsesIpopt(solver) ? 0 : 1) << v1::Solver_Name(solver);
+    lane.RunAll();
+    pool.RunAll();
+    ASSERT_EQ(outcome.calls, 1);
+    EXPECT_TRUE(outcome.status->ok()) << *outcome.status;
+  }
+}
+
+TEST(ApiPlanDispatchLaneTest, FullIpoptLaneRefusesIpoptButNotGeometricWork) {
+  ManualPool pool(4), lane(0);
+  PlanDispatcher dispatcher(&pool, {}, &lane);
+  TestCaller caller;
+  v1::PlanResponse response;
+  Outcome ipopt, geometric;
+  dispatcher.Dispatch(Grasp(v1::SOLVER_IPOPT), &response, CallLog("Plan", caller), caller, ipopt.Done());
+  ASSERT_EQ(ipopt.calls, 1);
+  EXPECT_EQ(ipopt.status->code(), absl::StatusCode::kResourceExhausted);
+  PlanSettings pooled;
+  pooled.inline_max_contacts = 0;
+  PlanDispatcher pooled_dispatcher(&pool, pooled, &lane);
+  pooled_dispatcher.Dispatch(Grasp(v1::SOLVER_GEOMETRIC), &response, CallLog("Plan", caller), caller,
+                             geometric.Done());
+  EXPECT_EQ(pool.pending(), 1);
+  pool.RunAll();
+  ASSERT_EQ(geometric.calls, 1);
+  EXPECT_TRUE(geometric.status->ok()) << *geometric.status;
+}
+
+TEST(ApiRunCallTest, ExceptionsBecomeStatusesInlineAndOnThePool) {
+  struct Case {
+    std::function<void()> thrower;
+    absl::StatusCode code;
+    const char* text;
+  };
+  const std::vector<Case> cases = {
+      {[] { throw std::bad_alloc(); }, absl::StatusCode::kResourceExhausted, "out of memory"},
+      {[] { throw std::runtime_error("assimp said no"); }, absl::StatusCode::kInternal, "assimp said no"},
+      {[] { throw 42; }, absl::StatusCode::kInternal, "unknown exception"}};
+  for (const Case& c : cases) {
+    for (bool pooled : {false, true}) {
+      ManualPool pool(1);
+      TestCaller caller;
+      Outcome outcome;
+      RunCall(CallLog("X", caller), pooled ? &pool : nullptr,
+              [&c](CallLog&) -> absl::Status {
+                c.thrower();
+                return absl::OkStatus();
+              },
+              outcome.Done());
+      pool.RunAll();
+      ASSERT_EQ(outcome.calls, 1);
+      EXPECT_EQ(outcome.status->code(), c.code) << *outcome.status;
+      EXPECT_THAT(outcome.status->message(), HasSubstr(c.text));
+    }
+  }
 }
 
 TEST(ApiDispatchOnPoolTest, HandlerRunsOnThePoolWithTheLimits) {
