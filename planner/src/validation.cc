@@ -195,7 +195,8 @@ absl::Status ValidateFrictionProbe(const FrictionProbe& probe, Vec3* unit_normal
   if (!std::isfinite(probe.sample_rate) || probe.sample_rate <= 0) {
     return Invalid("probe.sample_rate", "must be > 0");
   }
-  if (auto s = CheckMagnitude("probe.sample_rate", probe.sample_rate, 1.0 / kMinTimeStep, "Hz"); !s.ok()) return s;
+  constexpr double kMaxSampleRate = 1e9;  // Hz: a sample per kMinTimeStep
+  if (auto s = CheckMagnitude("probe.sample_rate", probe.sample_rate, kMaxSampleRate, "Hz"); !s.ok()) return s;
   *unit_normal = n;
   *unit_tangent = t;
   return absl::OkStatus();

@@ -213,7 +213,7 @@ std::vector<Reproducer> Reproducers() {
   cases.push_back({"AuditModel times x1e300", audit([](v1::AuditRequest& r) {
                      for (auto& s : *r.mutable_samples()) s.set_t(s.t() * 1e300);
                    }),
-                   "samples[1].t: magnitude exceeds 1e+09 s"});
+                   "samples[1].t: magnitude exceeds 1e+12 s"});
 
   auto friction = [](std::function<void(v1::FrictionRequest&)> spoil) {
     return [spoil] {

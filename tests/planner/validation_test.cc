@@ -168,8 +168,8 @@ TEST(Validation, MagnitudeChecksNameTheFieldAndTheLimit) {
 TEST(Validation, TimesAreBoundedAndStepsResolved) {
   const double previous = 1.0;
   EXPECT_TRUE(CheckTime("t", 1.0 + 1e-6, &previous).ok());
-  EXPECT_TRUE(CheckTime("t", 1e9).ok());
-  EXPECT_EQ(CheckTime("t", 1e10).message(), "t: magnitude exceeds 1e+09 s");
+  EXPECT_TRUE(CheckTime("t", 1.7e9).ok());  // an epoch clock
+  EXPECT_EQ(CheckTime("t", 1e13).message(), "t: magnitude exceeds 1e+12 s");
   EXPECT_EQ(CheckTime("t", 1.0 + 1e-12, &previous).message().substr(0, 8), "t: step ");
   const double tiny = 1e-302;
   EXPECT_EQ(CheckTime("samples[1].t", 2e-302, &tiny).message(),

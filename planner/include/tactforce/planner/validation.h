@@ -22,7 +22,7 @@ inline constexpr double kMaxVelocity = 1e3;             // m/s
 inline constexpr double kMaxAngularVelocity = 1e3;      // rad/s
 inline constexpr double kMaxAngularAcceleration = 1e5;  // rad/s^2
 inline constexpr double kMaxInertia = 1e12;             // kg m^2 (kMaxMass x kMaxLength^2)
-inline constexpr double kMaxTime = 1e9;                 // s: time stamps (about 32 years)
+inline constexpr double kMaxTime = 1e12;  // s: time stamps (epoch clocks, 1.7e9 s, fit)
 // s: the smallest step between consecutive samples of a method that
 // differentiates or fits over time (1 GHz: beyond any sensor); finer steps
 // turn rounding into huge derivatives.
