@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "absl/strings/str_cat.h"
+#include "fixtures.h"
 #include "tactforce/api/convert.h"
 #include "tactforce/api/finite.h"
 #include "tactforce/api/inertia.h"
@@ -42,19 +43,7 @@ v1::PlanRequest Grasp() {
   return {};
 }
 
-v1::FrictionProbeRequest Probe() {
-  v1::FrictionProbeRequest probe;
-  *probe.mutable_plan() = Grasp();
-  probe.mutable_position()->set_z(0.02);
-  probe.mutable_normal()->set_z(-1);
-  probe.mutable_tangent()->set_x(1);
-  probe.set_tangential_force(1);
-  probe.set_initial_normal_force(3);
-  probe.set_final_normal_force(0.5);
-  probe.set_ramp_rate(1);
-  probe.set_sample_rate(10);  // 26 steps
-  return probe;
-}
+v1::FrictionProbeRequest Probe() { return fixtures::ProbeRequest(Grasp(), 10); }  // 26 steps
 
 v1::TrajectoryRequest Motion() {
   v1::TrajectoryRequest t;
