@@ -7,13 +7,16 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <tuple>
 #include <utility>
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "tactforce/api/convert.h"
+#include "tactforce/api/finite.h"
 #include "tactforce/inertia/metrics.h"
 #include "tactforce/inertia/samples.h"
+#include "tactforce/planner/validation.h"
 
 namespace tactforce::api {
 namespace {
@@ -99,6 +102,54 @@ io::MeshCheck MeshCheckFromProto(const v1::MeshCheck& c) {
   out.area = c.area();
   out.junction_edges = c.junction_edges();
   return out;
+}
+
+// Inertial parameters given in the options (prior, truth) within the
+// planner's limits: "options.truth.inertia.ixx: magnitude exceeds 1e+12 kg m^2".
+absl::Status CheckParameterMagnitudes(const std::string& path, const v1::InertialParameters& p) {
+  if (auto s = planner::CheckMagnitude(path + ".mass", p.mass(), planner::kMaxMass, "kg"); !s.ok()) return s;
+  if (auto s = planner::CheckMagnitude(path + ".com", FromProto(p.com()), planner::kMaxLength, "m"); !s.ok()) return s;
+  const v1::Inertia& in = p.inertia();
+  const std::pair<const char*, double> moments[] = {{"ixx", in.ixx()}, {"iyy", in.iyy()}, {"izz", in.izz()},
+                                                    {"ixy", in.ixy()}, {"ixz", in.ixz()}, {"iyz", in.iyz()}};
+  for (const auto& [name, v] : moments) {
+    if (auto s = planner::CheckMagnitude(absl::StrCat(path, ".inertia.", name), v, planner::kMaxInertia, "kg m^2");
+        !s.ok())
+      return s;
+  }
+  return absl::OkStatus();
+}
+
+// The physical numbers of the options within the planner's limits (the
+// fit's products of them stay finite); other options are the library's.
+absl::Status CheckOptionMagnitudes(const v1::InertiaFitOptions& o) {
+  using planner::CheckMagnitude;
+  if (auto s = CheckMagnitude("options.gravity", FromProto(o.gravity()), planner::kMaxAcceleration, "m/s^2"); !s.ok())
+    return s;
+  for (int i = 0; i < o.hull_size(); ++i) {
+    if (!planner::IsBounded(FromProto(o.hull(i)), planner::kMaxLength))
+      return planner::MagnitudeError(absl::StrCat("options.hull[", i, "]"), FromProto(o.hull(i)), planner::kMaxLength,
+                                     "m");
+  }
+  if (o.has_prior()) {
+    if (auto s = CheckParameterMagnitudes("options.prior.params", o.prior().params()); !s.ok()) return s;
+  }
+  if (o.has_truth()) {
+    if (auto s = CheckParameterMagnitudes("options.truth", o.truth()); !s.ok()) return s;
+  }
+  const v1::InertiaNoise& n = o.noise();
+  const std::tuple<const char*, double, double, const char*> sigmas[] = {
+      {"options.noise.force_sigma", n.force_sigma(), planner::kMaxForce, "N"},
+      {"options.noise.torque_sigma", n.torque_sigma(), planner::kMaxForce, "N m"},
+      {"options.noise.position_sigma", n.position_sigma(), planner::kMaxLength, "m"},
+      {"options.noise.angular_velocity_sigma", n.angular_velocity_sigma(), planner::kMaxAngularVelocity, "rad/s"},
+      {"options.noise.linear_acceleration_sigma", n.linear_acceleration_sigma(), planner::kMaxAcceleration, "m/s^2"},
+      {"options.noise.angular_acceleration_sigma", n.angular_acceleration_sigma(), planner::kMaxAngularAcceleration,
+       "rad/s^2"}};
+  for (const auto& [field, v, limit, unit] : sigmas) {
+    if (auto s = CheckMagnitude(field, v, limit, unit); !s.ok()) return s;
+  }
+  return absl::OkStatus();
 }
 
 }  // namespace
@@ -191,6 +242,7 @@ v1::InertialParameters InertialParametersToProto(const inertia::InertialParamete
 
 absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::InertiaFitOptions& o) {
   inertia::InertiaOptions out;
+  if (absl::Status s = CheckOptionMagnitudes(o); !s.ok()) return s;
   if (!v1::InertiaMethod_IsValid(o.method()))
     return absl::InvalidArgumentError(absl::StrCat("options.method: unknown value ", o.method()));
   if (o.method() == v1::INERTIA_METHOD_UNSPECIFIED) {
@@ -387,7 +439,7 @@ absl::StatusOr<v1::FitInertiaResponse> FitInertiaSamples(const inertia::InertiaS
     errors->set_com_mm(e.com_mm);
     errors->set_consistent(e.consistent);
   }
-  return response;
+  return FiniteAnswer<v1::FitInertiaResponse>(std::move(response));
 }
 
 namespace {

@@ -4,15 +4,19 @@
 
 #include <cmath>
 #include <cstdint>
+#include <utility>
 
+#include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "tactforce/api/convert.h"
+#include "tactforce/api/finite.h"
 #include "tactforce/audit/audit.h"
 #include "tactforce/sim/sensor_model.h"
 #include "tactforce/estimator/force_estimation.h"
 #include "tactforce/estimator/friction.h"
 #include "tactforce/planner/solver.h"
 #include "tactforce/planner/trajectory.h"
+#include "tactforce/planner/validation.h"
 
 namespace tactforce::api {
 namespace {
@@ -42,33 +46,82 @@ v1::EstimateStatus ToProto(estimator::EstimateStatus s) {
   return v1::ESTIMATE_STATUS_UNSPECIFIED;
 }
 
-// Work and response size of a motion, bounded before any step is solved: an
-// unauthenticated client must not buy minutes of CPU, and an answer too big
-// to send must not be computed first.
-absl::Status CheckTrajectorySize(const planner::TrajectoryProblem& t, const planner::PlanOptions& options,
-                                 const CallLimits& limits) {
-  int64_t contacts = 0;
-  for (const planner::TrajectoryStep& step : t.steps) {
-    contacts += step.contacts ? static_cast<int64_t>(step.contacts->size())
-                              : static_cast<int64_t>(t.base.contacts.size());
-  }
-  const int64_t work = contacts * options.cone_sides;
-  if (work > limits.max_trajectory_work) {
+// The planned steps of a motion or a probe, described for the limits'
+// messages ("steps: 100 steps with 300 contacts in all ...").
+struct PlannedSteps {
+  const char* field;          // the request field that sets the count
+  const char* steps_noun;     // "steps", "probe steps"
+  const char* contacts_noun;  // "contacts", "holding contacts"
+  double steps;               // in double: a nonsense count must not wrap
+  double contacts;            // in all steps
+  double extra_bytes;         // response bytes beside the steps' PlanResponses
+};
+
+// Work and response size of planned steps, bounded before any step is
+// solved: an unauthenticated client must not buy minutes of CPU, and an
+// answer too big to send must not be computed first.
+absl::Status CheckPlannedSteps(const PlannedSteps& p, int cone_sides, const CallLimits& limits) {
+  const double work = p.contacts * cone_sides;
+  if (work > static_cast<double>(limits.max_trajectory_work)) {
     return absl::InvalidArgumentError(absl::StrCat(
-        "steps: ", t.steps.size(), " steps with ", contacts, " contacts in all at ", options.cone_sides,
-        " cone sides exceed the limit of ", limits.max_trajectory_work,
+        p.field, ": ", p.steps, " ", p.steps_noun, " with ", p.contacts, " ", p.contacts_noun, " in all at ",
+        cone_sides, " cone sides exceed the limit of ", limits.max_trajectory_work,
         " (steps x contacts x cone sides; the server's --max-trajectory-work)"));
   }
   // A PlanResponse per step: status, solver, times (about 40 bytes) and per
   // contact a force (3 doubles), its normal force and sigma, with tags.
-  constexpr int64_t kStepBytes = 40, kContactBytes = 60;
-  const int64_t bytes = static_cast<int64_t>(t.steps.size()) * kStepBytes + contacts * kContactBytes;
-  if (limits.max_response_bytes > 0 && bytes > limits.max_response_bytes) {
+  constexpr double kStepBytes = 40, kContactBytes = 60;
+  const double bytes = p.steps * kStepBytes + p.contacts * kContactBytes + p.extra_bytes;
+  if (limits.max_response_bytes > 0 && bytes > static_cast<double>(limits.max_response_bytes)) {
     return absl::InvalidArgumentError(absl::StrCat(
-        "steps: the response of ", t.steps.size(), " steps would be about ", bytes, " bytes, over the limit of ",
-        limits.max_response_bytes, " (the server's --max-message-bytes)"));
+        p.field, ": the response of ", p.steps, " ", p.steps_noun, " would be about ", bytes,
+        " bytes, over the limit of ", limits.max_response_bytes, " (the server's --max-message-bytes)"));
   }
   return absl::OkStatus();
+}
+
+// An audit's answer does not grow with its samples: models, report (every
+// candidate effect) and summary take at most kAuditAnswerBytes (about 12 kB
+// with one cause; a cause adds its parameters) plus the strings the request
+// echoes: the source (report, summary, both models' JSON), the units and a
+// given model (extended and reported).
+absl::Status CheckAuditResponseSize(const v1::AuditRequest& r, const CallLimits& limits) {
+  constexpr double kAuditAnswerBytes = 64 * 1024;
+  const double bytes = kAuditAnswerBytes + 4.0 * static_cast<double>(r.source().size() + r.reading_units().size()) +
+                       2.0 * static_cast<double>(r.model_json().size());
+  if (limits.max_response_bytes > 0 && bytes > static_cast<double>(limits.max_response_bytes)) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "source, reading_units, model_json: the response (report, summary and models echoing them) would be up to ",
+        bytes, " bytes, over the limit of ", limits.max_response_bytes, " (the server's --max-message-bytes)"));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status CheckTrajectorySize(const planner::TrajectoryProblem& t, const planner::PlanOptions& options,
+                                 const CallLimits& limits) {
+  double contacts = 0;
+  for (const planner::TrajectoryStep& step : t.steps) {
+    contacts += static_cast<double>(step.contacts ? step.contacts->size() : t.base.contacts.size());
+  }
+  return CheckPlannedSteps({"steps", "steps", "contacts", static_cast<double>(t.steps.size()), contacts, 0.0},
+                           options.cone_sides, limits);
+}
+
+// The probe's numbers as the planner checks them, under the request's own
+// field names ("normal: zero length"; the planner says "probe.normal").
+absl::Status CheckProbe(const planner::FrictionProbe& probe) {
+  planner::Vec3 unit_normal, unit_tangent;
+  absl::Status s = planner::ValidateFrictionProbe(probe, &unit_normal, &unit_tangent);
+  constexpr absl::string_view kPrefix = "probe.";
+  if (s.ok() || !absl::StartsWith(s.message(), kPrefix)) return s;
+  return absl::Status(s.code(), s.message().substr(kPrefix.size()));
+}
+
+// The holding grasp of a motion or probe, checked whole before any step
+// ("plan.contacts[1].friction: not a finite number"): steps that replace
+// the contacts would otherwise never look at it.
+absl::Status CheckHoldingGrasp(const PlanCall& call) {
+  return Nested(planner::ValidateProblem(call.problem, call.options).status(), "plan.");
 }
 
 }  // namespace
@@ -97,7 +150,7 @@ absl::StatusOr<v1::PlanResponse> SolvePlan(const PlanCall& call, PlanBuffers* bu
       !s.ok()) {
     return s;
   }
-  return api::ToProto(buffers->result);
+  return FiniteAnswer<v1::PlanResponse>(api::ToProto(buffers->result));
 }
 
 absl::StatusOr<v1::PlanResponse> SolvePlan(const PlanCall& call) {
@@ -115,6 +168,7 @@ absl::StatusOr<v1::TrajectoryResponse> HandleTrajectory(const v1::TrajectoryRequ
                                                         const CallLimits& limits) {
   absl::StatusOr<PlanCall> call = PreparePlan(request.plan(), limits);
   if (!call.ok()) return Nested(call.status(), "plan.");
+  if (absl::Status s = CheckHoldingGrasp(*call); !s.ok()) return s;
   absl::StatusOr<planner::TrajectoryProblem> t = ToTrajectoryProblem(request, call->problem);
   if (!t.ok()) return t.status();
   if (absl::Status s = CheckTrajectorySize(*t, call->options, limits); !s.ok()) return s;
@@ -122,13 +176,14 @@ absl::StatusOr<v1::TrajectoryResponse> HandleTrajectory(const v1::TrajectoryRequ
   absl::StatusOr<planner::TrajectoryResult> r =
       planner::PlanTrajectory(*t, call->options, call->solver, warm);
   if (!r.ok()) return r.status();
-  return ToProto(*r);
+  return FiniteAnswer<v1::TrajectoryResponse>(ToProto(*r));
 }
 
 absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
     const v1::FrictionProbeRequest& request, const CallLimits& limits) {
   absl::StatusOr<PlanCall> call = PreparePlan(request.plan(), limits);
   if (!call.ok()) return Nested(call.status(), "plan.");
+  if (absl::Status s = CheckHoldingGrasp(*call); !s.ok()) return s;
   planner::FrictionProbe probe;
   probe.position = FromProto(request.position());
   probe.normal = FromProto(request.normal());
@@ -138,16 +193,19 @@ absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
   probe.final_normal_force = request.final_normal_force();
   probe.ramp_rate = request.ramp_rate();
   probe.sample_rate = request.sample_rate();
-  // The same work bound as a trajectory, on the step count the ramp implies
-  // (in double: nonsense rates are the planner's to name).
+  if (absl::Status s = CheckProbe(probe); !s.ok()) return s;
+  // The same work and size bounds as a trajectory, on the step count the
+  // ramp implies (in double: it may be beyond any integer).
   const double steps = std::floor((probe.initial_normal_force - probe.final_normal_force) / probe.ramp_rate *
                                   probe.sample_rate) + 1;
-  const double work = steps * static_cast<double>(call->problem.contacts.size()) * call->options.cone_sides;
-  if (std::isfinite(work) && steps >= 1 && work > static_cast<double>(limits.max_trajectory_work)) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "sample_rate: ", steps, " probe steps with ", call->problem.contacts.size(), " holding contacts at ",
-        call->options.cone_sides, " cone sides exceed the limit of ", limits.max_trajectory_work,
-        " (steps x contacts x cone sides; the server's --max-trajectory-work)"));
+  // Per step a time (8 bytes) and a probe force (3 doubles), with tags.
+  constexpr double kProbeStepBytes = 40;
+  if (absl::Status s = CheckPlannedSteps(
+          {"sample_rate", "probe steps", "holding contacts", steps,
+           steps * static_cast<double>(call->problem.contacts.size()), steps * kProbeStepBytes},
+          call->options.cone_sides, limits);
+      !s.ok()) {
+    return s;
   }
   absl::StatusOr<planner::ProbePlan> plan =
       planner::PlanFrictionProbe(call->problem, probe, call->options, call->solver);
@@ -156,7 +214,7 @@ absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
   for (double t : plan->times) out.add_times(t);
   for (const auto& f : plan->probe_forces) *out.add_probe_forces() = api::ToProto(f);
   *out.mutable_holding() = ToProto(plan->holding);
-  return out;
+  return FiniteAnswer<v1::FrictionProbeResponse>(std::move(out));
 }
 
 absl::StatusOr<v1::EstimateResponse> HandleEstimate(const v1::EstimateRequest& request,
@@ -202,7 +260,7 @@ absl::StatusOr<v1::EstimateResponse> HandleEstimate(const v1::EstimateRequest& r
   for (int j : e->negative_readings) out.add_negative_readings(j);
   out.set_solve_time_us(e->solve_time_us);
   out.set_iterations(e->iterations);
-  return out;
+  return FiniteAnswer<v1::EstimateResponse>(std::move(out));
 }
 
 absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& request,
@@ -227,7 +285,12 @@ absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& r
   o.interrupt = limits.interrupt;
   if (request.mesh().triangles_size() > 0 || request.mesh().vertices_size() > 0) {
     io::TriangleMesh mesh;
-    for (const auto& v : request.mesh().vertices()) mesh.vertices.push_back(FromProto(v));
+    for (int i = 0; i < request.mesh().vertices_size(); ++i) {
+      const planner::Vec3 v = FromProto(request.mesh().vertices(i));
+      if (!planner::IsBounded(v, planner::kMaxLength))
+        return planner::MagnitudeError(absl::StrCat("mesh.vertices[", i, "]"), v, planner::kMaxLength, "m");
+      mesh.vertices.push_back(v);
+    }
     for (const auto& t : request.mesh().triangles()) mesh.triangles.push_back({t.a(), t.b(), t.c()});
     o.mesh = std::move(mesh);
   }
@@ -265,7 +328,7 @@ absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& r
   out.set_mean(e->mean);
   out.set_iqr(e->iqr);
   out.set_count(e->count);
-  return out;
+  return FiniteAnswer<v1::FrictionResponse>(std::move(out));
 }
 
 absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request, const CallLimits& limits) {
@@ -274,6 +337,7 @@ absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request, c
                                                    " samples exceed the limit of ", limits.max_audit_samples,
                                                    " per request (the server's --max-audit-samples)"));
   }
+  if (absl::Status s = CheckAuditResponseSize(request, limits); !s.ok()) return s;
   audit::MeasuredData data;
   data.source = request.source().empty() ? "request" : request.source();
   bool any_shear = false;
@@ -326,7 +390,7 @@ absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request, c
   out.set_extended_model_json(sim::SensorModelToJson(report->extended_model));
   out.set_report_json(audit::AuditReportJson(*report));
   out.set_summary(audit::FormatAuditSummary(*report));
-  return out;
+  return FiniteAnswer<v1::AuditResponse>(std::move(out));
 }
 
 }  // namespace tactforce::api

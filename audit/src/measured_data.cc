@@ -16,6 +16,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "audit_internal.h"
+#include "tactforce/planner/validation.h"
 
 namespace tactforce::audit {
 
@@ -67,12 +68,28 @@ absl::Status ValidateMeasuredData(const MeasuredData& d, int min_samples) {
   for (auto st : {check_finite(d.t, "t"), check_finite(d.reference, "reference"),
                   check_finite(d.reading, "reading"), check_finite(d.shear, "shear")})
     if (!st.ok()) return st;
+  // Magnitudes far beyond any sensor: their squares and products (the fits'
+  // sums) stay finite, so no answer is computed from an overflow.
+  auto check_bounded = [&](const std::vector<double>& v, const char* col, double limit,
+                           const char* unit) -> absl::Status {
+    for (size_t i = 0; i < v.size(); ++i)
+      if (!planner::IsBounded(v[i], limit)) return planner::MagnitudeError(Where(d, i, col), v[i], limit, unit);
+    return absl::OkStatus();
+  };
+  for (auto st : {check_bounded(d.t, "t", planner::kMaxTime, "s"),
+                  check_bounded(d.reference, "reference", planner::kMaxForce, "N"),
+                  check_bounded(d.reading, "reading", kMaxReading, "sensor units"),
+                  check_bounded(d.shear, "shear", planner::kMaxForce, "N")})
+    if (!st.ok()) return st;
   std::vector<int> starts = d.segment_starts.empty() ? std::vector<int>{0} : d.segment_starts;
   for (size_t i = 1; i < n; ++i) {
     if (std::binary_search(starts.begin(), starts.end(), static_cast<int>(i))) continue;
     if (!(d.t[i] > d.t[i - 1]))
       return absl::InvalidArgumentError(absl::StrCat(Where(d, i, "t"), ": time not increasing (", d.t[i],
                                                      " after ", d.t[i - 1], "); sort the rows by time"));
+    // Delay, lag and drift are fitted over time: steps below the resolution are noise.
+    if (d.t[i] - d.t[i - 1] < planner::kMinTimeStep)
+      return planner::CheckTime(Where(d, static_cast<int>(i), "t"), d.t[i], &d.t[i - 1]);
   }
   auto check_const = [&](const std::vector<double>& v, const char* col, const char* why) -> absl::Status {
     auto [lo, hi] = std::minmax_element(v.begin(), v.end());

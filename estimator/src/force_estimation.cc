@@ -199,8 +199,8 @@ absl::Status CheckRequest(const PlanProblem& problem, const std::vector<double>&
                      readings.size()));
   }
   for (size_t j = 0; j < readings.size(); ++j) {
-    if (!std::isfinite(readings[j]))
-      return absl::InvalidArgumentError(absl::StrCat("readings[", j, "]: not a finite number"));
+    if (!planner::IsBounded(readings[j], planner::kMaxForce))
+      return planner::MagnitudeError(absl::StrCat("readings[", j, "]"), readings[j], planner::kMaxForce, "N");
     if (readings[j] < 0.0) out->negative_readings.push_back(static_cast<int>(j));
   }
   if (options.method == EstimateMethod::kProjection && !ws->extrinsic.empty() &&

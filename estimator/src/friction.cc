@@ -11,6 +11,7 @@
 #include <Eigen/Dense>
 
 #include "absl/strings/str_cat.h"
+#include "tactforce/planner/validation.h"
 
 namespace tactforce::estimator {
 namespace {
@@ -46,9 +47,18 @@ absl::Status ValidateTrial(const FrictionTrial& trial, int index, int min_sample
       return absl::InvalidArgumentError(sp + ".contact_point: not finite");
     if (k > 0 && !(s.t > trial.samples[k - 1].t))
       return absl::InvalidArgumentError(sp + ".t: not increasing");
+    // The pre-slip line fit is over time: steps below the resolution are noise.
+    if (absl::Status st = planner::CheckTime(sp + ".t", s.t, k > 0 ? &trial.samples[k - 1].t : nullptr); !st.ok())
+      return st;
+    if (absl::Status st = planner::CheckMagnitude(sp + ".force", s.force, planner::kMaxForce, "N"); !st.ok())
+      return st;
+    if (absl::Status st = planner::CheckMagnitude(sp + ".contact_point", s.contact_point, planner::kMaxLength, "m");
+        !st.ok())
+      return st;
   }
-  if (trial.normal && !(trial.normal->norm() > 1e-9))
-    return absl::InvalidArgumentError(path + ".normal: zero length");
+  Vec3 unit = trial.normal.value_or(Vec3::UnitZ());
+  if (trial.normal && !planner::NormalizeDirection(&unit))
+    return absl::InvalidArgumentError(path + (unit.allFinite() ? ".normal: zero length" : ".normal: not finite"));
   return absl::OkStatus();
 }
 
@@ -166,10 +176,15 @@ absl::Status ValidateOptions(const FrictionOptions& o) {
   };
   if (!(o.slip_distance > 0) || !std::isfinite(o.slip_distance))
     return bad("slip_distance", "finite and > 0 m", o.slip_distance);
+  if (absl::Status s = planner::CheckMagnitude("slip_distance", o.slip_distance, planner::kMaxLength, "m"); !s.ok())
+    return s;
   if (o.window < 1) return bad("window", ">= 1 sample", o.window);
   if (o.fit_window < 3) return bad("fit_window", ">= 3 samples", o.fit_window);
   if (!(o.min_normal_force >= 0) || !std::isfinite(o.min_normal_force))
     return bad("min_normal_force", "finite and >= 0 N", o.min_normal_force);
+  if (absl::Status s = planner::CheckMagnitude("min_normal_force", o.min_normal_force, planner::kMaxForce, "N");
+      !s.ok())
+    return s;
   if (!(o.noise_k > 0) || !std::isfinite(o.noise_k)) return bad("noise_k", "finite and > 0", o.noise_k);
   return absl::OkStatus();
 }
@@ -193,7 +208,8 @@ absl::StatusOr<FrictionEstimate> EstimateFriction(const std::vector<FrictionTria
     Vec3 n;
     int triangle = -1;
     if (trial.normal) {
-      n = trial.normal->normalized();
+      n = *trial.normal;
+      planner::NormalizeDirection(&n);  // without overflow; ValidateTrial accepted it
     } else if (o.mesh) {
       const io::NearestTriangle near = io::FindNearestTriangle(*o.mesh, trial.samples.front().contact_point);
       n = near.inward_normal;

@@ -51,22 +51,6 @@ namespace {
 
 constexpr double kMaxProbeSteps = 100000;
 
-absl::Status CheckStep(const TrajectoryProblem& t, int i) {
-  const TrajectoryStep& s = t.steps[i];
-  const std::string path = absl::StrCat("steps[", i, "]");
-  const std::pair<const char*, const Vec3*> fields[] = {
-      {".gravity", &s.gravity}, {".linear_acceleration", &s.linear_acceleration},
-      {".angular_velocity", &s.angular_velocity}, {".angular_acceleration", &s.angular_acceleration}};
-  for (const auto& [name, v] : fields) {
-    if (!v->allFinite()) return absl::InvalidArgumentError(absl::StrCat(path, name, ": not a finite vector"));
-  }
-  if (!t.inertia && (s.angular_velocity.squaredNorm() > 0 || s.angular_acceleration.squaredNorm() > 0)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("object.inertia: required because ", path, " rotates the object"));
-  }
-  return absl::OkStatus();
-}
-
 }  // namespace
 
 absl::StatusOr<TrajectoryResult> PlanTrajectory(const TrajectoryProblem& t,
@@ -76,6 +60,10 @@ absl::StatusOr<TrajectoryResult> PlanTrajectory(const TrajectoryProblem& t,
   if (t.steps.empty()) return absl::InvalidArgumentError("steps: at least one step is required");
   if (t.inertia) {
     if (absl::Status s = ValidateInertia(*t.inertia); !s.ok()) return s;
+  }
+  // Every step before any solve: a bad last step must not cost the others.
+  for (int i = 0; i < static_cast<int>(t.steps.size()); ++i) {
+    if (absl::Status s = ValidateTrajectoryStep(t.steps[i], i, t.inertia.has_value()); !s.ok()) return s;
   }
   const std::unique_ptr<ForceSolver> solver = MakeSolver(kind);
   TrajectoryResult out;
@@ -87,7 +75,6 @@ absl::StatusOr<TrajectoryResult> PlanTrajectory(const TrajectoryProblem& t,
     if (options.interrupt && options.interrupt()) {
       return absl::CancelledError(absl::StrCat("interrupted after ", i, " of ", t.steps.size(), " steps"));
     }
-    if (absl::Status s = CheckStep(t, i); !s.ok()) return s;
     PlanResult& r = out.steps.emplace_back();
     if (absl::Status s = solver->Solve(StepProblem(t, i), step_options, &workspace, &r);
         !s.ok()) {
@@ -113,28 +100,13 @@ absl::StatusOr<TrajectoryResult> PlanTrajectory(const TrajectoryProblem& t,
 absl::StatusOr<ProbePlan> PlanFrictionProbe(const PlanProblem& holding_grasp,
                                             const FrictionProbe& probe,
                                             const PlanOptions& options, SolverKind kind) {
-  auto invalid = [](const char* what) { return absl::InvalidArgumentError(what); };
-  if (!probe.position.allFinite()) return invalid("probe.position: not a finite vector");
-  if (!probe.normal.allFinite() || probe.normal.norm() < 1e-9) return invalid("probe.normal: zero length");
-  const Vec3 n = probe.normal.normalized();
-  const Vec3 t_raw = probe.tangent - probe.tangent.dot(n) * n;
-  if (!t_raw.allFinite() || t_raw.norm() < 1e-9)
-    return invalid("probe.tangent: zero length after projection onto the tangent plane");
-  const Vec3 t = t_raw.normalized();
-  for (const auto& [name, v] : {std::pair{"probe.tangential_force", probe.tangential_force},
-                                std::pair{"probe.initial_normal_force", probe.initial_normal_force},
-                                std::pair{"probe.final_normal_force", probe.final_normal_force}}) {
-    if (!std::isfinite(v) || v < 0) return absl::InvalidArgumentError(absl::StrCat(name, ": must be finite and >= 0"));
-  }
-  if (!(probe.initial_normal_force > probe.final_normal_force))
-    return invalid("probe.final_normal_force: must be below initial_normal_force");
-  if (!std::isfinite(probe.ramp_rate) || probe.ramp_rate <= 0) return invalid("probe.ramp_rate: must be > 0");
-  if (!std::isfinite(probe.sample_rate) || probe.sample_rate <= 0) return invalid("probe.sample_rate: must be > 0");
+  Vec3 n, t;
+  if (absl::Status s = ValidateFrictionProbe(probe, &n, &t); !s.ok()) return s;
   const double duration = (probe.initial_normal_force - probe.final_normal_force) / probe.ramp_rate;
   // Counted in double first: the product can exceed any int (UB to cast).
   const double step_count = std::floor(duration * probe.sample_rate) + 1;
   if (!(step_count <= kMaxProbeSteps)) {
-    return invalid("probe.sample_rate: more than 100000 steps; ramp faster or sample slower");
+    return absl::InvalidArgumentError("probe.sample_rate: more than 100000 steps; ramp faster or sample slower");
   }
   const int steps = static_cast<int>(step_count);
 

@@ -18,20 +18,6 @@ absl::Status Invalid(const std::string& field, const std::string& what) {
   return absl::InvalidArgumentError(absl::StrCat(field, ": ", what));
 }
 
-// Finite with every component's magnitude at most `limit` (`unit` names it).
-absl::Status CheckBounded(const char* field, double value, double limit, const char* unit) {
-  if (!std::isfinite(value)) return Invalid(field, "not a finite number");
-  if (std::abs(value) > limit) return Invalid(field, absl::StrCat("magnitude exceeds ", limit, " ", unit));
-  return absl::OkStatus();
-}
-absl::Status CheckBounded(const char* field, const Vec3& value, double limit, const char* unit) {
-  if (!Finite(value)) return Invalid(field, "not a finite vector");
-  if (value.cwiseAbs().maxCoeff() > limit) {
-    return Invalid(field, absl::StrCat("component magnitude exceeds ", limit, " ", unit));
-  }
-  return absl::OkStatus();
-}
-
 // Field paths are formatted only on failure: a valid request allocates
 // nothing here.
 absl::Status InvalidContact(int index, const char* field, const std::string& what) {
@@ -39,18 +25,11 @@ absl::Status InvalidContact(int index, const char* field, const std::string& wha
 }
 
 absl::Status CheckContact(int index, Contact& c) {
-  if (!Finite(c.position)) return InvalidContact(index, "position", "not a finite vector");
-  if (c.position.cwiseAbs().maxCoeff() > kMaxLength) {
-    return InvalidContact(index, "position", absl::StrCat("component magnitude exceeds ", kMaxLength, " m"));
+  if (!IsBounded(c.position, kMaxLength)) {
+    return MagnitudeError(absl::StrCat("contacts[", index, "].position"), c.position, kMaxLength, "m");
   }
   if (!Finite(c.normal)) return InvalidContact(index, "normal", "not a finite vector");
-  // Scaled by its largest component first: |n| of a finite n may overflow.
-  const double largest = c.normal.cwiseAbs().maxCoeff();
-  if (!(largest * (c.normal / (largest > 0 ? largest : 1.0)).norm() >= 1e-9)) {
-    return InvalidContact(index, "normal", "zero length");
-  }
-  c.normal /= largest;
-  c.normal.normalize();
+  if (!NormalizeDirection(&c.normal)) return InvalidContact(index, "normal", "zero length");
   struct NonNegative {
     const char* field;
     double value;
@@ -76,6 +55,45 @@ absl::Status CheckContact(int index, Contact& c) {
 
 }  // namespace
 
+bool IsBounded(double value, double limit) { return std::abs(value) <= limit; }  // false for NaN
+bool IsBounded(const Vec3& value, double limit) {
+  return value.allFinite() && value.cwiseAbs().maxCoeff() <= limit;
+}
+
+absl::Status MagnitudeError(absl::string_view field, double value, double limit, absl::string_view unit) {
+  if (!std::isfinite(value)) return Invalid(std::string(field), "not a finite number");
+  return Invalid(std::string(field), absl::StrCat("magnitude exceeds ", limit, " ", unit));
+}
+absl::Status MagnitudeError(absl::string_view field, const Vec3& value, double limit, absl::string_view unit) {
+  if (!Finite(value)) return Invalid(std::string(field), "not a finite vector");
+  return Invalid(std::string(field), absl::StrCat("component magnitude exceeds ", limit, " ", unit));
+}
+absl::Status CheckMagnitude(absl::string_view field, double value, double limit, absl::string_view unit) {
+  return IsBounded(value, limit) ? absl::OkStatus() : MagnitudeError(field, value, limit, unit);
+}
+absl::Status CheckMagnitude(absl::string_view field, const Vec3& value, double limit, absl::string_view unit) {
+  return IsBounded(value, limit) ? absl::OkStatus() : MagnitudeError(field, value, limit, unit);
+}
+
+absl::Status CheckTime(absl::string_view field, double t, const double* previous) {
+  if (!IsBounded(t, kMaxTime)) return MagnitudeError(field, t, kMaxTime, "s");
+  if (previous != nullptr && t > *previous && t - *previous < kMinTimeStep) {
+    return Invalid(std::string(field), absl::StrCat("step ", t - *previous,
+                                                    " s after the previous sample is below the resolution ",
+                                                    kMinTimeStep, " s"));
+  }
+  return absl::OkStatus();
+}
+
+bool NormalizeDirection(Vec3* direction) {
+  if (!Finite(*direction)) return false;
+  const double largest = direction->cwiseAbs().maxCoeff();
+  if (!(largest * (*direction / (largest > 0 ? largest : 1.0)).norm() >= kMinDirectionLength)) return false;
+  *direction /= largest;
+  direction->normalize();
+  return true;
+}
+
 absl::Status ValidateProblem(const PlanProblem& problem, const PlanOptions& options,
                              PlanProblem* validated) {
   std::string option_error;
@@ -85,12 +103,12 @@ absl::Status ValidateProblem(const PlanProblem& problem, const PlanOptions& opti
   out.object = problem.object;
   out.external_wrench = problem.external_wrench;
   out.contacts = problem.contacts;  // element-wise: keeps capacity
-  if (auto s = CheckBounded("object.mass", out.object.mass, kMaxMass, "kg"); !s.ok()) return s;
+  if (auto s = CheckMagnitude("object.mass", out.object.mass, kMaxMass, "kg"); !s.ok()) return s;
   if (out.object.mass < 0.0) return Invalid("object.mass", "must be >= 0");
-  if (auto s = CheckBounded("object.com", out.object.com, kMaxLength, "m"); !s.ok()) return s;
-  if (auto s = CheckBounded("object.gravity", out.object.gravity, kMaxAcceleration, "m/s^2"); !s.ok()) return s;
-  if (auto s = CheckBounded("external_wrench.force", out.external_wrench.force, kMaxForce, "N"); !s.ok()) return s;
-  if (auto s = CheckBounded("external_wrench.torque", out.external_wrench.torque, kMaxForce, "N m"); !s.ok()) {
+  if (auto s = CheckMagnitude("object.com", out.object.com, kMaxLength, "m"); !s.ok()) return s;
+  if (auto s = CheckMagnitude("object.gravity", out.object.gravity, kMaxAcceleration, "m/s^2"); !s.ok()) return s;
+  if (auto s = CheckMagnitude("external_wrench.force", out.external_wrench.force, kMaxForce, "N"); !s.ok()) return s;
+  if (auto s = CheckMagnitude("external_wrench.torque", out.external_wrench.torque, kMaxForce, "N m"); !s.ok()) {
     return s;
   }
 
@@ -107,6 +125,9 @@ absl::Status ValidateProblem(const PlanProblem& problem, const PlanOptions& opti
 absl::Status ValidateInertia(const Inertia& in) {
   for (double v : {in.ixx, in.iyy, in.izz, in.ixy, in.ixz, in.iyz}) {
     if (!std::isfinite(v)) return absl::InvalidArgumentError("object.inertia: not finite");
+    if (std::abs(v) > kMaxInertia) {
+      return Invalid("object.inertia", absl::StrCat("component magnitude exceeds ", kMaxInertia, " kg m^2"));
+    }
   }
   Eigen::Matrix3d m;
   m << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
@@ -120,6 +141,64 @@ absl::Status ValidateInertia(const Inertia& in) {
     return absl::InvalidArgumentError(absl::StrCat("object.inertia: principal moments ", moments(0), ", ", moments(1),
                                                    ", ", moments(2), " kg m^2 break the triangle inequality"));
   }
+  return absl::OkStatus();
+}
+
+absl::Status ValidateTrajectoryStep(const TrajectoryStep& s, int index, bool has_inertia) {
+  struct Bounded {
+    const char* name;
+    const Vec3* value;
+    double limit;
+    const char* unit;
+  };
+  const Bounded fields[] = {{"gravity", &s.gravity, kMaxAcceleration, "m/s^2"},
+                            {"linear_acceleration", &s.linear_acceleration, kMaxAcceleration, "m/s^2"},
+                            {"angular_velocity", &s.angular_velocity, kMaxAngularVelocity, "rad/s"},
+                            {"angular_acceleration", &s.angular_acceleration, kMaxAngularAcceleration, "rad/s^2"},
+                            {"external_wrench.force", &s.external_wrench.force, kMaxForce, "N"},
+                            {"external_wrench.torque", &s.external_wrench.torque, kMaxForce, "N m"}};
+  for (const Bounded& f : fields) {
+    if (!IsBounded(*f.value, f.limit)) {
+      return MagnitudeError(absl::StrCat("steps[", index, "].", f.name), *f.value, f.limit, f.unit);
+    }
+  }
+  if (!has_inertia && (s.angular_velocity.squaredNorm() > 0 || s.angular_acceleration.squaredNorm() > 0)) {
+    return Invalid("object.inertia", absl::StrCat("required because steps[", index, "] rotates the object"));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status ValidateFrictionProbe(const FrictionProbe& probe, Vec3* unit_normal, Vec3* unit_tangent) {
+  if (auto s = CheckMagnitude("probe.position", probe.position, kMaxLength, "m"); !s.ok()) return s;
+  Vec3 n = probe.normal;
+  if (!NormalizeDirection(&n)) {
+    return Invalid("probe.normal", Finite(n) ? "zero length" : "not a finite vector");
+  }
+  Vec3 t = probe.tangent;
+  if (!Finite(t)) return Invalid("probe.tangent", "not a finite vector");
+  // Unit length first, so the projection cannot overflow.
+  const bool unit = NormalizeDirection(&t);
+  if (unit) t -= t.dot(n) * n;
+  if (!unit || !NormalizeDirection(&t)) {
+    return Invalid("probe.tangent", "zero length after projection onto the tangent plane");
+  }
+  for (const auto& [name, v] : {std::pair{"probe.tangential_force", probe.tangential_force},
+                                std::pair{"probe.initial_normal_force", probe.initial_normal_force},
+                                std::pair{"probe.final_normal_force", probe.final_normal_force}}) {
+    if (!std::isfinite(v) || v < 0) return Invalid(name, "must be finite and >= 0");
+    if (auto s = CheckMagnitude(name, v, kMaxForce, "N"); !s.ok()) return s;
+  }
+  if (!(probe.initial_normal_force > probe.final_normal_force))
+    return Invalid("probe.final_normal_force", "must be below initial_normal_force");
+  if (!std::isfinite(probe.ramp_rate) || probe.ramp_rate <= 0) return Invalid("probe.ramp_rate", "must be > 0");
+  if (auto s = CheckMagnitude("probe.ramp_rate", probe.ramp_rate, kMaxForce, "N/s"); !s.ok()) return s;
+  if (!std::isfinite(probe.sample_rate) || probe.sample_rate <= 0) {
+    return Invalid("probe.sample_rate", "must be > 0");
+  }
+  constexpr double kMaxSampleRate = 1e9;  // Hz: a sample per kMinTimeStep
+  if (auto s = CheckMagnitude("probe.sample_rate", probe.sample_rate, kMaxSampleRate, "Hz"); !s.ok()) return s;
+  *unit_normal = n;
+  *unit_tangent = t;
   return absl::OkStatus();
 }
 

@@ -7,6 +7,7 @@
 
 #include <cmath>
 
+#include "fixtures.h"
 #include "tactforce/api/convert.h"
 #include "tactforce/api/inertia.h"
 #include "tactforce/planner/examples.h"
@@ -119,16 +120,7 @@ TEST(HandlerTest, TrajectoryWorkAndResponseSizeAreBoundedUpFront) {
   ASSERT_TRUE(r.ok());
   EXPECT_LE(static_cast<int64_t>(r->ByteSizeLong()), 100 * 40 + 100 * contacts * 60);
 
-  v1::FrictionProbeRequest probe;
-  *probe.mutable_plan() = request.plan();
-  probe.mutable_position()->set_z(0.02);
-  probe.mutable_normal()->set_z(-1);
-  probe.mutable_tangent()->set_x(1);
-  probe.set_tangential_force(1);
-  probe.set_initial_normal_force(3);
-  probe.set_final_normal_force(0.5);
-  probe.set_ramp_rate(1);
-  probe.set_sample_rate(1000);  // 2,501 steps
+  const v1::FrictionProbeRequest probe = fixtures::ProbeRequest(request.plan(), 1000);  // 2,501 steps
   limits = CallLimits{};
   limits.max_trajectory_work = 1000;
   absl::StatusOr<v1::FrictionProbeResponse> p = HandleFrictionProbe(probe, limits);

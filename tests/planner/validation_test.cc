@@ -149,6 +149,67 @@ TEST(Validation, InertiaMustBePhysical) {
   }
 }
 
+TEST(Validation, InertiaMagnitudeIsBounded) {
+  const absl::Status s = ValidateInertia({1e300, 1e300, 1e300, 0, 0, 0});
+  EXPECT_EQ(s.message(), "object.inertia: component magnitude exceeds 1e+12 kg m^2");
+}
+
+TEST(Validation, MagnitudeChecksNameTheFieldAndTheLimit) {
+  EXPECT_TRUE(CheckMagnitude("f", 1e9, kMaxForce, "N").ok());
+  EXPECT_EQ(CheckMagnitude("f", -1.5e9, kMaxForce, "N").message(), "f: magnitude exceeds 1e+09 N");
+  EXPECT_EQ(CheckMagnitude("f", std::nan(""), kMaxForce, "N").message(), "f: not a finite number");
+  EXPECT_EQ(CheckMagnitude("p", Vec3(0, -1e300, 0), kMaxLength, "m").message(),
+            "p: component magnitude exceeds 1000 m");
+  EXPECT_EQ(CheckMagnitude("p", Vec3(0, std::numeric_limits<double>::infinity(), 0), kMaxLength, "m").message(),
+            "p: not a finite vector");
+  EXPECT_FALSE(IsBounded(std::nan(""), 1.0));
+}
+
+TEST(Validation, TimesAreBoundedAndStepsResolved) {
+  const double previous = 1.0;
+  EXPECT_TRUE(CheckTime("t", 1.0 + 1e-6, &previous).ok());
+  EXPECT_TRUE(CheckTime("t", 1.7e9).ok());  // an epoch clock
+  EXPECT_EQ(CheckTime("t", 1e13).message(), "t: magnitude exceeds 1e+12 s");
+  EXPECT_EQ(CheckTime("t", 1.0 + 1e-12, &previous).message().substr(0, 8), "t: step ");
+  const double tiny = 1e-302;
+  EXPECT_EQ(CheckTime("samples[1].t", 2e-302, &tiny).message(),
+            "samples[1].t: step 1e-302 s after the previous sample is below the resolution 1e-09 s");
+}
+
+TEST(Validation, DirectionsOfAnyFiniteLengthAreNormalisedWithoutOverflow) {
+  for (const Vec3& v : {Vec3(0, 0, -1e155), Vec3(1e300, -1e300, 1e300), Vec3(3e-9, 4e-9, 0)}) {
+    Vec3 n = v;
+    ASSERT_TRUE(NormalizeDirection(&n)) << v.transpose();
+    EXPECT_NEAR(n.norm(), 1.0, 1e-15);
+    EXPECT_NEAR(n.dot(v / v.cwiseAbs().maxCoeff()), (v / v.cwiseAbs().maxCoeff()).norm(), 1e-12);
+  }
+  Vec3 zero(1e-10, 0, 0);
+  EXPECT_FALSE(NormalizeDirection(&zero));
+  EXPECT_EQ(zero, Vec3(1e-10, 0, 0));
+}
+
+TEST(Validation, TrajectoryStepsAndProbesNameTheirFields) {
+  TrajectoryStep step;
+  EXPECT_TRUE(ValidateTrajectoryStep(step, 0, false).ok());
+  step.linear_acceleration.z() = 1e155;
+  EXPECT_EQ(ValidateTrajectoryStep(step, 3, true).message(),
+            "steps[3].linear_acceleration: component magnitude exceeds 10000 m/s^2");
+  step = TrajectoryStep{};
+  step.angular_velocity.x() = 1.0;
+  EXPECT_EQ(ValidateTrajectoryStep(step, 1, false).message(),
+            "object.inertia: required because steps[1] rotates the object");
+
+  FrictionProbe probe;
+  probe.normal = Vec3(0, 0, -1e155);
+  probe.tangent = Vec3(1e300, 0, 1e300);  // projected: +x
+  Vec3 n, t;
+  ASSERT_TRUE(ValidateFrictionProbe(probe, &n, &t).ok());
+  EXPECT_NEAR((n - Vec3(0, 0, -1)).norm(), 0.0, 1e-15);
+  EXPECT_NEAR((t - Vec3(1, 0, 0)).norm(), 0.0, 1e-15);
+  probe.tangential_force = 1e155;
+  EXPECT_EQ(ValidateFrictionProbe(probe, &n, &t).message(), "probe.tangential_force: magnitude exceeds 1e+09 N");
+}
+
 TEST(Validation, GeometricBackendRejectsExactCone) {
   PlanOptions o;
   o.cone = ConeModel::kExact;

@@ -10,6 +10,7 @@
 #include <functional>
 #include <map>
 #include <set>
+#include <string_view>
 
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
@@ -17,6 +18,7 @@
 #include "absl/strings/str_join.h"
 #include "tactforce/inertia/fit.h"
 #include "tactforce/io/text_file.h"
+#include "tactforce/planner/validation.h"
 
 namespace tactforce::inertia {
 namespace {
@@ -56,6 +58,15 @@ bool Finite(const Vec3& v) { return v.allFinite(); }
 
 std::string Fmt(double v) { return absl::StrFormat("%.6g", v); }
 
+// A finite value past planner/validation.h's limit for its kind: named, so
+// that no fit runs on numbers whose products overflow.
+template <typename Value>
+absl::Status CheckBounded(const Locator& loc, int i, std::string_view csv_columns, std::string_view field,
+                          const Value& v, double limit, const char* unit) {
+  if (planner::IsBounded(v, limit)) return absl::OkStatus();
+  return planner::MagnitudeError(loc.At(i, std::string(csv_columns), std::string(field)), v, limit, unit);
+}
+
 // Time, position and orientation of sample i.
 absl::Status ValidatePose(const Locator& loc, const InertiaSamples& s, int i) {
   const InertiaSample& x = s.samples[i];
@@ -66,8 +77,14 @@ absl::Status ValidatePose(const Locator& loc, const InertiaSamples& s, int i) {
         x.t == s.samples[i - 1].t ? " duplicates" : " is before", " the previous sample's ",
         Fmt(s.samples[i - 1].t), " (times must be strictly increasing)"));
   }
+  // Poses are differentiated over time: a step below the resolution is noise.
+  const double* previous = i > 0 ? &s.samples[i - 1].t : nullptr;
+  if (!planner::IsBounded(x.t, planner::kMaxTime) || (previous && x.t - *previous < planner::kMinTimeStep))
+    return planner::CheckTime(loc.At(i, "t", "t"), x.t, previous);
   if (!Finite(x.position))
     return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "px,py,pz", "position"), ": not finite"));
+  if (auto st = CheckBounded(loc, i, "px,py,pz", "position", x.position, planner::kMaxLength, "m"); !st.ok())
+    return st;
   const double qn = x.orientation.coeffs().norm();
   if (!std::isfinite(qn))
     return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "qw,qx,qy,qz", "orientation"), ": not finite"));
@@ -89,6 +106,11 @@ absl::Status ValidateWrench(const Locator& loc, const InertiaSample& x, int i) {
     return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "f_sigma", "force_sigma"), ": must be finite and >= 0"));
   if (!(x.torque_sigma >= 0) || !std::isfinite(x.torque_sigma))
     return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "t_sigma", "torque_sigma"), ": must be finite and >= 0"));
+  for (auto st : {CheckBounded(loc, i, "fx,fy,fz", "wrench.force", x.force, planner::kMaxForce, "N"),
+                  CheckBounded(loc, i, "tx,ty,tz", "wrench.torque", x.torque, planner::kMaxForce, "N m"),
+                  CheckBounded(loc, i, "f_sigma", "force_sigma", x.force_sigma, planner::kMaxForce, "N"),
+                  CheckBounded(loc, i, "t_sigma", "torque_sigma", x.torque_sigma, planner::kMaxForce, "N m")})
+    if (!st.ok()) return st;
   return absl::OkStatus();
 }
 
@@ -115,6 +137,16 @@ absl::Status ValidateContacts(const Locator& loc, const InertiaSamples& s, int i
       return absl::InvalidArgumentError(absl::StrCat(
           loc.At(i, absl::StrCat(pfx, "sigma"), absl::StrCat("contacts[", c, "].sigma")),
           ": must be finite and >= 0"));
+    if (!planner::IsBounded(r.point, planner::kMaxLength) || !planner::IsBounded(r.force, planner::kMaxForce) ||
+        !planner::IsBounded(r.sigma, planner::kMaxForce)) {
+      for (auto st : {CheckBounded(loc, i, absl::StrCat(pfx, "px,", pfx, "py,", pfx, "pz"),
+                                   absl::StrCat("contacts[", c, "].point"), r.point, planner::kMaxLength, "m"),
+                      CheckBounded(loc, i, absl::StrCat(pfx, "fx,", pfx, "fy,", pfx, "fz"),
+                                   absl::StrCat("contacts[", c, "].force"), r.force, planner::kMaxForce, "N"),
+                      CheckBounded(loc, i, absl::StrCat(pfx, "sigma"), absl::StrCat("contacts[", c, "].sigma"),
+                                   r.sigma, planner::kMaxForce, "N")})
+        if (!st.ok()) return st;
+    }
   }
   return absl::OkStatus();
 }
@@ -127,17 +159,24 @@ absl::Status ValidateKinematics(const Locator& loc, const InertiaSample& x, int 
   }
   if (!expected) return absl::OkStatus();
   const MeasuredKinematics& k = *x.kinematics;
-  const std::pair<const char*, const Vec3*> fields[] = {
-      {"wx,wy,wz|angular_velocity", &k.angular_velocity},
-      {"vx,vy,vz|velocity", &k.velocity},
-      {"dwx,dwy,dwz|angular_acceleration", &k.angular_acceleration},
-      {"ax,ay,az|acceleration", &k.acceleration}};
-  for (const auto& [names, v] : fields) {
-    if (!Finite(*v)) {
-      const std::string both(names);
+  struct Field {
+    const char* names;
+    const Vec3* value;
+    double limit;
+    const char* unit;
+  };
+  const Field fields[] = {
+      {"wx,wy,wz|angular_velocity", &k.angular_velocity, planner::kMaxAngularVelocity, "rad/s"},
+      {"vx,vy,vz|velocity", &k.velocity, planner::kMaxVelocity, "m/s"},
+      {"dwx,dwy,dwz|angular_acceleration", &k.angular_acceleration, planner::kMaxAngularAcceleration, "rad/s^2"},
+      {"ax,ay,az|acceleration", &k.acceleration, planner::kMaxAcceleration, "m/s^2"}};
+  for (const Field& f : fields) {
+    if (!planner::IsBounded(*f.value, f.limit)) {
+      const std::string both(f.names);
       const size_t bar = both.find('|');
-      return absl::InvalidArgumentError(absl::StrCat(
-          loc.At(i, both.substr(0, bar), "kinematics." + both.substr(bar + 1)), ": not finite"));
+      const std::string where = loc.At(i, both.substr(0, bar), "kinematics." + both.substr(bar + 1));
+      if (!Finite(*f.value)) return absl::InvalidArgumentError(absl::StrCat(where, ": not finite"));
+      return planner::MagnitudeError(where, *f.value, f.limit, f.unit);
     }
   }
   return absl::OkStatus();

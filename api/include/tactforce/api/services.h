@@ -1,8 +1,11 @@
 // Request -> response paths of every RPC, shared by the CLI's local mode and
 // the gRPC service (which runs them through dispatch.h): convert, call the
 // library, convert back. !ok(): invalid request (InvalidArgument naming the
-// field path). ok(): a computed answer; infeasibility and solver failures
-// are statuses inside the response, not errors.
+// field path; numbers past planner/validation.h's magnitude limits
+// included), or Internal naming a response field that came out NaN or
+// infinite (finite.h). ok(): a computed answer, every number finite;
+// infeasibility and solver failures are statuses inside the response, not
+// errors.
 #pragma once
 
 #include <cstdint>
@@ -27,7 +30,8 @@ struct CallLimits {
   // cone sides, checked before any solve (the server's --max-trajectory-work).
   int64_t max_trajectory_work = 4'000'000;
   // Largest response the caller can send (bytes; 0 = no limit): a
-  // trajectory whose answer cannot fit is refused before solving.
+  // trajectory, probe or audit whose answer cannot fit is refused before
+  // any work (InvalidArgument naming the limit).
   int64_t max_response_bytes = 0;
   // Time one call's work may take, in seconds (0 = none): wall clock on
   // the thread doing it, from when the work starts (queue wait excluded);

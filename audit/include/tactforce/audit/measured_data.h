@@ -47,6 +47,11 @@ struct MeasuredData {
   double clock_offset_correlation = 0; // kEstimated: peak |correlation|
 };
 
+// Largest reading magnitude accepted (sensor units; raw 32-bit counts fit).
+// Time stamps, reference and shear take planner/validation.h's limits
+// (kMaxTime, kMinTimeStep between samples of a trial, kMaxForce).
+inline constexpr double kMaxReading = 1e12;
+
 // Minimum number of samples an audit needs (train + held-out block).
 inline constexpr int kMinAuditSamples = 40;
 
@@ -92,7 +97,9 @@ absl::StatusOr<MeasuredData> ReadAndAlignStreams(const std::string& reference_pa
                                                  const std::string& reading_path,
                                                  const AlignOptions& options = {});
 
-// Checks sizes, finiteness, time order, non-constant columns, sample count.
+// Checks sizes, finiteness, magnitudes (kMaxReading and the planner's
+// limits, see above), time order and resolution, non-constant columns,
+// sample count.
 absl::Status ValidateMeasuredData(const MeasuredData& data, int min_samples = kMinAuditSamples);
 
 }  // namespace tactforce::audit
