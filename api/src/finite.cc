@@ -108,13 +108,66 @@ std::optional<std::string> FindNonFinite(const Message& message) {
   return Find(message, &value);
 }
 
+namespace {
+
+absl::Status NonFiniteError(const std::string& path, double value, const Message& response) {
+  return absl::InternalError(absl::StrCat(
+      path, ": ", value, " in the answer of ", response.GetDescriptor()->name(),
+      " (a computation overflowed on input within the limits; please report it with the request)"));
+}
+
+// The first non-finite of `values` as "<field>[i]" (with `.x` etc. from
+// `component` when given).
+template <typename Repeated, typename Get>
+std::optional<std::pair<std::string, double>> FirstNonFinite(const Repeated& values, const char* field,
+                                                            Get get) {
+  for (int i = 0; i < values.size(); ++i) {
+    if (std::optional<std::pair<const char*, double>> bad = get(values.Get(i))) {
+      return std::make_pair(absl::StrCat(field, "[", i, "]", bad->first), bad->second);
+    }
+  }
+  return std::nullopt;
+}
+
+std::optional<std::pair<const char*, double>> NonFiniteComponent(const v1::Vec3& v) {
+  if (!std::isfinite(v.x())) return std::make_pair(".x", v.x());
+  if (!std::isfinite(v.y())) return std::make_pair(".y", v.y());
+  if (!std::isfinite(v.z())) return std::make_pair(".z", v.z());
+  return std::nullopt;
+}
+
+std::optional<std::pair<const char*, double>> NonFiniteScalar(double v) {
+  if (!std::isfinite(v)) return std::make_pair("", v);
+  return std::nullopt;
+}
+
+std::optional<std::pair<std::string, double>> FindInPlan(const v1::PlanResponse& r) {
+  if (auto bad = FirstNonFinite(r.forces(), "forces", NonFiniteComponent)) return bad;
+  if (auto bad = FirstNonFinite(r.normal_forces(), "normal_forces", NonFiniteScalar)) return bad;
+  if (auto bad = FirstNonFinite(r.normal_force_sigma(), "normal_force_sigma", NonFiniteScalar)) return bad;
+  if (!std::isfinite(r.objective())) return std::make_pair(std::string("objective"), r.objective());
+  if (!std::isfinite(r.min_margin())) return std::make_pair(std::string("min_margin"), r.min_margin());
+  const v1::CrossCheck& c = r.cross_check();
+  if (!std::isfinite(c.max_force_diff()))
+    return std::make_pair(std::string("cross_check.max_force_diff"), c.max_force_diff());
+  if (!std::isfinite(c.objective_rel_diff()))
+    return std::make_pair(std::string("cross_check.objective_rel_diff"), c.objective_rel_diff());
+  return std::nullopt;
+}
+
+}  // namespace
+
 absl::Status CheckFiniteAnswer(const Message& response) {
   double value = 0.0;
   std::optional<std::string> path = Find(response, &value);
   if (!path) return absl::OkStatus();
-  return absl::InternalError(absl::StrCat(
-      *path, ": ", value, " in the answer of ", response.GetDescriptor()->name(),
-      " (a computation overflowed on input within the limits; please report it with the request)"));
+  return NonFiniteError(*path, value, response);
+}
+
+absl::Status CheckFiniteAnswer(const v1::PlanResponse& response) {
+  std::optional<std::pair<std::string, double>> bad = FindInPlan(response);
+  if (!bad) return absl::OkStatus();
+  return NonFiniteError(bad->first, bad->second, response);
 }
 
 }  // namespace tactforce::api

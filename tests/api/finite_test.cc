@@ -5,6 +5,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <limits>
 
 #include "tactforce/v1/audit.pb.h"
@@ -83,6 +84,85 @@ TEST(FindNonFinite, DocumentedInfinitiesPassNanDoesNot) {
   r.mutable_errors()->set_riemannian(1.0);
   r.set_mass(kInf);
   EXPECT_EQ(FindNonFinite(r), "mass");
+}
+
+// Every double slot of `message` (each repeated field given two entries
+// first, submessages filled recursively), as a setter on a copy.
+void FillEveryField(google::protobuf::Message* m) {
+  const google::protobuf::Reflection* r = m->GetReflection();
+  const google::protobuf::Descriptor* d = m->GetDescriptor();
+  for (int i = 0; i < d->field_count(); ++i) {
+    const google::protobuf::FieldDescriptor* f = d->field(i);
+    using FD = google::protobuf::FieldDescriptor;
+    if (f->cpp_type() == FD::CPPTYPE_MESSAGE) {
+      if (f->is_repeated()) {
+        for (int k = 0; k < 2; ++k) FillEveryField(r->AddMessage(m, f));
+      } else {
+        FillEveryField(r->MutableMessage(m, f));
+      }
+    } else if (f->cpp_type() == FD::CPPTYPE_DOUBLE) {
+      if (f->is_repeated()) {
+        r->AddDouble(m, f, 1.0);
+        r->AddDouble(m, f, 2.0);
+      } else {
+        r->SetDouble(m, f, 1.0);
+      }
+    }
+  }
+}
+
+// Sets the `n`-th double value (depth first) of `m` to `value`; false when
+// there are fewer.
+bool SetNthDouble(google::protobuf::Message* m, int* n, double value) {
+  const google::protobuf::Reflection* r = m->GetReflection();
+  const google::protobuf::Descriptor* d = m->GetDescriptor();
+  using FD = google::protobuf::FieldDescriptor;
+  for (int i = 0; i < d->field_count(); ++i) {
+    const FD* f = d->field(i);
+    if (f->cpp_type() == FD::CPPTYPE_MESSAGE) {
+      const int count = f->is_repeated() ? r->FieldSize(*m, f) : 1;
+      for (int k = 0; k < count; ++k) {
+        google::protobuf::Message* sub = f->is_repeated() ? r->MutableRepeatedMessage(m, f, k)
+                                                          : r->MutableMessage(m, f);
+        if (SetNthDouble(sub, n, value)) return true;
+      }
+    } else if (f->cpp_type() == FD::CPPTYPE_DOUBLE) {
+      const int count = f->is_repeated() ? r->FieldSize(*m, f) : 1;
+      for (int k = 0; k < count; ++k) {
+        if ((*n)-- > 0) continue;
+        if (f->is_repeated()) {
+          r->SetRepeatedDouble(m, f, k, value);
+        } else {
+          r->SetDouble(m, f, value);
+        }
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
+// The reflection-free check of Plan's answer finds exactly what the walk
+// finds, with the same message, for a NaN or an infinity in every double
+// of a PlanResponse (so a new field cannot slip past it).
+TEST(CheckFiniteAnswer, PlanResponseFastPathAgreesWithTheWalkOnEveryField) {
+  v1::PlanResponse full;
+  FillEveryField(&full);
+  ASSERT_TRUE(CheckFiniteAnswer(full).ok());
+  int slots = 0;
+  for (double bad : {kNan, kInf, -kInf}) {
+    for (int n = 0;; ++n) {
+      v1::PlanResponse r = full;
+      int index = n;
+      if (!SetNthDouble(&r, &index, bad)) break;
+      const absl::Status fast = CheckFiniteAnswer(r);
+      const absl::Status walk = CheckFiniteAnswer(static_cast<const google::protobuf::Message&>(r));
+      EXPECT_FALSE(fast.ok()) << "double #" << n << ": " << walk;
+      EXPECT_EQ(fast, walk) << "double #" << n;
+      slots = std::max(slots, n + 1);
+    }
+  }
+  EXPECT_GE(slots, 13);  // forces 2x3, normal_forces 2, sigma 2, objective, margin, cross_check 2
 }
 
 }  // namespace
