@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Reliability runs of a local tactforce-server, driven by `tactforce load`:
 #
-#   scripts/soak.sh overload|soak|deadlines|all|lane [--duration-scale X] [--bin DIR] [--out FILE.json]
+#   scripts/soak.sh overload|soak|deadlines|all|lane|memory|stops [--duration-scale X] [--bin DIR] [--out FILE.json]
 #                   [--keep-logs DIR]
 #
 #   overload   server --workers 1 --queue 4; Ipopt and cross-check Plans
@@ -24,6 +24,12 @@
 #              callers of slow Ipopt plans (lane_ipopt_64.json: 64 contacts,
 #              exact cones). Pass: geometric p99 beside Ipopt <= 3x its p99
 #              alone, no errors (the Ipopt lane, --ipopt-workers). Not in `all`.
+#   memory     peak RSS one request makes a fresh server hold: PLY header
+#              counts of 1e8, a 4 MB closed STL fitted with DENSITY, a 4 MB OBJ
+#              of tiny faces (scripts/soak/attack.py). Not in `all`.
+#   stops      a long DENSITY fit, Ipopt trajectory and Ipopt plan: how far past a
+#              1 s deadline each ends, and SIGTERM (--grace-ms 1000) to exit.
+#              Not in `all`.
 #
 # Each mode starts its own server on 127.0.0.1:0 (the port it prints), samples
 # its VmRSS and runs `tactforce health` once a second. --duration-scale scales
@@ -40,5 +46,7 @@ if [[ $# -lt 1 || "$1" == "-h" || "$1" == "--help" ]]; then
   sed -n '2,/^set -euo/p' "${BASH_SOURCE[0]}" | sed '$d' | sed 's/^# \{0,1\}//'
   [[ $# -ge 1 ]] && exit 0 || exit 2
 fi
-command -v python3 >/dev/null || { echo "soak.sh: python3 is needed" >&2; exit 2; }
-exec python3 "$here/soak/soak.py" "$@"
+# Debian's python3 first: memory and stops use its python3-grpcio (setup.sh).
+python=/usr/bin/python3
+[[ -x "$python" ]] || python="$(command -v python3)" || { echo "soak.sh: python3 is needed" >&2; exit 2; }
+exec "$python" "$here/soak/soak.py" "$@"

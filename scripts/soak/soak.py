@@ -18,6 +18,7 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from procs import Load, Monitor, Server, SetupError  # noqa: E402
 from table import format_table  # noqa: E402
+from attack import run_memory, run_stops  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 OVERLOAD_REQUESTS = os.path.join(HERE, "overload_requests.json")
@@ -287,8 +288,9 @@ def machine(cfg):
             "duration_scale": cfg.scale, "bin_dir": cfg.bin}
 
 
-MODES = {"overload": run_overload, "soak": run_soak, "deadlines": run_deadlines, "lane": run_lane}
-ALL_MODES = ("overload", "soak", "deadlines")  # `all`; `lane` runs on its own
+MODES = {"overload": run_overload, "soak": run_soak, "deadlines": run_deadlines, "lane": run_lane,
+         "memory": run_memory, "stops": run_stops}
+ALL_MODES = ("overload", "soak", "deadlines")  # `all`; the others run on their own
 
 
 def parse_args(argv):

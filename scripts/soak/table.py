@@ -75,12 +75,30 @@ def _lane(s):
             _server_line(s)]
 
 
+def _memory(s):
+    lines = [f"memory     {_verdict(s)}  peak RSS above the server's start, fresh server per request"]
+    for r in s["cases"]:
+        lines.append(f"    {r['case']}: {r['code']} in {r['seconds']:.2f} s, peak +"
+                     f"{_mb(r['peak_above_start_kb'])}")
+    return lines
+
+
+def _stops(s):
+    lines = [f"stops      {_verdict(s)}  pass = done within 1 s of the deadline and exit within "
+             f"grace + 1 s of SIGTERM"]
+    for r in s["cases"]:
+        lines.append(f"    {r['case']}: {r['code']} {r['after_deadline_s']:+.3f} s after its "
+                     f"{r['deadline_s']:g} s deadline; SIGTERM (grace {r['grace_ms']} ms) to exit "
+                     f"{r['sigterm_to_exit_s']:.3f} s, exit {r['sigterm_exit_code']}")
+    return lines
+
+
 def format_table(summary):
     m = summary["machine"]
     lines = [f"tactforce soak: {m['cores']} cores ({m['cpu_model']}), duration scale "
              f"{m['duration_scale']:g}, {summary['wall_s']:.0f} s"]
     for name, fn in (("overload", _overload), ("soak", _soak), ("deadlines", _deadlines),
-                     ("lane", _lane)):
+                     ("lane", _lane), ("memory", _memory), ("stops", _stops)):
         if name in summary:
             lines += fn(summary[name])
     lines.append("overall    " + ("PASS" if summary["pass"] else "FAIL"))
