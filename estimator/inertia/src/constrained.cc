@@ -416,9 +416,9 @@ Vector10d EnforceHullRows(const Model& model, const Vector10d& theta, const Iner
 // information matrix A.
 Matrix10d UpdateDataTerm(const GlsData& gls, const Vector10d& pi, const ScaledCoordinates& sc,
                          const Vector10d& parameter_scale, bool last_round, Model* model,
-                         std::vector<std::string>* notes) {
+                         std::vector<std::string>* notes, InterruptPoll* poll) {
   GlsSums sums;
-  AccumulateGls(gls, pi, &sums);
+  AccumulateGls(gls, pi, poll, &sums);
   // Subtract the bias when the corrected matrix stays well positive definite.
   bool corrected = false;
   const Matrix10d Ause = BiasCorrected(sums, parameter_scale, &corrected);
@@ -431,15 +431,18 @@ Matrix10d UpdateDataTerm(const GlsData& gls, const Vector10d& pi, const ScaledCo
 
 }  // namespace
 
-GlsData PrepareGls(const InertiaSamples& s, const InertiaOptions& o, std::vector<std::string>* notes) {
+GlsData PrepareGls(const InertiaSamples& s, const InertiaOptions& o, std::vector<std::string>* notes,
+                   InterruptPoll* poll) {
   GlsData d;
-  d.kin = SmoothedKinematics(s, o.gravity, o.noise, o.smoothing_window, notes);
+  d.kin = SmoothedKinematics(s, o.gravity, o.noise, o.smoothing_window, notes, poll);
+  if (poll->stopped()) return d;
   const int n = static_cast<int>(d.kin.size());
   d.wrench.resize(n);
   d.wcov.resize(n);
   d.Y.resize(n);
   double f2 = 0, t2 = 0;
   for (int k = 0; k < n; ++k) {
+    if (poll->Tick()) return d;
     const InertiaSample& x = s.samples[d.kin[k].index];
     d.wrench[k] = SampleWrench(x, s.source);
     d.known = WrenchCovariance(x, s.source, o.noise, &d.wcov[k]) && d.known;
@@ -452,13 +455,14 @@ GlsData PrepareGls(const InertiaSamples& s, const InertiaOptions& o, std::vector
   d.floor_f = 1e-18 * std::max(f2 / (3.0 * n), 1e-300);
   d.floor_t = 1e-18 * std::max(t2 / (3.0 * n), 1e-300);
   for (int k = 0; k < n; ++k) {
+    if (poll->Tick()) return d;
     d.YtY += d.Y[k].transpose() * d.Y[k];
     d.Ytb += d.Y[k].transpose() * d.wrench[k];
   }
   return d;
 }
 
-void AccumulateGls(const GlsData& d, const Vector10d& pi, GlsSums* total, int blocks,
+void AccumulateGls(const GlsData& d, const Vector10d& pi, InterruptPoll* poll, GlsSums* total, int blocks,
                    std::vector<GlsSums>* per_block, std::vector<Matrix6d>* whiteners) {
   const int n = static_cast<int>(d.kin.size());
   Matrix6x10 unit_a[3], unit_dw[3];  // d Y / d(a - g), d Y / d dw (constant)
@@ -470,6 +474,7 @@ void AccumulateGls(const GlsData& d, const Vector10d& pi, GlsSums* total, int bl
   Matrix6d est = Matrix6d::Zero();
   if (!d.known) {
     for (int k = 0; k < n; ++k) {
+      if (poll->Tick()) return;
       const Vector6d r = d.Y[k] * pi - d.wrench[k];
       est += r * r.transpose();
     }
@@ -485,6 +490,7 @@ void AccumulateGls(const GlsData& d, const Vector10d& pi, GlsSums* total, int bl
   Vector10d& bvec = total->b;
   Matrix10d& bias = total->bias;
   for (int k = 0; k < n; ++k) {
+    if (poll->Tick(4)) return;
     Matrix6d C = d.known ? d.wcov[k] : est;
     const KinPoint& q = d.kin[k];
     // Kinematic errors propagated through the model at the current pi.
@@ -550,8 +556,10 @@ Matrix10d BiasCorrected(const GlsSums& sums, const Vector10d& scale, bool* appli
 
 absl::StatusOr<MethodOutput> FitConstrained(const InertiaSamples& s, const InertiaOptions& o,
                                             const ConvexHull* hull) {
+  InterruptPoll poll(o.interrupt);
   MethodOutput out;
-  const GlsData gls = PrepareGls(s, o, &out.notes);
+  const GlsData gls = PrepareGls(s, o, &out.notes, &poll);
+  if (poll.stopped()) return Interrupted();
   const Scales scales = UnweightedStart(gls, o, hull);
   out.scale = scales.parameter_scale;
   const ScaledCoordinates sc = MakeScaledCoordinates(scales.m0, scales.len);
@@ -561,9 +569,10 @@ absl::StatusOr<MethodOutput> FitConstrained(const InertiaSamples& s, const Inert
   Vector10d theta;
   Matrix10d A = Matrix10d::Zero();
   for (int round = 0; round < o.reweighting_rounds; ++round) {
-    if (o.interrupt && o.interrupt()) return absl::CancelledError("interrupted");
+    if (poll.Check()) return Interrupted();
     const bool last_round = round == o.reweighting_rounds - 1;
-    A = UpdateDataTerm(gls, pi, sc, out.scale, last_round, &model, &out.notes);
+    A = UpdateDataTerm(gls, pi, sc, out.scale, last_round, &model, &out.notes, &poll);
+    if (poll.stopped()) return Interrupted();
     if (round == 0) theta = InitialTheta(sc, scales, o, hull, &model, &out.notes);
     theta = Newton(model, theta, o.max_iterations, &out.iterations);
     if (!model.rows.empty()) theta = EnforceHullRows(model, theta, o, last_round, &out);
@@ -576,7 +585,8 @@ absl::StatusOr<MethodOutput> FitConstrained(const InertiaSamples& s, const Inert
   // Covariance of pi: (A)^+ (the unconstrained GLS information).
   out.cov = ScaledPseudoInverse(A, out.scale, 1e-14);
   out.samples_used = static_cast<int>(gls.kin.size());
-  ResidualRms(gls.kin, gls.wrench, pi, &out.rms_force, &out.rms_torque);
+  ResidualRms(gls.kin, gls.wrench, pi, &poll, &out.rms_force, &out.rms_torque);
+  if (poll.stopped()) return Interrupted();
   return out;
 }
 

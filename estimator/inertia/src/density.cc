@@ -12,6 +12,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "internal.h"
 
 namespace tactforce::inertia {
 namespace {
@@ -170,9 +171,11 @@ std::array<int, 3> CellCounts(const Vec3& extent, double h) {
   return n;
 }
 
+// Incomplete when `poll` fires (the caller checks poll->stopped()).
 RegionModel GridRegions(const io::TriangleMesh& mesh, const SolidMoments& total, const std::array<int, 3>& n,
                         const Eigen::Matrix3d& axes, const Vec3& lo, const Vec3& hi,
-                        const std::vector<Vec3>& v, const std::vector<Eigen::AlignedBox3d>& boxes) {
+                        const std::vector<Vec3>& v, const std::vector<Eigen::AlignedBox3d>& boxes,
+                        internal::InterruptPoll* poll) {
   RegionModel model;
   model.scheme = RegionScheme::kGrid;
   model.grid_axes = axes;
@@ -189,6 +192,7 @@ RegionModel GridRegions(const io::TriangleMesh& mesh, const SolidMoments& total,
   for (int i = 1; i <= n[0]; ++i)
     for (int j = 1; j <= n[1]; ++j)
       for (int k = 1; k <= n[2]; ++k) {
+        if (poll->Tick(1 + static_cast<int64_t>(mesh.triangles.size()) / 16)) return model;
         const Vec3 corner(model.grid_planes[0][i], model.grid_planes[1][j], model.grid_planes[2][k]);
         octant[idx(i, j, k)] = OctantMomentsInFrame(v, mesh.triangles, boxes, corner);
       }
@@ -310,10 +314,10 @@ absl::StatusOr<RegionScheme> ParseRegionScheme(std::string_view text) {
 }
 
 absl::StatusOr<RegionModel> BuildRegions(const io::TriangleMesh& mesh, const RegionOptions& options,
-                                         std::string_view name) {
-  if (options.target_regions < 1 || options.target_regions > 512)
-    return absl::InvalidArgumentError(
-        absl::StrCat("target_regions: must be in 1..512 (got ", options.target_regions, ")"));
+                                         std::string_view name, const std::function<bool()>& interrupt) {
+  if (options.target_regions < 1 || options.target_regions > kMaxTargetRegions)
+    return absl::InvalidArgumentError(absl::StrCat("target_regions: must be in 1..", kMaxTargetRegions, " (got ",
+                                                   options.target_regions, ")"));
   if (mesh.triangles.empty()) return absl::InvalidArgumentError(absl::StrCat(std::string(name), ": no triangles"));
   const SolidMoments total = MeshMoments(mesh);
   if (!(total.volume > 0))
@@ -367,9 +371,12 @@ absl::StatusOr<RegionModel> BuildRegions(const io::TriangleMesh& mesh, const Reg
     if (static_cast<long>(n[0]) * n[1] * n[2] > options.target_regions) break;
     h = cand;
   }
+  internal::InterruptPoll poll(interrupt);
   RegionModel model;
   for (int attempt = 0; attempt < 4; ++attempt) {
-    model = GridRegions(mesh, total, CellCounts(extent, h), axes, lo, hi, v, boxes);
+    if (poll.Check()) return internal::Interrupted();
+    model = GridRegions(mesh, total, CellCounts(extent, h), axes, lo, hi, v, boxes, &poll);
+    if (poll.stopped()) return internal::Interrupted();
     if (static_cast<int>(model.regions.size()) * 10 >= 7 * options.target_regions) break;
     // Too many empty cells: refine so the non-empty count approaches the target.
     const double ratio = static_cast<double>(options.target_regions) / std::max<size_t>(model.regions.size(), 1);

@@ -22,8 +22,9 @@ using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
 // min 1/2 u^T Q u - g^T u  s.t. u >= 0, Q symmetric positive definite
-// (Lawson-Hanson style primal active set). `u` is the start (feasible).
-VectorXd NonNegativeQp(const MatrixXd& Q, const VectorXd& g, int* iterations) {
+// (Lawson-Hanson style primal active set). Stops early (incomplete answer)
+// when `poll` fires.
+VectorXd NonNegativeQp(const MatrixXd& Q, const VectorXd& g, int* iterations, InterruptPoll* poll) {
   const int K = static_cast<int>(g.size());
   VectorXd u = VectorXd::Zero(K);
   std::vector<bool> free(K, false);
@@ -53,6 +54,8 @@ VectorXd NonNegativeQp(const MatrixXd& Q, const VectorXd& g, int* iterations) {
     if (j < 0) break;
     free[j] = true;
     for (int inner = 0; inner <= K; ++inner) {
+      const int64_t m = std::count(free.begin(), free.end(), true);
+      if (poll->Tick(1 + m * m * m / 1000)) return u.cwiseMax(0.0);  // ~1 unit per microsecond of LDLT
       VectorXd z;
       solve_free(&z);
       bool positive = true;
@@ -198,7 +201,7 @@ void FoldQuadratics(const DensityBasis& b, int folds, DensityState* st) {
 // Held-out weighted residual over a log grid of strengths (relative to the
 // data's mean curvature per region); the smallest wins, ties go to the
 // smoother fit.
-double ChooseStrength(const DensityBasis& b, const MatrixXd& ridge, DensityState* st) {
+double ChooseStrength(const DensityBasis& b, const MatrixXd& ridge, DensityState* st, InterruptPoll* poll) {
   const int K = b.K, folds = static_cast<int>(st->train.size());
   double best = std::numeric_limits<double>::infinity();
   double chosen = st->lambda_rel;
@@ -208,7 +211,8 @@ double ChooseStrength(const DensityBasis& b, const MatrixXd& ridge, DensityState
     for (int f = 0; f < folds; ++f) {
       const double tr_scale = std::max(st->train[f].H.trace() / K, 1e-300);
       const VectorXd uf = NonNegativeQp(st->train[f].H + rel * tr_scale / b.l_scale * b.L + ridge, st->train[f].g,
-                                        &st->qp_iterations);
+                                        &st->qp_iterations, poll);
+      if (poll->stopped()) return chosen;
       cv += st->held[f].Value(uf);
     }
     if (cv < best * (1 - 1e-9)) best = cv, chosen = rel;
@@ -220,10 +224,11 @@ double ChooseStrength(const DensityBasis& b, const MatrixXd& ridge, DensityState
 // strength (when chosen), and the non-negative solve.
 absl::Status DensityRound(const GlsData& gls, const DensityBasis& b, const RegionModel& regions,
                           const InertiaOptions& o, int round, int folds, bool choose, DensityState* st,
-                          MethodOutput* out) {
+                          MethodOutput* out, InterruptPoll* poll) {
   const int K = b.K;
   const bool last = round == o.reweighting_rounds - 1;
-  AccumulateGls(gls, st->pi, &st->total, folds, &st->blocks, last ? &st->whiteners : nullptr);
+  AccumulateGls(gls, st->pi, poll, &st->total, folds, &st->blocks, last ? &st->whiteners : nullptr);
+  if (poll->stopped()) return Interrupted();
   if (round == 0) {
     if (absl::Status s = CheckComInBoundingBox(st->total, b.parameter_scale, o); !s.ok()) return s;
   }
@@ -237,11 +242,11 @@ absl::Status DensityRound(const GlsData& gls, const DensityBasis& b, const Regio
   const double h_scale = std::max(st->full.H.trace() / K, 1e-300);
   const MatrixXd ridge = 1e-10 * h_scale * MatrixXd::Identity(K, K);
   FoldQuadratics(b, folds, st);
-  if (choose && K > 1 && !regions.neighbours.empty()) st->lambda_rel = ChooseStrength(b, ridge, st);
+  if (choose && K > 1 && !regions.neighbours.empty()) st->lambda_rel = ChooseStrength(b, ridge, st, poll);
   st->Hreg = st->full.H + st->lambda_rel * h_scale / b.l_scale * b.L + ridge;
-  st->u = NonNegativeQp(st->Hreg, st->full.g, &st->qp_iterations);
+  st->u = NonNegativeQp(st->Hreg, st->full.g, &st->qp_iterations, poll);
   st->pi = b.Phi_u * st->u;
-  return absl::OkStatus();
+  return poll->stopped() ? Interrupted() : absl::OkStatus();
 }
 
 // Standard errors of the densities and the covariance of pi on the free set
@@ -270,7 +275,7 @@ void DensityCovariance(const DensityBasis& b, const DensityState& st, MethodOutp
 // the free 10-parameter GLS fit (the model CONSTRAINED regularises), each
 // fitted on the other blocks with the last round's weights.
 void HeldOutContradiction(const GlsData& gls, const DensityBasis& b, int folds, DensityState* st,
-                          MethodOutput* out) {
+                          MethodOutput* out, InterruptPoll* poll) {
   const int n = static_cast<int>(gls.kin.size()), K = b.K;
   std::vector<Vector10d> pi_density(folds), pi_free(folds);
   for (int f = 0; f < folds; ++f) {
@@ -278,13 +283,14 @@ void HeldOutContradiction(const GlsData& gls, const DensityBasis& b, int folds, 
     const double h_scale = std::max(st->full.H.trace() / K, 1e-300);
     const VectorXd uf = NonNegativeQp(st->train[f].H + st->lambda_rel * tr_scale / b.l_scale * b.L +
                                           1e-10 * h_scale * MatrixXd::Identity(K, K),
-                                      st->train[f].g, &st->qp_iterations);
+                                      st->train[f].g, &st->qp_iterations, poll);
     pi_density[f] = b.Phi_u * uf;
     pi_free[f] = FreeGls(st->total.A - st->blocks[f].A, st->total.b - st->blocks[f].b, b.parameter_scale);
   }
   double sum_d = 0, sum_d2 = 0, res_density = 0, res_free = 0;
   double raw_density = 0, raw_free = 0, raw_wrench = 0;  // unweighted, for the physical size
   for (int k = 0; k < n; ++k) {
+    if (poll->Tick()) return;
     const int f = BlockOf(k, n, folds);
     const Vector6d ed = gls.Y[k] * pi_density[f] - gls.wrench[k];
     const Vector6d ef = gls.Y[k] * pi_free[f] - gls.wrench[k];
@@ -304,9 +310,11 @@ void HeldOutContradiction(const GlsData& gls, const DensityBasis& b, int folds, 
 }  // namespace
 
 absl::StatusOr<MethodOutput> FitDensity(const InertiaSamples& s, const InertiaOptions& o, const RegionModel& regions) {
+  InterruptPoll poll(o.interrupt);
   MethodOutput out;
   for (const std::string& n : regions.notes) out.notes.push_back(n);
-  const GlsData gls = PrepareGls(s, o, &out.notes);
+  const GlsData gls = PrepareGls(s, o, &out.notes, &poll);
+  if (poll.stopped()) return Interrupted();
   const int n = static_cast<int>(gls.kin.size());
   absl::StatusOr<DensityBasis> basis = MakeDensityBasis(gls, regions, o);
   if (!basis.ok()) return basis.status();
@@ -319,8 +327,9 @@ absl::StatusOr<MethodOutput> FitDensity(const InertiaSamples& s, const InertiaOp
   st.u = VectorXd::Ones(basis->K);
   st.lambda_rel = choose ? 0.0 : o.density_regularization;
   for (int round = 0; round < o.reweighting_rounds; ++round) {
-    if (o.interrupt && o.interrupt()) return absl::CancelledError("interrupted");
-    if (absl::Status r = DensityRound(gls, *basis, regions, o, round, folds, choose, &st, &out); !r.ok()) return r;
+    if (poll.Check()) return Interrupted();
+    if (absl::Status r = DensityRound(gls, *basis, regions, o, round, folds, choose, &st, &out, &poll); !r.ok())
+      return r;
     if (o.progress) o.progress(0.9 * (round + 1) / o.reweighting_rounds);
   }
   out.pi = st.pi;
@@ -330,9 +339,11 @@ absl::StatusOr<MethodOutput> FitDensity(const InertiaSamples& s, const InertiaOp
   out.regularization_rule = choose ? absl::StrCat("held-out time blocks (", folds, " folds)") : "given";
   out.densities.resize(basis->K);
   for (int r = 0; r < basis->K; ++r) out.densities[r] = basis->rho_ref * st.u(r);
+  if (poll.Check()) return Interrupted();
   DensityCovariance(*basis, st, &out);
-  HeldOutContradiction(gls, *basis, folds, &st, &out);
-  ResidualRms(gls.kin, gls.wrench, st.pi, &out.rms_force, &out.rms_torque);
+  HeldOutContradiction(gls, *basis, folds, &st, &out, &poll);
+  ResidualRms(gls.kin, gls.wrench, st.pi, &poll, &out.rms_force, &out.rms_torque);
+  if (poll.stopped()) return Interrupted();
   return out;
 }
 

@@ -183,24 +183,36 @@ struct NormalEquations {
   Matrix10d C;
   Vector10d gi;
 
-  void Reset(int n) {
-    B.assign(n, {Matrix6d::Zero(), Matrix6d::Zero(), Matrix6d::Zero()});
-    E.assign(n, Eigen::Matrix<double, 6, 10>::Zero());
-    gp.assign(n, Vector6d::Zero());
+  // Zeroes every block in a polled loop (the blocks of a long data set are
+  // gigabytes); false when `poll` fired.
+  bool Reset(int n, InterruptPoll* poll) {
+    B.clear(), E.clear(), gp.clear();  // the capacity stays
+    B.reserve(n), E.reserve(n), gp.reserve(n);
     C.setZero();
     gi.setZero();
+    for (int k = 0; k < n; ++k) {
+      if (poll->Tick()) return false;
+      B.push_back({Matrix6d::Zero(), Matrix6d::Zero(), Matrix6d::Zero()});
+      E.push_back(Eigen::Matrix<double, 6, 10>::Zero());
+      gp.push_back(Vector6d::Zero());
+    }
+    return true;
   }
 };
 
 // Block-banded Cholesky B = L L^T (L(k,k-1), L(k,k-2) below the diagonal).
 class BandedCholesky {
  public:
-  bool Factor(const NormalEquations& ne, double lambda) {
+  // False when B + lambda diag(B) is not positive definite or `poll` fired.
+  bool Factor(const NormalEquations& ne, double lambda, InterruptPoll* poll) {
     const int n = static_cast<int>(ne.B.size());
-    d_.resize(n);
-    l1_.assign(n, Matrix6d::Zero());
-    l2_.assign(n, Matrix6d::Zero());
+    d_.clear(), l1_.clear(), l2_.clear();  // filled in the polled loop
+    d_.reserve(n), l1_.reserve(n), l2_.reserve(n);
     for (int k = 0; k < n; ++k) {
+      if (poll->Tick(2)) return false;
+      d_.emplace_back();
+      l1_.push_back(Matrix6d::Zero());
+      l2_.push_back(Matrix6d::Zero());
       if (k >= 2) l2_[k] = d_[k - 2].matrixL().solve(ne.B[k - 2][2]).transpose();  // B(k,k-2) L^-T
       if (k >= 1) {
         Matrix6d rhs = ne.B[k - 1][1].transpose();
@@ -216,16 +228,18 @@ class BandedCholesky {
     }
     return true;
   }
-  // Solves B X = Y in place (Y: n blocks of 6 rows).
+  // Solves B X = Y in place (Y: n blocks of 6 rows); incomplete when `poll` fires.
   template <int Cols>
-  void Solve(std::vector<Eigen::Matrix<double, 6, Cols>>& y) const {
+  void Solve(std::vector<Eigen::Matrix<double, 6, Cols>>& y, InterruptPoll* poll) const {
     const int n = static_cast<int>(y.size());
     for (int k = 0; k < n; ++k) {  // forward: L z = y
+      if (poll->Tick(Cols > 1 ? 2 : 1)) return;
       if (k >= 1) y[k] -= l1_[k] * y[k - 1];
       if (k >= 2) y[k] -= l2_[k] * y[k - 2];
       y[k] = d_[k].matrixL().solve(y[k]);
     }
     for (int k = n - 1; k >= 0; --k) {  // backward: L^T x = z
+      if (poll->Tick(Cols > 1 ? 2 : 1)) return;
       if (k + 1 < n) y[k] -= l1_[k + 1].transpose() * y[k + 1];
       if (k + 2 < n) y[k] -= l2_[k + 2].transpose() * y[k + 2];
       y[k] = d_[k].matrixU().solve(y[k]);
@@ -237,20 +251,35 @@ class BandedCholesky {
   std::vector<Matrix6d> l1_, l2_;
 };
 
-// Damped step: (H + lambda diag(H)) d = -g; false if not positive definite.
-// With `cov`, also returns the inertial block of H^-1 (lambda should be 0).
-bool SolveStep(const NormalEquations& ne, double lambda, Eigen::VectorXd* step, Matrix10d* cov) {
+// *to = from in a polled loop; false when `poll` fired.
+template <typename Block>
+bool PolledCopy(const std::vector<Block>& from, std::vector<Block>* to, InterruptPoll* poll) {
+  to->clear();
+  to->reserve(from.size());
+  for (const Block& b : from) {
+    if (poll->Tick()) return false;
+    to->push_back(b);
+  }
+  return true;
+}
+
+// Damped step: (H + lambda diag(H)) d = -g; false if not positive definite
+// or `poll` fired. With `cov`, also returns the inertial block of H^-1
+// (lambda should be 0).
+bool SolveStep(const NormalEquations& ne, double lambda, Eigen::VectorXd* step, Matrix10d* cov, InterruptPoll* poll) {
   const int n = static_cast<int>(ne.B.size());
   BandedCholesky chol;
-  if (!chol.Factor(ne, lambda)) return false;
-  std::vector<Eigen::Matrix<double, 6, 10>> BE = ne.E;
-  chol.Solve<10>(BE);
-  std::vector<Eigen::Matrix<double, 6, 1>> Bg = ne.gp;
-  chol.Solve<1>(Bg);
+  if (!chol.Factor(ne, lambda, poll)) return false;
+  std::vector<Eigen::Matrix<double, 6, 10>> BE;
+  std::vector<Eigen::Matrix<double, 6, 1>> Bg;
+  if (!PolledCopy(ne.E, &BE, poll) || !PolledCopy(ne.gp, &Bg, poll)) return false;
+  chol.Solve<10>(BE, poll);
+  chol.Solve<1>(Bg, poll);
   Matrix10d S = ne.C;
   S.diagonal() += lambda * ne.C.diagonal().cwiseMax(1e-12);
   Vector10d rhs = ne.gi;
   for (int k = 0; k < n; ++k) {
+    if (poll->Tick()) return false;
     S -= ne.E[k].transpose() * BE[k];
     rhs -= ne.E[k].transpose() * Bg[k];
   }
@@ -270,10 +299,13 @@ bool SolveStep(const NormalEquations& ne, double lambda, Eigen::VectorXd* step, 
 
 class Problem {
  public:
-  Problem(const InertiaSamples& s, const InertiaOptions& o, const ConvexHull* hull)
-      : s_(s), o_(o), hull_(hull), n_(static_cast<int>(s.samples.size())) {
+  // Stops early (check poll->stopped()) when `poll` fires; so do the loops
+  // of Evaluate (then NaN), Retract and DynamicsRms.
+  Problem(const InertiaSamples& s, const InertiaOptions& o, const ConvexHull* hull, InterruptPoll* poll)
+      : s_(s), o_(o), hull_(hull), n_(static_cast<int>(s.samples.size())), poll_(poll) {
     meas_.resize(n_);
     for (int k = 0; k < n_; ++k) {
+      if (poll_->Tick()) return;
       meas_[k].R = s.samples[k].orientation.toRotationMatrix();
       meas_[k].p = s.samples[k].position;
     }
@@ -283,7 +315,10 @@ class Problem {
     InertiaNoise floored = o.noise;
     floored.force_sigma = std::max(o.noise.force_sigma, o.fg_min_force_sigma);
     floored.torque_sigma = std::max(o.noise.torque_sigma, o.fg_min_torque_sigma);
+    whiten_.reserve(std::max(0, n_ - 2));
+    wrench_.reserve(std::max(0, n_ - 2));
     for (int k = 0; k + 2 < n_; ++k) {
+      if (poll_->Tick()) return;
       const InertiaSample& x = s.samples[k];
       Matrix6d C;
       WrenchCovariance(x, s.source, floored, &C);
@@ -314,8 +349,11 @@ class Problem {
   // are added in a fixed order (dynamics, poses, constraints, prior).
   double Evaluate(NormalEquations* ne) const {
     double cost = 0;
-    if (ne) ne->Reset(n_);
-    for (int k = 0; k + 2 < n_; ++k) AddDynamicsFactor(k, ne, &cost);
+    if (ne && !ne->Reset(n_, poll_)) return std::numeric_limits<double>::quiet_NaN();
+    for (int k = 0; k + 2 < n_; ++k) {
+      if (poll_->Tick(ne ? 16 : 1)) return std::numeric_limits<double>::quiet_NaN();
+      AddDynamicsFactor(k, ne, &cost);
+    }
     AddPoseFactors(ne, &cost);
     AddConstraintFactors(ne, &cost);
     AddTracePrior(ne, &cost);
@@ -325,6 +363,7 @@ class Problem {
   void Retract(const Eigen::VectorXd& d) {
     in_.Retract(d.head<10>());
     for (int k = 0; k < n_; ++k) {
+      if (poll_->Tick()) return;
       poses_[k].R = poses_[k].R * ExpSO3(d.segment<3>(10 + 6 * k));
       poses_[k].p += d.segment<3>(10 + 6 * k + 3);
     }
@@ -335,6 +374,7 @@ class Problem {
     double sf = 0, st = 0;
     int cnt = 0;
     for (int k = 0; k + 2 < n_; ++k) {
+      if (poll_->Tick()) break;
       const double dt1 = s_.samples[k + 1].t - s_.samples[k].t, dt2 = s_.samples[k + 2].t - s_.samples[k + 1].t;
       const Pose &a = poses_[k], &b = poses_[k + 1], &c = poses_[k + 2];
       const Vector6d e = Dynamics<double>(a.R, a.p, b.R, b.p, c.R, c.p, dt1, dt2, in_.m, in_.c, in_.L, in_.R,
@@ -400,6 +440,7 @@ class Problem {
   // Pose measurement factors.
   void AddPoseFactors(NormalEquations* ne, double* cost) const {
     for (int k = 0; k < n_; ++k) {
+      if (poll_->Tick()) return;
       const Vec3 phi = LogSO3(meas_[k].R.transpose() * poses_[k].R);
       const Vec3 dp = poses_[k].p - meas_[k].p;
       *cost += 0.5 * (phi.squaredNorm() / (sig_r_ * sig_r_) + dp.squaredNorm() / (sig_p_ * sig_p_));
@@ -462,6 +503,7 @@ class Problem {
   const InertiaOptions& o_;
   const ConvexHull* hull_;
   const int n_;
+  InterruptPoll* poll_;
   std::vector<Pose> meas_;
   std::vector<Matrix6d> whiten_;
   std::vector<Vector6d> wrench_;
@@ -472,9 +514,10 @@ class Problem {
 
 // The factor graph's finite differences need rotations below 90 degrees
 // between consecutive samples.
-absl::Status CheckRotationSteps(const InertiaSamples& s) {
+absl::Status CheckRotationSteps(const InertiaSamples& s, InterruptPoll* poll) {
   const int n = static_cast<int>(s.samples.size());
   for (int k = 0; k + 1 < n; ++k) {
+    if (poll->Tick()) return Interrupted();
     const Eigen::Matrix3d Rr =
         s.samples[k].orientation.toRotationMatrix().transpose() * s.samples[k + 1].orientation.toRotationMatrix();
     if (LogSO3(Rr).norm() > M_PI / 2) {
@@ -497,20 +540,25 @@ struct InitialInertial {
 };
 
 InitialInertial InitialFromForces(const InertiaSamples& s, const InertiaOptions& o, const ConvexHull* hull,
-                                  const std::vector<KinPoint>& kin) {
-  Eigen::MatrixXd Yf(3 * kin.size(), 4);
-  Eigen::VectorXd bf(3 * kin.size());
+                                  const std::vector<KinPoint>& kin, InterruptPoll* poll) {
+  StackedLeastSquares ls(4);
+  double force_sq = 0;  // |all force rows|^2
   for (size_t i = 0; i < kin.size(); ++i) {
+    if (poll->Tick()) break;
     const Matrix6x10 Y = Regressor(kin[i].w, kin[i].dw, kin[i].a_minus_g);
-    Yf.middleRows<3>(3 * i) = Y.topLeftCorner<3, 4>();
-    bf.segment<3>(3 * i) = SampleWrench(s.samples[kin[i].index], s.source).head<3>();
+    const Vec3 f = SampleWrench(s.samples[kin[i].index], s.source).head<3>();
+    ls.Add(Y.topLeftCorner<3, 4>(), f);
+    force_sq += f.squaredNorm();
   }
   InitialInertial init;
-  Eigen::Vector4d mh = Yf.colPivHouseholderQr().solve(bf);
+  const Eigen::MatrixXd& t = ls.Triangle();
+  const Eigen::Matrix4d R = t.topLeftCorner<4, 4>();
+  Eigen::Vector4d mh = R.colPivHouseholderQr().solve(Eigen::Vector4d(t.col(4).head<4>()));
   init.m0 = mh(0);
   if (!(init.m0 > 0) || !std::isfinite(init.m0)) {
-    init.m0 =
-        std::max(bf.norm() / std::sqrt(static_cast<double>(kin.size())) / std::max(o.gravity.norm(), 1e-9), 1e-3);
+    init.m0 = std::max(std::sqrt(force_sq) / std::sqrt(static_cast<double>(kin.size())) /
+                           std::max(o.gravity.norm(), 1e-9),
+                       1e-3);
     mh.tail<3>().setZero();
   }
   init.c0 = mh.tail<3>() / init.m0;
@@ -526,17 +574,20 @@ InitialInertial InitialFromForces(const InertiaSamples& s, const InertiaOptions&
 // Batch Levenberg-Marquardt from the problem's current values; `ne` and
 // `cost` hold the normal equations and cost at the answer. Returns the
 // number of iterations.
-absl::StatusOr<int> LevenbergMarquardt(Problem& prob, const InertiaOptions& o, NormalEquations* ne, double* cost) {
+absl::StatusOr<int> LevenbergMarquardt(Problem& prob, const InertiaOptions& o, NormalEquations* ne, double* cost,
+                                       InterruptPoll* poll) {
   *cost = prob.Evaluate(ne);
+  if (poll->stopped()) return Interrupted();
   double lambda = 1e-4;
   int it = 0;
   for (; it < o.max_iterations; ++it) {
-    if (o.interrupt && o.interrupt()) return absl::CancelledError("interrupted");
+    if (poll->Check()) return Interrupted();
     bool accepted = false;
     double new_cost = *cost;
     for (int tries = 0; tries < 12 && !accepted; ++tries) {
       Eigen::VectorXd step;
-      if (!SolveStep(*ne, lambda, &step, nullptr)) {
+      if (!SolveStep(*ne, lambda, &step, nullptr, poll)) {
+        if (poll->stopped()) return Interrupted();
         lambda *= 10;
         continue;
       }
@@ -544,6 +595,7 @@ absl::StatusOr<int> LevenbergMarquardt(Problem& prob, const InertiaOptions& o, N
       const std::vector<Pose> saved_poses = prob.poses_;
       prob.Retract(step);
       new_cost = prob.Evaluate(nullptr);
+      if (poll->stopped()) return Interrupted();
       if (std::isfinite(new_cost) && new_cost < *cost) {
         accepted = true;
         lambda = std::max(lambda / 3, 1e-12);
@@ -557,6 +609,7 @@ absl::StatusOr<int> LevenbergMarquardt(Problem& prob, const InertiaOptions& o, N
     if (!accepted) break;
     const double dec = *cost - new_cost;
     *cost = prob.Evaluate(ne);
+    if (poll->stopped()) return Interrupted();
     if (dec <= 1e-10 * *cost) {
       ++it;
       break;
@@ -567,9 +620,9 @@ absl::StatusOr<int> LevenbergMarquardt(Problem& prob, const InertiaOptions& o, N
 
 // Marginal covariance of the inertial block (Gauss-Newton), mapped to pi;
 // zero when the normal equations are singular or the map is not finite.
-Matrix10d InertialCovariance(Problem& prob, const NormalEquations& ne) {
+Matrix10d InertialCovariance(Problem& prob, const NormalEquations& ne, InterruptPoll* poll) {
   Matrix10d cov_t;
-  if (!SolveStep(ne, 0.0, nullptr, &cov_t)) return Matrix10d::Zero();
+  if (!SolveStep(ne, 0.0, nullptr, &cov_t, poll)) return Matrix10d::Zero();
   Matrix10d Jp;
   for (int i = 0; i < 10; ++i) {
     Inertial a = prob.inertial(), b = prob.inertial();
@@ -587,15 +640,17 @@ Matrix10d InertialCovariance(Problem& prob, const NormalEquations& ne) {
 
 absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const InertiaOptions& o,
                                             const ConvexHull* hull) {
+  InterruptPoll poll(o.interrupt);
   MethodOutput out;
   const int n = static_cast<int>(s.samples.size());
   out.notes.push_back("kinematics: three consecutive poses per dynamics factor (eq. 10-17)");
   if (s.HasKinematics()) out.notes.push_back("measured kinematics ignored by factor-graph (poses only, as the paper)");
-  if (absl::Status st = CheckRotationSteps(s); !st.ok()) return st;
+  if (absl::Status st = CheckRotationSteps(s, &poll); !st.ok()) return st;
 
-  const std::vector<KinPoint> kin = FiniteDifferenceKinematics(s, o.gravity);
-  const InitialInertial init = InitialFromForces(s, o, hull, kin);
-  Problem prob(s, o, hull);
+  const std::vector<KinPoint> kin = FiniteDifferenceKinematics(s, o.gravity, &poll);
+  const InitialInertial init = InitialFromForces(s, o, hull, kin, &poll);
+  Problem prob(s, o, hull, &poll);
+  if (poll.stopped()) return Interrupted();
   prob.SetScales(init.m0, std::max(init.len, init.c0.norm()));
   prob.Initialise(init.m0, init.c0, init.len);
   if (o.prior) {
@@ -609,22 +664,24 @@ absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const Inert
 
   NormalEquations ne;
   double cost = 0;
-  absl::StatusOr<int> it = LevenbergMarquardt(prob, o, &ne, &cost);
+  absl::StatusOr<int> it = LevenbergMarquardt(prob, o, &ne, &cost, &poll);
   if (!it.ok()) return it.status();
   out.iterations = *it;
   out.pi = prob.inertial().Standard();
   out.samples_used = std::max(0, n - 2);
   prob.DynamicsRms(&out.rms_force, &out.rms_torque);
   out.notes.push_back(absl::StrFormat("Levenberg-Marquardt: %d iterations, final cost %.6g", *it, cost));
-  out.cov = InertialCovariance(prob, ne);
+  out.cov = InertialCovariance(prob, ne, &poll);
   // Excitation: three-point regressors whitened like the dynamics factors.
   double ms = 1, ls = 0.1;
   RoughScale(out.pi, hull, &ms, &ls);
   out.scale = ParameterScale(ms, ls);
   for (size_t i = 0; i < kin.size() && i < prob.whiten().size(); ++i) {
+    if (poll.Tick()) return Interrupted();
     const Matrix6x10 Y = prob.whiten()[i] * Regressor(kin[i].w, kin[i].dw, kin[i].a_minus_g);
     out.info += Y.transpose() * Y;
   }
+  if (poll.stopped()) return Interrupted();
   return out;
 }
 

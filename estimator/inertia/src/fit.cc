@@ -85,9 +85,9 @@ absl::Status ValidateMeshOptions(const InertiaOptions& o) {
     return absl::InvalidArgumentError("density_regularization: must be finite (< 0 = automatic)");
   if (o.density_folds < 2) return absl::InvalidArgumentError("density_folds: must be >= 2");
   if (absl::Status st = CheckSigma(o.contradiction_ratio, "contradiction_ratio"); !st.ok()) return st;
-  if (o.regions.target_regions < 1 || o.regions.target_regions > 512)
-    return absl::InvalidArgumentError(
-        absl::StrCat("regions.target_regions: must be in 1..512 (got ", o.regions.target_regions, ")"));
+  if (o.regions.target_regions < 1 || o.regions.target_regions > kMaxTargetRegions)
+    return absl::InvalidArgumentError(absl::StrCat("regions.target_regions: must be in 1..", kMaxTargetRegions,
+                                                   " (got ", o.regions.target_regions, ")"));
   if (o.method == InertiaMethod::kDensity && !o.mesh)
     return absl::InvalidArgumentError("mesh: the density method needs the object's closed mesh (--mesh)");
   if (o.mesh) {
@@ -174,9 +174,10 @@ absl::Status ValidateInertiaOptions(const InertiaOptions& o) {
 namespace internal {
 
 void ResidualRms(const std::vector<KinPoint>& kin, const std::vector<Vector6d>& wrench, const Vector10d& pi,
-                 double* rms_force, double* rms_torque) {
+                 InterruptPoll* poll, double* rms_force, double* rms_torque) {
   double sf = 0, st = 0;
   for (size_t i = 0; i < kin.size(); ++i) {
+    if (poll->Tick()) break;
     const Vector6d r = Regressor(kin[i].w, kin[i].dw, kin[i].a_minus_g) * pi - wrench[i];
     sf += r.head<3>().squaredNorm();
     st += r.tail<3>().squaredNorm();
@@ -314,7 +315,7 @@ absl::StatusOr<internal::MethodOutput> FitDensityOrFallBack(const InertiaSamples
                                                             const InertiaOptions& options, const ConvexHull* hull,
                                                             InertiaFit* fit) {
   fit->mesh_check = io::CheckMesh(*options.mesh);
-  absl::StatusOr<RegionModel> regions = BuildRegions(*options.mesh, options.regions, options.mesh_name);
+  absl::StatusOr<RegionModel> regions = BuildRegions(*options.mesh, options.regions, options.mesh_name, options.interrupt);
   if (!regions.ok()) return regions.status();
   auto model = std::make_shared<const RegionModel>(*std::move(regions));
   absl::StatusOr<internal::MethodOutput> r = internal::FitDensity(samples, options, *model);
@@ -400,7 +401,8 @@ void SetExcitation(const internal::MethodOutput& r, double threshold, InertiaFit
 absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in, const InertiaOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   const double cpu_start = ThreadCpuSeconds();
-  if (absl::Status st = ValidateInertiaSamples(samples_in); !st.ok()) return st;
+  internal::InterruptPoll poll(options.interrupt);
+  if (absl::Status st = internal::ValidateInertiaSamples(samples_in, &poll); !st.ok()) return st;
   if (absl::Status st = ValidateInertiaOptions(options); !st.ok()) return st;
   const int need = MinimumSamples(samples_in, options.method);
   if (static_cast<int>(samples_in.samples.size()) < need) {
@@ -409,8 +411,8 @@ absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in, const In
         samples_in.samples.size(), " sample(s), at least ", need, " needed by ", ToString(options.method),
         " for the 10 inertial parameters"));
   }
-  InertiaSamples samples = samples_in;
-  NormalizeOrientations(samples);
+  const InertiaSamples samples = internal::NormalizedCopy(samples_in, &poll);
+  if (poll.stopped()) return internal::Interrupted();
   std::optional<ConvexHull> hull;
   if (!options.hull.empty()) hull = *ComputeConvexHull(options.hull);
   const ConvexHull* hp = hull ? &*hull : nullptr;

@@ -1,6 +1,8 @@
 // Shared internals of the inertia fits (not installed).
 #pragma once
 
+#include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -13,6 +15,44 @@
 #include "tactforce/inertia/types.h"
 
 namespace tactforce::inertia::internal {
+
+// The status every interrupted fit returns: absl::Cancelled("interrupted").
+absl::Status Interrupted();
+
+// Polls InertiaOptions::interrupt from the loops of a fit. Tick(work)
+// counts work (about one sample's worth per unit) and calls the callback
+// once per kInterruptStride units; Check() calls it now. Once the callback
+// has returned true every later call returns true, so a helper can stop its
+// loop early (its output is then incomplete) and the method, which checks
+// stopped() after each helper, returns Interrupted(). An empty callback
+// never stops.
+class InterruptPoll {
+ public:
+  // A few thousand samples of the cheapest loops: well under 1 ms of work
+  // between polls for a sample loop, about 10-50 ms for the costliest
+  // (factor-graph AutoDiff, kinematics window selection).
+  static constexpr int64_t kInterruptStride = 2048;
+
+  explicit InterruptPoll(std::function<bool()> interrupt) : interrupt_(std::move(interrupt)) {}
+  bool Tick(int64_t work = 1) {
+    if (stopped_) return true;
+    if (!interrupt_) return false;
+    pending_ += work;
+    if (pending_ < kInterruptStride) return false;
+    return Check();
+  }
+  bool Check() {
+    pending_ = 0;
+    if (!stopped_ && interrupt_ && interrupt_()) stopped_ = true;
+    return stopped_;
+  }
+  bool stopped() const { return stopped_; }
+
+ private:
+  std::function<bool()> interrupt_;
+  int64_t pending_ = 0;
+  bool stopped_ = false;
+};
 
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
@@ -43,10 +83,18 @@ struct KinPoint {
   double var_w = 0, var_dw = 0, var_a = 0, var_rot = 0;
 };
 
+// ValidateInertiaSamples (samples.h), returning Interrupted() when `poll` fires.
+absl::Status ValidateInertiaSamples(const InertiaSamples& s, InterruptPoll* poll);
+// A copy with unit quaternions (incomplete when `poll` fires).
+InertiaSamples NormalizedCopy(const InertiaSamples& s, InterruptPoll* poll);
+
+// The loops below poll `poll` and stop early (incomplete output) once it
+// has fired; callers check poll->stopped().
+
 // Three-point differences at samples 1..N-2 (BASELINE_LS).
-std::vector<KinPoint> FiniteDifferenceKinematics(const InertiaSamples& s, const Vec3& g);
+std::vector<KinPoint> FiniteDifferenceKinematics(const InertiaSamples& s, const Vec3& g, InterruptPoll* poll);
 // The measured columns, unsmoothed.
-std::vector<KinPoint> MeasuredKinematicsPoints(const InertiaSamples& s, const Vec3& g);
+std::vector<KinPoint> MeasuredKinematicsPoints(const InertiaSamples& s, const Vec3& g, InterruptPoll* poll);
 
 // Weights of a local polynomial fit of `degree` over `window` samples around
 // sample k (window shifted inside the data at the ends): row r (0..min(deg,2))
@@ -55,7 +103,7 @@ Eigen::MatrixXd LocalPolyWeights(const std::vector<double>& t, int k, int window
 
 // Smooths each column of `values` (rows = samples) with a local polynomial.
 Eigen::MatrixXd SmoothSeries(const std::vector<double>& t, const Eigen::MatrixXd& values, int window,
-                             int degree);
+                             int degree, InterruptPoll* poll);
 
 // CONSTRAINED kinematics: from poses by local-polynomial fits (position, and
 // orientation in a local chart), window/degree chosen per signal by an
@@ -64,7 +112,7 @@ Eigen::MatrixXd SmoothSeries(const std::vector<double>& t, const Eigen::MatrixXd
 // when their noise is given. Notes describe the choices.
 std::vector<KinPoint> SmoothedKinematics(const InertiaSamples& s, const Vec3& g,
                                          const InertiaNoise& noise, int fixed_window,
-                                         std::vector<std::string>* notes);
+                                         std::vector<std::string>* notes, InterruptPoll* poll);
 
 // Scale of the standard parameters: [m0, m0 l x3, m0 l^2 x6].
 Vector10d ParameterScale(double m0, double length);
@@ -103,7 +151,8 @@ struct GlsData {
   Matrix10d YtY = Matrix10d::Zero();
   Vector10d Ytb = Vector10d::Zero();
 };
-GlsData PrepareGls(const InertiaSamples& s, const InertiaOptions& o, std::vector<std::string>* notes);
+GlsData PrepareGls(const InertiaSamples& s, const InertiaOptions& o, std::vector<std::string>* notes,
+                   InterruptPoll* poll);
 
 // Normal equations of the whitened problem at the estimate pi: A = sum
 // (WY)^T WY, b = sum (WY)^T W w, c = sum |W w|^2, and the first-order
@@ -117,7 +166,7 @@ struct GlsSums {
 };
 // Totals, and optionally per contiguous block of samples (`blocks` >= 1)
 // and the whitening matrices W (W^T W = C^-1) per sample.
-void AccumulateGls(const GlsData& d, const Vector10d& pi, GlsSums* total, int blocks = 1,
+void AccumulateGls(const GlsData& d, const Vector10d& pi, InterruptPoll* poll, GlsSums* total, int blocks = 1,
                    std::vector<GlsSums>* per_block = nullptr, std::vector<Matrix6d>* whiteners = nullptr);
 // Block of sample k when the samples are cut into `blocks` contiguous blocks.
 inline int BlockOf(int k, int n, int blocks) { return static_cast<int>((static_cast<long>(k) * blocks) / n); }
@@ -135,13 +184,32 @@ absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const Inert
 
 // Residual RMS (force, torque) of pi on kinematics/wrenches.
 void ResidualRms(const std::vector<KinPoint>& kin, const std::vector<Vector6d>& wrench,
-                 const Vector10d& pi, double* rms_force, double* rms_torque);
+                 const Vector10d& pi, InterruptPoll* poll, double* rms_force, double* rms_torque);
 
-// Least squares on stacked rows with column scaling; minimum-norm when rank
-// deficient. Returns pi, and fills info = Y^T Y (unscaled) and the residual
-// sum of squares.
-Vector10d ScaledLeastSquares(const Eigen::MatrixXd& Y, const Eigen::VectorXd& b, const Vector10d& scale,
-                             int* rank);
+// Least squares min |Y x - b| over many rows, added in any number of calls:
+// a stacked (tall-skinny) Householder QR that keeps only a (cols+1)-square
+// upper triangle T = [R, q; 0, rho] of [Y b] (R^T R = Y^T Y, R^T q = Y^T b,
+// rho^2 = the least residual sum of squares), so memory is O(chunk) and
+// callers can poll between rows.
+class StackedLeastSquares {
+ public:
+  explicit StackedLeastSquares(int cols);
+  void Add(const Eigen::Ref<const Eigen::MatrixXd>& Y, const Eigen::Ref<const Eigen::VectorXd>& b);
+  const Eigen::MatrixXd& Triangle();  // T after all rows added so far
+
+ private:
+  static constexpr int kChunkRows = 4096;
+  void Flush();
+  int cols_;
+  Eigen::MatrixXd buffer_;  // rows 0..cols: the triangle; then the pending rows
+  int rows_ = 0;            // pending rows
+  Eigen::MatrixXd triangle_;
+};
+
+// Least squares with column scaling from the 11 x 11 triangle of
+// StackedLeastSquares(10); minimum-norm (in scaled parameters) when rank
+// deficient (relative singular value below 1e-10). Returns pi.
+Vector10d ScaledLeastSquares(const Eigen::MatrixXd& triangle, const Vector10d& scale, int* rank);
 
 // S (S A S)^+ S with S = diag(scale): the pseudo-inverse of a symmetric
 // positive semi-definite information matrix A computed in scaled

@@ -90,11 +90,13 @@ bool WrenchCovariance(const InertiaSample& s, ForceSource source, const InertiaN
   return true;
 }
 
-std::vector<KinPoint> FiniteDifferenceKinematics(const InertiaSamples& s, const Vec3& g) {
+std::vector<KinPoint> FiniteDifferenceKinematics(const InertiaSamples& s, const Vec3& g, InterruptPoll* poll) {
   std::vector<KinPoint> out;
   const auto& x = s.samples;
   const int n = static_cast<int>(x.size());
+  out.reserve(std::max(0, n - 2));
   for (int k = 1; k + 1 < n; ++k) {
+    if (poll->Tick()) break;
     const Eigen::Matrix3d R0 = x[k - 1].orientation.toRotationMatrix();
     const Eigen::Matrix3d R1 = x[k].orientation.toRotationMatrix();
     const Eigen::Matrix3d R2 = x[k + 1].orientation.toRotationMatrix();
@@ -114,9 +116,11 @@ std::vector<KinPoint> FiniteDifferenceKinematics(const InertiaSamples& s, const 
   return out;
 }
 
-std::vector<KinPoint> MeasuredKinematicsPoints(const InertiaSamples& s, const Vec3& g) {
+std::vector<KinPoint> MeasuredKinematicsPoints(const InertiaSamples& s, const Vec3& g, InterruptPoll* poll) {
   std::vector<KinPoint> out;
+  out.reserve(s.samples.size());
   for (int k = 0; k < static_cast<int>(s.samples.size()); ++k) {
+    if (poll->Tick()) break;
     const InertiaSample& x = s.samples[k];
     KinPoint p;
     p.index = k;
@@ -204,9 +208,10 @@ Eigen::MatrixXd ComputeWeights(const std::vector<double>& t, int k, int w, int d
 }  // namespace
 
 Eigen::MatrixXd SmoothSeries(const std::vector<double>& t, const Eigen::MatrixXd& values, int window,
-                             int degree) {
-  Eigen::MatrixXd out(values.rows(), values.cols());
+                             int degree, InterruptPoll* poll) {
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(values.rows(), values.cols());
   for (int k = 0; k < values.rows(); ++k) {
+    if (poll->Tick(4)) break;
     int lo = 0;
     const Eigen::MatrixXd W = LocalPolyWeights(t, k, window, degree, &lo);
     out.row(k) = W.row(0) * values.middleRows(lo, W.cols());
@@ -274,12 +279,13 @@ Vec3 Apply(const Charted& c, int k, const Eigen::MatrixXd& W, int lo, int r) {
   return acc;
 }
 
-FitResult Final(const std::vector<double>& t, const Charted& c, Candidate cand) {
+FitResult Final(const std::vector<double>& t, const Charted& c, Candidate cand, InterruptPoll* poll) {
   const int n = static_cast<int>(t.size());
   FitResult f;
   f.chosen = cand;
   for (int r = 0; r < 3; ++r) f.d[r].assign(n, Vec3::Zero()), f.wsq[r].assign(n, 0.0);
   for (int k = 0; k < n; ++k) {
+    if (poll->Tick(8)) break;
     int lo = 0;
     const Eigen::MatrixXd W = LocalPolyWeights(t, k, cand.window, cand.degree, &lo);
     for (int r = 0; r < W.rows(); ++r) {
@@ -297,10 +303,10 @@ FitResult Final(const std::vector<double>& t, const Charted& c, Candidate cand) 
 // (order 2): nearly unbiased, so the first term measures bias^2 plus the
 // known noise terms. sigma2 < 0: estimated from the reference residuals.
 FitResult SelectAndFit(const std::vector<double>& t, const Charted& c, int order, double sigma2,
-                       int fixed_window) {
+                       int fixed_window, InterruptPoll* poll) {
   const int n = static_cast<int>(t.size());
   if (fixed_window > 0) {
-    FitResult f = Final(t, c, {fixed_window, 3});
+    FitResult f = Final(t, c, {fixed_window, 3}, poll);
     f.sigma2 = std::max(sigma2, 0.0);
     return f;
   }
@@ -319,6 +325,7 @@ FitResult SelectAndFit(const std::vector<double>& t, const Charted& c, int order
     const Candidate e = order == 0 ? Candidate{std::min(7, n), std::min(4, std::min(7, n) - 1)} : ref;
     double num = 0, den = 0;
     for (int k = 0; k < n; ++k) {
+      if (poll->Tick(4)) break;
       int lo = 0;
       const Eigen::MatrixXd W = LocalPolyWeights(t, k, e.window, e.degree, &lo);
       const Vec3 r = c.At(k, k) - Apply(c, k, W, lo, 0);
@@ -333,9 +340,10 @@ FitResult SelectAndFit(const std::vector<double>& t, const Charted& c, int order
   std::vector<double> sse(nc, 0.0), refsq(nc, 0.0), cross(nc, 0.0);
   std::vector<char> valid(nc, 1);
   for (int k = 0; k < n; ++k) {
+    if (poll->Tick(nc)) break;
     int lo_r = 0;
     const Eigen::MatrixXd Wr = LocalPolyWeights(t, k, ref.window, ref.degree, &lo_r);
-    if (Wr.rows() <= order) return Final(t, c, ref);
+    if (Wr.rows() <= order) return Final(t, c, ref, poll);
     const Vec3 dr = Apply(c, k, Wr, lo_r, order);
     const double wr2 = Wr.row(order).squaredNorm();
     for (int i = 0; i < nc; ++i) {
@@ -361,7 +369,7 @@ FitResult SelectAndFit(const std::vector<double>& t, const Charted& c, int order
     const double mse = sse[i] / (3.0 * n) - sigma2 * (refsq[i] - 2.0 * cross[i]) / n;
     if (mse < best) best = mse, chosen = cands[i];
   }
-  FitResult f = Final(t, c, chosen);
+  FitResult f = Final(t, c, chosen, poll);
   f.sigma2 = sigma2;
   f.estimated = estimated;
   return f;
@@ -376,26 +384,27 @@ std::string Describe(const char* what, const FitResult& f) {
 }  // namespace
 
 std::vector<KinPoint> SmoothedKinematics(const InertiaSamples& s, const Vec3& g, const InertiaNoise& noise,
-                                         int fixed_window, std::vector<std::string>* notes) {
+                                         int fixed_window, std::vector<std::string>* notes, InterruptPoll* poll) {
   const int n = static_cast<int>(s.samples.size());
   std::vector<double> t(n);
   std::vector<Vec3> p(n);
   std::vector<Eigen::Matrix3d> R(n);
   for (int k = 0; k < n; ++k) {
+    if (poll->Tick()) return {};
     t[k] = s.samples[k].t;
     p[k] = s.samples[k].position;
     R[k] = s.samples[k].orientation.toRotationMatrix();
   }
-  std::vector<KinPoint> out(n);
   if (s.HasKinematics()) {
-    std::vector<KinPoint> m = MeasuredKinematicsPoints(s, g);
+    std::vector<KinPoint> m = MeasuredKinematicsPoints(s, g, poll);
+    if (poll->stopped()) return m;
     // Smooth a measured series (object or world frame) when it is noisy.
     auto smooth = [&](const char* name, double sigma, auto get, auto set, double KinPoint::*var) {
       if (!(sigma > 0) && fixed_window <= 0) return;
       std::vector<Vec3> raw(n);
       for (int k = 0; k < n; ++k) raw[k] = get(k);
       const Charted c = Charted::Positions(raw, kMaxWindow);
-      FitResult f = SelectAndFit(t, c, 0, sigma * sigma, fixed_window);
+      FitResult f = SelectAndFit(t, c, 0, sigma * sigma, fixed_window, poll);
       for (int k = 0; k < n; ++k) {
         set(k, raw[k] + f.d[0][k]);
         m[k].*var = sigma * sigma * f.wsq[0][k];
@@ -412,7 +421,7 @@ std::vector<KinPoint> SmoothedKinematics(const InertiaSamples& s, const Vec3& g,
            [&](int k) { return acc[k]; }, [&](int k, const Vec3& v) { acc[k] = v; }, &KinPoint::var_a);
     if (noise.orientation_sigma > 0) {
       const Charted c = Charted::Rotations(R, kMaxWindow);
-      FitResult f = SelectAndFit(t, c, 0, noise.orientation_sigma * noise.orientation_sigma, fixed_window);
+      FitResult f = SelectAndFit(t, c, 0, noise.orientation_sigma * noise.orientation_sigma, fixed_window, poll);
       for (int k = 0; k < n; ++k) {
         m[k].R = R[k] * ExpSO3(f.d[0][k]);
         m[k].var_rot = f.sigma2 * f.wsq[0][k];
@@ -424,14 +433,18 @@ std::vector<KinPoint> SmoothedKinematics(const InertiaSamples& s, const Vec3& g,
   }
   const double sp2 = noise.position_sigma > 0 ? noise.position_sigma * noise.position_sigma : -1.0;
   const double sr2 = noise.orientation_sigma > 0 ? noise.orientation_sigma * noise.orientation_sigma : -1.0;
-  const FitResult fp = SelectAndFit(t, Charted::Positions(p, kMaxWindow), 2, sp2, fixed_window);
-  const FitResult fr = SelectAndFit(t, Charted::Rotations(R, kMaxWindow), 2, sr2, fixed_window);
+  const FitResult fp = SelectAndFit(t, Charted::Positions(p, kMaxWindow), 2, sp2, fixed_window, poll);
+  const FitResult fr = SelectAndFit(t, Charted::Rotations(R, kMaxWindow), 2, sr2, fixed_window, poll);
+  if (poll->stopped()) return {};
   if (notes) {
     notes->push_back(Describe("kinematics from positions", fp));
     notes->push_back(Describe("kinematics from orientations", fr));
   }
+  std::vector<KinPoint> out;
+  out.reserve(n);  // filled as polled (no unpolled initialisation of n points)
   for (int k = 0; k < n; ++k) {
-    KinPoint& q = out[k];
+    if (poll->Tick()) break;
+    KinPoint& q = out.emplace_back();
     q.index = k;
     q.t = t[k];
     q.R = R[k] * ExpSO3(fr.d[0][k]);

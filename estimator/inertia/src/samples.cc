@@ -19,6 +19,7 @@
 #include "tactforce/inertia/fit.h"
 #include "tactforce/io/text_file.h"
 #include "tactforce/planner/validation.h"
+#include "internal.h"
 
 namespace tactforce::inertia {
 namespace {
@@ -357,12 +358,24 @@ absl::Status RejectNan(const io::CsvTable& table) {
 }  // namespace
 
 absl::Status ValidateInertiaSamples(const InertiaSamples& s) {
+  internal::InterruptPoll never(nullptr);
+  return internal::ValidateInertiaSamples(s, &never);
+}
+
+void NormalizeOrientations(InertiaSamples& s) {
+  for (InertiaSample& x : s.samples) x.orientation.normalize();
+}
+
+namespace internal {
+
+absl::Status ValidateInertiaSamples(const InertiaSamples& s, InterruptPoll* poll) {
   const Locator loc{s};
   const std::string src = s.source_name.empty() ? "samples" : s.source_name;
   if (s.source == ForceSource::kContacts && s.num_contacts < 1)
     return absl::InvalidArgumentError(absl::StrCat(src, ": contact source with no contacts"));
   const bool kin = s.HasKinematics();
   for (int i = 0; i < static_cast<int>(s.samples.size()); ++i) {
+    if (poll->Tick()) return Interrupted();
     const InertiaSample& x = s.samples[i];
     if (absl::Status st = ValidatePose(loc, s, i); !st.ok()) return st;
     absl::Status forces = s.source == ForceSource::kWrench ? ValidateWrench(loc, x, i) : ValidateContacts(loc, s, i);
@@ -372,9 +385,22 @@ absl::Status ValidateInertiaSamples(const InertiaSamples& s) {
   return absl::OkStatus();
 }
 
-void NormalizeOrientations(InertiaSamples& s) {
-  for (InertiaSample& x : s.samples) x.orientation.normalize();
+InertiaSamples NormalizedCopy(const InertiaSamples& s, InterruptPoll* poll) {
+  InertiaSamples out;
+  out.source = s.source;
+  out.num_contacts = s.num_contacts;
+  out.source_name = s.source_name;
+  out.line_numbers = s.line_numbers;
+  out.samples.reserve(s.samples.size());
+  for (const InertiaSample& x : s.samples) {
+    if (poll->Tick()) break;
+    out.samples.push_back(x);
+    out.samples.back().orientation.normalize();
+  }
+  return out;
 }
+
+}  // namespace internal
 
 absl::StatusOr<InertiaSamples> InertiaSamplesFromCsv(const io::CsvTable& table) {
   const std::string& src = table.source;

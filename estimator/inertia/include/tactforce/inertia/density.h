@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -52,9 +53,14 @@ enum class RegionScheme {
 const char* ToString(RegionScheme scheme);  // "auto", "grid", "colors", "single"
 absl::StatusOr<RegionScheme> ParseRegionScheme(std::string_view text);
 
+// Upper limit of RegionOptions::target_regions. The DENSITY fit's cost
+// grows with the cube of the region count (its non-negative solves); at
+// this many regions a typical fit takes a few seconds (README, "Limits").
+inline constexpr int kMaxTargetRegions = 100;
+
 struct RegionOptions {
   RegionScheme scheme = RegionScheme::kAuto;
-  int target_regions = 12;  // kGrid: about this many non-empty cells (1..512)
+  int target_regions = 12;  // kGrid: about this many non-empty cells (1..kMaxTargetRegions)
 };
 
 struct DensityRegion {
@@ -87,7 +93,10 @@ struct RegionModel {
 // Splits the solid bounded by `mesh` (object frame, m; closed) into regions.
 // Errors name `name`, e.g. "Pliers.ply: colour #e5e5e5 does not bound a
 // closed part (423 boundary edges); use --regions grid".
+// `interrupt` (may be empty) is polled while the grid's cells are
+// integrated; when it returns true the result is absl::Cancelled("interrupted").
 absl::StatusOr<RegionModel> BuildRegions(const io::TriangleMesh& mesh, const RegionOptions& options,
-                                         std::string_view name = "mesh");
+                                         std::string_view name = "mesh",
+                                         const std::function<bool()>& interrupt = nullptr);
 
 }  // namespace tactforce::inertia
