@@ -297,7 +297,7 @@ int main(int argc, char** argv) {
     }
     std::printf("\nGrowth with the number of regions (Hammer.ply):\n\n| target regions | regions | regions ms | "
                 "fit ms (incl. regions) |\n|---|---|---|---|\n");
-    for (int target : {4, 8, 16, 32, 64, 128}) {
+    for (int target : {4, 8, 16, 32, 64, kMaxTargetRegions}) {
       double load, build, fit;
       int k;
       RegionOptions grid;

@@ -89,20 +89,14 @@ TEST(Interrupt, BaselineLsStopsPromptly) {
   ExpectStopsPromptly(data.samples, o);
 }
 
-TEST(Interrupt, ConstrainedStopsPromptly) {
+TEST(Interrupt, ConstrainedAndFactorGraphStopPromptly) {
   const SimulationResult& data = BoxData(200.0, 500.0);
-  InertiaOptions o;
-  o.method = InertiaMethod::kConstrained;
-  o.hull = data.object.hull;
-  ExpectStopsPromptly(data.samples, o);
-}
-
-TEST(Interrupt, FactorGraphStopsPromptly) {
-  const SimulationResult& data = BoxData(200.0, 500.0);
-  InertiaOptions o;
-  o.method = InertiaMethod::kFactorGraph;
-  o.hull = data.object.hull;
-  ExpectStopsPromptly(data.samples, o);
+  for (InertiaMethod method : {InertiaMethod::kConstrained, InertiaMethod::kFactorGraph}) {
+    InertiaOptions o;
+    o.method = method;
+    o.hull = data.object.hull;
+    ExpectStopsPromptly(data.samples, o);
+  }
 }
 
 TEST(Interrupt, DensityWithManyRegionsStopsPromptly) {

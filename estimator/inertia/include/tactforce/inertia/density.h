@@ -55,7 +55,7 @@ absl::StatusOr<RegionScheme> ParseRegionScheme(std::string_view text);
 
 // Upper limit of RegionOptions::target_regions. The DENSITY fit's cost
 // grows with the cube of the region count (its non-negative solves); at
-// this many regions a typical fit takes a few seconds (README, "Limits").
+// this many regions a fit on the box example takes 3-5 s (README, "Work limit").
 inline constexpr int kMaxTargetRegions = 100;
 
 struct RegionOptions {

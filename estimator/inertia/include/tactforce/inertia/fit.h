@@ -145,8 +145,12 @@ struct InertiaOptions {
 
   // Called with the fraction done (0..1) during long fits. May be empty.
   std::function<void(double fraction)> progress;
-  // Polled between iterations; returning true ends the fit with
-  // absl::Cancelled("interrupted"). May be empty.
+  // The work limit. Polled in every loop of the fit (validation, kinematics,
+  // normal equations, residuals, held-out checks, factor-graph iterations
+  // and their linear algebra, DENSITY's region building and solves) about
+  // once per couple of thousand samples' work, a few ms at most; returning
+  // true ends the fit with absl::Cancelled("interrupted"), on 1,000,000
+  // samples within about 0.15 s (README, "Work limit"). May be empty.
   std::function<bool()> interrupt;
 };
 
