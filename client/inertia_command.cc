@@ -200,9 +200,10 @@ absl::Status SetDensityOptions(const InertiaArgs& args, v1::InertiaFitOptions* o
   absl::StatusOr<inertia::RegionScheme> scheme = inertia::ParseRegionScheme(args.regions);
   if (!scheme.ok()) return absl::InvalidArgumentError(absl::StrCat("--regions: ", scheme.status().message()));
   o->set_regions(api::RegionSchemeToProto(*scheme));
-  if (args.target_regions < 0 || args.target_regions > 512)
+  if (args.target_regions < 0 || args.target_regions > inertia::kMaxTargetRegions)
     return absl::InvalidArgumentError(
-        absl::StrCat("--target-regions: must be in 1..512, 0 = 12 (got ", args.target_regions, ")"));
+        absl::StrCat("--target-regions: must be in 1..", inertia::kMaxTargetRegions, ", 0 = 12 (got ",
+                     args.target_regions, ")"));
   o->set_target_regions(static_cast<uint32_t>(args.target_regions));
   absl::StatusOr<std::optional<double>> regularization =
       ParseNonNegative(args.density_regularization, "--density-regularization", "",
@@ -352,7 +353,7 @@ void AddMeshFlags(CLI::App* cmd, InertiaArgs& args) {
       ->check(CLI::IsMember({"auto", "grid", "colors", "single"}))
       ->capture_default_str()
       ->needs(mesh);
-  cmd->add_option("--target-regions", args.target_regions, "density, grid: about this many regions (1..512; 0 = 12)")
+  cmd->add_option("--target-regions", args.target_regions, "density, grid: about this many regions (1..100; 0 = 12)")
       ->type_name("N")
       ->needs(mesh);
   cmd->add_option("--density-regularization", args.density_regularization,

@@ -14,6 +14,7 @@
 #include "absl/strings/str_cat.h"
 #include "tactforce/api/convert.h"
 #include "tactforce/api/finite.h"
+#include "tactforce/inertia/density.h"
 #include "tactforce/inertia/metrics.h"
 #include "tactforce/inertia/samples.h"
 #include "tactforce/planner/validation.h"
@@ -284,9 +285,10 @@ absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::Inerti
   if (!scheme.ok()) return scheme.status();
   out.regions.scheme = *scheme;
   if (o.target_regions() != 0) {
-    if (o.target_regions() > 512)
+    if (o.target_regions() > static_cast<uint32_t>(inertia::kMaxTargetRegions))
       return absl::InvalidArgumentError(
-          absl::StrCat("options.target_regions: must be in 1..512, 0 = 12 (got ", o.target_regions(), ")"));
+          absl::StrCat("options.target_regions: must be in 1..", inertia::kMaxTargetRegions,
+                       ", 0 = 12 (got ", o.target_regions(), ")"));
     out.regions.target_regions = static_cast<int>(o.target_regions());
   }
   if (o.has_density_regularization()) out.density_regularization = o.density_regularization();
@@ -422,6 +424,14 @@ absl::StatusOr<v1::FitInertiaResponse> FitInertiaSamples(const inertia::InertiaS
                                                          inertia::InertiaFit* fit_out) {
   absl::StatusOr<inertia::InertiaOptions> converted = InertiaOptionsFromProto(options);
   if (!converted.ok()) return converted.status();
+  const int64_t n = static_cast<int64_t>(samples.samples.size());
+  if (limits.max_fit_bytes > 0 && inertia::FitWorkingBytes(converted->method, n) > limits.max_fit_bytes) {
+    return absl::InvalidArgumentError(absl::StrCat(
+        "samples: a ", InertiaMethodName(converted->method), " fit of ", n, " samples needs about ",
+        inertia::FitWorkingBytes(converted->method, n) >> 20, " MiB of working memory, over the server's limit of ",
+        limits.max_fit_bytes >> 20, " MiB (--max-fit-bytes): send at most ",
+        limits.max_fit_bytes / inertia::FitWorkingBytes(converted->method, 1), " samples"));
+  }
   converted->progress = std::move(progress);
   converted->interrupt = limits.interrupt;
   absl::StatusOr<inertia::InertiaFit> fit = inertia::FitInertia(samples, *converted);

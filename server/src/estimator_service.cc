@@ -33,7 +33,8 @@ class FitInertiaReactor final : public grpc::ServerReadReactor<grpc::ByteBuffer>
   FitInertiaReactor(grpc::CallbackServerContext* context, grpc::ByteBuffer* response,
                     WorkerPool* pool, StreamRegistry* streams, const EstimatorServiceOptions& options)
       : response_(response), pool_(pool), streams_(streams), stream_(options.max_inertia_samples),
-        max_call_seconds_(options.solve_timeout_ms / 1000.0), guard_(context, &cancelled_),
+        max_call_seconds_(options.solve_timeout_ms / 1000.0), max_fit_bytes_(options.max_fit_bytes),
+        guard_(context, &cancelled_),
         log_("FitInertia", guard_) {
     log_.set_pooled();  // also for a call that ends before the fit
     if (absl::Status admitted = streams_->Open(this, "FitInertia"); !admitted.ok()) {
@@ -132,6 +133,7 @@ class FitInertiaReactor final : public grpc::ServerReadReactor<grpc::ByteBuffer>
       const api::WorkBudget budget(max_call_seconds_, guard_.Interrupt());
       api::CallLimits limits;
       limits.interrupt = budget.Interrupt();
+      limits.max_fit_bytes = max_fit_bytes_;
       absl::StatusOr<v1::FitInertiaResponse> result = stream_.Fit(limits);
       if (!result.ok()) return guard_.ShouldStop() ? result.status() : budget.Explain(result.status());
       return SerializeMessage(*result, response_);
@@ -164,6 +166,7 @@ class FitInertiaReactor final : public grpc::ServerReadReactor<grpc::ByteBuffer>
   std::atomic<int64_t> reserved_bytes_{0};
   api::InertiaStream stream_;
   double max_call_seconds_;
+  int64_t max_fit_bytes_;
   grpc::ByteBuffer buffer_;
   v1::FitInertiaRequest message_;
   std::atomic<bool> cancelled_{false};

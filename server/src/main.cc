@@ -75,11 +75,11 @@ void LogStart(const ServerConfig& c, const tactforce::server::ServerHost& host,
               const tactforce::server::WorkerPool& pool) {
   spdlog::info("event=start address={} tls={} mtls={} reflection={} workers={} ipopt_workers={} queue={} "
                "max_contacts={} solve_timeout_ms={} inline_max_contacts={} max_message_bytes={} "
-               "max_inertia_samples={} max_inflight_samples={} max_inflight_bytes={} max_audit_samples={} "
+               "max_inertia_samples={} max_inflight_samples={} max_inflight_bytes={} max_fit_bytes={} max_audit_samples={} "
                "max_streams={} stream_idle_timeout_ms={} max_streams_per_connection={} max_trajectory_work={}",
                host.bound_address(), host.tls(), !c.tls_client_ca.empty(), c.reflection, pool.workers(),
                c.ipopt_workers, pool.max_queued(), c.max_contacts, c.solve_timeout_ms, c.inline_max_contacts,
-               c.max_message_bytes, c.max_inertia_samples, c.max_inflight_samples, c.max_inflight_bytes,
+               c.max_message_bytes, c.max_inertia_samples, c.max_inflight_samples, c.max_inflight_bytes, c.max_fit_bytes,
                c.max_audit_samples, c.max_streams, c.stream_idle_timeout_ms, c.max_streams_per_connection,
                c.max_trajectory_work);
 }

@@ -40,6 +40,7 @@ EstimatorServiceOptions ServerConfig::ToEstimatorOptions() const {
   options.max_inertia_samples = max_inertia_samples;
   options.max_audit_samples = max_audit_samples;
   options.solve_timeout_ms = solve_timeout_ms;
+  options.max_fit_bytes = max_fit_bytes;
   return options;
 }
 
@@ -115,6 +116,12 @@ void RegisterFlags(CLI::App& app, ServerConfig* c) {
                  "their contacts, and the options with the mesh); the message that would exceed it "
                  "ends its stream with RESOURCE_EXHAUSTED (0 = no limit). The default, 256 MiB, is a "
                  "quarter of the shipped Kubernetes memory limit")
+      ->check(CLI::Range(int64_t{0}, int64_t{1} << 40));
+  app.add_option("--max-fit-bytes", c->max_fit_bytes,
+                 "Most working memory one FitInertia fit may take, estimated from its method and "
+                 "sample count before it starts (FACTOR_GRAPH ~4.5 KB per sample, the others ~2 KB); "
+                 "a bigger fit is refused with INVALID_ARGUMENT naming the most samples it may have "
+                 "(0 = no limit)")
       ->check(CLI::Range(int64_t{0}, int64_t{1} << 40));
   app.add_option("--max-streams-per-connection", c->max_streams_per_connection,
                  "Calls one client connection may have in flight at once (HTTP/2 "

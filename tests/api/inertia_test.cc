@@ -384,8 +384,8 @@ TEST(InertiaMeshInput, BadMeshesAndPlacementsNameTheField) {
   }
   {
     v1::InertiaFitOptions o = with_mesh(obj, "obj", "box.obj");
-    o.set_target_regions(513);
-    EXPECT_NE(error(o).find("options.target_regions"), std::string::npos) << error(o);
+    o.set_target_regions(inertia::kMaxTargetRegions + 1);
+    EXPECT_NE(error(o).find("options.target_regions: must be in 1..100"), std::string::npos) << error(o);
     o.set_target_regions(0);
     o.set_regions(static_cast<v1::RegionScheme>(9));
     EXPECT_NE(error(o).find("options.regions: unknown value 9"), std::string::npos) << error(o);

@@ -256,7 +256,7 @@ TEST_F(InertiaMeshCliTest, BadMeshInputNamesTheFileOrFlag) {
       {{"--mesh", Write("mesh.step", "solid").string()}, "mesh.step: unknown mesh format"},
       {{"--mesh", Write("junk.ply", "ply\nthis is not a mesh\n").string()}, "junk.ply"},
       {{"--mesh", box, "--plot", (dir() / "no_such_dir" / "x.svg").string()}, "--plot: directory"},
-      {{"--mesh", box, "--target-regions", "600"}, "--target-regions: must be in 1..512"},
+      {{"--mesh", box, "--target-regions", "600"}, "--target-regions: must be in 1..100"},
       {{"--mesh", box, "--density-regularization", "-1"}, "--density-regularization: must be >= 0"},
       {{"--method", "density"}, "the density method needs the object's closed mesh (--mesh)"},
       {{"--mesh-scale", "2"}, "--mesh"},  // needs --mesh (CLI11)

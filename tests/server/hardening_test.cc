@@ -198,7 +198,8 @@ TEST_F(HardeningTest, LongEchoedInputKeepsItsCodeWithABoundedMessage) {
 class StreamBoundsTest : public ServerTest {
  protected:
   std::vector<std::string> server_flags() const override {
-    return {"--max-streams", "1", "--stream-idle-timeout-ms", "500", "--max-inflight-bytes", "2000000"};
+    return {"--max-streams", "1", "--stream-idle-timeout-ms", "500", "--max-inflight-bytes", "2000000",
+            "--max-fit-bytes", "1000000"};
   }
 };
 
@@ -260,6 +261,21 @@ TEST_F(StreamBoundsTest, FitInertiaBytesShareOneBudget) {
   const std::vector<v1::FitInertiaRequest> small = InertiaMessages(1, 200);
   const grpc::Status after = StreamRaw(channel_, {Bytes(small[0])});
   EXPECT_TRUE(after.ok()) << Describe(after);
+}
+
+// 1 MB of fit working memory: 300 samples fit with CONSTRAINED (~2 KB
+// each) but not with FACTOR_GRAPH (~4.5 KB each), which is refused before
+// it starts, naming the flag and the most samples it may have.
+TEST_F(StreamBoundsTest, FitsBeyondTheWorkingMemoryLimitAreRefusedBeforeTheyStart) {
+  std::vector<v1::FitInertiaRequest> messages = InertiaMessages(1, 300);
+  messages[0].mutable_options()->set_method(v1::INERTIA_METHOD_CONSTRAINED);
+  const grpc::Status constrained = StreamRaw(channel_, {Bytes(messages[0])});
+  EXPECT_TRUE(constrained.ok()) << Describe(constrained);
+  messages[0].mutable_options()->set_method(v1::INERTIA_METHOD_FACTOR_GRAPH);
+  const grpc::Status factor_graph = StreamRaw(channel_, {Bytes(messages[0])});
+  EXPECT_EQ(factor_graph.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << Describe(factor_graph);
+  EXPECT_THAT(factor_graph.error_message(), HasSubstr("--max-fit-bytes"));
+  EXPECT_THAT(factor_graph.error_message(), HasSubstr("send at most 217 samples"));
 }
 
 class IpoptLaneTest : public ServerTest {

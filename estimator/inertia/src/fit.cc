@@ -36,6 +36,11 @@ constexpr double kContradictionZ = 4.0;
 constexpr double kContradictionExcess = 1e-5;
 }  // namespace
 
+int64_t FitWorkingBytes(InertiaMethod method, int64_t samples) {
+  const int64_t per_sample = method == InertiaMethod::kFactorGraph ? 4608 : 2048;
+  return samples * per_sample;
+}
+
 const char* ToString(InertiaMethod m) {
   switch (m) {
     case InertiaMethod::kBaselineLs: return "baseline-ls";

@@ -42,6 +42,10 @@ struct CallLimits {
   // AuditModel: most samples one request may carry (the server's
   // --max-audit-samples).
   int64_t max_audit_samples = 1'000'000;
+  // FitInertia: most working memory one fit may take (bytes, estimated
+  // before it starts with inertia::FitWorkingBytes; 0 = no limit; the
+  // server's --max-fit-bytes).
+  int64_t max_fit_bytes = 0;
 };
 
 // A PlanRequest converted (FromProto) with `limits` applied to its options.

@@ -26,6 +26,8 @@ struct EstimatorServiceOptions {
   int64_t max_inertia_samples = api::kDefaultMaxInertiaSamples;  // per FitInertia stream
   int64_t max_audit_samples = api::CallLimits{}.max_audit_samples;  // per AuditModel request
   int solve_timeout_ms = 10'000;  // work budget of every call (CallLimits::max_call_seconds); 0 = none
+  // Working memory of one FitInertia fit (CallLimits::max_fit_bytes); 0 = none.
+  int64_t max_fit_bytes = int64_t{256} << 20;
 
   api::CallLimits Limits() const;
 };

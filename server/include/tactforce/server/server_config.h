@@ -28,6 +28,7 @@ struct ServerConfig {
   int stream_idle_timeout_ms = static_cast<int>(StreamLimits{}.idle_timeout.count());
   int64_t max_inflight_samples = StreamLimits{}.max_inflight_samples;
   int64_t max_inflight_bytes = StreamLimits{}.max_inflight_bytes;
+  int64_t max_fit_bytes = EstimatorServiceOptions{}.max_fit_bytes;  // per FitInertia fit
   int max_streams_per_connection = ServerOptions{}.max_streams_per_connection;
   bool reflection = true;
   std::string tls_cert;

@@ -43,6 +43,7 @@
 // poorly excited parameter directions.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -213,6 +214,14 @@ struct InertiaFit {
 
 // Human-readable multi-line summary (CLI output).
 std::string DescribeFit(const InertiaFit& fit);
+
+// About the most memory (bytes) a fit of `samples` samples with `method`
+// takes beyond the samples themselves, so a service can refuse a fit it
+// cannot hold before starting it. Slopes of peak RSS measured on simulated
+// wrist and in-hand data (20k-60k samples, `/usr/bin/time` on `tactforce
+// inertia`, rounded up): FACTOR_GRAPH ~4.5 KB per sample (its banded
+// system), the others ~2 KB (DENSITY at kMaxTargetRegions regions).
+int64_t FitWorkingBytes(InertiaMethod method, int64_t samples);
 
 // Validates samples and options, then fits with options.method.
 absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples, const InertiaOptions& options);
