@@ -84,11 +84,12 @@ def _memory(s):
 
 
 def _stops(s):
-    lines = [f"stops      {_verdict(s)}  pass = done within 1 s of the deadline and exit within "
-             f"grace + 1 s of SIGTERM"]
+    lines = [f"stops      {_verdict(s)}  pass = answered within 1 s of the deadline, < 0.5 s of "
+             f"server CPU in the 1 s after it, exit within grace + 1 s of SIGTERM"]
     for r in s["cases"]:
         lines.append(f"    {r['case']}: {r['code']} {r['after_deadline_s']:+.3f} s after its "
-                     f"{r['deadline_s']:g} s deadline; SIGTERM (grace {r['grace_ms']} ms) to exit "
+                     f"{r['deadline_s']:g} s deadline, then {r['server_cpu_s_in_1s_after']:.3f} s of "
+                     f"server CPU in 1 s; SIGTERM (grace {r['grace_ms']} ms) to exit "
                      f"{r['sigterm_to_exit_s']:.3f} s, exit {r['sigterm_exit_code']}")
     return lines
 
