@@ -125,6 +125,31 @@ def csv_corpora():
     write("csv", "2_inertia_wrench.csv", "2" + "\n".join(rows) + "\n")
 
 
+def magnitude_corpora():
+    """Issue 23's huge finite inputs and corrupt stream bytes: each request
+    path must refuse them by name, never answer OK with a wrong number."""
+    tripod = plan_requests()["tripod"]
+    huge = json.loads(json.dumps(tripod))
+    huge["contacts"][0]["normal"] = {"x": 0, "y": 0, "z": -1e155}
+    write("plan_json", "P_normal_1e155.json", "P" + json.dumps(huge))
+    huge["contacts"][0]["normal"] = {"x": 0, "y": 0, "z": -1}
+    huge["contacts"][1]["friction"] = "Infinity"
+    write("plan_json", "P_friction_infinity.json", "P" + json.dumps(huge))
+    est = {"object": {"mass": 0.3}, "contacts": tripod["contacts"], "readings": [2.0, 1e300, -0.1]}
+    write("plan_json", "E_reading_1e300.json", "E" + json.dumps(est))
+    # A length-delimited field declaring 4 GiB (the corrupt stream message).
+    write("plan_binary", "corrupt_field_4gib.bin", b"\x12\xff\xff\xff\x0f")
+    rows = ["t,fx,fy,fz,px,py,pz,slip"]
+    for i in range(20):
+        slip = 1 if i > 12 else 0
+        rows.append(f"{i * 0.01:.2f},1e155,0,{3e155 - 1e154 * i:.3e},{0.001 * slip * (i - 12):.4f},0,0,{slip}")
+    write("csv", "0_friction_forces_1e155.csv", "0" + "\n".join(rows) + "\n")
+    rows = ["t,px,py,pz,qw,qx,qy,qz,fx,fy,fz,tx,ty,tz"]
+    for i in range(12):
+        rows.append(f"{1e-300 * i:.3e},0,0,{1e300 * i:.3e},1,0,0,0,0,0,{4.9e300:.3e},0.01,0,0")
+    write("csv", "2_inertia_times_1e-300_wrench_1e300.csv", "2" + "\n".join(rows) + "\n")
+
+
 def mesh_corpora():
     write("mesh", "0_probe_block.stl", b"0" + example("probe_block.stl"))
     write("mesh", "0_inertia_box_binary.stl", b"0" + example("inertia_box.stl"))
@@ -218,5 +243,6 @@ def sensor_model_corpora():
 if __name__ == "__main__":
     plan_corpora()
     csv_corpora()
+    magnitude_corpora()
     mesh_corpora()
     sensor_model_corpora()
