@@ -96,7 +96,13 @@ int main(int argc, char** argv) {
       "tactforce-server"};
   app.set_version_flag("--version", std::string("tactforce-server ") + tactforce::api::kVersion);
   tactforce::server::RegisterFlags(app, &config);
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help and --version exit 0; every flag error exits 2 (as the CLI does)
+    // with CLI11's message naming the flag.
+    return app.exit(e) == 0 ? 0 : 2;
+  }
 
   // Debian's Abseil is built with Mutex deadlock detection on (no NDEBUG),
   // and gRPC's locks are absl::Mutex: every lock would update a global

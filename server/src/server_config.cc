@@ -21,6 +21,7 @@ ServerOptions ServerConfig::ToServerOptions() const {
   options.tls.client_ca = tls_client_ca;
   options.max_streams_per_connection = max_streams_per_connection;
   options.reflection = reflection;
+  options.reuse_port = reuse_port;
   return options;
 }
 
@@ -59,7 +60,24 @@ void RegisterFlags(CLI::App& app, ServerConfig* c) {
                  "Address to listen on, host:port. Port 0 picks a free port; the bound "
                  "address is printed on stdout as 'tactforce-server listening on HOST:PORT'. "
                  "Listening on every interface must be asked for: 0.0.0.0:50051 or [::]:50051")
-      ->type_name("HOST:PORT");
+      ->type_name("HOST:PORT")
+      ->check(CLI::Validator(
+          [](std::string& address) -> std::string {
+            if (address.rfind("unix:", 0) == 0) return "";
+            const size_t colon = address.rfind(':');
+            const std::string port = colon == std::string::npos ? "" : address.substr(colon + 1);
+            int value = -1;
+            if (port.empty() || port.size() > 5 ||
+                port.find_first_not_of("0123456789") != std::string::npos ||
+                (value = std::stoi(port)) > 65535) {
+              return "'" + address + "': expected HOST:PORT with a port of 0..65535";
+            }
+            return "";
+          },
+          "HOST:PORT"));
+  app.add_flag("--reuse-port", c->reuse_port,
+               "Let several processes listen on the same port (SO_REUSEPORT, the kernel spreads "
+               "connections over them); without it a port in use is a startup error (exit 1)");
   app.add_option("--workers", c->workers,
                  "Worker threads for large geometric solves, trajectories, estimation, inertia "
                  "fits and audits (0 = hardware threads); Ipopt work has its own lane "

@@ -173,6 +173,7 @@ absl::Status ServerHost::Start() {
   builder.SetMaxReceiveMessageSize(options_.max_message_bytes);
   builder.SetMaxSendMessageSize(options_.max_message_bytes);
   builder.AddChannelArgument(GRPC_ARG_MAX_CONCURRENT_STREAMS, options_.max_streams_per_connection);
+  builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, options_.reuse_port ? 1 : 0);
   builder.SetOption(std::make_unique<ReflectionOption>(options_.reflection));
   int selected_port = 0;
   builder.AddListeningPort(options_.listen, *credentials, &selected_port);

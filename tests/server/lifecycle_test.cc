@@ -51,11 +51,14 @@ TEST(ServerCliTest, BadFlagsAreRejected) {
            {"--max-contacts", "0"},
            {"--tls-cert", "/nonexistent/cert.pem", "--tls-key", "/nonexistent/key.pem"},
            {"--tls-key", "/etc/hostname"},  // needs --tls-cert
-           {"--no-such-flag"}}) {
+           {"--no-such-flag"},
+           {"--listen", "127.0.0.1:99999"},
+           {"--listen", "127.0.0.1:http"},
+           {"--listen", "127.0.0.1"}}) {
     std::vector<std::string> argv = {Server()};
     argv.insert(argv.end(), args.begin(), args.end());
     ProcessResult run = RunProcess(argv);
-    EXPECT_NE(run.exit_code, 0) << args[0];
+    EXPECT_EQ(run.exit_code, 2) << args[0] << " " << args.back();
     EXPECT_FALSE(run.err.empty()) << args[0];
     EXPECT_TRUE(run.out.empty()) << args[0] << ": " << run.out;
   }
@@ -71,6 +74,32 @@ TEST(ServerCliTest, StartupErrorsExitOne) {
   run = RunProcess({Server(), "--listen", "192.0.2.1:0"});
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_THAT(run.err, HasSubstr("cannot listen on 192.0.2.1:0"));
+}
+
+// gRPC turns SO_REUSEPORT on by default: a second server on a port in use
+// would start and silently take half of the calls. It must fail instead,
+// unless both ask for --reuse-port.
+TEST(ServerCliTest, SecondServerOnAPortInUseExitsOne) {
+  std::string error;
+  auto first = ServerProcess::Start({}, &error);
+  ASSERT_NE(first, nullptr) << error;
+  ProcessResult run = RunProcess({Server(), "--listen", first->address()}, {}, std::chrono::seconds(10));
+  EXPECT_EQ(run.exit_code, 1) << run.out;
+  EXPECT_THAT(run.err, HasSubstr("cannot listen on " + first->address()));
+  EXPECT_TRUE(run.out.empty()) << run.out;
+
+  // --reuse-port on the second alone is not enough: the first did not share.
+  run = RunProcess({Server(), "--listen", first->address(), "--reuse-port"}, {}, std::chrono::seconds(10));
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_THAT(run.err, HasSubstr("cannot listen on " + first->address()));
+
+  // Both asking: the second starts and listens (stopped by the timeout).
+  auto sharing = ServerProcess::Start({"--reuse-port"}, &error);
+  ASSERT_NE(sharing, nullptr) << error;
+  run = RunProcess({Server(), "--listen", sharing->address(), "--reuse-port"}, {}, std::chrono::seconds(2));
+  EXPECT_THAT(run.out, HasSubstr("listening on " + sharing->address()));
+  EXPECT_EQ(sharing->Stop(), 0);
+  EXPECT_EQ(first->Stop(), 0);
 }
 
 TEST(ServerLifecycleTest, SigintAlsoStopsCleanly) {

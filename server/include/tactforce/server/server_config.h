@@ -31,6 +31,7 @@ struct ServerConfig {
   int64_t max_fit_bytes = EstimatorServiceOptions{}.max_fit_bytes;  // per FitInertia fit
   int max_streams_per_connection = ServerOptions{}.max_streams_per_connection;
   bool reflection = true;
+  bool reuse_port = false;
   std::string tls_cert;
   std::string tls_key;
   std::string tls_client_ca;

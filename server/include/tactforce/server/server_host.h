@@ -47,6 +47,9 @@ struct ServerOptions {
   // Calls in flight per client connection (HTTP/2 SETTINGS_MAX_CONCURRENT_STREAMS).
   int max_streams_per_connection = 128;
   bool reflection = true;  // serve grpc.reflection.v1alpha
+  // SO_REUSEPORT: off, so a second server on a port in use fails to start
+  // instead of silently taking half of the calls; on only when asked.
+  bool reuse_port = false;
 };
 
 class ServerHost {
