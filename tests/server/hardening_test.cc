@@ -105,8 +105,11 @@ TEST_F(HardeningTest, UnaryRequestsThatCannotBeParsedAreInvalidArgumentNamingThe
 TEST_F(HardeningTest, PlanStreamWithACorruptRequestEndsNamingItsIndex) {
   grpc::ClientContext context;
   SetDeadline(&context, std::chrono::seconds(30));
-  auto stream = grpc::internal::ClientReaderWriterFactory<grpc::ByteBuffer, grpc::ByteBuffer>::Create(
-      channel_.get(), RpcMethod("/tactforce.v1.Planner/PlanStream", RpcMethod::BIDI_STREAMING), &context);
+  // The internal factories return owning raw pointers.
+  std::unique_ptr<grpc::ClientReaderWriter<grpc::ByteBuffer, grpc::ByteBuffer>> stream(
+      grpc::internal::ClientReaderWriterFactory<grpc::ByteBuffer, grpc::ByteBuffer>::Create(
+          channel_.get(), RpcMethod("/tactforce.v1.Planner/PlanStream", RpcMethod::BIDI_STREAMING),
+          &context));
   // The corrupt message's position is drawn per run (2..4).
   std::mt19937_64 rng(::testing::UnitTest::GetInstance()->random_seed());
   const int corrupt = std::uniform_int_distribution<int>(2, 4)(rng);
@@ -155,9 +158,10 @@ grpc::Status StreamRaw(const std::shared_ptr<grpc::Channel>& channel,
   grpc::ClientContext context;
   SetDeadline(&context, std::chrono::seconds(60));
   grpc::ByteBuffer response;
-  auto writer = grpc::internal::ClientWriterFactory<grpc::ByteBuffer>::Create(
-      channel.get(), RpcMethod("/tactforce.v1.Estimator/FitInertia", RpcMethod::CLIENT_STREAMING),
-      &context, &response);
+  std::unique_ptr<grpc::ClientWriter<grpc::ByteBuffer>> writer(
+      grpc::internal::ClientWriterFactory<grpc::ByteBuffer>::Create(
+          channel.get(), RpcMethod("/tactforce.v1.Estimator/FitInertia", RpcMethod::CLIENT_STREAMING),
+          &context, &response));
   for (const grpc::ByteBuffer& m : messages) {
     if (!writer->Write(m)) break;
   }
