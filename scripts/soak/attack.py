@@ -117,9 +117,15 @@ def fit_call(mods, channel, samples, mesh=None, method=None, regions=None, deadl
     first = inertia_pb2.FitInertiaRequest(options=options)
     first.samples.extend(samples)
     stub = est_grpc.EstimatorStub(channel)
+    return timed_call(grpc, lambda: stub.FitInertia(iter([first]), timeout=deadline_s))
+
+
+def timed_call(grpc, call):
+    """(code, seconds) of one RPC: "OK", or the gRPC code with the start of
+    its message."""
     start = time.monotonic()
     try:
-        stub.FitInertia(iter([first]), timeout=deadline_s)
+        call()
         code = "OK"
     except grpc.RpcError as e:
         code = f"{e.code().name} ({e.details()[:100]})"
@@ -171,13 +177,7 @@ def stop_cases(mods, cfg, samples):
     def unary(method, request):
         def call(channel, deadline):
             fn = getattr(planner_grpc.PlannerStub(channel), method)
-            start = time.monotonic()
-            try:
-                fn(request, timeout=deadline)
-                code = "OK"
-            except mods[0].RpcError as e:
-                code = e.code().name
-            return code, time.monotonic() - start
+            return timed_call(mods[0], lambda: fn(request, timeout=deadline))
         return call
     return [(f"FitInertia DENSITY, box mesh, target_regions {regions}", density_fit, 1.0),
             (f"PlanTrajectory IPOPT, {len(traj.steps)} steps", unary("PlanTrajectory", traj), 1.0),
