@@ -10,9 +10,12 @@
 #include <filesystem>
 #include <numeric>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include <assimp/IOSystem.hpp>
+#include <assimp/MemoryIOWrapper.h>
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -120,16 +123,30 @@ absl::StatusOr<std::string> MeshFormatFromPath(const std::string& path) {
 
 namespace {
 
-// The only files assimp may open: none. ReadFileFromMemory wraps the
-// importer's IOSystem in a MemoryIOSystem that serves the buffer and hands
-// every other name (an OBJ's `mtllib /etc/passwd`, a FIFO that blocks the
-// reader forever) to this one, so request bytes never reach the file system.
-class NoFilesIOSystem : public Assimp::IOSystem {
+// The only file assimp may open: the request's bytes, under a name no file
+// statement can spell. Every other name (an OBJ's `mtllib /etc/passwd`, a
+// FIFO that blocks the reader forever, the OBJ reader's fallback of its own
+// name with ".mtl") is refused, so request bytes never reach the file system.
+// assimp's ReadFileFromMemory is not used: its reader serves every name that
+// starts with its magic prefix, so that fallback parsed the OBJ again as MTL
+// (a texture line before `newmtl` then wrote through a null material).
+class OneBufferIOSystem : public Assimp::IOSystem {
  public:
-  bool Exists(const char*) const override { return false; }
+  // An OBJ statement ends at a line end, so no `mtllib` can name this file.
+  static std::string NameFor(const std::string& hint) { return "request\n." + hint; }
+
+  OneBufferIOSystem(std::string name, std::string_view bytes) : name_(std::move(name)), bytes_(bytes) {}
+  bool Exists(const char* file) const override { return file != nullptr && name_ == file; }
   char getOsSeparator() const override { return '/'; }
-  Assimp::IOStream* Open(const char*, const char*) override { return nullptr; }
-  void Close(Assimp::IOStream*) override {}
+  Assimp::IOStream* Open(const char* file, const char* mode) override {
+    if (!Exists(file) || mode == nullptr || mode[0] != 'r') return nullptr;
+    return new Assimp::MemoryIOStream(reinterpret_cast<const uint8_t*>(bytes_.data()), bytes_.size());
+  }
+  void Close(Assimp::IOStream* stream) override { delete stream; }
+
+ private:
+  std::string name_;
+  std::string_view bytes_;
 };
 
 // A binary STL's triangle count against the file size, before assimp reads
@@ -174,15 +191,11 @@ absl::StatusOr<TriangleMesh> ReadMesh(std::string_view bytes, const std::string&
   }
   // No DefaultLogger is created, so assimp logs to its silent NullLogger.
   Assimp::Importer importer;
-  NoFilesIOSystem* no_files = new NoFilesIOSystem;  // owned by the importer from here
-  importer.SetIOHandler(no_files);
+  const std::string file = OneBufferIOSystem::NameFor(hint);
+  importer.SetIOHandler(new OneBufferIOSystem(file, bytes));  // owned by the importer
   // Validation: assimp's readers do not check face indices (a truncated
   // binary PLY has faces pointing past the vertices); FromScene checks again.
-  const aiScene* scene =
-      importer.ReadFileFromMemory(bytes.data(), bytes.size(), aiProcess_ValidateDataStructure, hint.c_str());
-  // Had ReadFileFromMemory been left by an exception, its MemoryIOSystem
-  // would still be installed and ours orphaned: put ours back (deleting it).
-  if (importer.GetIOHandler() != no_files) importer.SetIOHandler(no_files);
+  const aiScene* scene = importer.ReadFile(file, aiProcess_ValidateDataStructure);
   // assimp catches what its readers throw and keeps it: std::bad_alloc
   // becomes ResourceExhausted in ReadMeshBytes rather than a parse error.
   if (scene == nullptr && importer.GetException()) std::rethrow_exception(importer.GetException());

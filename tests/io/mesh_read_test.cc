@@ -423,6 +423,33 @@ TEST_F(MeshRead, ObjMtllibNamingAnExistingFileIsNeverOpened) {
   ::close(watch);
 }
 
+// assimp's OBJ reader, when the mtllib file cannot be opened, falls back to
+// the OBJ's own name with ".mtl"; assimp's memory reader served every name
+// starting with its magic prefix, so the OBJ itself was parsed as MTL, where
+// a texture statement before any `newmtl` wrote through a null material
+// (found by the mesh fuzzer). Every MTL statement, in a child process so a
+// crash fails this test instead of the binary.
+TEST_F(MeshRead, ObjIsNeverReadAgainAsItsOwnMaterialLibrary) {
+  std::mt19937 rng(4242);
+  const Solid box = RandomBox(rng, true);
+  absl::StatusOr<TriangleMesh> plain = ReadMeshBytes(ObjOf(box, ""), "obj", "box.obj");
+  ASSERT_TRUE(plain.ok()) << plain.status();
+  for (const char* statement : {"map_Pm x.png", "map_Kd x.png", "map_Pr x", "bump x", "Ns 10", "Kd 1 0 0",
+                                "map_Ks x", "disp x", "refl -type sphere x", "Pm 0.5", "Ke 1 1 1"}) {
+    SCOPED_TRACE(statement);
+    const std::string obj = ObjOf(box, absl::StrCat("mtllib missing.mtl\n", statement, "\n"));
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+      absl::StatusOr<TriangleMesh> mesh = ReadMeshBytes(obj, "obj", "box.obj");
+      ::_exit(mesh.ok() && mesh->triangles == plain->triangles ? 0 : 1);
+    }
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    ASSERT_TRUE(WIFEXITED(status)) << "the read crashed with signal " << (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+    EXPECT_EQ(WEXITSTATUS(status), 0) << "the OBJ with an MTL statement did not read as the plain OBJ";
+  }
+}
+
 // ----------------------------------------------------- memory and exceptions
 
 // Runs `body` in a child process limited to `address_space` bytes more than
