@@ -344,6 +344,29 @@ TEST_F(MeshRead, PlyElementsWithoutDataOrOverTheLimitAreRefused) {
                                                   kMaxMeshVertices, " vertices"));
 }
 
+// Without a vertex element (or without faces) assimp read other elements'
+// data as vertices and allocated 1.6 GB for a 244-byte file (the fuzzer's
+// find, kept here with its bytes): refused from the header.
+TEST_F(MeshRead, PlyWithoutVerticesOrFacesIsRefusedFromTheHeader) {
+  std::string body(48, '\0');
+  body += std::string("\0\0\0\0\0\0\x80\x3f\0\x28\x6b\xee", 12);
+  const std::string found = absl::StrCat(
+      "ply\nformat binary_little_endian 1.0\nelement verstptex 4\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uint int vertex_indices\nend_header\n",
+      body);
+  absl::StatusOr<TriangleMesh> mesh = ReadMeshBytes(found, "ply", "found.ply");
+  ASSERT_FALSE(mesh.ok());
+  EXPECT_EQ(mesh.status().message(),
+            "found.ply: PLY header declares no vertices (element 'vertex' missing or empty)");
+  mesh = ReadMeshBytes("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                       "property float z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n"
+                       "0 0 0\n1 0 0\n0 1 0\n",
+                       "ply", "points.ply");
+  ASSERT_FALSE(mesh.ok());
+  EXPECT_EQ(mesh.status().message(),
+            "points.ply: PLY header declares no faces (element 'face' or 'tristrips' missing or empty)");
+}
+
 // ---------------------------------------------------------------- STL
 
 TEST_F(MeshRead, BinaryStlTriangleCountMustMatchTheFileSize) {
