@@ -96,8 +96,8 @@ std::string FormatTable(const std::vector<DemoRow>& rows, int repeat, double tol
       absl::StrAppendFormat(&out, "  %-12s %10.4f %10.4f %10.4f %10.4f\n", name, r.forces(i).x(),
                             r.forces(i).y(), r.forces(i).z(), fn);
     }
-    absl::StrAppendFormat(&out, "  objective %.6g N^2, min margin %.6g N\n", r.objective(),
-                          r.min_margin());
+    if (r.status() == v1::PLAN_STATUS_OPTIMAL)
+      absl::StrAppendFormat(&out, "  objective %.6g N^2, min margin %.6g N\n", r.objective(), r.min_margin());
     if (r.has_cross_check()) {
       const v1::CrossCheck& cc = r.cross_check();
       absl::StrAppendFormat(&out,

@@ -62,8 +62,10 @@ std::string FormatPlanTable(const v1::PlanRequest& request,
     out += "\n";
   }
 
-  absl::StrAppendFormat(&out, "objective:   %.6g N^2\n", response.objective());
-  absl::StrAppendFormat(&out, "min margin:  %.6g N\n", response.min_margin());
+  if (response.status() == v1::PLAN_STATUS_OPTIMAL) {  // other answers carry no forces, so no objective
+    absl::StrAppendFormat(&out, "objective:   %.6g N^2\n", response.objective());
+    absl::StrAppendFormat(&out, "min margin:  %.6g N\n", response.min_margin());
+  }
   absl::StrAppendFormat(&out, "solver:      %s\n", SolverName(response.solver()));
   absl::StrAppendFormat(&out, "time:        %d us\n", response.solve_time_us());
   absl::StrAppendFormat(&out, "iterations:  %d\n", response.iterations());

@@ -35,6 +35,15 @@ double MinMargin(const PreparedProblem& prepared, const PlanOptions& options,
   return std::isfinite(margin) ? margin : 0.0;
 }
 
+// A margin of round-off size (an active row's slack, e.g. -2.8e-17 N) is
+// reported as exactly 0 so no output reads like a violation: below
+// kMarginRoundOff times the largest force (at least 1 N) no backend resolves it.
+double SnapRoundOff(double margin, const std::vector<Vec3>& forces) {
+  double scale = 1.0;
+  for (const Vec3& f : forces) scale = std::max(scale, f.lpNorm<Eigen::Infinity>());
+  return std::abs(margin) <= kMarginRoundOff * scale ? 0.0 : margin;
+}
+
 void ResetResult(PlanResult* result) {
   result->status = PlanStatus::kSolverFailure;
   result->message.clear();
@@ -77,7 +86,7 @@ void FinishResult(const PreparedProblem& prepared, const PlanOptions& options,
     result->normal_forces[i] = problem.contacts[i].normal.dot(result->forces[i]);
     result->objective += result->forces[i].squaredNorm();
   }
-  result->min_margin = MinMargin(prepared, options, result->forces);
+  result->min_margin = SnapRoundOff(MinMargin(prepared, options, result->forces), result->forces);
   // Never an OPTIMAL answer that is not a number: overflow anywhere in a
   // backend becomes a named failure instead of a silent wrong answer.
   if (!std::isfinite(result->objective) || !std::isfinite(result->min_margin)) {

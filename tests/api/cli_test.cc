@@ -12,7 +12,10 @@
 #include <gtest/gtest.h>
 
 #include "support/cli_fixture.h"
+#include "google/protobuf/util/message_differencer.h"
+#include "tactforce/api/convert.h"
 #include "tactforce/api/json.h"
+#include "tactforce/planner/examples.h"
 
 namespace tactforce {
 namespace {
@@ -71,6 +74,31 @@ TEST_F(CliTest, ShippedExampleRequestPlans) {
   const CliRun run = Tactforce({"plan", "--json", "--local", "--request", example.string()});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_EQ(ParseResponse(run.out).status(), v1::PLAN_STATUS_OPTIMAL);
+}
+
+// The shipped request is the built-in sphere-pinch that the demo plans, so
+// the first numbers a user sees agree everywhere.
+TEST_F(CliTest, ShippedExampleIsTheBuiltInSpherePinch) {
+  const fs::path example = fs::path(EnvOr("TACTFORCE_SOURCE_DIR", TACTFORCE_DEFAULT_SOURCE_DIR)) /
+                           "client" / "examples" / "sphere_pinch.json";
+  std::ifstream in(example, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  absl::StatusOr<v1::PlanRequest> shipped = api::ParsePlanRequestJson(text.str(), example.string());
+  ASSERT_TRUE(shipped.ok()) << shipped.status();
+  for (const planner::ExampleGrasp& g : planner::BuiltInGrasps()) {
+    if (g.name != "sphere-pinch") continue;
+    // Both through the same writer, so defaults the file leaves out compare equal.
+    absl::StatusOr<planner::PlanProblem> problem = api::ToProblem(*shipped);
+    absl::StatusOr<planner::PlanOptions> options = api::ToOptions(*shipped);
+    ASSERT_TRUE(problem.ok() && options.ok()) << problem.status() << options.status();
+    const v1::PlanRequest file = api::ToRequest(*problem, *options, planner::SolverKind::kGeometric);
+    const v1::PlanRequest builtin = api::ToRequest(g.problem, g.options, planner::SolverKind::kGeometric);
+    EXPECT_TRUE(google::protobuf::util::MessageDifferencer::Equivalent(file, builtin))
+        << "shipped:\n" << file.DebugString() << "built-in:\n" << builtin.DebugString();
+    return;
+  }
+  FAIL() << "no built-in sphere-pinch";
 }
 
 TEST_F(CliTest, TableFormat) {

@@ -64,6 +64,9 @@ TEST(TableTest, InfeasiblePlanWithoutForcesAndWithCrossCheck) {
   EXPECT_THAT(table, HasSubstr("cross-check: agree"));
   EXPECT_THAT(table, HasSubstr("ipopt 900 us"));
   EXPECT_THAT(table, HasSubstr("ipopt status INFEASIBLE"));
+  // No forces, so no objective or margin (they read as "0 N^2" otherwise).
+  EXPECT_THAT(table, Not(HasSubstr("objective:")));
+  EXPECT_THAT(table, Not(HasSubstr("min margin:")));
 }
 
 }  // namespace

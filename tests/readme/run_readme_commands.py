@@ -1,5 +1,7 @@
 #!/usr/bin/env python3
-"""Runs every shell command block of README.md, as a new user would paste it.
+"""Runs every shell command block of README.md, as a new user would paste it,
+and checks that every block marked `<!-- readme-test: file: PATH -->` (the
+line before its fence) is exactly the shipped file PATH.
 
 Each ```sh block is run with bash (set -euo pipefail) from the repository
 root, except blocks preceded by a line `<!-- readme-test: skip: REASON -->`
@@ -26,6 +28,7 @@ import tempfile
 import time
 
 SKIP = re.compile(r"<!--\s*readme-test:\s*skip:\s*(.+?)\s*-->")
+FILE = re.compile(r"<!--\s*readme-test:\s*file:\s*(\S+)\s*-->")
 FENCE = re.compile(r"^```(\w*)\s*$")
 
 
@@ -52,6 +55,35 @@ def shell_blocks(text):
             blocks.append((start + 1, "\n".join(lines[start + 1:j]), skip))
         i = j + 1
     return blocks
+
+
+def file_blocks(text):
+    """[(line number, shipped path, block text)] of the blocks marked as files."""
+    lines, out = text.splitlines(), []
+    for i in range(1, len(lines)):
+        m = FILE.search(lines[i - 1])
+        if m and FENCE.match(lines[i]):
+            j = i + 1
+            while j < len(lines) and not lines[j].startswith("```"):
+                j += 1
+            out.append((i + 1, m.group(1), "\n".join(lines[i + 1:j]) + "\n"))
+    return out
+
+
+def check_file_blocks(text, source_dir):
+    """Number of marked blocks that differ from their file (each printed)."""
+    failures = 0
+    for line, path, block in file_blocks(text):
+        try:
+            shipped = open(os.path.join(source_dir, path)).read()
+        except OSError as e:
+            shipped = f"<cannot read: {e}>"
+        if shipped != block:
+            failures += 1
+            print(f"README.md:{line}: the block differs from the shipped {path}")
+        else:
+            print(f"README.md:{line}: the block is the shipped {path}")
+    return failures
 
 
 def start_server(bin_dir):
@@ -82,11 +114,13 @@ def main():
     parser.add_argument("--source-dir", required=True)
     parser.add_argument("--list", action="store_true", help="only list the blocks")
     args = parser.parse_args()
-    blocks = shell_blocks(open(args.readme).read())
+    text = open(args.readme).read()
+    blocks = shell_blocks(text)
     if args.list:
         for line, code, skip in blocks:
             print(f"README.md:{line}: {'skip: ' + skip if skip else 'run'}: {code.splitlines()[0]}")
         return 0
+    file_failures = check_file_blocks(text, args.source_dir)
     work = tempfile.mkdtemp(prefix="tactforce_readme_")
     server, address = start_server(os.path.abspath(args.bin_dir))
     failures, ran = 0, 0
@@ -110,8 +144,8 @@ def main():
         server.terminate()
         server.wait(timeout=30)
         shutil.rmtree(work, ignore_errors=True)
-    print(f"{ran} blocks run, {failures} failed")
-    return 1 if failures or ran == 0 else 0
+    print(f"{ran} blocks run, {failures} failed; {file_failures} shipped-file blocks differ")
+    return 1 if failures or file_failures or ran == 0 else 0
 
 
 if __name__ == "__main__":

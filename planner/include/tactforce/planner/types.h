@@ -105,6 +105,9 @@ struct CrossCheckReport {
   std::string ipopt_message;
 };
 
+// Relative size below which a margin is round-off (see PlanResult::min_margin).
+inline constexpr double kMarginRoundOff = 1e-9;
+
 // The answer. Infeasibility is a result, not an error.
 struct PlanResult {
   PlanStatus status = PlanStatus::kSolverFailure;
@@ -113,7 +116,9 @@ struct PlanResult {
   std::vector<double> normal_forces;       // n_i . f_i (N)
   std::vector<double> normal_force_sigma;  // rho_n,i (N)
   double objective = 0.0;                  // sum |f_i|^2 (N^2)
-  double min_margin = 0.0;  // smallest slack of the tightened rows (N)
+  // Smallest slack of the tightened rows (N); exactly 0 when within round-off
+  // (|margin| <= kMarginRoundOff x max(1 N, largest force component)).
+  double min_margin = 0.0;
   SolverKind solver = SolverKind::kGeometric;
   int64_t solve_time_us = 0;
   int iterations = 0;
