@@ -9,6 +9,7 @@
 #include "CLI/CLI.hpp"
 #include "audit_command.h"
 #include "cli_common.h"
+#include "cli_suggest.h"
 #include "demo_command.h"
 #include "estimate_command.h"
 #include "experiment_command.h"
@@ -77,11 +78,12 @@ int Main(int argc, char** argv) {
   } catch (const CLI::Success& e) {  // --help, --version
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::string what = e.what();
+    const ArgumentHint hint = HintForArguments(app, argc, argv);
+    std::string what = hint.message.empty() ? std::string(e.what()) : hint.message;
     for (char& c : what) {
       if (c == '\n') c = ' ';
     }
-    std::cerr << "error: " << what << " (see tactforce --help)" << std::endl;
+    std::cerr << "error: " << what << " (see " << hint.command_path << " --help)" << std::endl;
     return kExitBadInput;
   }
 

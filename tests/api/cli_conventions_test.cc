@@ -4,6 +4,7 @@
 // standard input, per-command examples in --help, and the command list for
 // a bare `tactforce`.
 #include <filesystem>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -159,6 +160,43 @@ TEST_F(CliConventionsTest, HelpShowsTheCommandsOwnExamplesAndBareTactforceListsC
   EXPECT_THAT(friction.out, Not(HasSubstr("tactforce demo")));  // not the top-level footer
   const CliRun estimate = Tactforce({"estimate", "--help"});
   EXPECT_THAT(estimate.out, HasSubstr("tactforce estimate --local --request client/examples/estimate_request.json"));
+}
+
+// A misspelt command or flag gets the nearest names, like a misspelt JSON
+// field. The misspellings are drawn (two neighbouring letters swapped) from
+// a seed at test time.
+TEST_F(CliConventionsTest, MisspeltCommandsAndFlagsGetDidYouMean) {
+  struct Case {
+    std::vector<std::string> before;  // the command path
+    std::string name;                 // a real command or flag
+  };
+  const std::vector<Case> cases = {
+      {{}, "plan"},           {{}, "inertia"},           {{}, "experiment"},
+      {{"simulate"}, "inertia"}, {{"experiment"}, "grasp"}, {{"plan"}, "--local"},
+      {{"plan"}, "--request"}, {{"inertia"}, "--method"}, {{"experiment", "grasp"}, "--trials"},
+      {{"load"}, "--concurrency"}, {{"audit"}, "--heldout"}, {{"simulate", "inertia"}, "--contacts"},
+  };
+  std::mt19937 rng(::testing::UnitTest::GetInstance()->random_seed() + 25);
+  for (const Case& c : cases) {
+    std::string typo = c.name;
+    const size_t first = c.name[0] == '-' ? 2 : 0;
+    const size_t at = first + std::uniform_int_distribution<size_t>(0, c.name.size() - first - 2)(rng);
+    std::swap(typo[at], typo[at + 1]);
+    if (typo == c.name) typo.insert(at, "x");  // a doubled letter swaps into itself
+    std::vector<std::string> args = c.before;
+    args.push_back(typo);
+    const CliRun run = Tactforce(args);
+    SCOPED_TRACE(typo);
+    EXPECT_EQ(run.exit_code, 2);
+    const std::string kind = c.name[0] == '-' ? "flag" : "command";
+    EXPECT_THAT(run.err, HasSubstr("unknown " + kind + " '" + typo + "'"));
+    EXPECT_THAT(run.err, HasSubstr("did you mean"));
+    EXPECT_THAT(run.err, HasSubstr("'" + c.name + "'"));
+  }
+  // Values are not flags: a negative number after a numeric flag is its value.
+  const CliRun negative = Tactforce({"simulate", "inertia", "--force-variance", "-1", "--out",
+                                     (dir() / "o").string()});
+  EXPECT_THAT(negative.err, Not(HasSubstr("unknown flag")));
 }
 
 }  // namespace
