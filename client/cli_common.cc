@@ -2,6 +2,8 @@
 // vectors, and reporting an error as one line with its exit code.
 #include "cli_common.h"
 
+#include <unistd.h>
+
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -14,6 +16,7 @@
 #include <sstream>
 #include <vector>
 
+#include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 
@@ -176,6 +179,24 @@ absl::StatusOr<Eigen::Vector3d> ParseVec3(const std::string& text, const std::st
   }
   if (v.size() != 3) return absl::InvalidArgumentError(absl::StrCat(flag, ": '", text, "' is not x,y,z"));
   return Eigen::Vector3d(v[0], v[1], v[2]);
+}
+
+absl::Status CheckPlotPath(const std::string& path, const std::string& flag) {
+  if (path.empty()) return absl::OkStatus();
+  const std::filesystem::path file(path);
+  if (absl::AsciiStrToLower(file.extension().string()) != ".svg") {
+    return absl::InvalidArgumentError(absl::StrCat(flag, ": '", path,
+                                                   "': pictures are SVG; give a .svg name (rsvg-convert makes a PNG)"));
+  }
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec))
+    return absl::InvalidArgumentError(absl::StrCat(flag, ": cannot write '", path, "': it is a directory"));
+  const std::string folder = file.parent_path().empty() ? "." : file.parent_path().string();
+  if (!std::filesystem::is_directory(folder, ec))
+    return absl::InvalidArgumentError(absl::StrCat(flag, ": directory '", folder, "' of '", path, "' does not exist"));
+  if (::access(folder.c_str(), W_OK) != 0)
+    return absl::InvalidArgumentError(absl::StrCat(flag, ": cannot write '", path, "': ", std::strerror(errno)));
+  return absl::OkStatus();
 }
 
 }  // namespace tactforce::cli

@@ -37,6 +37,12 @@ enum ExitCode : int {
 // Exit code for a failed call with `code` (OK -> kExitOk).
 int ExitCodeFor(absl::StatusCode code);
 
+// A picture's output path, checked before any work: empty is fine (no
+// picture); otherwise an .svg name (tactforce draws SVG only; a .png name
+// would get SVG bytes) that is not a directory, in a writable folder.
+// Errors name `flag`: "--plot: 'p.png': ...".
+absl::Status CheckPlotPath(const std::string& path, const std::string& flag = "--plot");
+
 // Whole contents of `path`; "-" reads standard input. Errors name the path.
 absl::StatusOr<std::string> ReadInput(const std::string& path,
                                       const std::string& flag = "--request");

@@ -238,18 +238,6 @@ absl::StatusOr<v1::InertiaFitOptions> BuildOptions(const InertiaArgs& args, std:
   return o;
 }
 
-// --plot: the directory must exist (checked before the fit).
-absl::Status CheckPlotPath(const std::string& path) {
-  if (path.empty()) return absl::OkStatus();
-  std::filesystem::path parent = std::filesystem::path(path).parent_path();
-  if (parent.empty()) parent = ".";
-  std::error_code ec;
-  if (!std::filesystem::is_directory(parent, ec))
-    return absl::InvalidArgumentError(
-        absl::StrCat("--plot: directory '", parent.string(), "' of '", path, "' does not exist"));
-  return absl::OkStatus();
-}
-
 // Writes the SVG of the fit on the mesh. `fit` is the library's result
 // (local) or the server's answer converted back; the latter has no region
 // model, which is rebuilt from the same mesh and options (deterministic).

@@ -299,7 +299,7 @@ int RunLoadCommand(const LoadArgs& args) {
   absl::StatusOr<LoadSpec> spec = LoadSpecFromFlags(args);
   if (!spec.ok()) return ReportError(spec.status());
   if (!args.plot_path.empty()) {
-    if (absl::Status s = CheckLoadPlotPath(args.plot_path); !s.ok()) return ReportError(s);
+    if (absl::Status s = CheckPlotPath(args.plot_path); !s.ok()) return ReportError(s);
   }
   absl::StatusOr<std::vector<std::shared_ptr<grpc::Channel>>> channels =
       ConnectLoadChannels(args.connection, args.connection.server, args.channels, *spec);

@@ -229,16 +229,4 @@ absl::Status WriteLoadPlot(const LoadReport& report, const std::string& target,
   }
   return absl::OkStatus();
 }
-
-absl::Status CheckLoadPlotPath(const std::string& path) {
-  std::filesystem::path parent = std::filesystem::path(path).parent_path();
-  if (parent.empty()) parent = ".";
-  std::error_code ec;
-  if (!std::filesystem::is_directory(parent, ec)) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--plot: directory '", parent.string(), "' of '", path, "' does not exist"));
-  }
-  return absl::OkStatus();
-}
-
 }  // namespace tactforce::cli

@@ -28,8 +28,5 @@ std::string LoadPlotSvg(const LoadReport& report, const std::string& target);
 absl::Status WriteLoadPlot(const LoadReport& report, const std::string& target,
                            const std::string& path);
 
-// --plot checked before the run: InvalidArgument naming --plot when the
-// directory does not exist.
-absl::Status CheckLoadPlotPath(const std::string& path);
 
 }  // namespace tactforce::cli

@@ -63,22 +63,6 @@ absl::StatusOr<std::unique_ptr<PlanBackend>> SelectBackend(const PlanArgs& args)
   return MakeRemoteBackend(args.connection);
 }
 
-// --plot before any work: a usage error naming --plot when the file could
-// not be written (a directory, or a folder that is missing or read-only).
-absl::Status CheckPlotPath(const std::string& path) {
-  if (path.empty()) return absl::OkStatus();
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
-    return absl::InvalidArgumentError(absl::StrCat("--plot: cannot write '", path, "': it is a directory"));
-  }
-  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
-  const std::string folder = parent.empty() ? "." : parent.string();
-  if (::access(folder.c_str(), W_OK) != 0) {
-    return absl::InvalidArgumentError(absl::StrCat("--plot: cannot write '", path, "': ", std::strerror(errno)));
-  }
-  return absl::OkStatus();
-}
-
 // The picture, written to a temporary name and renamed when complete
 // (io::WriteTextFile); errors name --plot.
 absl::Status WritePlot(const std::string& path, const absl::StatusOr<std::string>& svg) {

@@ -8,6 +8,8 @@
 #include "tactforce/io/json.h"
 #include "tactforce/io/suggest.h"
 
+#include <cmath>
+#include <cstdlib>
 #include <string>
 #include <utility>
 #include <vector>
@@ -92,8 +94,8 @@ class FieldChecker {
         !absl::StartsWith(field->message_type()->full_name(), "google.protobuf.")) {
       return Message(value, field->message_type(), path);
     }
-    if (field->type() != FieldDescriptor::TYPE_ENUM) return absl::OkStatus();  // protobuf checks scalars
-    if (value.is_number()) return absl::OkStatus();                           // numeric enum values
+    if (field->type() != FieldDescriptor::TYPE_ENUM) return Scalar(value, field, path);
+    if (value.is_number()) return absl::OkStatus();  // numeric enum values
     if (!value.is_string()) return Error(value.line(), value.column(), path, "expected an enum name (a string)");
     const EnumDescriptor* type = field->enum_type();
     if (type->FindValueByName(value.string()) != nullptr) return absl::OkStatus();
@@ -102,6 +104,53 @@ class FieldChecker {
     return Error(value.line(), value.column(), path,
                  absl::StrCat("unknown ", type->name(), " value '", value.string(), "'",
                               io::DidYouMean(value.string(), names)));
+  }
+
+  // The JSON kind of a scalar, so a wrong type keeps its line and column
+  // (protobuf's own message has neither). Quoted numbers and "NaN" /
+  // "Infinity" are proto3 JSON; their values are left to protobuf.
+  absl::Status Scalar(const io::JsonValue& value, const FieldDescriptor* field, const std::string& path) const {
+    const std::string type = field->type_name();
+    switch (field->cpp_type()) {
+      case FieldDescriptor::CPPTYPE_DOUBLE:
+      case FieldDescriptor::CPPTYPE_FLOAT:
+        if (value.is_number() || (value.is_string() && QuotedNumber(value.string(), false)))
+          return absl::OkStatus();
+        return Error(value.line(), value.column(), path,
+                     absl::StrCat("expected a number (", type, "), got ", Kind(value)));
+      case FieldDescriptor::CPPTYPE_INT32:
+      case FieldDescriptor::CPPTYPE_INT64:
+      case FieldDescriptor::CPPTYPE_UINT32:
+      case FieldDescriptor::CPPTYPE_UINT64:
+        if (value.is_string() && QuotedNumber(value.string(), true)) return absl::OkStatus();
+        if (value.is_number() && value.number() == std::floor(value.number())) return absl::OkStatus();
+        return Error(value.line(), value.column(), path,
+                     absl::StrCat("expected an integer (", type, "), got ", Kind(value)));
+      case FieldDescriptor::CPPTYPE_BOOL:
+        if (value.is_bool()) return absl::OkStatus();
+        return Error(value.line(), value.column(), path, absl::StrCat("expected true or false, got ", Kind(value)));
+      case FieldDescriptor::CPPTYPE_STRING:
+        if (value.is_string()) return absl::OkStatus();
+        return Error(value.line(), value.column(), path, absl::StrCat("expected a string, got ", Kind(value)));
+      default:
+        return absl::OkStatus();
+    }
+  }
+
+  // A proto3 JSON number in quotes: "0.5", "-3", "NaN", "Infinity".
+  static bool QuotedNumber(const std::string& text, bool integer) {
+    if (!integer && (text == "NaN" || text == "Infinity" || text == "-Infinity")) return true;
+    char* end = nullptr;
+    const double v = std::strtod(text.c_str(), &end);
+    return !text.empty() && end == text.c_str() + text.size() && (!integer || v == std::floor(v));
+  }
+  static std::string Kind(const io::JsonValue& value) {
+    if (value.is_string()) return absl::StrCat("the string \"", value.string().substr(0, 40), "\"");
+    if (value.is_number()) return absl::StrCat("the number ", value.number());
+    if (value.is_bool()) return value.boolean() ? "true" : "false";
+    if (value.is_object()) return "an object";
+    if (value.is_array()) return "an array";
+    return "null";
   }
 
   static const FieldDescriptor* FindField(const Descriptor* type, const std::string& key) {

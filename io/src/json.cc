@@ -10,6 +10,7 @@
 // 1000000.0) and uses nlohmann's string escaping.
 #include "tactforce/io/json.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -21,6 +22,7 @@
 #include <nlohmann/json.hpp>
 
 #include "absl/container/flat_hash_set.h"
+#include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/match.h"
 #include "absl/strings/string_view.h"
@@ -176,8 +178,14 @@ class JsonTreeBuilder {
     value.column_ = Column(progress_->last_significant);
     return value;
   }
-  // A scalar, at the line of its last byte (its only line).
-  bool Add(JsonValue value) { return Place(At(std::move(value))); }
+  // A scalar, at its first byte (the lexer has read to its last byte or
+  // the one after; a token never spans lines).
+  bool Add(JsonValue value) {
+    const bool quoted = value.is_string();
+    value = At(std::move(value));
+    value.column_ = Column(ScalarStart(progress_->last_significant, quoted));
+    return Place(std::move(value));
+  }
   // Into the open container, or as the document.
   bool Place(JsonValue value) {
     if (open_.empty()) {
@@ -206,6 +214,16 @@ class JsonTreeBuilder {
     return Place(std::move(value));
   }
   // Offset of the opening quote of the string whose closing quote is at `end`.
+  // First byte of the unquoted scalar (number, true, false, null) that ends
+  // at `end` or right before it.
+  size_t ScalarStart(size_t end, bool quoted) const {
+    if (quoted) return KeyStart(end);
+    auto in_token = [](char c) { return absl::ascii_isalnum(c) || c == '+' || c == '-' || c == '.'; };
+    size_t i = std::min(end, text_.size() - 1);
+    if (i > 0 && !in_token(text_[i])) --i;
+    while (i > 0 && in_token(text_[i - 1])) --i;
+    return i;
+  }
   size_t KeyStart(size_t end) const {
     for (size_t i = end; i-- > 0;) {
       if (text_[i] != '"') continue;

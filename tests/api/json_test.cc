@@ -1,8 +1,13 @@
 #include "tactforce/api/json.h"
 
+#include <random>
+#include <string>
+#include <vector>
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "absl/strings/str_cat.h"
 #include "google/protobuf/util/message_differencer.h"
 #include "tactforce/api/convert.h"
 
@@ -146,6 +151,41 @@ TEST(JsonTest, ErrorsNameFileLineColumnAndSuggestNames) {
   EXPECT_TRUE(ParseJson(R"({"coneSides": 8, "contacts": [{"minNormalForce": 1}]})", &request, "a.json").ok());
   absl::Status wrong_type = ParseJson(R"({"cone_sides": "many"})", &request, "a.json");
   EXPECT_THAT(std::string(wrong_type.message()), HasSubstr("cone_sides"));
+}
+
+// A value of the wrong JSON kind keeps its file:line:column like a misspelt
+// name (protobuf's own message has neither). Where the value sits is drawn
+// from a seed at test time.
+TEST(JsonTest, WrongValueTypesNameFileLineColumn) {
+  struct Case {
+    std::string field, value, path, what;
+  };
+  const std::vector<Case> cases = {
+      {R"("object": {"mass": )", R"("heavy"})", "object.mass", R"(expected a number (double), got the string "heavy")"},
+      {R"("cone_sides": )", "4.5", "cone_sides", "expected an integer (uint32), got the number 4.5"},
+      {R"("cone_sides": )", R"("12x")", "cone_sides", R"(expected an integer (uint32), got the string "12x")"},
+      {R"("contacts": [{"name": )", "3}]", "contacts[0].name", "expected a string, got the number 3"},
+      {R"("contacts": [{"friction": )", "true}]", "contacts[0].friction", "expected a number (double), got true"},
+      {R"("object": {"com": {"x": )", "[1]}}", "object.com.x", "expected a number (double), got an array"},
+  };
+  std::mt19937 rng(::testing::UnitTest::GetInstance()->random_seed() + 7);
+  for (const Case& c : cases) {
+    const int blank_lines = std::uniform_int_distribution<int>(0, 5)(rng);
+    const int indent = std::uniform_int_distribution<int>(0, 8)(rng);
+    const std::string prefix = std::string("{") + std::string(blank_lines, '\n') + std::string(indent, ' ') + c.field;
+    const std::string text = prefix + c.value + "}";
+    SCOPED_TRACE(text);
+    v1::PlanRequest request;
+    const absl::Status status = ParseJson(text, &request, "w.json");
+    ASSERT_FALSE(status.ok());
+    const size_t line_start = blank_lines > 0 ? prefix.rfind('\n') + 1 : 0;
+    const size_t column = prefix.size() - line_start + 1;  // 1-based, of the value
+    const std::string located = absl::StrCat("w.json:", blank_lines + 1, ":", column, ": ");
+    EXPECT_EQ(std::string(status.message()), located + c.path + ": " + c.what);
+  }
+  // Quoted numbers and the special values are proto3 JSON and stay accepted.
+  v1::PlanRequest request;
+  EXPECT_TRUE(ParseJson(R"({"object": {"mass": "0.5", "com": {"x": "NaN"}}, "cone_sides": "8"})", &request).ok());
 }
 
 TEST(JsonTest, RequestJsonRoundTrip) {

@@ -86,6 +86,26 @@ TEST_F(PlotCliTest, UnwritablePlotIsAUsageErrorNamingTheFlag) {
   EXPECT_TRUE(Files().empty());
 }
 
+// Pictures are SVG: a .png (or any non-.svg) name is refused before any work
+// by every command with --plot, instead of SVG bytes in a .png file.
+TEST_F(PlotCliTest, NonSvgPlotNamesAreRefusedByEveryCommand) {
+  const std::string png = (plots() / "picture.png").string();
+  const std::vector<std::vector<std::string>> commands = {
+      {"plan", "--local", "--request", Example("sphere_pinch.json"), "--plot", png},
+      {"plan", "--local", "--trajectory", Example("wrench_lift_trajectory.json"), "--plot", png},
+      {"inertia", "--csv", Example("inertia_log.csv"), "--mesh", Example("inertia_box.stl"), "--method", "density",
+       "--plot", png},
+      {"load", "--target", "127.0.0.1:1", "--rpc", "plan", "-n", "1", "--plot", png},
+  };
+  for (const std::vector<std::string>& args : commands) {
+    const CliRun run = Tactforce(args);
+    SCOPED_TRACE(args[0]);
+    ExpectBadInput(run);
+    EXPECT_THAT(run.err, HasSubstr("--plot: '" + png + "': pictures are SVG"));
+  }
+  EXPECT_TRUE(Files().empty());
+}
+
 TEST_F(PlotCliTest, HelpDescribesThePlot) {
   const CliRun run = Tactforce({"plan", "--help"});
   EXPECT_EQ(run.exit_code, 0);

@@ -50,8 +50,8 @@ class JsonValue {
   const std::vector<std::pair<std::string, JsonValue>>& members() const { return members_; }
   const JsonValue* Find(std::string_view key) const;  // nullptr when absent
   int line() const { return line_; }                  // 1-based line where it starts; 0 if built in code
-  // 1-based byte column of its last byte on that line (scalars) or of its
-  // '{' / '[' (containers); 0 if built in code.
+  // 1-based byte column of its first byte (a string's opening quote, a
+  // container's '{' / '['); 0 if built in code.
   int column() const { return column_; }
   struct Position {
     int line = 0, column = 0;  // 1-based; 0 if built in code
