@@ -149,14 +149,14 @@ absl::Status InHandSim::Simulate(const std::function<void(double)>& progress, In
   int next = 0;
   for (long k = 0; k <= total && next < n_samples; ++k) {
     const double t = k * dt - c.settle;
-    if (t >= next / c.rate - 0.5 * dt) {
+    if (k % per_tick == 0) ControlTick(t);
+    ApplyForces(t);
+    if (t >= next / c.rate - 0.5 * dt) {  // the forces and accelerations this step will use
       mj_forward(m_, d_);
       Log(t, out);
       ++next;
       if (progress && next % 100 == 0) progress(static_cast<double>(next) / n_samples);
     }
-    if (k % per_tick == 0) ControlTick(t);
-    ApplyForces(t);
     mj_step(m_, d_);
     if (!std::isfinite(d_->qpos[obj_q_])) return absl::InternalError("mujoco: simulation diverged");
   }
@@ -171,18 +171,6 @@ void InHandSim::Log(double t, InHandRun* out) {
   row.orientation = Eigen::Quaterniond(q[3], q[4], q[5], q[6]).normalized();
   LogContacts(t, row.position, row.orientation.toRotationMatrix(), &row, out);
   NewtonEulerResidual(row, &out->stats);
-  if (getenv("INHAND_DEBUG") && samples_ % 25 == 0) {
-    const Motion mo = s_.MotionAt(t);
-    const Matrix3d R = row.orientation.toRotationMatrix();
-    fprintf(stderr, "t %.2f dp %.2f mm drot %.3f deg |", t, 1e3 * (row.position - mo.p).norm(),
-            Eigen::AngleAxisd(R * mo.R.transpose()).angle() * 57.3);
-    for (int i = 0; i < kFingers; ++i) {
-      const Vector3d tip(d_->xpos + 3 * body_[i]);
-      const Vector3d rel = R.transpose() * (tip - row.position) - s_.contact_point[i];
-      fprintf(stderr, " tip%d %.2f,%.2f,%.2f corr %.2f", i, 1e3 * rel.x(), 1e3 * rel.y(), 1e3 * rel.z(), 1e3 * corr_[i].norm());
-    }
-    fprintf(stderr, "\n");
-  }
   out->truth_log.push_back(std::move(row));
   ++samples_;
 }
