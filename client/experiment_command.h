@@ -8,6 +8,7 @@
 
 #include "CLI/CLI.hpp"
 #include "cli_common.h"
+#include "experiment_ablation_command.h"
 #include "experiment_inhand_command.h"
 
 namespace tactforce::cli {
@@ -34,6 +35,7 @@ struct ExperimentArgs {
   CLI::App* grasp = nullptr;
   CLI::App* slope = nullptr;
   InHandArgs inhand;                // `experiment inhand`
+  AblationArgs ablation;            // `experiment ablation`
 };
 CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args);
 int RunExperiment(const ExperimentArgs& args);
