@@ -201,6 +201,7 @@ void InHandSim::LogContacts(double t, const Vector3d& p, const Matrix3d& R, InHa
 // The logged sample: tracked pose, sensed forces and points in the tracked frame.
 void InHandSim::SenseSample(double t, const InHandTruthRow& row, const std::array<Vector3d, kFingers>& fw,
                             const std::array<Vector3d, kFingers>& pw, InHandRun* out) {
+  sense_.Advance();
   std::array<Vector3d, kFingers> tips;
   std::array<bool, kFingers> usable;
   for (int i = 0; i < kFingers; ++i) {
