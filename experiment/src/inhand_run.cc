@@ -60,7 +60,7 @@ class InHandSim {
   std::array<int, kFingers> geom_, body_, dof_, qadr_;
   std::array<Vector3d, kFingers> open_, corr_;
   std::array<Vector3d, kFingers> slip_ref_;
-  std::array<bool, kFingers> was_on_{};
+  std::array<bool, kFingers> was_on_{}, slip_ref_set_{};
   int samples_ = 0;
   double ne_sq_f_ = 0, ne_sq_t_ = 0;
   int ne_n_ = 0;
@@ -183,7 +183,7 @@ void InHandSim::LogContacts(double t, const Vector3d& p, const Matrix3d& R, InHa
     fw[i] = on ? Vector3d(f) : Vector3d::Zero();
     pw[i] = on ? Vector3d(pt) : Vector3d(p + R * s_.contact_point[i]);
     const Vector3d po = R.transpose() * (pw[i] - p);
-    if (on && (!was_on_[i] || samples_ == 0)) slip_ref_[i] = po;
+    if (on && !slip_ref_set_[i]) slip_ref_[i] = po, slip_ref_set_[i] = true;
     if (samples_ > 0 && on != was_on_[i]) {
       const bool scheduled = s_.InBreak(i, t) || s_.InBreak(i, t - kBreakBlend);
       out->events.push_back({t, on ? "contact_made" : "contact_lost", i, scheduled ? "scheduled break" : "unscheduled"});

@@ -164,7 +164,7 @@ struct InHandTruthRow {
   Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
   std::vector<Eigen::Vector3d> force;   // per contact, applied to the object, object frame (N)
   std::vector<Eigen::Vector3d> point;   // per contact, object frame (m)
-  std::vector<double> slip_mm;          // contact point travel in the object frame since made
+  std::vector<double> slip_mm;          // contact point travel in the object frame since first made (0 when off)
   std::vector<bool> in_contact;
 };
 
