@@ -37,6 +37,10 @@
 
 namespace tactforce::experiment {
 
+// kVision: see VisionTrackerModel. kKinematic: the object rigidly attached
+// at the first sample to fingertip 0 (position) and to the hand's rotation
+// (Kabsch over the fingertip centres not in a break): slip becomes pose
+// drift; a break of contact 0 drags the tracked pose with the fingertip.
 enum class Tracker { kVision, kKinematic };
 const char* ToString(Tracker tracker);  // "vision", "kinematic"
 absl::StatusOr<Tracker> ParseTracker(std::string_view text);  // errors name "tracker"
