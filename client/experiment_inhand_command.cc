@@ -87,8 +87,10 @@ struct MethodRow {
 std::vector<MethodRow> FitAll(const ex::InHandRun& run) {
   std::vector<MethodRow> rows;
   const std::pair<const char*, inertia::InertiaMethod> methods[] = {
-      {"baseline-ls", inertia::InertiaMethod::kBaselineLs},     {"baseline-ls+sg51", inertia::InertiaMethod::kBaselineLs},
-      {"factor-graph", inertia::InertiaMethod::kFactorGraph},  {"constrained", inertia::InertiaMethod::kConstrained},
+      {"baseline-ls", inertia::InertiaMethod::kBaselineLs},
+      {"baseline-ls+sg51", inertia::InertiaMethod::kBaselineLs},
+      {"factor-graph", inertia::InertiaMethod::kFactorGraph},
+      {"constrained", inertia::InertiaMethod::kConstrained},
       {"density", inertia::InertiaMethod::kDensity}};
   for (const auto& [name, method] : methods) {
     inertia::InertiaOptions o = ex::InHandFitOptions(run, method);
@@ -128,7 +130,8 @@ std::string StatsTable(const ex::InHandRun& run, const ex::InHandConfig& c) {
   absl::StrAppend(&s, absl::StrFormat("net force std: in hand %.4g N, wrist (arm excitation) %.4g N, ratio %.3f\n",
                                       st.net_force_std, st.wrist_net_force_std,
                                       st.wrist_net_force_std > 0 ? st.net_force_std / st.wrist_net_force_std : 0.0));
-  absl::StrAppend(&s, absl::StrFormat("force model: median |f| error %.4g N, angle %.3g deg, |error| <= sigma %.1f %%\n",
+  absl::StrAppend(&s, absl::StrFormat("force model: median |f| error %.4g N, angle %.3g deg, |error| <= sigma "
+                                      "%.1f %%\n",
                                       st.median_magnitude_error, st.median_angle_error_deg, 100 * st.sigma_coverage));
   absl::StrAppend(&s, absl::StrFormat("slip max %.3g mm; tracker error max %.3g mm (final %.3g), rotation max %.3g "
                                       "deg, r(error, slip) %.2f, dropouts %d; unscheduled contact losses %d; min "
@@ -147,12 +150,15 @@ std::string RunJson(const ex::InHandRun& run, const std::vector<MethodRow>& fits
       ",\"stats\":{\"ne_residual_force_max\":", Num(st.ne_residual_force_max), ",\"ne_residual_percent_mg\":",
       Num(100 * st.ne_residual_force_max / st.mg), ",\"ne_residual_torque_rms\":", Num(st.ne_residual_torque_rms),
       ",\"net_force_std\":", Num(st.net_force_std), ",\"wrist_net_force_std\":", Num(st.wrist_net_force_std),
+      ",\"wrist_same_trajectory_net_force_std\":", Num(st.wrist_same_trajectory_net_force_std),
       ",\"median_magnitude_error\":", Num(st.median_magnitude_error), ",\"median_angle_error_deg\":",
       Num(st.median_angle_error_deg), ",\"sigma_coverage\":", Num(st.sigma_coverage), ",\"max_slip_mm\":",
       Num(st.max_slip_mm), ",\"tracker_position_error_max_mm\":", Num(st.tracker_position_error_max_mm),
       ",\"tracker_position_error_final_mm\":", Num(st.tracker_position_error_final_mm),
-      ",\"slip_tracker_correlation\":", Num(st.slip_tracker_correlation), ",\"tracker_dropouts\":",
-      st.tracker_dropouts, ",\"contact_losses\":", st.contact_losses, ",\"wall_seconds\":", Num(st.wall_seconds),
+      ",\"slip_tracker_correlation\":", Num(st.slip_tracker_correlation),
+      ",\"tracker_rotation_error_max_deg\":", Num(st.tracker_rotation_error_max_deg), ",\"tracker_dropouts\":",
+      st.tracker_dropouts, ",\"contact_losses\":", st.contact_losses, ",\"min_normal_force\":",
+      Num(st.min_normal_force), ",\"wall_seconds\":", Num(st.wall_seconds),
       "},\"fits\":[");
   for (size_t i = 0; i < fits.size(); ++i) {
     const MethodRow& r = fits[i];

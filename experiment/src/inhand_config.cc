@@ -223,7 +223,7 @@ io::TriangleMesh InHandObjectMesh(const InHandObject& o) {
 absl::StatusOr<TactileForceModel> NamedForceModel(const std::string& name) {
   TactileForceModel m;
   if (name == "biotac") return m;
-  if (name == "ideal") return TactileForceModel{"ideal", 0, 0, 0, 0};
+  if (name == "ideal") return TactileForceModel{"ideal", 0, 1, 0, 0, 0};
   return absl::InvalidArgumentError(absl::StrCat("force_model: unknown '", name, "' (expected biotac or ideal)"));
 }
 
@@ -245,6 +245,7 @@ absl::Status ValidateInHandConfig(const InHandConfig& c) {
     const TactileForceModel& m = *c.custom_force_model;
     for (double v : {m.bias_sigma, m.noise_floor, m.noise_slope, m.point_sigma})
       if (!(v >= 0) || !std::isfinite(v)) return bad("force_model", "parameters must be finite and >= 0");
+    if (!(m.bias_time > 0)) return bad("force_model", "bias_time must be > 0");
   }
   const VisionTrackerModel& v = c.vision;
   if (!(v.position_sigma >= 0 && v.orientation_sigma_deg >= 0 && v.dropout_probability >= 0 &&

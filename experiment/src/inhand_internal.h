@@ -74,6 +74,8 @@ absl::StatusOr<Setup> PrepareInHand(const InHandConfig& config);
 class Sensing {
  public:
   Sensing(const Setup& setup, uint64_t seed);
+  // Moves the drifting force biases on by one log interval.
+  void Advance();
   // Reading of a true world force on contact i; `sigma` per component (N).
   Vector3d ReadForce(int i, const Vector3d& f_true, double* sigma);
   Vector3d ReadPoint(const Vector3d& x_true);

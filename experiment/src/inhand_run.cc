@@ -1,10 +1,10 @@
 // RunInHand: the MuJoCo run. Every 1 ms physics step a PD in fingertip space
 // (J = I, gravity compensated, the fingertip's own acceleration fed forward)
 // tracks targets carried by the commanded object motion: each fingertip's
-// contact point, pressed in by K^-1 times its planned force plus an
-// admittance correction that every control tick moves the true force
-// towards the plan (the hand's own loop runs on the true forces; the sensor
-// models only shape what is logged). A scheduled break backs a fingertip off
+// contact point, pressed in by K^-1 times its planned force (no force
+// feedback: an admittance on the force error also integrates along the
+// rigid-motion directions, where the object's dynamic lag shows, and walked
+// the grasp into the friction limit). A scheduled break backs a fingertip off
 // by 12 mm (50 ms blends) while the plan holds the object with the others.
 // At each log instant the state is re-evaluated (mj_forward) so forces and
 // accelerations belong to the logged pose; the log gets the true rows, the
@@ -23,10 +23,6 @@ namespace tactforce::experiment {
 namespace inhand_internal {
 namespace {
 
-constexpr double kAdmittanceGain = 0.0;
-constexpr double kMaxCorrectionStep = 0.001;  // m per control tick
-constexpr double kMaxCorrection = 0.01;       // m
-
 double Median(std::vector<double> v) {
   if (v.empty()) return 0;
   const size_t h = v.size() / 2;
@@ -43,7 +39,6 @@ class InHandSim {
 
  private:
   void ApplyForces(double t);
-  void ControlTick(double t);
   void ApplyFingertipRotation(const Motion& mo);
   void Log(double t, InHandRun* out);
   void LogContacts(double t, const Vector3d& p, const Matrix3d& R, InHandTruthRow* row, InHandRun* out);
@@ -58,9 +53,9 @@ class InHandSim {
   Sensing sense_;
   int obj_body_ = -1, obj_q_ = -1, obj_v_ = -1, box_ = -1;
   std::array<int, kFingers> geom_, body_, dof_, qadr_;
-  std::array<Vector3d, kFingers> open_, corr_;
+  std::array<Vector3d, kFingers> open_;
   std::array<Vector3d, kFingers> slip_ref_;
-  std::array<bool, kFingers> was_on_{};
+  std::array<bool, kFingers> was_on_{}, slip_ref_set_{};
   int samples_ = 0;
   double ne_sq_f_ = 0, ne_sq_t_ = 0;
   int ne_n_ = 0;
@@ -81,7 +76,6 @@ void InHandSim::Locate() {
     dof_[i] = m_->jnt_dofadr[jx];
     qadr_[i] = m_->jnt_qposadr[jx];
     open_[i] = Vector3d(m_->body_pos + 3 * body_[i]);
-    corr_[i].setZero();
   }
 }
 
@@ -94,7 +88,7 @@ void InHandSim::ApplyForces(double t) {
   for (int i = 0; i < kFingers; ++i) {
     const Vector3d x0 = s_.contact_point[i] - s_.contact_normal[i] * c.fingertip_radius;
     const double b = s_.BreakBlend(i, t);
-    const Vector3d press = mo.R * plan[i] / c.kp + corr_[i];
+    const Vector3d press = mo.R * plan[i] / c.kp;
     const Vector3d target = mo.Point(x0) + (1 - b) * press - b * kRetract * (mo.R * s_.contact_normal[i]);
     const Vector3d vt = mo.PointVelocity(x0), at = mo.PointAcceleration(x0);
     for (int a = 0; a < 3; ++a) {
@@ -125,31 +119,14 @@ void InHandSim::ApplyFingertipRotation(const Motion& mo) {
   }
 }
 
-// Admittance: the true force each fingertip applies moves towards the plan.
-void InHandSim::ControlTick(double t) {
-  const Matrix3d R = s_.MotionAt(t).R;
-  const std::array<Vector3d, kFingers>& plan = s_.tick_force[s_.Tick(t)];
-  for (int i = 0; i < kFingers; ++i) {
-    if (s_.BreakBlend(i, t) > 0) continue;
-    double f[3], pt[3];
-    PairForce(m_, d_, box_, geom_[i], f, pt);
-    Vector3d step = kAdmittanceGain * (R * plan[i] - Vector3d(f)) / s_.cfg.kp;
-    if (step.norm() > kMaxCorrectionStep) step *= kMaxCorrectionStep / step.norm();
-    corr_[i] += step;
-    if (corr_[i].norm() > kMaxCorrection) corr_[i] *= kMaxCorrection / corr_[i].norm();
-  }
-}
-
 absl::Status InHandSim::Simulate(const std::function<void(double)>& progress, InHandRun* out) {
   const double dt = m_->opt.timestep;
   const InHandConfig& c = s_.cfg;
-  const int per_tick = std::max(1, static_cast<int>(std::lround(1.0 / (c.control_rate * dt))));
   const int n_samples = static_cast<int>(std::floor(c.duration * c.rate + 1e-9)) + 1;
   const long total = std::lround((c.settle + c.duration) / dt) + 1;
   int next = 0;
   for (long k = 0; k <= total && next < n_samples; ++k) {
     const double t = k * dt - c.settle;
-    if (k % per_tick == 0) ControlTick(t);
     ApplyForces(t);
     if (t >= next / c.rate - 0.5 * dt) {  // the forces and accelerations this step will use
       mj_forward(m_, d_);
@@ -183,10 +160,11 @@ void InHandSim::LogContacts(double t, const Vector3d& p, const Matrix3d& R, InHa
     fw[i] = on ? Vector3d(f) : Vector3d::Zero();
     pw[i] = on ? Vector3d(pt) : Vector3d(p + R * s_.contact_point[i]);
     const Vector3d po = R.transpose() * (pw[i] - p);
-    if (on && (!was_on_[i] || samples_ == 0)) slip_ref_[i] = po;
+    if (on && !slip_ref_set_[i]) slip_ref_[i] = po, slip_ref_set_[i] = true;
     if (samples_ > 0 && on != was_on_[i]) {
       const bool scheduled = s_.InBreak(i, t) || s_.InBreak(i, t - kBreakBlend);
-      out->events.push_back({t, on ? "contact_made" : "contact_lost", i, scheduled ? "scheduled break" : "unscheduled"});
+      out->events.push_back(
+          {t, on ? "contact_made" : "contact_lost", i, scheduled ? "scheduled break" : "unscheduled"});
       if (!on && !scheduled) ++out->stats.contact_losses;
     }
     was_on_[i] = on;
@@ -201,6 +179,7 @@ void InHandSim::LogContacts(double t, const Vector3d& p, const Matrix3d& R, InHa
 // The logged sample: tracked pose, sensed forces and points in the tracked frame.
 void InHandSim::SenseSample(double t, const InHandTruthRow& row, const std::array<Vector3d, kFingers>& fw,
                             const std::array<Vector3d, kFingers>& pw, InHandRun* out) {
+  sense_.Advance();
   std::array<Vector3d, kFingers> tips;
   std::array<bool, kFingers> usable;
   for (int i = 0; i < kFingers; ++i) {

@@ -4,6 +4,8 @@
 // repeat the last pose) and the kinematic tracker (the object rigidly
 // attached to fingertip 0 from the first sample; the hand's rotation from the
 // fingertip centres by Kabsch).
+#include <cmath>
+
 #include <Eigen/SVD>
 
 #include "inhand_internal.h"
@@ -30,6 +32,12 @@ Matrix3d KabschRotation(const std::array<Vector3d, kFingers>& from, const std::a
 Sensing::Sensing(const Setup& setup, uint64_t seed) : s_(setup), rng_(seed) {
   for (int i = 0; i < kFingers; ++i)
     bias_[i] = s_.force_model.bias_sigma * Vector3d(normal_(rng_), normal_(rng_), normal_(rng_));
+}
+
+void Sensing::Advance() {
+  const double decay = std::exp(-1.0 / (s_.cfg.rate * s_.force_model.bias_time));
+  const double kick = s_.force_model.bias_sigma * std::sqrt(1 - decay * decay);
+  for (Vector3d& b : bias_) b = decay * b + kick * Vector3d(normal_(rng_), normal_(rng_), normal_(rng_));
 }
 
 Vector3d Sensing::ReadForce(int i, const Vector3d& f_true, double* sigma) {

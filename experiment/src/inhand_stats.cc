@@ -136,7 +136,8 @@ namespace {
 
 std::string EventsCsv(const InHandRun& run) {
   std::string s = "t,kind,contact,detail\n";
-  for (const InHandEvent& e : run.events) absl::StrAppend(&s, absl::StrFormat("%.6f,%s,%d,%s\n", e.t, e.kind, e.contact, e.detail));
+  for (const InHandEvent& e : run.events)
+    absl::StrAppend(&s, absl::StrFormat("%.6f,%s,%d,%s\n", e.t, e.kind, e.contact, e.detail));
   return s;
 }
 

@@ -37,6 +37,10 @@
 
 namespace tactforce::experiment {
 
+// kVision: see VisionTrackerModel. kKinematic: the object rigidly attached
+// at the first sample to fingertip 0 (position) and to the hand's rotation
+// (Kabsch over the fingertip centres not in a break): slip becomes pose
+// drift; a break of contact 0 drags the tracked pose with the fingertip.
 enum class Tracker { kVision, kKinematic };
 const char* ToString(Tracker tracker);  // "vision", "kinematic"
 absl::StatusOr<Tracker> ParseTracker(std::string_view text);  // errors name "tracker"
@@ -74,14 +78,16 @@ inertia::InertialParameters InHandObjectInertia(const InHandObject& object);
 io::TriangleMesh InHandObjectMesh(const InHandObject& object);
 
 // Tactile force model: the reading (fingertip frame = world axes) is
-//   f_read = f_true + b_i + n,  b_i ~ N(0, bias_sigma^2) per axis, fixed per
-//   contact and run, n ~ N(0, s(|f|)^2) per axis, s(f) = noise_floor + noise_slope |f|;
+//   f_read = f_true + b_i(t) + n, b_i a drifting bias per contact and axis
+//   (Ornstein-Uhlenbeck: stationary std bias_sigma, time constant
+//   bias_time), n ~ N(0, s(|f|)^2) per axis, s(f) = noise_floor + noise_slope |f|;
 // the REPORTED per-sample sigma (per component) is sqrt(bias_sigma^2 + s^2),
 // so about 68 % of component errors are within it. A contact that is off
 // reads exactly zero. The contact point gets isotropic noise point_sigma.
 struct TactileForceModel {
   std::string name = "biotac";
-  double bias_sigma = 0.015;   // N
+  double bias_sigma = 0.0155;  // N
+  double bias_time = 2.0;      // s
   double noise_floor = 0.010;  // N
   double noise_slope = 0.013;  // per N of |f|
   double point_sigma = 0.001;  // m
@@ -162,7 +168,7 @@ struct InHandTruthRow {
   Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
   std::vector<Eigen::Vector3d> force;   // per contact, applied to the object, object frame (N)
   std::vector<Eigen::Vector3d> point;   // per contact, object frame (m)
-  std::vector<double> slip_mm;          // contact point travel in the object frame since made
+  std::vector<double> slip_mm;          // contact point travel in the object frame since first made (0 when off)
   std::vector<bool> in_contact;
 };
 
