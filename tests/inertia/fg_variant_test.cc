@@ -82,6 +82,12 @@ TEST(FactorGraphVariant, PriorVariantWithoutPriorIsAnErrorNamingTheField) {
   InertiaOptions other = Options(FactorGraphVariant::kConstraintPrior);
   other.method = InertiaMethod::kConstrained;
   EXPECT_TRUE(ValidateInertiaOptions(other).ok());
+  other.fg_variant = FactorGraphVariant::kNoConstraint;
+  absl::StatusOr<InertiaFit> constrained = FitInertia(sim.samples, other);
+  ASSERT_TRUE(constrained.ok()) << constrained.status();
+  EXPECT_NE(std::find(constrained->notes.begin(), constrained->notes.end(),
+                      "fg_variant fg-no-c ignored by constrained"),
+            constrained->notes.end());
 }
 
 // Data of an object whose every force is negated: the least-squares answer

@@ -462,6 +462,8 @@ absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in, const In
   if (!r.ok()) return r.status();
   if (options.mesh && (options.method == InertiaMethod::kBaselineLs || options.method == InertiaMethod::kFactorGraph))
     r->notes.push_back(absl::StrCat("mesh ignored by ", ToString(options.method)));
+  if (options.method != InertiaMethod::kFactorGraph && options.fg_variant != FactorGraphVariant::kConstraint)
+    r->notes.push_back(absl::StrCat("fg_variant ", ToString(options.fg_variant), " ignored by ", ToString(options.method)));
 
   fit.method = options.method;
   fit.standard = r->pi;
