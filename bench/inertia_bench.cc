@@ -14,6 +14,9 @@
 //    Nadeau et al. noise on accelerations and wrenches (low/moderate/high).
 //    Target at moderate: mass < 1 %, CoM < 1 % of size, Riemannian < 0.5.
 // 3. The same on the five shared workshop tools (../shared/data/inertia).
+// 4. The paper's ablation (experiment/ablation.h, `tactforce experiment
+//    ablation`): every method and factor-graph variant on every source,
+//    --ablation-seeds runs per cell (0 skips it).
 // Times are CPU seconds of the fitting thread (the machine is shared);
 // "x LS" is the ratio to BASELINE_LS on the same data.
 #include <time.h>
@@ -27,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "tactforce/experiment/ablation.h"
 #include "tactforce/inertia/fit.h"
 #include "tactforce/inertia/metrics.h"
 #include "tactforce/inertia/samples.h"
@@ -111,7 +115,7 @@ void Run(const InertiaSamples& s, const InertialParameters& truth, const Inertia
 }
 
 struct Args {
-  int runs = 5, tool_runs = 3;
+  int runs = 5, tool_runs = 3, ablation_seeds = 3;
   double duration = 10.0;
   std::string tools;
   bool no_tools = false, fg = true;
@@ -138,10 +142,11 @@ int main(int argc, char** argv) {
     else if (k == "--tools") a.tools = next();
     else if (k == "--no-tools") a.no_tools = true;
     else if (k == "--no-factor-graph") a.fg = false;
+    else if (k == "--ablation-seeds") a.ablation_seeds = std::max(0, std::atoi(next()));
     else {
       std::fprintf(stderr,
                    "usage: inertia_bench [--runs N] [--tool-runs N] [--duration S] [--tools DIR] [--no-tools] "
-                   "[--no-factor-graph]\n");
+                   "[--no-factor-graph] [--ablation-seeds N]\n");
       return 2;
     }
   }
@@ -329,6 +334,17 @@ int main(int argc, char** argv) {
     if (!names.empty())
       wrist_table("Wrist sensor, shared workshop tools (Nadeau et al. 2023 simulation, 100 Hz)", names, data, truths,
                   g, a.tool_runs);
+  }
+  if (a.ablation_seeds > 0) {
+    tactforce::experiment::AblationConfig c;
+    c.seeds = a.ablation_seeds;
+    c.duration = a.duration;
+    absl::StatusOr<tactforce::experiment::AblationTable> t = tactforce::experiment::RunAblation(c);
+    if (!t.ok()) {
+      std::fprintf(stderr, "ablation failed: %s\n", std::string(t.status().message()).c_str());
+      return 1;
+    }
+    std::printf("%s\n", tactforce::experiment::AblationMarkdown(*t).c_str());
   }
   std::fprintf(stderr, "\n");
   return 0;

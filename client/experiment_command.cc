@@ -369,12 +369,16 @@ CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args) {
       "  tactforce experiment slope --mu 0.3,0.5 --no-creep\n"
       "  tactforce experiment slope --json");
   args.slope = s;
+  AddInHandSubcommand(cmd, args.inhand);
+  AddAblationSubcommand(cmd, args.ablation);
   return cmd;
 }
 
 int RunExperiment(const ExperimentArgs& args) {
   if (args.grasp && args.grasp->parsed()) return RunGrasp(args);
   if (args.slope && args.slope->parsed()) return RunSlope(args);
+  if (args.inhand.cmd && args.inhand.cmd->parsed()) return RunInHandCommand(args.inhand);
+  if (args.ablation.cmd && args.ablation.cmd->parsed()) return RunAblationCommand(args.ablation);
   return ReportError(absl::InvalidArgumentError("experiment: give grasp or slope"));
 }
 

@@ -8,6 +8,8 @@
 
 #include "CLI/CLI.hpp"
 #include "cli_common.h"
+#include "experiment_ablation_command.h"
+#include "experiment_inhand_command.h"
 
 namespace tactforce::cli {
 
@@ -32,6 +34,8 @@ struct ExperimentArgs {
 
   CLI::App* grasp = nullptr;
   CLI::App* slope = nullptr;
+  InHandArgs inhand;                // `experiment inhand`
+  AblationArgs ablation;            // `experiment ablation`
 };
 CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args);
 int RunExperiment(const ExperimentArgs& args);

@@ -189,6 +189,11 @@ absl::Status SetSolverOptions(const InertiaArgs& args, v1::InertiaFitOptions* o)
   n->set_linear_acceleration_sigma(args.acceleration_sigma);
   n->set_angular_acceleration_sigma(args.angular_acceleration_sigma);
   o->set_savitzky_golay(args.savitzky_golay);
+  if (!args.fg_variant.empty()) {
+    absl::StatusOr<inertia::FactorGraphVariant> v = inertia::ParseFactorGraphVariant(args.fg_variant);
+    if (!v.ok()) return absl::InvalidArgumentError(absl::StrCat("--fg-variant: ", v.status().message()));
+    o->set_fg_variant(api::FactorGraphVariantToProto(*v));
+  }
   if (args.max_iterations < 0) return absl::InvalidArgumentError("--max-iterations: must be >= 0");
   o->set_max_iterations(static_cast<uint32_t>(args.max_iterations));
   return absl::OkStatus();
@@ -400,6 +405,8 @@ CLI::App* AddInertiaCommand(CLI::App& app, InertiaArgs& args) {
     cmd->add_option(flag, *value, what)->check(AtLeast(0));
   }
   cmd->add_flag("--savitzky-golay", args.savitzky_golay, "baseline-ls: cubic Savitzky-Golay smoothing, window 51");
+  cmd->add_option("--fg-variant", args.fg_variant,
+                  "factor-graph ablation variant: baseline-fg, fg-no-c, fg-c (default) or fg-c-g (needs --prior)");
   cmd->add_option("--max-iterations", args.max_iterations, "Iteration limit (0 = 100)")->check(Between(0, 100000));
   CLI::Option* server = AddConnectionFlags(cmd, &args.connection, "--server", /*default_deadline_ms=*/120'000);
   server->description("Fit on tactforce-server (Estimator.FitInertia, streamed) instead of locally");

@@ -38,6 +38,7 @@ struct InertiaArgs {
   double force_sigma = 0, torque_sigma = 0, position_sigma = 0, orientation_sigma = 0;
   double angular_velocity_sigma = 0, acceleration_sigma = 0, angular_acceleration_sigma = 0;
   bool savitzky_golay = false;
+  std::string fg_variant;            // factor-graph: baseline-fg | fg-no-c | fg-c | fg-c-g; empty: fg-c
   int max_iterations = 0;
   // Remote mode: set when --server is given.
   bool remote = false;

@@ -41,7 +41,7 @@ ALLOWED = {
     "inertia": {"io", "planner", "estimator"},
     "sim": {"io"},
     "audit": {"io", "planner", "estimator", "sim"},
-    "experiment": {"io", "planner", "estimator", "sim"},
+    "experiment": {"io", "planner", "estimator", "inertia", "sim"},
     "v1": set(),
     "api": {"io", "planner", "estimator", "inertia", "sim", "audit", "experiment", "v1"},
     "server": {"io", "api", "v1"},

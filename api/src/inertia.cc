@@ -62,6 +62,18 @@ absl::StatusOr<inertia::RegionScheme> RegionSchemeFromProto(v1::RegionScheme sch
   return absl::InvalidArgumentError(absl::StrCat("options.regions: unknown value ", static_cast<int>(scheme)));
 }
 
+absl::StatusOr<inertia::FactorGraphVariant> FactorGraphVariantFromProto(v1::FactorGraphVariant variant) {
+  switch (variant) {
+    case v1::FACTOR_GRAPH_VARIANT_BASELINE_FG: return inertia::FactorGraphVariant::kBaselineFg;
+    case v1::FACTOR_GRAPH_VARIANT_NO_C: return inertia::FactorGraphVariant::kNoConstraint;
+    case v1::FACTOR_GRAPH_VARIANT_UNSPECIFIED:
+    case v1::FACTOR_GRAPH_VARIANT_C: return inertia::FactorGraphVariant::kConstraint;
+    case v1::FACTOR_GRAPH_VARIANT_C_G: return inertia::FactorGraphVariant::kConstraintPrior;
+    default: break;
+  }
+  return absl::InvalidArgumentError(absl::StrCat("options.fg_variant: unknown value ", static_cast<int>(variant)));
+}
+
 // UNSPECIFIED and unknown numbers: CONSTRAINED (a response's method; a
 // request's is checked by InertiaOptionsFromProto first).
 inertia::InertiaMethod InertiaMethodFromProto(v1::InertiaMethod method) {
@@ -154,6 +166,16 @@ absl::Status CheckOptionMagnitudes(const v1::InertiaFitOptions& o) {
 }
 
 }  // namespace
+
+v1::FactorGraphVariant FactorGraphVariantToProto(inertia::FactorGraphVariant variant) {
+  switch (variant) {
+    case inertia::FactorGraphVariant::kBaselineFg: return v1::FACTOR_GRAPH_VARIANT_BASELINE_FG;
+    case inertia::FactorGraphVariant::kNoConstraint: return v1::FACTOR_GRAPH_VARIANT_NO_C;
+    case inertia::FactorGraphVariant::kConstraint: return v1::FACTOR_GRAPH_VARIANT_C;
+    case inertia::FactorGraphVariant::kConstraintPrior: return v1::FACTOR_GRAPH_VARIANT_C_G;
+  }
+  return v1::FACTOR_GRAPH_VARIANT_UNSPECIFIED;
+}
 
 v1::RegionScheme RegionSchemeToProto(inertia::RegionScheme scheme) {
   switch (scheme) {
@@ -284,6 +306,9 @@ absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::Inerti
   absl::StatusOr<inertia::RegionScheme> scheme = RegionSchemeFromProto(o.regions());
   if (!scheme.ok()) return scheme.status();
   out.regions.scheme = *scheme;
+  absl::StatusOr<inertia::FactorGraphVariant> variant = FactorGraphVariantFromProto(o.fg_variant());
+  if (!variant.ok()) return variant.status();
+  out.fg_variant = *variant;
   if (o.target_regions() != 0) {
     if (o.target_regions() > static_cast<uint32_t>(inertia::kMaxTargetRegions))
       return absl::InvalidArgumentError(

@@ -10,9 +10,11 @@
 #include <cmath>
 #include <filesystem>
 
+#include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "inertia/test_util.h"
 #include "support/cli_fixture.h"
+#include "tactforce/api/inertia.h"
 #include "tactforce/api/json.h"
 #include "tactforce/v1/inertia.pb.h"
 
@@ -76,6 +78,66 @@ TEST_F(InertiaCliTest, HullFromACsvAndGravityFlag) {
   ASSERT_TRUE(api::ParseJson(run.out, &response).ok());
   EXPECT_TRUE(response.com_in_hull());
   EXPECT_LE(response.com().y(), 0.1 + 1e-6);
+}
+
+// --fg-variant selects the factor graph of the paper's ablation; the
+// response's first factor-graph note names it.
+TEST_F(InertiaCliTest, FactorGraphVariantFlag) {
+  const std::string sim = Simulate("sim", {"--mode", "wrist"});
+  for (const char* variant : {"baseline-fg", "fg-no-c", "fg-c", "fg-c-g"}) {
+    std::vector<std::string> args = {"inertia", "--csv", sim + "/inertia.csv", "--method", "factor-graph",
+                                     "--fg-variant", variant, "--json"};
+    if (std::string(variant) == "fg-c-g") args.insert(args.end(), {"--prior", sim + "/truth.json"});
+    const CliRun run = Tactforce(args);
+    ASSERT_EQ(run.exit_code, 0) << variant << ": " << run.err;
+    v1::FitInertiaResponse response;
+    ASSERT_TRUE(api::ParseJson(run.out, &response).ok()) << run.out.substr(0, 300);
+    bool named = false;
+    for (const std::string& note : response.notes())
+      named |= note.rfind(absl::StrCat("factor-graph variant ", variant, ":"), 0) == 0;
+    EXPECT_TRUE(named) << variant;
+  }
+  // Bad input: exit 2, the flag or field named, nothing on stdout.
+  CliRun run = Tactforce({"inertia", "--csv", sim + "/inertia.csv", "--method", "factor-graph", "--fg-variant",
+                          "fg-x"});
+  ExpectBadInput(run);
+  EXPECT_NE(run.err.find("--fg-variant"), std::string::npos) << run.err;
+  run = Tactforce({"inertia", "--csv", sim + "/inertia.csv", "--method", "factor-graph", "--fg-variant", "fg-c-g"});
+  ExpectBadInput(run);
+  EXPECT_NE(run.err.find("prior"), std::string::npos) << run.err;
+}
+
+// InertiaFitOptions.fg_variant through proto3 JSON and back to the library.
+TEST(InertiaFgVariantProto, RoundTrip) {
+  for (inertia::FactorGraphVariant v :
+       {inertia::FactorGraphVariant::kBaselineFg, inertia::FactorGraphVariant::kNoConstraint,
+        inertia::FactorGraphVariant::kConstraint, inertia::FactorGraphVariant::kConstraintPrior}) {
+    v1::InertiaFitOptions o;
+    o.set_method(v1::INERTIA_METHOD_FACTOR_GRAPH);
+    o.set_fg_variant(api::FactorGraphVariantToProto(v));
+    o.mutable_prior()->mutable_params()->set_mass(1.0);
+    o.mutable_prior()->mutable_params()->mutable_inertia()->set_ixx(0.01);
+    o.mutable_prior()->mutable_params()->mutable_inertia()->set_iyy(0.01);
+    o.mutable_prior()->mutable_params()->mutable_inertia()->set_izz(0.01);
+    v1::InertiaFitOptions back;
+    ASSERT_TRUE(api::ParseJson(api::ToJson(o), &back).ok());
+    absl::StatusOr<inertia::InertiaOptions> lib = api::InertiaOptionsFromProto(back);
+    ASSERT_TRUE(lib.ok()) << lib.status();
+    EXPECT_EQ(lib->fg_variant, v);
+  }
+  v1::InertiaFitOptions unspecified;
+  EXPECT_EQ(api::InertiaOptionsFromProto(unspecified)->fg_variant, inertia::FactorGraphVariant::kConstraint);
+  v1::InertiaFitOptions bad;
+  bad.set_fg_variant(static_cast<v1::FactorGraphVariant>(17));
+  absl::StatusOr<inertia::InertiaOptions> lib = api::InertiaOptionsFromProto(bad);
+  ASSERT_FALSE(lib.ok());
+  EXPECT_NE(lib.status().message().find("options.fg_variant"), std::string::npos) << lib.status();
+  v1::InertiaFitOptions no_prior;
+  no_prior.set_method(v1::INERTIA_METHOD_FACTOR_GRAPH);
+  no_prior.set_fg_variant(v1::FACTOR_GRAPH_VARIANT_C_G);
+  lib = api::InertiaOptionsFromProto(no_prior);
+  ASSERT_FALSE(lib.ok());
+  EXPECT_NE(lib.status().message().find("options.prior"), std::string::npos) << lib.status();
 }
 
 TEST_F(InertiaCliTest, BadInputNamesTheProblem) {

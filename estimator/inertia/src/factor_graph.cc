@@ -88,8 +88,7 @@ void LogSE3(const M3<T>& R, const V3<T>& t, V3<T>* phi, V3<T>* rho) {
 template <typename T>
 Eigen::Matrix<T, 6, 1> Dynamics(const M3<T>& R0, const V3<T>& p0, const M3<T>& R1, const V3<T>& p1,
                                 const M3<T>& R2, const V3<T>& p2, double dt1, double dt2, const T& m,
-                                const V3<T>& c, const V3<T>& L, const M3<T>& Rl, const Vec3& g,
-                                const Vector6d& wrench) {
+                                const V3<T>& c, const M3<T>& H, const Vec3& g, const Vector6d& wrench) {
   V3<T> phi_a, rho_a, phi_b, rho_b;
   LogSE3<T>(R0.transpose() * R1, R0.transpose() * (p1 - p0), &phi_a, &rho_a);  // eq. 10, 12
   LogSE3<T>(R1.transpose() * R2, R1.transpose() * (p2 - p1), &phi_b, &rho_b);  // eq. 11, 13
@@ -100,11 +99,6 @@ Eigen::Matrix<T, 6, 1> Dynamics(const M3<T>& R0, const V3<T>& p0, const M3<T>& R
   const V3<T> dw = (w2p - w1) / T(dt2);          // eq. 16
   const V3<T> a = (v2p - v1) / T(dt2);           // eq. 17
   const V3<T> g0 = R0.transpose() * g.cast<T>();
-  M3<T> Hd = M3<T>::Zero();
-  Hd(0, 0) = L(1) + L(2);
-  Hd(1, 1) = L(0) + L(2);
-  Hd(2, 2) = L(0) + L(1);
-  const M3<T> H = Rl * Hd * Rl.transpose();
   const V3<T> amg = a - g0;
   const V3<T> A = m * amg - m * c.cross(dw) + m * w2p.cross(w1.cross(c));  // eq. 18
   const V3<T> B = m * c.cross(amg) + H * dw + w2p.cross(H * w1);          // eq. 19
@@ -112,6 +106,24 @@ Eigen::Matrix<T, 6, 1> Dynamics(const M3<T>& R0, const V3<T>& p0, const M3<T>& R
   r.template head<3>() = A - wrench.head<3>().cast<T>();
   r.template tail<3>() = B - wrench.tail<3>().cast<T>();
   return r;
+}
+
+// Inertia about the origin from the paper's parameterisation (eq. 26-30).
+template <typename T>
+M3<T> InertiaFromL(const V3<T>& L, const M3<T>& Rl) {
+  M3<T> Hd = M3<T>::Zero();
+  Hd(0, 0) = L(1) + L(2);
+  Hd(1, 1) = L(0) + L(2);
+  Hd(2, 2) = L(0) + L(1);
+  return Rl * Hd * Rl.transpose();
+}
+
+// Inertia about the origin from Baseline-FG's raw entries [xx, yy, zz, xy, xz, yz].
+template <typename T>
+M3<T> InertiaFromEntries(const Eigen::Matrix<T, 6, 1>& h) {
+  M3<T> H;
+  H << h(0), h(3), h(4), h(3), h(1), h(5), h(4), h(5), h(2);
+  return H;
 }
 
 template <typename T>
@@ -126,22 +138,39 @@ Eigen::Matrix<T, 4, 4> Pseudo(const T& m, const V3<T>& c, const V3<T>& L, const 
   return P;
 }
 
+// The inertial variables: [m, c, L, R] (the paper's w), or with `raw`
+// Baseline-FG's [m, c, h] (h = the six entries of H about the origin).
 struct Inertial {
+  bool raw = false;
   double m = 1;
   Vec3 c = Vec3::Zero();
   Vec3 L = Vec3::Ones();
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  Vector6d h = Vector6d::Zero();
 
+  Eigen::Matrix3d InertiaOrigin() const { return raw ? InertiaFromEntries<double>(h) : InertiaFromL<double>(L, R); }
   Vector10d Standard() const {
-    const Eigen::Matrix3d S = R * L.asDiagonal() * R.transpose();
-    const Eigen::Matrix3d Io = S.trace() * Eigen::Matrix3d::Identity() - S;
+    const Eigen::Matrix3d Io = InertiaOrigin();
     Vector10d pi;
     pi << m, m * c, Io(0, 0), Io(1, 1), Io(2, 2), Io(0, 1), Io(0, 2), Io(1, 2);
     return pi;
   }
+  // Sets the inertia about the origin to that of second moment S.
+  void SetSecondMoment(const Eigen::Matrix3d& S) {
+    const Eigen::Matrix3d Io = S.trace() * Eigen::Matrix3d::Identity() - S;
+    h << Io(0, 0), Io(1, 1), Io(2, 2), Io(0, 1), Io(0, 2), Io(1, 2);
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(S);
+    L = es.eigenvalues();
+    R = es.eigenvectors();
+    if (R.determinant() < 0) R.col(2) = -R.col(2);
+  }
   void Retract(const Eigen::Ref<const Eigen::VectorXd>& d) {
     m += d(0);
     c += d.segment<3>(1);
+    if (raw) {
+      h += d.segment<6>(4);
+      return;
+    }
     L += d.segment<3>(4);
     R = R * ExpSO3(d.segment<3>(7));
   }
@@ -161,6 +190,22 @@ Jet Const(double v) {
   Jet j(v);
   j.derivatives().setZero();
   return j;
+}
+
+// The inertial block as AutoDiff variables 18..27 (local perturbations of
+// R for the paper's w): m, c and the inertia about the origin H.
+void InertialJets(const Inertial& in, Jet* m, V3<Jet>* c, M3<Jet>* H) {
+  *m = Var(in.m, 18);
+  *c = V3<Jet>(Var(in.c(0), 19), Var(in.c(1), 20), Var(in.c(2), 21));
+  if (in.raw) {
+    Eigen::Matrix<Jet, 6, 1> h;
+    for (int i = 0; i < 6; ++i) h(i) = Var(in.h(i), 22 + i);
+    *H = InertiaFromEntries<Jet>(h);
+    return;
+  }
+  const V3<Jet> L(Var(in.L(0), 22), Var(in.L(1), 23), Var(in.L(2), 24));
+  const V3<Jet> dr(Var(0, 25), Var(0, 26), Var(0, 27));
+  *H = InertiaFromL<Jet>(L, in.R.cast<Jet>() * (M3<Jet>::Identity() + Hat<Jet>(dr)));
 }
 
 Eigen::Matrix3d InvRightJacobian(const Vec3& phi) {
@@ -297,6 +342,13 @@ bool SolveStep(const NormalEquations& ne, double lambda, Eigen::VectorXd* step, 
   return true;
 }
 
+// The variants with the constraint factor C; those with the prior B (fg-c
+// keeps the earlier FACTOR_GRAPH's behaviour: B when a prior is given).
+bool UsesConstraints(FactorGraphVariant v) {
+  return v == FactorGraphVariant::kConstraint || v == FactorGraphVariant::kConstraintPrior;
+}
+bool UsesPrior(const InertiaOptions& o) { return UsesConstraints(o.fg_variant) && o.prior.has_value(); }
+
 class Problem {
  public:
   // Stops early (check poll->stopped()) when `poll` fires; so do the loops
@@ -336,13 +388,10 @@ class Problem {
   // three-point kinematics; second moment of a small ball around c.
   void Initialise(double m0, const Vec3& c0, double radius) {
     poses_ = meas_;
+    in_.raw = o_.fg_variant == FactorGraphVariant::kBaselineFg;
     in_.m = m0;
     in_.c = c0;
-    const Eigen::Matrix3d S = m0 * (c0 * c0.transpose() + radius * radius * Eigen::Matrix3d::Identity());
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(S);
-    in_.L = es.eigenvalues();
-    in_.R = es.eigenvectors();
-    if (in_.R.determinant() < 0) in_.R.col(2) = -in_.R.col(2);
+    in_.SetSecondMoment(m0 * (c0 * c0.transpose() + radius * radius * Eigen::Matrix3d::Identity()));
   }
 
   // Cost; with `ne`, also the Gauss-Newton normal equations. The factors
@@ -377,8 +426,8 @@ class Problem {
       if (poll_->Tick()) break;
       const double dt1 = s_.samples[k + 1].t - s_.samples[k].t, dt2 = s_.samples[k + 2].t - s_.samples[k + 1].t;
       const Pose &a = poses_[k], &b = poses_[k + 1], &c = poses_[k + 2];
-      const Vector6d e = Dynamics<double>(a.R, a.p, b.R, b.p, c.R, c.p, dt1, dt2, in_.m, in_.c, in_.L, in_.R,
-                                          o_.gravity, wrench_[k]);
+      const Vector6d e = Dynamics<double>(a.R, a.p, b.R, b.p, c.R, c.p, dt1, dt2, in_.m, in_.c,
+                                          in_.InertiaOrigin(), o_.gravity, wrench_[k]);
       sf += e.head<3>().squaredNorm();
       st += e.tail<3>().squaredNorm();
       ++cnt;
@@ -401,7 +450,7 @@ class Problem {
     const Pose &a = poses_[k], &b = poses_[k + 1], &cpose = poses_[k + 2];
     Vector6d e;
     if (!ne) {
-      e = Dynamics<double>(a.R, a.p, b.R, b.p, cpose.R, cpose.p, dt1, dt2, in_.m, in_.c, in_.L, in_.R, g,
+      e = Dynamics<double>(a.R, a.p, b.R, b.p, cpose.R, cpose.p, dt1, dt2, in_.m, in_.c, in_.InertiaOrigin(), g,
                            wrench_[k]);
       *cost += 0.5 * (whiten_[k] * e).squaredNorm();
       return;
@@ -414,13 +463,12 @@ class Problem {
       R[q] = ps[q]->R.cast<Jet>() * (M3<Jet>::Identity() + Hat<Jet>(d));
       P[q] = ps[q]->p.cast<Jet>() + V3<Jet>(Var(0, 6 * q + 3), Var(0, 6 * q + 4), Var(0, 6 * q + 5));
     }
-    const Jet m = Var(in_.m, 18);
-    const V3<Jet> c(Var(in_.c(0), 19), Var(in_.c(1), 20), Var(in_.c(2), 21));
-    const V3<Jet> L(Var(in_.L(0), 22), Var(in_.L(1), 23), Var(in_.L(2), 24));
-    const V3<Jet> dr(Var(0, 25), Var(0, 26), Var(0, 27));
-    const M3<Jet> Rl = in_.R.cast<Jet>() * (M3<Jet>::Identity() + Hat<Jet>(dr));
+    Jet m;
+    V3<Jet> c;
+    M3<Jet> H;
+    InertialJets(in_, &m, &c, &H);
     const Eigen::Matrix<Jet, 6, 1> ej =
-        Dynamics<Jet>(R[0], P[0], R[1], P[1], R[2], P[2], dt1, dt2, m, c, L, Rl, g, wrench_[k]);
+        Dynamics<Jet>(R[0], P[0], R[1], P[1], R[2], P[2], dt1, dt2, m, c, H, g, wrench_[k]);
     Eigen::Matrix<double, 6, kLocal> Jl;
     for (int i = 0; i < 6; ++i) e(i) = ej(i).value(), Jl.row(i) = ej(i).derivatives().transpose();
     const Eigen::Matrix<double, 6, kLocal> Jw = whiten_[k] * Jl;
@@ -463,8 +511,10 @@ class Problem {
     }
   }
 
-  // Constraint factors on the inertial block, active only when violated.
+  // Constraint factors on the inertial block, active only when violated
+  // (fg-c and fg-c-g only).
   void AddConstraintFactors(NormalEquations* ne, double* cost) const {
+    if (!UsesConstraints(o_.fg_variant)) return;
     const double sm = o_.fg_constraint_sigma * m_scale_, sl = o_.fg_constraint_sigma * m_scale_ * l_scale_ * l_scale_,
                  sc = o_.fg_constraint_sigma * l_scale_;
     const double m_min = 1e-6 * m_scale_;
@@ -484,7 +534,7 @@ class Problem {
 
   // Trace prior (eq. 20).
   void AddTracePrior(NormalEquations* ne, double* cost) const {
-    if (!o_.prior || !(o_.prior->weight > 0)) return;
+    if (!UsesPrior(o_) || !(o_.prior->weight > 0)) return;
     const double sw = std::sqrt(o_.prior->weight);
     const Eigen::Matrix4d P0inv = PseudoInertia(o_.prior->params).inverse();
     const Jet m = Var(in_.m, 18);
@@ -564,11 +614,34 @@ InitialInertial InitialFromForces(const InertiaSamples& s, const InertiaOptions&
   init.c0 = mh.tail<3>() / init.m0;
   if (!init.c0.allFinite()) init.c0.setZero();
   init.len = hull ? 0.25 * hull->size : std::max(0.05, 0.5 * init.c0.norm());
-  if (o.prior) {
+  if (UsesPrior(o)) {
     init.m0 = o.prior->params.mass;
     init.c0 = o.prior->params.com;
   }
   return init;
+}
+
+// What the variant optimises, for the fit's notes.
+std::string VariantNote(const InertiaOptions& o) {
+  const char* what = "";
+  switch (o.fg_variant) {
+    case FactorGraphVariant::kBaselineFg:
+      what = "inertial variables [m, c, H_xx..H_yz] (H about the origin) as independent reals, no constraint, no prior";
+      break;
+    case FactorGraphVariant::kNoConstraint:
+      what = "inertial variables [m, c, L, R in SO(3)], no constraint factor (m > 0, c in hull, L >= 0 off), no prior";
+      break;
+    case FactorGraphVariant::kConstraint:
+      what = o.prior ? "[m, c, L, R], constraint factors m > 0, c in hull, L >= 0, trace prior (the prior given)"
+                     : "[m, c, L, R], constraint factors m > 0, c in hull, L >= 0, no prior";
+      break;
+    case FactorGraphVariant::kConstraintPrior:
+      what = "[m, c, L, R], constraint factors m > 0, c in hull, L >= 0, trace prior";
+      break;
+  }
+  std::string note = absl::StrCat("factor-graph variant ", ToString(o.fg_variant), ": ", what);
+  if (o.prior && !UsesPrior(o)) absl::StrAppend(&note, " (prior ignored)");
+  return note;
 }
 
 // Batch Levenberg-Marquardt from the problem's current values; `ne` and
@@ -643,6 +716,7 @@ absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const Inert
   InterruptPoll poll(o.interrupt);
   MethodOutput out;
   const int n = static_cast<int>(s.samples.size());
+  out.notes.push_back(VariantNote(o));
   out.notes.push_back("kinematics: three consecutive poses per dynamics factor (eq. 10-17)");
   if (s.HasKinematics()) out.notes.push_back("measured kinematics ignored by factor-graph (poses only, as the paper)");
   if (absl::Status st = CheckRotationSteps(s, &poll); !st.ok()) return st;
@@ -653,13 +727,9 @@ absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const Inert
   if (poll.stopped()) return Interrupted();
   prob.SetScales(init.m0, std::max(init.len, init.c0.norm()));
   prob.Initialise(init.m0, init.c0, init.len);
-  if (o.prior) {
+  if (UsesPrior(o)) {
     // Start from the prior's inertia.
-    const Eigen::Matrix4d P0 = PseudoInertia(o.prior->params);
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(P0.topLeftCorner<3, 3>());
-    prob.inertial().L = es.eigenvalues();
-    prob.inertial().R = es.eigenvectors();
-    if (prob.inertial().R.determinant() < 0) prob.inertial().R.col(2) *= -1;
+    prob.inertial().SetSecondMoment(PseudoInertia(o.prior->params).topLeftCorner<3, 3>());
   }
 
   NormalEquations ne;

@@ -63,6 +63,31 @@ absl::StatusOr<InertiaMethod> ParseInertiaMethod(std::string_view text) {
       "method: unknown '", std::string(text), "' (expected baseline-ls, factor-graph, constrained or density)"));
 }
 
+const char* ToString(FactorGraphVariant v) {
+  switch (v) {
+    case FactorGraphVariant::kBaselineFg: return "baseline-fg";
+    case FactorGraphVariant::kNoConstraint: return "fg-no-c";
+    case FactorGraphVariant::kConstraint: return "fg-c";
+    case FactorGraphVariant::kConstraintPrior: return "fg-c-g";
+  }
+  return "?";
+}
+
+absl::StatusOr<FactorGraphVariant> ParseFactorGraphVariant(std::string_view text) {
+  std::string s;
+  for (char c : text) s += c == '_' ? '-' : static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (s.rfind("factor-graph-variant-", 0) == 0) {
+    s = s.substr(21);
+    if (s == "baseline-fg") return FactorGraphVariant::kBaselineFg;
+    s = "fg-" + s;
+  }
+  for (FactorGraphVariant v : {FactorGraphVariant::kBaselineFg, FactorGraphVariant::kNoConstraint,
+                               FactorGraphVariant::kConstraint, FactorGraphVariant::kConstraintPrior})
+    if (s == ToString(v)) return v;
+  return absl::InvalidArgumentError(absl::StrCat("fg_variant: unknown '", std::string(text),
+                                                 "' (expected baseline-fg, fg-no-c, fg-c or fg-c-g)"));
+}
+
 int MinimumSamples(const InertiaSamples& s, InertiaMethod method) {
   if (method != InertiaMethod::kFactorGraph && s.HasKinematics()) return 2;
   return method == InertiaMethod::kConstrained || method == InertiaMethod::kDensity ? 5 : 4;
@@ -155,6 +180,10 @@ absl::Status ValidateInertiaOptions(const InertiaOptions& o) {
     if (!h.ok()) return h.status();
     hull = *std::move(h);
   }
+  if (o.method == InertiaMethod::kFactorGraph && o.fg_variant == FactorGraphVariant::kConstraintPrior &&
+      !o.prior)
+    return absl::InvalidArgumentError(
+        "prior: the factor-graph variant fg-c-g needs a prior (the geodesic prior factor B); give one or use fg-c");
   if (o.prior) {
     const InertialParameters& p = o.prior->params;
     if (absl::Status st = CheckPositive(p.mass, "prior.mass"); !st.ok()) return st;
@@ -433,6 +462,8 @@ absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in, const In
   if (!r.ok()) return r.status();
   if (options.mesh && (options.method == InertiaMethod::kBaselineLs || options.method == InertiaMethod::kFactorGraph))
     r->notes.push_back(absl::StrCat("mesh ignored by ", ToString(options.method)));
+  if (options.method != InertiaMethod::kFactorGraph && options.fg_variant != FactorGraphVariant::kConstraint)
+    r->notes.push_back(absl::StrCat("fg_variant ", ToString(options.fg_variant), " ignored by ", ToString(options.method)));
 
   fit.method = options.method;
   fit.standard = r->pi;

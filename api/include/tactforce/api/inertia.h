@@ -32,6 +32,7 @@ v1::InertiaMethod InertiaMethodToProto(inertia::InertiaMethod method);
 // library's inertia::ToString is the CLI spelling ("density").
 std::string InertiaMethodName(inertia::InertiaMethod method);
 v1::RegionScheme RegionSchemeToProto(inertia::RegionScheme scheme);
+v1::FactorGraphVariant FactorGraphVariantToProto(inertia::FactorGraphVariant variant);
 
 // The mesh of a MeshInput in the object frame (m), and its name for
 // messages ("mesh" when unnamed). `field` starts the error messages.

@@ -66,6 +66,30 @@ const char* ToString(InertiaMethod method);
 // Accepts either spelling, case-insensitive, '_' or '-'.
 absl::StatusOr<InertiaMethod> ParseInertiaMethod(std::string_view text);
 
+// Which factors and parameterisation FACTOR_GRAPH uses (the ablation of
+// Sundaralingam & Hermans, Sec. IV-B, Figs. 7-8, Tables I-IV):
+//   kBaselineFg        "Baseline-FG": the inertial variables are the paper's
+//                      w_vector = [m, c, H_xx, H_yy, H_zz, H_xy, H_xz, H_yz]
+//                      (H about the origin, independent reals in a vector
+//                      space) with the pose and force measurement variables;
+//                      no constraint factor, no prior (a given prior is
+//                      ignored, noted).
+//   kNoConstraint      "No C, No G": w = [m, c, L, R in SO(3)] with every
+//                      constraint factor off (m > 0, c in the hull and
+//                      L >= 0); no prior (ignored, noted).
+//   kConstraint        "C, No G": the constraint factors on (the default;
+//                      exactly the FACTOR_GRAPH of earlier releases, which
+//                      also adds the trace prior when a prior is given).
+//   kConstraintPrior   "C + G": plus the trace prior (eq. 20); a prior is
+//                      required (InvalidArgument naming `prior`).
+enum class FactorGraphVariant { kBaselineFg, kNoConstraint, kConstraint, kConstraintPrior };
+
+// "baseline-fg", "fg-no-c", "fg-c", "fg-c-g" (CLI spelling).
+const char* ToString(FactorGraphVariant variant);
+// Accepts the CLI spelling, case-insensitive, '_' or '-', and the wire
+// spelling FACTOR_GRAPH_VARIANT_* (BASELINE_FG, NO_C, C, C_G).
+absl::StatusOr<FactorGraphVariant> ParseFactorGraphVariant(std::string_view text);
+
 struct InertiaPrior {
   InertialParameters params;
   double weight = 1.0;  // >= 0; relative to the data term (in units of chi^2)
@@ -138,6 +162,7 @@ struct InertiaOptions {
   double fg_min_position_sigma = 1e-6;     // m
   double fg_min_orientation_sigma = 1e-6;  // rad
   double fg_constraint_sigma = 1e-4;       // relative: active constraint factors
+  FactorGraphVariant fg_variant = FactorGraphVariant::kConstraint;
 
   int max_iterations = 100;  // FACTOR_GRAPH LM / CONSTRAINED Newton iterations
   // Directions whose relative singular value (scaled regressor) is below
@@ -156,7 +181,8 @@ struct InertiaOptions {
 };
 
 // Checks the options (InvalidArgument naming the field, e.g. "hull: ...",
-// "prior.com ... is outside the hull", "noise.force_sigma: negative").
+// "prior.com ... is outside the hull", "noise.force_sigma: negative",
+// "prior: the factor-graph variant fg-c-g needs a prior").
 absl::Status ValidateInertiaOptions(const InertiaOptions& options);
 
 struct InertiaFit {
