@@ -369,12 +369,14 @@ CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args) {
       "  tactforce experiment slope --mu 0.3,0.5 --no-creep\n"
       "  tactforce experiment slope --json");
   args.slope = s;
+  AddProbeCommand(cmd, args.probe);
   return cmd;
 }
 
 int RunExperiment(const ExperimentArgs& args) {
   if (args.grasp && args.grasp->parsed()) return RunGrasp(args);
   if (args.slope && args.slope->parsed()) return RunSlope(args);
+  if (args.probe.app && args.probe.app->parsed()) return RunProbe(args.probe);
   return ReportError(absl::InvalidArgumentError("experiment: give grasp or slope"));
 }
 

@@ -8,6 +8,7 @@
 
 #include "CLI/CLI.hpp"
 #include "cli_common.h"
+#include "experiment_probe_command.h"
 
 namespace tactforce::cli {
 
@@ -32,6 +33,7 @@ struct ExperimentArgs {
 
   CLI::App* grasp = nullptr;
   CLI::App* slope = nullptr;
+  ProbeArgs probe;  // `experiment probe` (experiment_probe_command.h)
 };
 CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args);
 int RunExperiment(const ExperimentArgs& args);
