@@ -55,6 +55,7 @@ absl::StatusOr<ex::ProbeConfig> Config(const ProbeArgs& a) {
   c.seed = a.seed;
   c.force_sigma = a.force_sigma;
   c.force_bias = a.force_bias;
+  c.contact_sigma = a.contact_sigma;
   c.hold_scale = a.hold_scale;
   c.admittance_gain = a.admittance_gain;
   c.plan_sigma = a.plan_sigma;
@@ -65,6 +66,7 @@ absl::StatusOr<ex::ProbeConfig> Config(const ProbeArgs& a) {
     const char* flag = absl::StartsWith(m, "force_sigma") ? "--force-sigma"
                        : absl::StartsWith(m, "force_bias") ? "--force-bias"
                        : absl::StartsWith(m, "hold_scale") ? "--hold-scale"
+                       : absl::StartsWith(m, "contact_sigma") ? "--contact-sigma"
                        : absl::StartsWith(m, "object")     ? "--object"
                                                            : "experiment probe";
     return absl::InvalidArgumentError(absl::StrCat(flag, ": ", m));
@@ -182,6 +184,8 @@ CLI::App* AddProbeCommand(CLI::App* experiment, ProbeArgs& args) {
   p->add_option("--seed", args.seed, "Seed of the tactile noise, bias and probe position")->capture_default_str();
   p->add_option("--force-sigma", args.force_sigma, "Tactile force noise per axis (N)")->capture_default_str();
   p->add_option("--force-bias", args.force_bias, "Std. dev. of the per-trial tactile bias per axis (N)")
+      ->capture_default_str();
+  p->add_option("--contact-sigma", args.contact_sigma, "Tactile contact-point noise per axis (m)")
       ->capture_default_str();
   p->add_option("--hold-scale", args.hold_scale, "Scale of the planned holding forces (0.3: negative control)")
       ->capture_default_str();

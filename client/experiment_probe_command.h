@@ -19,6 +19,7 @@ struct ProbeArgs {
   uint64_t seed = 1;
   double force_sigma = 0.05;     // N per axis
   double force_bias = 0.02;      // N per axis (std. dev. of the per-trial bias)
+  double contact_sigma = 2e-5;   // m per axis
   double hold_scale = 1.0;
   double admittance_gain = 0.05;  // per tick; 0: impedance only
   double plan_sigma = 1.0;       // N, the holding plan's robustness (grip margin)

@@ -126,6 +126,8 @@ absl::Status ValidateProbeConfig(const ProbeConfig& c) {
       absl::StrCat("object.", s.message()));
   if (!(c.force_sigma >= 0 && c.force_sigma <= 5)) return bad("force_sigma", absl::StrFormat("must be in [0, 5] N, got %g", c.force_sigma));
   if (!(c.force_bias >= 0 && c.force_bias <= 5)) return bad("force_bias", absl::StrFormat("must be in [0, 5] N, got %g", c.force_bias));
+  if (!(c.contact_sigma >= 0 && c.contact_sigma <= 0.005))
+    return bad("contact_sigma", absl::StrFormat("must be in [0, 0.005] m, got %g", c.contact_sigma));
   if (!(c.hold_scale > 0 && c.hold_scale <= 3)) return bad("hold_scale", absl::StrFormat("must be in (0, 3], got %g", c.hold_scale));
   if (!(c.table_mu > 0 && c.table_mu <= 2)) return bad("table_mu", absl::StrFormat("must be in (0, 2], got %g", c.table_mu));
   if (!(c.max_motion > 0)) return bad("max_motion", "must be > 0 m");

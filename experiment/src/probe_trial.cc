@@ -171,7 +171,8 @@ void ProbeRun::RecordProbe(double t) {
   estimator::FrictionSample smp;
   smp.t = t - t0_;
   smp.force = R.transpose() * Sense(Vec3(f[0], f[1], f[2]), p.bias);
-  smp.contact_point = R.transpose() * (Vec3(pt[0], pt[1], pt[2]) - x);
+  smp.contact_point = R.transpose() * (Vec3(pt[0], pt[1], pt[2]) - x) +
+                      c_.contact_sigma * Vec3(noise_(rng_), noise_(rng_), noise_(rng_));
   rec_.trial.samples.push_back(smp);
   const double c = std::clamp(((R * R0_.transpose()).trace() - 1) / 2, -1.0, 1.0);
   rec_.motion.push_back((x - x0_).norm());

@@ -83,8 +83,9 @@ TEST(ProbeData, ConfigErrorsNameTheField) {
 }
 
 // Surfaces with mu drawn in [0.2, 1.2] and a drawn box, in the air and on a
-// table: every trial valid with slip detected, the normal from the top face,
-// and the estimate within 0.03 of the slope method on the same pair.
+// table, with noise-free force sensing (the mechanics: grasp, tracking, mesh
+// normal, eq. 5): every trial valid with slip detected, the normal from the
+// top face, and the estimate within 0.03 of the slope method on the same pair.
 TEST(ProbeExperiment, DrawnSurfacesAndObject) {
   std::mt19937_64 rng(kTestSeed);
   std::uniform_real_distribution<double> mu(0.2, 1.2);
@@ -93,6 +94,8 @@ TEST(ProbeExperiment, DrawnSurfacesAndObject) {
     ProbeConfig c;
     c.object = DrawObject(rng);
     c.on_table = on_table;
+    c.force_sigma = 0;
+    c.force_bias = 0;
     c.seed = rng();
     auto report = RunProbeExperiment(c, surfaces, 2);
     ASSERT_TRUE(report.ok()) << report.status();
@@ -107,6 +110,26 @@ TEST(ProbeExperiment, DrawnSurfacesAndObject) {
     }
     EXPECT_EQ(report->summary.valid, 4);
     EXPECT_EQ(report->summary.slip_detected_valid, 4);
+  }
+}
+
+// The default tactile model (bias + noise per axis): each estimate within
+// 0.01 + 4 standard deviations of what that model predicts for eq. 5 at the
+// slip point, sd = sqrt(sigma^2 / window + bias^2) sqrt(1 + mu^2) / f_n,slip.
+TEST(ProbeExperiment, NoisySensingStaysWithinItsPredictedSpread) {
+  std::mt19937_64 rng(kTestSeed + 2);
+  std::uniform_real_distribution<double> mu(0.2, 1.2);
+  ProbeConfig c;
+  c.seed = rng();
+  const SurfacePair s{"drawn", mu(rng)};
+  const double fn_slip = c.slope.probe_tangential / s.mu;
+  const double sd = std::sqrt(c.force_sigma * c.force_sigma / c.slope.friction.window + c.force_bias * c.force_bias) *
+                    std::sqrt(1 + s.mu * s.mu) / fn_slip;
+  auto report = RunProbeExperiment(c, {s}, 4);
+  ASSERT_TRUE(report.ok()) << report.status();
+  for (const ProbeTrialResult& t : report->trials) {
+    EXPECT_TRUE(t.valid) << t.invalid_reason;
+    EXPECT_NEAR(t.mu_estimated, t.mu_slope, 0.01 + 4 * sd) << "mu " << s.mu;
   }
 }
 

@@ -64,6 +64,11 @@ struct ProbeConfig {
   double table_mu = 0.5;       // box/table
   double force_sigma = 0.05;   // N, tactile noise per axis per sample
   double force_bias = 0.02;    // N, std. dev. of the per-trial constant bias per axis
+  // m, tactile contact-point noise per axis per sample (the friction
+  // simulator's default, estimator::FrictionSimOptions::position_noise). With
+  // exactly noise-free points EstimateFriction's onset threshold (median +
+  // k MAD of the quiet travel) collapses to MuJoCo's sub-micrometre creep.
+  double contact_sigma = 2e-5;
   double hold_scale = 1.0;     // scales the planned holding forces (negative control < 1)
   double max_motion = 0.001;   // m, object travel allowed before slip
   double max_rotation_deg = 1; // deg, object rotation allowed before slip
