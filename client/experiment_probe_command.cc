@@ -115,6 +115,8 @@ std::string ReportJson(const ProbeArgs& a, const ex::ProbeConfig& c, const ex::P
   absl::StrAppend(&s, "]},\"config\":{\"object\":", JsonEscape(c.object.name), ",\"on_table\":",
                   c.on_table ? "true" : "false", ",\"force_sigma\":", JsonNumber(c.force_sigma),
                   ",\"force_bias\":", JsonNumber(c.force_bias), ",\"hold_scale\":", JsonNumber(c.hold_scale),
+                  ",\"contact_sigma\":", JsonNumber(c.contact_sigma), ",\"plan_sigma\":", JsonNumber(c.plan_sigma),
+                  ",\"admittance_gain\":", JsonNumber(c.admittance_gain),
                   ",\"pre_slip\":", JsonEscape(a.pre_slip), ",\"seed\":", a.seed,
                   ",\"error_convention\":\"mu_slope - mu_estimated\"},\"wall_seconds\":", JsonNumber(r.wall_seconds),
                   "}");

@@ -32,12 +32,23 @@ planner::Contact Holding(const char* name, const Vec3& p, const Vec3& n, double 
 }
 
 // The holding problem: box mass and CoM, three fingertips, table corners.
-planner::PlanProblem HoldingProblem(const ProbeConfig& c, double mu, std::vector<planner::Contact>* fingers) {
+// In the air the thumb opposes the probe from the bottom face (the probe's
+// normal force goes straight into it, not through friction) and two fingers
+// pinch the x faces; on a table, which carries the normal force, the thumb
+// is on the -x face and the two fingers on the +x face.
+planner::PlanProblem HoldingProblem(const ProbeConfig& c, double mu, const Vec3& probe,
+                                    std::vector<planner::Contact>* fingers) {
   const Vec3 h = c.object.size / 2;
   fingers->clear();
-  fingers->push_back(Holding("thumb", Vec3(-h.x(), 0, 0), Vec3::UnitX(), mu, c));
-  fingers->push_back(Holding("middle", Vec3(h.x(), 0.5 * h.y(), 0), -Vec3::UnitX(), mu, c));
-  fingers->push_back(Holding("ring", Vec3(h.x(), -0.5 * h.y(), 0), -Vec3::UnitX(), mu, c));
+  if (c.on_table) {
+    fingers->push_back(Holding("thumb", Vec3(-h.x(), 0, 0), Vec3::UnitX(), mu, c));
+    fingers->push_back(Holding("middle", Vec3(h.x(), 0.5 * h.y(), 0), -Vec3::UnitX(), mu, c));
+    fingers->push_back(Holding("ring", Vec3(h.x(), -0.5 * h.y(), 0), -Vec3::UnitX(), mu, c));
+  } else {
+    fingers->push_back(Holding("thumb", Vec3(probe.x(), probe.y(), -h.z()), Vec3::UnitZ(), mu, c));
+    fingers->push_back(Holding("middle", Vec3(h.x(), 0, 0), -Vec3::UnitX(), mu, c));
+    fingers->push_back(Holding("ring", Vec3(-h.x(), 0, 0), Vec3::UnitX(), mu, c));
+  }
   planner::PlanProblem p;
   p.object.mass = c.object.mass;
   p.object.com = c.object.com_offset;
@@ -120,10 +131,12 @@ absl::StatusOr<ProbeSetup> MakeProbeSetup(const ProbeConfig& c, const SurfacePai
   s.probe.tangent = Vec3::UnitX();
   s.probe.tangential_force = c.slope.probe_tangential;
   s.probe.initial_normal_force = c.slope.probe_start_ratio * c.slope.probe_tangential / surface.mu;
-  s.probe.final_normal_force = 0;
+  // The schedule brackets the expected slip force (1 N / mu) by the same
+  // factor on both sides: it starts start_ratio above and stops that far below.
+  s.probe.final_normal_force = c.slope.probe_tangential / (c.slope.probe_start_ratio * surface.mu);
   s.probe.ramp_rate = c.slope.probe_ramp;
   s.probe.sample_rate = c.slope.sample_rate;
-  const planner::PlanProblem holding = HoldingProblem(c, surface.mu, &s.holding);
+  const planner::PlanProblem holding = HoldingProblem(c, surface.mu, s.probe.position, &s.holding);
   planner::PlanOptions options;
   options.confidence = c.confidence;
   absl::StatusOr<planner::ProbePlan> plan = planner::PlanFrictionProbe(holding, s.probe, options,

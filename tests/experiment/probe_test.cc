@@ -2,6 +2,7 @@
 // `tactforce experiment probe` end to end. Surfaces and an object are drawn
 // from a fixed seed at test time.
 #include <cmath>
+#include <cstdlib>
 #include <random>
 #include <string>
 #include <vector>
@@ -16,7 +17,7 @@
 namespace tactforce::experiment {
 namespace {
 
-constexpr uint64_t kTestSeed = 20261127;
+const uint64_t kTestSeed = std::getenv("PROBE_SEED") ? std::strtoull(std::getenv("PROBE_SEED"), nullptr, 10) : 20261127;
 
 // A box drawn at test time: edges 5-10 cm, 0.08-0.3 kg, CoM up to 5 mm off-centre.
 ProbeObject DrawObject(std::mt19937_64& rng) {
