@@ -15,7 +15,7 @@
 
 namespace tactforce::experiment {
 
-inline constexpr int kHoldingFingers = 3;  // thumb (-x face), middle and ring (+x face)
+inline constexpr int kHoldingFingers = 3;  // thumb, middle, ring (layout: probe_setup.cc)
 inline constexpr double kCloseTime = 0.3;  // s: the holding fingertips close (object held kinematically)
 inline constexpr double kSettleTime = 0.3; // s: object released, probe force ramps in
 

@@ -17,6 +17,7 @@
 namespace tactforce::experiment {
 namespace {
 
+// $PROBE_SEED draws other surfaces and objects (a robustness check by hand).
 const uint64_t kTestSeed = std::getenv("PROBE_SEED") ? std::strtoull(std::getenv("PROBE_SEED"), nullptr, 10) : 20261127;
 
 // A box drawn at test time: edges 5-10 cm, 0.08-0.3 kg, CoM up to 5 mm off-centre.

@@ -11,8 +11,9 @@
 // Ground truth per surface: the slope method (slope.h) on the same pair.
 //
 // Object frame: origin at the box centre, axes along its edges, +z up at
-// rest. The probe sits on the +z face and pushes towards +x; the thumb is on
-// the -x face, two fingers on the +x face. SI units.
+// rest. The probe sits on the +z face and pushes towards +x. In the air the
+// thumb opposes it from the -z face and two fingers pinch the x faces; on a
+// table the thumb is on the -x face and two fingers on the +x face. SI units.
 #pragma once
 
 #include <cstdint>
