@@ -321,7 +321,7 @@ int RunSlope(const ExperimentArgs& a) {
 }  // namespace
 
 CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args) {
-  CLI::App* cmd = app.add_subcommand("experiment", "Closed-loop experiments in MuJoCo (grasp, slope)");
+  CLI::App* cmd = app.add_subcommand("experiment", "Closed-loop experiments in MuJoCo (grasp, slope, probe, inhand, ablation)");
   cmd->require_subcommand(1);
   CLI::App* g = cmd->add_subcommand(
       "grasp", "Grasp-and-lift trials with force feedback on raw or estimated tactile forces (GeoDEx Table III)");
@@ -371,6 +371,7 @@ CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args) {
   args.slope = s;
   AddInHandSubcommand(cmd, args.inhand);
   AddAblationSubcommand(cmd, args.ablation);
+  AddProbeCommand(cmd, args.probe);
   return cmd;
 }
 
@@ -379,7 +380,8 @@ int RunExperiment(const ExperimentArgs& args) {
   if (args.slope && args.slope->parsed()) return RunSlope(args);
   if (args.inhand.cmd && args.inhand.cmd->parsed()) return RunInHandCommand(args.inhand);
   if (args.ablation.cmd && args.ablation.cmd->parsed()) return RunAblationCommand(args.ablation);
-  return ReportError(absl::InvalidArgumentError("experiment: give grasp or slope"));
+  if (args.probe.app && args.probe.app->parsed()) return RunProbe(args.probe);
+  return ReportError(absl::InvalidArgumentError("experiment: give grasp, slope, probe, inhand or ablation"));
 }
 
 }  // namespace tactforce::cli

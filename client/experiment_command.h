@@ -10,6 +10,7 @@
 #include "cli_common.h"
 #include "experiment_ablation_command.h"
 #include "experiment_inhand_command.h"
+#include "experiment_probe_command.h"
 
 namespace tactforce::cli {
 
@@ -36,6 +37,7 @@ struct ExperimentArgs {
   CLI::App* slope = nullptr;
   InHandArgs inhand;                // `experiment inhand`
   AblationArgs ablation;            // `experiment ablation`
+  ProbeArgs probe;  // `experiment probe` (experiment_probe_command.h)
 };
 CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args);
 int RunExperiment(const ExperimentArgs& args);
