@@ -1,5 +1,5 @@
 // RenderSvg (svg.h): stacked panels over one x axis, built from the plot
-// elements of svg_plot.cc. Layout: margins of 70 px (left, tick labels and
+// elements of svg_plot.cc. Layout: the title, then margins of 70 px (left, tick labels and
 // the y title) and 150 px (right, the legend), panels kGap px apart.
 #include <algorithm>
 
@@ -8,7 +8,7 @@
 namespace tactforce::io {
 namespace {
 
-constexpr double kLeft = 70, kRight = 150, kTop = 40, kGap = 40, kBottom = 45;
+constexpr double kLeft = 70, kRight = 150, kTop = 54, kGap = 40, kBottom = 45;
 
 // The markers' labels right of their rules inside the top of the frame, each
 // one row lower than the last while it would overlap a label already drawn.
