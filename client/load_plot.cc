@@ -54,6 +54,7 @@ std::string Subtitle(const LoadReport& r, const std::string& target) {
 // log10(µs) axis, labelled by hand: DrawAxes would print the exponents.
 void DrawLogLatencyTicks(io::SvgCanvas& canvas, const io::PlotFrame& frame) {
   const bool fine = frame.x_hi - frame.x_lo <= 2.0 + 1e-9;
+  canvas.OpenGroup("class=\"x-ticks\"");
   for (int k = static_cast<int>(std::floor(frame.x_lo)); k <= frame.x_hi; ++k) {
     for (double m : {1.0, 2.0, 5.0}) {
       if (m != 1.0 && !fine) continue;
@@ -62,10 +63,11 @@ void DrawLogLatencyTicks(io::SvgCanvas& canvas, const io::PlotFrame& frame) {
       const double px = frame.X(x);
       canvas.Line(px, frame.top, px, frame.bottom(),
                   io::Stroke{m == 1.0 ? "#d0d0d0" : "#eeeeee", 1, ""});
-      canvas.Text(px, frame.bottom() + canvas.font_size() + 3, DurationLabel(std::pow(10.0, x)),
+      canvas.Text(px, frame.bottom() + canvas.font_size() + 5, DurationLabel(std::pow(10.0, x)),
                   {.anchor = io::TextAnchor::kMiddle});
     }
   }
+  canvas.CloseGroup();
 }
 
 // One bar per bin with calls, each a group carrying its numbers.

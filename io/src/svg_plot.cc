@@ -1,6 +1,7 @@
 // Plot elements of svg.h on top of SvgCanvas: axes (grid, tick labels,
 // titles), rules, traces, scatter dots, markers, legends and colour bars.
-// Tick labels sit 5 px off the frame; a legend swatch's middle is 4 px above
+// Tick labels sit 5 px off the frame (x labels clear of a y label at the
+// bottom edge); a legend swatch's middle is 4 px above
 // its label's baseline (about half the height of a lower-case letter).
 #include <algorithm>
 #include <cmath>
@@ -38,9 +39,9 @@ void DrawAxes(SvgCanvas& canvas, const PlotFrame& frame, const Ticks& x_ticks, c
     const double x = frame.X(v);
     if (x_style.grid) canvas.Line(x, frame.top, x, frame.bottom(), kGridStroke);
     const std::string label = TickLabel(v, x_ticks.step);
-    const TextBox box = TextBoxOf(x, frame.bottom() + x_font + 3, label, x_font, TextAnchor::kMiddle);
+    const TextBox box = TextBoxOf(x, frame.bottom() + x_font + 5, label, x_font, TextAnchor::kMiddle);
     if (!x_style.tick_labels || box.left < last_right + 0.5 * x_font) continue;  // would touch its neighbour
-    canvas.Text(x, frame.bottom() + x_font + 3, label, {.size = x_font, .anchor = TextAnchor::kMiddle});
+    canvas.Text(x, frame.bottom() + x_font + 5, label, {.size = x_font, .anchor = TextAnchor::kMiddle});
     last_right = box.right;
   }
   canvas.CloseGroup();
@@ -56,8 +57,10 @@ void DrawAxes(SvgCanvas& canvas, const PlotFrame& frame, const Ticks& x_ticks, c
     widest = std::max(widest, TextWidth(label, y_font));
   }
   canvas.CloseGroup();
+  // The x title's ascent must clear the tick labels' descent by 2 px.
+  const double x_offset = std::max(x_style.title_offset, x_font + 5 + 0.25 * x_font + 2 + 0.8 * canvas.font_size());
   if (!x_style.title.empty())
-    canvas.Text(frame.left + frame.width / 2, frame.bottom() + x_style.title_offset, x_style.title,
+    canvas.Text(frame.left + frame.width / 2, frame.bottom() + x_offset, x_style.title,
                 {.anchor = TextAnchor::kMiddle});
   // The rotated title's descent must clear the widest tick label by 3 px.
   const double y_offset = std::max(y_style.title_offset, 5 + widest + 3 + 0.25 * canvas.font_size());

@@ -207,7 +207,8 @@ struct AxisStyle {
 // outline (DrawFrameOutline) after. Tick labels are grouped as
 // <g class="x-ticks"> and <g class="y-ticks">; an x label that would touch
 // its left neighbour is skipped; the y title moves left of the widest y tick
-// label when title_offset is too small for it.
+// label, and the x title below the x tick labels, when title_offset is too
+// small for them.
 void DrawAxes(SvgCanvas& canvas, const PlotFrame& frame, const Ticks& x_ticks, const AxisStyle& x_style,
               const Ticks& y_ticks, const AxisStyle& y_style);
 
