@@ -101,7 +101,7 @@ int RunAuditCommand(const AuditArgs& args) {
   if (!report.ok()) return ReportError(report.status());
   // An existing folder is fine: the report's files are replaced whole.
   if (absl::Status s = PrepareOutputDir(args.out_dir, /*force=*/true, {}); !s.ok()) return ReportError(s);
-  if (absl::Status s = audit::WriteAuditReport(*report, args.out_dir); !s.ok()) {
+  if (absl::Status s = audit::WriteAuditReport(*report, args.out_dir, args.csv); !s.ok()) {
     return ReportError(absl::InvalidArgumentError(absl::StrCat("--out: ", s.message())));
   }
   if (args.output.json()) {

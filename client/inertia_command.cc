@@ -260,6 +260,7 @@ absl::Status WritePlot(const InertiaArgs& args, const FlagMesh& mesh, inertia::I
   inertia::DensityPlotOptions plot;
   plot.title = absl::StrCat(mesh.loaded.name, ": ", inertia::ToString(fit.method), " fit");
   if (options.has_truth()) plot.true_com = api::FromProto(options.truth().com());
+  plot.source = absl::StrCat("--csv ", args.csv, " --mesh ", args.mesh_path);
   absl::StatusOr<std::string> svg = inertia::DensityPlotSvg(mesh.loaded.mesh, fit, plot);
   if (!svg.ok()) return absl::Status(svg.status().code(), absl::StrCat("--plot: ", svg.status().message()));
   if (absl::Status written = io::WriteTextFile(args.plot_path, *svg); !written.ok()) {

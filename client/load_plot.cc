@@ -54,6 +54,7 @@ std::string Subtitle(const LoadReport& r, const std::string& target) {
 // log10(µs) axis, labelled by hand: DrawAxes would print the exponents.
 void DrawLogLatencyTicks(io::SvgCanvas& canvas, const io::PlotFrame& frame) {
   const bool fine = frame.x_hi - frame.x_lo <= 2.0 + 1e-9;
+  canvas.OpenGroup("class=\"x-ticks\"");
   for (int k = static_cast<int>(std::floor(frame.x_lo)); k <= frame.x_hi; ++k) {
     for (double m : {1.0, 2.0, 5.0}) {
       if (m != 1.0 && !fine) continue;
@@ -62,10 +63,11 @@ void DrawLogLatencyTicks(io::SvgCanvas& canvas, const io::PlotFrame& frame) {
       const double px = frame.X(x);
       canvas.Line(px, frame.top, px, frame.bottom(),
                   io::Stroke{m == 1.0 ? "#d0d0d0" : "#eeeeee", 1, ""});
-      canvas.Text(px, frame.bottom() + canvas.font_size() + 3, DurationLabel(std::pow(10.0, x)),
+      canvas.Text(px, frame.bottom() + canvas.font_size() + 5, DurationLabel(std::pow(10.0, x)),
                   {.anchor = io::TextAnchor::kMiddle});
     }
   }
+  canvas.CloseGroup();
 }
 
 // One bar per bin with calls, each a group carrying its numbers.
@@ -113,7 +115,7 @@ void DrawHistogramPanel(io::SvgCanvas& canvas, const LoadReport& r) {
                               .tick_labels = false};
   const io::AxisStyle y_style{
       .title = absl::StrFormat("calls per 1/%d decade", kLatencyBinsPerDecade), .title_offset = 56};
-  io::DrawAxes(canvas, frame, io::Ticks{}, x_style, io::NiceTicks(0, frame.y_hi, 5), y_style);
+  io::DrawAxes(canvas, frame, io::Ticks{}, x_style, io::AxisTicks(0, frame.y_hi, 5), y_style);
   DrawLogLatencyTicks(canvas, frame);
   DrawLatencyBars(canvas, frame, bins);
   std::vector<io::LegendEntry> legend;
@@ -132,7 +134,7 @@ void DrawHistogramPanel(io::SvgCanvas& canvas, const LoadReport& r) {
   }
   io::DrawFrameOutline(canvas, frame, io::Stroke{"#888888", 1, ""});
   canvas.Text(frame.left + 4, frame.top - 8, "Latency histogram", {.bold = true});
-  io::DrawLegend(canvas, frame.right() + 12, frame.top + 14, legend);
+  io::DrawLegend(canvas, frame.right() + 12, frame.top + 14, legend, 16, kRight - 20);
 }
 
 // Calls per second in intervals of the timeline (grouped to 1 s for long
@@ -195,7 +197,7 @@ void DrawRatePanel(io::SvgCanvas& canvas, const LoadReport& r) {
                             .y_hi = y_hi};
   const io::AxisStyle x_style{.title = "time since the first call [s]", .title_offset = 34};
   const io::AxisStyle y_style{.title = "calls/s", .title_offset = 56};
-  io::DrawAxes(canvas, frame, io::NiceTicks(0, x_hi, 10), x_style, io::NiceTicks(0, y_hi, 5),
+  io::DrawAxes(canvas, frame, io::AxisTicks(0, x_hi, 10), x_style, io::AxisTicks(0, y_hi, 5),
                y_style);
   DrawRateSeries(canvas, frame, rates.t, rates.ok, "qps", kOkColor);
   std::vector<io::LegendEntry> legend = {
@@ -207,15 +209,15 @@ void DrawRatePanel(io::SvgCanvas& canvas, const LoadReport& r) {
   io::DrawFrameOutline(canvas, frame, io::Stroke{"#888888", 1, ""});
   canvas.Text(frame.left + 4, frame.top - 8,
               absl::StrFormat("Calls per second (per %g s)", rates.interval_s), {.bold = true});
-  io::DrawLegend(canvas, frame.right() + 12, frame.top + 14, legend);
+  io::DrawLegend(canvas, frame.right() + 12, frame.top + 14, legend, 16, kRight - 20);
 }
 
 }  // namespace
 
 std::string LoadPlotSvg(const LoadReport& report, const std::string& target) {
   io::SvgCanvas canvas(kWidth, kHeight, 11);
-  canvas.Text(kLeft, 24, Title(report), {.size = 15, .bold = true});
-  canvas.Text(kLeft, 44, Subtitle(report, target), {.size = 12, .color = "#444444"});
+  canvas.WrappedText(kLeft, 24, Title(report), kWidth - kLeft - 10, {.size = 15, .bold = true}, 18, 1);
+  canvas.WrappedText(kLeft, 44, Subtitle(report, target), kWidth - kLeft - 10, {.size = 12, .color = "#444444"}, 14, 2);
   DrawHistogramPanel(canvas, report);
   DrawRatePanel(canvas, report);
   return canvas.Finish();

@@ -103,7 +103,7 @@ int RunTrajectory(const PlanArgs& args) {
                  : CallUnary(args.connection, &v1::Planner::Stub::PlanTrajectory, request);
   if (!response.ok()) return ReportError(response.status());
   if (!args.plot_path.empty()) {
-    if (absl::Status s = WritePlot(args.plot_path, api::TrajectorySvg(request, *response)); !s.ok()) return ReportError(s);
+    if (absl::Status s = WritePlot(args.plot_path, api::TrajectorySvg(request, *response, InputName(args.trajectory_path))); !s.ok()) return ReportError(s);
   }
   std::cout << (args.output.json() ? api::ToJson(*response) : FormatTrajectoryTable(*response));
   return std::cout ? kExitOk : kExitFailure;
@@ -167,7 +167,7 @@ int RunPlan(const PlanArgs& args) {
   absl::StatusOr<v1::PlanResponse> response = (*backend)->Plan(*request);
   if (!response.ok()) return ReportError(response.status());
   if (!args.plot_path.empty()) {
-    if (absl::Status s = WritePlot(args.plot_path, api::PlanSvg(*request, *response)); !s.ok()) return ReportError(s);
+    if (absl::Status s = WritePlot(args.plot_path, api::PlanSvg(*request, *response, InputName(args.request_path))); !s.ok()) return ReportError(s);
   }
 
   if (args.output.json()) {

@@ -61,7 +61,7 @@ struct Style {
   double label_font;
 };
 constexpr Style kLarge{300, 64, 80, 11, 30, 9, 3.5, 11};
-constexpr Style kSmall{150, 46, 58, 9, 25, 6, 2.5, 9};
+constexpr Style kSmall{170, 50, 62, 9, 25, 6, 2.5, 9};
 
 // One length and force scale for every view of a figure.
 struct Scale {
@@ -200,7 +200,7 @@ void DrawSpread(io::SvgCanvas& canvas, const Projector& at, const ContactGlyph& 
 }
 
 void DrawContact(io::SvgCanvas& canvas, const Projector& at, const ContactGlyph& c, const Scale& s,
-                 const Style& style, int i) {
+                 const Style& style, int i, io::LabelPlacer& labels) {
   const Point p = at(c.position);
   canvas.OpenGroup(GlyphGroup("normal", i));
   const Point n = at(c.position + s.normal_length * c.normal);
@@ -214,14 +214,16 @@ void DrawContact(io::SvgCanvas& canvas, const Projector& at, const ContactGlyph&
   canvas.CloseGroup();
   canvas.OpenGroup(GlyphGroup("contact-point", i));
   canvas.Circle(p.first, p.second, style.point, "black");
-  canvas.Text(p.first + 5, p.second - 5, c.label, {.size = style.label_font});
+  const auto [lx, ly] = labels.Place(p.first, p.second, c.label, style.label_font);
+  canvas.Text(lx, ly, c.label, {.size = style.label_font});
   canvas.CloseGroup();
 }
 
 // The CoM (ring and cross) and the gravity direction from it: an arrow of
 // 0.2 x the view, or, seen end on, a circle with a dot (toward you) or a
 // cross (away) beside the CoM.
-void DrawComAndGravity(io::SvgCanvas& canvas, const Projector& at, const PlanScene& scene, double view_px) {
+void DrawComAndGravity(io::SvgCanvas& canvas, const Projector& at, const PlanScene& scene, double view_px,
+                       io::LabelPlacer& labels) {
   const Point com = at(scene.com);
   canvas.OpenGroup("class=\"com\"");
   io::DrawMarker(canvas, com.first, com.second, {.shape = io::MarkerShape::kRing, .color = kComColor, .size = 12});
@@ -232,11 +234,13 @@ void DrawComAndGravity(io::SvgCanvas& canvas, const Projector& at, const PlanSce
   const io::Stroke stroke{kGravityColor, 2, ""};
   if (!(g > 0)) {
     canvas.Text(com.first + 10, com.second - 10, "g = 0", {.color = kGravityColor});
+    labels.Block(io::TextBoxOf(com.first + 10, com.second - 10, "g = 0", canvas.font_size(), io::TextAnchor::kStart));
   } else {
     const double dx = scene.gravity[at.view.a] / g * length, dy = -scene.gravity[at.view.b] / g * length;
     if (std::hypot(dx, dy) >= 4) {
       io::DrawArrow(canvas, com.first, com.second, com.first + dx, com.second + dy, stroke, 9);
       canvas.Text(com.first + dx + 4, com.second + dy + 4, "g", {.color = kGravityColor});
+      labels.Block(io::TextBoxOf(com.first + dx + 4, com.second + dy + 4, "g", canvas.font_size(), io::TextAnchor::kStart));
     } else {
       const double x = com.first + 16, y = com.second - 16;
       canvas.Circle(x, y, 6, "none", &stroke);
@@ -246,6 +250,8 @@ void DrawComAndGravity(io::SvgCanvas& canvas, const Projector& at, const PlanSce
         canvas.Path(absl::StrFormat("M%.1f,%.1fl8,8m0,-8l-8,8", x - 4, y - 4), {kGravityColor, 1.5, ""});
       }
       canvas.Text(x + 9, y + 4, "g", {.color = kGravityColor});
+      labels.Block({x - 7, y - 7, x + 7, y + 7});
+      labels.Block(io::TextBoxOf(x + 9, y + 4, "g", canvas.font_size(), io::TextAnchor::kStart));
     }
   }
   canvas.CloseGroup();
@@ -263,13 +269,21 @@ void DrawView(io::SvgCanvas& canvas, const io::PlotFrame& frame, const ViewAxes&
   io::AxisStyle y_axis = x_axis;
   y_axis.title = kAxisTitle[view.b];
   y_axis.title_offset = style.left - 12;
-  io::DrawAxes(canvas, frame, io::NiceTicks(frame.x_lo, frame.x_hi, 4), x_axis,
-               io::NiceTicks(frame.y_lo, frame.y_hi, 4), y_axis);
+  io::DrawAxes(canvas, frame, io::AxisTicks(frame.x_lo, frame.x_hi, 4), x_axis,
+               io::AxisTicks(frame.y_lo, frame.y_hi, 4), y_axis);
   const Projector at{frame, view};
-  DrawComAndGravity(canvas, at, scene, style.view);
+  // Contact labels go where no other label, point or the CoM is.
+  io::LabelPlacer labels({frame.left + 2, frame.top + 2, frame.right() - 2, frame.bottom() - 2});
+  for (const ContactGlyph& c : scene.contacts) {
+    const Point p = at(c.position);
+    labels.Block({p.first - style.point, p.second - style.point, p.first + style.point, p.second + style.point});
+  }
+  const Point com = at(scene.com);
+  labels.Block({com.first - 6, com.second - 6, com.first + 6, com.second + 6});
+  DrawComAndGravity(canvas, at, scene, style.view, labels);
   for (size_t i = 0; i < scene.contacts.size(); ++i) DrawCone(canvas, at, scene.contacts[i], s, static_cast<int>(i));
   for (size_t i = 0; i < scene.contacts.size(); ++i) {
-    DrawContact(canvas, at, scene.contacts[i], s, style, static_cast<int>(i));
+    DrawContact(canvas, at, scene.contacts[i], s, style, static_cast<int>(i), labels);
     DrawSpread(canvas, at, scene.contacts[i], s, static_cast<int>(i));
   }
   io::DrawFrameOutline(canvas, frame, {"#444", 1, ""});
@@ -293,13 +307,10 @@ double ViewsWidth(const Style& style) { return style.left + 3 * style.view + 2 *
 
 // ---- Legend ---------------------------------------------------------------------
 
-constexpr int kLegendRows = 8;  // the heading and seven entries
+constexpr double kLegendRow = 18;  // px
 
-// The legend under the views (kLegendRows rows of 18 px from y); returns the
-// baseline below it.
-double DrawPlotLegend(io::SvgCanvas& canvas, double x, double y, const PlanScene& scene, const Scale& s) {
-  canvas.OpenGroup("id=\"legend\"");
-  canvas.Text(x, y, "Object frame, orthographic views; positions in m. Legend:", {.bold = true});
+// The legend's entries (what each glyph is, with the figure's scales).
+std::vector<io::LegendEntry> PlotLegendEntries(const PlanScene& scene, const Scale& s) {
   const int sides = scene.contacts.empty() ? 0 : scene.contacts.front().cone_sides;
   const std::string cone =
       sides > 0 ? absl::StrFormat("robust friction pyramid (%d facets): apex moved along n by the largest facet "
@@ -309,7 +320,7 @@ double DrawPlotLegend(io::SvgCanvas& canvas, double x, double y, const PlanScene
                                   "tightened cone); drawn up to n\xc2\xb7" "f = %.3g N",
                                   s.cone_height);
   using Entry = io::LegendEntry;
-  const std::vector<Entry> entries = {
+  return {
       {.label = "contact point (m), with its name", .swatch = Entry::Swatch::kMarker,
        .marker = {.shape = io::MarkerShape::kBox, .size = 6}},
       {.label = "inward normal n (direction only)", .line = kNormalStroke},
@@ -325,9 +336,41 @@ double DrawPlotLegend(io::SvgCanvas& canvas, double x, double y, const PlanScene
       {.label = "gravity direction (fixed length; \xe2\x8a\x99 toward you, \xe2\x8a\x97 away)",
        .line = {kGravityColor, 2, ""}},
   };
-  const double end = io::DrawLegend(canvas, x, y + 18, entries, 18);
+}
+
+// The height of the legend (heading and entries) wrapped to `width` px.
+double PlotLegendHeight(const PlanScene& scene, const Scale& s, double font_size, double width) {
+  return kLegendRow + io::LegendHeight(PlotLegendEntries(scene, s), font_size, kLegendRow, width);
+}
+
+// The legend under the views, wrapped to `width` px, its heading's baseline at
+// y; returns the baseline below it.
+double DrawPlotLegend(io::SvgCanvas& canvas, double x, double y, const PlanScene& scene, const Scale& s,
+                      double width) {
+  canvas.OpenGroup("id=\"legend\"");
+  canvas.WrappedText(x, y, "Object frame, orthographic views; positions in m. Legend:", width, {.bold = true}, 0, 1);
+  const double end = io::DrawLegend(canvas, x, y + kLegendRow, PlotLegendEntries(scene, s), kLegendRow, width);
   canvas.CloseGroup();
   return end;
+}
+
+// The title (bold, wrapped), the settings and the source file under it, from
+// baseline y within `width` px; returns the baseline below.
+double DrawHeading(io::SvgCanvas& canvas, double x, double y, const std::string& title, const PlanScene* scene,
+                   std::string_view source, double width, double title_size) {
+  y = canvas.WrappedText(x, y, title, width, {.size = title_size, .bold = true}, title_size + 4, 2);
+  if (scene != nullptr) y = canvas.WrappedText(x, y, scene->settings, width, {}, 16, 2);
+  if (!source.empty()) y = canvas.WrappedText(x, y, "source: " + std::string(source), width, {.color = "#444"}, 16, 1);
+  return y;
+}
+
+// The height DrawHeading takes.
+double HeadingHeight(const std::string& title, const PlanScene* scene, std::string_view source, double width,
+                     double title_size, double font_size) {
+  double h = (title_size + 4) * io::WrapText(title, title_size, width, 2).size();
+  if (scene != nullptr) h += 16 * io::WrapText(scene->settings, font_size, width, 2).size();
+  if (!source.empty()) h += 16;
+  return h;
 }
 
 std::string ForceLine(const ContactGlyph& c) {
@@ -340,22 +383,23 @@ std::string ForceLine(const ContactGlyph& c) {
 
 // ---- Figures --------------------------------------------------------------------
 
-std::string RenderPlan(const PlanScene& scene) {
+std::string RenderPlan(const PlanScene& scene, std::string_view source) {
   const Style& style = kLarge;
   const Scale s = ChooseScale({&scene});
-  const double views_top = 84, legend_top = views_top + style.view + 62;
-  const double table_top = legend_top + kLegendRows * 18 + 14;
+  const double width = ViewsWidth(style) + 30, text_width = width - style.left - 10, font = 12;
+  const std::string title =
+      absl::StrCat("Plan: ", scene.status, scene.outcome.empty() ? "" : " \xe2\x80\x94 ", scene.outcome);
+  const double views_top = 26 + HeadingHeight(title, &scene, source, text_width, 16, font) + 20;
+  const double legend_top = views_top + style.view + 62;
+  const double table_top = legend_top + PlotLegendHeight(scene, s, font, text_width) + 14;
   const double height = table_top + 16 * scene.contacts.size() + 16;
-  io::SvgCanvas canvas(ViewsWidth(style) + 30, height);
-  canvas.Text(style.left, 26, absl::StrCat("Plan: ", scene.status, scene.outcome.empty() ? "" : " \xe2\x80\x94 ",
-                                           scene.outcome),
-              {.size = 16, .bold = true});
-  canvas.Text(style.left, 46, scene.settings);
+  io::SvgCanvas canvas(width, height, font);
+  DrawHeading(canvas, style.left, 26, title, &scene, source, text_width, 16);
   DrawViews(canvas, style.left, views_top, "", scene, s, style);
-  DrawPlotLegend(canvas, style.left, legend_top, scene, s);
+  DrawPlotLegend(canvas, style.left, legend_top, scene, s, text_width);
   canvas.OpenGroup("id=\"contact-table\"");
   for (size_t i = 0; i < scene.contacts.size(); ++i)
-    canvas.Text(style.left, table_top + 16 * i, ForceLine(scene.contacts[i]));
+    canvas.WrappedText(style.left, table_top + 16 * i, ForceLine(scene.contacts[i]), text_width, {}, 16, 1);
   canvas.CloseGroup();
   return canvas.Finish();
 }
@@ -368,44 +412,48 @@ std::string TrajectoryHeading(const v1::TrajectoryResponse& response, int steps,
 }
 
 std::string RenderTrajectory(const std::vector<PlanScene>& scenes, const std::vector<int>& shown,
-                             const std::string& heading) {
+                             const std::string& heading, std::string_view source) {
   const Style& style = kSmall;
   std::vector<const PlanScene*> all;
   for (const PlanScene& scene : scenes) all.push_back(&scene);
   const Scale s = ChooseScale(all);
-  const int columns = shown.size() > 4 ? 2 : 1;
+  const int columns = shown.size() > 2 ? 2 : 1;
   const int rows = (static_cast<int>(shown.size()) + columns - 1) / columns;
-  const double panel_w = ViewsWidth(style) + 24, panel_h = 36 + style.view + 48, top = 70;
+  const double panel_w = ViewsWidth(style) + 24, panel_h = 36 + style.view + 48, font = 12;
+  const double width = columns * panel_w + 20, text_width = width - style.left - 10;
+  const PlanScene* first = scenes.empty() ? nullptr : &scenes.front();
+  const double top = 26 + HeadingHeight(heading, first, source, text_width, 15, font) + 8;
   const double legend_top = top + rows * panel_h + 16;
-  io::SvgCanvas canvas(std::max(columns * panel_w + 20, 1150.0), legend_top + kLegendRows * 18 + 16);
-  canvas.Text(style.left, 26, heading, {.size = 15, .bold = true});
-  if (!scenes.empty()) canvas.Text(style.left, 46, scenes.front().settings);
+  const double legend_height = first == nullptr ? 0 : PlotLegendHeight(*first, s, font, text_width);
+  io::SvgCanvas canvas(width, legend_top + legend_height + 16, font);
+  DrawHeading(canvas, style.left, 26, heading, first, source, text_width, 15);
   for (size_t j = 0; j < shown.size(); ++j) {
     const double x = 10 + (j % columns) * panel_w, y = top + (j / columns) * panel_h;
     canvas.OpenGroup(absl::StrFormat("class=\"step-panel\" data-step=\"%d\"", shown[j]));
     const PlanScene& scene = scenes[j];
-    canvas.Text(x, y + 14, absl::StrCat("step ", shown[j], ": ", scene.status, scene.outcome.empty() ? "" : ", ",
-                                        scene.outcome),
-                {.bold = true});
+    canvas.WrappedText(x, y + 14, absl::StrCat("step ", shown[j], ": ", scene.status,
+                                               scene.outcome.empty() ? "" : ", ", scene.outcome),
+                       panel_w - 20, {.bold = true}, 16, 1);
     DrawViews(canvas, x + style.left, y + 36, absl::StrCat("step", shown[j], "-"), scene, s, style);
     canvas.CloseGroup();
   }
-  if (!scenes.empty()) DrawPlotLegend(canvas, style.left, legend_top, scenes.front(), s);
+  if (first != nullptr) DrawPlotLegend(canvas, style.left, legend_top, *first, s, text_width);
   return canvas.Finish();
 }
 
 }  // namespace
 
-absl::StatusOr<std::string> PlanSvg(const v1::PlanRequest& request, const v1::PlanResponse& response) {
+absl::StatusOr<std::string> PlanSvg(const v1::PlanRequest& request, const v1::PlanResponse& response,
+                                    std::string_view source) {
   absl::StatusOr<PlanCall> call = FromProto(request);
   if (!call.ok()) return call.status();
   absl::StatusOr<PlanScene> scene = BuildPlanScene(call->problem, call->options, response);
   if (!scene.ok()) return scene.status();
-  return RenderPlan(*scene);
+  return RenderPlan(*scene, source);
 }
 
 absl::StatusOr<std::string> TrajectorySvg(const v1::TrajectoryRequest& request,
-                                          const v1::TrajectoryResponse& response) {
+                                          const v1::TrajectoryResponse& response, std::string_view source) {
   absl::StatusOr<PlanCall> call = FromProto(request.plan());
   if (!call.ok()) return call.status();
   absl::StatusOr<planner::TrajectoryProblem> motion = ToTrajectoryProblem(request, call->problem);
@@ -419,7 +467,7 @@ absl::StatusOr<std::string> TrajectorySvg(const v1::TrajectoryRequest& request,
     if (!scene.ok()) return absl::Status(scene.status().code(), absl::StrCat("steps[", k, "]: ", scene.status().message()));
     scenes.push_back(*std::move(scene));
   }
-  return RenderTrajectory(scenes, shown, TrajectoryHeading(response, steps, shown));
+  return RenderTrajectory(scenes, shown, TrajectoryHeading(response, steps, shown), source);
 }
 
 }  // namespace tactforce::api

@@ -150,14 +150,21 @@ void WriteDownstream(io::JsonWriter& w, const std::optional<DownstreamGain>& dow
 struct Series {
   std::string label, color;
   std::vector<double> x, y;
-  bool line = false;  // a line through the points; otherwise dots
+  bool line = false;    // a line through the points; otherwise dots
+  double radius = 1.6;  // px, dots
+  double opacity = 0.6;
 };
 
-// One 800 x 520 plot of `series` (the data's extent, y padded by 5 %), with a
-// dashed "held-out" rule at x = `vline` when it is finite.
-std::string Plot(const std::string& title, const std::string& xlabel, const std::string& ylabel,
-                 const std::vector<Series>& series, double vline = NAN) {
-  constexpr double kWidth = 800, kHeight = 520, kLeft = 80, kRight = 20, kTop = 40, kBottom = 60;
+// The title, the axis titles and the source file of one plot.
+struct PlotText {
+  std::string title, xlabel, ylabel, source;
+};
+
+// One plot of `series` in drawing order (the data's extent, y padded by 5 %),
+// the legend right of the frame, with a dashed "held-out" rule at x = `vline`
+// when it is finite.
+std::string Plot(const PlotText& text, const std::vector<Series>& series, double vline = NAN) {
+  constexpr double kWidth = 860, kHeight = 540, kLeft = 80, kRight = 190, kTop = 58, kBottom = 60;
   io::Range x, y;
   for (const Series& s : series)
     for (size_t i = 0; i < s.x.size() && i < s.y.size(); ++i)
@@ -166,21 +173,24 @@ std::string Plot(const std::string& title, const std::string& xlabel, const std:
   y = y.ForAxis(0.05);
   const io::PlotFrame frame{kLeft, kTop, kWidth - kLeft - kRight, kHeight - kTop - kBottom, x.lo, x.hi, y.lo, y.hi};
   io::SvgCanvas canvas(kWidth, kHeight, 12);
-  canvas.Text(kWidth / 2, 24, title, {.size = 15, .anchor = io::TextAnchor::kMiddle});
-  io::DrawAxes(canvas, frame, io::NiceTicks(x.lo, x.hi), {.title = xlabel, .title_offset = 40},
-               io::NiceTicks(y.lo, y.hi), {.title = ylabel, .title_offset = 62});
+  canvas.WrappedText(kLeft, 24, text.title, kWidth - kLeft - 10, {.size = 15, .bold = true}, 18, 1);
+  if (!text.source.empty())
+    canvas.WrappedText(kLeft, 42, "source: " + text.source, kWidth - kLeft - 10, {.color = "#444"}, 16, 1);
+  io::DrawAxes(canvas, frame, io::AxisTicks(x.lo, x.hi), {.title = text.xlabel, .title_offset = 40},
+               io::AxisTicks(y.lo, y.hi), {.title = text.ylabel, .title_offset = 62});
   io::DrawVerticalRule(canvas, frame, vline, io::Stroke{"black", 1, "5,4"}, "held-out");
   std::vector<io::LegendEntry> legend;
   for (const Series& s : series) {
     if (s.line) io::DrawLineTrace(canvas, frame, s.x, s.y, io::Stroke{s.color, 1.5, ""});
-    else io::DrawScatter(canvas, frame, s.x, s.y, s.color);
-    legend.push_back({.label = s.label,
-                      .swatch = s.line ? io::LegendEntry::Swatch::kLine : io::LegendEntry::Swatch::kBox,
-                      .line = io::Stroke{s.color, 2, ""},
-                      .color = s.color});
+    else io::DrawScatter(canvas, frame, s.x, s.y, s.color, s.radius, s.opacity);
+    io::LegendEntry entry{.label = s.label, .line = io::Stroke{s.color, 2, ""}};
+    if (!s.line)
+      entry.swatch = io::LegendEntry::Swatch::kMarker,
+      entry.marker = {.shape = io::MarkerShape::kBox, .color = s.color, .size = std::max(4.0, 2.5 * s.radius)};
+    legend.push_back(entry);
   }
   io::DrawFrameOutline(canvas, frame, io::Stroke{});
-  io::DrawLegend(canvas, kLeft + 10, kTop + 16, legend);
+  io::DrawLegend(canvas, frame.right() + 12, kTop + 14, legend, 18, kRight - 20);
   return canvas.Finish();
 }
 
@@ -311,7 +321,7 @@ std::string FormatAuditSummary(const AuditReport& r) {
   return s;
 }
 
-absl::Status WriteAuditReport(const AuditReport& r, const std::string& dir) {
+absl::Status WriteAuditReport(const AuditReport& r, const std::string& dir, const std::string& source) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) return absl::InternalError(absl::StrCat(dir, ": cannot create directory: ", ec.message()));
@@ -337,27 +347,30 @@ absl::Status WriteAuditReport(const AuditReport& r, const std::string& dir) {
                               *std::max_element(r.reference.begin(), r.reference.end())};
     std::vector<double> ys = {r.nominal_model.gain * xs[0] + r.nominal_model.offset,
                               r.nominal_model.gain * xs[1] + r.nominal_model.offset};
-    std::vector<Series> se = {{"measured", "#888888", r.reference, r.reading, false},
-                              {"extended model", "#e6550d", r.reference, r.predicted_extended, false},
+    // Measured dots large and pale underneath, the model's small and dark on top: both show.
+    std::vector<Series> se = {{"measured", "#888888", r.reference, r.reading, false, 2.6, 0.45},
+                              {"extended model", "#e6550d", r.reference, r.predicted_extended, false, 1.1, 0.9},
                               {"nominal model", "#3182bd", xs, ys, true}};
     if (auto st = write("reading_vs_reference.svg",
-                        Plot("Reading vs reference", "reference force [N]", ylab, se));
+                        Plot({"Reading vs reference", "reference force [N]", ylab, source}, se));
         !st.ok())
       return st;
   }
   {
-    std::vector<Series> se = {{"nominal residual", "#3182bd", r.reference, res_n, false},
-                              {"extended residual", "#e6550d", r.reference, res_e, false}};
+    std::vector<Series> se = {{"nominal residual", "#3182bd", r.reference, res_n, false, 2.4, 0.45},
+                              {"extended residual", "#e6550d", r.reference, res_e, false, 1.2, 0.9}};
     if (auto st = write("residual_vs_reference.svg",
-                        Plot("Residual vs reference (force equivalent)", "reference force [N]", "residual [N]", se));
+                        Plot({"Residual vs reference (force equivalent)", "reference force [N]", "residual [N]", source},
+                             se));
         !st.ok())
       return st;
   }
   {
-    std::vector<Series> se = {{"nominal residual", "#3182bd", r.t, res_n, false},
-                              {"extended residual", "#e6550d", r.t, res_e, false}};
+    std::vector<Series> se = {{"nominal residual", "#3182bd", r.t, res_n, false, 2.4, 0.45},
+                              {"extended residual", "#e6550d", r.t, res_e, false, 1.2, 0.9}};
     if (auto st = write("residual_vs_time.svg",
-                        Plot("Residual vs time (force equivalent)", "t [s]", "residual [N]", se, r.split_time));
+                        Plot({"Residual vs time (force equivalent)", "t [s]", "residual [N]", source}, se,
+                             r.split_time));
         !st.ok())
       return st;
   }

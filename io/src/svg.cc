@@ -62,6 +62,18 @@ Ticks NiceTicks(double lo, double hi, int intervals) {
   return TicksAt(lo, hi, NiceStep((hi - lo) / std::max(1, intervals)));
 }
 
+Ticks AxisTicks(double lo, double hi, int intervals) {
+  Ticks t = NiceTicks(lo, hi, intervals);
+  if (!(hi > lo) || !std::isfinite(hi - lo)) return t;
+  // The next lower 1-2-5 step (5 -> 2 -> 1 -> 0.5); a step under a third of the span gives three ticks.
+  for (int round = 0; round < 8 && t.values.size() < 3; ++round) {
+    const double magnitude = std::pow(10.0, std::floor(std::log10(t.step) + 1e-9));
+    const double mantissa = std::round(t.step / magnitude);
+    t = TicksAt(lo, hi, mantissa >= 5 ? 2 * magnitude : mantissa >= 2 ? magnitude : 0.5 * magnitude);
+  }
+  return t;
+}
+
 std::string TickLabel(double value, double step) {
   if (step > 0 && std::isfinite(step)) value = std::round(value / step) * step;
   if (std::abs(value) < 1e-9 * step) value = 0;

@@ -1,9 +1,11 @@
 // Plot elements of svg.h on top of SvgCanvas: axes (grid, tick labels,
 // titles), rules, traces, scatter dots, markers, legends and colour bars.
-// Tick labels sit 5 px off the frame; a legend swatch's middle is 4 px above
+// Tick labels sit 5 px off the frame (x labels clear of a y label at the
+// bottom edge); a legend swatch's middle is 4 px above
 // its label's baseline (about half the height of a lower-case letter).
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
@@ -30,27 +32,40 @@ size_t Stride(size_t n, size_t max_points) { return std::max<size_t>(1, n / std:
 void DrawAxes(SvgCanvas& canvas, const PlotFrame& frame, const Ticks& x_ticks, const AxisStyle& x_style,
               const Ticks& y_ticks, const AxisStyle& y_style) {
   const double x_font = FontSize(canvas, x_style.tick_font_size), y_font = FontSize(canvas, y_style.tick_font_size);
+  canvas.OpenGroup("class=\"x-ticks\"");
+  double last_right = -std::numeric_limits<double>::infinity();
   for (double v : x_ticks.values) {
     if (!Inside(v, frame.x_lo, frame.x_hi)) continue;
     const double x = frame.X(v);
     if (x_style.grid) canvas.Line(x, frame.top, x, frame.bottom(), kGridStroke);
-    if (x_style.tick_labels)
-      canvas.Text(x, frame.bottom() + x_font + 3, TickLabel(v, x_ticks.step),
-                  {.size = x_font, .anchor = TextAnchor::kMiddle});
+    const std::string label = TickLabel(v, x_ticks.step);
+    const TextBox box = TextBoxOf(x, frame.bottom() + x_font + 5, label, x_font, TextAnchor::kMiddle);
+    if (!x_style.tick_labels || box.left < last_right + 0.5 * x_font) continue;  // would touch its neighbour
+    canvas.Text(x, frame.bottom() + x_font + 5, label, {.size = x_font, .anchor = TextAnchor::kMiddle});
+    last_right = box.right;
   }
+  canvas.CloseGroup();
+  canvas.OpenGroup("class=\"y-ticks\"");
+  double widest = 0;
   for (double v : y_ticks.values) {
     if (!Inside(v, frame.y_lo, frame.y_hi)) continue;
     const double y = frame.Y(v);
     if (y_style.grid) canvas.Line(frame.left, y, frame.right(), y, kGridStroke);
-    if (y_style.tick_labels)
-      canvas.Text(frame.left - 5, y + 0.35 * y_font, TickLabel(v, y_ticks.step),
-                  {.size = y_font, .anchor = TextAnchor::kEnd});
+    if (!y_style.tick_labels) continue;
+    const std::string label = TickLabel(v, y_ticks.step);
+    canvas.Text(frame.left - 5, y + 0.35 * y_font, label, {.size = y_font, .anchor = TextAnchor::kEnd});
+    widest = std::max(widest, TextWidth(label, y_font));
   }
+  canvas.CloseGroup();
+  // The x title's ascent must clear the tick labels' descent by 2 px.
+  const double x_offset = std::max(x_style.title_offset, x_font + 5 + 0.25 * x_font + 2 + 0.8 * canvas.font_size());
   if (!x_style.title.empty())
-    canvas.Text(frame.left + frame.width / 2, frame.bottom() + x_style.title_offset, x_style.title,
+    canvas.Text(frame.left + frame.width / 2, frame.bottom() + x_offset, x_style.title,
                 {.anchor = TextAnchor::kMiddle});
+  // The rotated title's descent must clear the widest tick label by 3 px.
+  const double y_offset = std::max(y_style.title_offset, 5 + widest + 3 + 0.25 * canvas.font_size());
   if (!y_style.title.empty())
-    canvas.Text(frame.left - y_style.title_offset, frame.top + frame.height / 2, y_style.title,
+    canvas.Text(frame.left - y_offset, frame.top + frame.height / 2, y_style.title,
                 {.anchor = TextAnchor::kMiddle, .vertical = true});
 }
 
@@ -114,6 +129,9 @@ void DrawMarker(SvgCanvas& canvas, double x, double y, const MarkerStyle& style)
       case MarkerShape::kBox:
         canvas.Rect(x - half, y - half, style.size, style.size, style.color, halo ? &stroke : nullptr);
         break;
+      case MarkerShape::kDiamond:
+        canvas.Polygon({{x, y - half}, {x + half, y}, {x, y + half}, {x - half, y}}, stroke);
+        break;
     }
   };
   if (style.halo) draw(true);
@@ -137,7 +155,9 @@ void DrawArrow(SvgCanvas& canvas, double x1, double y1, double x2, double y2, co
               Stroke{stroke.color, 1, ""}, stroke.color);
 }
 
-double DrawLegend(SvgCanvas& canvas, double x, double y, const std::vector<LegendEntry>& entries, double row) {
+double DrawLegend(SvgCanvas& canvas, double x, double y, const std::vector<LegendEntry>& entries, double row,
+                  double max_width) {
+  const double label_width = max_width > 0 ? max_width - 24 : std::numeric_limits<double>::infinity();
   for (const LegendEntry& e : entries) {
     const double mid = y - 4;
     switch (e.swatch) {
@@ -155,10 +175,16 @@ double DrawLegend(SvgCanvas& canvas, double x, double y, const std::vector<Legen
         break;
       }
     }
-    canvas.Text(x + 24, y, e.label);
-    y += row;
+    y = canvas.WrappedText(x + 24, y, e.label, label_width, {}, row, 4);
   }
   return y;
+}
+
+double LegendHeight(const std::vector<LegendEntry>& entries, double font_size, double row, double max_width) {
+  const double label_width = max_width > 0 ? max_width - 24 : std::numeric_limits<double>::infinity();
+  double height = 0;
+  for (const LegendEntry& e : entries) height += row * WrapText(e.label, font_size, label_width, 4).size();
+  return height;
 }
 
 ColorRamp::ColorRamp(std::vector<uint32_t> anchors) : anchors_(std::move(anchors)) {
@@ -194,12 +220,14 @@ void DrawColorBar(SvgCanvas& canvas, const ColorBar& bar, const ColorRamp& ramp)
   const Stroke outline{"#444", 1, ""};
   canvas.Rect(bar.x, bar.y, bar.width, bar.height, absl::StrCat("url(#", id, "-ramp)"), &outline);
   const PlotFrame scale{bar.x, bar.y, bar.width, bar.height, 0, 1, bar.lo, bar.hi};
+  canvas.OpenGroup("class=\"bar-ticks\"");
   for (double v : bar.ticks.values) {
     if (!Inside(v, bar.lo, bar.hi)) continue;
     const double y = scale.Y(v);
     canvas.Line(bar.x + bar.width, y, bar.x + bar.width + 4, y, outline);
     canvas.Text(bar.x + bar.width + 7, y + 4, TickLabel(v, bar.ticks.step), {.size = 11});
   }
+  canvas.CloseGroup();
   std::string marks;
   for (const auto& [value, tooltip] : bar.marks)
     if (std::isfinite(value) && Inside(value, bar.lo, bar.hi))

@@ -16,6 +16,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "support/svg_legibility.h"
 #include "absl/strings/str_cat.h"
 #include "cli_test_support.h"
 #include "tactforce/api/inertia.h"
@@ -458,6 +459,7 @@ TEST_F(LoadTest, PlotHasHistogramBarsAndCallsPerSecond) {
   EXPECT_THAT(text, HasSubstr("calls/s"));
   EXPECT_THAT(text, HasSubstr("[s]"));
   EXPECT_THAT(text, HasSubstr("µs"));
+  test_support::ExpectLegible(svg, "load plot");
 }
 
 // ------------------------------------------------------------- bad flags

@@ -155,7 +155,7 @@ TEST(DensityPlot, TwoMaterialBoxIsColouredByItsFittedDensities) {
   EXPECT_EQ(svg->substr(svg->size() - 7), "</svg>\n");
   EXPECT_NE(svg->find("two-material box &lt;test&gt;"), std::string::npos) << "the title, escaped";
   EXPECT_EQ(svg->find("mesh contradicted"), std::string::npos);
-  EXPECT_NE(svg->find("2 regions (colors)"), std::string::npos);
+  EXPECT_NE(svg->find("2 regions (colors, outlined)"), std::string::npos);
   // The colour bar: its label and ticks 0, 2000, ..., 8000 kg/m^3.
   EXPECT_NE(svg->find("density (kg/m³)"), std::string::npos);
   for (const char* tick : {">0<", ">2000<", ">4000<", ">6000<", ">8000<"})

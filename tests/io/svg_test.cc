@@ -240,7 +240,7 @@ TEST(SvgPlot, RenderSvgStacksPanelsOverOneTimeAxis) {
   plot.markers = {{1.0, "lift"}, {9.0, "outside"}};
   const std::string svg = RenderSvg(plot, 900, 200);
   EXPECT_EQ(svg.rfind("<svg", 0), 0u);
-  EXPECT_NE(svg.find("height=\"525\""), std::string::npos) << "40 + 2 x 200 + 40 + 45";
+  EXPECT_NE(svg.find("height=\"539\""), std::string::npos) << "54 + 2 x 200 + 40 + 45";
   EXPECT_NE(svg.find(">grasp &lt;sphere&gt;</text>"), std::string::npos);
   EXPECT_NE(svg.find(">desired</text>"), std::string::npos);
   EXPECT_EQ(Count(svg, ">lift</text>"), 1) << "the marker's label on the first panel only";
@@ -252,6 +252,72 @@ TEST(SvgPlot, RenderSvgStacksPanelsOverOneTimeAxis) {
   std::smatch m;
   ASSERT_TRUE(std::regex_search(svg, m, slip_path));
   EXPECT_EQ(Count(m[1], "M"), 2);
+}
+
+// ---- Text layout ------------------------------------------------------------------
+
+TEST(SvgText, AxisTicksGiveAtLeastThreeTicksOnAnyRange) {
+  std::mt19937 rng(25);
+  std::uniform_real_distribution<double> exponent(-6, 6), unit(-1, 1);
+  for (int trial = 0; trial < 2000; ++trial) {
+    const double scale = std::pow(10.0, exponent(rng));
+    double lo = unit(rng) * scale, hi = unit(rng) * scale;
+    if (lo > hi) std::swap(lo, hi);
+    if (!(hi - lo > 1e-9 * scale)) continue;
+    for (int intervals : {2, 4, 5, 10}) {
+      const Ticks t = AxisTicks(lo, hi, intervals);
+      ASSERT_GE(t.values.size(), 3u) << lo << " " << hi << " " << intervals;
+      ASSERT_LE(t.values.size(), static_cast<size_t>(std::max(intervals, 5)) + 2) << lo << " " << hi;
+      ASSERT_TRUE(IsNice(t.step)) << t.step;
+    }
+  }
+}
+
+TEST(SvgText, WrapTextKeepsEveryLineWithinTheWidth) {
+  std::mt19937 rng(26);
+  std::uniform_int_distribution<int> word_length(1, 14), words(1, 40), letter('a', 'z');
+  std::uniform_real_distribution<double> width(40, 600);
+  for (int trial = 0; trial < 300; ++trial) {
+    std::string text;
+    for (int w = words(rng); w > 0; --w) {
+      for (int c = word_length(rng); c > 0; --c) text.push_back(static_cast<char>(letter(rng)));
+      if (w > 1) text.push_back(' ');
+    }
+    const double max_width = width(rng);
+    const std::vector<std::string> lines = WrapText(text, 12, max_width, 3);
+    ASSERT_GE(lines.size(), 1u);
+    ASSERT_LE(lines.size(), 3u);
+    for (const std::string& line : lines) EXPECT_LE(TextWidth(line, 12), max_width + 1e-9) << line;
+    if (TextWidth(text, 12) <= max_width) EXPECT_EQ(lines, std::vector<std::string>{text}) << "fits: one line";
+  }
+}
+
+TEST(SvgText, LabelPlacerSeparatesLabelsAtOnePoint) {
+  std::mt19937 rng(27);
+  std::uniform_real_distribution<double> where(80, 220);
+  for (int trial = 0; trial < 100; ++trial) {
+    LabelPlacer placer({0, 0, 300, 300});
+    const double x = where(rng), y = where(rng);
+    std::vector<TextBox> boxes;
+    for (const char* name : {"thumb", "index", "middle"}) {  // all at the same point, as a pinch seen along its axis
+      const auto [lx, ly] = placer.Place(x, y, name, 11);
+      boxes.push_back(TextBoxOf(lx, ly, name, 11, TextAnchor::kStart));
+      EXPECT_LT(std::hypot(boxes.back().left - x, ly - y), 80) << "near its point";
+    }
+    for (size_t i = 0; i < boxes.size(); ++i)
+      for (size_t j = i + 1; j < boxes.size(); ++j) EXPECT_FALSE(Overlap(boxes[i], boxes[j])) << i << " " << j;
+  }
+}
+
+TEST(SvgText, TextBoxesFollowAnchorAndRotation) {
+  const TextBox start = TextBoxOf(100, 50, "abcde", 10, TextAnchor::kStart);
+  EXPECT_DOUBLE_EQ(start.left, 100);
+  EXPECT_DOUBLE_EQ(start.right, 130);
+  const TextBox end = TextBoxOf(100, 50, "abcde", 10, TextAnchor::kEnd);
+  EXPECT_DOUBLE_EQ(end.right, 100);
+  const TextBox vertical = TextBoxOf(100, 50, "abcde", 10, TextAnchor::kMiddle, true);
+  EXPECT_DOUBLE_EQ(vertical.bottom - vertical.top, 30) << "read bottom to top: as tall as the text is long";
+  EXPECT_DOUBLE_EQ(TextWidth("\xc2\xb5s", 10), 12) << "code points, not bytes";
 }
 
 }  // namespace

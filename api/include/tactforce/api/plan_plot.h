@@ -30,6 +30,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -74,16 +75,19 @@ absl::StatusOr<PlanScene> BuildPlanScene(const planner::PlanProblem& problem,
                                          const planner::PlanOptions& options,
                                          const v1::PlanResponse& response);
 
-// The SVG document of one plan. Errors: the request's (field paths).
-absl::StatusOr<std::string> PlanSvg(const v1::PlanRequest& request, const v1::PlanResponse& response);
+// The SVG document of one plan; `source` (the request's file name; may be
+// empty) is named under the title. Errors: the request's (field paths).
+absl::StatusOr<std::string> PlanSvg(const v1::PlanRequest& request, const v1::PlanResponse& response,
+                                    std::string_view source = "");
 
 // Which of `steps` steps a trajectory plot shows: all when at most
 // `max_steps`, else `max_steps` evenly spaced ones from the first to the last.
 std::vector<int> PlottedSteps(int steps, int max_steps = kMaxPlotSteps);
 
 // Small multiples of a trajectory: one panel per plotted step (the three
-// views, small), all at one length and force scale, and one legend.
+// views, small), all at one length and force scale, and one legend; `source`
+// as in PlanSvg.
 absl::StatusOr<std::string> TrajectorySvg(const v1::TrajectoryRequest& request,
-                                          const v1::TrajectoryResponse& response);
+                                          const v1::TrajectoryResponse& response, std::string_view source = "");
 
 }  // namespace tactforce::api

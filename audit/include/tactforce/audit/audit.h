@@ -165,8 +165,9 @@ absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOption
 
 // Writes dir/report.json, dir/summary.txt, dir/extended_model.json and
 // dir/{reading_vs_reference,residual_vs_reference,residual_vs_time}.svg.
-// report.json's "extended_model" is the written model's path.
-absl::Status WriteAuditReport(const AuditReport& report, const std::string& dir);
+// report.json's "extended_model" is the written model's path. `source` (the
+// measured CSV's name; may be empty) is named in every plot.
+absl::Status WriteAuditReport(const AuditReport& report, const std::string& dir, const std::string& source = "");
 std::string AuditReportJson(const AuditReport& report,
                             const std::string& extended_model_path = "extended_model.json");
 std::string FormatAuditSummary(const AuditReport& report);

@@ -45,6 +45,11 @@ Ticks TicksAt(double lo, double hi, double step);
 // so there are floor(intervals / 2.5) to intervals + 1 ticks.
 Ticks NiceTicks(double lo, double hi, int intervals = 5);
 
+// At least three ticks in [lo, hi] (hi > lo, both finite): NiceTicks, with
+// the step lowered through 1-2-5 values while fewer than three fall inside.
+// An axis with one or two labels does not say its scale.
+Ticks AxisTicks(double lo, double hi, int intervals = 5);
+
 // A tick value as text: `value` rounded to a multiple of `step`, "%.6g",
 // never "-0" ("0.3", "2000", "-100", "1e+06").
 std::string TickLabel(double value, double step);
@@ -64,6 +69,50 @@ struct Range {
 // ---- Canvas -------------------------------------------------------------------
 
 enum class TextAnchor { kStart, kMiddle, kEnd };
+
+// ---- Text extent and layout (estimates: no font metrics without a renderer) ---
+
+// The estimated width (px) of `text` at `size` px sans-serif: 0.6 x size per
+// character (UTF-8 code point), a little wider than DejaVu Sans and Helvetica
+// average over digits and lower-case letters, so estimated boxes that do not
+// overlap do not overlap when rendered.
+double TextWidth(std::string_view text, double size);
+
+// A text's box on the canvas (px, y down).
+struct TextBox {
+  double left = 0, top = 0, right = 0, bottom = 0;
+};
+
+// The box of `text` drawn at (x, y) (the baseline) with `size`, `anchor` and
+// `vertical` as in TextStyle: 0.8 x size above the baseline to 0.25 x size
+// below, TextWidth long (turned about (x, y) when vertical).
+TextBox TextBoxOf(double x, double y, std::string_view text, double size, TextAnchor anchor,
+                  bool vertical = false);
+
+// The interiors of a and b intersect (by more than `slack` px on both axes).
+bool Overlap(const TextBox& a, const TextBox& b, double slack = 0.5);
+
+// `text` in lines of at most `max_width` px at `size` px, broken at spaces;
+// at most `max_lines` lines, the last shortened with "\u2026" when the text
+// does not fit (a word longer than a line is shortened the same way).
+std::vector<std::string> WrapText(std::string_view text, double size, double max_width, int max_lines = 3);
+
+// Places labels beside points so that no two labels, and no label and a
+// blocked box, overlap, inside `bounds`: tries eight positions around the
+// point at growing distances and takes the first free one (the first
+// candidate when none is).
+class LabelPlacer {
+ public:
+  explicit LabelPlacer(const TextBox& bounds) : bounds_(bounds) {}
+  void Block(const TextBox& box) { placed_.push_back(box); }
+  // The baseline-start (x, y) of `text` at `size` px near the point (x, y),
+  // to draw with TextAnchor::kStart; the label's box is blocked from now on.
+  std::pair<double, double> Place(double x, double y, std::string_view text, double size);
+
+ private:
+  TextBox bounds_;
+  std::vector<TextBox> placed_;
+};
 
 struct TextStyle {
   double size = 0;   // px; 0: the canvas's font size
@@ -92,6 +141,11 @@ class SvgCanvas {
 
   // Text with its baseline at y (anchor decides what x is).
   void Text(double x, double y, std::string_view text, const TextStyle& style = {});
+  // `text` wrapped (WrapText) to `max_width` px, lines `line_height` px apart
+  // (0: 1.3 x the size), the first baseline at y; returns the baseline one
+  // line below the last. Titles that fit the canvas, whatever their length.
+  double WrappedText(double x, double y, std::string_view text, double max_width, const TextStyle& style = {},
+                     double line_height = 0, int max_lines = 3);
   void Line(double x1, double y1, double x2, double y2, const Stroke& stroke);
   // A rectangle filled with `fill` ("none" for an outline) and, when
   // `outline` is set, stroked; `css_class` (optional) comes first, as
@@ -150,7 +204,11 @@ struct AxisStyle {
 
 // Grid lines, tick labels and titles of both axes of `frame` (ticks outside
 // the frame's range are skipped). Draw it before the data; the frame's
-// outline (DrawFrameOutline) after.
+// outline (DrawFrameOutline) after. Tick labels are grouped as
+// <g class="x-ticks"> and <g class="y-ticks">; an x label that would touch
+// its left neighbour is skipped; the y title moves left of the widest y tick
+// label, and the x title below the x tick labels, when title_offset is too
+// small for them.
 void DrawAxes(SvgCanvas& canvas, const PlotFrame& frame, const Ticks& x_ticks, const AxisStyle& x_style,
               const Ticks& y_ticks, const AxisStyle& y_style);
 
@@ -180,6 +238,7 @@ enum class MarkerShape {
   kCross,  // "+", arms of `size` px
   kRing,   // circle of diameter `size` px, not filled
   kBox,    // filled square of `size` px
+  kDiamond,  // a square of diagonal `size` px standing on a corner, not filled
 };
 
 struct MarkerStyle {
@@ -212,9 +271,14 @@ struct LegendEntry {
 };
 
 // Entries one under the other: the first label's baseline at y, `row` px
-// apart; a 20 px swatch at x, its label at x + 24. Returns the baseline
-// below the last entry.
-double DrawLegend(SvgCanvas& canvas, double x, double y, const std::vector<LegendEntry>& entries, double row = 16);
+// apart; a 20 px swatch at x, its label at x + 24, wrapped to `max_width` px
+// (whole legend, swatch included; 0: no wrapping) with one more row per
+// extra line. Returns the baseline below the last entry.
+double DrawLegend(SvgCanvas& canvas, double x, double y, const std::vector<LegendEntry>& entries, double row = 16,
+                  double max_width = 0);
+// The height DrawLegend takes (rows x row) at the canvas font size `font_size`.
+double LegendHeight(const std::vector<LegendEntry>& entries, double font_size, double row = 16,
+                    double max_width = 0);
 
 // A sequential colour ramp, linear in sRGB between equally spaced anchors.
 class ColorRamp {

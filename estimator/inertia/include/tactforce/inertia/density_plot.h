@@ -18,12 +18,14 @@ namespace tactforce::inertia {
 struct DensityPlotOptions {
   std::string title;            // drawn on top; empty: "<method> fit"
   std::optional<Vec3> true_com; // object frame, m; drawn as a second marker
+  std::string source;           // the input files, named under the title; empty: none
 };
 
 // The SVG document. `mesh` is the fitted mesh (object frame, m) and `fit`
 // the result of FitInertia with it.
 //
-// Panels, left to right: the planes of principal axes (1, 2), (1, 3) and
+// Panels, in a row (or one under the other when that draws the mesh larger,
+// as for a long tool): the planes of principal axes (1, 2), (1, 3) and
 // (2, 3), i.e. views along axis 3, 2 and 1, where axis i is column i-1 of
 // fit.principal_axes (moments ascending: axis 3 has the largest moment);
 // coordinates in mm from the fitted CoM, one mm-per-pixel scale in all
@@ -31,7 +33,8 @@ struct DensityPlotOptions {
 // (fit.region_model->triangle_region -> fit.densities) on a viridis-like
 // ramp from 0 to a round number above the largest density (colour bar in
 // kg/m^3); triangles of no region (-1) are light grey; the near side is
-// drawn on top. A contradicted mesh (fit.mesh_contradicted) still has its
+// drawn on top; edges between regions are outlined, so that regions of one
+// density still show. A contradicted mesh (fit.mesh_contradicted) still has its
 // region model: its densities are drawn, under a warning that they are the
 // rejected fit's. Without a region model (a method other than DENSITY) the
 // silhouette is drawn in grey with the CoM markers only.
