@@ -4,6 +4,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
+#include <random>
 #include <sstream>
 
 #include "gmock/gmock.h"
@@ -371,6 +373,50 @@ TEST(GivenModel, TrueModelIsAdequate) {
   ASSERT_TRUE(plain.ok());
   ASSERT_FALSE(plain->causes.empty());
   EXPECT_EQ(plain->causes[0].effect, "hysteresis");
+}
+
+// ---- the absolute floor of a cause's gain -------------------------------------
+
+// Noise-free ideal sensors with drawn gains and offsets, through the CSV the
+// simulator writes (9 significant digits): the nominal residual is
+// round-off, so no cause may be named however large its relative gain on it.
+// With the floor at 0 (the relative gain alone) the same runs are reported
+// on stderr: how many then named a cause on that residual.
+TEST(GainFloor, RoundOffResidualNamesNoCause) {
+  std::mt19937_64 rng(2025);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int without_floor = 0;
+  double largest_rms = 0;
+  constexpr int kRuns = 6;
+  for (int run = 0; run < kRuns; ++run) {
+    sim::SensorModel m;
+    m.gain = (unit(rng) < 0.5 ? -1 : 1) * (0.5 + 60 * unit(rng));
+    m.offset = 2000 * (unit(rng) - 0.5);
+    auto d = ParseMeasuredCsv(SimCsv(m, 40 + run, 8, 100), "ideal.csv");
+    ASSERT_TRUE(d.ok()) << d.status();
+    auto rep = RunAudit(*d, Quick());
+    ASSERT_TRUE(rep.ok()) << rep.status();
+    largest_rms = std::max(largest_rms, rep->nominal.heldout_rms / std::abs(m.gain));
+    EXPECT_TRUE(rep->causes.empty()) << "run " << run << " (gain " << m.gain << "): named " << rep->causes[0].effect
+                                     << " with gain " << rep->causes[0].gain << " % on a held-out RMS of "
+                                     << rep->causes[0].heldout_rms_before;
+    EXPECT_TRUE(rep->nominal_adequate) << "run " << run;
+    AuditOptions no_floor = Quick();
+    no_floor.min_rms_drop = 0;
+    auto relative_only = RunAudit(*d, no_floor);
+    ASSERT_TRUE(relative_only.ok());
+    if (!relative_only->causes.empty()) ++without_floor;
+  }
+  std::cerr << "[ floor ] ideal sensors: largest nominal held-out RMS " << largest_rms << " N; causes named with "
+            << "the floor 0 of " << kRuns << ", without the floor " << without_floor << " of " << kRuns << "\n";
+}
+
+TEST(GainFloor, OptionIsChecked) {
+  auto d = ParseMeasuredCsv(SimCsv(sim::SensorModel{}, 3, 8, 100), "ideal.csv");
+  ASSERT_TRUE(d.ok());
+  AuditOptions o = Quick();
+  o.min_rms_drop = -1;
+  EXPECT_THAT(Message(RunAudit(*d, o).status()), HasSubstr("min_rms_drop"));
 }
 
 // ---- real data ---------------------------------------------------------------
