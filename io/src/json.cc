@@ -305,8 +305,13 @@ std::string IndentJson(std::string_view json) {
     const char c = json[i];
     if (in_string) {
       out += c;
-      escaped = !escaped && c == '\\';
-      if (!escaped && c == '"') in_string = false;
+      if (escaped) {
+        escaped = false;
+      } else if (c == '\\') {
+        escaped = true;
+      } else if (c == '"') {
+        in_string = false;
+      }
       continue;
     }
     if (c == '{' || c == '[') {

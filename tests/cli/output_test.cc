@@ -48,8 +48,13 @@ std::vector<std::string> IndentationErrors(const std::string& text) {
     for (size_t i = spaces; i < line.size(); ++i) {
       const char c = line[i];
       if (in_string) {
-        escaped = !escaped && c == '\\';
-        if (c == '"' && !escaped) in_string = false;
+        if (escaped) {
+          escaped = false;
+        } else if (c == '\\') {
+          escaped = true;
+        } else if (c == '"') {
+          in_string = false;
+        }
       } else if (c == '"') {
         in_string = true;
       } else if (c == '{' || c == '[') {

@@ -262,8 +262,13 @@ TEST(IndentJson, KeepsTheValueInTheWritersLayout) {
     bool in_string = false, escaped = false;
     for (char c : pretty) {  // the same text once whitespace outside strings is gone
       if (in_string) {
-        escaped = !escaped && c == '\\';
-        if (c == '"' && !escaped) in_string = false;
+        if (escaped) {
+          escaped = false;
+        } else if (c == '\\') {
+          escaped = true;
+        } else if (c == '"') {
+          in_string = false;
+        }
       } else if (c == '"') {
         in_string = true;
       } else if (c == ' ' || c == '\n') {
@@ -275,8 +280,13 @@ TEST(IndentJson, KeepsTheValueInTheWritersLayout) {
     in_string = escaped = false;
     for (char c : compact) {
       if (in_string) {
-        escaped = !escaped && c == '\\';
-        if (c == '"' && !escaped) in_string = false;
+        if (escaped) {
+          escaped = false;
+        } else if (c == '\\') {
+          escaped = true;
+        } else if (c == '"') {
+          in_string = false;
+        }
       } else if (c == '"') {
         in_string = true;
       } else if (c == ' ') {

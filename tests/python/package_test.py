@@ -43,8 +43,12 @@ def indentation_errors(text):
         in_string = escaped = False
         for c in stripped:
             if in_string:
-                escaped = not escaped and c == "\\"
-                in_string = not (c == '"' and not escaped)
+                if escaped:
+                    escaped = False
+                elif c == "\\":
+                    escaped = True
+                elif c == '"':
+                    in_string = False
             elif c == '"':
                 in_string = True
             elif c in "{[":

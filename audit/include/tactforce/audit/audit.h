@@ -22,7 +22,7 @@
 //     BIC_h = n_h ln(RSS_h / n_h) + k ln(n_h). The best is accepted when it
 //     lowers BIC_h AND improves the held-out RMS by at least min_gain
 //     (default 1 %) AND by at least min_rms_drop x the reference force range
-//     (force equivalent; default 1e-4, an absolute floor); otherwise
+//     (force equivalent; default 1e-6, an absolute floor); otherwise
 //     selection stops. At most max_causes.
 //  4. The extended model = nominal + named effects, jointly re-fitted, with
 //     1-sigma uncertainties (conditional Delta-RSS = sigma^2 intervals).
@@ -56,9 +56,10 @@ struct AuditOptions {
   double min_gain = 0.01;           // relative held-out RMS gain to accept a cause
   // Absolute floor beside min_gain: the held-out RMS (force equivalent,
   // reading units / |gain|) must also fall by at least this fraction of the
-  // reference force range (1e-4: 1 mN on a 10 N range), so a large relative
-  // gain on a negligible residual (round-off, CSV precision) is no cause.
-  double min_rms_drop = 1e-4;
+  // reference force range (1e-6: 10 uN on a 10 N range, 10x above the
+  // round-off of a 9-digit CSV, far below any tactile sensor's resolution),
+  // so a large relative gain on a negligible residual is no cause.
+  double min_rms_drop = 1e-6;
   int max_causes = 3;
   double max_delay = 0.3;           // s, |delay| bound
   double max_lag = 0.5;             // s
