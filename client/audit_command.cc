@@ -45,8 +45,11 @@ CLI::App* AddAuditCommand(CLI::App& app, AuditArgs& args) {
   search->needs(ref);
   centre->needs(ref);
   cmd->add_option("--model", args.model_path, "Start from this model JSON instead of the affine nominal");
-  cmd->add_option("--out", args.out_dir, "Report directory (report.json, summary.txt, model, SVG plots)")
+  cmd->add_option("--out", args.out_dir,
+                  "Report directory (report.json, summary.txt, model, SVG plots); refused when it already holds "
+                  "files, unless --force")
       ->required();
+  cmd->add_flag("--force", args.force, "Replace the report files of an earlier audit in --out");
   cmd->add_option("--units", args.units, "Name of the reading's units, for the report")->capture_default_str();
   cmd->add_option("--heldout", args.heldout_fraction, "Fraction of the run (the later block) held out")
       ->check(Between(0.05, 0.9))
@@ -99,8 +102,12 @@ int RunAuditCommand(const AuditArgs& args) {
   }
   absl::StatusOr<audit::AuditReport> report = audit::RunAudit(*data, options);
   if (!report.ok()) return ReportError(report.status());
-  // An existing folder is fine: the report's files are replaced whole.
-  if (absl::Status s = PrepareOutputDir(args.out_dir, /*force=*/true, {}); !s.ok()) return ReportError(s);
+  // As `simulate --out`: an earlier report is never mixed with this one.
+  if (absl::Status s = PrepareOutputDir(args.out_dir, args.force, audit::AuditReportFileNames(), "--out",
+                                        "this audit's");
+      !s.ok()) {
+    return ReportError(s);
+  }
   if (absl::Status s = audit::WriteAuditReport(*report, args.out_dir, args.csv); !s.ok()) {
     return ReportError(absl::InvalidArgumentError(absl::StrCat("--out: ", s.message())));
   }

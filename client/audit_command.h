@@ -25,6 +25,7 @@ struct AuditArgs {
   double clock_offset_centre = 0.0;  // s, centre of the estimation search
   std::string model_path;      // a given model JSON instead of the affine nominal
   std::string out_dir;
+  bool force = false;          // replace an earlier report's files in out_dir
   std::string units = "reading units";
   double heldout_fraction = 0.35;
   int max_causes = 3;

@@ -96,7 +96,7 @@ CLI::Validator Between(double min, double max) {
 }
 
 absl::Status PrepareOutputDir(const std::string& dir, bool force, const std::vector<std::string>& patterns,
-                              const std::string& flag) {
+                              const std::string& flag, const std::string& whose) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (fs::exists(dir, ec) && !fs::is_directory(dir, ec)) {
@@ -122,7 +122,7 @@ absl::Status PrepareOutputDir(const std::string& dir, bool force, const std::vec
     return absl::InvalidArgumentError(absl::StrCat(
         flag, ": '", dir, "' is not empty (", ours.size() + others, " entries",
         ours.empty() ? "" : absl::StrCat(", e.g. ", ours.front().filename().string()),
-        "); choose an empty folder, or --force to replace this simulation's files"));
+        "); choose an empty folder, or --force to replace ", whose, " files"));
   }
   for (const fs::path& p : ours) {
     if (!fs::remove(p, ec) || ec) {

@@ -69,8 +69,9 @@ CLI::Validator Between(double min, double max); // finite and in [min, max]
 // first removes only the files the simulation writes (names matching one of
 // `patterns`, "*" a wildcard: "trial*.csv"), so an earlier run's files can
 // never be mixed with the new ones. Other files are left alone.
+// `whose` names those files in the refusal ("this simulation's files").
 absl::Status PrepareOutputDir(const std::string& dir, bool force, const std::vector<std::string>& patterns,
-                              const std::string& flag = "--out");
+                              const std::string& flag = "--out", const std::string& whose = "this simulation's");
 
 // How an input is named in messages: its path, "<stdin>" for "-".
 std::string InputName(const std::string& path);

@@ -146,7 +146,7 @@ std::string FormatJson(const std::vector<DemoRow>& rows, int repeat,
   out += "\n  ]";
   if (!server_json.empty()) absl::StrAppend(&out, ",\n  \"server\": ", server_json);
   out += "\n}\n";
-  return out;
+  return io::IndentJson(out);  // the embedded compact responses laid out too
 }
 
 // ------------------------------------------------------------ --server

@@ -21,6 +21,7 @@
 #include "tactforce/experiment/grasp.h"
 #include "tactforce/experiment/slope.h"
 #include "tactforce/sim/sensor_model.h"
+#include "tactforce/io/json.h"
 #include "tactforce/io/text_file.h"
 
 namespace tactforce::cli {
@@ -208,7 +209,7 @@ int RunGrasp(const ExperimentArgs& a) {
   bar.Finish();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   if (a.output.json()) {
-    std::cout << GraspJson(a, *rows, wall) << std::endl;
+    std::cout << io::IndentJson(GraspJson(a, *rows, wall)) << std::flush;
   } else {
     std::cout << GraspTable(a, *rows, wall);
   }
@@ -304,7 +305,7 @@ int RunSlope(const ExperimentArgs& a) {
     default_rows = *r;
   }
   if (a.output.json()) {
-    std::cout << SlopeJson(*rows, default_rows, creep) << std::endl;
+    std::cout << io::IndentJson(SlopeJson(*rows, default_rows, creep)) << std::flush;
     return kExitOk;
   }
   std::cout << "Slope method vs probing (chosen solver settings):\n" << SlopeTable(*rows);

@@ -93,8 +93,9 @@ int RunHealth(const HealthArgs& args) {
   if (!state.ok()) return ReportError(state.status());
 
   if (args.output.json()) {
-    std::cout << "{\"service\": " << io::JsonEscape(args.service) << ", \"status\": " << io::JsonEscape(*state)
-              << "}" << std::endl;
+    std::cout << io::IndentJson(absl::StrCat("{\"service\": ", io::JsonEscape(args.service),
+                                             ", \"status\": ", io::JsonEscape(*state), "}"))
+              << std::flush;
   } else {
     std::cout << *state << std::endl;
   }

@@ -421,7 +421,7 @@ CLI::App* AddInertiaCommand(CLI::App& app, InertiaArgs& args) {
       "against --truth); warnings also go to stderr. Examples:\n"
       "  tactforce simulate inertia --out /tmp/inertia\n"
       "  tactforce inertia --csv /tmp/inertia/inertia.csv --truth /tmp/inertia/truth.json\n"
-      "  tactforce inertia --csv client/examples/inertia_log.csv --hull client/examples/object.stl --json\n"
+      "  tactforce inertia --csv client/examples/inertia_log.csv --hull client/examples/inertia_box.stl --json\n"
       "  tactforce inertia --csv /tmp/inertia/inertia.csv --server localhost:50051");
   return cmd;
 }

@@ -259,8 +259,8 @@ std::string FormatLoadJson(const LoadReport& r, const std::string& target) {
                         Number(r.all_p50_us), Number(r.all_p90_us), Number(r.all_p99_us),
                         Number(r.all_max_us));
   if (r.interrupted) out += ", \"interrupted\": true";
-  out += "}\n";
-  return out;
+  out += "}";
+  return io::IndentJson(out);
 }
 
 }  // namespace tactforce::cli

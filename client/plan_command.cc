@@ -109,6 +109,42 @@ int RunTrajectory(const PlanArgs& args) {
   return std::cout ? kExitOk : kExitFailure;
 }
 
+// One line per probe sample: time, the probe's force and the holding plan.
+std::string FormatProbeTable(const v1::FrictionProbeResponse& response) {
+  std::string out = absl::StrFormat("%5s  %8s  %-26s  %-14s  %s\n", "step", "t (s)", "probe force (N)", "holding",
+                                    "holding normal forces (N)");
+  for (int k = 0; k < response.times_size(); ++k) {
+    const v1::Vec3& f = response.probe_forces(k);
+    const v1::PlanResponse& step =
+        k < response.holding().steps_size() ? response.holding().steps(k) : v1::PlanResponse::default_instance();
+    std::string normals;
+    for (double fn : step.normal_forces()) absl::StrAppend(&normals, absl::StrFormat("%7.3f ", fn));
+    absl::StrAppendFormat(&out, "%5d  %8.3f  %8.3f %8.3f %8.3f  %-14s  %s\n", k, response.times(k), f.x(), f.y(),
+                          f.z(), api::StatusName(step.status()), normals);
+  }
+  const v1::TrajectoryResponse& h = response.holding();
+  absl::StrAppendFormat(&out, "%d samples: %d optimal, %d infeasible, %d failed; total %d us\n",
+                        response.times_size(), h.optimal_steps(), h.infeasible_steps(), h.failed_steps(),
+                        h.total_time_us());
+  return out;
+}
+
+// --friction-probe: the FrictionProbeRequest planned here (--local) or by
+// Planner.PlanFrictionProbe.
+int RunFrictionProbe(const PlanArgs& args) {
+  absl::StatusOr<std::string> text = ReadInput(args.probe_path, "--friction-probe");
+  if (!text.ok()) return ReportError(text.status());
+  v1::FrictionProbeRequest request;
+  if (absl::Status s = api::ParseJson(*text, &request, InputName(args.probe_path)); !s.ok()) return ReportError(s);
+  ApplySolverFlags(args, request.mutable_plan());
+  absl::StatusOr<v1::FrictionProbeResponse> response =
+      args.local ? api::HandleFrictionProbe(request)
+                 : CallUnary(args.connection, &v1::Planner::Stub::PlanFrictionProbe, request);
+  if (!response.ok()) return ReportError(response.status());
+  std::cout << (args.output.json() ? api::ToJson(*response) : FormatProbeTable(*response));
+  return std::cout ? kExitOk : kExitFailure;
+}
+
 }  // namespace
 
 CLI::App* AddPlanCommand(CLI::App& app, PlanArgs& args) {
@@ -126,14 +162,22 @@ CLI::App* AddPlanCommand(CLI::App& app, PlanArgs& args) {
                       "TrajectoryRequest as JSON (plan + steps): one PlanResponse per step plus totals")
           ->type_name("FILE");
   request->excludes(trajectory);
-  AddOutputFlags(cmd, &args.output, "the PlanResponse (TrajectoryResponse)");
+  CLI::Option* probe =
+      cmd->add_option("--friction-probe", args.probe_path,
+                      "FrictionProbeRequest as JSON (plan = the holding grasp, the probe's position, normal, "
+                      "tangent, tangential force and normal-force ramp): the probe's force and the holding plan "
+                      "per sample (Planner.PlanFrictionProbe); - reads standard input")
+          ->type_name("FILE");
+  probe->excludes(request)->excludes(trajectory);
+  AddOutputFlags(cmd, &args.output, "the PlanResponse (TrajectoryResponse, FrictionProbeResponse)");
   AddSolverFlags(cmd, &args);
   cmd->add_option("--plot", args.plot_path,
                   "Also draw the plan as SVG: contacts, normals, robust friction cones, forces (arrows), "
                   "their 1-sigma spread, CoM and gravity in three orthographic views (x-y, x-z, y-z). "
                   "With --trajectory: small multiples, one panel per step (at most " +
                       std::to_string(api::kMaxPlotSteps) + ", evenly subsampled and named in the figure)")
-      ->type_name("FILE.svg");
+      ->type_name("FILE.svg")
+      ->excludes(probe);
   cmd->footer(
       "Sends the request to tactforce-server (--server, default " + std::string(kDefaultServer) +
       ") unless\n"
@@ -144,15 +188,17 @@ CLI::App* AddPlanCommand(CLI::App& app, PlanArgs& args) {
       "  tactforce plan --local --request client/examples/sphere_pinch.json\n"
       "  tactforce plan --local --request client/examples/sphere_pinch.json --solver cross-check --json\n"
       "  tactforce plan --server localhost:50051 --request client/examples/sphere_pinch.json --plot plan.svg\n"
-      "  tactforce plan --local --trajectory client/examples/wrench_lift_trajectory.json");
+      "  tactforce plan --local --trajectory client/examples/wrench_lift_trajectory.json\n"
+      "  tactforce plan --local --friction-probe client/examples/friction_probe.json");
   return cmd;
 }
 
 int RunPlan(const PlanArgs& args) {
   if (absl::Status s = CheckPlotPath(args.plot_path); !s.ok()) return ReportError(s);
   if (!args.trajectory_path.empty()) return RunTrajectory(args);
+  if (!args.probe_path.empty()) return RunFrictionProbe(args);
   if (args.request_path.empty()) {
-    return ReportError(absl::InvalidArgumentError("give --request FILE or --trajectory FILE"));
+    return ReportError(absl::InvalidArgumentError("give --request FILE, --trajectory FILE or --friction-probe FILE"));
   }
   absl::StatusOr<std::unique_ptr<PlanBackend>> backend = SelectBackend(args);
   if (!backend.ok()) return ReportError(backend.status());

@@ -1,5 +1,7 @@
 // `tactforce plan`: one request (JSON file or stdin) -> one plan, computed by
-// tactforce-server (default, --server ADDR) or in this process (--local).
+// tactforce-server (default, --server ADDR) or in this process (--local):
+// a PlanRequest (--request), a TrajectoryRequest (--trajectory) or a
+// FrictionProbeRequest (--friction-probe, Planner.PlanFrictionProbe).
 #pragma once
 
 #include <optional>
@@ -16,6 +18,7 @@ struct PlanArgs {
   ConnectionArgs connection;    // --server, --tls-*, --deadline-ms
   std::string request_path;     // "-" = stdin
   std::string trajectory_path;  // TrajectoryRequest JSON instead of --request
+  std::string probe_path;       // FrictionProbeRequest JSON instead of --request
   OutputFormat output;          // table (default) | json
   // Solver overrides of the request (absent: the request's own values).
   std::string solver;           // geometric | ipopt | cross-check

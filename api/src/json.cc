@@ -209,7 +209,9 @@ absl::StatusOr<v1::PlanRequest> ParsePlanRequestJson(std::string_view json, std:
 
 std::string ToJson(const google::protobuf::Message& message, bool compact) {
   google::protobuf::util::JsonPrintOptions options;
-  options.add_whitespace = !compact;
+  // Protobuf indents by one space: the text is laid out by io::IndentJson,
+  // the two-space layout of every command's JSON.
+  options.add_whitespace = false;
   options.always_print_primitive_fields = true;
   options.always_print_enums_as_ints = false;
   options.preserve_proto_field_names = true;
@@ -219,9 +221,7 @@ std::string ToJson(const google::protobuf::Message& message, bool compact) {
     // Only possible for unresolvable Any types, which the API does not use.
     return absl::StrCat("{\"error\": ", io::JsonEscape(status.ToString()), "}\n");
   }
-  // With add_whitespace protobuf already ends the text with a newline.
-  if (!compact && (out.empty() || out.back() != '\n')) out.push_back('\n');
-  return out;
+  return compact ? out : io::IndentJson(out);
 }
 
 

@@ -30,6 +30,8 @@ absl::Status ValidateAuditInputs(const MeasuredData& data, const AuditOptions& o
     return absl::InvalidArgumentError(absl::StrCat("heldout_fraction: must be in [0.1, 0.6], got ", o.heldout_fraction));
   if (!(o.min_gain >= 0 && o.min_gain < 1))
     return absl::InvalidArgumentError(absl::StrCat("min_gain: must be in [0, 1), got ", o.min_gain));
+  if (!(o.min_rms_drop >= 0 && o.min_rms_drop < 1))
+    return absl::InvalidArgumentError(absl::StrCat("min_rms_drop: must be in [0, 1), got ", o.min_rms_drop));
   if (o.max_causes < 0 || o.max_causes > kNumEffects)
     return absl::InvalidArgumentError(absl::StrCat("max_causes: must be in [0, 8], got ", o.max_causes));
   if (!(o.max_delay > 0) || !(o.max_lag > 0))

@@ -3,8 +3,9 @@
 // current model, jointly re-refining the effects already named, on the
 // training block, and scores it on the held-out block with
 // BIC_h = n_h ln(RSS_h / n_h) + k ln(n_h). The best is accepted when BIC_h
-// falls and the held-out RMS improves by at least min_gain; otherwise
-// selection stops. Before each round the named effects are re-converged, so a
+// falls, the held-out RMS improves by at least min_gain and falls by at
+// least min_rms_drop of the reference force range (force equivalent);
+// otherwise selection stops. Before each round the named effects are re-converged, so a
 // new effect is credited only with what it adds.
 #include "cause_selection.h"
 
@@ -127,14 +128,19 @@ RoundBest ScoreRound(ChannelEvaluator& eng, const std::vector<Effect>& candidate
   return best;
 }
 
-// Names the round's best a cause when it lowers the held-out BIC and gains
-// at least min_gain; false (nothing changed) otherwise.
+// Names the round's best a cause when it lowers the held-out BIC, gains at
+// least min_gain and lowers the held-out RMS by at least min_rms_drop x the
+// reference force range; false (nothing changed) otherwise.
 bool AcceptBest(const RoundBest& best, const std::vector<Effect>& candidates, int n_h, const RunStats& st,
                 const AuditOptions& o, Selection* s, AuditReport* rep) {
   const double rms_before = std::sqrt(s->fit.rss_heldout / n_h);
   const double rms_after = std::sqrt(best.fit.rss_heldout / n_h);
   const double gain = rms_before > 0 ? 1 - rms_after / rms_before : 0;
-  if (!(best.bic < s->bic && gain >= o.min_gain)) return false;
+  // The absolute floor, in force-equivalent N (RMS / |gain|): a relative gain
+  // on a residual already at round-off or CSV-precision size names no cause.
+  const double scale = std::abs(s->fit.a) > 0 ? std::abs(s->fit.a) : 1;
+  const bool material = (rms_before - rms_after) / scale >= o.min_rms_drop * st.range;
+  if (!(best.bic < s->bic && gain >= o.min_gain && material)) return false;
   const Effect e = candidates[best.candidate];
   for (size_t idx : best.scored)
     if (rep->candidates[idx].effect == EffectName(e) && rep->candidates[idx].form == best.form)

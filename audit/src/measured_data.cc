@@ -376,7 +376,10 @@ absl::StatusOr<MeasuredData> AlignStreams(const io::CsvTable& ref, const io::Csv
     clock_offset = est->offset;
     d.clock_offset_source = MeasuredData::ClockOffset::kEstimated;
     d.clock_offset_correlation = est->correlation;
-    d.notes.push_back(absl::StrCat("clock offset estimated by cross-correlation: ", G(est->offset), " s (peak |r| ",
+    // Named apart from the header's clock offset, which adds the audit's
+    // refinement to this one.
+    d.notes.push_back(absl::StrCat("cross-correlation clock offset (before the audit's refinement): ", G(est->offset),
+                                   " s (peak |r| ",
                                    est->correlation, ", ", est->samples, " reading samples, search ",
                                    G(options.clock_offset), " +/- ", G(options.max_clock_offset), " s)"));
   }
@@ -390,7 +393,10 @@ absl::StatusOr<MeasuredData> AlignStreams(const io::CsvTable& ref, const io::Csv
   };
   d.notes.push_back(absl::StrCat("two streams aligned: reference ", rt.size(), " samples at ~", rate(rt),
                                  " Hz interpolated onto ", d.t.size(), " reading samples at ~", rate(qt), " Hz",
-                                 clock_offset != 0 ? absl::StrCat(" (clock offset ", G(clock_offset), " s)") : ""));
+                                 clock_offset == 0 ? ""
+                                 : d.clock_offset_source == MeasuredData::ClockOffset::kEstimated
+                                     ? absl::StrCat(" (shifted by the cross-correlation clock offset ", G(clock_offset), " s)")
+                                     : absl::StrCat(" (clock offset ", G(clock_offset), " s)")));
   if (outside > 0)
     d.notes.push_back(absl::StrCat(outside, " reading sample(s) outside the reference time span dropped"));
   if (d.skipped_nan_rows > 0)

@@ -321,6 +321,11 @@ std::string FormatAuditSummary(const AuditReport& r) {
   return s;
 }
 
+std::vector<std::string> AuditReportFileNames() {
+  return {"report.json", "summary.txt", "extended_model.json", "reading_vs_reference.svg",
+          "residual_vs_reference.svg", "residual_vs_time.svg"};
+}
+
 absl::Status WriteAuditReport(const AuditReport& r, const std::string& dir, const std::string& source) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);

@@ -4,6 +4,10 @@ Adds to setuptools' build_py:
   * tactforce/v1/<name>_pb2.py and <name>_pb2_grpc.py for every
     proto/tactforce/v1/*.proto of the checkout (a new .proto is picked up
     without editing this file), made by protoc with grpc_python_plugin;
+  * tactforce/health/v1/health_pb2.py and health_pb2_grpc.py, the standard
+    grpc.health.v1 protocol from grpc-proto's health.proto, compiled inside
+    the tactforce package so that no top-level `grpc` folder shadows the
+    real grpc package;
   * tactforce/_version.py with the version of the top-level CMakeLists.txt
     (`project(tactforce VERSION x.y.z ...)`), also the package's version.
 Both are written into the build directory only, and the whole build (build/,
@@ -57,6 +61,16 @@ def tool(variable: str, name: str, package: str) -> str:
     return path
 
 
+def health_proto() -> Path:
+    """grpc-proto's grpc/health/v1/health.proto ($GRPC_HEALTH_PROTO, else
+    Debian's /usr/share/grpc-proto)."""
+    path = Path(os.environ.get("GRPC_HEALTH_PROTO") or "/usr/share/grpc-proto/grpc/health/v1/health.proto")
+    if not path.is_file():
+        sys.exit(f"tactforce setup.py: {path} not found: install Debian's grpc-proto (scripts/setup.sh) "
+                 "or set GRPC_HEALTH_PROTO")
+    return path
+
+
 def protos(root: Path) -> list:
     found = sorted((root / "proto" / "tactforce" / "v1").glob("*.proto"))
     if not found:
@@ -82,18 +96,55 @@ class BuildPyWithStubs(build_py):
         ]
         self.announce("running " + " ".join(command), level=2)
         subprocess.run(command, check=True)
+        self.health_stubs(command[0], command[1], out)
         (out / "tactforce" / "_version.py").write_text(
             f'"""Generated at build time from {root.name}/CMakeLists.txt."""\n'
             f'__version__ = "{cmake_version(root)}"\n', encoding="utf-8")
+
+    def health_stubs(self, protoc: str, plugin: str, out: Path) -> None:
+        """tactforce/health/v1/health_pb2(_grpc).py: health.proto compiled
+        from a copy under tactforce/health/v1/, so the modules (and the
+        import between them) live in the tactforce package and no top-level
+        `grpc` folder shadows the real grpc package."""
+        with tempfile.TemporaryDirectory(prefix="tactforce-health-") as tmp:
+            copy = Path(tmp) / "tactforce" / "health" / "v1" / "health.proto"
+            copy.parent.mkdir(parents=True)
+            shutil.copyfile(health_proto(), copy)
+            subprocess.run([protoc, plugin, f"--proto_path={tmp}", f"--python_out={out}",
+                            f"--grpc_python_out={out}", str(copy)], check=True)
 
     def get_outputs(self, include_bytecode=1):
         outputs = list(super().get_outputs(include_bytecode))
         out = Path(self.build_lib) / "tactforce"
         outputs.append(str(out / "_version.py"))
+        outputs += [str(out / "health" / "v1" / "health_pb2.py"), str(out / "health" / "v1" / "health_pb2_grpc.py")]
         for proto in protos(source_dir()):
             outputs += [str(out / "v1" / f"{proto.stem}_pb2.py"), str(out / "v1" / f"{proto.stem}_pb2_grpc.py")]
         return outputs
 
+
+def check_interpreter() -> None:
+    """A clear message instead of setuptools' "invalid command 'bdist_wheel'"
+    when this interpreter cannot build a wheel offline (a python3 other than
+    Debian's /usr/bin/python3, e.g. pyenv's or conda's, first on PATH), and a
+    warning when it lacks the run-time packages."""
+    import importlib.util
+    has_bdist_wheel = (importlib.util.find_spec("wheel") is not None
+                       or importlib.util.find_spec("setuptools.command.bdist_wheel") is not None)
+    if not has_bdist_wheel:
+        sys.exit(f"tactforce setup.py: {sys.executable} (Python {sys.version.split()[0]}) has no 'wheel' package, "
+                 "so pip cannot build the package: make the venv with Debian's /usr/bin/python3 "
+                 "(/usr/bin/python3 -m venv --system-site-packages V; python3-wheel, python3-grpcio and "
+                 "python3-protobuf are installed for it by scripts/setup.sh), or install wheel, grpcio and "
+                 "protobuf into this interpreter's venv from PyPI first")
+    missing = [name for name in ("grpc", "google.protobuf") if importlib.util.find_spec(name.split(".")[0]) is None]
+    if missing:
+        print(f"tactforce setup.py: warning: {sys.executable} cannot import {', '.join(missing)}: "
+              "`import tactforce` will fail until grpcio and protobuf are installed for it "
+              "(Debian's /usr/bin/python3 has them: python3-grpcio, python3-protobuf)", file=sys.stderr)
+
+
+check_interpreter()
 
 # Build outside the source tree: setuptools' build/ and *.egg-info go to a
 # temporary directory of this process.

@@ -11,6 +11,7 @@
 #include "tactforce/io/json.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -302,6 +303,62 @@ std::string JsonNumber(double v) {
     if (std::strtod(buf, nullptr) == v) break;
   }
   return buf;
+}
+
+std::string IndentJson(std::string_view json) {
+  std::string out;
+  out.reserve(json.size() + json.size() / 2);
+  int depth = 0;
+  bool in_string = false, escaped = false;
+  auto newline = [&] {
+    out += '\n';
+    out.append(2 * static_cast<size_t>(std::max(depth, 0)), ' ');
+  };
+  auto next_token = [&](size_t i) {
+    while (i < json.size() && std::isspace(static_cast<unsigned char>(json[i]))) ++i;
+    return i;
+  };
+  for (size_t i = 0; i < json.size(); ++i) {
+    const char c = json[i];
+    if (in_string) {
+      out += c;
+      if (escaped) {
+        escaped = false;
+      } else if (c == '\\') {
+        escaped = true;
+      } else if (c == '"') {
+        in_string = false;
+      }
+      continue;
+    }
+    if (c == '{' || c == '[') {
+      out += c;
+      const size_t j = next_token(i + 1);
+      if (j < json.size() && json[j] == (c == '{' ? '}' : ']')) {
+        out += json[j];  // {} and [] stay on one line
+        i = j;
+      } else {
+        ++depth;
+        newline();
+      }
+    } else if (c == '}' || c == ']') {
+      --depth;
+      newline();
+      out += c;
+    } else if (c == ',') {
+      out += c;
+      newline();
+    } else if (c == ':') {
+      out += ": ";
+    } else if (c == '"') {
+      in_string = true;
+      out += c;
+    } else if (!std::isspace(static_cast<unsigned char>(c))) {
+      out += c;
+    }
+  }
+  if (!out.empty() && out.back() != '\n') out += '\n';
+  return out;
 }
 
 void JsonWriter::Newline() {

@@ -4,6 +4,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
+#include <random>
 #include <sstream>
 
 #include "gmock/gmock.h"
@@ -371,6 +373,59 @@ TEST(GivenModel, TrueModelIsAdequate) {
   ASSERT_TRUE(plain.ok());
   ASSERT_FALSE(plain->causes.empty());
   EXPECT_EQ(plain->causes[0].effect, "hysteresis");
+}
+
+// ---- the absolute floor of a cause's gain -------------------------------------
+
+// Noise-free sensors with drawn gains and offsets, ideal or with one drawn
+// dead zone, through the CSV the simulator writes (9 significant digits):
+// once the true effect is named the residual is round-off, and no further
+// cause may be named however large its relative gain on it. With the floor
+// at 0 (the relative gain alone) the same runs are counted on stderr.
+TEST(GainFloor, RoundOffResidualNamesNoFurtherCause) {
+  std::mt19937_64 rng(2025);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int extra_without_floor = 0;
+  double largest_gain_without_floor = 0, its_rms = 0;
+  constexpr int kRuns = 8;
+  for (int run = 0; run < kRuns; ++run) {
+    sim::SensorModel m;
+    m.gain = (unit(rng) < 0.5 ? -1 : 1) * (0.5 + 60 * unit(rng));
+    m.offset = 2000 * (unit(rng) - 0.5);
+    const bool deadzone = run % 2 == 1;
+    if (deadzone) m.effects.threshold = 0.2 + 0.3 * unit(rng);
+    auto d = ParseMeasuredCsv(SimCsv(m, 40 + run, 8, 100), "noise_free.csv");
+    ASSERT_TRUE(d.ok()) << d.status();
+    auto rep = RunAudit(*d, Quick());
+    ASSERT_TRUE(rep.ok()) << rep.status();
+    ASSERT_EQ(rep->causes.size(), deadzone ? 1u : 0u)
+        << "run " << run << " (gain " << m.gain << "): last named " << rep->causes.back().effect << " with gain "
+        << rep->causes.back().gain << " % on a held-out RMS of " << rep->causes.back().heldout_rms_before;
+    if (deadzone) EXPECT_EQ(rep->causes[0].effect, "deadzone") << "run " << run;
+    AuditOptions no_floor = Quick();
+    no_floor.min_rms_drop = 0;
+    auto relative_only = RunAudit(*d, no_floor);
+    ASSERT_TRUE(relative_only.ok());
+    if (relative_only->causes.size() > rep->causes.size()) {
+      ++extra_without_floor;
+      const Cause& extra = relative_only->causes[rep->causes.size()];
+      if (extra.gain > largest_gain_without_floor) {
+        largest_gain_without_floor = extra.gain;
+        its_rms = extra.heldout_rms_before / std::abs(m.gain);
+      }
+    }
+  }
+  std::cerr << "[ floor ] " << kRuns << " noise-free runs: a cause on the round-off residual in 0 with the floor, in "
+            << extra_without_floor << " without it (largest gain " << largest_gain_without_floor
+            << " % on a held-out RMS of " << its_rms << " N)\n";
+}
+
+TEST(GainFloor, OptionIsChecked) {
+  auto d = ParseMeasuredCsv(SimCsv(sim::SensorModel{}, 3, 8, 100), "ideal.csv");
+  ASSERT_TRUE(d.ok());
+  AuditOptions o = Quick();
+  o.min_rms_drop = -1;
+  EXPECT_THAT(Message(RunAudit(*d, o).status()), HasSubstr("min_rms_drop"));
 }
 
 // ---- real data ---------------------------------------------------------------

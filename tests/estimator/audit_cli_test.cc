@@ -42,5 +42,45 @@ TEST_F(CliTest, AuditBadInputNamesTheProblem) {
   EXPECT_NE(m.err.find("missing column(s) reading"), std::string::npos) << m.err;
 }
 
+// `audit --out` as `simulate --out`: an earlier report's folder is refused
+// (exit 2, nothing written or removed) unless --force, which replaces only
+// the report's own files.
+TEST_F(CliTest, AuditOutRefusesAFolderWithFilesUnlessForce) {
+  const std::string examples = SourceDir() + "/client/examples/";
+  const std::vector<std::string> audit = {"audit", "--reference", examples + "reference.csv", "--reading",
+                                          examples + "reading.csv", "--quiet", "--out"};
+  const std::string out = (dir() / "report").string();
+  auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = audit;
+    args.insert(args.end(), extra.begin(), extra.end());
+    return Tactforce(args);
+  };
+  const CliRun first = with({out});
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  WriteFile(out + "/summary.txt", "an earlier report");
+  WriteFile(out + "/notes.md", "the user's own file");
+
+  const CliRun again = with({out});
+  ExpectBadInput(again);
+  EXPECT_NE(again.err.find("--out: '" + out + "' is not empty"), std::string::npos) << again.err;
+  EXPECT_NE(again.err.find("or --force to replace this audit's files"), std::string::npos) << again.err;
+  EXPECT_EQ(ReadFile(out + "/summary.txt"), "an earlier report");  // nothing written
+
+  // The same wording as simulate's refusal, but for its own files.
+  const CliRun sim = Tactforce({"simulate", "sensor", "--seconds", "2", "--out", out});
+  ExpectBadInput(sim);
+  EXPECT_NE(sim.err.find("--out: '" + out + "' is not empty"), std::string::npos) << sim.err;
+  EXPECT_NE(sim.err.find("or --force to replace this simulation's files"), std::string::npos) << sim.err;
+
+  const CliRun forced = with({out, "--force"});
+  ASSERT_EQ(forced.exit_code, 0) << forced.err;
+  EXPECT_NE(ReadFile(out + "/summary.txt"), "an earlier report");
+  EXPECT_EQ(ReadFile(out + "/notes.md"), "the user's own file");  // not the audit's: kept
+  EXPECT_TRUE(std::filesystem::exists(out + "/report.json"));
+  // A file where the folder should be is refused, --force or not.
+  WriteFile((dir() / "file").string(), "x");
+  ExpectBadInput(with({(dir() / "file").string(), "--force"}));
+}
+
 }  // namespace
 }  // namespace tactforce::testing

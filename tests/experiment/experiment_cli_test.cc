@@ -12,11 +12,15 @@ TEST_F(ExperimentCliTest, GraspJson) {
   CliRun r = Tactforce({"experiment", "grasp", "--object", "sphere", "--trials", "1", "--feedback", "estimated",
                         "--json", "--plots", (dir() / "plots").string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(r.out.rfind("{\"results\":[{\"object\":\"sphere\",\"feedback\":\"estimated\",\"trials\":1,", 0), 0u)
+  // The JSON layout of every command (io::IndentJson).
+  EXPECT_EQ(r.out.rfind("{\n  \"results\": [\n    {\n      \"object\": \"sphere\",\n      \"feedback\": \"estimated\",\n"
+                        "      \"trials\": 1,",
+                        0),
+            0u)
       << r.out;
-  EXPECT_NE(r.out.find("\"successes\":"), std::string::npos);
-  EXPECT_NE(r.out.find("\"force_error_mean\":"), std::string::npos);
-  EXPECT_NE(r.out.find("\"force_error_std\":"), std::string::npos);
+  EXPECT_NE(r.out.find("\"successes\": "), std::string::npos);
+  EXPECT_NE(r.out.find("\"force_error_mean\": "), std::string::npos);
+  EXPECT_NE(r.out.find("\"force_error_std\": "), std::string::npos);
   const std::string svg = ReadFile(dir() / "plots" / "sphere_estimated.svg");
   EXPECT_EQ(svg.rfind("<svg", 0), 0u);
 }
@@ -33,8 +37,8 @@ TEST_F(ExperimentCliTest, GraspBothModesTable) {
 TEST_F(ExperimentCliTest, SlopeJson) {
   CliRun r = Tactforce({"experiment", "slope", "--mu", "0.6", "--no-creep", "--json"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(r.out.rfind("{\"results\":[{\"mu\":0.6,", 0), 0u) << r.out;
-  EXPECT_NE(r.out.find("\"mu_slope\":0.60"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.rfind("{\n  \"results\": [\n    {\n      \"mu\": 0.6,", 0), 0u) << r.out;
+  EXPECT_NE(r.out.find("\"mu_slope\": 0.60"), std::string::npos) << r.out;
 }
 
 TEST_F(ExperimentCliTest, BadInput) {

@@ -4,6 +4,7 @@
 #include "tactforce/io/json.h"
 
 #include <cmath>
+#include <random>
 #include <regex>
 #include <string>
 
@@ -215,6 +216,88 @@ TEST(JsonWriter, PrettyLayoutIsStable) {
             "  \"empty\": [],\n"
             "  \"ok\": true\n"
             "}\n");
+}
+
+// Random nested values from a seed, written compact with random spacing:
+// IndentJson keeps the value (strings with brackets, quotes and escapes
+// included), lays it out as JsonWriter does, and is idempotent.
+std::string RandomCompactJson(std::mt19937_64& rng, int depth) {
+  std::uniform_int_distribution<int> kind(0, depth > 3 ? 3 : 5), count(0, 3), pad(0, 2);
+  const std::string space(static_cast<size_t>(pad(rng)), ' ');
+  const std::vector<std::string> strings = {R"("a{b")", R"("[,]:")", R"("q\"x\\")", R"("")", R"("t\n")"};
+  switch (kind(rng)) {
+    case 0: return JsonNumber(std::uniform_real_distribution<double>(-1e3, 1e3)(rng));
+    case 1: return strings[static_cast<size_t>(count(rng)) % strings.size()];
+    case 2: return "true";
+    case 3: return "null";
+    case 4: {
+      std::string out = "[" + space;
+      const int n = count(rng);
+      for (int i = 0; i < n; ++i) out += (i ? "," + space : "") + RandomCompactJson(rng, depth + 1);
+      return out + space + "]";
+    }
+    default: {
+      std::string out = "{";
+      const int n = count(rng);
+      for (int i = 0; i < n; ++i) {
+        out += (i ? "," : "") + space + "\"k" + std::to_string(i) + "\"" + space + ":" + RandomCompactJson(rng, depth + 1);
+      }
+      return out + "}";
+    }
+  }
+}
+
+TEST(IndentJson, KeepsTheValueInTheWritersLayout) {
+  EXPECT_EQ(IndentJson(R"({"name":"x\"y","list":[1.5,null,{},[ ]],"ok":true})"),
+            "{\n  \"name\": \"x\\\"y\",\n  \"list\": [\n    1.5,\n    null,\n    {},\n    []\n  ],\n"
+            "  \"ok\": true\n}\n");
+  std::mt19937_64 rng(25);
+  for (int trial = 0; trial < 200; ++trial) {
+    const std::string compact = "{\"v\": " + RandomCompactJson(rng, 0) + "}";
+    const std::string pretty = IndentJson(compact);
+    absl::StatusOr<JsonValue> a = ParseJson(compact, "compact"), b = ParseJson(pretty, "pretty");
+    ASSERT_TRUE(a.ok()) << a.status() << compact;
+    ASSERT_TRUE(b.ok()) << b.status() << pretty;
+    std::string no_space;
+    bool in_string = false, escaped = false;
+    for (char c : pretty) {  // the same text once whitespace outside strings is gone
+      if (in_string) {
+        if (escaped) {
+          escaped = false;
+        } else if (c == '\\') {
+          escaped = true;
+        } else if (c == '"') {
+          in_string = false;
+        }
+      } else if (c == '"') {
+        in_string = true;
+      } else if (c == ' ' || c == '\n') {
+        continue;
+      }
+      no_space += c;
+    }
+    std::string compact_no_space;
+    in_string = escaped = false;
+    for (char c : compact) {
+      if (in_string) {
+        if (escaped) {
+          escaped = false;
+        } else if (c == '\\') {
+          escaped = true;
+        } else if (c == '"') {
+          in_string = false;
+        }
+      } else if (c == '"') {
+        in_string = true;
+      } else if (c == ' ') {
+        continue;
+      }
+      compact_no_space += c;
+    }
+    EXPECT_EQ(no_space, compact_no_space);
+    EXPECT_EQ(IndentJson(pretty), pretty);  // idempotent
+    EXPECT_EQ(pretty.back(), '\n');
+  }
 }
 
 TEST(JsonWriter, RoundTripsThroughTheReader) {

@@ -2,7 +2,10 @@
 run_package_test.py with the venv's interpreter; TACTFORCE_TEST_SERVER is
 the server's address). One call per RPC through tactforce.Client with a
 sensible answer, the errors' exit codes (2 bad input, 3 unavailable,
-4 deadline) and the command-line tools' exit codes."""
+4 deadline) and the command-line tools' exit codes; the friction and audit
+CSV readers on data drawn from a seed; plan_friction_probe and the tool's
+--friction-probe; the grpc.health.v1 stubs beside the real grpc package;
+the two-space JSON of the tools."""
 
 import json
 import math
@@ -24,6 +27,35 @@ VENV = Path(os.environ["TACTFORCE_TEST_VENV"])
 TMP = Path(os.environ["TACTFORCE_TEST_TMP"])
 SPHERE_PINCH = SOURCE / "client" / "examples" / "sphere_pinch.json"
 LIFT = SOURCE / "client" / "examples" / "wrench_lift_trajectory.json"
+PROBE = SOURCE / "client" / "examples" / "friction_probe.json"
+SEED = int(os.environ.get("TACTFORCE_TEST_SEED", "25"))
+
+
+def indentation_errors(text):
+    """Lines of `text` (pretty JSON) not indented two spaces per open
+    bracket, as 'line N: ...'; [] when every line is."""
+    errors, depth = [], 0
+    for number, line in enumerate(text.splitlines(), start=1):
+        stripped = line.lstrip(" ")
+        expected = depth - (1 if stripped[:1] in "}]" else 0)
+        if len(line) - len(stripped) != 2 * expected:
+            errors.append(f"line {number}: {len(line) - len(stripped)} spaces, expected {2 * expected}: {line!r}")
+        in_string = escaped = False
+        for c in stripped:
+            if in_string:
+                if escaped:
+                    escaped = False
+                elif c == "\\":
+                    escaped = True
+                elif c == '"':
+                    in_string = False
+            elif c == '"':
+                in_string = True
+            elif c in "{[":
+                depth += 1
+            elif c in "}]":
+                depth -= 1
+    return errors
 
 
 def read_json(path):
@@ -321,6 +353,203 @@ class PackageTest(unittest.TestCase):
             self.assertEqual(tactforce.exit_code_for(code), exit_code, code)
 
 
+def write_friction_csv(path, trial, slip_column):
+    """A FrictionTrial as the CSV `tactforce friction` reads."""
+    header = "t,fx,fy,fz,px,py,pz" + (",slip" if slip_column else "")
+    rows = [header]
+    for s in trial.samples:
+        values = [s.t, s.force.x, s.force.y, s.force.z, s.contact_point.x, s.contact_point.y, s.contact_point.z]
+        row = ",".join(repr(v) for v in values)
+        slipping = s.contact_point.x != 0.0 or s.contact_point.y != 0.0  # the probe has moved
+        rows.append(row + (f",{int(slipping)}" if slip_column else ""))
+    path.write_text("\n".join(rows) + "\n", encoding="utf-8")
+
+
+class CsvReadersTest(unittest.TestCase):
+    """tactforce.friction and tactforce.audit on files drawn from SEED."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.client = tactforce.Client(SERVER, timeout=30)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.client.close()
+
+    def test_friction_csvs_round_trip_and_recover_mu(self):
+        from tactforce import friction as friction_csv
+        rng = random.Random(SEED)
+        for case in range(3):
+            mu = rng.uniform(0.3, 0.9)
+            trials = rng.randint(2, 5)
+            drawn = friction_request(mu=mu, trials=trials)
+            paths = []
+            for i, trial in enumerate(drawn.trials):
+                path = TMP / f"friction_{case}_{i}.csv"
+                write_friction_csv(path, trial, slip_column=(i % 2 == 1))
+                paths.append(str(path))
+            read = friction_csv.friction_request(paths, normal=(0.0, 0.0, -1.0))
+            self.assertEqual(len(read.trials), trials)
+            for i, (got, want) in enumerate(zip(read.trials, drawn.trials)):
+                self.assertEqual(got.name, Path(paths[i]).name)
+                self.assertEqual(len(got.samples), len(want.samples))
+                self.assertEqual([s.t for s in got.samples], [s.t for s in want.samples])
+                self.assertEqual([s.force.z for s in got.samples], [s.force.z for s in want.samples])
+                self.assertEqual([s.contact_point.x for s in got.samples], [s.contact_point.x for s in want.samples])
+                self.assertEqual(got.samples[0].HasField("slip"), i % 2 == 1)
+                if i % 2 == 1:
+                    self.assertEqual([s.slip for s in got.samples],
+                                     [s.contact_point.x != 0 or s.contact_point.y != 0 for s in want.samples])
+            response = self.client.EstimateFriction(read)
+            self.assertEqual(response.count, trials)
+            self.assertAlmostEqual(response.median, mu, delta=0.05 * mu, msg=f"case {case}: mu {mu}")
+
+    def test_friction_csv_errors_name_file_line_and_column(self):
+        from tactforce._csv import BadInput
+        from tactforce.friction import read_trial
+        bad = TMP / "bad_friction.csv"
+        bad.write_text("t,fx,fy,fz,px,py,pz\n0,0,0,-1,0,0,0\n0.1,0,0,x,0,0,0\n", encoding="utf-8")
+        with self.assertRaisesRegex(BadInput, r"bad_friction.csv:3: column 'fz': not a number"):
+            read_trial(str(bad))
+        bad.write_text("t,fx,fy,fz,px,py\n0,0,0,-1,0,0\n", encoding="utf-8")
+        with self.assertRaisesRegex(BadInput, r"missing column\(s\) pz"):
+            read_trial(str(bad))
+        bad.write_text("t,fx,fy,fz,px,py,pz\n0.2,0,0,-1,0,0,0\n0.1,0,0,-1,0,0,0\n", encoding="utf-8")
+        with self.assertRaisesRegex(BadInput, r":3: column 't': not increasing"):
+            read_trial(str(bad))
+
+    def test_audit_csv_skips_nan_rows_and_finds_the_deadzone(self):
+        from tactforce.audit import audit_request, read_samples
+        rng = random.Random(SEED + 1)
+        threshold = rng.uniform(0.25, 0.6)
+        drawn = audit_request_from(threshold, rng)
+        path = TMP / "audit_run.csv"
+        nan_rows = sorted(rng.sample(range(len(drawn.samples)), rng.randint(1, 12)))
+        lines = ["t,reference,reading,trial"]
+        for k, sample in enumerate(drawn.samples):
+            reading = "nan" if k in nan_rows[::2] else ("" if k in nan_rows[1::2] else repr(sample.reading))
+            lines.append(f"{sample.t!r},{sample.reference!r},{reading},3")
+        path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+        samples, skipped = read_samples(str(path))
+        self.assertEqual(skipped, len(nan_rows))
+        self.assertEqual(len(samples), len(drawn.samples) - len(nan_rows))
+        kept = [s for k, s in enumerate(drawn.samples) if k not in nan_rows]
+        self.assertEqual([s.reading for s in samples], [s.reading for s in kept])
+        self.assertTrue(all(s.trial == 3 for s in samples))
+        request = audit_request(str(path), reading_units="N")
+        self.assertEqual(request.source, "audit_run.csv")
+        response = self.client.AuditModel(request)
+        self.assertEqual(response.causes[0].effect, "deadzone", response.summary)
+        self.assertAlmostEqual(response.causes[0].parameters["threshold"], threshold, delta=0.05)
+
+    def test_audit_csv_errors(self):
+        from tactforce._csv import BadInput
+        from tactforce.audit import read_samples
+        bad = TMP / "bad_audit.csv"
+        bad.write_text("t,reference\n0,1\n", encoding="utf-8")
+        with self.assertRaisesRegex(BadInput, r"missing column\(s\) reading"):
+            read_samples(str(bad))
+        bad.write_text("t,reference,reading,trial\n0,1,2,0.5\n", encoding="utf-8")
+        with self.assertRaisesRegex(BadInput, r"bad_audit.csv:2: column 'trial': not an integer"):
+            read_samples(str(bad))
+
+
+def audit_request_from(threshold, rng, seconds=15.0, rate=50.0):
+    """audit_request's deadzone sensor with a drawn threshold and noise."""
+    request = audit_pb2.AuditRequest(source="drawn")
+    noise = rng.uniform(0.005, 0.02)
+    for k in range(int(seconds * rate)):
+        t = k / rate
+        phase = (t % 3.0) / 3.0
+        reference = 4.0 * (2 * phase if phase < 0.5 else 2 - 2 * phase)
+        request.samples.add(t=t, reference=reference,
+                            reading=max(0.0, reference - threshold) + rng.gauss(0.0, noise))
+    return request
+
+
+class FrictionProbeTest(unittest.TestCase):
+    """Client.plan_friction_probe over the test's server (an ephemeral port)."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.client = tactforce.Client(SERVER, timeout=30)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.client.close()
+
+    def test_plan_friction_probe_follows_the_drawn_ramp(self):
+        rng = random.Random(SEED + 2)
+        for case in range(4):
+            initial = rng.uniform(1.5, 3.0)
+            final = rng.uniform(0.5, initial - 0.2)
+            ramp, rate, tangential = rng.uniform(0.5, 2.0), rng.uniform(5.0, 20.0), rng.uniform(0.1, 0.6)
+            response = self.client.plan_friction_probe(
+                wrench_grasp(), position=(0.0, 0.0, 0.012), normal=(0.0, 0.0, -1.0), tangent=(1.0, 0.0, 0.0),
+                tangential_force=tangential, initial_normal_force=initial, final_normal_force=final,
+                ramp_rate=ramp, sample_rate=rate)
+            count = math.floor((initial - final) / ramp * rate) + 1
+            self.assertEqual(len(response.times), count, f"case {case}")
+            self.assertEqual(len(response.holding.steps), count)
+            for t, force in zip(response.times, response.probe_forces):
+                self.assertAlmostEqual(-force.z, max(final, initial - ramp * t), delta=1e-9)
+                self.assertAlmostEqual(force.x, tangential, delta=1e-12)
+            # The same request as a message: the same answer.
+            request = planner_pb2.FrictionProbeRequest(
+                tangential_force=tangential, initial_normal_force=initial, final_normal_force=final,
+                ramp_rate=ramp, sample_rate=rate)
+            request.plan.CopyFrom(wrench_grasp())
+            set_vec(request.position, [0.0, 0.0, 0.012])
+            set_vec(request.normal, [0.0, 0.0, -1.0])
+            set_vec(request.tangent, [1.0, 0.0, 0.0])
+            direct = self.client.PlanFrictionProbe(request)
+            self.assertEqual([f.z for f in direct.probe_forces], [f.z for f in response.probe_forces])
+            self.assertEqual([s.status for s in direct.holding.steps], [s.status for s in response.holding.steps])
+
+    def test_plan_friction_probe_bad_input_is_exit_code_2(self):
+        with self.assertRaises(tactforce.TactforceError) as caught:
+            self.client.plan_friction_probe(wrench_grasp(), position=(0, 0), normal=(0, 0, -1), tangent=(1, 0, 0),
+                                            tangential_force=0.5, initial_normal_force=2, final_normal_force=1,
+                                            ramp_rate=1, sample_rate=10)
+        self.assertEqual(caught.exception.exit_code, 2)
+        self.assertIn("position", caught.exception.details)
+        with self.assertRaises(tactforce.TactforceError) as caught:
+            self.client.plan_friction_probe(wrench_grasp(), position=(0, 0, 0.012), normal=(0, 0, -1),
+                                            tangent=(1, 0, 0), tangential_force=0.5, initial_normal_force=2,
+                                            final_normal_force=1, ramp_rate=0, sample_rate=10)
+        self.assertEqual(caught.exception.code, grpc.StatusCode.INVALID_ARGUMENT)
+        self.assertIn("ramp_rate", caught.exception.details)
+
+
+class HealthStubsTest(unittest.TestCase):
+    """The grpc.health.v1 stubs live in tactforce.health.v1: importable
+    beside the real grpc package, which they do not shadow."""
+
+    def test_health_stubs_import_beside_the_real_grpc(self):
+        from tactforce.health.v1 import health_pb2, health_pb2_grpc
+        self.assertTrue(hasattr(grpc, "insecure_channel"), grpc.__file__)
+        self.assertFalse(Path(grpc.__file__).resolve().is_relative_to(Path(tactforce.__file__).parent.resolve()))
+        self.assertEqual(health_pb2.DESCRIPTOR.package, "grpc.health.v1")
+        self.assertTrue(hasattr(health_pb2_grpc, "HealthStub"))
+        # Nothing the install added is a top-level grpc folder.
+        site = Path(tactforce.__file__).resolve().parent.parent
+        self.assertFalse((site / "grpc" / "health").exists(), site)
+        # A fresh interpreter imports both, in either order.
+        for order in ("import grpc; import tactforce.health.v1.health_pb2_grpc as h",
+                      "import tactforce.health.v1.health_pb2_grpc as h; import grpc"):
+            run = subprocess.run([str(VENV / "bin" / "python"), "-c", order + "; grpc.insecure_channel; h.HealthStub"],
+                                 capture_output=True, text=True, timeout=60)
+            self.assertEqual(run.returncode, 0, run.stderr)
+
+    def test_check_health_over_the_standard_service(self):
+        with tactforce.Client(SERVER, timeout=30) as client:
+            self.assertEqual(client.CheckHealth(), "SERVING")
+            self.assertEqual(client.CheckHealth("tactforce.v1.Planner"), "SERVING")
+            with self.assertRaises(tactforce.TactforceError) as caught:
+                client.CheckHealth("no.such.Service")
+        self.assertEqual(caught.exception.code, grpc.StatusCode.NOT_FOUND)
+
+
 class ToolsTest(unittest.TestCase):
     """tactforce-plan-py and tactforce-inertia-py, the console scripts."""
 
@@ -350,6 +579,34 @@ class ToolsTest(unittest.TestCase):
         self.assertEqual(run.returncode, 3, run.stderr)
         self.assertIn("UNAVAILABLE", run.stderr)
 
+    def test_plan_tool_friction_probe(self):
+        run = self.tool("tactforce-plan-py", "--server", SERVER, "--friction-probe", str(PROBE), "--json")
+        self.assertEqual(run.returncode, 0, run.stderr)
+        self.assertEqual(indentation_errors(run.stdout), [])
+        response = json.loads(run.stdout)
+        request = read_json(PROBE)
+        count = math.floor((request["initial_normal_force"] - request["final_normal_force"])
+                           / request["ramp_rate"] * request["sample_rate"]) + 1
+        self.assertEqual(len(response["times"]), count)
+        self.assertEqual(len(response["holding"]["steps"]), count)
+        run = self.tool("tactforce-plan-py", "--server", SERVER, "--friction-probe", str(PROBE))
+        self.assertEqual(run.returncode, 0, run.stderr)
+        self.assertIn(f"{count} samples: {count} optimal", run.stdout)
+        run = self.tool("tactforce-plan-py", "--server", SERVER, "--friction-probe", str(TMP / "missing.json"))
+        self.assertEqual(run.returncode, 2, run.stderr)
+        run = self.tool("tactforce-plan-py", "--server", SERVER, "--friction-probe", str(PROBE),
+                        "--request", str(SPHERE_PINCH))
+        self.assertEqual(run.returncode, 2, run.stderr)
+        self.assertIn("--friction-probe", run.stderr)
+
+    def test_tools_print_two_space_json(self):
+        for args in (("tactforce-plan-py", "--request", str(SPHERE_PINCH)),
+                     ("tactforce-plan-py", "--request", str(SPHERE_PINCH), "--stream")):
+            run = self.tool(args[0], "--server", SERVER, *args[1:], "--json")
+            self.assertEqual(run.returncode, 0, run.stderr)
+            self.assertEqual(indentation_errors(run.stdout), [], args)
+            self.assertIn('\n  "status": ', run.stdout)
+
     def test_inertia_tool(self):
         csv = TMP / "tumble.csv"
         rows = ["t,px,py,pz,qw,qx,qy,qz,fx,fy,fz,tx,ty,tz,wx,wy,wz,dwx,dwy,dwz,ax,ay,az"]
@@ -366,6 +623,7 @@ class ToolsTest(unittest.TestCase):
         run = self.tool("tactforce-inertia-py", "--server", SERVER, "--csv", str(csv), "--method", "baseline-ls",
                         "--batch", "50", "--json")
         self.assertEqual(run.returncode, 0, run.stderr)
+        self.assertEqual(indentation_errors(run.stdout), [])
         response = json.loads(run.stdout)
         self.assertEqual(response["samples_received"], 200)
         self.assertAlmostEqual(response["mass"], MASS, delta=1e-3 * MASS)

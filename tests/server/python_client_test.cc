@@ -86,6 +86,24 @@ TEST_F(PythonClientTest, ReportsInvalidRequestsAndUnreachableServers) {
   EXPECT_THAT(run.err, HasSubstr("UNAVAILABLE"));
 }
 
+// The build tree's grpc.health.v1 stubs live in tactforce.health.v1: no
+// grpc/ folder in <build>/python shadows the real grpc package, and both
+// import in one interpreter and check the server's health.
+TEST_F(PythonClientTest, HealthStubsImportBesideTheRealGrpc) {
+  EXPECT_FALSE(fs::exists(fs::path(TACTFORCE_PYTHON_STUB_DIR) / "grpc"));
+  const std::string script =
+      "import sys, grpc\n"
+      "from tactforce.health.v1 import health_pb2, health_pb2_grpc\n"
+      "channel = grpc.insecure_channel(sys.argv[1])\n"
+      "reply = health_pb2_grpc.HealthStub(channel).Check(health_pb2.HealthCheckRequest(), timeout=10)\n"
+      "print(health_pb2.HealthCheckResponse.ServingStatus.Name(reply.status), grpc.__file__)\n";
+  ProcessResult run = RunProcess({TACTFORCE_PYTHON3, "-c", script, server_->address()},
+                                 {std::string("PYTHONPATH=") + TACTFORCE_PYTHON_STUB_DIR});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_THAT(run.out, ::testing::StartsWith("SERVING "));
+  EXPECT_THAT(run.out, ::testing::Not(HasSubstr(TACTFORCE_PYTHON_STUB_DIR)));  // the real grpc
+}
+
 // client/python/inertia_client.py streams a CSV to Estimator.FitInertia in
 // batches; its answer equals the in-process fit of the same file, and a bad
 // row is reported with its line before anything wrong reaches the server.

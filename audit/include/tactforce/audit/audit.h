@@ -21,7 +21,9 @@
 //     training block and scores it on the held-out block with
 //     BIC_h = n_h ln(RSS_h / n_h) + k ln(n_h). The best is accepted when it
 //     lowers BIC_h AND improves the held-out RMS by at least min_gain
-//     (default 1 %); otherwise selection stops. At most max_causes.
+//     (default 1 %) AND by at least min_rms_drop x the reference force range
+//     (force equivalent; default 1e-6, an absolute floor); otherwise
+//     selection stops. At most max_causes.
 //  4. The extended model = nominal + named effects, jointly re-fitted, with
 //     1-sigma uncertainties (conditional Delta-RSS = sigma^2 intervals).
 //  5. Gain: the measured run re-simulated with both models
@@ -52,6 +54,12 @@ std::vector<std::string> EffectFields(Effect e);
 struct AuditOptions {
   double heldout_fraction = 0.35;   // later block used for scoring, (0.1, 0.6)
   double min_gain = 0.01;           // relative held-out RMS gain to accept a cause
+  // Absolute floor beside min_gain: the held-out RMS (force equivalent,
+  // reading units / |gain|) must also fall by at least this fraction of the
+  // reference force range (1e-6: 10 uN on a 10 N range, 10x above the
+  // round-off of a 9-digit CSV, far below any tactile sensor's resolution),
+  // so a large relative gain on a negligible residual is no cause.
+  double min_rms_drop = 1e-6;
   int max_causes = 3;
   double max_delay = 0.3;           // s, |delay| bound
   double max_lag = 0.5;             // s
@@ -168,6 +176,9 @@ absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOption
 // report.json's "extended_model" is the written model's path. `source` (the
 // measured CSV's name; may be empty) is named in every plot.
 absl::Status WriteAuditReport(const AuditReport& report, const std::string& dir, const std::string& source = "");
+// The names of the files WriteAuditReport writes (what `audit --out --force`
+// may replace in an earlier report's folder).
+std::vector<std::string> AuditReportFileNames();
 std::string AuditReportJson(const AuditReport& report,
                             const std::string& extended_model_path = "extended_model.json");
 std::string FormatAuditSummary(const AuditReport& report);

@@ -13,8 +13,12 @@ Contents:
     tls_credentials         TLS credentials from PEM files
     HAS_SERVER_INFO         True if built with tactforce/v1/info.proto
     tactforce.v1            the generated messages and stubs (*_pb2, *_pb2_grpc)
+    tactforce.health.v1     grpc.health.v1 messages and stubs (health_pb2, health_pb2_grpc)
+    tactforce.friction      slip-trial CSVs -> FrictionRequest (read_trial, friction_request)
+    tactforce.audit         measured-data CSV -> AuditRequest (read_samples, audit_request)
     tactforce.plan          `python3 -m tactforce.plan` (tactforce-plan-py)
-    tactforce.inertia       `python3 -m tactforce.inertia` (tactforce-inertia-py)
+    tactforce.inertia       `python3 -m tactforce.inertia` (tactforce-inertia-py); read_samples
+                            reads the inertia CSV
     __version__             the tactforce version (top-level CMakeLists.txt)
 """
 

@@ -23,6 +23,7 @@ from google.protobuf import json_format, symbol_database
 from google.protobuf.message import Message
 
 from tactforce.errors import TactforceError
+from tactforce.health.v1 import health_pb2, health_pb2_grpc
 from tactforce.v1 import (audit_pb2, audit_pb2_grpc, estimator_pb2, estimator_pb2_grpc, inertia_pb2,
                           planner_pb2, planner_pb2_grpc)
 
@@ -136,6 +137,7 @@ class Client:
         self._estimator = estimator_pb2_grpc.EstimatorStub(channel)
         self._audit = audit_pb2_grpc.AuditStub(channel)
         self._info = info_pb2_grpc.InfoStub(channel) if HAS_SERVER_INFO else None
+        self._health = health_pb2_grpc.HealthStub(channel)
 
     def close(self) -> None:
         """Closes the channel (if the client opened it)."""
@@ -189,6 +191,30 @@ class Client:
         return self._unary(self._planner.PlanFrictionProbe, "PlanFrictionProbe",
                            _message(request, planner_pb2.FrictionProbeRequest, "PlanFrictionProbe"), timeout)
 
+    def plan_friction_probe(self, plan: Request[planner_pb2.PlanRequest], *,
+                            position: Sequence[float], normal: Sequence[float], tangent: Sequence[float],
+                            tangential_force: float, initial_normal_force: float, final_normal_force: float,
+                            ramp_rate: float, sample_rate: float,
+                            timeout: Optional[float] = None) -> planner_pb2.FrictionProbeResponse:
+        """PlanFrictionProbe from keyword arguments: `plan` the holding
+        grasp; the probe at `position` (m, object frame) pressing along
+        `normal` (into the object) with `tangential_force` (N) along
+        `tangent`, its normal force ramped from `initial_normal_force` to
+        `final_normal_force` (N) at `ramp_rate` (N/s), sampled at
+        `sample_rate` (Hz). Returns the probe force and the holding plan per
+        sample (response.times, .probe_forces, .holding.steps)."""
+        request = planner_pb2.FrictionProbeRequest(
+            tangential_force=tangential_force, initial_normal_force=initial_normal_force,
+            final_normal_force=final_normal_force, ramp_rate=ramp_rate, sample_rate=sample_rate)
+        request.plan.CopyFrom(_message(plan, planner_pb2.PlanRequest, "PlanFrictionProbe"))
+        for field, values in (("position", position), ("normal", normal), ("tangent", tangent)):
+            if len(values) != 3:
+                raise TactforceError(grpc.StatusCode.INVALID_ARGUMENT,
+                                     f"{field}: expected 3 numbers, got {len(values)}", "PlanFrictionProbe")
+            vec = getattr(request, field)
+            vec.x, vec.y, vec.z = (float(v) for v in values)
+        return self.PlanFrictionProbe(request, timeout=timeout)
+
     # tactforce.v1.Estimator
 
     def EstimateForces(self, request: Request[estimator_pb2.EstimateRequest], *,
@@ -224,6 +250,17 @@ class Client:
         (Audit.AuditModel)."""
         return self._unary(self._audit.AuditModel, "AuditModel",
                            _message(request, audit_pb2.AuditRequest, "AuditModel"), timeout)
+
+    # grpc.health.v1.Health (tactforce.health.v1)
+
+    def CheckHealth(self, service: str = "", *, timeout: Optional[float] = None) -> str:
+        """The server's health (grpc.health.v1.Health/Check) for `service`
+        ("" = the whole server, or e.g. "tactforce.v1.Planner") by its name
+        in health.proto: "SERVING", "NOT_SERVING", ... An unknown service is
+        TactforceError(NOT_FOUND)."""
+        response = self._unary(self._health.Check, "Check",
+                               health_pb2.HealthCheckRequest(service=service), timeout)
+        return health_pb2.HealthCheckResponse.ServingStatus.Name(response.status)
 
     # tactforce.v1.Info (only when the package was built with info.proto)
 

@@ -39,6 +39,7 @@ import sys
 import grpc
 
 from tactforce._cli import print_json, report, wire_choices
+from tactforce._csv import BadInput
 from tactforce.client import Client
 from tactforce.errors import EXIT_BAD_INPUT, EXIT_OK, TactforceError
 from tactforce.v1 import inertia_pb2
@@ -53,8 +54,6 @@ WRENCH = ["fx", "fy", "fz", "tx", "ty", "tz"]
 KINEMATICS = ["wx", "wy", "wz", "dwx", "dwy", "dwz", "ax", "ay", "az"]
 
 
-class BadInput(Exception):
-    pass
 
 
 def set_vec(message, values):

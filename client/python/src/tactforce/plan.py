@@ -1,11 +1,14 @@
 """Plan fingertip contact forces on a running tactforce-server.
 
 Sends one PlanRequest (the built-in 3-finger wrench grasp, or a PlanRequest
-JSON file) to tactforce.v1.Planner and prints the force of every contact.
+JSON file) to tactforce.v1.Planner and prints the force of every contact;
+or, with --friction-probe FILE, a FrictionProbeRequest to PlanFrictionProbe
+and prints the probe's force and the holding plan per sample.
 
     tactforce-plan-py --server 127.0.0.1:50051
     python3 -m tactforce.plan --server 127.0.0.1:50051 \\
         --request client/examples/sphere_pinch.json --solver ipopt --json
+    tactforce-plan-py --server 127.0.0.1:50051 --friction-probe client/examples/friction_probe.json
 
 Exit codes (those of the `tactforce` CLI): 0 an answer was computed
 (optimal, infeasible or solver failure: see the status line), 1 any other
@@ -20,6 +23,7 @@ import sys
 from typing import List, Optional, TextIO
 
 from google.protobuf import json_format
+from google.protobuf.message import Message
 
 from tactforce._cli import print_json, report, wire_choices
 from tactforce.client import Client, tls_credentials
@@ -57,14 +61,14 @@ def wrench_grasp() -> planner_pb2.PlanRequest:
     return request
 
 
-def load_request(path: str) -> planner_pb2.PlanRequest:
-    """A PlanRequest JSON file ('-' = stdin)."""
+def load_request(path: str, message_type: type = planner_pb2.PlanRequest) -> Message:
+    """A PlanRequest (or `message_type`) JSON file ('-' = stdin)."""
     if path == "-":
         text = sys.stdin.read()
     else:
         with open(path, encoding="utf-8") as handle:
             text = handle.read()
-    return json_format.Parse(text, planner_pb2.PlanRequest())
+    return json_format.Parse(text, message_type())
 
 
 def status_name(value: int) -> str:
@@ -102,6 +106,20 @@ def print_table(request: planner_pb2.PlanRequest, response: planner_pb2.PlanResp
               file=out)
 
 
+def print_probe_table(response: planner_pb2.FrictionProbeResponse, out: TextIO) -> None:
+    """One line per probe sample, as `tactforce plan --friction-probe`."""
+    print(f"{'step':>5}  {'t (s)':>8}  {'probe force (N)':<26}  {'holding':<14}  holding normal forces (N)", file=out)
+    for k, t in enumerate(response.times):
+        f = response.probe_forces[k]
+        step = response.holding.steps[k] if k < len(response.holding.steps) else planner_pb2.PlanResponse()
+        normals = " ".join(f"{fn:7.3f}" for fn in step.normal_forces)
+        print(f"{k:5d}  {t:8.3f}  {f.x:8.3f} {f.y:8.3f} {f.z:8.3f}  {status_name(step.status):<14}  {normals}",
+              file=out)
+    h = response.holding
+    print(f"{len(response.times)} samples: {h.optimal_steps} optimal, {h.infeasible_steps} infeasible, "
+          f"{h.failed_steps} failed; total {h.total_time_us} us", file=out)
+
+
 def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
     parser = argparse.ArgumentParser(
         prog="tactforce-plan-py",
@@ -111,6 +129,9 @@ def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
     parser.add_argument("--request", metavar="FILE",
                         help="PlanRequest JSON ('-' = stdin); default: the built-in "
                              "3-finger wrench grasp")
+    parser.add_argument("--friction-probe", metavar="FILE",
+                        help="FrictionProbeRequest JSON ('-' = stdin) instead of --request: the probe's "
+                             "force and the holding plan per sample (Planner.PlanFrictionProbe)")
     parser.add_argument("--solver", choices=sorted(SOLVERS),
                         help="override the request's solver")
     parser.add_argument("--timeout", type=float, default=10.0,
@@ -124,7 +145,10 @@ def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
     parser.add_argument("--tls-key", metavar="PEM", help="client private key (mutual TLS)")
     parser.add_argument("--tls-server-name", metavar="NAME",
                         help="expected server name in its certificate, if not the host")
-    return parser.parse_args(argv)
+    args = parser.parse_args(argv)
+    if args.friction_probe and (args.request or args.stream):
+        parser.error("--friction-probe excludes --request and --stream")
+    return args
 
 
 def connect(args: argparse.Namespace) -> Client:
@@ -135,8 +159,34 @@ def connect(args: argparse.Namespace) -> Client:
                   server_name=args.tls_server_name)
 
 
+def run_friction_probe(args: argparse.Namespace) -> int:
+    """--friction-probe: Planner.PlanFrictionProbe; printed as the CLI does."""
+    try:
+        request = load_request(args.friction_probe, planner_pb2.FrictionProbeRequest)
+    except (OSError, json_format.ParseError) as error:
+        print(f"error: {args.friction_probe}: {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if args.solver:
+        request.plan.solver = SOLVERS[args.solver]
+    try:
+        with connect(args) as client:
+            response = client.PlanFrictionProbe(request)
+    except OSError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except TactforceError as error:
+        return report(error)
+    if args.json:
+        print_json(response)
+    else:
+        print_probe_table(response, sys.stdout)
+    return EXIT_OK
+
+
 def main(argv: Optional[List[str]] = None) -> int:
     args = parse_args(argv)
+    if args.friction_probe:
+        return run_friction_probe(args)
     try:
         request = load_request(args.request) if args.request else wrench_grasp()
     except (OSError, json_format.ParseError) as error:

@@ -111,6 +111,13 @@ class JsonWriter {
   bool after_key_ = false;
 };
 
+// `json` (valid JSON text, compact or indented any way) in the one layout
+// every command prints, JsonWriter's: two spaces per level, one member or
+// element a line, `"key": value`, empty containers as {} and [], a final
+// newline. Only whitespace outside strings changes (numbers, key order and
+// escapes are kept byte for byte).
+std::string IndentJson(std::string_view json);
+
 // `s` as a quoted JSON string (nlohmann's escaping: \" \\ \b \f \n \r \t,
 // other control characters as \u00XX; invalid UTF-8 becomes U+FFFD).
 std::string JsonEscape(std::string_view s);
