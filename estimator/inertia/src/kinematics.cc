@@ -395,6 +395,41 @@ std::string Describe(const char* what, const FitResult& f) {
                          f.estimated ? ", estimated" : "");
 }
 
+struct SeriesNoise {
+  const char* name;
+  const char* unit;
+  double sigma;   // given; 0 = unknown
+  bool estimate;  // estimate an unknown sigma from the series' roughness
+};
+
+// Smooths a measured series (object or world frame) in place when it is
+// noisy and sets the per-sample variance of the smoothed values. An unknown
+// sigma of a regressor series (the accelerations) is estimated from the
+// series' roughness, so the errors-in-variables weighting and bias
+// correction see it; other unknown sigmas leave the series as measured
+// (returns false) unless a fixed window is asked for.
+bool SmoothMeasuredSeries(const std::vector<double>& t, const SeriesNoise& noise, int fixed_window,
+                          std::vector<Vec3>* series, std::vector<double>* variance, std::vector<std::string>* notes,
+                          InterruptPoll* poll) {
+  const bool estimated = !(noise.sigma > 0) && noise.estimate;
+  if (!(noise.sigma > 0) && !estimated && fixed_window <= 0) return false;
+  const int n = static_cast<int>(series->size());
+  const Charted c = Charted::Positions(*series, kMaxWindow);
+  const double sigma2 = estimated ? RoughnessVariance(t, c, kRoughnessFit, poll) : noise.sigma * noise.sigma;
+  FitResult f = SelectAndFit(t, c, 0, sigma2, fixed_window, poll);
+  f.estimated = estimated;
+  variance->assign(n, 0.0);
+  for (int k = 0; k < n; ++k) (*series)[k] += f.d[0][k], (*variance)[k] = f.sigma2 * f.wsq[0][k];
+  if (notes) notes->push_back(Describe(noise.name, f));
+  if (notes && estimated) {
+    notes->push_back(absl::StrFormat(
+        "%s noise: sigma %.3g %s estimated from the data (roughness against a local quartic over %d samples; "
+        "give it to override)",
+        noise.name, std::sqrt(f.sigma2), noise.unit, kRoughnessFit.window));
+  }
+  return true;
+}
+
 }  // namespace
 
 std::vector<KinPoint> SmoothedKinematics(const InertiaSamples& s, const Vec3& g, const InertiaNoise& noise,
@@ -412,31 +447,14 @@ std::vector<KinPoint> SmoothedKinematics(const InertiaSamples& s, const Vec3& g,
   if (s.HasKinematics()) {
     std::vector<KinPoint> m = MeasuredKinematicsPoints(s, g, poll);
     if (poll->stopped()) return m;
-    // Smooth a measured series (object or world frame) when it is noisy.
-    // An unknown (0) sigma of a regressor series (accelerations) is
-    // estimated from the series' roughness, so the errors-in-variables
-    // weighting and bias correction see it; other unknown sigmas stay 0.
     auto smooth = [&](const char* name, double sigma, bool estimate, const char* unit, auto get, auto set,
                       double KinPoint::*var) {
-      if (!(sigma > 0) && !estimate && fixed_window <= 0) return;
-      std::vector<Vec3> raw(n);
-      for (int k = 0; k < n; ++k) raw[k] = get(k);
-      const Charted c = Charted::Positions(raw, kMaxWindow);
-      const bool estimated = !(sigma > 0) && estimate;
-      const double sigma2 = estimated ? RoughnessVariance(t, c, kRoughnessFit, poll) : sigma * sigma;
-      FitResult f = SelectAndFit(t, c, 0, sigma2, fixed_window, poll);
-      f.estimated = estimated;
-      for (int k = 0; k < n; ++k) {
-        set(k, raw[k] + f.d[0][k]);
-        m[k].*var = f.sigma2 * f.wsq[0][k];
-      }
-      if (notes) notes->push_back(Describe(name, f));
-      if (notes && estimated) {
-        notes->push_back(absl::StrFormat(
-            "%s noise: sigma %.3g %s estimated from the data (roughness against a local quartic over %d samples; "
-            "give it to override)",
-            name, std::sqrt(f.sigma2), unit, kRoughnessFit.window));
-      }
+      std::vector<Vec3> series(n);
+      for (int k = 0; k < n; ++k) series[k] = get(k);
+      std::vector<double> variance;
+      if (!SmoothMeasuredSeries(t, {name, unit, sigma, estimate}, fixed_window, &series, &variance, notes, poll))
+        return;
+      for (int k = 0; k < n; ++k) set(k, series[k]), m[k].*var = variance[k];
     };
     std::vector<Vec3> acc(n);
     for (int k = 0; k < n; ++k) acc[k] = s.samples[k].kinematics->acceleration;
