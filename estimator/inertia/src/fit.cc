@@ -32,14 +32,15 @@ constexpr double kContradictionZ = 4.0;
 // between the mesh fit's and the free fit's predicted wrenches is read in
 // the units of the fitted parameters: force difference / (m |a - g|) is a
 // relative mass error, torque difference / (m |a - g|) a CoM displacement.
-// A CAD model with one uniform density per part is an idealisation (real
-// parts have cavities, inserts, coatings and tolerances), and what a fit of
-// the ten parameters is used for (grasp planning, control) tolerates errors
-// of a few per cent of the mass and of the object's size. The floor is 3 %
-// of the fitted mass and a CoM displacement of 3 % of the mesh's
-// bounding-box diagonal; below both, the density fit is returned (its
-// misfit is stated in the notes) even when the data tell the difference.
-constexpr double kContradictionFloor = 0.03;
+// Floors: 1 % of the mass, the calibration accuracy of a wrist F/T sensor
+// (about 1 % of full scale: a smaller force misfit could be the sensor's
+// gain error as well as the mesh's); a CoM displacement of 3 % of the
+// mesh's bounding-box diagonal, because a CAD model with one uniform
+// density per part is an idealisation (cavities, inserts, coatings) that
+// misplaces the CoM by a few per cent of the object's size. Below both, the
+// density fit is returned and its misfit stated in the notes.
+constexpr double kContradictionMassFloor = 0.01;
+constexpr double kContradictionComFloor = 0.03;  // of the mesh's size
 }  // namespace
 
 int64_t FitWorkingBytes(InertiaMethod method, int64_t samples) {
@@ -339,17 +340,17 @@ absl::StatusOr<internal::MethodOutput> FitDensityOrFallBack(const InertiaSamples
   fit->density_regularization = r->regularization;
   fit->density_regularization_rule = r->regularization_rule;
   fit->heldout_residual_ratio = r->heldout_ratio;
-  const double com_floor = kContradictionFloor * r->mesh_size;
+  const double com_floor = kContradictionComFloor * r->mesh_size;
   const std::string heldout_note = absl::StrFormat(
       "held-out weighted residual %.3gx the free 10-parameter fit's (z = %.3g over the held-out samples); the "
       "predicted wrenches differ like a mass error of %.2g %% and a CoM displacement of %.3g mm (floor %g %% and "
       "%.3g mm, %g %% of the mesh's %.3g m)",
       r->heldout_ratio, r->heldout_z, 100 * r->heldout_mass_equivalent, 1000 * r->heldout_com_equivalent,
-      100 * kContradictionFloor, 1000 * com_floor, 100 * kContradictionFloor, r->mesh_size);
+      100 * kContradictionMassFloor, 1000 * com_floor, 100 * kContradictionComFloor, r->mesh_size);
   r->notes.push_back(heldout_note);
   const bool contradicted = options.contradiction_ratio > 0 && r->heldout_ratio > options.contradiction_ratio &&
                             r->heldout_z > kContradictionZ &&
-                            (r->heldout_mass_equivalent > kContradictionFloor || r->heldout_com_equivalent > com_floor);
+                            (r->heldout_mass_equivalent > kContradictionMassFloor || r->heldout_com_equivalent > com_floor);
   if (!contradicted) {
     fit->density_realizable = true;
     return r;
