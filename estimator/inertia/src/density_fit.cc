@@ -134,6 +134,7 @@ struct DensityBasis {
   MatrixXd L;                    // K x K
   double l_scale = 1;            // mean diagonal of L (1 without neighbours)
   Vector10d parameter_scale;
+  const std::vector<Vec3>* mesh_vertices = nullptr;  // for the object's size
 };
 
 absl::StatusOr<DensityBasis> MakeDensityBasis(const GlsData& gls, const RegionModel& regions,
@@ -165,6 +166,7 @@ absl::StatusOr<DensityBasis> MakeDensityBasis(const GlsData& gls, const RegionMo
   b.l_scale = b.L.trace() > 0 ? b.L.trace() / K : 1.0;
   b.Phi_u = Phi * b.rho_ref;
   b.pi_uniform = phi_total * b.rho_ref;
+  if (o.mesh) b.mesh_vertices = &o.mesh->vertices;
   return b;
 }
 
@@ -288,7 +290,8 @@ void HeldOutContradiction(const GlsData& gls, const DensityBasis& b, int folds, 
     pi_free[f] = FreeGls(st->total.A - st->blocks[f].A, st->total.b - st->blocks[f].b, b.parameter_scale);
   }
   double sum_d = 0, sum_d2 = 0, res_density = 0, res_free = 0;
-  double raw_density = 0, raw_free = 0, raw_wrench = 0;  // unweighted, for the physical size
+  double diff_f = 0, diff_t = 0;  // prediction differences, per kind
+  double accel2 = 0;  // |a - g|^2 in the object frame
   for (int k = 0; k < n; ++k) {
     if (poll->Tick()) return;
     const int f = BlockOf(k, n, folds);
@@ -298,9 +301,17 @@ void HeldOutContradiction(const GlsData& gls, const DensityBasis& b, int folds, 
     const double rf = (st->whiteners[k] * ef).squaredNorm();
     res_density += rd, res_free += rf;
     sum_d += rd - rf, sum_d2 += (rd - rf) * (rd - rf);
-    raw_density += ed.squaredNorm(), raw_free += ef.squaredNorm(), raw_wrench += gls.wrench[k].squaredNorm();
+    const Vector6d dp = ed - ef;
+    diff_f += dp.head<3>().squaredNorm(), diff_t += dp.tail<3>().squaredNorm();
+    accel2 += gls.kin[k].a_minus_g.squaredNorm();
   }
-  out->heldout_excess = raw_wrench > 0 ? (std::sqrt(raw_density) - std::sqrt(raw_free)) / std::sqrt(raw_wrench) : 0;
+  const double mg = std::abs(st->pi(0)) * std::sqrt(accel2 / n);
+  out->heldout_mass_equivalent = mg > 0 ? std::sqrt(diff_f / n) / mg : 0;
+  out->heldout_com_equivalent = mg > 0 ? std::sqrt(diff_t / n) / mg : 0;
+  Eigen::AlignedBox3d box;
+  for (const Vec3& v : b.mesh_vertices ? *b.mesh_vertices : std::vector<Vec3>()) box.extend(v);
+  out->mesh_size = box.isEmpty() ? 0 : box.diagonal().norm();
+
   const double mean = sum_d / n;
   const double var = std::max(sum_d2 / n - mean * mean, 0.0);
   out->heldout_ratio = res_free > 0 ? res_density / res_free : (res_density > 0 ? HUGE_VAL : 1.0);

@@ -133,9 +133,12 @@ struct MethodOutput {
   std::string regularization_rule;
   double heldout_ratio = 0;
   double heldout_z = 0;
-  // Held-out unweighted RMS residual of DENSITY minus the free fit's,
-  // relative to the RMS wrench (how large the misfit is physically).
-  double heldout_excess = 0;
+  // The held-out difference between DENSITY's and the free fit's predicted
+  // wrenches in the units of the fitted parameters: the RMS force difference
+  // over m |a - g| (a relative mass error) and the RMS torque difference
+  // over m |a - g| (a CoM displacement, m); the mesh's bounding-box
+  // diagonal (m) is the object's size they are judged against.
+  double heldout_mass_equivalent = 0, heldout_com_equivalent = 0, mesh_size = 0;
 };
 
 // Generalised least squares data shared by CONSTRAINED and DENSITY: the

@@ -296,6 +296,32 @@ FitResult Final(const std::vector<double>& t, const Charted& c, Candidate cand, 
   return f;
 }
 
+// The short quartic fit whose residuals measure a signal's noise.
+constexpr Candidate kRoughnessFit{7, 4};
+
+// Noise variance per component of a signal from its roughness: the
+// residual of a local polynomial fit `e` at each sample, divided by its
+// expected value per unit noise variance (1 - 2 w_kk + |w|^2 per component),
+// so white noise of any level is recovered without bias while a smooth
+// signal (its variation well inside the fit's degree over the window)
+// contributes only its fit error.
+double RoughnessVariance(const std::vector<double>& t, const Charted& c, Candidate e, InterruptPoll* poll) {
+  const int n = static_cast<int>(t.size());
+  e.window = std::min(e.window, n);
+  e.degree = std::min(e.degree, e.window - 1);
+  double num = 0, den = 0;
+  for (int k = 0; k < n; ++k) {
+    if (poll->Tick(4)) break;
+    int lo = 0;
+    const Eigen::MatrixXd W = LocalPolyWeights(t, k, e.window, e.degree, &lo);
+    const Vec3 r = c.At(k, k) - Apply(c, k, W, lo, 0);
+    const double wkk = W(0, k - lo);
+    num += r.squaredNorm();
+    den += 3.0 * std::max(1e-12, 1.0 - 2.0 * wkk + W.row(0).squaredNorm());
+  }
+  return den > 0 ? num / den : 0.0;
+}
+
 // Chooses the window/degree minimising an unbiased estimate of the mean
 // squared error of derivative `order` (0 or 2) of the signal:
 //   MSE_c ~ mean |d_c - d_ref|^2 - sigma^2 (|w_ref|^2 - 2 w_c . w_ref)
@@ -321,19 +347,7 @@ FitResult SelectAndFit(const std::vector<double>& t, const Charted& c, int order
   if (cands.empty()) cands.push_back(ref);
   bool estimated = false;
   if (sigma2 < 0) {
-    // sigma^2 from the residual of the reference (or a short quartic fit).
-    const Candidate e = order == 0 ? Candidate{std::min(7, n), std::min(4, std::min(7, n) - 1)} : ref;
-    double num = 0, den = 0;
-    for (int k = 0; k < n; ++k) {
-      if (poll->Tick(4)) break;
-      int lo = 0;
-      const Eigen::MatrixXd W = LocalPolyWeights(t, k, e.window, e.degree, &lo);
-      const Vec3 r = c.At(k, k) - Apply(c, k, W, lo, 0);
-      const double wkk = W(0, k - lo);
-      num += r.squaredNorm();
-      den += 3.0 * std::max(1e-12, 1.0 - 2.0 * wkk + W.row(0).squaredNorm());
-    }
-    sigma2 = den > 0 ? num / den : 0.0;
+    sigma2 = RoughnessVariance(t, c, order == 0 ? kRoughnessFit : ref, poll);
     estimated = true;
   }
   const int nc = static_cast<int>(cands.size());
@@ -381,6 +395,41 @@ std::string Describe(const char* what, const FitResult& f) {
                          f.estimated ? ", estimated" : "");
 }
 
+struct SeriesNoise {
+  const char* name;
+  const char* unit;
+  double sigma;   // given; 0 = unknown
+  bool estimate;  // estimate an unknown sigma from the series' roughness
+};
+
+// Smooths a measured series (object or world frame) in place when it is
+// noisy and sets the per-sample variance of the smoothed values. An unknown
+// sigma of a regressor series (the accelerations) is estimated from the
+// series' roughness, so the errors-in-variables weighting and bias
+// correction see it; other unknown sigmas leave the series as measured
+// (returns false) unless a fixed window is asked for.
+bool SmoothMeasuredSeries(const std::vector<double>& t, const SeriesNoise& noise, int fixed_window,
+                          std::vector<Vec3>* series, std::vector<double>* variance, std::vector<std::string>* notes,
+                          InterruptPoll* poll) {
+  const bool estimated = !(noise.sigma > 0) && noise.estimate;
+  if (!(noise.sigma > 0) && !estimated && fixed_window <= 0) return false;
+  const int n = static_cast<int>(series->size());
+  const Charted c = Charted::Positions(*series, kMaxWindow);
+  const double sigma2 = estimated ? RoughnessVariance(t, c, kRoughnessFit, poll) : noise.sigma * noise.sigma;
+  FitResult f = SelectAndFit(t, c, 0, sigma2, fixed_window, poll);
+  f.estimated = estimated;
+  variance->assign(n, 0.0);
+  for (int k = 0; k < n; ++k) (*series)[k] += f.d[0][k], (*variance)[k] = f.sigma2 * f.wsq[0][k];
+  if (notes) notes->push_back(Describe(noise.name, f));
+  if (notes && estimated) {
+    notes->push_back(absl::StrFormat(
+        "%s noise: sigma %.3g %s estimated from the data (roughness against a local quartic over %d samples; "
+        "give it to override)",
+        noise.name, std::sqrt(f.sigma2), noise.unit, kRoughnessFit.window));
+  }
+  return true;
+}
+
 }  // namespace
 
 std::vector<KinPoint> SmoothedKinematics(const InertiaSamples& s, const Vec3& g, const InertiaNoise& noise,
@@ -398,26 +447,22 @@ std::vector<KinPoint> SmoothedKinematics(const InertiaSamples& s, const Vec3& g,
   if (s.HasKinematics()) {
     std::vector<KinPoint> m = MeasuredKinematicsPoints(s, g, poll);
     if (poll->stopped()) return m;
-    // Smooth a measured series (object or world frame) when it is noisy.
-    auto smooth = [&](const char* name, double sigma, auto get, auto set, double KinPoint::*var) {
-      if (!(sigma > 0) && fixed_window <= 0) return;
-      std::vector<Vec3> raw(n);
-      for (int k = 0; k < n; ++k) raw[k] = get(k);
-      const Charted c = Charted::Positions(raw, kMaxWindow);
-      FitResult f = SelectAndFit(t, c, 0, sigma * sigma, fixed_window, poll);
-      for (int k = 0; k < n; ++k) {
-        set(k, raw[k] + f.d[0][k]);
-        m[k].*var = sigma * sigma * f.wsq[0][k];
-      }
-      if (notes) notes->push_back(Describe(name, f));
+    auto smooth = [&](const char* name, double sigma, bool estimate, const char* unit, auto get, auto set,
+                      double KinPoint::*var) {
+      std::vector<Vec3> series(n);
+      for (int k = 0; k < n; ++k) series[k] = get(k);
+      std::vector<double> variance;
+      if (!SmoothMeasuredSeries(t, {name, unit, sigma, estimate}, fixed_window, &series, &variance, notes, poll))
+        return;
+      for (int k = 0; k < n; ++k) set(k, series[k]), m[k].*var = variance[k];
     };
     std::vector<Vec3> acc(n);
     for (int k = 0; k < n; ++k) acc[k] = s.samples[k].kinematics->acceleration;
-    smooth("measured angular velocity", noise.angular_velocity_sigma,
+    smooth("measured angular velocity", noise.angular_velocity_sigma, false, "rad/s",
            [&](int k) { return m[k].w; }, [&](int k, const Vec3& v) { m[k].w = v; }, &KinPoint::var_w);
-    smooth("measured angular acceleration", noise.angular_acceleration_sigma,
+    smooth("measured angular acceleration", noise.angular_acceleration_sigma, true, "rad/s^2",
            [&](int k) { return m[k].dw; }, [&](int k, const Vec3& v) { m[k].dw = v; }, &KinPoint::var_dw);
-    smooth("measured acceleration", noise.linear_acceleration_sigma,
+    smooth("measured acceleration", noise.linear_acceleration_sigma, true, "m/s^2",
            [&](int k) { return acc[k]; }, [&](int k, const Vec3& v) { acc[k] = v; }, &KinPoint::var_a);
     if (noise.orientation_sigma > 0) {
       const Charted c = Charted::Rotations(R, kMaxWindow);

@@ -97,6 +97,8 @@ struct InertiaPrior {
 
 // Noise levels (standard deviations). 0 means "unknown": the fit then
 // estimates the wrench noise from its own residuals.
+// Unknown measured linear and angular acceleration sigmas are estimated
+// from the series' roughness (CONSTRAINED, DENSITY); the notes name them.
 struct InertiaNoise {
   double force_sigma = 0.0;         // N per component: each contact force (contacts) or the wrench force
   double torque_sigma = 0.0;        // N m per component, wrench source only
@@ -134,6 +136,8 @@ struct InertiaOptions {
   // Contradiction test: the mesh is rejected when DENSITY's held-out
   // weighted residual exceeds CONSTRAINED's by this factor AND the
   // difference is significant (z > 4 over the held-out samples). 0 disables.
+  // AND the misfit matters physically (README: > 1 % of the mass or a CoM
+  // displacement > 3 % of the mesh's bounding-box diagonal).
   double contradiction_ratio = 1.2;
 
   // BASELINE_LS: Savitzky-Golay smoothing of the wrench and kinematics.
