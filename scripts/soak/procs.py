@@ -4,6 +4,7 @@ sample + `tactforce health`), and `tactforce load` runs with --json.
 Standard library only."""
 
 import json
+import re
 import os
 import select
 import signal
@@ -220,12 +221,11 @@ class Load:
         out, err = self._out.read(), self._err.read()
         self._out.close()
         self._err.close()
-        report = None
-        for line in out.splitlines():
-            if line.startswith("{"):
-                try:
-                    report = json.loads(line)
-                except json.JSONDecodeError:
-                    pass
+        report = None  # the JSON object that starts a line of stdout (pretty-printed)
+        for start in (m.start() for m in re.finditer(r"^\{", out, re.M)):
+            try:
+                report, _ = json.JSONDecoder().raw_decode(out[start:])
+            except json.JSONDecodeError:
+                pass
         return {"exit_code": code, "report": report,
                 "stderr": " | ".join(err.strip().splitlines()[-3:])}
