@@ -8,6 +8,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
 #include "progress.h"
+#include "tactforce/io/json.h"
 #include "tactforce/experiment/ablation.h"
 
 namespace tactforce::cli {
@@ -81,7 +82,7 @@ int RunAblationCommand(const AblationArgs& a) {
   absl::StatusOr<ex::AblationTable> table = ex::RunAblation(*config);
   bar.Finish();
   if (!table.ok()) return ReportError(table.status());
-  std::cout << (a.output.json() ? ex::AblationJson(*table) : ex::AblationMarkdown(*table));
+  std::cout << (a.output.json() ? io::IndentJson(ex::AblationJson(*table)) : ex::AblationMarkdown(*table));
   return 0;
 }
 

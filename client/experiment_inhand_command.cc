@@ -15,6 +15,7 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
 #include "progress.h"
+#include "tactforce/io/json.h"
 #include "tactforce/experiment/inhand.h"
 #include "tactforce/inertia/fit.h"
 #include "tactforce/inertia/metrics.h"
@@ -214,7 +215,7 @@ int RunInHandCommand(const InHandArgs& a) {
   std::vector<MethodRow> fits;
   if (a.fit) fits = FitAll(*run);
   if (a.output.json()) {
-    std::cout << RunJson(*run, fits) << std::endl;
+    std::cout << io::IndentJson(RunJson(*run, fits)) << std::flush;
     return kExitOk;
   }
   std::cout << StatsTable(*run, *c);

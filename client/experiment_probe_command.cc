@@ -224,7 +224,7 @@ int RunProbe(const ProbeArgs& a) {
   });
   bar.Finish();
   if (!r.ok()) return ReportError(r.status());
-  if (a.output.json()) std::cout << ReportJson(a, *c, *r) << std::endl;
+  if (a.output.json()) std::cout << io::IndentJson(ReportJson(a, *c, *r)) << std::flush;
   else std::cout << ReportTable(a, *c, *r);
   return kExitOk;
 }

@@ -98,6 +98,10 @@ TEST_F(OutputTest, EveryJsonCommandIndentsByTwoSpaces) {
       {"load", "--target", address(), "--rpc", "health", "--requests", "20", "--concurrency", "2", "--json"},
       {"demo", "--repeat", "1", "--json"},
       {"experiment", "slope", "--mu", "0.6", "--no-creep", "--json"},
+      {"experiment", "probe", "--mu", "0.6", "--trials", "1", "--no-progress", "--json"},
+      {"experiment", "inhand", "--duration", "1", "--no-progress", "--out", dir_.Path("inhand"), "--json"},
+      {"experiment", "ablation", "--seeds", "1", "--sources", "sim-0.25", "--methods", "constrained", "--duration",
+       "1.5", "--no-progress", "--json"},
   };
   for (const std::vector<std::string>& args : commands) {
     const std::string name = absl::StrCat(args[0], " ", args[1], " ", args[2]);
