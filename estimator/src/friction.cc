@@ -141,7 +141,8 @@ TrialFriction EstimateTrial(const FrictionTrial& trial, const Vec3& n, const Fri
   const double med = Median(quiet);
   std::vector<double> dev;
   for (double v : quiet) dev.push_back(std::abs(v - med));
-  const double threshold = med + o.noise_k * 1.4826 * Median(dev);
+  const double threshold =
+      std::max(med + o.noise_k * 1.4826 * Median(dev), o.min_onset_fraction * o.slip_distance);
   int onset = detect;
   while (onset - 1 >= 1 && travel[onset - 1] > threshold) --onset;
   // `onset` is now the first displaced sample, so the motion began from the
@@ -186,6 +187,8 @@ absl::Status ValidateOptions(const FrictionOptions& o) {
       !s.ok())
     return s;
   if (!(o.noise_k > 0) || !std::isfinite(o.noise_k)) return bad("noise_k", "finite and > 0", o.noise_k);
+  if (!(o.min_onset_fraction >= 0 && o.min_onset_fraction < 1))
+    return bad("min_onset_fraction", "in [0, 1)", o.min_onset_fraction);
   return absl::OkStatus();
 }
 

@@ -49,6 +49,10 @@ struct FrictionOptions {
   // Onset back-tracking: speed noise level = median + k * 1.4826 MAD of the
   // tangential contact-point speeds before detection.
   double noise_k = 6.0;
+  // ... and never below this fraction of `slip_distance`: with noise-free
+  // contact points the MAD is ~0 and sub-micrometre pre-slip deformation
+  // (soft contacts, a real pad's shear) would be read as the onset.
+  double min_onset_fraction = 0.01;
   std::optional<io::TriangleMesh> mesh;
   // Polled between trials; once true the estimate stops with
   // absl::Cancelled("interrupted after i of N trials"). May be empty.
