@@ -141,8 +141,7 @@ TrialFriction EstimateTrial(const FrictionTrial& trial, const Vec3& n, const Fri
   const double med = Median(quiet);
   std::vector<double> dev;
   for (double v : quiet) dev.push_back(std::abs(v - med));
-  const double threshold =
-      std::max(med + o.noise_k * 1.4826 * Median(dev), o.min_onset_fraction * o.slip_distance);
+  const double threshold = std::max(med + o.noise_k * 1.4826 * Median(dev), o.min_onset_fraction * o.slip_distance);
   int onset = detect;
   while (onset - 1 >= 1 && travel[onset - 1] > threshold) --onset;
   // `onset` is now the first displaced sample, so the motion began from the
