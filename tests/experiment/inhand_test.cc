@@ -192,7 +192,7 @@ TEST_F(InHandCliTest, WritesTheLogThatInertiaReads) {
   testing::CliRun r = Tactforce({"experiment", "inhand", "--duration", "2", "--tracker", "kinematic", "--out", out,
                                  "--json", "--no-progress"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(r.out.rfind("{\"object\":\"box_0\",\"samples\":201,", 0), 0u) << r.out;
+  EXPECT_EQ(r.out.rfind("{\n  \"object\": \"box_0\",\n  \"samples\": 201,", 0), 0u) << r.out;
   for (const char* f : {"inertia.csv", "truth.json", "events.csv", "truth_log.csv", "mesh.obj"})
     EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(out) / f)) << f;
   const std::string header = testing::Lines(testing::ReadFile(std::filesystem::path(out) / "inertia.csv"))[0];
