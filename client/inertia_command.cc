@@ -192,6 +192,8 @@ absl::Status SetSolverOptions(const InertiaArgs& args, v1::InertiaFitOptions* o)
   if (!args.fg_variant.empty()) {
     absl::StatusOr<inertia::FactorGraphVariant> v = inertia::ParseFactorGraphVariant(args.fg_variant);
     if (!v.ok()) return absl::InvalidArgumentError(absl::StrCat("--fg-variant: ", v.status().message()));
+    if (*v == inertia::FactorGraphVariant::kConstraintPrior && args.prior_path.empty())
+      return absl::InvalidArgumentError("--fg-variant fg-c-g needs --prior FILE (its geodesic prior; truth JSON format)");
     o->set_fg_variant(api::FactorGraphVariantToProto(*v));
   }
   if (args.max_iterations < 0) return absl::InvalidArgumentError("--max-iterations: must be >= 0");

@@ -104,7 +104,7 @@ TEST_F(InertiaCliTest, FactorGraphVariantFlag) {
   EXPECT_NE(run.err.find("--fg-variant"), std::string::npos) << run.err;
   run = Tactforce({"inertia", "--csv", sim + "/inertia.csv", "--method", "factor-graph", "--fg-variant", "fg-c-g"});
   ExpectBadInput(run);
-  EXPECT_NE(run.err.find("prior"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("--fg-variant fg-c-g needs --prior FILE"), std::string::npos) << run.err;
 }
 
 // InertiaFitOptions.fg_variant through proto3 JSON and back to the library.
