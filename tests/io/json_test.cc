@@ -247,6 +247,29 @@ std::string RandomCompactJson(std::mt19937_64& rng, int depth) {
   }
 }
 
+// `json` without the spaces and newlines outside its strings.
+std::string WithoutLayout(const std::string& json) {
+  std::string out;
+  bool in_string = false, escaped = false;
+  for (char c : json) {
+    if (in_string) {
+      if (escaped) {
+        escaped = false;
+      } else if (c == '\\') {
+        escaped = true;
+      } else if (c == '"') {
+        in_string = false;
+      }
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == ' ' || c == '\n') {
+      continue;
+    }
+    out += c;
+  }
+  return out;
+}
+
 TEST(IndentJson, KeepsTheValueInTheWritersLayout) {
   EXPECT_EQ(IndentJson(R"({"name":"x\"y","list":[1.5,null,{},[ ]],"ok":true})"),
             "{\n  \"name\": \"x\\\"y\",\n  \"list\": [\n    1.5,\n    null,\n    {},\n    []\n  ],\n"
@@ -258,43 +281,8 @@ TEST(IndentJson, KeepsTheValueInTheWritersLayout) {
     absl::StatusOr<JsonValue> a = ParseJson(compact, "compact"), b = ParseJson(pretty, "pretty");
     ASSERT_TRUE(a.ok()) << a.status() << compact;
     ASSERT_TRUE(b.ok()) << b.status() << pretty;
-    std::string no_space;
-    bool in_string = false, escaped = false;
-    for (char c : pretty) {  // the same text once whitespace outside strings is gone
-      if (in_string) {
-        if (escaped) {
-          escaped = false;
-        } else if (c == '\\') {
-          escaped = true;
-        } else if (c == '"') {
-          in_string = false;
-        }
-      } else if (c == '"') {
-        in_string = true;
-      } else if (c == ' ' || c == '\n') {
-        continue;
-      }
-      no_space += c;
-    }
-    std::string compact_no_space;
-    in_string = escaped = false;
-    for (char c : compact) {
-      if (in_string) {
-        if (escaped) {
-          escaped = false;
-        } else if (c == '\\') {
-          escaped = true;
-        } else if (c == '"') {
-          in_string = false;
-        }
-      } else if (c == '"') {
-        in_string = true;
-      } else if (c == ' ') {
-        continue;
-      }
-      compact_no_space += c;
-    }
-    EXPECT_EQ(no_space, compact_no_space);
+    // The same text once whitespace outside strings is gone.
+    EXPECT_EQ(WithoutLayout(pretty), WithoutLayout(compact));
     EXPECT_EQ(IndentJson(pretty), pretty);  // idempotent
     EXPECT_EQ(pretty.back(), '\n');
   }
