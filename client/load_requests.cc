@@ -14,6 +14,7 @@
 #include "tactforce/api/json.h"
 #include "tactforce/inertia/samples.h"
 #include "tactforce/inertia/simulate.h"
+#include "tactforce/io/json.h"
 #include "tactforce/io/text_file.h"
 #include "tactforce/planner/examples.h"
 #include "tactforce/sim/simulate.h"
@@ -48,20 +49,10 @@ absl::StatusOr<std::vector<std::pair<size_t, size_t>>> SplitJsonList(const std::
   std::vector<std::pair<size_t, size_t>> elements;
   size_t i = text.find('[') + 1, start = i;
   int depth = 0;
-  bool in_string = false, escaped = false;
+  io::JsonStringTracker strings;
   for (; i < text.size(); ++i) {
     const char c = text[i];
-    if (in_string) {
-      if (escaped) {
-        escaped = false;
-      } else if (c == '\\') {
-        escaped = true;
-      } else if (c == '"') {
-        in_string = false;
-      }
-      continue;
-    }
-    if (c == '"') in_string = true;
+    if (strings.InString(c)) continue;
     if (c == '{' || c == '[') ++depth;
     if ((c == '}' || c == ']') && depth > 0) {
       --depth;

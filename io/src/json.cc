@@ -309,7 +309,7 @@ std::string IndentJson(std::string_view json) {
   std::string out;
   out.reserve(json.size() + json.size() / 2);
   int depth = 0;
-  bool in_string = false, escaped = false;
+  JsonStringTracker strings;
   auto newline = [&] {
     out += '\n';
     out.append(2 * static_cast<size_t>(std::max(depth, 0)), ' ');
@@ -320,15 +320,8 @@ std::string IndentJson(std::string_view json) {
   };
   for (size_t i = 0; i < json.size(); ++i) {
     const char c = json[i];
-    if (in_string) {
+    if (strings.InString(c)) {
       out += c;
-      if (escaped) {
-        escaped = false;
-      } else if (c == '\\') {
-        escaped = true;
-      } else if (c == '"') {
-        in_string = false;
-      }
       continue;
     }
     if (c == '{' || c == '[') {
@@ -350,9 +343,6 @@ std::string IndentJson(std::string_view json) {
       newline();
     } else if (c == ':') {
       out += ": ";
-    } else if (c == '"') {
-      in_string = true;
-      out += c;
     } else if (!std::isspace(static_cast<unsigned char>(c))) {
       out += c;
     }

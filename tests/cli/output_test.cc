@@ -18,6 +18,7 @@
 #include "absl/strings/str_format.h"
 #include "cli_test_support.h"
 #include "tactforce/api/json.h"
+#include "tactforce/io/json.h"
 #include "tactforce/v1/planner.pb.h"
 
 namespace tactforce::cli_testing {
@@ -44,19 +45,11 @@ std::vector<std::string> IndentationErrors(const std::string& text) {
     if (static_cast<int>(spaces) != 2 * expected) {
       errors.push_back(absl::StrFormat("line %d: %d spaces, expected %d: %s", number, spaces, 2 * expected, line));
     }
-    bool in_string = false, escaped = false;
+    io::JsonStringTracker strings;
     for (size_t i = spaces; i < line.size(); ++i) {
       const char c = line[i];
-      if (in_string) {
-        if (escaped) {
-          escaped = false;
-        } else if (c == '\\') {
-          escaped = true;
-        } else if (c == '"') {
-          in_string = false;
-        }
-      } else if (c == '"') {
-        in_string = true;
+      if (strings.InString(c)) {
+        continue;
       } else if (c == '{' || c == '[') {
         ++depth;
       } else if (c == '}' || c == ']') {

@@ -250,24 +250,22 @@ std::string RandomCompactJson(std::mt19937_64& rng, int depth) {
 // `json` without the spaces and newlines outside its strings.
 std::string WithoutLayout(const std::string& json) {
   std::string out;
-  bool in_string = false, escaped = false;
+  JsonStringTracker strings;
   for (char c : json) {
-    if (in_string) {
-      if (escaped) {
-        escaped = false;
-      } else if (c == '\\') {
-        escaped = true;
-      } else if (c == '"') {
-        in_string = false;
-      }
-    } else if (c == '"') {
-      in_string = true;
-    } else if (c == ' ' || c == '\n') {
-      continue;
-    }
+    if (!strings.InString(c) && (c == ' ' || c == '\n')) continue;
     out += c;
   }
   return out;
+}
+
+TEST(JsonStringTracker, MarksQuotesEscapesAndContentsAsInString) {
+  const std::string text = R"({"k":"a\"b\\","n":[1]})";
+  // One flag per character: 1 = inside a string literal (quotes included).
+  const std::string expected = "0111011111111011100000";
+  JsonStringTracker strings;
+  std::string flags;
+  for (char c : text) flags += strings.InString(c) ? '1' : '0';
+  EXPECT_EQ(flags, expected) << text;
 }
 
 TEST(IndentJson, KeepsTheValueInTheWritersLayout) {

@@ -118,6 +118,30 @@ class JsonWriter {
 // escapes are kept byte for byte).
 std::string IndentJson(std::string_view json);
 
+// Follows JSON text one character at a time and tells which characters are
+// inside a string literal, so scanners of raw JSON text (indenters, list
+// splitters, layout checks) can skip brackets and commas in strings.
+class JsonStringTracker {
+ public:
+  // True when `c`, the next character of the text, belongs to a string,
+  // its quotes and escapes included.
+  bool InString(char c) {
+    if (!in_string_) return in_string_ = (c == '"');
+    if (escaped_) {
+      escaped_ = false;
+    } else if (c == '\\') {
+      escaped_ = true;
+    } else if (c == '"') {
+      in_string_ = false;
+    }
+    return true;
+  }
+
+ private:
+  bool in_string_ = false;
+  bool escaped_ = false;
+};
+
 // `s` as a quoted JSON string (nlohmann's escaping: \" \\ \b \f \n \r \t,
 // other control characters as \u00XX; invalid UTF-8 becomes U+FFFD).
 std::string JsonEscape(std::string_view s);
