@@ -44,13 +44,13 @@ void CauseTracker::Tick(double t, const std::vector<double>& truth, const std::v
   }
 }
 
-FailureCause CauseTracker::Label(bool failed, bool rotation_failure) const {
+FailureCause CauseTracker::Label(bool failed, bool tilted) const {
   if (!failed) return FailureCause::kNone;
   if (non_activation_) return FailureCause::kNonActivation;
   if (phantom_) return FailureCause::kPhantomForce;
   double worst_over = -INFINITY;
   for (const Finger& f : fingers_) worst_over = std::max(worst_over, ticks_ > 0 ? f.over_sum / ticks_ : 0.0);
-  if (rotation_failure && worst_over > kOverReadMargin) return FailureCause::kOverReadingTilt;
+  if (tilted && worst_over > kOverReadMargin) return FailureCause::kOverReadingTilt;
   return FailureCause::kSlipDrop;
 }
 

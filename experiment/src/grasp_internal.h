@@ -82,7 +82,7 @@ class CauseTracker {
   explicit CauseTracker(int n_fingers);
   // One control tick (settle onward, until the first failure criterion is met).
   void Tick(double t, const std::vector<double>& truth, const std::vector<double>& reading);
-  FailureCause Label(bool failed, bool rotation_failure) const;
+  FailureCause Label(bool failed, bool tilted) const;
 
  private:
   struct Finger {

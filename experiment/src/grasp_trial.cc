@@ -179,6 +179,7 @@ class TrialRun {
   Readings readings_;
   bool est_ok_ = false;
   double err_sum_ = 0, fb_sum_ = 0;
+  std::vector<double> finger_err_, finger_loop_;
   long err_n_ = 0;
   double ok_since_ = -1;
   bool lift_started_ = false;
@@ -420,9 +421,13 @@ void TrialRun::TrackConvergence(double t, const std::vector<double>& desired) {
 }
 
 void TrialRun::AccumulateForceError(const std::vector<double>& desired) {
+  finger_err_.resize(nf_, 0.0);
+  finger_loop_.resize(nf_, 0.0);
   for (int i = 0; i < nf_; ++i) {
     err_sum_ += std::abs(readings_.truth[i] - desired[i]);
     fb_sum_ += std::abs(readings_.observed[i] - readings_.truth[i]);
+    finger_err_[i] += std::abs(readings_.truth[i] - desired[i]);
+    finger_loop_[i] += std::abs(readings_.observed[i] - desired[i]);
   }
   ++err_n_;
 }
@@ -491,14 +496,19 @@ TrialResult TrialRun::Finish() {
   res_.dropped = dropped_;
   res_.force_error = err_n_ > 0 ? err_sum_ / (err_n_ * nf_) : 0;
   res_.feedback_error = err_n_ > 0 ? fb_sum_ / (err_n_ * nf_) : 0;
+  for (size_t i = 0; i < finger_err_.size(); ++i) {
+    res_.finger_force_error.push_back(finger_err_[i] / err_n_);
+    res_.finger_loop_error.push_back(finger_loop_[i] / err_n_);
+    res_.loop_error += finger_loop_[i] / (err_n_ * nf_);
+  }
   if (dropped_) res_.failure = "dropped";
   else if (res_.max_slip >= cfg_.max_slip) res_.failure = absl::StrFormat("slip %.1f mm", res_.max_slip * 1e3);
   else if (res_.max_rotation_deg >= cfg_.max_rotation_deg)
     res_.failure = absl::StrFormat("rotation %.2f deg", res_.max_rotation_deg);
   res_.success = res_.failure.empty();
-  const bool rotation_failure =
-      !dropped_ && res_.max_slip < cfg_.max_slip && res_.max_rotation_deg >= cfg_.max_rotation_deg;
-  res_.cause = causes_.Label(!res_.success, rotation_failure);
+  // Tilted: rotated past the threshold while still held (a slip may come with it).
+  const bool tilted = !dropped_ && res_.max_rotation_deg >= cfg_.max_rotation_deg;
+  res_.cause = causes_.Label(!res_.success, tilted);
   for (double s : switched_sum_) res_.switched_force_error.push_back(switched_n_ > 0 ? s / switched_n_ : 0.0);
   res_.sim_seconds = d_->time;
   return std::move(res_);
@@ -538,17 +548,24 @@ void SummariseSplit(BatchSummary* b) {
   MeanStd(b->results, true, &b->force_error_success_mean, &b->force_error_success_std);
   MeanStd(b->results, false, &b->force_error_failure_mean, &b->force_error_failure_std);
   for (FailureCause c : AllFailureCauses()) b->failure_causes[ToString(c)] = 0;
-  double loc = 0;
+  double loc = 0, l = 0, l2 = 0;
+  const size_t n = b->results.size();
+  auto add = [&](std::vector<double>* dst, const std::vector<double>& v) {
+    if (dst->size() < v.size()) dst->resize(v.size(), 0.0);
+    for (size_t i = 0; i < v.size(); ++i) (*dst)[i] += v[i] / n;
+  };
   for (const TrialResult& r : b->results) {
+    l += r.loop_error, l2 += r.loop_error * r.loop_error;
+    add(&b->finger_force_error, r.finger_force_error);
+    add(&b->finger_loop_error, r.finger_loop_error);
     if (r.cause != FailureCause::kNone) ++b->failure_causes[ToString(r.cause)];
     b->replan_failures += r.replan_failed;
     loc += r.contact_location_error;
-    for (size_t i = 0; i < r.switched_force_error.size(); ++i) {
-      if (b->switched_force_error.size() <= i) b->switched_force_error.resize(i + 1, 0.0);
-      b->switched_force_error[i] += r.switched_force_error[i] / b->results.size();
-    }
+    add(&b->switched_force_error, r.switched_force_error);
   }
-  b->contact_location_error_mean = b->results.empty() ? 0.0 : loc / b->results.size();
+  b->contact_location_error_mean = n > 0 ? loc / n : 0.0;
+  b->loop_error_mean = n > 0 ? l / n : 0.0;
+  b->loop_error_std = n > 1 ? std::sqrt(std::max(0.0, (l2 - l * l / n) / (n - 1))) : 0.0;
 }
 
 }  // namespace
@@ -562,6 +579,7 @@ absl::StatusOr<BatchSummary> RunGraspBatch(const GraspConfig& config, int trials
   b.object = config.object;
   b.feedback = config.feedback;
   b.trials = trials;
+  b.finger_names = (*setup)->finger_names();
   double conv = 0;
   for (int k = 0; k < trials; ++k) {
     auto r = RunGraspTrial(**setup, k);

@@ -97,8 +97,9 @@ PhaseDurations ProtocolPhases(Protocol p);
 //     while the true force rises (and exceeds 0.1 N);
 //   phantom_force: a reading > true + 0.5 N while the true force < 0.1 N, or a
 //     touching fingertip detaching (true force < 0.1 N for >= 0.05 s);
-//   over_reading_tilt: a rotation failure with a fingertip reading on average
-//     more than 0.25 N above its true force;
+//   over_reading_tilt: the object tilted (rotation >= max_rotation_deg, not
+//     dropped; it may slip too) with a fingertip reading on average more than
+//     0.25 N above its true force;
 //   slip_drop: any other failure.
 // The first that applies, in this order.
 enum class FailureCause { kNone, kNonActivation, kPhantomForce, kOverReadingTilt, kSlipDrop };
@@ -169,6 +170,10 @@ struct TrialResult {
   double max_rotation_deg = 0;
   double force_error = 0;       // N, mean |fn_true - fn_desired| over fingertips, hold..hold_lifted
   double feedback_error = 0;    // N, mean |fn_observed - fn_true| (what the loop was told vs truth)
+  // The loop's own error, mean |fn_desired - fn_observed| (GeoDEx's "error between the desired force and the
+  // estimated values"), hold..hold_lifted, over fingertips; and both errors per fingertip (N).
+  double loop_error = 0;
+  std::vector<double> finger_force_error, finger_loop_error;
   double converge_time = -1;    // s after settle start until the loop's own error stays
                                 // below max(0.1 N, 10 %) for 0.1 s; -1 = never
   int estimate_failures = 0;    // ticks where the estimator gave no answer (raw used)
@@ -220,6 +225,9 @@ struct BatchSummary {
   double force_error_success_mean = 0, force_error_success_std = 0;
   double force_error_failure_mean = 0, force_error_failure_std = 0;
   std::map<std::string, int> failure_causes;  // every cause's name -> failed trials
+  double loop_error_mean = 0, loop_error_std = 0;             // N, over trials
+  std::vector<double> finger_force_error, finger_loop_error;  // N, per fingertip, mean over trials
+  std::vector<std::string> finger_names;
   int replan_failures = 0;                    // taxel sensors
   double contact_location_error_mean = 0;     // m, taxel sensors
   std::vector<double> switched_force_error;   // per fingertip, mean over trials (paper protocol)
