@@ -3,6 +3,11 @@
 // fingertip space (the Jacobian is the identity), close on an object resting
 // on a table, regulate their normal forces with an admittance loop on either
 // the raw tactile readings or tactforce's estimate, lift, hold and place.
+// Readings come from one sensor-model channel per fingertip or from a
+// 42-taxel array per fingertip (SensorArray::kTaxel), whose sensed contacts
+// replace the grasp's for planning at the end of the close; failed trials are
+// labelled with a FailureCause and batches split the force error between
+// successful and failed trials (Table III).
 //
 //   GraspConfig c;  c.object = GraspObject::kWrench;  c.feedback = Feedback::kRaw;
 //   auto setup = GraspSetup::Create(c);            // plans once per object
