@@ -118,8 +118,9 @@ absl::StatusOr<GraspRun> GraspRunFromFlags(const ExperimentArgs& a) {
   GraspRun run;
   if (absl::Status s = SetObjectsAndModes(a, &run); !s.ok()) return s;
   if (a.trials < 1) return absl::InvalidArgumentError(absl::StrFormat("--trials: must be >= 1, got %d", a.trials));
-  if (absl::Status s = SetBaseConfig(a, &run.base); !s.ok()) return s;
+  // Sensors first: a flag that does not apply to --sensors taxel is named before its file is read.
   if (absl::Status s = SetSensorsAndProtocol(a, &run.base); !s.ok()) return s;
+  if (absl::Status s = SetBaseConfig(a, &run.base); !s.ok()) return s;
   return run;
 }
 

@@ -189,6 +189,9 @@ TEST_F(TaxelCliTest, BadInputNamesTheFlag) {
   r = Tactforce({"experiment", "grasp", "--sensors", "taxel", "--ideal-sensors"});
   ExpectBadInput(r);
   EXPECT_NE(r.err.find("--ideal-sensors"), std::string::npos) << r.err;
+  r = Tactforce({"experiment", "grasp", "--sensors", "taxel", "--sensor-model", (dir() / "missing.json").string()});
+  ExpectBadInput(r);
+  EXPECT_NE(r.err.find("--sensor-model: applies to --sensors channel only"), std::string::npos) << r.err;
   const std::string ranges = (dir() / "ranges.json").string();
   WriteFile(ranges, "{\n  \"format\": \"tactforce.taxel_ranges.v1\",\n  \"threshold_min\": -0.3\n}\n");
   r = Tactforce({"experiment", "grasp", "--sensors", "taxel", "--taxel-ranges", ranges});
