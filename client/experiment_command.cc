@@ -17,10 +17,12 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "cli_common.h"
+#include "experiment_grasp_report.h"
 #include "progress.h"
 #include "tactforce/experiment/grasp.h"
 #include "tactforce/experiment/slope.h"
 #include "tactforce/sim/sensor_model.h"
+#include "tactforce/sim/taxel_array.h"
 #include "tactforce/io/json.h"
 #include "tactforce/io/text_file.h"
 
@@ -91,10 +93,33 @@ absl::Status SetBaseConfig(const ExperimentArgs& a, ex::GraspConfig* base) {
   return absl::OkStatus();
 }
 
+// --sensors (taxel: one sim::TaxelArray per fingertip, --taxel-ranges) and --protocol.
+absl::Status SetSensorsAndProtocol(const ExperimentArgs& a, ex::GraspConfig* base) {
+  auto array = ex::ParseSensorArray(a.sensors);
+  if (!array.ok()) return absl::InvalidArgumentError(absl::StrCat("--", array.status().message()));
+  base->sensor_array = *array;
+  if (*array == ex::SensorArray::kTaxel && (a.ideal || !a.sensor_model_path.empty()))
+    return absl::InvalidArgumentError(absl::StrCat(a.ideal ? "--ideal-sensors" : "--sensor-model",
+                                                   ": applies to --sensors channel only"));
+  if (!a.taxel_ranges_path.empty()) {
+    if (*array != ex::SensorArray::kTaxel)
+      return absl::InvalidArgumentError("--taxel-ranges: needs --sensors taxel");
+    auto r = sim::LoadTaxelRanges(a.taxel_ranges_path);
+    if (!r.ok()) return absl::InvalidArgumentError(absl::StrCat("--taxel-ranges: ", r.status().message()));
+    base->taxel_ranges = *r;
+  }
+  auto protocol = ex::ParseProtocol(a.protocol);
+  if (!protocol.ok()) return absl::InvalidArgumentError(absl::StrCat("--", protocol.status().message()));
+  base->phases = ex::ProtocolPhases(*protocol);
+  return absl::OkStatus();
+}
+
 absl::StatusOr<GraspRun> GraspRunFromFlags(const ExperimentArgs& a) {
   GraspRun run;
   if (absl::Status s = SetObjectsAndModes(a, &run); !s.ok()) return s;
   if (a.trials < 1) return absl::InvalidArgumentError(absl::StrFormat("--trials: must be >= 1, got %d", a.trials));
+  // Sensors first: a flag that does not apply to --sensors taxel is named before its file is read.
+  if (absl::Status s = SetSensorsAndProtocol(a, &run.base); !s.ok()) return s;
   if (absl::Status s = SetBaseConfig(a, &run.base); !s.ok()) return s;
   return run;
 }
@@ -118,10 +143,11 @@ absl::Status WriteTracePlot(const std::string& plots_dir, const ex::GraspConfig&
 // --details: one line per trial on stderr.
 void PrintTrialDetails(const ex::GraspConfig& c, const ex::BatchSummary& b) {
   for (const ex::TrialResult& t : b.results)
-    std::cerr << absl::StrFormat("%s %s trial %d: %s  slip %.2f mm  rotation %.2f deg  force error %.3f N\n",
+    std::cerr << absl::StrFormat("%s %s trial %d: %s%s  slip %.2f mm  rotation %.2f deg  force error %.3f N\n",
                                  ex::ToString(c.object), ex::ToString(c.feedback), t.trial,
-                                 t.success ? "success" : t.failure, t.max_slip * 1e3, t.max_rotation_deg,
-                                 t.force_error);
+                                 t.success ? "success" : t.failure,
+                                 t.success ? "" : absl::StrCat(" (", ex::ToString(t.cause), ")"), t.max_slip * 1e3,
+                                 t.max_rotation_deg, t.force_error);
 }
 
 // Every object x mode batch in order, with `bar` counting trials; the
@@ -170,10 +196,11 @@ std::string GraspJson(const ExperimentArgs& a, const std::vector<ex::BatchSummar
                     ",\"converged\":", r.converged,
                     ",\"converge_time_mean\":", r.converged ? JsonNumber(r.converge_time_mean) : "null",
                     ",\"sim_seconds\":", JsonNumber(r.sim_seconds), ",\"wall_seconds\":", JsonNumber(r.wall_seconds),
-                    "}");
+                    GraspSplitJsonMembers(r), "}");
   }
   absl::StrAppend(&s, "],\"seed\":", a.seed, ",\"estimator\":\"", a.estimator, "\",\"admittance\":\"",
-                  a.admittance, "\",\"wall_seconds\":",
+                  a.admittance, "\",\"sensors\":\"", a.sensors, "\",\"protocol\":\"", a.protocol,
+                  "\",\"wall_seconds\":",
                   JsonNumber(wall), "}");
   return s;
 }
@@ -193,9 +220,11 @@ std::string GraspTable(const ExperimentArgs& a, const std::vector<ex::BatchSumma
   }
   absl::StrAppend(&out, absl::StrFormat("total %.1f s wall; seed %d; estimator %s; admittance %s; sensors %s\n",
                                         wall, a.seed, a.estimator, a.admittance,
-                                        a.ideal ? "ideal"
+                                        a.sensors == "taxel" ? "42-taxel arrays, GeoDEx ranges per taxel and trial"
+                                        : a.ideal            ? "ideal"
                                         : a.sensor_model_path.empty() ? "GeoDEx error ranges per trial"
                                                                       : a.sensor_model_path));
+  absl::StrAppend(&out, GraspSplitTable(rows, a.protocol == "paper"));
   return out;
 }
 
@@ -350,12 +379,24 @@ CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args) {
                 "Sensor model JSON for every fingertip (default: GeoDEx error ranges drawn per trial)")
       ->type_name("FILE");
   g->add_flag("--ideal-sensors", args.ideal, "Readings are the true normal forces");
+  g->add_option("--sensors", args.sensors,
+                "channel: one sensor-model channel per fingertip; taxel: a 42-taxel array per fingertip fed "
+                "MuJoCo's contact point and force, contacts sensed from the taxels")
+      ->capture_default_str();
+  g->add_option("--taxel-ranges", args.taxel_ranges_path,
+                "Taxel ranges JSON (tactforce.taxel_ranges.v1) for --sensors taxel (default: the paper's)")
+      ->type_name("FILE");
+  g->add_option("--protocol", args.protocol,
+                "short: close, settle, hold, lift 5 cm, hold 1 s, place; paper: GeoDEx Fig. 12's 50 s (lift at 27 s, "
+                "placed at 33 s, feedback switched at 40 s)")
+      ->capture_default_str();
   g->add_flag("--no-progress", args.no_progress, "No progress bar on stderr");
   g->add_flag("--details", args.details, "Also print one line per trial (outcome, slip, rotation) on stderr");
   g->footer(
       "Prints success rates per object and feedback mode. Examples:\n"
       "  tactforce experiment grasp --object wrench --trials 5\n"
-      "  tactforce experiment grasp --object all --trials 20 --plots /tmp/plots --json");
+      "  tactforce experiment grasp --object all --trials 20 --plots /tmp/plots --json\n"
+      "  tactforce experiment grasp --object all --sensors taxel --trials 50 --feedback both");
   args.grasp = g;
   CLI::App* s = cmd->add_subcommand(
       "slope", "Friction by the slope method vs the probing estimate, and MuJoCo's creep under static friction");

@@ -28,6 +28,9 @@ struct ExperimentArgs {
   bool ideal = false;               // ideal sensors
   bool no_progress = false;
   bool details = false;             // one line per trial
+  std::string sensors = "channel";  // channel|taxel
+  std::string protocol = "short";   // short|paper
+  std::string taxel_ranges_path;    // --taxel-ranges FILE (sim::TaxelRanges JSON)
   // slope
   std::vector<double> mus = {0.3, 0.5, 0.7, 0.9};
   double tilt_rate = 0.5;           // deg/s

@@ -48,6 +48,56 @@ absl::StatusOr<Admittance> ParseAdmittance(std::string_view name) {
       absl::StrCat("admittance: unknown '", std::string(name), "' (expected full or normal)"));
 }
 
+const char* ToString(SensorArray s) { return s == SensorArray::kChannel ? "channel" : "taxel"; }
+
+absl::StatusOr<SensorArray> ParseSensorArray(std::string_view name) {
+  if (name == "channel") return SensorArray::kChannel;
+  if (name == "taxel") return SensorArray::kTaxel;
+  return absl::InvalidArgumentError(
+      absl::StrCat("sensors: unknown '", std::string(name), "' (expected taxel or channel)"));
+}
+
+const char* ToString(Protocol p) { return p == Protocol::kShort ? "short" : "paper"; }
+
+absl::StatusOr<Protocol> ParseProtocol(std::string_view name) {
+  if (name == "short") return Protocol::kShort;
+  if (name == "paper") return Protocol::kPaper;
+  return absl::InvalidArgumentError(
+      absl::StrCat("protocol: unknown '", std::string(name), "' (expected short or paper)"));
+}
+
+PhaseDurations ProtocolPhases(Protocol p) {
+  if (p == Protocol::kShort) return PhaseDurations{};
+  // GeoDEx Fig. 12: converged within 5 s, held to 27 s, lifted, placed back
+  // at 33 s, switched to the other feedback at 40 s.
+  PhaseDurations d;
+  d.close = 0.3;
+  d.settle = 5.0;
+  d.hold = 21.7;
+  d.lift = 1.0;
+  d.hold_lifted = 4.0;
+  d.place = 1.0;
+  d.placed = 7.0;
+  d.switched = 10.0;
+  return d;
+}
+
+const char* ToString(FailureCause c) {
+  switch (c) {
+    case FailureCause::kNone: return "none";
+    case FailureCause::kNonActivation: return "non_activation";
+    case FailureCause::kPhantomForce: return "phantom_force";
+    case FailureCause::kOverReadingTilt: return "over_reading_tilt";
+    case FailureCause::kSlipDrop: return "slip_drop";
+  }
+  return "?";
+}
+
+std::vector<FailureCause> AllFailureCauses() {
+  return {FailureCause::kNonActivation, FailureCause::kPhantomForce, FailureCause::kOverReadingTilt,
+          FailureCause::kSlipDrop};
+}
+
 const char* ToString(Phase p) {
   switch (p) {
     case Phase::kClose: return "close";
@@ -56,9 +106,25 @@ const char* ToString(Phase p) {
     case Phase::kLift: return "lift";
     case Phase::kHoldLifted: return "hold";
     case Phase::kPlace: return "place";
+    case Phase::kPlaced: return "placed";
+    case Phase::kSwitched: return "switched";
   }
   return "?";
 }
+
+namespace {
+
+absl::Status ValidateFault(const SensorFault& f) {
+  if (f.kind == SensorFault::Kind::kNone) return absl::OkStatus();
+  if (f.finger < 0) return absl::InvalidArgumentError(absl::StrFormat("fault.finger: must be >= 0, got %d", f.finger));
+  if (!std::isfinite(f.magnitude))
+    return absl::InvalidArgumentError(absl::StrFormat("fault.magnitude: must be finite, got %g", f.magnitude));
+  if (!(f.start >= 0 && std::isfinite(f.start)))
+    return absl::InvalidArgumentError(absl::StrFormat("fault.start: must be >= 0, got %g", f.start));
+  return absl::OkStatus();
+}
+
+}  // namespace
 
 absl::Status ValidateGraspConfig(const GraspConfig& c) {
   auto bad = [](const std::string& field, const std::string& why) {
@@ -73,7 +139,8 @@ absl::Status ValidateGraspConfig(const GraspConfig& c) {
                          {"phases.lift", p.lift}, {"phases.hold_lifted", p.hold_lifted}}) {
     if (auto s = positive(name, v); !s.ok()) return s;
   }
-  if (!(p.place >= 0 && std::isfinite(p.place))) return bad("phases.place", absl::StrFormat("must be >= 0, got %g", p.place));
+  for (auto [name, v] : {std::pair{"phases.place", p.place}, {"phases.placed", p.placed}, {"phases.switched", p.switched}})
+    if (!(v >= 0 && std::isfinite(v))) return bad(name, absl::StrFormat("must be >= 0, got %g", v));
   if (!(c.lift_height >= 0 && c.lift_height <= 0.5))
     return bad("lift_height", absl::StrFormat("must be in [0, 0.5] m, got %g", c.lift_height));
   if (!(c.pivot_angle_deg >= 0 && c.pivot_angle_deg <= 40))
@@ -104,6 +171,10 @@ absl::Status ValidateGraspConfig(const GraspConfig& c) {
   if (c.sensors == SensorMode::kGeoDexRandom) {
     if (auto s = ValidateErrorRanges(c.error_ranges, "error_ranges."); !s.ok()) return s;
   }
+  if (c.sensor_array == SensorArray::kTaxel) {
+    if (auto s = sim::ValidateTaxelRanges(c.taxel_ranges, "taxel_ranges."); !s.ok()) return s;
+  }
+  if (auto s = ValidateFault(c.fault); !s.ok()) return s;
   if (c.sensors == SensorMode::kModel) {
     if (auto s = sim::ValidateSensorModel(c.sensor_model); !s.ok())
       return absl::InvalidArgumentError(absl::StrCat("sensor_model.", s.message()));

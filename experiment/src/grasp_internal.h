@@ -9,6 +9,8 @@
 #include <Eigen/Geometry>
 
 #include "tactforce/experiment/grasp.h"
+#include "absl/status/statusor.h"
+#include "tactforce/planner/solver.h"
 #include "tactforce/planner/types.h"
 
 namespace tactforce::experiment {
@@ -19,7 +21,8 @@ void MinJerk(double tau, double* s, double* ds, double* dds);
 
 // Start times (s) of the phases after `close`, and the end of the trial.
 struct Timeline {
-  double t_settle, t_hold, t_lift, t_hold_lifted, t_place, t_end;
+  double t_settle, t_hold, t_lift, t_hold_lifted, t_place, t_placed, t_switched, t_end;
+  bool has_placed = false, has_switched = false;
   explicit Timeline(const PhaseDurations& p);
   Phase At(double t) const;
 };
@@ -50,6 +53,7 @@ struct GraspSetup::Impl {
   std::vector<planner::PlanProblem> tick_problem;  // per control tick (estimation)
   std::vector<std::vector<double>> tick_desired;   // per tick, per finger (N)
   std::vector<std::vector<planner::Vec3>> tick_force;  // per tick, per finger, object frame (N)
+  planner::PlanOptions plan_options;  // what the ticks were planned with (re-plans use them too)
 
   // The hand's motion at time t (lift, hold, place; or the pivot).
   HandMotion Motion(double t) const;
@@ -58,6 +62,38 @@ struct GraspSetup::Impl {
   planner::Vec3 Apply(const HandMotion& h, const planner::Vec3& x0) const;
   planner::Vec3 Velocity(const HandMotion& h, const planner::Vec3& x0) const;
   planner::Vec3 Acceleration(const HandMotion& h, const planner::Vec3& x0) const;
+};
+
+// Per-tick plans for ticks [first, ticks) of `im`'s motion with `contacts`
+// (object frame) in place of the grasp's: desired normal forces, forces and
+// the estimation problems, index 0 = tick `first`. Errors: the planner's.
+struct TickPlans {
+  std::vector<std::vector<double>> desired;
+  std::vector<std::vector<planner::Vec3>> force;
+  std::vector<planner::PlanProblem> problem;
+};
+absl::StatusOr<TickPlans> PlanTickRange(const GraspConfig& config, const GraspSetup::Impl& im,
+                                        const std::vector<planner::Contact>& contacts, int first);
+
+// Labels a failed trial's cause (FailureCause in grasp.h) from what the
+// fingertips read and truly felt every control tick until the failure.
+class CauseTracker {
+ public:
+  explicit CauseTracker(int n_fingers);
+  // One control tick (settle onward, until the first failure criterion is met).
+  void Tick(double t, const std::vector<double>& truth, const std::vector<double>& reading);
+  FailureCause Label(bool failed, bool tilted) const;
+
+ private:
+  struct Finger {
+    double low_since = -1, low_truth = 0;  // run of reading < 50 % of truth
+    double off_since = -1;                 // run of truth < 0.1 N after touching
+    bool touched = false;
+    double over_sum = 0;
+  };
+  std::vector<Finger> fingers_;
+  long ticks_ = 0;
+  bool non_activation_ = false, phantom_ = false;
 };
 
 }  // namespace tactforce::experiment

@@ -25,7 +25,11 @@ Timeline::Timeline(const PhaseDurations& p) {
   t_lift = t_hold + p.hold;
   t_hold_lifted = t_lift + p.lift;
   t_place = t_hold_lifted + p.hold_lifted;
-  t_end = t_place + p.place;
+  t_placed = t_place + p.place;
+  t_switched = t_placed + p.placed;
+  t_end = t_switched + p.switched;
+  has_placed = p.placed > 0;
+  has_switched = p.switched > 0;
 }
 
 Phase Timeline::At(double t) const {
@@ -34,7 +38,9 @@ Phase Timeline::At(double t) const {
   if (t < t_lift) return Phase::kHold;
   if (t < t_hold_lifted) return Phase::kLift;
   if (t < t_place) return Phase::kHoldLifted;
-  return Phase::kPlace;
+  if (t < t_placed || (!has_placed && !has_switched)) return Phase::kPlace;
+  if (t < t_switched || !has_switched) return Phase::kPlaced;
+  return Phase::kSwitched;
 }
 
 HandMotion GraspSetup::Impl::Motion(double t) const {

@@ -47,13 +47,14 @@ absl::StatusOr<planner::PlanOptions> SetUpObjectAndMotion(const GraspConfig& con
   return options;
 }
 
-// One trajectory step per control tick: the wrench of the hand's motion in
-// the (possibly rotating) object frame.
-planner::TrajectoryProblem TickTrajectory(const GraspSetup::Impl& im, double dt_tick) {
+// One trajectory step per control tick from `first` on: the wrench of the
+// hand's motion in the (possibly rotating) object frame, on `base`'s contacts.
+planner::TrajectoryProblem TickTrajectory(const GraspSetup::Impl& im, double dt_tick, const planner::PlanProblem& base,
+                                          int first) {
   planner::TrajectoryProblem traj;
-  traj.base = im.base;
+  traj.base = base;
   traj.inertia = im.inertia;
-  for (int j = 0; j < im.ticks; ++j) {
+  for (int j = first; j < im.ticks; ++j) {
     const HandMotion h = im.Motion(j * dt_tick);
     planner::TrajectoryStep step;
     const Matrix3d Rt = h.R.transpose();  // object axes = hand axes (aligned at rest)
@@ -62,7 +63,7 @@ planner::TrajectoryProblem TickTrajectory(const GraspSetup::Impl& im, double dt_
     step.angular_velocity = Rt * h.w;
     step.angular_acceleration = Rt * h.dw;
     if (im.pivot) {
-      std::vector<planner::Contact> contacts = im.base.contacts;
+      std::vector<planner::Contact> contacts = base.contacts;
       for (planner::Contact& c : contacts)
         if (c.kind == planner::ContactKind::kExtrinsic) c.normal = Rt * Vec3::UnitZ();
       step.contacts = contacts;
@@ -76,7 +77,7 @@ planner::TrajectoryProblem TickTrajectory(const GraspSetup::Impl& im, double dt_
 absl::Status PlanTicks(const GraspConfig& config, const planner::PlanOptions& options, GraspSetup::Impl* im) {
   const double dt_tick = 1.0 / config.control_rate;
   im->ticks = static_cast<int>(std::ceil(im->timeline.t_end / dt_tick)) + 1;
-  const planner::TrajectoryProblem traj = TickTrajectory(*im, dt_tick);
+  const planner::TrajectoryProblem traj = TickTrajectory(*im, dt_tick, im->base, 0);
   auto planned = planner::PlanTrajectory(traj, options, planner::SolverKind::kGeometric, true);
   if (!planned.ok()) return absl::InternalError(absl::StrCat("planner: ", planned.status().message()));
   for (int j = 0; j < im->ticks; ++j) {
@@ -162,6 +163,29 @@ std::string GraspMjcf(const GraspConfig& config, const ObjectSpec& spec, const G
 
 }  // namespace
 
+absl::StatusOr<TickPlans> PlanTickRange(const GraspConfig& config, const GraspSetup::Impl& im,
+                                        const std::vector<planner::Contact>& contacts, int first) {
+  planner::PlanProblem base = im.base;
+  base.contacts = contacts;
+  const planner::TrajectoryProblem traj = TickTrajectory(im, 1.0 / config.control_rate, base, first);
+  auto planned = planner::PlanTrajectory(traj, im.plan_options, planner::SolverKind::kGeometric, true);
+  if (!planned.ok()) return absl::InternalError(absl::StrCat("planner: ", planned.status().message()));
+  TickPlans out;
+  for (size_t k = 0; k < traj.steps.size(); ++k) {
+    const planner::PlanResult& r = planned->steps[k];
+    if (r.status != planner::PlanStatus::kOptimal)
+      return absl::FailedPreconditionError(absl::StrFormat("planner: step %d is %s", first + static_cast<int>(k),
+                                                           planner::ToString(r.status)));
+    std::vector<double> fd;
+    std::vector<Vec3> ff;
+    for (int i = 0; i < im.n_fingers; ++i) fd.push_back(r.normal_forces[i]), ff.push_back(r.forces[i]);
+    out.desired.push_back(std::move(fd));
+    out.force.push_back(std::move(ff));
+    out.problem.push_back(planner::StepProblem(traj, static_cast<int>(k)));
+  }
+  return out;
+}
+
 GraspSetup::~GraspSetup() = default;
 const std::vector<std::string>& GraspSetup::finger_names() const { return impl_->finger_names; }
 
@@ -175,6 +199,11 @@ absl::StatusOr<std::unique_ptr<GraspSetup>> GraspSetup::Create(const GraspConfig
   setup->impl_ = std::make_unique<Impl>();
   absl::StatusOr<planner::PlanOptions> options = SetUpObjectAndMotion(config, *spec, setup->impl_.get());
   if (!options.ok()) return options.status();
+  setup->impl_->plan_options = *options;
+  if (config.fault.kind != SensorFault::Kind::kNone && config.fault.finger >= setup->impl_->n_fingers)
+    return absl::InvalidArgumentError(absl::StrFormat("fault.finger: must be < %d (the %s grasp's fingers), got %d",
+                                                      setup->impl_->n_fingers, ToString(config.object),
+                                                      config.fault.finger));
   if (absl::Status s = PlanTicks(config, *options, setup->impl_.get()); !s.ok()) return s;
   setup->mjcf_ = GraspMjcf(config, *spec, *setup->impl_);
   // Compile once here so model errors surface at set-up.

@@ -6,6 +6,9 @@
 // admittance law and scores the object's pose against where the hand's
 // motion puts it; every physics step a PD in fingertip space tracks the
 // targets. The steps below are the methods of `TrialRun`, in that order.
+// With taxel sensors each fingertip is a sim::TaxelArray fed MuJoCo's contact
+// point and force, and at the end of the close the contacts sensed by the
+// taxels replace the grasp specification's for planning and estimation.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -66,12 +69,39 @@ double AngleDeg(const Matrix3d& R) {
   return std::acos(c) * 180 / std::numbers::pi;
 }
 
+// The force the object exerts on one fingertip geom (world, N) and where it
+// acts (normal-force-weighted mean of the contact points, world, m).
+struct FingerWrench {
+  double normal = 0;
+  Vec3 force = Vec3::Zero(), point = Vec3::Zero();
+};
+FingerWrench MeasureFingerForce(const mjModel* m, const mjData* d, int finger_geom, int object_body) {
+  FingerWrench out;
+  for (int i = 0; i < d->ncon; ++i) {
+    const mjContact& c = d->contact[i];
+    if (c.geom1 != finger_geom && c.geom2 != finger_geom) continue;
+    const int other = c.geom1 == finger_geom ? c.geom2 : c.geom1;
+    if (m->geom_bodyid[other] != object_body || c.efc_address < 0) continue;
+    mjtNum f[6];
+    mj_contactForce(m, d, i, f);
+    // The contact frame's normal points from geom1 to geom2: the force on geom2.
+    const double sign = c.geom2 == finger_geom ? 1.0 : -1.0;
+    for (int k = 0; k < 3; ++k)
+      out.force[k] += sign * (f[0] * c.frame[k] + f[1] * c.frame[3 + k] + f[2] * c.frame[6 + k]);
+    out.point += f[0] * Vec3(c.pos[0], c.pos[1], c.pos[2]);
+    out.normal += f[0];
+  }
+  if (out.normal > 0) out.point /= out.normal;
+  return out;
+}
+
 // Where fingertip i lives in the scene and where its targets start.
 struct Fingertip {
   int geom = -1, dof = -1, qadr = -1;
   Vec3 normal, center, open;  // contact normal; centre touching the contact and 15 mm back (world, at rest)
   double delta = 0;           // normal admittance offset (m), Admittance::kNormal
   Vec3 offset;                // target - touching centre (hand frame, m)
+  Matrix3d frame = Matrix3d::Identity();  // taxel fingertip frame -> world (z = the contact normal at rest)
 };
 
 // What the loop saw and was told at the last control tick (per fingertip).
@@ -107,6 +137,20 @@ class TrialRun {
   void TrackObjectPose(const HandMotion& hm, double* slip, double* rot);
   void RecordTrace(double t, Phase phase, const std::vector<double>& desired, double slip, double rot);
   void ApplyFingertipPd(double t, Phase phase, const HandMotion& hm);
+  void ReadTaxels(double t);
+  void ApplyFault(double t);
+  void SenseContactsAndReplan(int tick);
+  void TrackSwitched(const std::vector<double>& desired);
+  Feedback ActiveFeedback(Phase phase) const;
+  const std::vector<double>& Desired(int tick) const {
+    return replanned_ && tick >= plan_first_ ? plans_.desired[tick - plan_first_] : im_.tick_desired[tick];
+  }
+  const std::vector<Vec3>& DesiredForce(int tick) const {
+    return replanned_ && tick >= plan_first_ ? plans_.force[tick - plan_first_] : im_.tick_force[tick];
+  }
+  const planner::PlanProblem& Problem(int tick) const {
+    return replanned_ && tick >= plan_first_ ? plans_.problem[tick - plan_first_] : im_.tick_problem[tick];
+  }
 
   const GraspConfig& cfg_;
   const GraspSetup::Impl& im_;
@@ -117,6 +161,17 @@ class TrialRun {
   const int trial_;
   TrialResult res_;
   std::vector<SensorChannel> channels_;
+  std::vector<sim::TaxelArray> arrays_;   // taxel sensors
+  std::vector<Vec3> sensed_point_, sensed_normal_;  // world, from the taxels at the last tick
+  bool sensed_ = false, replanned_ = false;
+  int plan_first_ = 0;
+  TickPlans plans_;
+  CauseTracker causes_{nf_};
+  bool failure_seen_ = false;
+  bool switch_started_ = false;
+  Vec3 p_switch_ = Vec3::Zero();
+  std::vector<double> switched_sum_;
+  long switched_n_ = 0;
   std::vector<Fingertip> tips_;
   int object_body_ = -1, obj_q_ = -1;
   estimator::EstimateOptions est_opt_;
@@ -124,6 +179,7 @@ class TrialRun {
   Readings readings_;
   bool est_ok_ = false;
   double err_sum_ = 0, fb_sum_ = 0;
+  std::vector<double> finger_err_, finger_loop_;
   long err_n_ = 0;
   double ok_since_ = -1;
   bool lift_started_ = false;
@@ -135,6 +191,17 @@ class TrialRun {
 // Sensors: same draws for either feedback mode.
 absl::Status TrialRun::DrawSensors() {
   std::mt19937_64 rng(res_.seed);
+  if (cfg_.sensor_array == SensorArray::kTaxel) {
+    const sim::FingertipGeometry geometry{cfg_.fingertip_radius, sim::FingertipGeometry{}.body_length};
+    for (int i = 0; i < nf_; ++i) {
+      auto a = sim::TaxelArray::Create(cfg_.taxel_ranges, SplitMix(res_.seed + 31 * (i + 1)), geometry);
+      if (!a.ok()) return a.status();
+      arrays_.push_back(std::move(*a));
+    }
+    sensed_point_.assign(nf_, Vec3::Zero());
+    sensed_normal_.assign(nf_, Vec3::Zero());
+    return absl::OkStatus();
+  }
   for (int i = 0; i < nf_; ++i) {
     sim::SensorModel model;
     if (cfg_.sensors == SensorMode::kGeoDexRandom) model = DrawGeoDexModel(cfg_.error_ranges, rng);
@@ -163,6 +230,11 @@ void TrialRun::LocateFingertips() {
     f.open = f.center - f.normal * kOpenGap;
     f.delta = im_.tick_desired[0][i] / cfg_.kp;
     f.offset = im_.tick_force[0][i] / cfg_.kp;
+    // Any right-handed frame whose z is the contact normal (the fingertips only translate).
+    const Vec3 x = f.normal.unitOrthogonal();
+    f.frame.col(0) = x;
+    f.frame.col(1) = f.normal.cross(x);
+    f.frame.col(2) = f.normal;
   }
 }
 
@@ -184,21 +256,30 @@ absl::Status TrialRun::Simulate() {
 
 void TrialRun::ControlTick(double t, Phase phase, const HandMotion& hm) {
   const int j = std::min(im_.ticks - 1, static_cast<int>(std::lround(t * cfg_.control_rate)));
-  const std::vector<double>& desired = im_.tick_desired[j];
   ReadSensors(t);
+  ApplyFault(t);
+  if (cfg_.sensor_array == SensorArray::kTaxel && phase != Phase::kClose && !sensed_) SenseContactsAndReplan(j);
+  const std::vector<double>& desired = Desired(j);
   Observe(j, phase);
   if (phase != Phase::kClose) {
     UpdateTargets(j);
     if (phase == Phase::kSettle || phase == Phase::kHold) TrackConvergence(t, desired);
   }
   if (phase == Phase::kHold || phase == Phase::kLift || phase == Phase::kHoldLifted) AccumulateForceError(desired);
+  if (phase == Phase::kSettle || phase == Phase::kHold || phase == Phase::kLift || phase == Phase::kHoldLifted)
+    if (!failure_seen_) causes_.Tick(t, readings_.truth, readings_.raw);
   double slip = 0, rot = 0;
-  if (phase == Phase::kLift || phase == Phase::kHoldLifted) TrackObjectPose(hm, &slip, &rot);
+  if (phase == Phase::kLift || phase == Phase::kHoldLifted) {
+    TrackObjectPose(hm, &slip, &rot);
+    failure_seen_ = failure_seen_ || dropped_ || slip >= cfg_.max_slip || rot >= cfg_.max_rotation_deg;
+  }
+  if (phase == Phase::kSwitched) TrackSwitched(desired);
   if (trial_ < cfg_.trace_trials) RecordTrace(t, phase, desired, slip, rot);
 }
 
 // True contact forces through each fingertip's sensor channel.
 void TrialRun::ReadSensors(double t) {
+  if (cfg_.sensor_array == SensorArray::kTaxel) return ReadTaxels(t);
   Readings& r = readings_;
   for (int i = 0; i < nf_; ++i) {
     const FingerContact fc = MeasureFinger(m_, d_, tips_[i].geom, object_body_);
@@ -208,23 +289,107 @@ void TrialRun::ReadSensors(double t) {
   }
 }
 
+// MuJoCo's contact point and force into each fingertip's taxel array (its
+// frame: the hemisphere's centre at (0, 0, body_length) is the sphere's
+// centre); the reading is the taxels' sum, the sensed contact their
+// force-weighted location and normal, back in the world.
+void TrialRun::ReadTaxels(double t) {
+  Readings& r = readings_;
+  const Vec3 tip_centre(0, 0, sim::FingertipGeometry{}.body_length);
+  for (int i = 0; i < nf_; ++i) {
+    const Fingertip& f = tips_[i];
+    const FingerWrench w = MeasureFingerForce(m_, d_, f.geom, object_body_);
+    const Vec3 centre = f.open + Vec3(d_->qpos[f.qadr], d_->qpos[f.qadr + 1], d_->qpos[f.qadr + 2]);
+    Vec3 point = tip_centre + cfg_.fingertip_radius * Vec3::UnitZ();
+    if (w.normal > 0 && (w.point - centre).norm() > 1e-9)
+      point = tip_centre + cfg_.fingertip_radius * (f.frame.transpose() * (w.point - centre)).normalized();
+    const sim::TaxelArrayReading& out = arrays_[i].Step(t, point, f.frame.transpose() * w.force);
+    r.truth[i] = w.normal;
+    r.shear[i] = std::sqrt(std::max(0.0, w.force.squaredNorm() - w.normal * w.normal));
+    r.raw[i] = out.fingertip.force;
+    sensed_point_[i] = centre + f.frame * (out.fingertip.location - tip_centre);
+    sensed_normal_[i] = f.frame * out.fingertip.normal;
+  }
+}
+
+// The constructed fault (GraspConfig::fault) on one fingertip's reading.
+void TrialRun::ApplyFault(double t) {
+  const SensorFault& fault = cfg_.fault;
+  if (fault.kind == SensorFault::Kind::kNone || t < fault.start) return;
+  double& raw = readings_.raw[fault.finger];
+  raw = fault.kind == SensorFault::Kind::kDead ? 0.0 : raw + fault.magnitude;
+}
+
+// End of the close: the contacts the taxels sense (object frame) replace the
+// specification's where a fingertip reads a force, and the rest of the trial
+// is re-planned on them (GeoDEx Sec. IV: contact locations and normals from
+// the tactile arrays). A failed re-plan keeps the specification's plan.
+void TrialRun::SenseContactsAndReplan(int tick) {
+  sensed_ = true;
+  const double* q = d_->qpos + obj_q_;
+  const Vec3 p(q[0], q[1], q[2]);
+  const Matrix3d Rt = Eigen::Quaterniond(q[3], q[4], q[5], q[6]).toRotationMatrix().transpose();
+  std::vector<planner::Contact> contacts = im_.base.contacts;
+  double loc_err = 0, ang_err = 0;
+  for (int i = 0; i < nf_; ++i) {
+    if (!(readings_.raw[i] > 0) || sensed_normal_[i].norm() < 0.5) continue;
+    planner::Contact& c = contacts[i];
+    c.position = Rt * (sensed_point_[i] - p);
+    c.normal = (Rt * sensed_normal_[i]).normalized();
+    loc_err += (c.position - im_.base.contacts[i].position).norm();
+    ang_err += AngleDeg(Eigen::Quaterniond::FromTwoVectors(im_.base.contacts[i].normal.normalized(), c.normal)
+                            .toRotationMatrix());
+    ++res_.contacts_sensed;
+  }
+  if (res_.contacts_sensed > 0) {
+    res_.contact_location_error = loc_err / res_.contacts_sensed;
+    res_.contact_normal_error_deg = ang_err / res_.contacts_sensed;
+  }
+  auto plans = PlanTickRange(cfg_, im_, contacts, tick);
+  if (!plans.ok()) {
+    res_.replan_failed = true;
+    return;
+  }
+  plans_ = *std::move(plans);
+  plan_first_ = tick;
+  replanned_ = true;
+  for (int i = 0; i < nf_; ++i)
+    if (contacts[i].normal != im_.base.contacts[i].normal) tips_[i].normal = (Rt.transpose() * contacts[i].normal);
+}
+
+Feedback TrialRun::ActiveFeedback(Phase phase) const {
+  if (phase != Phase::kSwitched) return cfg_.feedback;
+  return cfg_.feedback == Feedback::kRaw ? Feedback::kEstimated : Feedback::kRaw;
+}
+
+// The switched phase: force error per fingertip and the object's motion.
+void TrialRun::TrackSwitched(const std::vector<double>& desired) {
+  const double* q = d_->qpos + obj_q_;
+  const Vec3 p(q[0], q[1], q[2]);
+  if (!switch_started_) switch_started_ = true, p_switch_ = p, switched_sum_.assign(nf_, 0.0);
+  for (int i = 0; i < nf_; ++i) switched_sum_[i] += std::abs(readings_.truth[i] - desired[i]);
+  ++switched_n_;
+  res_.switched_motion = std::max(res_.switched_motion, (p - p_switch_).norm());
+}
+
 // The estimate from the readings, and what the loop is told (raw readings as
 // force vectors r_i n_i when the feedback is raw or the estimator fails).
 void TrialRun::Observe(int tick, Phase phase) {
   Readings& r = readings_;
-  auto e = estimator::EstimateForces(im_.tick_problem[tick], r.raw, est_opt_);
+  auto e = estimator::EstimateForces(Problem(tick), r.raw, est_opt_);
   est_ok_ = e.ok() && e->status == estimator::EstimateStatus::kOk;
   for (int i = 0; i < nf_; ++i) r.est[i] = est_ok_ ? e->normal_forces[i] : r.raw[i];
   if (!est_ok_ && phase != Phase::kClose) ++res_.estimate_failures;
-  r.observed = cfg_.feedback == Feedback::kRaw ? r.raw : r.est;
+  const Feedback feedback = ActiveFeedback(phase);
+  r.observed = feedback == Feedback::kRaw ? r.raw : r.est;
   for (int i = 0; i < nf_; ++i)
-    r.observed_force[i] = cfg_.feedback == Feedback::kRaw || !est_ok_ ? Vec3(r.raw[i] * tips_[i].normal) : e->forces[i];
+    r.observed_force[i] = feedback == Feedback::kRaw || !est_ok_ ? Vec3(r.raw[i] * tips_[i].normal) : e->forces[i];
 }
 
 // The admittance law (Admittance::kFull or kNormal) on the fingertip targets.
 void TrialRun::UpdateTargets(int tick) {
-  const std::vector<double>& desired = im_.tick_desired[tick];
-  const std::vector<Vec3>& desired_force = im_.tick_force[tick];  // object frame = hand frame
+  const std::vector<double>& desired = Desired(tick);
+  const std::vector<Vec3>& desired_force = DesiredForce(tick);  // object frame = hand frame
   const Readings& r = readings_;
   for (int i = 0; i < nf_; ++i) {
     Fingertip& f = tips_[i];
@@ -256,9 +421,13 @@ void TrialRun::TrackConvergence(double t, const std::vector<double>& desired) {
 }
 
 void TrialRun::AccumulateForceError(const std::vector<double>& desired) {
+  finger_err_.resize(nf_, 0.0);
+  finger_loop_.resize(nf_, 0.0);
   for (int i = 0; i < nf_; ++i) {
     err_sum_ += std::abs(readings_.truth[i] - desired[i]);
     fb_sum_ += std::abs(readings_.observed[i] - readings_.truth[i]);
+    finger_err_[i] += std::abs(readings_.truth[i] - desired[i]);
+    finger_loop_[i] += std::abs(readings_.observed[i] - desired[i]);
   }
   ++err_n_;
 }
@@ -327,11 +496,20 @@ TrialResult TrialRun::Finish() {
   res_.dropped = dropped_;
   res_.force_error = err_n_ > 0 ? err_sum_ / (err_n_ * nf_) : 0;
   res_.feedback_error = err_n_ > 0 ? fb_sum_ / (err_n_ * nf_) : 0;
+  for (size_t i = 0; i < finger_err_.size(); ++i) {
+    res_.finger_force_error.push_back(finger_err_[i] / err_n_);
+    res_.finger_loop_error.push_back(finger_loop_[i] / err_n_);
+    res_.loop_error += finger_loop_[i] / (err_n_ * nf_);
+  }
   if (dropped_) res_.failure = "dropped";
   else if (res_.max_slip >= cfg_.max_slip) res_.failure = absl::StrFormat("slip %.1f mm", res_.max_slip * 1e3);
   else if (res_.max_rotation_deg >= cfg_.max_rotation_deg)
     res_.failure = absl::StrFormat("rotation %.2f deg", res_.max_rotation_deg);
   res_.success = res_.failure.empty();
+  // Tilted: rotated past the threshold while still held (a slip may come with it).
+  const bool tilted = !dropped_ && res_.max_rotation_deg >= cfg_.max_rotation_deg;
+  res_.cause = causes_.Label(!res_.success, tilted);
+  for (double s : switched_sum_) res_.switched_force_error.push_back(switched_n_ > 0 ? s / switched_n_ : 0.0);
   res_.sim_seconds = d_->time;
   return std::move(res_);
 }
@@ -352,6 +530,46 @@ absl::StatusOr<TrialResult> RunGraspTrial(const GraspSetup& setup, int trial) {
   return res;
 }
 
+namespace {
+
+// Mean and sample std of the force error over the trials with success == `ok`.
+void MeanStd(const std::vector<TrialResult>& results, bool ok, double* mean, double* std) {
+  double s = 0, s2 = 0;
+  int n = 0;
+  for (const TrialResult& r : results)
+    if (r.success == ok) s += r.force_error, s2 += r.force_error * r.force_error, ++n;
+  *mean = n > 0 ? s / n : 0.0;
+  *std = n > 1 ? std::sqrt(std::max(0.0, (s2 - s * s / n) / (n - 1))) : 0.0;
+}
+
+// Table III's split, the failure causes, the taxels' contact sensing and the
+// switched phase's force error per fingertip.
+void SummariseSplit(BatchSummary* b) {
+  MeanStd(b->results, true, &b->force_error_success_mean, &b->force_error_success_std);
+  MeanStd(b->results, false, &b->force_error_failure_mean, &b->force_error_failure_std);
+  for (FailureCause c : AllFailureCauses()) b->failure_causes[ToString(c)] = 0;
+  double loc = 0, l = 0, l2 = 0;
+  const size_t n = b->results.size();
+  auto add = [&](std::vector<double>* dst, const std::vector<double>& v) {
+    if (dst->size() < v.size()) dst->resize(v.size(), 0.0);
+    for (size_t i = 0; i < v.size(); ++i) (*dst)[i] += v[i] / n;
+  };
+  for (const TrialResult& r : b->results) {
+    l += r.loop_error, l2 += r.loop_error * r.loop_error;
+    add(&b->finger_force_error, r.finger_force_error);
+    add(&b->finger_loop_error, r.finger_loop_error);
+    if (r.cause != FailureCause::kNone) ++b->failure_causes[ToString(r.cause)];
+    b->replan_failures += r.replan_failed;
+    loc += r.contact_location_error;
+    add(&b->switched_force_error, r.switched_force_error);
+  }
+  b->contact_location_error_mean = n > 0 ? loc / n : 0.0;
+  b->loop_error_mean = n > 0 ? l / n : 0.0;
+  b->loop_error_std = n > 1 ? std::sqrt(std::max(0.0, (l2 - l * l / n) / (n - 1))) : 0.0;
+}
+
+}  // namespace
+
 absl::StatusOr<BatchSummary> RunGraspBatch(const GraspConfig& config, int trials,
                                            const std::function<void(int)>& progress) {
   if (trials < 1) return absl::InvalidArgumentError(absl::StrFormat("trials: must be >= 1, got %d", trials));
@@ -361,6 +579,7 @@ absl::StatusOr<BatchSummary> RunGraspBatch(const GraspConfig& config, int trials
   b.object = config.object;
   b.feedback = config.feedback;
   b.trials = trials;
+  b.finger_names = (*setup)->finger_names();
   double conv = 0;
   for (int k = 0; k < trials; ++k) {
     auto r = RunGraspTrial(**setup, k);
@@ -379,6 +598,7 @@ absl::StatusOr<BatchSummary> RunGraspBatch(const GraspConfig& config, int trials
   b.force_error_std = trials > 1 ? std::sqrt(std::max(0.0, (s2 - s * s / trials) / (trials - 1))) : 0.0;
   b.feedback_error_mean = fb / trials;
   b.converge_time_mean = b.converged > 0 ? conv / b.converged : -1;
+  SummariseSplit(&b);
   return b;
 }
 

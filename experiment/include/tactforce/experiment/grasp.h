@@ -3,6 +3,11 @@
 // fingertip space (the Jacobian is the identity), close on an object resting
 // on a table, regulate their normal forces with an admittance loop on either
 // the raw tactile readings or tactforce's estimate, lift, hold and place.
+// Readings come from one sensor-model channel per fingertip or from a
+// 42-taxel array per fingertip (SensorArray::kTaxel), whose sensed contacts
+// replace the grasp's for planning at the end of the close; failed trials are
+// labelled with a FailureCause and batches split the force error between
+// successful and failed trials (Table III).
 //
 //   GraspConfig c;  c.object = GraspObject::kWrench;  c.feedback = Feedback::kRaw;
 //   auto setup = GraspSetup::Create(c);            // plans once per object
@@ -14,6 +19,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -26,6 +32,7 @@
 #include "tactforce/io/svg.h"
 #include "tactforce/planner/trajectory.h"
 #include "tactforce/sim/sensor_model.h"
+#include "tactforce/sim/taxel_array.h"
 
 namespace tactforce::experiment {
 
@@ -61,6 +68,15 @@ enum class SensorMode {
   kIdeal,         // readings = true normal force
 };
 
+// What each fingertip's reading comes from.
+enum class SensorArray {
+  kChannel,  // one SensorChannel per fingertip on MuJoCo's normal force (`sensors` picks its model)
+  kTaxel,    // a sim::TaxelArray per fingertip on MuJoCo's contact point and 3D force; contact
+             // locations and normals for planning and estimation sensed at the end of the close
+};
+const char* ToString(SensorArray s);  // "channel", "taxel"
+absl::StatusOr<SensorArray> ParseSensorArray(std::string_view name);
+
 struct PhaseDurations {  // s
   double close = 0.3;        // fingertips move from open to contact (position control)
   double settle = 0.5;       // force loop on, object on the table
@@ -68,14 +84,52 @@ struct PhaseDurations {  // s
   double lift = 1.0;         // minimum-jerk lift (cube: pivot up)
   double hold_lifted = 1.0;
   double place = 0.8;        // back down
+  double placed = 0;         // held on the table after the place (0 = none)
+  double switched = 0;       // then the other feedback (raw <-> estimated) for this long (0 = none)
+};
+
+// The trial's timeline: today's short trial, or GeoDEx Sec. IV-C's wrench
+// protocol (Fig. 12): converge and hold until 27 s, lift, place back at 33 s,
+// hold, switch the feedback at 40 s, 10 s more.
+enum class Protocol { kShort, kPaper };
+const char* ToString(Protocol p);  // "short", "paper"
+absl::StatusOr<Protocol> ParseProtocol(std::string_view name);
+PhaseDurations ProtocolPhases(Protocol p);
+
+// Why a failed trial failed (GeoDEx Sec. IV-C's failure modes), judged from
+// the settle until the first failure criterion is met:
+//   non_activation: a fingertip's reading < 50 % of its true force for > 0.1 s
+//     while the true force rises (and exceeds 0.1 N);
+//   phantom_force: a reading > true + 0.5 N while the true force < 0.1 N, or a
+//     touching fingertip detaching (true force < 0.1 N for >= 0.05 s);
+//   over_reading_tilt: the object tilted (rotation >= max_rotation_deg, not
+//     dropped; it may slip too) with a fingertip reading on average more than
+//     0.25 N above its true force;
+//   slip_drop: any other failure.
+// The first that applies, in this order.
+enum class FailureCause { kNone, kNonActivation, kPhantomForce, kOverReadingTilt, kSlipDrop };
+const char* ToString(FailureCause c);  // "none", "non_activation", "phantom_force", "over_reading_tilt", "slip_drop"
+std::vector<FailureCause> AllFailureCauses();  // the four causes, without kNone
+
+// A constructed sensor fault on one fingertip's summed reading (tests and
+// what-if runs): from `start` (s) on, kDead reads 0, kOffset adds `magnitude` N.
+struct SensorFault {
+  enum class Kind { kNone, kDead, kOffset };
+  Kind kind = Kind::kNone;
+  int finger = 0;
+  double magnitude = 0;  // N
+  double start = 0;      // s
 };
 
 struct GraspConfig {
   GraspObject object = GraspObject::kWrench;
   Feedback feedback = Feedback::kEstimated;
   estimator::EstimateMethod estimator = estimator::EstimateMethod::kNormalLsq;  // or kProjection (GeoDEx)
-  SensorMode sensors = SensorMode::kGeoDexRandom;
+  SensorMode sensors = SensorMode::kGeoDexRandom;  // kChannel's model
   ErrorRanges error_ranges;
+  SensorArray sensor_array = SensorArray::kChannel;
+  sim::TaxelRanges taxel_ranges;  // kTaxel: drawn per taxel, fingertip and trial
+  SensorFault fault;
   sim::SensorModel sensor_model;  // kModel
   uint64_t seed = 1;              // trial k draws from (seed, k), independent of feedback
   PhaseDurations phases;
@@ -99,7 +153,7 @@ struct GraspConfig {
 };
 absl::Status ValidateGraspConfig(const GraspConfig& c);
 
-enum class Phase { kClose, kSettle, kHold, kLift, kHoldLifted, kPlace };
+enum class Phase { kClose, kSettle, kHold, kLift, kHoldLifted, kPlace, kPlaced, kSwitched };
 const char* ToString(Phase p);
 
 struct TraceSample {
@@ -116,15 +170,33 @@ struct TrialResult {
   bool success = false;
   bool dropped = false;
   std::string failure;          // "", "dropped", "slip 7.1 mm", "rotation 2.3 deg"
+  FailureCause cause = FailureCause::kNone;  // kNone when successful
   double max_slip = 0;          // m, during lift + hold
   double max_rotation_deg = 0;
   double force_error = 0;       // N, mean |fn_true - fn_desired| over fingertips, hold..hold_lifted
   double feedback_error = 0;    // N, mean |fn_observed - fn_true| (what the loop was told vs truth)
+  // The loop's own error, mean |fn_desired - fn_observed| (GeoDEx's "error between the desired force and the
+  // estimated values"), hold..hold_lifted, over fingertips; and both errors per fingertip (N).
+  double loop_error = 0;
+  std::vector<double> finger_force_error, finger_loop_error;
   double converge_time = -1;    // s after settle start until the loop's own error stays
                                 // below max(0.1 N, 10 %) for 0.1 s; -1 = never
   int estimate_failures = 0;    // ticks where the estimator gave no answer (raw used)
   double sim_seconds = 0, wall_seconds = 0;
-  std::vector<sim::SensorModel> sensor_models;  // per fingertip (the draw)
+  std::vector<sim::SensorModel> sensor_models;  // per fingertip (the draw; channel sensors)
+  // Taxel sensors: how far the sensed contact locations (end of the close)
+  // were from the grasp specification's (m, mean over fingertips), how many
+  // fingertips sensed one (the rest keep the specification's), and whether
+  // the re-plan on them failed (the specification's plan is kept).
+  double contact_location_error = 0;
+  double contact_normal_error_deg = 0;
+  int contacts_sensed = 0;
+  bool replan_failed = false;
+  // Switched phase (PhaseDurations::switched > 0): mean |fn_true - fn_desired|
+  // per fingertip under the other feedback, and the object's largest motion
+  // from its pose when the switch happened.
+  std::vector<double> switched_force_error;
+  double switched_motion = 0;  // m
   std::vector<TraceSample> trace;                // when record_trace
 };
 
@@ -154,6 +226,16 @@ struct BatchSummary {
   Feedback feedback = Feedback::kEstimated;
   int trials = 0, successes = 0, drops = 0;
   double force_error_mean = 0, force_error_std = 0;  // over trials (N)
+  // Table III's split: over successful and over failed trials (N; 0 if none).
+  double force_error_success_mean = 0, force_error_success_std = 0;
+  double force_error_failure_mean = 0, force_error_failure_std = 0;
+  std::map<std::string, int> failure_causes;  // every cause's name -> failed trials
+  double loop_error_mean = 0, loop_error_std = 0;             // N, over trials
+  std::vector<double> finger_force_error, finger_loop_error;  // N, per fingertip, mean over trials
+  std::vector<std::string> finger_names;
+  int replan_failures = 0;                    // taxel sensors
+  double contact_location_error_mean = 0;     // m, taxel sensors
+  std::vector<double> switched_force_error;   // per fingertip, mean over trials (paper protocol)
   double feedback_error_mean = 0;                    // N
   double converge_time_mean = -1;                    // s over converged trials; -1 none
   int converged = 0;
