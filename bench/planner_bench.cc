@@ -141,6 +141,13 @@ const std::vector<DenseQp>& PlaneQps(int n) {
   return out;
 }
 
+// The timed call of BM_QpOnly, out of line for callgrind as above.
+[[gnu::noinline]] bool TimedQpSolve(const DenseQp& qp, DenseQpWorkspace* workspace,
+                                    DenseQpResult* result) {
+  SolveDenseQp(qp, {}, workspace, result);
+  return result->status == DenseQpStatus::kOptimal;
+}
+
 void BM_QpOnly(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   const auto& qps = PlaneQps(n);
@@ -152,8 +159,7 @@ void BM_QpOnly(benchmark::State& state) {
   Counters counters;
   counters.Start();
   for (auto _ : state) {
-    SolveDenseQp(qps[i++ % qps.size()], {}, &workspace, &result);
-    if (result.status != DenseQpStatus::kOptimal) ++failures;
+    if (!TimedQpSolve(qps[i++ % qps.size()], &workspace, &result)) ++failures;
     benchmark::DoNotOptimize(result);
   }
   counters.Stop(state, n);
@@ -214,13 +220,32 @@ class RatioReporter : public benchmark::ConsoleReporter {
 namespace tactforce::planner {
 namespace {
 
-// --callgrind-run=N,C: no Google Benchmark; N workspace solves of the
-// C-contact grasps (cycling over all 64, after one warm-up pass), for
+// --callgrind-run=N,C[,qp]: no Google Benchmark; N workspace solves of the
+// C-contact grasps (cycling over all 64, after one warm-up pass), or with
+// ",qp" N solves of their FE-plane QPs alone (TimedQpSolve), for
 // scripts/count_instructions.sh to count under callgrind.
+int CallgrindQpRun(int solves, int contacts) {
+  const auto& qps = PlaneQps(contacts);
+  DenseQpWorkspace workspace;
+  DenseQpResult result;
+  for (const DenseQp& qp : qps) SolveDenseQp(qp, {}, &workspace, &result);
+  int failures = 0;
+  int64_t iterations = 0;
+  for (int i = 0; i < solves; ++i) {
+    if (!TimedQpSolve(qps[i % qps.size()], &workspace, &result)) ++failures;
+    iterations += result.iterations;
+  }
+  std::printf("%d QP solves of %d contacts, %.2f iterations each, %d failures\n", solves,
+              contacts, static_cast<double>(iterations) / solves, failures);
+  return failures == 0 ? 0 : 1;
+}
+
 int CallgrindRun(const std::string& spec) {
   const size_t comma = spec.find(',');
   const int solves = std::stoi(spec.substr(0, comma));
-  const int contacts = comma == std::string::npos ? 4 : std::stoi(spec.substr(comma + 1));
+  const std::string rest = comma == std::string::npos ? "" : spec.substr(comma + 1);
+  const int contacts = rest.empty() ? 4 : std::stoi(rest);
+  if (rest.find(",qp") != std::string::npos) return CallgrindQpRun(solves, contacts);
   const auto& grasps = Grasps(contacts);
   const auto solver = MakeSolver(SolverKind::kGeometric);
   PlanningWorkspace workspace;
