@@ -106,8 +106,13 @@ class ActiveSetSolver {
   void EnsureNormal(int k);
   // The norms of every structured row's normal, without forming them.
   void StructuredNorms();
-  // slack = b - A x of every inequality row, into w_.slack.
+  // slack = b - A x of every inequality row (dense rows), into w_.slack.
   void ScanRows();
+  // The same for structured rows, block by block.
+  void ScanBlocks();
+  // Most violated row of w_.slack in [begin, end), if worse than *worst_ratio.
+  void SelectRows(int begin, int end, double x_norm, int* worst, double* worst_ratio);
+
   double Slack(int k) const { return w_.rhs(k) - w_.normals.col(k).dot(f_.x); }
   double Scale(int k) const {
     return std::max({1.0, std::abs(w_.rhs(k)), w_.normal_norms(k) * f_.x.norm()});
@@ -264,7 +269,7 @@ template <class Factors>
 void ActiveSetSolver<Factors>::StructuredNorms() {
   // |M_b^T a|^2 = a^T (M_b M_b^T) a: one 3x3 Gram matrix per block.
   const int blocks = static_cast<int>(qp_.in_block_maps.rows()) / 3;
-  w_.block_values.resize(6 * blocks);  // here the Gram matrices; later y = M x
+  w_.block_values.resize(6 * blocks);
   double* gram = w_.block_values.data();
   std::fill(gram, gram + 6 * blocks, 0.0);
   for (int j = 0; j < N(); ++j) {
@@ -298,35 +303,64 @@ template <class Factors>
 void ActiveSetSolver<Factors>::ScanRows() {
   double* __restrict slack = w_.slack.data();
   const double* __restrict b = qp_.in_rhs.data();
-  if (structured_) {
-    // y = M x for every block (3 values each), then 3 products per row.
-    const int values = static_cast<int>(qp_.in_block_maps.rows());
-    double* __restrict y = w_.block_values.data();
-    std::fill(y, y + values, 0.0);
-    for (int j = 0; j < N(); ++j) {
-      const double xj = f_.x(j);
-      const double* __restrict column = qp_.in_block_maps.col(j).data();
-      for (int v = 0; v < values; ++v) y[v] += xj * column[v];
-    }
-    const double* __restrict ax = qp_.in_directions.col(0).data();
-    const double* __restrict ay = qp_.in_directions.col(1).data();
-    const double* __restrict az = qp_.in_directions.col(2).data();
-    const int blocks = values / 3;
-    for (int block = 0; block < blocks; ++block) {
-      const double y0 = y[3 * block], y1 = y[3 * block + 1], y2 = y[3 * block + 2];
-      const int end = qp_.in_block_first[block + 1];
-      for (int i = qp_.in_block_first[block]; i < end; ++i) {
-        slack[i] = b[i] - (ax[i] * y0 + ay[i] * y1 + az[i] * y2);
-      }
-    }
-    return;
-  }
   // slack = b - A x, column by column (A is m x n, column-major)
   std::copy(b, b + m_, slack);
   for (int j = 0; j < N(); ++j) {
     const double xj = f_.x(j);
     const double* __restrict column = qp_.in_matrix.col(j).data();
     for (int i = 0; i < m_; ++i) slack[i] -= xj * column[i];
+  }
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::ScanBlocks() {
+  // Per block: y = M_b x (3 N products, unrolled for FixedFactors), then 3
+  // products per row. (Skipping blocks whose rows provably stay satisfied,
+  // by |a_r| |y_b - y_ref|, was tried: on the planner's grasps nearly every
+  // block holds an active or nearly active row, and the test cost more.)
+  const int values = static_cast<int>(qp_.in_block_maps.rows());
+  const double* __restrict ax = qp_.in_directions.col(0).data();
+  const double* __restrict ay = qp_.in_directions.col(1).data();
+  const double* __restrict az = qp_.in_directions.col(2).data();
+  const double* __restrict b = qp_.in_rhs.data();
+  double* __restrict slack = w_.slack.data();
+  const double* __restrict x = f_.x.data();
+  const int blocks = values / 3;
+  for (int block = 0; block < blocks; ++block) {
+    const double* __restrict map = qp_.in_block_maps.data() + 3 * block;
+    double y0 = 0.0, y1 = 0.0, y2 = 0.0;
+    for (int j = 0; j < N(); ++j) {
+      const double* column = map + j * values;
+      y0 += x[j] * column[0];
+      y1 += x[j] * column[1];
+      y2 += x[j] * column[2];
+    }
+    const int first = qp_.in_block_first[block], end = qp_.in_block_first[block + 1];
+    for (int i = first; i < end; ++i) {
+      slack[i] = b[i] - (ax[i] * y0 + ay[i] * y1 + az[i] * y2);
+    }
+  }
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::SelectRows(int begin, int end, double x_norm, int* worst,
+                                          double* worst_ratio) {
+  // Relative violation: slack / max(1, |b|, |a| |x|).
+  const double* slack = w_.slack.data();
+  const double* bound = w_.slack_bound.data();
+  for (int i = begin; i < end; ++i) {
+    // The ratio's denominator is at least max(1, |b|): rows above this
+    // bound are not violated, and need no normal.
+    if (slack[i] >= bound[i]) continue;
+    const int k = p_ + i;
+    if (w_.is_active[k]) continue;
+    if (!structured_) EnsureNormal(k);
+    const double ratio =
+        slack[i] / std::max({1.0, std::abs(w_.rhs(k)), w_.normal_norms(k) * x_norm});
+    if (ratio < *worst_ratio) {
+      *worst_ratio = ratio;
+      *worst = k;
+    }
   }
 }
 
@@ -344,25 +378,15 @@ int ActiveSetSolver<Factors>::MostViolated() {
     EnsureNormal(k);
     if (violation(k, Slack(k)) < -tol) return k;
   }
-  if (m_ == 0) return -1;
-  ScanRows();
-  const double* slack = w_.slack.data();
-  const double* bound = w_.slack_bound.data();
   int worst = -1;
   double worst_ratio = -tol;
-  for (int i = 0; i < m_; ++i) {
-    // The ratio's denominator is at least max(1, |b|): rows above this
-    // bound are not violated, and need no normal.
-    if (slack[i] >= bound[i]) continue;
-    const int k = p_ + i;
-    if (w_.is_active[k]) continue;
-    if (!structured_) EnsureNormal(k);
-    const double ratio = violation(k, slack[i]);
-    if (ratio < worst_ratio) {
-      worst_ratio = ratio;
-      worst = k;
-    }
+  if (m_ == 0) return worst;
+  if (structured_) {
+    ScanBlocks();
+  } else {
+    ScanRows();
   }
+  SelectRows(0, m_, x_norm, &worst, &worst_ratio);
   return worst;
 }
 

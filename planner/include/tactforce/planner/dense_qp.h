@@ -78,7 +78,7 @@ struct DenseQpWorkspace {
   std::vector<char> has_normal; // p + m: column formed in this solve
   Eigen::VectorXd slack;        // m
   Eigen::VectorXd slack_bound;  // m: -tolerance max(1, |b|), below which a row may be violated
-  Eigen::VectorXd block_values; // 6 blocks: per-block Gram M_b M_b^T, then y_b = M_b x
+  Eigen::VectorXd block_values; // 6 blocks: per-block Gram M_b M_b^T (structured rows)
   Eigen::VectorXd x, d, z, r, u;  // n each (r, u: leading q entries used)
   Eigen::MatrixXd J, R;         // n x n
   Eigen::VectorXd hx;           // n: H x, for the objective
