@@ -8,10 +8,12 @@
 //   BM_Workspace   the in-place Solve with one PlanningWorkspace and
 //                  PlanResult (what the server, PlanStream, trajectories use)
 //   BM_QpOnly      only the dense QP of the same grasps (SolveDenseQp in
-//                  place), so the cost of preparation stays visible
+//                  place), so the cost of preparation stays visible; the
+//                  table's "QP / workspace" is that split
 //   BM_Ipopt       the Ipopt SOCP reference
 // Counters: allocs = heap allocations per solve (operator new is counted in
-// this binary), instr = user-space instructions per solve from
+// this binary), qp_iter = active-set iterations (additions and drops) per
+// workspace solve, instr = user-space instructions per solve from
 // perf_event_open (n/a where the kernel refuses it; then see
 // scripts/count_instructions.sh).
 // After the Google Benchmark output it prints the table of medians.
@@ -185,31 +187,38 @@ class RatioReporter : public benchmark::ConsoleReporter {
       const int n = std::stoi(run.run_name.args);
       Row& row = rows_[run.run_name.function_name][n];
       row.us = run.GetAdjustedRealTime();
-      for (const char* key : {"allocs", "instr"}) {
+      auto counter = [&](const char* key) {
         auto it = run.counters.find(key);
-        (std::string(key) == "allocs" ? row.allocs : row.instructions) =
-            it == run.counters.end() ? -1.0 : double(it->second);
-      }
+        return it == run.counters.end() ? -1.0 : double(it->second);
+      };
+      row.allocs = counter("allocs");
+      row.instructions = counter("instr");
+      row.qp_iterations = counter("qp_iter");
     }
   }
   void Finalize() override {
     ConsoleReporter::Finalize();
     std::printf(
-        "\n| contacts | one-off Solve (us) | workspace Solve (us) | QP alone (us) | ipopt (us) |"
-        " ipopt / workspace | allocs per solve (one-off / workspace) | instructions per "
-        "workspace solve |\n|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+        "\n| contacts | one-off Solve (us) | workspace Solve (us) | QP alone (us) | QP / workspace |"
+        " QP iterations | ipopt (us) | ipopt / workspace | allocs per solve (one-off / workspace) |"
+        " instructions per workspace solve / QP alone |\n"
+        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     for (const auto& [n, w] : rows_["BM_Workspace"]) {
       const Row g = rows_["BM_Geometric"][n], q = rows_["BM_QpOnly"][n], i = rows_["BM_Ipopt"][n];
-      char instructions[32] = "n/a";
-      if (w.instructions >= 0) std::snprintf(instructions, sizeof(instructions), "%.0f", w.instructions);
-      std::printf("| %d | %.2f | %.2f | %.2f | %.1f | %.0fx | %.1f / %.1f | %s |\n", n, g.us, w.us,
-                  q.us, i.us, i.us / w.us, g.allocs, w.allocs, instructions);
+      char instructions[64] = "n/a (scripts/count_instructions.sh)";
+      if (w.instructions >= 0) {
+        std::snprintf(instructions, sizeof(instructions), "%.0f / %.0f", w.instructions,
+                      q.instructions);
+      }
+      std::printf("| %d | %.2f | %.2f | %.2f | %.2f | %.1f | %.1f | %.0fx | %.1f / %.1f | %s |\n", n,
+                  g.us, w.us, q.us, q.us / w.us, w.qp_iterations, i.us, i.us / w.us, g.allocs,
+                  w.allocs, instructions);
     }
   }
 
  private:
   struct Row {
-    double us = 0, allocs = -1, instructions = -1;
+    double us = 0, allocs = -1, instructions = -1, qp_iterations = -1;
   };
   std::map<std::string, std::map<int, Row>> rows_;
 };

@@ -22,9 +22,14 @@ std::string DescribeActive(const PreparedProblem& prepared, const std::vector<in
   return out;
 }
 
-// min 0.5 |x|^2 + (B^T f0)^T x  s.t. (A B) x <= d - A f0, handed over in
-// the QP's row structure: row r of contact i is its direction a_r applied to
-// B_i x (B_i: the contact's three rows of B), so A B is never formed.
+// Below this many FE-plane coordinates a dense row (d numbers) is as cheap
+// to scan as the row structure (3 per row plus 3 d per contact).
+constexpr int kMinStructuredCoordinates = 3;
+
+// min 0.5 |x|^2 + (B^T f0)^T x  s.t. (A B) x <= d - A f0. From 3
+// coordinates on, in the QP's row structure: row r of contact i is its
+// direction a_r applied to B_i x (B_i: the contact's three rows of B), so
+// A B is never formed.
 void FillPlaneQp(const PreparedProblem& prepared, DenseQp* qp) {
   const ForceEquilibrium& eq = prepared.equilibrium;
   const ConstraintRows& rows = prepared.rows;
@@ -35,6 +40,11 @@ void FillPlaneQp(const PreparedProblem& prepared, DenseQp* qp) {
   qp->gradient.noalias() = eq.null_basis.transpose() * eq.particular;  // zero up to round-off
   qp->eq_matrix.resize(0, d);
   qp->eq_rhs.resize(0);
+  if (d < kMinStructuredCoordinates) {
+    qp->in_directions.resize(0, 3);
+    RowsOnPlane(rows, eq, &qp->in_matrix, &qp->in_rhs);
+    return;
+  }
   qp->in_matrix.resize(0, d);
   qp->in_block_maps = eq.null_basis;
   qp->in_directions.resize(m, 3);
