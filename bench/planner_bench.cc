@@ -8,10 +8,12 @@
 //   BM_Workspace   the in-place Solve with one PlanningWorkspace and
 //                  PlanResult (what the server, PlanStream, trajectories use)
 //   BM_QpOnly      only the dense QP of the same grasps (SolveDenseQp in
-//                  place), so the cost of preparation stays visible
+//                  place), so the cost of preparation stays visible; the
+//                  table's "QP / workspace" is that split
 //   BM_Ipopt       the Ipopt SOCP reference
 // Counters: allocs = heap allocations per solve (operator new is counted in
-// this binary), instr = user-space instructions per solve from
+// this binary), qp_iter = active-set iterations (additions and drops) per
+// workspace solve, instr = user-space instructions per solve from
 // perf_event_open (n/a where the kernel refuses it; then see
 // scripts/count_instructions.sh).
 // After the Google Benchmark output it prints the table of medians.
@@ -141,6 +143,13 @@ const std::vector<DenseQp>& PlaneQps(int n) {
   return out;
 }
 
+// The timed call of BM_QpOnly, out of line for callgrind as above.
+[[gnu::noinline]] bool TimedQpSolve(const DenseQp& qp, DenseQpWorkspace* workspace,
+                                    DenseQpResult* result) {
+  SolveDenseQp(qp, {}, workspace, result);
+  return result->status == DenseQpStatus::kOptimal;
+}
+
 void BM_QpOnly(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   const auto& qps = PlaneQps(n);
@@ -152,8 +161,7 @@ void BM_QpOnly(benchmark::State& state) {
   Counters counters;
   counters.Start();
   for (auto _ : state) {
-    SolveDenseQp(qps[i++ % qps.size()], {}, &workspace, &result);
-    if (result.status != DenseQpStatus::kOptimal) ++failures;
+    if (!TimedQpSolve(qps[i++ % qps.size()], &workspace, &result)) ++failures;
     benchmark::DoNotOptimize(result);
   }
   counters.Stop(state, n);
@@ -179,31 +187,38 @@ class RatioReporter : public benchmark::ConsoleReporter {
       const int n = std::stoi(run.run_name.args);
       Row& row = rows_[run.run_name.function_name][n];
       row.us = run.GetAdjustedRealTime();
-      for (const char* key : {"allocs", "instr"}) {
+      auto counter = [&](const char* key) {
         auto it = run.counters.find(key);
-        (std::string(key) == "allocs" ? row.allocs : row.instructions) =
-            it == run.counters.end() ? -1.0 : double(it->second);
-      }
+        return it == run.counters.end() ? -1.0 : double(it->second);
+      };
+      row.allocs = counter("allocs");
+      row.instructions = counter("instr");
+      row.qp_iterations = counter("qp_iter");
     }
   }
   void Finalize() override {
     ConsoleReporter::Finalize();
     std::printf(
-        "\n| contacts | one-off Solve (us) | workspace Solve (us) | QP alone (us) | ipopt (us) |"
-        " ipopt / workspace | allocs per solve (one-off / workspace) | instructions per "
-        "workspace solve |\n|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+        "\n| contacts | one-off Solve (us) | workspace Solve (us) | QP alone (us) | QP / workspace |"
+        " QP iterations | ipopt (us) | ipopt / workspace | allocs per solve (one-off / workspace) |"
+        " instructions per workspace solve / QP alone |\n"
+        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     for (const auto& [n, w] : rows_["BM_Workspace"]) {
       const Row g = rows_["BM_Geometric"][n], q = rows_["BM_QpOnly"][n], i = rows_["BM_Ipopt"][n];
-      char instructions[32] = "n/a";
-      if (w.instructions >= 0) std::snprintf(instructions, sizeof(instructions), "%.0f", w.instructions);
-      std::printf("| %d | %.2f | %.2f | %.2f | %.1f | %.0fx | %.1f / %.1f | %s |\n", n, g.us, w.us,
-                  q.us, i.us, i.us / w.us, g.allocs, w.allocs, instructions);
+      char instructions[64] = "n/a (scripts/count_instructions.sh)";
+      if (w.instructions >= 0) {
+        std::snprintf(instructions, sizeof(instructions), "%.0f / %.0f", w.instructions,
+                      q.instructions);
+      }
+      std::printf("| %d | %.2f | %.2f | %.2f | %.2f | %.1f | %.1f | %.0fx | %.1f / %.1f | %s |\n", n,
+                  g.us, w.us, q.us, q.us / w.us, w.qp_iterations, i.us, i.us / w.us, g.allocs,
+                  w.allocs, instructions);
     }
   }
 
  private:
   struct Row {
-    double us = 0, allocs = -1, instructions = -1;
+    double us = 0, allocs = -1, instructions = -1, qp_iterations = -1;
   };
   std::map<std::string, std::map<int, Row>> rows_;
 };
@@ -214,13 +229,32 @@ class RatioReporter : public benchmark::ConsoleReporter {
 namespace tactforce::planner {
 namespace {
 
-// --callgrind-run=N,C: no Google Benchmark; N workspace solves of the
-// C-contact grasps (cycling over all 64, after one warm-up pass), for
+// --callgrind-run=N,C[,qp]: no Google Benchmark; N workspace solves of the
+// C-contact grasps (cycling over all 64, after one warm-up pass), or with
+// ",qp" N solves of their FE-plane QPs alone (TimedQpSolve), for
 // scripts/count_instructions.sh to count under callgrind.
+int CallgrindQpRun(int solves, int contacts) {
+  const auto& qps = PlaneQps(contacts);
+  DenseQpWorkspace workspace;
+  DenseQpResult result;
+  for (const DenseQp& qp : qps) SolveDenseQp(qp, {}, &workspace, &result);
+  int failures = 0;
+  int64_t iterations = 0;
+  for (int i = 0; i < solves; ++i) {
+    if (!TimedQpSolve(qps[i % qps.size()], &workspace, &result)) ++failures;
+    iterations += result.iterations;
+  }
+  std::printf("%d QP solves of %d contacts, %.2f iterations each, %d failures\n", solves,
+              contacts, static_cast<double>(iterations) / solves, failures);
+  return failures == 0 ? 0 : 1;
+}
+
 int CallgrindRun(const std::string& spec) {
   const size_t comma = spec.find(',');
   const int solves = std::stoi(spec.substr(0, comma));
-  const int contacts = comma == std::string::npos ? 4 : std::stoi(spec.substr(comma + 1));
+  const std::string rest = comma == std::string::npos ? "" : spec.substr(comma + 1);
+  const int contacts = rest.empty() ? 4 : std::stoi(rest);
+  if (rest.find(",qp") != std::string::npos) return CallgrindQpRun(solves, contacts);
   const auto& grasps = Grasps(contacts);
   const auto solver = MakeSolver(SolverKind::kGeometric);
   PlanningWorkspace workspace;

@@ -1,18 +1,24 @@
 #!/usr/bin/env bash
 # Instructions per call of a bench's out-of-line timed function, by callgrind
 # (for machines where perf_event_open is refused, as in containers).
-#   scripts/count_instructions.sh [CONTACTS] [SOLVES]
+#   scripts/count_instructions.sh [CONTACTS] [SOLVES] [qp]
 # defaults: 4 contacts, 640 solves (each of planner_bench's 64 grasps 10
-# times, after a warm-up pass) through the workspace path.
+# times, after a warm-up pass) through the workspace path; with "qp", only
+# the FE-plane QPs of the same grasps (TimedQpSolve).
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 contacts="${1:-4}"
 solves="${2:-640}"
 function=TimedWorkspaceSolve
+run="$solves,$contacts"
+if [[ "${3:-}" == qp ]]; then
+  function=TimedQpSolve
+  run="$run,qp"
+fi
 out="$(mktemp -d)"
 valgrind --tool=callgrind --callgrind-out-file="$out/cg.out" \
   --toggle-collect="*${function}*" build/bin/planner_bench \
-  --callgrind-run="$solves,$contacts" >/dev/null 2>&1
+  --callgrind-run="$run" >/dev/null 2>&1
 python3 - "$out/cg.out" "$function" "$solves" <<'PY'
 import sys
 path, function, solves = sys.argv[1], sys.argv[2], int(sys.argv[3])

@@ -24,9 +24,11 @@ using Eigen::VectorXd;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// Rotation (c, s) with [c s; -s c] [a; b] = [h; 0].
+// Rotation (c, s) with [c s; -s c] [a; b] = [h; 0]. sqrt(a^2 + b^2) unless
+// that would over- or underflow (std::hypot costs several times more).
 void Givens(double a, double b, double* c, double* s, double* h) {
-  *h = std::hypot(a, b);
+  const double h2 = a * a + b * b;
+  *h = (h2 > 1e-290 && h2 < 1e290) ? std::sqrt(h2) : std::hypot(a, b);
   if (*h == 0.0) {
     *c = 1.0;
     *s = 0.0;
@@ -36,18 +38,45 @@ void Givens(double a, double b, double* c, double* s, double* h) {
   }
 }
 
+// The row structure applies when `in_matrix` has no rows and the structure
+// describes exactly the rows of `in_rhs` (a workspace's DenseQp reused by a
+// caller that fills `in_matrix` keeps stale structure, which is then ignored).
+bool UsesRowStructure(const DenseQp& qp) {
+  const Eigen::Index m = qp.in_rhs.size();
+  const std::vector<int>& first = qp.in_block_first;
+  if (qp.in_matrix.rows() != 0 || m == 0 || qp.in_directions.rows() != m || first.size() < 2 ||
+      qp.in_block_maps.cols() != qp.gradient.size() ||
+      qp.in_block_maps.rows() != 3 * static_cast<Eigen::Index>(first.size() - 1) ||
+      first.front() != 0 || first.back() != m) {
+    return false;
+  }
+  return std::is_sorted(first.begin(), first.end());
+}
+
 // The iterate and the factorisation of one solve. Up to MaxN variables they
 // live in fixed-capacity storage on the stack, whose small products Eigen
 // evaluates inline; beyond that, in the DenseQpWorkspace (WorkspaceFactors).
 template <int MaxN>
 struct SmallFactors {
+  static constexpr int kN = 0;  // the size is known at run time only
   using Matrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, MaxN, MaxN>;
   using Vector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, MaxN, 1>;
   Matrix J, R;  // n x n
   Vector x, d, z, r, u, hx;
 };
 
+// Exactly N variables (the FE-plane sizes 1..12 of 2..6 contacts): every
+// loop over the variables has a compile-time trip count, so the compiler
+// unrolls and vectorises the O(n^2) updates.
+template <int N>
+struct FixedFactors {
+  static constexpr int kN = N;
+  Eigen::Matrix<double, N, N> J, R;
+  Eigen::Matrix<double, N, 1> x, d, z, r, u, hx;
+};
+
 struct WorkspaceFactors {
+  static constexpr int kN = 0;
   explicit WorkspaceFactors(DenseQpWorkspace& w)
       : J(w.J), R(w.R), x(w.x), d(w.d), z(w.z), r(w.r), u(w.u), hx(w.hx) {}
   MatrixXd &J, &R;
@@ -64,14 +93,26 @@ class ActiveSetSolver {
                   Factors* factors)
       : qp_(qp), settings_(settings), w_(*ws), f_(*factors),
         n_(static_cast<int>(qp.gradient.size())), p_(static_cast<int>(qp.eq_matrix.rows())),
-        m_(static_cast<int>(qp.in_matrix.rows())) {}
+        structured_(UsesRowStructure(qp)),
+        m_(static_cast<int>(structured_ ? qp.in_directions.rows() : qp.in_matrix.rows())) {}
 
   void Run(DenseQpResult* out);
 
  private:
   // Constraint k of the stacked set (equalities first, then inequalities),
-  // as a contiguous column of the normals.
+  // as a contiguous column of the normals (after EnsureNormal(k)).
   auto Normal(int k) const { return w_.normals.col(k); }
+  // Forms the normal of constraint k and its norm, once per solve.
+  void EnsureNormal(int k);
+  // The norms of every structured row's normal, without forming them.
+  void StructuredNorms();
+  // slack = b - A x of every inequality row (dense rows), into w_.slack.
+  void ScanRows();
+  // The same for structured rows, block by block.
+  void ScanBlocks();
+  // Most violated row of w_.slack in [begin, end), if worse than *worst_ratio.
+  void SelectRows(int begin, int end, double x_norm, int* worst, double* worst_ratio);
+
   double Slack(int k) const { return w_.rhs(k) - w_.normals.col(k).dot(f_.x); }
   double Scale(int k) const {
     return std::max({1.0, std::abs(w_.rhs(k)), w_.normal_norms(k) * f_.x.norm()});
@@ -101,7 +142,17 @@ class ActiveSetSolver {
   const DenseQpSettings& settings_;
   DenseQpWorkspace& w_;
   Factors& f_;
-  const int n_, p_, m_;
+  // The number of variables, a compile-time constant for FixedFactors.
+  int N() const {
+    if constexpr (Factors::kN > 0) {
+      return Factors::kN;
+    } else {
+      return n_;
+    }
+  }
+  const int n_, p_;
+  const bool structured_;
+  const int m_;
   int iterations_ = 0;
 };
 
@@ -112,19 +163,19 @@ void ActiveSetSolver<Factors>::Directions(int k) {
   const int q = Active();
   const double* a = w_.normals.col(k).data();
   // d = J^T a
-  for (int i = 0; i < n_; ++i) {
+  for (int i = 0; i < N(); ++i) {
     const double* column = f_.J.col(i).data();
     double sum = 0.0;
-    for (int row = 0; row < n_; ++row) sum += column[row] * a[row];
+    for (int row = 0; row < N(); ++row) sum += column[row] * a[row];
     f_.d(i) = sum;
   }
   // z = J_2 d_2 (the columns after the active ones)
   double* z = f_.z.data();
-  std::fill(z, z + n_, 0.0);
-  for (int c = q; c < n_; ++c) {
+  std::fill(z, z + N(), 0.0);
+  for (int c = q; c < N(); ++c) {
     const double dc = f_.d(c);
     const double* column = f_.J.col(c).data();
-    for (int row = 0; row < n_; ++row) z[row] += dc * column[row];
+    for (int row = 0; row < N(); ++row) z[row] += dc * column[row];
   }
   // r = R^-1 d_1 (R upper triangular, q x q): back substitution
   for (int i = q - 1; i >= 0; --i) {
@@ -139,13 +190,13 @@ void ActiveSetSolver<Factors>::AddToFactorization() {
   const int q = Active();  // before adding
   auto& d = f_.d;
   auto& J = f_.J;
-  for (int j = n_ - 1; j > q; --j) {
+  for (int j = N() - 1; j > q; --j) {
     double c, s, h;
     Givens(d(j - 1), d(j), &c, &s, &h);
     if (s == 0.0) continue;
     d(j - 1) = h;
     d(j) = 0.0;
-    for (int row = 0; row < n_; ++row) {
+    for (int row = 0; row < N(); ++row) {
       const double a = J(row, j - 1), b = J(row, j);
       J(row, j - 1) = c * a + s * b;
       J(row, j) = -s * a + c * b;
@@ -178,7 +229,7 @@ void ActiveSetSolver<Factors>::DropFromFactorization(int position) {
       R(j, col) = c * a + s * b;
       R(j + 1, col) = -s * a + c * b;
     }
-    for (int row = 0; row < n_; ++row) {
+    for (int row = 0; row < N(); ++row) {
       const double a = J(row, j), b = J(row, j + 1);
       J(row, j) = c * a + s * b;
       J(row, j + 1) = -s * a + c * b;
@@ -189,39 +240,153 @@ void ActiveSetSolver<Factors>::DropFromFactorization(int position) {
 }
 
 template <class Factors>
+void ActiveSetSolver<Factors>::EnsureNormal(int k) {
+  if (w_.has_normal[k]) return;
+  double* normal = w_.normals.col(k).data();
+  if (k < p_) {
+    for (int j = 0; j < N(); ++j) normal[j] = qp_.eq_matrix(k, j);
+  } else if (structured_) {  // its norm is already known (StructuredNorms)
+    const int row = k - p_;
+    const auto& first = qp_.in_block_first;
+    const int block = static_cast<int>(std::upper_bound(first.begin(), first.end(), row) -
+                                       first.begin()) - 1;
+    const double a0 = qp_.in_directions(row, 0), a1 = qp_.in_directions(row, 1),
+                 a2 = qp_.in_directions(row, 2);
+    for (int j = 0; j < N(); ++j) {
+      const double* map = qp_.in_block_maps.col(j).data() + 3 * block;
+      normal[j] = a0 * map[0] + a1 * map[1] + a2 * map[2];
+    }
+    w_.has_normal[k] = 1;
+    return;
+  } else {
+    for (int j = 0; j < N(); ++j) normal[j] = qp_.in_matrix(k - p_, j);
+  }
+  w_.normal_norms(k) = w_.normals.col(k).norm();
+  w_.has_normal[k] = 1;
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::StructuredNorms() {
+  // |M_b^T a|^2 = a^T (M_b M_b^T) a: one 3x3 Gram matrix per block.
+  const int blocks = static_cast<int>(qp_.in_block_maps.rows()) / 3;
+  w_.block_values.resize(6 * blocks);
+  double* gram = w_.block_values.data();
+  std::fill(gram, gram + 6 * blocks, 0.0);
+  for (int j = 0; j < N(); ++j) {
+    const double* column = qp_.in_block_maps.col(j).data();
+    for (int b = 0; b < blocks; ++b) {
+      const double* c = column + 3 * b;
+      double* g = gram + 6 * b;
+      g[0] += c[0] * c[0];
+      g[1] += c[0] * c[1];
+      g[2] += c[0] * c[2];
+      g[3] += c[1] * c[1];
+      g[4] += c[1] * c[2];
+      g[5] += c[2] * c[2];
+    }
+  }
+  const double* ax = qp_.in_directions.col(0).data();
+  const double* ay = qp_.in_directions.col(1).data();
+  const double* az = qp_.in_directions.col(2).data();
+  double* norms = w_.normal_norms.data() + p_;
+  for (int b = 0; b < blocks; ++b) {
+    const double* g = gram + 6 * b;
+    for (int i = qp_.in_block_first[b]; i < qp_.in_block_first[b + 1]; ++i) {
+      const double q = ax[i] * (g[0] * ax[i] + 2.0 * (g[1] * ay[i] + g[2] * az[i])) +
+                       ay[i] * (g[3] * ay[i] + 2.0 * g[4] * az[i]) + az[i] * g[5] * az[i];
+      norms[i] = std::sqrt(std::max(0.0, q));
+    }
+  }
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::ScanRows() {
+  double* __restrict slack = w_.slack.data();
+  const double* __restrict b = qp_.in_rhs.data();
+  // slack = b - A x, column by column (A is m x n, column-major)
+  std::copy(b, b + m_, slack);
+  for (int j = 0; j < N(); ++j) {
+    const double xj = f_.x(j);
+    const double* __restrict column = qp_.in_matrix.col(j).data();
+    for (int i = 0; i < m_; ++i) slack[i] -= xj * column[i];
+  }
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::ScanBlocks() {
+  // Per block: y = M_b x (3 N products, unrolled for FixedFactors), then 3
+  // products per row. (Skipping blocks whose rows provably stay satisfied,
+  // by |a_r| |y_b - y_ref|, was tried: on the planner's grasps nearly every
+  // block holds an active or nearly active row, and the test cost more.)
+  const int values = static_cast<int>(qp_.in_block_maps.rows());
+  const double* __restrict ax = qp_.in_directions.col(0).data();
+  const double* __restrict ay = qp_.in_directions.col(1).data();
+  const double* __restrict az = qp_.in_directions.col(2).data();
+  const double* __restrict b = qp_.in_rhs.data();
+  double* __restrict slack = w_.slack.data();
+  const double* __restrict x = f_.x.data();
+  const int blocks = values / 3;
+  for (int block = 0; block < blocks; ++block) {
+    const double* __restrict map = qp_.in_block_maps.data() + 3 * block;
+    double y0 = 0.0, y1 = 0.0, y2 = 0.0;
+    for (int j = 0; j < N(); ++j) {
+      const double* column = map + j * values;
+      y0 += x[j] * column[0];
+      y1 += x[j] * column[1];
+      y2 += x[j] * column[2];
+    }
+    const int first = qp_.in_block_first[block], end = qp_.in_block_first[block + 1];
+    for (int i = first; i < end; ++i) {
+      slack[i] = b[i] - (ax[i] * y0 + ay[i] * y1 + az[i] * y2);
+    }
+  }
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::SelectRows(int begin, int end, double x_norm, int* worst,
+                                          double* worst_ratio) {
+  // Relative violation: slack / max(1, |b|, |a| |x|).
+  const double* slack = w_.slack.data();
+  const double* bound = w_.slack_bound.data();
+  for (int i = begin; i < end; ++i) {
+    // The ratio's denominator is at least max(1, |b|): rows above this
+    // bound are not violated, and need no normal.
+    if (slack[i] >= bound[i]) continue;
+    const int k = p_ + i;
+    if (w_.is_active[k]) continue;
+    if (!structured_) EnsureNormal(k);
+    const double ratio =
+        slack[i] / std::max({1.0, std::abs(w_.rhs(k)), w_.normal_norms(k) * x_norm});
+    if (ratio < *worst_ratio) {
+      *worst_ratio = ratio;
+      *worst = k;
+    }
+  }
+}
+
+template <class Factors>
 int ActiveSetSolver<Factors>::MostViolated() {
   // Relative violation: slack / max(1, |b|, |a| |x|).
   const double x_norm = f_.x.norm();
+  const double tol = settings_.tolerance;
   auto violation = [&](int k, double slack) {
     return slack / std::max({1.0, std::abs(w_.rhs(k)), w_.normal_norms(k) * x_norm});
   };
   for (int row : settings_.warm_start) {
     const int k = p_ + row;
-    if (row >= 0 && row < m_ && !w_.is_active[k] &&
-        violation(k, Slack(k)) < -settings_.tolerance)
-      return k;
-  }
-  if (m_ == 0) return -1;
-  // slack = b - A x, column by column (A is m x n, column-major)
-  double* __restrict slack = w_.slack.data();
-  const double* __restrict b = qp_.in_rhs.data();
-  std::copy(b, b + m_, slack);
-  for (int j = 0; j < n_; ++j) {
-    const double xj = f_.x(j);
-    const double* __restrict column = qp_.in_matrix.col(j).data();
-    for (int i = 0; i < m_; ++i) slack[i] -= xj * column[i];
+    if (row < 0 || row >= m_ || w_.is_active[k]) continue;
+    EnsureNormal(k);
+    if (violation(k, Slack(k)) < -tol) return k;
   }
   int worst = -1;
-  double worst_ratio = -settings_.tolerance;
-  for (int i = 0; i < m_; ++i) {
-    const int k = p_ + i;
-    if (slack[i] >= 0.0 || w_.is_active[k]) continue;
-    const double ratio = violation(k, slack[i]);
-    if (ratio < worst_ratio) {
-      worst_ratio = ratio;
-      worst = k;
-    }
+  double worst_ratio = -tol;
+  if (m_ == 0) return worst;
+  if (structured_) {
+    ScanBlocks();
+  } else {
+    ScanRows();
   }
+  SelectRows(0, m_, x_norm, &worst, &worst_ratio);
   return worst;
 }
 
@@ -254,26 +419,29 @@ void ActiveSetSolver<Factors>::Finish(DenseQpStatus status, int blocking, DenseQ
 template <class Factors>
 bool ActiveSetSolver<Factors>::Initialize() {
   w_.is_active.assign(p_ + m_, 0);
+  w_.has_normal.assign(p_ + m_, 0);
   w_.active.clear();
-  w_.active.reserve(n_ + 1);
-  w_.normals.resize(n_, p_ + m_);
-  if (p_ > 0) w_.normals.leftCols(p_) = qp_.eq_matrix.transpose();
-  if (m_ > 0) w_.normals.rightCols(m_) = qp_.in_matrix.transpose();
+  w_.active.reserve(N() + 1);
+  w_.normals.resize(N(), p_ + m_);
   w_.rhs.resize(p_ + m_);
   w_.rhs.head(p_) = qp_.eq_rhs;
   w_.rhs.tail(m_) = qp_.in_rhs;
   w_.normal_norms.resize(p_ + m_);
-  for (int k = 0; k < p_ + m_; ++k) w_.normal_norms(k) = w_.normals.col(k).norm();
   w_.slack.resize(m_);
-  f_.x.resize(n_);
-  f_.d.resize(n_);
-  f_.z.resize(n_);
-  f_.r.resize(n_);
-  f_.u.resize(n_);
-  f_.hx.resize(n_);
-  f_.R.setZero(n_, n_);
+  w_.slack_bound.resize(m_);
+  for (int i = 0; i < m_; ++i) {
+    w_.slack_bound(i) = -settings_.tolerance * std::max(1.0, std::abs(qp_.in_rhs(i)));
+  }
+  if (structured_) StructuredNorms();
+  f_.x.resize(N());
+  f_.d.resize(N());
+  f_.z.resize(N());
+  f_.r.resize(N());
+  f_.u.resize(N());
+  f_.hx.resize(N());
+  f_.R.setZero(N(), N());
   if (qp_.identity_hessian) {  // L = I: J = I, x = -g
-    f_.J.setIdentity(n_, n_);
+    f_.J.setIdentity(N(), N());
     f_.x = -qp_.gradient;
     return true;
   }
@@ -283,7 +451,7 @@ bool ActiveSetSolver<Factors>::Initialize() {
     return false;
   }
   // J = L^-T; unconstrained minimum x = -H^-1 g.
-  f_.J.setIdentity(n_, n_);
+  f_.J.setIdentity(N(), N());
   w_.llt.matrixU().solveInPlace(f_.J);
   f_.x = -qp_.gradient;
   w_.llt.solveInPlace(f_.x);
@@ -294,6 +462,7 @@ template <class Factors>
 int ActiveSetSolver<Factors>::AddEqualities() {
   const double tol = settings_.tolerance;
   for (int k = 0; k < p_; ++k) {
+    EnsureNormal(k);
     Directions(k);
     const double zn = f_.z.dot(Normal(k));
     if (f_.z.norm() <= tol * std::max(1.0, Normal(k).norm()) || std::abs(zn) <= tol) {
@@ -331,6 +500,7 @@ template <class Factors>
 std::optional<DenseQpStatus> ActiveSetSolver<Factors>::AddInequality(int k, int max_iterations) {
   const double tol = settings_.tolerance;
   double u_new = 0.0;  // multiplier of the constraint being added
+  EnsureNormal(k);
   while (true) {
     if (++iterations_ > max_iterations) return DenseQpStatus::kIterationLimit;
     Directions(k);
@@ -366,7 +536,7 @@ template <class Factors>
 void ActiveSetSolver<Factors>::Run(DenseQpResult* out) {
   if (!Initialize()) return Finish(DenseQpStatus::kNumericalError, -1, out);
   const int max_iterations =
-      settings_.max_iterations > 0 ? settings_.max_iterations : 5 * (n_ + m_ + p_) + 20;
+      settings_.max_iterations > 0 ? settings_.max_iterations : 5 * (N() + m_ + p_) + 20;
   // Equalities first: each becomes active with a multiplier of either sign.
   if (const int inconsistent = AddEqualities(); inconsistent >= 0) {
     return Finish(DenseQpStatus::kInfeasible, inconsistent, out);
@@ -386,14 +556,26 @@ void Solve(const DenseQp& qp, const DenseQpSettings& settings, DenseQpWorkspace*
   ActiveSetSolver<Factors>(qp, settings, workspace, factors).Run(result);
 }
 
+template <int N>
+void SolveFixed(const DenseQp& qp, const DenseQpSettings& settings, DenseQpWorkspace* workspace,
+                DenseQpResult* result) {
+  FixedFactors<N> factors;
+  Solve(qp, settings, workspace, &factors, result);
+}
+
 }  // namespace
 
 void SolveDenseQp(const DenseQp& qp, const DenseQpSettings& settings,
                   DenseQpWorkspace* workspace, DenseQpResult* result) {
+  using FixedSolve = void (*)(const DenseQp&, const DenseQpSettings&, DenseQpWorkspace*,
+                              DenseQpResult*);
+  static constexpr FixedSolve kFixed[] = {
+      nullptr,        &SolveFixed<1>, &SolveFixed<2>, &SolveFixed<3>,  &SolveFixed<4>,
+      &SolveFixed<5>, &SolveFixed<6>, &SolveFixed<7>, &SolveFixed<8>,  &SolveFixed<9>,
+      &SolveFixed<10>, &SolveFixed<11>, &SolveFixed<12>};
   const int n = static_cast<int>(qp.gradient.size());
-  if (n <= 8) {
-    SmallFactors<8> factors;
-    Solve(qp, settings, workspace, &factors, result);
+  if (n >= 1 && n <= 12) {
+    kFixed[n](qp, settings, workspace, result);
   } else if (n <= 16) {
     SmallFactors<16> factors;
     Solve(qp, settings, workspace, &factors, result);

@@ -22,16 +22,44 @@ std::string DescribeActive(const PreparedProblem& prepared, const std::vector<in
   return out;
 }
 
-// min 0.5 |x|^2 + (B^T f0)^T x  s.t. (A B) x <= d - A f0.
+// Below this many FE-plane coordinates a dense row (d numbers) is as cheap
+// to scan as the row structure (3 per row plus 3 d per contact).
+constexpr int kMinStructuredCoordinates = 3;
+
+// min 0.5 |x|^2 + (B^T f0)^T x  s.t. (A B) x <= d - A f0. From 3
+// coordinates on, in the QP's row structure: row r of contact i is its
+// direction a_r applied to B_i x (B_i: the contact's three rows of B), so
+// A B is never formed.
 void FillPlaneQp(const PreparedProblem& prepared, DenseQp* qp) {
   const ForceEquilibrium& eq = prepared.equilibrium;
+  const ConstraintRows& rows = prepared.rows;
   const int d = static_cast<int>(eq.null_basis.cols());
+  const int m = static_cast<int>(rows.info.size());
   qp->identity_hessian = true;
   qp->hessian.resize(0, 0);
   qp->gradient.noalias() = eq.null_basis.transpose() * eq.particular;  // zero up to round-off
   qp->eq_matrix.resize(0, d);
   qp->eq_rhs.resize(0);
-  RowsOnPlane(prepared.rows, eq, &qp->in_matrix, &qp->in_rhs);
+  if (d < kMinStructuredCoordinates) {
+    qp->in_directions.resize(0, 3);
+    RowsOnPlane(rows, eq, &qp->in_matrix, &qp->in_rhs);
+    return;
+  }
+  qp->in_matrix.resize(0, d);
+  qp->in_block_maps = eq.null_basis;
+  qp->in_directions.resize(m, 3);
+  qp->in_block_first.assign(prepared.num_contacts() + 1, m);
+  qp->in_rhs.resize(m);
+  const double* f0 = eq.particular.data();
+  // A contact's rows are consecutive (BuildConstraintRows), and every
+  // contact has at least its minimum-normal-force row.
+  for (int r = m - 1; r >= 0; --r) qp->in_block_first[rows.info[r].contact] = r;
+  for (int r = 0; r < m; ++r) {
+    const int i = rows.info[r].contact;
+    const auto a = rows.matrix.block<1, 3>(r, 3 * i);
+    qp->in_directions.row(r) = a;
+    qp->in_rhs(r) = rows.rhs(r) - (a(0) * f0[3 * i] + a(1) * f0[3 * i + 1] + a(2) * f0[3 * i + 2]);
+  }
 }
 
 class GeometricSolver final : public ForceSolver {

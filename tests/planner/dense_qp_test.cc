@@ -2,6 +2,7 @@
 // optimality independently of any other solver.
 #include "tactforce/planner/dense_qp.h"
 
+#include <algorithm>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -108,6 +109,73 @@ TEST(DenseQp, WarmStartGivesTheSameAnswerInFewerIterations) {
     warm_iterations += warm.iterations;
   }
   EXPECT_LE(warm_iterations, cold_iterations);
+}
+
+// The row structure (a_r applied to M_b x) against the same rows as a dense
+// matrix: identical statuses, answers to round-off, the same blocking row.
+// Sizes, blocks and warm starts are drawn from the seed; some problems get an
+// infeasible pair of rows.
+TEST(DenseQp, RowStructureAnswersAsTheDenseRows) {
+  std::mt19937 rng(2029);
+  std::normal_distribution<double> normal;
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  int infeasible = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const int n = 1 + trial % 14;  // covers the fixed sizes 1..12 and beyond
+    const int blocks = 1 + static_cast<int>(uniform(rng) * 6);
+    DenseQp structured;
+    structured.identity_hessian = true;
+    structured.gradient = VectorXd::NullaryExpr(n, [&] { return 3.0 * normal(rng); });
+    structured.eq_matrix.resize(0, n);
+    structured.in_block_maps = MatrixXd::NullaryExpr(3 * blocks, n, [&] { return normal(rng); });
+    structured.in_block_first = {0};
+    for (int b = 0; b < blocks; ++b) {
+      structured.in_block_first.push_back(structured.in_block_first.back() + 1 +
+                                          static_cast<int>(uniform(rng) * 8));
+    }
+    const int m = structured.in_block_first.back();
+    structured.in_directions = Eigen::MatrixX3d::NullaryExpr(m, 3, [&] { return normal(rng); });
+    DenseQp dense = structured;
+    dense.in_matrix.resize(m, n);
+    for (int b = 0; b < blocks; ++b) {
+      for (int r = structured.in_block_first[b]; r < structured.in_block_first[b + 1]; ++r) {
+        dense.in_matrix.row(r) =
+            structured.in_directions.row(r) * structured.in_block_maps.middleRows(3 * b, 3);
+      }
+    }
+    const VectorXd feasible = VectorXd::NullaryExpr(n, [&] { return normal(rng); });
+    structured.in_rhs = dense.in_matrix * feasible;
+    for (int i = 0; i < m; ++i) structured.in_rhs(i) += uniform(rng);
+    if (trial % 5 == 4 && m >= 2) {  // row 1 = -row 0 with rhs making them inconsistent
+      const int b0 = 0;
+      if (structured.in_block_first[b0 + 1] >= 2) {
+        structured.in_directions.row(1) = -structured.in_directions.row(0);
+        dense.in_matrix.row(1) = -dense.in_matrix.row(0);
+        structured.in_rhs(1) = -structured.in_rhs(0) - 1.0;
+      }
+    }
+    dense.in_rhs = structured.in_rhs;
+    dense.in_directions.resize(0, 3);
+    const DenseQpResult a = SolveDenseQp(structured);
+    const DenseQpResult b = SolveDenseQp(dense);
+    ASSERT_EQ(a.status, b.status) << trial;
+    if (a.status == DenseQpStatus::kInfeasible) {
+      ++infeasible;
+      EXPECT_GE(a.blocking_row, 0) << trial;
+      continue;
+    }
+    ASSERT_EQ(a.status, DenseQpStatus::kOptimal) << trial;
+    EXPECT_LE((a.x - b.x).cwiseAbs().maxCoeff(), 1e-9 * std::max(1.0, b.x.norm())) << trial;
+    DenseQp check = dense;
+    check.hessian = MatrixXd::Identity(n, n);
+    ExpectKkt(check, a, 1e-8);
+    // Warm-started from the answer: the same point.
+    DenseQpSettings settings;
+    settings.warm_start = a.active_set;
+    const DenseQpResult warm = SolveDenseQp(structured, settings);
+    EXPECT_LE((warm.x - a.x).cwiseAbs().maxCoeff(), 1e-9 * std::max(1.0, a.x.norm())) << trial;
+  }
+  EXPECT_GT(infeasible, 0);
 }
 
 TEST(DenseQp, DetectsInfeasibilityAndNamesTheRow) {

@@ -28,6 +28,17 @@ struct DenseQp {
   Eigen::VectorXd eq_rhs;
   Eigen::MatrixXd in_matrix;  // m x n (may have 0 rows)
   Eigen::VectorXd in_rhs;
+  // Optional row structure (the geometric planner's), used when `in_matrix`
+  // has no rows, `in_directions` has one row per entry of `in_rhs` and
+  // `in_block_first` splits them into consecutive blocks (else ignored): the
+  // rows of block b are [in_block_first[b], in_block_first[b + 1]), and row r
+  // of it is the 3-vector a_r = in_directions.row(r) applied to the three
+  // values y_b = M_b x, M_b = in_block_maps.middleRows<3>(3 b); its normal is
+  // M_b^T a_r. A scan of all rows then costs 3 n per block and 3 per row
+  // instead of n per row, and a normal is formed only for a row that enters.
+  Eigen::Matrix<double, Eigen::Dynamic, 3> in_directions;  // m x 3
+  std::vector<int> in_block_first;  // blocks + 1, from 0 to m
+  Eigen::MatrixXd in_block_maps;    // 3 blocks x n
   // H = I (`hessian` is then ignored): the minimum-norm point of a polytope,
   // the geometric planner's case. Starts from J = I with no factorisation.
   bool identity_hessian = false;
@@ -61,10 +72,13 @@ struct DenseQpResult {
 // inequalities), reused from solve to solve. One per thread; contents are
 // scratch between solves.
 struct DenseQpWorkspace {
-  Eigen::MatrixXd normals;      // n x (p + m): constraint normals as columns
+  Eigen::MatrixXd normals;      // n x (p + m): constraint normals as columns, formed on demand
   Eigen::VectorXd rhs;          // p + m
-  Eigen::VectorXd normal_norms; // p + m
+  Eigen::VectorXd normal_norms; // p + m (where formed)
+  std::vector<char> has_normal; // p + m: column formed in this solve
   Eigen::VectorXd slack;        // m
+  Eigen::VectorXd slack_bound;  // m: -tolerance max(1, |b|), below which a row may be violated
+  Eigen::VectorXd block_values; // 6 blocks: per-block Gram M_b M_b^T (structured rows)
   Eigen::VectorXd x, d, z, r, u;  // n each (r, u: leading q entries used)
   Eigen::MatrixXd J, R;         // n x n
   Eigen::VectorXd hx;           // n: H x, for the objective
