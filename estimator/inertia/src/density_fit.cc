@@ -455,9 +455,9 @@ MeshDistance DistanceToRealizable(const MatrixXd& C, const Vector10d& xf, const 
     *value = r.dot(w.asDiagonal() * r) - nu * threshold;
     return s;
   };
-  double lo = 1e-30, hi = 1.0, value = 0;
+  // Bracket the root of the slope around 1 / (largest eigenvalue), then bisect in log nu.
   const double amax = std::max(a.maxCoeff(), 1e-300);
-  lo = 1e-6 / amax, hi = 1e6 / amax;
+  double lo = 1e-6 / amax, hi = 1e6 / amax, value = 0;
   while (slope(hi, &value) > 0 && hi < 1e300 && !poll->stopped()) lo = hi, hi *= 1e6;
   while (slope(lo, &value) < 0 && lo > 1e-300 && !poll->stopped()) hi = lo, lo *= 1e-6;
   for (int it = 0; it < 60 && !poll->stopped(); ++it) {
