@@ -362,8 +362,8 @@ void AddMeshFlags(CLI::App* cmd, InertiaArgs& args) {
       ->type_name("W")
       ->needs(mesh);
   cmd->add_option("--contradiction-ratio", args.contradiction_ratio,
-                  "density: reject the mesh when its held-out residual exceeds constrained's by this factor "
-                  "(default 1.2; 0 disables)")
+                  "density: 0 disables the mesh test (any positive value enables it; default 1.2); the mesh is "
+                  "rejected when every density it can carry is > 0.03 (Riemannian) from what the data allow")
       ->type_name("R")
       ->needs(mesh);
   cmd->add_option("--plot", args.plot_path,

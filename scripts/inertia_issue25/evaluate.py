@@ -1,7 +1,7 @@
 # Issue 25 items 2 and 3 (estimator/inertia/README.md): DENSITY's contradiction test on correct
 # meshes (false alarms) and wrong ones (detection), and the 15 checks of estimated regressor noise.
 # Run from the repository root after building tactforce:
-#   python3 scripts/inertia_issue25/evaluate.py false|detect|noise
+#   python3 scripts/inertia_issue25/evaluate.py false|detect|noise|excess
 # Writes its noisy CSVs and simulations under /tmp/inertia25.
 import subprocess, json, re, os, sys, statistics
 B = 'build/bin/tactforce'; S = '../shared/data/inertia'; T = '/tmp/inertia25'
@@ -15,7 +15,9 @@ def run(args):
     out = r.stdout + r.stderr
     m = re.search(r'Riemannian distance ([0-9.e+-]+|inf)', out)
     sig = dict(re.findall(r'measured (angular acceleration|acceleration) noise: sigma ([0-9.e+-]+)', out))
-    return {'contradicted': 'the data contradict the mesh' in out, 'riem': float(m.group(1)) if m else None, 'sig': sig, 'rc': r.returncode, 'out': out}
+    d = re.search(r'mesh test: the densities this mesh can carry are ([0-9.e+-]+) .*?least chi\^2 excess ([0-9.e+-]+)', out)
+    return {'distance': float(d.group(1)) if d else None, 'excess': float(d.group(2)) if d else None,
+            'contradicted': 'the data contradict the mesh' in out, 'riem': float(m.group(1)) if m else None, 'sig': sig, 'rc': r.returncode, 'out': out}
 def noisy(tool, level, seed, pm=None):
     path = f'{T}/{tool}_{level}_{seed}' + ('_pm' if pm else '') + '.csv'
     sa, sdw, sf, st = LEVELS.get(level, (0, 0, 0, 0))
@@ -70,6 +72,20 @@ elif what == 'detect':
                 cells.append(f'{hits}/{len(seeds)}' + ('' if pm else f' ({worst:.3g})'))
             print(f'| {kind} | {level} | ' + ' | '.join(cells) + ' |')
     for k, (h, n) in det.items(): print(f'detected {k}: {h}/{n} = {100*h/n:.0f} %')
+elif what == 'excess':
+    # The mesh test's numbers on the same noisy data: the right mesh against each wrong one. A wrong mesh
+    # whose least chi^2 excess is within the right mesh's range is not distinguishable on these data.
+    print('| tool | seed | right mesh | scale 1.05 | shift 1 cm (x) | point mass 10 % (right mesh) |')
+    print('|---|---|---|---|---|---|')
+    for tool in TOOLS:
+        for seed in (1, 2, 3):
+            csv = noisy(tool, 'moderate', seed); m = f'{S}/{tool}.mesh.json'
+            lo, hi = bbox(tool); ext = [hi[i] - lo[i] for i in range(3)]; ax = ext.index(max(ext))
+            p = [(lo[i] + hi[i]) / 2 for i in range(3)]; p[ax] = hi[ax] + 0.02
+            rs = [run(['--csv', csv, '--mesh', m]), run(['--csv', csv, '--mesh', m, '--mesh-scale', '0.00105']),
+                  run(['--csv', csv, '--mesh', mesh_json(tool, 0.01)]),
+                  run(['--csv', noisy(tool, 'moderate', seed, [0.1 * truth(tool)['mass']] + p), '--mesh', m])]
+            print(f'| {tool} | {seed} | ' + ' | '.join('%.3g / %.3g%s' % (r['excess'], r['distance'], ' FLAGGED' if r['contradicted'] else '') for r in rs) + ' |')
 elif what == 'noise':
     rows = []
     true = '--acceleration-sigma 0.05 --angular-acceleration-sigma 0.5 --force-sigma 0.1 --torque-sigma 0.005'.split()

@@ -367,8 +367,9 @@ TEST(DensityFit, DetectsMeshesTheDataContradict) {
       absl::StatusOr<InertiaFit> fit = FitInertia(sim->samples, o);
       ASSERT_TRUE(fit.ok()) << fit.status();
       if (c == 2 && !fit->mesh_contradicted) {
-        // A move the regions absorb is below the physical floor (fit.cc):
-        // then the density answer itself is that close to the truth.
+        // A move the grid cells absorb (their densities still carry the
+        // data within the tolerance, fit.cc): then the density answer
+        // itself is that close to the truth.
         EXPECT_NEAR(fit->params.mass, cases[c].first->mass, 0.01 * cases[c].first->mass);
         EXPECT_LT((fit->params.com - cases[c].first->com).norm(), 0.03 * 0.314);
       }
@@ -384,9 +385,8 @@ TEST(DensityFit, DetectsMeshesTheDataContradict) {
   }
   EXPECT_EQ(flagged[0], 0) << "the right mesh was flagged";
   EXPECT_EQ(flagged[1], seeds) << "mesh scaled by 1.25";
-  // Moved by 2 cm: the grid cells shift their densities and the predicted
-  // wrenches differ like a 0.1 % mass error and a 0.3 mm CoM displacement,
-  // significant (z ~ 17) but below the physical floor, so not flagged.
+  // Moved by 2 cm: the grid cells shift their densities and still carry the
+  // data (a two-part mesh moved cannot: MeshTest.MovedTwoPartMeshIsFlagged).
   EXPECT_EQ(flagged[3], seeds) << "point mass outside the mesh";
 }
 
@@ -552,6 +552,34 @@ TEST(ContradictionFloor, WrongMeshAboveTheFloorIsFlagged) {
     absl::StatusOr<InertiaFit> fit = FitInertia(sim->samples, DensityOptions(mesh));
     ASSERT_TRUE(fit.ok()) << fit.status();
     EXPECT_TRUE(fit->mesh_contradicted) << (scale ? "scaled" : "point mass") << ", draw " << draw;
+  }
+}
+
+// A two-part CAD-like mesh (one colour per part, two free densities) moved
+// by a drawn 1-2 cm along a drawn axis, at a drawn noise level and no sigma
+// given: the parts' densities cannot carry the data's inertia, so the mesh
+// test flags it, and its note states the tolerance in mm.
+TEST(MeshTest, MovedTwoPartMeshIsFlagged) {
+  std::mt19937 rng(1207);
+  const TwoMaterialBox truth = MakeTwoMaterialBox(7800, 2700, true);
+  const char* levels[] = {"low", "moderate"};
+  for (int draw = 0; draw < 3; ++draw) {
+    const std::string level = levels[std::uniform_int_distribution<int>(0, 1)(rng)];
+    Vec3 move = Vec3::Zero();
+    move(std::uniform_int_distribution<int>(0, 2)(rng)) = std::uniform_real_distribution<double>(0.01, 0.02)(rng);
+    TriangleMesh moved = truth.mesh;
+    for (Vec3& v : moved.vertices) v += move;
+    absl::StatusOr<SimulationResult> sim = WristData(truth.params, level, 700 + draw);
+    ASSERT_TRUE(sim.ok()) << sim.status();
+    absl::StatusOr<InertiaFit> fit = FitInertia(sim->samples, DensityOptions(moved));
+    ASSERT_TRUE(fit.ok()) << fit.status();
+    EXPECT_TRUE(fit->mesh_contradicted) << level << ", moved by " << move.transpose() << "\n" << DescribeFit(*fit);
+    bool stated = false;
+    for (const std::string& n : fit->notes) stated |= n.find("tolerance 0.03") != std::string::npos && n.find(" mm along") != std::string::npos;
+    EXPECT_TRUE(stated) << DescribeFit(*fit);
+    // The answer is CONSTRAINED's: consistent, close in mass.
+    EXPECT_TRUE(fit->physically_consistent);
+    EXPECT_NEAR(fit->params.mass, truth.params.mass, 0.01 * truth.params.mass);
   }
 }
 

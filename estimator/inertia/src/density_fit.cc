@@ -10,6 +10,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
@@ -318,6 +319,188 @@ void HeldOutContradiction(const GlsData& gls, const DensityBasis& b, int folds, 
   out->heldout_z = var > 0 ? mean / std::sqrt(var / n) : (mean > 0 ? HUGE_VAL : 0.0);
 }
 
+// Pseudo-inertia [[Sigma, h], [h^T, m]] of standard parameters, Sigma the
+// second moment about the origin; and back. Both maps are linear.
+Eigen::Matrix4d PseudoOfStandard(const Vector10d& pi) {
+  Eigen::Matrix3d io;
+  io << pi(4), pi(7), pi(8), pi(7), pi(5), pi(9), pi(8), pi(9), pi(6);
+  Eigen::Matrix4d P;
+  P.topLeftCorner<3, 3>() = 0.5 * io.trace() * Eigen::Matrix3d::Identity() - io;
+  P.topRightCorner<3, 1>() = pi.segment<3>(1);
+  P.bottomLeftCorner<1, 3>() = pi.segment<3>(1).transpose();
+  P(3, 3) = pi(0);
+  return P;
+}
+Vector10d StandardOfPseudo(const Eigen::Matrix4d& P) {
+  const Eigen::Matrix3d sigma = P.topLeftCorner<3, 3>();
+  const Eigen::Matrix3d io = sigma.trace() * Eigen::Matrix3d::Identity() - sigma;
+  Vector10d pi;
+  pi << P(3, 3), P(0, 3), P(1, 3), P(2, 3), io(0, 0), io(1, 1), io(2, 2), io(0, 1), io(0, 2), io(1, 2);
+  return pi;
+}
+
+// Columns: the standard parameters of dP = S Z S for the 10 unit symmetric
+// Z (off-diagonal pairs 1/sqrt(2) each), S = P_ref^(1/2). Then |z| = |S^-1
+// dP S^-1|_F, the first-order affine-invariant (Riemannian) distance from
+// P_ref: a relative mass error dm/m, a CoM move dc_i/(sqrt(2) s_i) with s_i
+// the radius of gyration along axis i, relative second moments.
+Matrix10d WhitenedBasis(const Eigen::Matrix4d& p_ref) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> es(p_ref);
+  const double top = std::max(es.eigenvalues()(3), 1e-300);
+  const Eigen::Vector4d root = es.eigenvalues().cwiseMax(1e-12 * top).cwiseSqrt();
+  const Eigen::Matrix4d S = es.eigenvectors() * root.asDiagonal() * es.eigenvectors().transpose();
+  Matrix10d G;
+  int col = 0;
+  for (int i = 0; i < 4; ++i) {
+    for (int j = i; j < 4; ++j) {
+      Eigen::Matrix4d Z = Eigen::Matrix4d::Zero();
+      const double v = i == j ? 1.0 : std::sqrt(0.5);
+      Z(i, j) = v, Z(j, i) = v;
+      G.col(col++) = StandardOfPseudo(S * Z * S);
+    }
+  }
+  return G;
+}
+
+// Pseudo-inverse of a symmetric positive semi-definite matrix (eigenvalues
+// below 1e-14 of the largest dropped: round-off, not weak excitation).
+Matrix10d SymmetricPseudoInverse(const Matrix10d& M) {
+  Eigen::SelfAdjointEigenSolver<Matrix10d> es(0.5 * (M + M.transpose()));
+  const double top = std::max(es.eigenvalues()(9), 1e-300);
+  Vector10d inv;
+  for (int i = 0; i < 10; ++i) inv(i) = es.eigenvalues()(i) > 1e-14 * top ? 1 / es.eigenvalues()(i) : 0.0;
+  return es.eigenvectors() * inv.asDiagonal() * es.eigenvectors().transpose();
+}
+
+// The free GLS fit in the whitened coordinates z (pi = G z), re-weighted at
+// its own estimate (when the wrench noise is estimated from residuals, the
+// unrestricted model's residuals: right under both hypotheses, and a wrong
+// density cannot whiten away its own misfit): x_f and its information as a
+// sandwich A_z B_z^-1 A_z, B_z the spread of the scores of ~25-sample time
+// blocks, so that correlated (smoothed) rows, misjudged noise and the
+// errors-in-variables approximation do not make the ellipsoid too small
+// (with A_z alone the right mesh of a simulated box at 'high' noise was
+// 0.12 away).
+struct FreeFit {
+  Vector10d x;
+  Matrix10d A;
+};
+FreeFit FreeFitOwnWeights(const GlsData& gls, const DensityBasis& b, const Matrix10d& G, const Vector10d& pi0,
+                          InterruptPoll* poll) {
+  FreeFit f;
+  Vector10d pi = pi0;
+  const int n = static_cast<int>(gls.kin.size());
+  const int nblocks = std::max(10, n / 25);
+  for (int round = 0; round < 2; ++round) {
+    GlsSums sums;
+    std::vector<GlsSums> blocks;
+    AccumulateGls(gls, pi, poll, &sums, nblocks, &blocks);
+    if (poll->stopped()) return f;
+    bool corrected = false;
+    f.A = G.transpose() * BiasCorrected(sums, b.parameter_scale, &corrected) * G;
+    f.x = SymmetricPseudoInverse(f.A) * (G.transpose() * sums.b);
+    pi = G * f.x;
+    {  // sandwich: A B^-1 A with B the covariance of the block scores
+      Matrix10d B = Matrix10d::Zero();
+      for (const GlsSums& blk : blocks) {
+        const Matrix10d Ab = G.transpose() * (corrected ? Matrix10d(blk.A - blk.bias) : blk.A) * G;
+        const Vector10d sc = G.transpose() * blk.b - Ab * f.x;
+        B += sc * sc.transpose();
+      }
+      const Matrix10d Ai = SymmetricPseudoInverse(f.A);
+      f.A = SymmetricPseudoInverse(Ai * B * Ai);
+    }
+  }
+  return f;
+}
+
+// The distance, in first-order Riemannian units at the density answer,
+// between the densities the mesh's regions can carry (C u, u >= 0) and the
+// parameters the data allow (x with (x - x_f)^T A_z (x - x_f) <= threshold):
+// d^2 = max over nu >= 0 of min_u (C u - x_f)^T M_nu (C u - x_f) - nu
+// threshold, M_nu = A_z (A_z + I / nu)^-1 (Lagrangian dual of the ellipsoid
+// constraint; the inner minimum is a non-negative QP). Also T0, the least
+// chi^2 excess of a realizable density (likelihood ratio).
+struct MeshDistance {
+  double distance = 0, t0 = 0;
+};
+MeshDistance DistanceToRealizable(const MatrixXd& C, const Vector10d& xf, const Matrix10d& Az, double threshold,
+                                  DensityState* st, InterruptPoll* poll) {
+  const int K = static_cast<int>(C.cols());
+  Eigen::SelfAdjointEigenSolver<Matrix10d> es(0.5 * (Az + Az.transpose()));
+  const Vector10d a = es.eigenvalues().cwiseMax(0.0);
+  const Matrix10d V = es.eigenvectors();
+  const MatrixXd Cv = V.transpose() * C;
+  const Vector10d xv = V.transpose() * xf;
+  // weight(i) of the metric for nu (nu = inf: the T0 metric a itself).
+  auto solve = [&](const Vector10d& weight, VectorXd* u) {
+    const MatrixXd H = Cv.transpose() * weight.asDiagonal() * Cv;
+    const double scale = std::max(H.trace() / K, 1e-300);
+    *u = NonNegativeQp(H + 1e-12 * scale * MatrixXd::Identity(K, K), Cv.transpose() * weight.asDiagonal() * xv,
+                       &st->qp_iterations, poll);
+    return Vector10d(Cv * *u - xv);
+  };
+  MeshDistance out;
+  VectorXd u;
+  const Vector10d r0 = solve(a, &u);
+  out.t0 = r0.dot(a.asDiagonal() * r0);
+  if (out.t0 <= threshold) return out;
+  // Derivative of the dual in nu: sum a_i r_i^2 / (1 + nu a_i)^2 - threshold (decreasing).
+  auto slope = [&](double nu, double* value) {
+    Vector10d w;
+    for (int i = 0; i < 10; ++i) w(i) = nu * a(i) / (1 + nu * a(i));
+    const Vector10d r = solve(w, &u);
+    double s = -threshold;
+    for (int i = 0; i < 10; ++i) s += a(i) * r(i) * r(i) / ((1 + nu * a(i)) * (1 + nu * a(i)));
+    *value = r.dot(w.asDiagonal() * r) - nu * threshold;
+    return s;
+  };
+  // Bracket the root of the slope around 1 / (largest eigenvalue), then bisect in log nu.
+  const double amax = std::max(a.maxCoeff(), 1e-300);
+  double lo = 1e-6 / amax, hi = 1e6 / amax, value = 0;
+  while (slope(hi, &value) > 0 && hi < 1e300 && !poll->stopped()) lo = hi, hi *= 1e6;
+  while (slope(lo, &value) < 0 && lo > 1e-300 && !poll->stopped()) hi = lo, lo *= 1e-6;
+  for (int it = 0; it < 60 && !poll->stopped(); ++it) {
+    const double mid = std::sqrt(lo * hi);
+    (slope(mid, &value) > 0 ? lo : hi) = mid;
+  }
+  slope(std::sqrt(lo * hi), &value);
+  out.distance = std::sqrt(std::max(value, 0.0));
+  return out;
+}
+
+// The chi^2 quantile (Wilson-Hilferty) for `dof` degrees of freedom at the
+// standard-normal quantile z.
+double ChiSquareQuantile(int dof, double z) {
+  const double k = std::max(dof, 1);
+  const double c = 1 - 2 / (9 * k) + z * std::sqrt(2 / (9 * k));
+  return k * c * c * c;
+}
+
+// The mesh test (fit.cc decides): how far, in first-order Riemannian units
+// at the density answer, the densities the regions can carry are from the
+// parameters the data allow at the 99.9 % chi^2 bound (10 degrees of
+// freedom) of the free fit.
+void MeshConsistency(const GlsData& gls, const DensityBasis& b, DensityState* st, MethodOutput* out,
+                     InterruptPoll* poll) {
+  const Matrix10d G = WhitenedBasis(PseudoOfStandard(st->pi));
+  const Eigen::FullPivLU<Matrix10d> lu(G);
+  const FreeFit f = FreeFitOwnWeights(gls, b, G, st->pi, poll);
+  if (poll->stopped()) return;
+  const MatrixXd C = lu.solve(b.Phi_u);
+  out->mesh_chi2_bound = ChiSquareQuantile(10, 3.0902);  // upper 0.1 %
+  const MeshDistance m = DistanceToRealizable(C, f.x, f.A, out->mesh_chi2_bound, st, poll);
+  out->mesh_distance = m.distance;
+  out->mesh_chi2_excess = m.t0;
+  const InertialParameters p = InertialParameters::FromStandard(st->pi);
+  if (p.mass > 0) {
+    const Eigen::Matrix3d ic = p.inertia_com.Matrix();
+    const Eigen::Matrix3d sigma = 0.5 * ic.trace() * Eigen::Matrix3d::Identity() - ic;
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(sigma, Eigen::EigenvaluesOnly);
+    out->gyration_radii = (es.eigenvalues().cwiseMax(0.0) / p.mass).cwiseSqrt();
+  }
+}
+
 }  // namespace
 
 absl::StatusOr<MethodOutput> FitDensity(const InertiaSamples& s, const InertiaOptions& o, const RegionModel& regions) {
@@ -353,6 +536,7 @@ absl::StatusOr<MethodOutput> FitDensity(const InertiaSamples& s, const InertiaOp
   if (poll.Check()) return Interrupted();
   DensityCovariance(*basis, st, &out);
   HeldOutContradiction(gls, *basis, folds, &st, &out, &poll);
+  MeshConsistency(gls, *basis, &st, &out, &poll);
   ResidualRms(gls.kin, gls.wrench, st.pi, &poll, &out.rms_force, &out.rms_torque);
   if (poll.stopped()) return Interrupted();
   return out;

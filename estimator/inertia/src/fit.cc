@@ -25,22 +25,17 @@
 namespace tactforce::inertia {
 
 namespace {
-// Significance of the held-out residual difference (per-sample z statistic)
-// needed, besides the ratio, to call the mesh contradicted.
-constexpr double kContradictionZ = 4.0;
-// ... and a misfit that matters physically. The held-out difference
-// between the mesh fit's and the free fit's predicted wrenches is read in
-// the units of the fitted parameters: force difference / (m |a - g|) is a
-// relative mass error, torque difference / (m |a - g|) a CoM displacement.
-// Floors: 1 % of the mass, the calibration accuracy of a wrist F/T sensor
-// (about 1 % of full scale: a smaller force misfit could be the sensor's
-// gain error as well as the mesh's); a CoM displacement of 3 % of the
-// mesh's bounding-box diagonal, because a CAD model with one uniform
-// density per part is an idealisation (cavities, inserts, coatings) that
-// misplaces the CoM by a few per cent of the object's size. Below both, the
-// density fit is returned and its misfit stated in the notes.
-constexpr double kContradictionMassFloor = 0.01;
-constexpr double kContradictionComFloor = 0.03;  // of the mesh's size
+// The mesh test. The data contradict the mesh when every density its
+// regions can carry lies farther than kMeshTolerance, in first-order
+// Riemannian units (the affine-invariant distance between pseudo-inertias,
+// RiemannianDistance in metrics.h), from every parameter vector the data
+// allow (the free fit's 99.9 % chi^2 ellipsoid): significant AND physically
+// large. 0.03 is a 3 % error of the mass or of a principal second moment,
+// or a CoM displacement of 3 % / sqrt(2) of the radius of gyration along
+// that axis: the idealisation of a CAD model with one uniform density per
+// part (cavities, inserts, coatings) is of that order, so smaller
+// disagreements are not called contradictions.
+constexpr double kMeshTolerance = 0.03;
 }  // namespace
 
 int64_t FitWorkingBytes(InertiaMethod method, int64_t samples) {
@@ -369,32 +364,37 @@ absl::StatusOr<internal::MethodOutput> FitDensityOrFallBack(const InertiaSamples
   fit->density_regularization = r->regularization;
   fit->density_regularization_rule = r->regularization_rule;
   fit->heldout_residual_ratio = r->heldout_ratio;
-  const double com_floor = kContradictionComFloor * r->mesh_size;
   const std::string heldout_note = absl::StrFormat(
       "held-out weighted residual %.3gx the free 10-parameter fit's (z = %.3g over the held-out samples); the "
-      "predicted wrenches differ like a mass error of %.2g %% and a CoM displacement of %.3g mm (floor %g %% and "
-      "%.3g mm, %g %% of the mesh's %.3g m)",
-      r->heldout_ratio, r->heldout_z, 100 * r->heldout_mass_equivalent, 1000 * r->heldout_com_equivalent,
-      100 * kContradictionMassFloor, 1000 * com_floor, 100 * kContradictionComFloor, r->mesh_size);
+      "predicted wrenches differ like a mass error of %.2g %% and a CoM displacement of %.3g mm",
+      r->heldout_ratio, r->heldout_z, 100 * r->heldout_mass_equivalent, 1000 * r->heldout_com_equivalent);
   r->notes.push_back(heldout_note);
-  const bool contradicted = options.contradiction_ratio > 0 && r->heldout_ratio > options.contradiction_ratio &&
-                            r->heldout_z > kContradictionZ &&
-                            (r->heldout_mass_equivalent > kContradictionMassFloor || r->heldout_com_equivalent > com_floor);
+  const Vec3& s = r->gyration_radii;
+  const std::string mesh_note = absl::StrFormat(
+      "mesh test: the densities this mesh can carry are %.3g (first-order Riemannian) from the parameters the "
+      "data allow (least chi^2 excess %.3g, bound %.3g at 99.9 %%); tolerance %g: a %g %% error of the mass or a "
+      "principal second moment, or a CoM move of %.3g / %.3g / %.3g mm along the principal axes",
+      r->mesh_distance, r->mesh_chi2_excess, r->mesh_chi2_bound, kMeshTolerance, 100 * kMeshTolerance,
+      1000 * kMeshTolerance * s(0) / std::sqrt(2.0), 1000 * kMeshTolerance * s(1) / std::sqrt(2.0),
+      1000 * kMeshTolerance * s(2) / std::sqrt(2.0));
+  r->notes.push_back(mesh_note);
+  const bool contradicted = options.contradiction_ratio > 0 && r->mesh_distance > kMeshTolerance;
   if (!contradicted) {
     fit->density_realizable = true;
     return r;
   }
   fit->mesh_contradicted = true;
   fit->mesh_contradiction = absl::StrFormat(
-      "the data contradict the mesh: held-out residual %.3gx the mesh-free fit's; check scale and object_in_mesh "
-      "(the answer is CONSTRAINED's; the densities are those of the rejected mesh fit)",
-      r->heldout_ratio);
+      "the data contradict the mesh: every density it can carry is %.3g (Riemannian, tolerance %g) from what the "
+      "data allow; check scale and object_in_mesh (the answer is CONSTRAINED's; the densities are those of the "
+      "rejected mesh fit)",
+      r->mesh_distance, kMeshTolerance);
   InertiaOptions plain = options;
   plain.mesh = nullptr;
   plain.method = InertiaMethod::kConstrained;
   absl::StatusOr<internal::MethodOutput> c = internal::FitConstrained(samples, plain, hull);
   if (!c.ok()) return c.status();
-  c->notes.insert(c->notes.begin(), {fit->mesh_contradiction, heldout_note});
+  c->notes.insert(c->notes.begin(), {fit->mesh_contradiction, mesh_note, heldout_note});
   c->iterations += r->iterations;
   return c;
 }

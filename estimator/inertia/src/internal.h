@@ -139,6 +139,14 @@ struct MethodOutput {
   // over m |a - g| (a CoM displacement, m); the mesh's bounding-box
   // diagonal (m) is the object's size they are judged against.
   double heldout_mass_equivalent = 0, heldout_com_equivalent = 0, mesh_size = 0;
+  // The mesh test: the first-order Riemannian distance between the
+  // densities the regions can carry and the free fit's confidence
+  // ellipsoid (chi^2 <= mesh_chi2_bound above its minimum), and the least
+  // chi^2 excess of a realizable density over the free fit.
+  double mesh_distance = 0, mesh_chi2_excess = 0, mesh_chi2_bound = 0;
+  // Radii of gyration of the density answer along its principal axes (m),
+  // to state the tolerance as a CoM displacement.
+  Vec3 gyration_radii = Vec3::Zero();
 };
 
 // Generalised least squares data shared by CONSTRAINED and DENSITY: the
