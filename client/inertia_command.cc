@@ -221,10 +221,10 @@ absl::Status SetDensityOptions(const InertiaArgs& args, v1::InertiaFitOptions* o
       ParseNonNegative(args.mesh_prior_weight, "--mesh-prior-weight");
   if (!prior_weight.ok()) return prior_weight.status();
   if (prior_weight->has_value()) o->set_mesh_prior_weight(**prior_weight);
-  absl::StatusOr<std::optional<double>> ratio =
-      ParseNonNegative(args.contradiction_ratio, "--contradiction-ratio", ", 0 disables");
-  if (!ratio.ok()) return ratio.status();
-  if (ratio->has_value()) o->set_contradiction_ratio(**ratio);
+  absl::StatusOr<std::optional<double>> tolerance =
+      ParseNonNegative(args.mesh_tolerance, "--mesh-tolerance", ", 0 disables");
+  if (!tolerance.ok()) return tolerance.status();
+  if (tolerance->has_value()) o->set_mesh_tolerance(**tolerance);
   return absl::OkStatus();
 }
 
@@ -361,10 +361,10 @@ void AddMeshFlags(CLI::App* cmd, InertiaArgs& args) {
                   "constrained with --mesh: weight of the mesh's uniform-density prior (chi^2 units; default 1)")
       ->type_name("W")
       ->needs(mesh);
-  cmd->add_option("--contradiction-ratio", args.contradiction_ratio,
-                  "density: 0 disables the mesh test (any positive value enables it; default 1.2); the mesh is "
-                  "rejected when every density it can carry is > 0.03 (Riemannian) from what the data allow")
-      ->type_name("R")
+  cmd->add_option("--mesh-tolerance", args.mesh_tolerance,
+                  "density: the mesh is rejected when every density it can carry is farther than T (first-order "
+                  "Riemannian; default 0.03 = 3 % of the mass) from what the data allow; 0 disables the test")
+      ->type_name("T")
       ->needs(mesh);
   cmd->add_option("--plot", args.plot_path,
                   "Write an SVG of the fit: the mesh in the principal planes, regions coloured by density, the "

@@ -32,7 +32,7 @@ struct InertiaArgs {
   int target_regions = 0;            // 0 = 12
   std::string density_regularization;  // empty: chosen by held-out time blocks
   std::string mesh_prior_weight;     // empty: 1
-  std::string contradiction_ratio;   // empty: 1.2
+  std::string mesh_tolerance;        // empty: 0.03
   std::string plot_path;             // SVG of the density fit
   // Noise standard deviations (0 = unknown).
   double force_sigma = 0, torque_sigma = 0, position_sigma = 0, orientation_sigma = 0;

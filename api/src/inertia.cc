@@ -318,7 +318,15 @@ absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::Inerti
   }
   if (o.has_density_regularization()) out.density_regularization = o.density_regularization();
   if (o.has_mesh_prior_weight()) out.mesh_prior_weight = o.mesh_prior_weight();
-  if (o.has_contradiction_ratio()) out.contradiction_ratio = o.contradiction_ratio();
+  if (o.has_contradiction_ratio()) {
+    if (o.contradiction_ratio() != 0)
+      return absl::InvalidArgumentError(absl::StrCat(
+          "options.contradiction_ratio: ", o.contradiction_ratio(),
+          " is no longer used (only 0, which disables the mesh test); set options.mesh_tolerance instead "
+          "(first-order Riemannian, default ", inertia::kDefaultMeshTolerance, ", 0 disables)"));
+    out.mesh_tolerance = 0;
+  }
+  if (o.has_mesh_tolerance()) out.mesh_tolerance = o.mesh_tolerance();
   if (o.has_mesh()) {
     absl::StatusOr<ObjectMesh> mesh = MeshFromProto(o.mesh());
     if (!mesh.ok()) return mesh.status();

@@ -252,15 +252,32 @@ TEST(InertiaMeshInput, PlacedCadMeshGivesTheObjectFrameBoxAndADensityFit) {
   EXPECT_LT(converted->density_regularization, 0);  // automatic
   options.set_density_regularization(0.5);
   options.set_mesh_prior_weight(2.0);
-  options.set_contradiction_ratio(0.0);
+  options.set_mesh_tolerance(0.05);
   converted = InertiaOptionsFromProto(options);
   ASSERT_TRUE(converted.ok()) << converted.status();
   EXPECT_EQ(converted->density_regularization, 0.5);
   EXPECT_EQ(converted->mesh_prior_weight, 2.0);
-  EXPECT_EQ(converted->contradiction_ratio, 0.0);
+  EXPECT_EQ(converted->mesh_tolerance, 0.05);
+  options.clear_mesh_tolerance();
+  // The replaced ratio: 0 still disables the mesh test, any other value is refused by name.
+  options.set_contradiction_ratio(0.0);
+  converted = InertiaOptionsFromProto(options);
+  ASSERT_TRUE(converted.ok()) << converted.status();
+  EXPECT_EQ(converted->mesh_tolerance, 0.0);
+  options.set_contradiction_ratio(1.2);
+  converted = InertiaOptionsFromProto(options);
+  ASSERT_FALSE(converted.ok());
+  EXPECT_EQ(converted.status().code(), absl::StatusCode::kInvalidArgument);
+  const std::string refused(converted.status().message());
+  EXPECT_NE(refused.find("options.contradiction_ratio"), std::string::npos) << refused;
+  EXPECT_NE(refused.find("mesh_tolerance"), std::string::npos) << refused;
+  options.set_mesh_tolerance(-1);
+  options.clear_contradiction_ratio();
+  const std::string negative(InertiaOptionsFromProto(options).status().message());
+  EXPECT_NE(negative.find("mesh_tolerance"), std::string::npos) << negative;
   options.clear_density_regularization();
   options.clear_mesh_prior_weight();
-  options.clear_contradiction_ratio();
+  options.clear_mesh_tolerance();
 
   inertia::InertiaFit library_fit;
   absl::StatusOr<v1::FitInertiaResponse> r = FitInertiaSamples(sim.samples, options, {}, {}, &library_fit);

@@ -24,20 +24,6 @@
 
 namespace tactforce::inertia {
 
-namespace {
-// The mesh test. The data contradict the mesh when every density its
-// regions can carry lies farther than kMeshTolerance, in first-order
-// Riemannian units (the affine-invariant distance between pseudo-inertias,
-// RiemannianDistance in metrics.h), from every parameter vector the data
-// allow (the free fit's 99.9 % chi^2 ellipsoid): significant AND physically
-// large. 0.03 is a 3 % error of the mass or of a principal second moment,
-// or a CoM displacement of 3 % / sqrt(2) of the radius of gyration along
-// that axis: the idealisation of a CAD model with one uniform density per
-// part (cavities, inserts, coatings) is of that order, so smaller
-// disagreements are not called contradictions.
-constexpr double kMeshTolerance = 0.03;
-}  // namespace
-
 int64_t FitWorkingBytes(InertiaMethod method, int64_t samples) {
   const int64_t per_sample = method == InertiaMethod::kFactorGraph ? 4608 : 2048;
   return samples * per_sample;
@@ -116,7 +102,7 @@ absl::Status ValidateMeshOptions(const InertiaOptions& o) {
   if (!std::isfinite(o.density_regularization))
     return absl::InvalidArgumentError("density_regularization: must be finite (< 0 = automatic)");
   if (o.density_folds < 2) return absl::InvalidArgumentError("density_folds: must be >= 2");
-  if (absl::Status st = CheckSigma(o.contradiction_ratio, "contradiction_ratio"); !st.ok()) return st;
+  if (absl::Status st = CheckSigma(o.mesh_tolerance, "mesh_tolerance"); !st.ok()) return st;
   if (o.regions.target_regions < 1 || o.regions.target_regions > kMaxTargetRegions)
     return absl::InvalidArgumentError(absl::StrCat("regions.target_regions: must be in 1..", kMaxTargetRegions,
                                                    " (got ", o.regions.target_regions, ")"));
@@ -347,6 +333,11 @@ absl::StatusOr<internal::MethodOutput> FitConstrainedWithMesh(const InertiaSampl
 }
 
 // DENSITY; when the data contradict the mesh, CONSTRAINED's answer, marked.
+// The data contradict the mesh when every density its regions can carry lies
+// farther than options.mesh_tolerance, in first-order Riemannian units (the
+// affine-invariant distance between pseudo-inertias, metrics.h), from every
+// parameter vector the data allow (the free fit's 99.9 % chi^2 ellipsoid):
+// significant AND physically large (kDefaultMeshTolerance says why 0.03).
 absl::StatusOr<internal::MethodOutput> FitDensityOrFallBack(const InertiaSamples& samples,
                                                             const InertiaOptions& options, const ConvexHull* hull,
                                                             InertiaFit* fit) {
@@ -370,15 +361,16 @@ absl::StatusOr<internal::MethodOutput> FitDensityOrFallBack(const InertiaSamples
       r->heldout_ratio, r->heldout_z, 100 * r->heldout_mass_equivalent, 1000 * r->heldout_com_equivalent);
   r->notes.push_back(heldout_note);
   const Vec3& s = r->gyration_radii;
+  const double tolerance = options.mesh_tolerance;
   const std::string mesh_note = absl::StrFormat(
       "mesh test: the densities this mesh can carry are %.3g (first-order Riemannian) from the parameters the "
       "data allow (least chi^2 excess %.3g, bound %.3g at 99.9 %%); tolerance %g: a %g %% error of the mass or a "
       "principal second moment, or a CoM move of %.3g / %.3g / %.3g mm along the principal axes",
-      r->mesh_distance, r->mesh_chi2_excess, r->mesh_chi2_bound, kMeshTolerance, 100 * kMeshTolerance,
-      1000 * kMeshTolerance * s(0) / std::sqrt(2.0), 1000 * kMeshTolerance * s(1) / std::sqrt(2.0),
-      1000 * kMeshTolerance * s(2) / std::sqrt(2.0));
+      r->mesh_distance, r->mesh_chi2_excess, r->mesh_chi2_bound, tolerance, 100 * tolerance,
+      1000 * tolerance * s(0) / std::sqrt(2.0), 1000 * tolerance * s(1) / std::sqrt(2.0),
+      1000 * tolerance * s(2) / std::sqrt(2.0));
   r->notes.push_back(mesh_note);
-  const bool contradicted = options.contradiction_ratio > 0 && r->mesh_distance > kMeshTolerance;
+  const bool contradicted = tolerance > 0 && r->mesh_distance > tolerance;
   if (!contradicted) {
     fit->density_realizable = true;
     return r;
@@ -388,7 +380,7 @@ absl::StatusOr<internal::MethodOutput> FitDensityOrFallBack(const InertiaSamples
       "the data contradict the mesh: every density it can carry is %.3g (Riemannian, tolerance %g) from what the "
       "data allow; check scale and object_in_mesh (the answer is CONSTRAINED's; the densities are those of the "
       "rejected mesh fit)",
-      r->mesh_distance, kMeshTolerance);
+      r->mesh_distance, tolerance);
   InertiaOptions plain = options;
   plain.mesh = nullptr;
   plain.method = InertiaMethod::kConstrained;
