@@ -242,7 +242,8 @@ void FillRowMargins(const PreparedProblem& prepared, const std::vector<Vec3>& fo
   for (int r = 0; r < m; ++r) {
     RowMargin& o = (*out)[r];
     const int c = rows.info[r].contact;
-    o = {c, false, r, 0.0, 0.0, 0.0};
+    o.contact = c, o.cone = false, o.row = r, o.slack = 0.0;
+    o.constraint = rows.Describe(r, prepared.problem);
     o.parameters = t.active ? t.row_margin(r) : 0.0;
     o.measurement = std::max(0.0, rows.nominal_rhs(r) - rows.rhs(r) - o.parameters);
     if (have_forces) o.slack = rows.rhs(r) - rows.matrix.block<1, 3>(r, 3 * c).dot(forces[c].transpose());
@@ -250,7 +251,8 @@ void FillRowMargins(const PreparedProblem& prepared, const std::vector<Vec3>& fo
   for (int i = 0; i < static_cast<int>(prepared.cone_shift.size()); ++i) {
     RowMargin& o = (*out)[m + i];
     const Contact& c = prepared.problem.contacts[i];
-    o = {i, true, -1, 0.0, 0.0, 0.0};
+    o.contact = i, o.cone = true, o.row = -1, o.slack = 0.0;
+    o.constraint = absl::StrCat(ContactLabel(prepared.problem, i), " exact friction cone");
     o.parameters = t.active ? t.cone_margin[i] : 0.0;
     o.measurement = std::max(0.0, prepared.cone_shift[i] - o.parameters);
     if (have_forces) o.slack = ExactConeSlack(c.normal, c.friction, prepared.cone_shift[i], forces[i]);

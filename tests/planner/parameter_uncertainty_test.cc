@@ -16,6 +16,7 @@
 #include "planner/fixtures.h"
 #include "tactforce/planner/random_grasps.h"
 #include "tactforce/planner/solver.h"
+#include "tactforce/planner/trajectory.h"
 
 namespace tactforce::planner {
 namespace {
@@ -334,6 +335,25 @@ TEST(ParameterUncertainty, BadCovarianceNamesFieldAndIndex) {
   p.contacts[1].friction_sigma = -0.1;
   EXPECT_NE(ValidateProblem(p, PlanOptions{}).status().message().find("contacts[1].friction_sigma"),
             std::string::npos);
+}
+
+// PlanTrajectory takes the regressor of each step: an inertia-only
+// covariance costs nothing at rest and a margin while the object turns.
+TEST(ParameterUncertainty, TrajectoryUsesTheStepRegressor) {
+  TrajectoryProblem t;
+  t.base = fixtures::ThreeFingerGrasp(4, 0.1);
+  t.inertia = Inertia{1e-3, 1e-3, 1e-3, 0, 0, 0};
+  for (int k = 4; k < 10; ++k) t.base.object.uncertainty.covariance(k, k) = 1e-8;
+  t.steps.resize(2);
+  t.steps[1].angular_acceleration = Vec3(0, 0, 20.0);
+  absl::StatusOr<TrajectoryResult> r = PlanTrajectory(t, Options(ConeModel::kPyramid, 1.0), SolverKind::kGeometric);
+  ASSERT_TRUE(r.ok()) << r.status();
+  ASSERT_EQ(r->optimal, 2);
+  double at_rest = 0, turning = 0;
+  for (const RowMargin& m : r->steps[0].row_margins) at_rest = std::max(at_rest, m.parameters);
+  for (const RowMargin& m : r->steps[1].row_margins) turning = std::max(turning, m.parameters);
+  EXPECT_EQ(at_rest, 0.0);
+  EXPECT_GT(turning, 0.0);
 }
 
 TEST(ParameterUncertainty, RegressorMatchesNewtonEuler) {
