@@ -178,8 +178,7 @@ TrialFriction EstimateTrial(const FrictionTrial& trial, const Vec3& n, const Fri
   const Vec3 f = PreSlipForceAt(trial, last_static, s[onset].t, o);
   const auto [fn, ft] = ratio(f);
   if (fn < o.min_normal_force) {
-    out.message = absl::StrCat("normal force before slip ", fn, " N is below the minimum ",
-                               o.min_normal_force, " N");
+    out.message = absl::StrCat("normal force before slip ", fn, " N is below the minimum ", o.min_normal_force, " N");
     return out;
   }
   out.valid = true;
