@@ -356,7 +356,10 @@ v1::PlanResponse ToProto(const planner::PlanResult& result) {
   for (const planner::RowMargin& m : result.row_margins) {
     v1::RowMargin* out = response.add_row_margins();
     out->set_contact(m.contact);
-    out->set_constraint(m.constraint);
+    out->set_constraint(m.cone ? "exact friction cone"
+                        : m.facet >= 0 ? absl::StrCat("friction cone facet ", m.facet)
+                        : m.upper      ? "maximum normal force"
+                                       : "minimum normal force");
     out->set_slack(m.slack);
     out->set_measurement(m.measurement);
     out->set_parameters(m.parameters);

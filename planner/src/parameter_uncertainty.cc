@@ -109,6 +109,10 @@ absl::Status CheckCovariance(absl::string_view field, const Eigen::MatrixXd& s, 
   for (int i = 0; i < n; ++i) {
     if (s(i, i) < 0.0) return absl::InvalidArgumentError(entry(i, i) + ": negative variance");
   }
+  // A pivoted LDL^T settles the common case cheaply (this runs on every
+  // solve); only a failing or doubtful one pays for the eigenvalues.
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(s);
+  if (ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() >= 0.0) return absl::OkStatus();
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (s + s.transpose()));
   if (eig.eigenvalues()(0) < -1e-9 * scale) {
     int k = 0;
@@ -243,7 +247,8 @@ void FillRowMargins(const PreparedProblem& prepared, const std::vector<Vec3>& fo
     RowMargin& o = (*out)[r];
     const int c = rows.info[r].contact;
     o.contact = c, o.cone = false, o.row = r, o.slack = 0.0;
-    o.constraint = rows.Describe(r, prepared.problem);
+    o.facet = rows.info[r].kind == RowKind::kFrictionFacet ? rows.info[r].facet : -1;
+    o.upper = rows.info[r].kind == RowKind::kMaxNormal;
     o.parameters = t.active ? t.row_margin(r) : 0.0;
     o.measurement = std::max(0.0, rows.nominal_rhs(r) - rows.rhs(r) - o.parameters);
     if (have_forces) o.slack = rows.rhs(r) - rows.matrix.block<1, 3>(r, 3 * c).dot(forces[c].transpose());
@@ -251,8 +256,7 @@ void FillRowMargins(const PreparedProblem& prepared, const std::vector<Vec3>& fo
   for (int i = 0; i < static_cast<int>(prepared.cone_shift.size()); ++i) {
     RowMargin& o = (*out)[m + i];
     const Contact& c = prepared.problem.contacts[i];
-    o.contact = i, o.cone = true, o.row = -1, o.slack = 0.0;
-    o.constraint = absl::StrCat(ContactLabel(prepared.problem, i), " exact friction cone");
+    o.contact = i, o.cone = true, o.row = -1, o.slack = 0.0, o.facet = -1, o.upper = false;
     o.parameters = t.active ? t.cone_margin[i] : 0.0;
     o.measurement = std::max(0.0, prepared.cone_shift[i] - o.parameters);
     if (have_forces) o.slack = ExactConeSlack(c.normal, c.friction, prepared.cone_shift[i], forces[i]);

@@ -30,7 +30,7 @@ class PlanEstimatesCliTest : public testing::CliTest {
   std::string FitJson() {
     const std::string csv = testing::SourceDir() +
                             "/client/examples/inertia_log.csv";
-    const testing::CliRun run = Tactforce({"inertia", "--local", "--csv", csv, "--json"});
+    const testing::CliRun run = Tactforce({"inertia", "--csv", csv, "--json"});
     EXPECT_EQ(run.exit_code, 0) << run.err;
     return run.out;
   }

@@ -128,7 +128,8 @@ struct RowMargin {
   int contact = 0;
   bool cone = false;      // EXACT cone of `contact` rather than a row
   int row = -1;           // index into the prepared rows (-1 for a cone)
-  std::string constraint;  // "contact 2 (thumb) friction cone facet 5", "... exact friction cone"
+  int facet = -1;         // a pyramid facet's index; -1: a normal-force bound or a cone
+  bool upper = false;     // the maximum (not minimum) normal-force bound
   double slack = 0.0;     // of the tightened row / cone at the forces
   double measurement = 0.0;  // kappa sqrt(a^T S_f a) (cone: kappa (mu rho_n + rho_t))
   double parameters = 0.0;   // kappa_b sqrt(a^T G^+ S_b G^+T a) (cone: likewise)
