@@ -7,6 +7,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
@@ -133,6 +134,14 @@ absl::Status ValidateParameterUncertainty(const ParameterUncertainty& u) {
     }
   }
   if (u.covariance.isZero(0.0)) return absl::OkStatus();
+  // Fast path in fixed size for the common valid case (this runs every solve).
+  const Matrix10d& s = u.covariance;
+  const double scale = s.cwiseAbs().maxCoeff();
+  const bool plain = s.allFinite() && scale <= kMaxCovarianceEntry && (s - s.transpose()).cwiseAbs().maxCoeff() <= 1e-9 * scale;
+  if (plain && s.diagonal().minCoeff() >= 0.0) {
+    const Eigen::LDLT<Matrix10d> ldlt(s);
+    if (ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() >= 0.0) return absl::OkStatus();
+  }
   return CheckCovariance("object.uncertainty.covariance", u.covariance, kMaxCovarianceEntry, kParameterNames);
 }
 
@@ -169,10 +178,36 @@ using SmallMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 
 // G^+ = U^T X with X = (M^T M)^-1 M^T, so P_i = U_i^T (X S_b X^T) U_i.
 // Returns the size (N, N m) of the part of the kappa_b wrench ellipsoid no
 // contact force can balance: sqrt(lambda_max((I - M X) S_b (I - M X)^T)).
+// Full rank (r = 6, every grasp that resists all wrenches): M is square, so
+// G^+ = U^T M^-1; all in fixed sizes, M's columns from G's structure.
+void ContactCovariancesFullRank(const ForceEquilibrium& eq, const Eigen::Matrix<double, 6, 6>& wrench_cov,
+                                std::vector<Eigen::Matrix3d>* out) {
+  const int n = static_cast<int>(eq.grasp_matrix.cols() / 3);
+  Eigen::Matrix<double, 6, 6> m = Eigen::Matrix<double, 6, 6>::Zero();
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Matrix<double, 6, 3> u = eq.independent_rows.middleCols<3>(3 * i);  // 6 x 3
+    const Eigen::Matrix3d skew = eq.grasp_matrix.block<3, 3>(3, 3 * i);
+    m.topRows<3>().noalias() += u.transpose();
+    m.bottomRows<3>().noalias() += skew * u.transpose();
+  }
+  const Eigen::PartialPivLU<Eigen::Matrix<double, 6, 6>> lu(m);
+  const Eigen::Matrix<double, 6, 6> x = lu.inverse();
+  const Eigen::Matrix<double, 6, 6> k = x * wrench_cov * x.transpose();
+  out->resize(n);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Matrix<double, 6, 3> u = eq.independent_rows.middleCols<3>(3 * i);
+    (*out)[i].noalias() = u.transpose() * k * u;
+  }
+}
+
 double ContactCovariances(const ForceEquilibrium& eq, const Eigen::Matrix<double, 6, 6>& wrench_cov,
                           std::vector<Eigen::Matrix3d>* out) {
   const int n = static_cast<int>(eq.grasp_matrix.cols() / 3);
   const int r = static_cast<int>(eq.independent_rows.rows());
+  if (r == 6) {
+    ContactCovariancesFullRank(eq, wrench_cov, out);
+    return 0.0;
+  }
   const SmallMatrix m = eq.grasp_matrix * eq.independent_rows.transpose();  // 6 x r
   const SmallMatrix normal = m.transpose() * m;
   const SmallMatrix x = normal.llt().solve(m.transpose());  // r x 6
