@@ -17,6 +17,7 @@
 #include "cli_common.h"
 #include "plan_backend.h"
 #include "remote_call.h"
+#include "tactforce/api/estimates.h"
 #include "tactforce/api/json.h"
 #include "tactforce/api/names.h"
 #include "tactforce/api/plan_plot.h"
@@ -56,6 +57,30 @@ void ApplySolverFlags(const PlanArgs& args, v1::PlanRequest* request) {
   if (args.ipopt_max_seconds) o->set_ipopt_max_cpu_seconds(*args.ipopt_max_seconds);
   if (args.rank_tolerance) o->set_rank_tolerance(*args.rank_tolerance);
   if (args.agreement_tolerance) o->set_agreement_tolerance(*args.agreement_tolerance);
+}
+
+// --inertia / --friction: earlier estimates, with their uncertainty, into
+// the request (api/estimates.h). Errors name the flag.
+absl::Status ApplyEstimateFlags(const PlanArgs& args, v1::PlanRequest* request) {
+  if (!args.inertia_path.empty()) {
+    absl::StatusOr<std::string> text = ReadInput(args.inertia_path);
+    if (!text.ok()) return absl::Status(text.status().code(), absl::StrCat("--inertia: ", text.status().message()));
+    v1::FitInertiaResponse fit;
+    if (absl::Status s = api::ParseJson(*text, &fit, InputName(args.inertia_path)); !s.ok()) {
+      return absl::InvalidArgumentError(absl::StrCat("--inertia: ", s.message()));
+    }
+    if (absl::Status s = api::ApplyInertiaFit(fit, "--inertia", request); !s.ok()) return s;
+  }
+  if (!args.friction_path.empty()) {
+    absl::StatusOr<std::string> text = ReadInput(args.friction_path);
+    if (!text.ok()) return absl::Status(text.status().code(), absl::StrCat("--friction: ", text.status().message()));
+    v1::FrictionResponse friction;
+    if (absl::Status s = api::ParseJson(*text, &friction, InputName(args.friction_path)); !s.ok()) {
+      return absl::InvalidArgumentError(absl::StrCat("--friction: ", s.message()));
+    }
+    if (absl::Status s = api::ApplyFrictionEstimate(friction, "--friction", request); !s.ok()) return s;
+  }
+  return absl::OkStatus();
 }
 
 absl::StatusOr<std::unique_ptr<PlanBackend>> SelectBackend(const PlanArgs& args) {
@@ -171,6 +196,18 @@ CLI::App* AddPlanCommand(CLI::App& app, PlanArgs& args) {
   probe->excludes(request)->excludes(trajectory);
   AddOutputFlags(cmd, &args.output, "the PlanResponse (TrajectoryResponse, FrictionProbeResponse)");
   AddSolverFlags(cmd, &args);
+  cmd->add_option("--inertia", args.inertia_path,
+                  "FitInertiaResponse JSON (`tactforce inertia --json`): the object's mass, CoM and inertia and "
+                  "their covariance; the plan holds for every value within the request's confidence")
+      ->type_name("FIT.json")
+      ->excludes(trajectory)
+      ->excludes(probe);
+  cmd->add_option("--friction", args.friction_path,
+                  "FrictionResponse JSON (`tactforce friction --json`): every fingertip contact's friction = "
+                  "its median, friction_sigma = its mu_sigma")
+      ->type_name("FRICTION.json")
+      ->excludes(trajectory)
+      ->excludes(probe);
   cmd->add_option("--plot", args.plot_path,
                   "Also draw the plan as SVG: contacts, normals, robust friction cones, forces (arrows), "
                   "their 1-sigma spread, CoM and gravity in three orthographic views (x-y, x-z, y-z). "
@@ -189,7 +226,8 @@ CLI::App* AddPlanCommand(CLI::App& app, PlanArgs& args) {
       "  tactforce plan --local --request client/examples/sphere_pinch.json --solver cross-check --json\n"
       "  tactforce plan --server localhost:50051 --request client/examples/sphere_pinch.json --plot plan.svg\n"
       "  tactforce plan --local --trajectory client/examples/wrench_lift_trajectory.json\n"
-      "  tactforce plan --local --friction-probe client/examples/friction_probe.json");
+      "  tactforce plan --local --friction-probe client/examples/friction_probe.json\n"
+      "  tactforce plan --local --request grasp.json --inertia fit.json --friction friction.json");
   return cmd;
 }
 
@@ -209,6 +247,7 @@ int RunPlan(const PlanArgs& args) {
   absl::StatusOr<v1::PlanRequest> request = api::ParsePlanRequestJson(*text, InputName(args.request_path));
   if (!request.ok()) return ReportError(request.status());
   ApplySolverFlags(args, &*request);
+  if (absl::Status s = ApplyEstimateFlags(args, &*request); !s.ok()) return ReportError(s);
 
   absl::StatusOr<v1::PlanResponse> response = (*backend)->Plan(*request);
   if (!response.ok()) return ReportError(response.status());

@@ -25,6 +25,8 @@ struct PlanArgs {
   std::optional<double> ipopt_tolerance, ipopt_max_seconds, rank_tolerance, agreement_tolerance;
   std::optional<int> max_iterations;
   std::string plot_path;        // --plot: an SVG picture of the plan (or trajectory) too
+  std::string inertia_path;     // --inertia: a FitInertiaResponse JSON (`inertia --json`)
+  std::string friction_path;    // --friction: a FrictionResponse JSON (`friction --json`)
 };
 
 CLI::App* AddPlanCommand(CLI::App& app, PlanArgs& args);

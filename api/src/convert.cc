@@ -12,6 +12,7 @@
 #include "absl/status/status.h"
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
+#include "tactforce/planner/parameter_uncertainty.h"
 #include "tactforce/planner/validation.h"
 
 namespace tactforce::api {
@@ -60,7 +61,57 @@ absl::StatusOr<planner::SolverKind> SolverFromProto(v1::Solver solver) {
   }
 }
 
+v1::UncertaintySource ToProto(planner::UncertaintySource source) {
+  switch (source) {
+    case planner::UncertaintySource::kNone: return v1::UNCERTAINTY_SOURCE_UNSPECIFIED;
+    case planner::UncertaintySource::kNominal: return v1::UNCERTAINTY_SOURCE_NOMINAL;
+    case planner::UncertaintySource::kMeasurement: return v1::UNCERTAINTY_SOURCE_MEASUREMENT;
+    case planner::UncertaintySource::kParameters: return v1::UNCERTAINTY_SOURCE_PARAMETERS;
+    case planner::UncertaintySource::kFriction: return v1::UNCERTAINTY_SOURCE_FRICTION;
+    case planner::UncertaintySource::kCombined: return v1::UNCERTAINTY_SOURCE_COMBINED;
+  }
+  return v1::UNCERTAINTY_SOURCE_UNSPECIFIED;
+}
+
 }  // namespace
+
+absl::Status UncertaintyFromProto(const v1::ParameterUncertainty& in, double mass, const planner::Vec3& com,
+                                  planner::ParameterUncertainty* out) {
+  if (in.has_confidence()) out->confidence = in.confidence();
+  const bool short_form = in.mass_sigma() != 0.0 || in.com_covariance_size() > 0;
+  if (in.covariance_size() > 0 && short_form) {
+    return absl::InvalidArgumentError(
+        "object.uncertainty: give either covariance or mass_sigma / com_covariance, not both");
+  }
+  if (in.covariance_size() > 0) {
+    if (in.covariance_size() != 100) {
+      return absl::InvalidArgumentError(absl::StrCat("object.uncertainty.covariance: ", in.covariance_size(),
+                                                     " entries, need 100 (10x10 row-major)"));
+    }
+    for (int k = 0; k < 100; ++k) out->covariance(k / 10, k % 10) = in.covariance(k);
+    return absl::OkStatus();  // checked by the planner's validation
+  }
+  if (!short_form) return absl::OkStatus();
+  if (!std::isfinite(in.mass_sigma()) || in.mass_sigma() < 0.0 || in.mass_sigma() > planner::kMaxMass) {
+    return absl::InvalidArgumentError(absl::StrCat("object.uncertainty.mass_sigma: must be in [0, ",
+                                                   planner::kMaxMass, "] kg, got ", in.mass_sigma()));
+  }
+  Eigen::Matrix3d com_covariance = Eigen::Matrix3d::Zero();
+  if (in.com_covariance_size() > 0) {
+    if (in.com_covariance_size() != 9) {
+      return absl::InvalidArgumentError(absl::StrCat("object.uncertainty.com_covariance: ",
+                                                     in.com_covariance_size(), " entries, need 9 (3x3 row-major)"));
+    }
+    for (int k = 0; k < 9; ++k) com_covariance(k / 3, k % 3) = in.com_covariance(k);
+    if (absl::Status s = planner::CheckCovariance("object.uncertainty.com_covariance", com_covariance,
+                                                  planner::kMaxLength * planner::kMaxLength);
+        !s.ok()) {
+      return s;
+    }
+  }
+  out->covariance = planner::CovarianceFromMassAndCom(mass, com, in.mass_sigma(), com_covariance);
+  return absl::OkStatus();
+}
 
 planner::Vec3 FromProto(const v1::Vec3& v) { return planner::Vec3(v.x(), v.y(), v.z()); }
 
@@ -78,6 +129,7 @@ absl::StatusOr<planner::Contact> ContactFromProto(const v1::Contact& in, const s
   c.position = FromProto(in.position());
   c.normal = FromProto(in.normal());
   c.friction = in.friction();
+  c.friction_sigma = in.friction_sigma();
   absl::StatusOr<planner::ContactKind> kind = ContactKindFromProto(in.kind(), path + ".kind");
   if (!kind.ok()) return kind.status();
   c.kind = *kind;
@@ -98,6 +150,14 @@ absl::StatusOr<planner::PlanProblem> ToProblem(const v1::PlanRequest& request) {
   if (object.has_inertia()) {
     const v1::Inertia& in = object.inertia();
     if (absl::Status s = planner::ValidateInertia({in.ixx(), in.iyy(), in.izz(), in.ixy(), in.ixz(), in.iyz()});
+        !s.ok()) {
+      return s;
+    }
+  }
+
+  if (object.has_uncertainty()) {
+    if (absl::Status s = UncertaintyFromProto(object.uncertainty(), problem.object.mass, problem.object.com,
+                                              &problem.object.uncertainty);
         !s.ok()) {
       return s;
     }
@@ -235,6 +295,15 @@ v1::PlanRequest ToRequest(const planner::PlanProblem& problem,
     out->set_sigma(c.sigma);
     out->set_min_normal_force(c.min_normal_force);
     out->set_max_normal_force(c.max_normal_force);
+    out->set_friction_sigma(c.friction_sigma);
+  }
+  const planner::ParameterUncertainty& u = problem.object.uncertainty;
+  if (!u.covariance.isZero(0.0) || u.confidence.has_value()) {
+    v1::ParameterUncertainty* pu = object->mutable_uncertainty();
+    if (u.confidence.has_value()) pu->set_confidence(*u.confidence);
+    if (!u.covariance.isZero(0.0)) {
+      for (int k = 0; k < 100; ++k) pu->add_covariance(u.covariance(k / 10, k % 10));
+    }
   }
   *request.mutable_external_wrench()->mutable_force() = ToProto(problem.external_wrench.force);
   *request.mutable_external_wrench()->mutable_torque() = ToProto(problem.external_wrench.torque);
@@ -284,6 +353,18 @@ v1::PlanResponse ToProto(const planner::PlanResult& result) {
     out->set_ipopt_status(ToProto(in.ipopt_status));
     out->set_ipopt_message(in.ipopt_message);
   }
+  for (const planner::RowMargin& m : result.row_margins) {
+    v1::RowMargin* out = response.add_row_margins();
+    out->set_contact(m.contact);
+    out->set_constraint(m.cone ? "exact friction cone"
+                        : m.facet >= 0 ? absl::StrCat("friction cone facet ", m.facet)
+                        : m.upper      ? "maximum normal force"
+                                       : "minimum normal force");
+    out->set_slack(m.slack);
+    out->set_measurement(m.measurement);
+    out->set_parameters(m.parameters);
+  }
+  response.set_infeasible_source(ToProto(result.infeasible_source));
   return response;
 }
 

@@ -391,6 +391,9 @@ v1::FitInertiaResponse InertiaFitToProto(const inertia::InertiaFit& fit) {
   se->set_mass(fit.mass_se);
   *se->mutable_com() = ToProto(fit.com_se);
   *se->mutable_inertia() = TensorToProto(fit.inertia_se);
+  if (!fit.covariance.isZero(0.0)) {
+    for (int k = 0; k < 100; ++k) out.add_covariance(fit.covariance(k / 10, k % 10));
+  }
   for (double s : fit.singular_values) out.add_singular_values(s);
   for (const std::string& d : fit.poorly_excited) out.add_poorly_excited(d);
   out.set_iterations(fit.iterations);
@@ -432,6 +435,9 @@ inertia::InertiaFit InertiaFitFromProto(const v1::FitInertiaResponse& r) {
   fit.mass_se = r.standard_errors().mass();
   fit.com_se = FromProto(r.standard_errors().com());
   fit.inertia_se = TensorFromProto(r.standard_errors().inertia());
+  if (r.covariance_size() == 100) {
+    for (int k = 0; k < 100; ++k) fit.covariance(k / 10, k % 10) = r.covariance(k);
+  }
   fit.singular_values.assign(r.singular_values().begin(), r.singular_values().end());
   fit.poorly_excited.assign(r.poorly_excited().begin(), r.poorly_excited().end());
   fit.iterations = r.iterations();

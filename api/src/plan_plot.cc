@@ -45,6 +45,7 @@ constexpr const char* kAxisTitle[3] = {"x (m)", "y (m)", "z (m)"};
 const char kConeColor[] = "#3182bd";
 const char kForceColor[] = "#d62728";
 const char kSpreadColor[] = "#ff7f0e";
+const char kParameterSpreadColor[] = "#9467bd";
 const char kComColor[] = "#2ca02c";
 const char kGravityColor[] = "#6a3d9a";
 const io::Stroke kNormalStroke{"#666", 1, "3,3"};
@@ -96,7 +97,8 @@ Vec3 Rim(const ContactGlyph& c, const Scale& s, double phi) {
 void ExtendByGlyph(const ContactGlyph& c, const Scale& s, Eigen::AlignedBox3d* box) {
   const double m = s.metres_per_newton();
   const Vec3 tip = c.has_force ? Vec3(c.position + m * c.force) : c.position;
-  const Vec3 spread = m * c.covariance.diagonal().cwiseMax(0).cwiseSqrt();
+  const Vec3 spread = m * (c.covariance.diagonal().cwiseMax(0).cwiseSqrt())
+                              .cwiseMax(c.parameter_covariance.diagonal().cwiseMax(0).cwiseSqrt());
   box->extend(tip + spread);
   box->extend(tip - spread);
   box->extend(c.position + s.normal_length * c.normal);
@@ -118,7 +120,7 @@ void ChooseForceScale(const std::vector<const PlanScene*>& scenes, double size, 
   double force = 0;
   for (const PlanScene* scene : scenes)
     for (const ContactGlyph& c : scene->contacts) {
-      const double spread = std::sqrt(std::max(0.0, c.covariance.trace()));
+      const double spread = std::sqrt(std::max({0.0, c.covariance.trace(), c.parameter_covariance.trace()}));
       force = std::max({force, (c.has_force ? c.force.norm() : 0.0) + spread,
                         s->cone_height * std::hypot(1.0, c.friction)});
     }
@@ -184,17 +186,18 @@ void DrawCone(io::SvgCanvas& canvas, const Projector& at, const ContactGlyph& c,
 // The 1-sigma ellipse of S_ii projected on the view, at the force's tip: the
 // shadow of {x : x^T S^-1 x <= 1} on a coordinate plane has the 2x2 block of
 // S as its matrix. At least 0.6 px on each axis, so a zero spread shows.
-void DrawSpread(io::SvgCanvas& canvas, const Projector& at, const ContactGlyph& c, const Scale& s, int i) {
-  canvas.OpenGroup(GlyphGroup("spread-ellipse", i));
+void DrawSpread(io::SvgCanvas& canvas, const Projector& at, const ContactGlyph& c, const Scale& s, int i,
+                const Eigen::Matrix3d& covariance, const char* css_class, const char* color) {
+  canvas.OpenGroup(GlyphGroup(css_class, i));
   const Point tip = at(c.has_force ? Vec3(c.position + s.metres_per_newton() * c.force) : c.position);
   const double k = s.metres_per_newton() * at.px_per_metre();  // px per N
   const int a = at.view.a, b = at.view.b;
-  const double saa = c.covariance(a, a) * k * k, sbb = c.covariance(b, b) * k * k, sab = c.covariance(a, b) * k * k;
+  const double saa = covariance(a, a) * k * k, sbb = covariance(b, b) * k * k, sab = covariance(a, b) * k * k;
   const double mean = 0.5 * (saa + sbb), dev = std::hypot(0.5 * (saa - sbb), sab);
   const double rx = std::max(0.6, std::sqrt(std::max(0.0, mean + dev)));
   const double ry = std::max(0.6, std::sqrt(std::max(0.0, mean - dev)));
   const double theta = 0.5 * std::atan2(2 * sab, saa - sbb);  // major axis, data angle (y up)
-  const io::Stroke stroke{kSpreadColor, 1.5, ""};
+  const io::Stroke stroke{color, 1.5, ""};
   canvas.Ellipse(tip.first, tip.second, rx, ry, -theta * 180 / std::numbers::pi, "none", &stroke);
   canvas.CloseGroup();
 }
@@ -284,7 +287,12 @@ void DrawView(io::SvgCanvas& canvas, const io::PlotFrame& frame, const ViewAxes&
   for (size_t i = 0; i < scene.contacts.size(); ++i) DrawCone(canvas, at, scene.contacts[i], s, static_cast<int>(i));
   for (size_t i = 0; i < scene.contacts.size(); ++i) {
     DrawContact(canvas, at, scene.contacts[i], s, style, static_cast<int>(i), labels);
-    DrawSpread(canvas, at, scene.contacts[i], s, static_cast<int>(i));
+    const ContactGlyph& c = scene.contacts[i];
+    DrawSpread(canvas, at, c, s, static_cast<int>(i), c.covariance, "spread-ellipse", kSpreadColor);
+    if (!c.parameter_covariance.isZero(0.0)) {
+      DrawSpread(canvas, at, c, s, static_cast<int>(i), c.parameter_covariance, "parameter-spread-ellipse",
+                 kParameterSpreadColor);
+    }
   }
   io::DrawFrameOutline(canvas, frame, {"#444", 1, ""});
   canvas.CloseGroup();
@@ -320,7 +328,7 @@ std::vector<io::LegendEntry> PlotLegendEntries(const PlanScene& scene, const Sca
                                   "tightened cone); drawn up to n\xc2\xb7" "f = %.3g N",
                                   s.cone_height);
   using Entry = io::LegendEntry;
-  return {
+  std::vector<Entry> entries = {
       {.label = "contact point (m), with its name", .swatch = Entry::Swatch::kMarker,
        .marker = {.shape = io::MarkerShape::kBox, .size = 6}},
       {.label = "inward normal n (direction only)", .line = kNormalStroke},
@@ -336,6 +344,16 @@ std::vector<io::LegendEntry> PlotLegendEntries(const PlanScene& scene, const Sca
       {.label = "gravity direction (fixed length; \xe2\x8a\x99 toward you, \xe2\x8a\x97 away)",
        .line = {kGravityColor, 2, ""}},
   };
+  bool uncertain = false;
+  for (const ContactGlyph& c : scene.contacts) uncertain = uncertain || !c.parameter_covariance.isZero(0.0);
+  if (uncertain) {
+    const Entry parameters{
+        .label = "1\xcf\x83 spread of f from the inertial parameters: (G\xe2\x81\xba S_b G\xe2\x81\xba\xe1\xb5\x80)_ii, "
+                 "S_b = Y S_\xcf\x80 Y\xe1\xb5\x80 (N\xc2\xb2), projected, at the force tip (same N per m)",
+        .line = {kParameterSpreadColor, 1.5, ""}};
+    entries.insert(entries.begin() + 5, parameters);
+  }
+  return entries;
 }
 
 // The height of the legend (heading and entries) wrapped to `width` px.

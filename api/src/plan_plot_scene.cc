@@ -91,6 +91,7 @@ absl::StatusOr<PlanScene> BuildPlanScene(const planner::PlanProblem& problem,
     g.has_force = forces;
     if (forces) g.force = FromProto(response.forces(i));
     g.covariance = prepared.ellipsoid.ContactCovariance(i);
+    if (prepared.parameters.active) g.parameter_covariance = prepared.parameters.contact_covariance[i];
     scene.contacts.push_back(std::move(g));
   }
   return scene;

@@ -316,6 +316,7 @@ absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& r
     r->set_slipped(t.slipped);
     r->set_valid(t.valid);
     r->set_mu(t.mu);
+    r->set_mu_sigma(t.mu_sigma);
     r->set_lower_bound(t.lower_bound);
     r->set_slip_time(t.slip_time);
     r->set_slip_index(t.slip_index);
@@ -327,6 +328,7 @@ absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& r
   out.set_median(e->median);
   out.set_mean(e->mean);
   out.set_iqr(e->iqr);
+  out.set_mu_sigma(e->mu_sigma);
   out.set_count(e->count);
   return FiniteAnswer<v1::FrictionResponse>(std::move(out));
 }

@@ -88,6 +88,25 @@ Vec3 PreSlipForceAt(const FrictionTrial& trial, int last_static, double t_onset,
   return coef.row(0).transpose();  // value at the onset
 }
 
+// The estimate's own error model: the standard error of |f_t| / f_n over
+// the samples the pre-slip force is taken from (0 for a single sample).
+double RatioStandardError(const FrictionTrial& trial, const Vec3& n, int last_static, const FrictionOptions& o) {
+  const int span = o.pre_slip == PreSlipForce::kWindowAverage ? o.window : o.fit_window;
+  const int first = std::max(0, last_static - span + 1);
+  const int m = last_static - first + 1;
+  if (m < 2) return 0.0;
+  double sum = 0.0, sum2 = 0.0;
+  for (int k = first; k <= last_static; ++k) {
+    const Vec3& f = trial.samples[k].force;
+    const double fn = f.dot(n);
+    const double ratio = fn > 0 ? (f - fn * n).norm() / fn : 0.0;
+    sum += ratio;
+    sum2 += ratio * ratio;
+  }
+  const double variance = std::max(0.0, (sum2 - sum * sum / m) / (m - 1));
+  return std::sqrt(variance / m);
+}
+
 TrialFriction EstimateTrial(const FrictionTrial& trial, const Vec3& n, const FrictionOptions& o) {
   TrialFriction out;
   out.name = trial.name;
@@ -159,12 +178,12 @@ TrialFriction EstimateTrial(const FrictionTrial& trial, const Vec3& n, const Fri
   const Vec3 f = PreSlipForceAt(trial, last_static, s[onset].t, o);
   const auto [fn, ft] = ratio(f);
   if (fn < o.min_normal_force) {
-    out.message = absl::StrCat("normal force before slip ", fn, " N is below the minimum ",
-                               o.min_normal_force, " N");
+    out.message = absl::StrCat("normal force before slip ", fn, " N is below the minimum ", o.min_normal_force, " N");
     return out;
   }
   out.valid = true;
   out.mu = ft / fn;
+  out.mu_sigma = RatioStandardError(trial, n, last_static, o);
   out.force_angle = std::acos(std::clamp(f.normalized().dot(n), -1.0, 1.0));
   return out;
 }
@@ -235,6 +254,15 @@ absl::StatusOr<FrictionEstimate> EstimateFriction(const std::vector<FrictionTria
     for (double m : mus) sum += m;
     out.mean = sum / mus.size();
     out.iqr = Quantile(mus, 0.75) - Quantile(mus, 0.25);
+    if (mus.size() >= 2) {
+      double squares = 0;
+      for (double m : mus) squares += (m - out.mean) * (m - out.mean);
+      out.mu_sigma = std::sqrt(squares / (mus.size() - 1));
+    } else {
+      for (const auto& t : out.trials) {
+        if (t.valid && t.slipped) out.mu_sigma = t.mu_sigma;
+      }
+    }
   }
   return out;
 }

@@ -9,6 +9,7 @@
 #include <Eigen/SVD>
 
 #include "absl/strings/str_cat.h"
+#include "tactforce/planner/parameter_uncertainty.h"
 
 namespace tactforce::planner {
 namespace {
@@ -399,14 +400,17 @@ void TangentialForceSigma(const PlanProblem& problem, const MeasurementEllipsoid
                           std::vector<double>* out) {
   out->resize(problem.contacts.size());
   for (int i = 0; i < static_cast<int>(problem.contacts.size()); ++i) {
-    // P S P has the normal in its kernel; its other eigenvalues are those of
-    // the 2x2 block [t1 t2]^T S [t1 t2].
-    const auto [t1, t2] = TangentBasis(problem.contacts[i].normal);
-    const Eigen::Matrix3d s = ellipsoid.ContactCovariance(i);
-    const double a = t1.dot(s * t1), b = t1.dot(s * t2), c = t2.dot(s * t2);
-    const double lambda_max = 0.5 * (a + c) + std::hypot(0.5 * (a - c), b);
-    (*out)[i] = std::sqrt(std::max(0.0, lambda_max));
+    (*out)[i] = TangentialSpread(problem.contacts[i].normal, ellipsoid.ContactCovariance(i));
   }
+}
+
+double TangentialSpread(const Vec3& normal, const Eigen::Matrix3d& s) {
+  // P S P has the normal in its kernel; its other eigenvalues are those of
+  // the 2x2 block [t1 t2]^T S [t1 t2].
+  const auto [t1, t2] = TangentBasis(normal);
+  const double a = t1.dot(s * t1), b = t1.dot(s * t2), c = t2.dot(s * t2);
+  const double lambda_max = 0.5 * (a + c) + std::hypot(0.5 * (a - c), b);
+  return std::sqrt(std::max(0.0, lambda_max));
 }
 
 std::vector<double> TangentialForceSigma(const PlanProblem& problem,
@@ -442,6 +446,7 @@ double ExactConeSlack(const Vec3& normal, double mu, double shift, const Vec3& f
 
 void PrepareInPlace(const PlanOptions& options, EquilibriumScratch* scratch,
                     PreparedProblem* p) {
+  ApplyFrictionUncertainty(options.confidence, &p->problem, &p->nominal_friction);
   ComputeForceEquilibrium(p->problem, options.rank_tolerance, scratch, &p->equilibrium);
   ComputeMeasurementEllipsoid(p->problem, p->equilibrium, &p->ellipsoid);
   BuildConstraintRows(p->problem, p->ellipsoid, options.cone_sides, options.confidence,
@@ -454,6 +459,7 @@ void PrepareInPlace(const PlanOptions& options, EquilibriumScratch* scratch,
   } else {
     p->cone_shift.clear();
   }
+  TightenForParameters(options, p);
 }
 
 PreparedProblem Prepare(PlanProblem validated, const PlanOptions& options) {

@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "planner/src/backends.h"
+#include "tactforce/planner/parameter_uncertainty.h"
 #include "tactforce/planner/validation.h"
 
 namespace tactforce::planner {
@@ -45,6 +46,8 @@ double SnapRoundOff(double margin, const std::vector<Vec3>& forces) {
 }
 
 void ResetResult(PlanResult* result) {
+  result->row_margins.clear();
+  result->infeasible_source = UncertaintySource::kNone;
   result->status = PlanStatus::kSolverFailure;
   result->message.clear();
   result->forces.clear();
@@ -78,6 +81,9 @@ void FinishResult(const PreparedProblem& prepared, const PlanOptions& options,
   if (result->status != PlanStatus::kOptimal || static_cast<int>(result->forces.size()) != n) {
     if (result->status == PlanStatus::kOptimal) Fail("backend returned no forces", result);
     ClearAnswer(result);
+    if (!prepared.nominal_friction.empty() || prepared.parameters.active) {
+      FillRowMargins(prepared, {}, &result->row_margins);
+    }
     return;
   }
   result->normal_forces.resize(n);
@@ -87,6 +93,9 @@ void FinishResult(const PreparedProblem& prepared, const PlanOptions& options,
     result->objective += result->forces[i].squaredNorm();
   }
   result->min_margin = SnapRoundOff(MinMargin(prepared, options, result->forces), result->forces);
+  if (!prepared.nominal_friction.empty() || prepared.parameters.active) {
+    FillRowMargins(prepared, result->forces, &result->row_margins);
+  }
   // Never an OPTIMAL answer that is not a number: overflow anywhere in a
   // backend becomes a named failure instead of a silent wrong answer.
   if (!std::isfinite(result->objective) || !std::isfinite(result->min_margin)) {
@@ -99,6 +108,15 @@ void FinishResult(const PreparedProblem& prepared, const PlanOptions& options,
 
 absl::Status ForceSolver::Solve(const PlanProblem& problem, const PlanOptions& options,
                                 PlanningWorkspace* workspace, PlanResult* result) const {
+  absl::Status status = SolveOnce(problem, options, workspace, result);
+  if (status.ok() && result->status == PlanStatus::kInfeasible && HasModelUncertainty(problem)) {
+    AttributeInfeasibility(problem, options, result);
+  }
+  return status;
+}
+
+absl::Status ForceSolver::SolveOnce(const PlanProblem& problem, const PlanOptions& options,
+                                    PlanningWorkspace* workspace, PlanResult* result) const {
   const auto start = std::chrono::steady_clock::now();
   PreparedProblem& prepared = workspace->prepared;
   if (absl::Status valid = ValidateProblem(problem, options, &prepared.problem); !valid.ok()) {

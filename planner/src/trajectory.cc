@@ -44,6 +44,7 @@ PlanProblem StepProblem(const TrajectoryProblem& t, int step) {
   const Vec3 weight = p.object.mass * s.gravity;
   p.external_wrench.force += s.external_wrench.force - need.force - weight;
   p.external_wrench.torque += s.external_wrench.torque - need.torque - p.object.com.cross(weight);
+  p.motion = {s.linear_acceleration, s.angular_velocity, s.angular_acceleration};
   return p;
 }
 

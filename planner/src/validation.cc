@@ -8,6 +8,7 @@
 #include <string>
 
 #include "absl/strings/str_cat.h"
+#include "tactforce/planner/parameter_uncertainty.h"
 
 namespace tactforce::planner {
 namespace {
@@ -38,6 +39,7 @@ absl::Status CheckContact(int index, Contact& c) {
     const char* unit;
   };
   const NonNegative numbers[] = {{"friction", c.friction, "must be >= 0", kMaxFriction, ""},
+                                 {"friction_sigma", c.friction_sigma, "must be >= 0", kMaxFriction, ""},
                                  {"sigma", c.sigma, "must be >= 0", kMaxForce, " N"},
                                  {"min_normal_force", c.min_normal_force, "must be >= 0", kMaxForce, " N"},
                                  {"max_normal_force", c.max_normal_force, "must be >= 0 (0 = none)", kMaxForce, " N"}};
@@ -103,12 +105,29 @@ absl::Status ValidateProblem(const PlanProblem& problem, const PlanOptions& opti
   out.object = problem.object;
   out.external_wrench = problem.external_wrench;
   out.contacts = problem.contacts;  // element-wise: keeps capacity
+  out.motion = problem.motion;
   if (auto s = CheckMagnitude("object.mass", out.object.mass, kMaxMass, "kg"); !s.ok()) return s;
   if (out.object.mass < 0.0) return Invalid("object.mass", "must be >= 0");
   if (auto s = CheckMagnitude("object.com", out.object.com, kMaxLength, "m"); !s.ok()) return s;
   if (auto s = CheckMagnitude("object.gravity", out.object.gravity, kMaxAcceleration, "m/s^2"); !s.ok()) return s;
   if (auto s = CheckMagnitude("external_wrench.force", out.external_wrench.force, kMaxForce, "N"); !s.ok()) return s;
   if (auto s = CheckMagnitude("external_wrench.torque", out.external_wrench.torque, kMaxForce, "N m"); !s.ok()) {
+    return s;
+  }
+
+  if (auto s = ValidateParameterUncertainty(out.object.uncertainty); !s.ok()) return s;
+  const Motion& motion = out.motion;
+  if (auto s = CheckMagnitude("motion.linear_acceleration", motion.linear_acceleration, kMaxAcceleration, "m/s^2");
+      !s.ok()) {
+    return s;
+  }
+  if (auto s = CheckMagnitude("motion.angular_velocity", motion.angular_velocity, kMaxAngularVelocity, "rad/s");
+      !s.ok()) {
+    return s;
+  }
+  if (auto s = CheckMagnitude("motion.angular_acceleration", motion.angular_acceleration, kMaxAngularAcceleration,
+                              "rad/s^2");
+      !s.ok()) {
     return s;
   }
 

@@ -280,6 +280,29 @@ class PackageTest(unittest.TestCase):
         self.assertAlmostEqual(response.com.x, COM[0], delta=1e-3)
         self.assertAlmostEqual(response.com.z, COM[2], delta=1e-3)
 
+    def test_plan_takes_the_fit_and_the_friction_estimate_directly(self):
+        """Issue 28: FitInertia's and EstimateFriction's answers go into a plan unchanged."""
+        from tactforce.plan import apply_estimates
+        samples = inertia_samples()
+
+        def requests():
+            first = inertia_pb2.FitInertiaRequest()
+            first.options.method = inertia_pb2.INERTIA_METHOD_BASELINE_LS
+            yield first
+            yield inertia_pb2.FitInertiaRequest(samples=samples)
+
+        fit = self.client.FitInertia(requests())
+        self.assertEqual(len(fit.covariance), 100)
+        friction = self.client.EstimateFriction(friction_request(mu=0.5, trials=3))
+        self.assertGreater(friction.mu_sigma, 0.0)
+        from google.protobuf import json_format
+        request = json_format.ParseDict(read_json(SPHERE_PINCH), planner_pb2.PlanRequest())
+        apply_estimates(request, inertia=fit, friction=friction)
+        self.assertEqual(list(request.object.uncertainty.covariance), list(fit.covariance))
+        self.assertEqual(request.contacts[0].friction_sigma, friction.mu_sigma)
+        response = self.client.Plan(request)
+        self.assertGreater(len(response.row_margins), 0, response.message)
+
     def test_fit_inertia_reraises_the_request_streams_own_error(self):
         class BadRow(Exception):
             pass

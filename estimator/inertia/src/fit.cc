@@ -481,7 +481,10 @@ absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in, const In
   fit.samples_used = r->samples_used;
   fit.notes = r->notes;
 
-  if (r->cov.allFinite() && r->cov.norm() > 0 && fit.params.mass != 0) SetStandardErrors(*r, &fit);
+  if (r->cov.allFinite() && r->cov.norm() > 0 && fit.params.mass != 0) {
+    SetStandardErrors(*r, &fit);
+    fit.covariance = 0.5 * (r->cov + r->cov.transpose());
+  }
   SetExcitation(*r, options.excitation_threshold, &fit);
   fit.time_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

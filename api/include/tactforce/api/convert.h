@@ -53,6 +53,13 @@ v1::PlanRequest ToRequest(const planner::PlanProblem& problem,
                           planner::SolverKind solver);
 v1::PlanResponse ToProto(const planner::PlanResult& result);
 
+// ObjectModel.uncertainty of an object of `mass` and `com`: the 10x10
+// covariance (100 entries, checked by the planner's validation) or the
+// short form mass_sigma / com_covariance converted to it; errors name the
+// field ("object.uncertainty.covariance: 99 entries, need 100 ...").
+absl::Status UncertaintyFromProto(const v1::ParameterUncertainty& in, double mass, const planner::Vec3& com,
+                                  planner::ParameterUncertainty* out);
+
 // Single-value mappings.
 v1::Vec3 ToProto(const planner::Vec3& v);
 planner::Vec3 FromProto(const v1::Vec3& v);

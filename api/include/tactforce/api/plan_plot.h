@@ -57,6 +57,9 @@ struct ContactGlyph {
   bool has_force = false;   // the response carries a force for this contact
   planner::Vec3 force = planner::Vec3::Zero();  // N
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // S_ii of the trusted ellipsoid (N^2)
+  // (G^+ S_b G^+T)_ii: the force spread the inertial-parameter uncertainty
+  // causes (N^2); zero without object.uncertainty.
+  Eigen::Matrix3d parameter_covariance = Eigen::Matrix3d::Zero();
 };
 
 // One plan as drawn.

@@ -28,7 +28,7 @@ from google.protobuf.message import Message
 from tactforce._cli import print_json, report, wire_choices
 from tactforce.client import Client, tls_credentials
 from tactforce.errors import EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_OK, TactforceError
-from tactforce.v1 import planner_pb2
+from tactforce.v1 import estimator_pb2, inertia_pb2, planner_pb2
 
 SOLVERS = wire_choices(planner_pb2.Solver, "SOLVER_")
 
@@ -58,6 +58,40 @@ def wrench_grasp() -> planner_pb2.PlanRequest:
         contact.sigma = 0.5
         contact.min_normal_force = 0.3
     request.solver = planner_pb2.SOLVER_GEOMETRIC
+    return request
+
+
+def apply_estimates(request: planner_pb2.PlanRequest,
+                    inertia: Optional[Message] = None,
+                    friction: Optional[Message] = None) -> planner_pb2.PlanRequest:
+    """Fill `request` from earlier estimates, with their uncertainty (in place).
+
+    `inertia`: a FitInertiaResponse (Client.FitInertia's answer): mass, CoM,
+    inertia, and its `covariance` as object.uncertainty.covariance unchanged.
+    `friction`: a FrictionResponse (Client.EstimateFriction's answer): every
+    fingertip (non-EXTRINSIC) contact's friction = median, friction_sigma =
+    mu_sigma. As `tactforce plan --inertia FIT.json --friction FRICTION.json`.
+    """
+    if inertia is not None:
+        if not inertia.mass > 0:
+            raise ValueError(f"inertia: the fit has no positive mass ({inertia.mass} kg)")
+        if len(inertia.covariance) not in (0, 100):
+            raise ValueError(f"inertia: covariance has {len(inertia.covariance)} entries, need 100")
+        obj = request.object
+        obj.mass = inertia.mass
+        obj.com.CopyFrom(inertia.com)
+        obj.inertia.CopyFrom(inertia.inertia)
+        del obj.uncertainty.covariance[:]
+        del obj.uncertainty.com_covariance[:]
+        obj.uncertainty.mass_sigma = 0.0
+        obj.uncertainty.covariance.extend(inertia.covariance)
+    if friction is not None:
+        if friction.count <= 0:
+            raise ValueError("friction: no trial slipped (count 0): no friction estimate")
+        for contact in request.contacts:
+            if contact.kind != planner_pb2.CONTACT_KIND_EXTRINSIC:
+                contact.friction = friction.median
+                contact.friction_sigma = friction.mu_sigma
     return request
 
 
@@ -132,6 +166,10 @@ def parse_args(argv: Optional[List[str]]) -> argparse.Namespace:
     parser.add_argument("--friction-probe", metavar="FILE",
                         help="FrictionProbeRequest JSON ('-' = stdin) instead of --request: the probe's "
                              "force and the holding plan per sample (Planner.PlanFrictionProbe)")
+    parser.add_argument("--inertia", metavar="FIT.json",
+                        help="FitInertiaResponse JSON: object mass, CoM, inertia and their covariance")
+    parser.add_argument("--friction", metavar="FRICTION.json",
+                        help="FrictionResponse JSON: fingertip friction = median, friction_sigma = mu_sigma")
     parser.add_argument("--solver", choices=sorted(SOLVERS),
                         help="override the request's solver")
     parser.add_argument("--timeout", type=float, default=10.0,
@@ -191,6 +229,13 @@ def main(argv: Optional[List[str]] = None) -> int:
         request = load_request(args.request) if args.request else wrench_grasp()
     except (OSError, json_format.ParseError) as error:
         print(f"error: {args.request}: {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    try:
+        fit = load_request(args.inertia, inertia_pb2.FitInertiaResponse) if args.inertia else None
+        mu = load_request(args.friction, estimator_pb2.FrictionResponse) if args.friction else None
+        apply_estimates(request, fit, mu)
+    except (OSError, json_format.ParseError, ValueError) as error:
+        print(f"error: --inertia/--friction: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
     if args.solver:
         request.solver = SOLVERS[args.solver]

@@ -64,6 +64,7 @@ struct TrialFriction {
   bool slipped = false;
   bool valid = false;       // false: no estimate (message says why)
   double mu = 0.0;          // slipped: estimate; else lower bound
+  double mu_sigma = 0.0;    // slipped: standard error of mu over the pre-slip samples
   bool lower_bound = false; // no slip: mu >= the largest |f_t| / f_n seen
   double slip_time = 0.0;   // s, onset: the last sample at rest before the motion
   int slip_index = -1;      // onset sample (the window ends one sample before it)
@@ -78,6 +79,9 @@ struct FrictionEstimate {
   std::vector<TrialFriction> trials;
   // Over valid slipped trials.
   double median = 0.0, mean = 0.0, iqr = 0.0;
+  // Std. dev. of mu: over the trials (sample, n - 1) when two or more, else
+  // the one trial's own mu_sigma; 0 when none slipped.
+  double mu_sigma = 0.0;
   int count = 0;
 };
 

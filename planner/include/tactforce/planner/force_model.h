@@ -136,6 +136,10 @@ std::vector<double> TangentialForceSigma(const PlanProblem& problem,
 void TangentialForceSigma(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid,
                           std::vector<double>* out);
 
+// sqrt(lambda_max(P_t S P_t)) of a 3x3 covariance S at a contact with unit
+// `normal` (P_t its tangent-plane projector), in closed form.
+double TangentialSpread(const Vec3& normal, const Eigen::Matrix3d& covariance);
+
 // Robust tightening of each contact's exact (circular) friction cone (N):
 // shift_i = kappa (mu_i rho_n,i + rho_t,i), so the cone every force the
 // sensors could mistake for f_i stays in is
@@ -153,6 +157,16 @@ void ExactConeShift(const PlanProblem& problem, const std::vector<double>& norma
 // normal n and friction mu: mu n . f - shift - |P f|; >= 0 inside.
 double ExactConeSlack(const Vec3& normal, double mu, double shift, const Vec3& force);
 
+// The tightening for uncertain inertial parameters (parameter_uncertainty.h).
+struct ParameterTightening {
+  bool active = false;      // non-zero covariance and kappa_b > 0
+  double confidence = 0.0;  // kappa_b
+  Eigen::Matrix<double, 6, 6> wrench_covariance = Eigen::Matrix<double, 6, 6>::Zero();  // S_b
+  std::vector<Eigen::Matrix3d> contact_covariance;  // P_i = (G^+ S_b G^+T)_ii (N^2)
+  VectorXd row_margin;             // kappa_b sqrt(a^T P_i a) per row (N), taken off rhs
+  std::vector<double> cone_margin;  // EXACT: kappa_b (mu rho_n,b + rho_t,b) (N), in cone_shift
+};
+
 // Everything a backend needs, derived once from a validated request.
 struct PreparedProblem {
   PlanProblem problem;  // validated, normals of unit length
@@ -165,6 +179,11 @@ struct PreparedProblem {
   // the exact cones that every backend and the reported margin use.
   // PYRAMID: empty (the facets in `rows` carry the tightening).
   std::vector<double> cone_shift;
+  // Model uncertainty (parameter_uncertainty.h). `problem`'s frictions are
+  // the planning ones, mu - kappa sigma_mu; the request's are kept here
+  // (empty when no contact has a friction_sigma).
+  std::vector<double> nominal_friction;
+  ParameterTightening parameters;
   int num_contacts() const { return static_cast<int>(problem.contacts.size()); }
 };
 

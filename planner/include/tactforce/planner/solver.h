@@ -53,6 +53,14 @@ class ForceSolver {
                        PlanResult* result) const = 0;
 
  private:
+  // Solve without attributing an infeasible plan to an uncertainty source.
+  absl::Status SolveOnce(const PlanProblem& problem, const PlanOptions& options,
+                         PlanningWorkspace* workspace, PlanResult* result) const;
+  // A plan with model uncertainty found infeasible: which source's
+  // tightening, removed alone, makes it feasible (types.h UncertaintySource).
+  void AttributeInfeasibility(const PlanProblem& problem, const PlanOptions& options,
+                              PlanResult* result) const;
+
   SolverKind kind_;
 };
 

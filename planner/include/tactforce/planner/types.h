@@ -27,16 +27,40 @@ struct Contact {
   Vec3 position = Vec3::Zero();  // contact point (m)
   Vec3 normal = Vec3::UnitZ();   // unit, pointing INTO the object
   double friction = 0.5;         // Coulomb mu >= 0
+  // Std. dev. of mu (0 = known): the plan uses the cone at
+  // mu - kappa sigma_mu (kappa = PlanOptions::confidence), clipped at 0.
+  double friction_sigma = 0.0;
   ContactKind kind = ContactKind::kIntrinsic;
   double sigma = 0.0;             // reading std. dev. (N); ignored if extrinsic
   double min_normal_force = 0.0;  // N
   double max_normal_force = 0.0;  // N; 0 = unbounded
 };
 
+// The 10 inertial parameters pi = (m, m c_x, m c_y, m c_z, I_xx, I_yy, I_zz,
+// I_xy, I_xz, I_yz), inertia about the OBJECT ORIGIN (kg, kg m, kg m^2).
+using Matrix10d = Eigen::Matrix<double, 10, 10>;
+
+// Uncertainty of pi the plan must hold against (parameter_uncertainty.h):
+// every pi in the ellipsoid {dpi^T covariance^+ dpi <= kappa_b^2}.
+struct ParameterUncertainty {
+  Matrix10d covariance = Matrix10d::Zero();  // of pi; zero = known
+  std::optional<double> confidence;          // kappa_b; empty: PlanOptions::confidence
+};
+
 struct ObjectModel {
   double mass = 0.0;                 // kg
   Vec3 com = Vec3::Zero();           // m
   Vec3 gravity = Vec3(0, 0, -9.81);  // m/s^2
+  ParameterUncertainty uncertainty;
+};
+
+// The object's motion at the planned instant (object frame), for the wrench
+// regressor b = Y pi; zero = static. The wrench itself is carried by
+// `external_wrench` (StepProblem), so a plan without uncertainty ignores it.
+struct Motion {
+  Vec3 linear_acceleration = Vec3::Zero();   // of the origin (m/s^2)
+  Vec3 angular_velocity = Vec3::Zero();      // rad/s
+  Vec3 angular_acceleration = Vec3::Zero();  // rad/s^2
 };
 
 // Force (N) and torque about the object origin (N m).
@@ -50,6 +74,7 @@ struct PlanProblem {
   ObjectModel object;
   std::vector<Contact> contacts;
   Wrench external_wrench;  // also balanced by the contacts
+  Motion motion;
 };
 
 enum class ConeModel { kPyramid, kExact };
@@ -92,6 +117,24 @@ struct PlanOptions {
 
 enum class PlanStatus { kOptimal, kInfeasible, kSolverFailure };
 
+// What made a plan infeasible when uncertainty is present: the plan is
+// feasible once that source's tightening alone is removed (kNominal:
+// infeasible even without any; kCombined: only removing several helps).
+enum class UncertaintySource { kNone, kNominal, kMeasurement, kParameters, kFriction, kCombined };
+const char* ToString(UncertaintySource source);
+
+// One tightened constraint's margin split by source (N), at the plan.
+struct RowMargin {
+  int contact = 0;
+  bool cone = false;      // EXACT cone of `contact` rather than a row
+  int row = -1;           // index into the prepared rows (-1 for a cone)
+  int facet = -1;         // a pyramid facet's index; -1: a normal-force bound or a cone
+  bool upper = false;     // the maximum (not minimum) normal-force bound
+  double slack = 0.0;     // of the tightened row / cone at the forces
+  double measurement = 0.0;  // kappa sqrt(a^T S_f a) (cone: kappa (mu rho_n + rho_t))
+  double parameters = 0.0;   // kappa_b sqrt(a^T G^+ S_b G^+T a) (cone: likewise)
+};
+
 const char* ToString(PlanStatus status);
 const char* ToString(SolverKind solver);
 
@@ -125,6 +168,10 @@ struct PlanResult {
   std::optional<CrossCheckReport> cross_check;
   // Geometric backend: active constraint rows at the optimum (warm starts).
   std::vector<int> active_set;
+  // Only when the problem carries uncertainty (object.uncertainty or a
+  // friction_sigma); empty otherwise, so such plans are unchanged.
+  std::vector<RowMargin> row_margins;  // every row, then every EXACT cone
+  UncertaintySource infeasible_source = UncertaintySource::kNone;
 };
 
 }  // namespace tactforce::planner

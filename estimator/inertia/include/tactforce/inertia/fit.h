@@ -217,6 +217,10 @@ struct InertiaFit {
   double mass_se = 0.0;
   Vec3 com_se = Vec3::Zero();
   InertiaTensor inertia_se;
+  // Covariance of `standard` (pi about the object origin, ToStandard()
+  // order; kg, kg m, kg m^2 squared); zero when unknown. What a plan takes
+  // as planner::ParameterUncertainty::covariance unchanged.
+  Eigen::Matrix<double, 10, 10> covariance = Eigen::Matrix<double, 10, 10>::Zero();
 
   // Singular values of the column-scaled, whitened regressor, descending,
   // relative to the largest; directions below options.excitation_threshold

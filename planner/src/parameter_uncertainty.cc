@@ -1,0 +1,301 @@
+// Tightening for uncertain inertial parameters and friction
+// (parameter_uncertainty.h).
+#include "tactforce/planner/parameter_uncertainty.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+
+#include "absl/strings/match.h"
+#include "absl/strings/str_cat.h"
+#include "tactforce/planner/validation.h"
+
+namespace tactforce::planner {
+namespace {
+
+Eigen::Matrix3d Skew(const Vec3& v) {
+  Eigen::Matrix3d s;
+  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return s;
+}
+
+// L(v) with I_o v = L(v) (I_xx, I_yy, I_zz, I_xy, I_xz, I_yz).
+Eigen::Matrix<double, 3, 6> InertiaProductMap(const Vec3& v) {
+  Eigen::Matrix<double, 3, 6> l;
+  l << v.x(), 0, 0, v.y(), v.z(), 0,  //
+      0, v.y(), 0, v.x(), 0, v.z(),   //
+      0, 0, v.z(), 0, v.x(), v.y();
+  return l;
+}
+
+constexpr const char* kParameterNames[10] = {"m",   "m*cx", "m*cy", "m*cz", "Ixx",
+                                             "Iyy", "Izz",  "Ixy",  "Ixz",  "Iyz"};
+
+// Largest |covariance| entry allowed: (kMaxInertia)^2, beyond any object.
+constexpr double kMaxCovarianceEntry = kMaxInertia * kMaxInertia;
+
+}  // namespace
+
+const char* ToString(UncertaintySource source) {
+  switch (source) {
+    case UncertaintySource::kNone: return "NONE";
+    case UncertaintySource::kNominal: return "NOMINAL";
+    case UncertaintySource::kMeasurement: return "MEASUREMENT";
+    case UncertaintySource::kParameters: return "PARAMETERS";
+    case UncertaintySource::kFriction: return "FRICTION";
+    case UncertaintySource::kCombined: return "COMBINED";
+  }
+  return "UNKNOWN";
+}
+
+WrenchRegressorMatrix WrenchRegressor(const Vec3& gravity, const Motion& motion) {
+  const Vec3 a_minus_g = motion.linear_acceleration - gravity;
+  const Vec3& w = motion.angular_velocity;
+  const Vec3& dw = motion.angular_acceleration;
+  WrenchRegressorMatrix y = WrenchRegressorMatrix::Zero();
+  y.block<3, 1>(0, 0) = a_minus_g;
+  y.block<3, 3>(0, 1) = Skew(dw) + Skew(w) * Skew(w);
+  y.block<3, 3>(3, 1) = -Skew(a_minus_g);
+  y.block<3, 6>(3, 4) = InertiaProductMap(dw) + Skew(w) * InertiaProductMap(w);
+  return y;
+}
+
+Vector10d StandardParameters(double mass, const Vec3& com, const Eigen::Matrix3d& inertia_com) {
+  const Eigen::Matrix3d io =
+      inertia_com + mass * (com.squaredNorm() * Eigen::Matrix3d::Identity() - com * com.transpose());
+  Vector10d pi;
+  pi << mass, mass * com, io(0, 0), io(1, 1), io(2, 2), io(0, 1), io(0, 2), io(1, 2);
+  return pi;
+}
+
+Matrix10d CovarianceFromMassAndCom(double mass, const Vec3& com, double mass_sigma,
+                                   const Eigen::Matrix3d& com_covariance) {
+  // d(m, h) = J (dm, dc), J = [1 0; c m I].
+  Eigen::Matrix<double, 4, 4> j = Eigen::Matrix<double, 4, 4>::Zero();
+  j(0, 0) = 1.0;
+  j.block<3, 1>(1, 0) = com;
+  j.block<3, 3>(1, 1) = mass * Eigen::Matrix3d::Identity();
+  Eigen::Matrix<double, 4, 4> input = Eigen::Matrix<double, 4, 4>::Zero();
+  input(0, 0) = mass_sigma * mass_sigma;
+  input.block<3, 3>(1, 1) = 0.5 * (com_covariance + com_covariance.transpose());
+  Matrix10d out = Matrix10d::Zero();
+  out.topLeftCorner<4, 4>() = j * input * j.transpose();
+  return out;
+}
+
+absl::Status CheckCovariance(absl::string_view field, const Eigen::MatrixXd& s, double limit,
+                             const char* const* names) {
+  const int n = static_cast<int>(s.rows());
+  const auto entry = [&](int i, int j) { return absl::StrCat(field, "[", i * n + j, "]"); };
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      if (!std::isfinite(s(i, j))) return absl::InvalidArgumentError(entry(i, j) + ": not a finite number");
+      if (std::abs(s(i, j)) > limit) {
+        return absl::InvalidArgumentError(absl::StrCat(entry(i, j), ": magnitude exceeds ", limit));
+      }
+    }
+  }
+  const double scale = std::max(s.cwiseAbs().maxCoeff(), 1e-300);
+  for (int i = 0; i < n; ++i) {
+    for (int j = i + 1; j < n; ++j) {
+      if (std::abs(s(i, j) - s(j, i)) > 1e-9 * scale) {
+        return absl::InvalidArgumentError(absl::StrCat(entry(i, j), ": not symmetric (", s(i, j),
+                                                       " but the entry [", j * n + i, "] is ", s(j, i), ")"));
+      }
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    if (s(i, i) < 0.0) return absl::InvalidArgumentError(entry(i, i) + ": negative variance");
+  }
+  // A pivoted LDL^T settles the common case cheaply (this runs on every
+  // solve); only a failing or doubtful one pays for the eigenvalues.
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(s);
+  if (ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() >= 0.0) return absl::OkStatus();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (s + s.transpose()));
+  if (eig.eigenvalues()(0) < -1e-9 * scale) {
+    int k = 0;
+    eig.eigenvectors().col(0).cwiseAbs().maxCoeff(&k);
+    return absl::InvalidArgumentError(absl::StrCat(
+        entry(k, k), ": not positive semidefinite (eigenvalue ", eig.eigenvalues()(0),
+        ", its direction mostly along index ", k, names ? absl::StrCat(" (", names[k], ")") : "", ")"));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status ValidateParameterUncertainty(const ParameterUncertainty& u) {
+  if (u.confidence.has_value()) {
+    const double k = *u.confidence;
+    if (!std::isfinite(k) || k < 0.0 || k > PlanOptions::kMaxConfidence) {
+      return absl::InvalidArgumentError(absl::StrCat("object.uncertainty.confidence: must be in [0, ",
+                                                     PlanOptions::kMaxConfidence, "], got ", k));
+    }
+  }
+  if (u.covariance.isZero(0.0)) return absl::OkStatus();
+  // Fast path in fixed size for the common valid case (this runs every solve).
+  const Matrix10d& s = u.covariance;
+  const double scale = s.cwiseAbs().maxCoeff();
+  const bool plain = s.allFinite() && scale <= kMaxCovarianceEntry && (s - s.transpose()).cwiseAbs().maxCoeff() <= 1e-9 * scale;
+  if (plain && s.diagonal().minCoeff() >= 0.0) {
+    const Eigen::LDLT<Matrix10d> ldlt(s);
+    if (ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() >= 0.0) return absl::OkStatus();
+  }
+  return CheckCovariance("object.uncertainty.covariance", u.covariance, kMaxCovarianceEntry, kParameterNames);
+}
+
+bool HasModelUncertainty(const PlanProblem& problem) {
+  if (!problem.object.uncertainty.covariance.isZero(0.0)) return true;
+  for (const Contact& c : problem.contacts) {
+    if (c.friction_sigma > 0.0) return true;
+  }
+  return false;
+}
+
+void ApplyFrictionUncertainty(double confidence, PlanProblem* problem,
+                              std::vector<double>* nominal_friction) {
+  nominal_friction->clear();
+  bool any = false;
+  for (const Contact& c : problem->contacts) any = any || c.friction_sigma > 0.0;
+  if (!any) return;
+  for (Contact& c : problem->contacts) {
+    nominal_friction->push_back(c.friction);
+    if (c.friction_sigma > 0.0) c.friction = std::max(0.0, c.friction - confidence * c.friction_sigma);
+    c.friction_sigma = 0.0;
+  }
+}
+
+}  // namespace tactforce::planner
+
+namespace tactforce::planner {
+namespace {
+
+using SmallMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
+
+// P_i = (G^+ S_b G^+T)_ii for every contact. With U the orthonormal rows
+// spanning G's row space (r x 3n) and M = G U^T (6 x r, full column rank),
+// G^+ = U^T X with X = (M^T M)^-1 M^T, so P_i = U_i^T (X S_b X^T) U_i.
+// Returns the size (N, N m) of the part of the kappa_b wrench ellipsoid no
+// contact force can balance: sqrt(lambda_max((I - M X) S_b (I - M X)^T)).
+// Full rank (r = 6, every grasp that resists all wrenches): M is square, so
+// G^+ = U^T M^-1; all in fixed sizes, M's columns from G's structure.
+void ContactCovariancesFullRank(const ForceEquilibrium& eq, const Eigen::Matrix<double, 6, 6>& wrench_cov,
+                                std::vector<Eigen::Matrix3d>* out) {
+  const int n = static_cast<int>(eq.grasp_matrix.cols() / 3);
+  Eigen::Matrix<double, 6, 6> m = Eigen::Matrix<double, 6, 6>::Zero();
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Matrix<double, 6, 3> u = eq.independent_rows.middleCols<3>(3 * i);  // 6 x 3
+    const Eigen::Matrix3d skew = eq.grasp_matrix.block<3, 3>(3, 3 * i);
+    m.topRows<3>().noalias() += u.transpose();
+    m.bottomRows<3>().noalias() += skew * u.transpose();
+  }
+  const Eigen::PartialPivLU<Eigen::Matrix<double, 6, 6>> lu(m);
+  const Eigen::Matrix<double, 6, 6> x = lu.inverse();
+  const Eigen::Matrix<double, 6, 6> k = x * wrench_cov * x.transpose();
+  out->resize(n);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Matrix<double, 6, 3> u = eq.independent_rows.middleCols<3>(3 * i);
+    (*out)[i].noalias() = u.transpose() * k * u;
+  }
+}
+
+double ContactCovariances(const ForceEquilibrium& eq, const Eigen::Matrix<double, 6, 6>& wrench_cov,
+                          std::vector<Eigen::Matrix3d>* out) {
+  const int n = static_cast<int>(eq.grasp_matrix.cols() / 3);
+  const int r = static_cast<int>(eq.independent_rows.rows());
+  if (r == 6) {
+    ContactCovariancesFullRank(eq, wrench_cov, out);
+    return 0.0;
+  }
+  const SmallMatrix m = eq.grasp_matrix * eq.independent_rows.transpose();  // 6 x r
+  const SmallMatrix normal = m.transpose() * m;
+  const SmallMatrix x = normal.llt().solve(m.transpose());  // r x 6
+  const SmallMatrix k = x * wrench_cov * x.transpose();      // r x r
+  out->resize(n);
+  for (int i = 0; i < n; ++i) {
+    const auto u = eq.independent_rows.middleCols<3>(3 * i);  // r x 3
+    (*out)[i].noalias() = u.transpose() * k * u;
+  }
+  if (r >= 6) return 0.0;
+  const Eigen::Matrix<double, 6, 6> reject = Eigen::Matrix<double, 6, 6>::Identity() - m * x;
+  const Eigen::Matrix<double, 6, 6> rest = reject * wrench_cov * reject.transpose();
+  return std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>(
+                                     rest, Eigen::EigenvaluesOnly).eigenvalues()(5)));
+}
+
+}  // namespace
+
+void TightenForParameters(const PlanOptions& options, PreparedProblem* p) {
+  ParameterTightening& t = p->parameters;
+  const ParameterUncertainty& u = p->problem.object.uncertainty;
+  t.confidence = u.confidence.value_or(options.confidence);
+  t.active = t.confidence > 0.0 && !u.covariance.isZero(0.0);
+  t.cone_margin.clear();
+  if (!t.active) {
+    t.wrench_covariance.setZero();
+    t.contact_covariance.clear();
+    t.row_margin.resize(0);
+    return;
+  }
+  const WrenchRegressorMatrix y = WrenchRegressor(p->problem.object.gravity, p->problem.motion);
+  t.wrench_covariance.noalias() = y * u.covariance * y.transpose();
+  const double unbalanced = ContactCovariances(p->equilibrium, t.wrench_covariance, &t.contact_covariance);
+  ForceEquilibrium& eq = p->equilibrium;
+  if (t.confidence * unbalanced > 1e-8 * std::max(1.0, eq.wrench.norm())) {
+    // Some wrench in the ellipsoid cannot be balanced by any contact force.
+    eq.consistent = false;
+    eq.residual = std::max(eq.residual, t.confidence * unbalanced);
+  }
+  ConstraintRows& rows = p->rows;
+  const int m = static_cast<int>(rows.info.size());
+  t.row_margin.resize(m);
+  for (int r = 0; r < m; ++r) {
+    const int c = rows.info[r].contact;
+    const Vec3 a = rows.matrix.block<1, 3>(r, 3 * c).transpose();
+    t.row_margin(r) = t.confidence * std::sqrt(std::max(0.0, a.dot(t.contact_covariance[c] * a)));
+    rows.rhs(r) -= t.row_margin(r);
+  }
+  if (p->cone_shift.empty()) return;
+  t.cone_margin.resize(p->cone_shift.size());
+  for (int i = 0; i < p->num_contacts(); ++i) {
+    const Contact& c = p->problem.contacts[i];
+    const Eigen::Matrix3d& s = t.contact_covariance[i];
+    const double normal_spread = std::sqrt(std::max(0.0, c.normal.dot(s * c.normal)));
+    t.cone_margin[i] = t.confidence * (c.friction * normal_spread + TangentialSpread(c.normal, s));
+    p->cone_shift[i] += t.cone_margin[i];
+  }
+}
+
+}  // namespace tactforce::planner
+
+namespace tactforce::planner {
+
+void FillRowMargins(const PreparedProblem& prepared, const std::vector<Vec3>& forces,
+                    std::vector<RowMargin>* out) {
+  const ConstraintRows& rows = prepared.rows;
+  const ParameterTightening& t = prepared.parameters;
+  const int m = static_cast<int>(rows.info.size());
+  const bool have_forces = static_cast<int>(forces.size()) == prepared.num_contacts();
+  out->resize(m + prepared.cone_shift.size());
+  for (int r = 0; r < m; ++r) {
+    RowMargin& o = (*out)[r];
+    const int c = rows.info[r].contact;
+    o.contact = c, o.cone = false, o.row = r, o.slack = 0.0;
+    o.facet = rows.info[r].kind == RowKind::kFrictionFacet ? rows.info[r].facet : -1;
+    o.upper = rows.info[r].kind == RowKind::kMaxNormal;
+    o.parameters = t.active ? t.row_margin(r) : 0.0;
+    o.measurement = std::max(0.0, rows.nominal_rhs(r) - rows.rhs(r) - o.parameters);
+    if (have_forces) o.slack = rows.rhs(r) - rows.matrix.block<1, 3>(r, 3 * c).dot(forces[c].transpose());
+  }
+  for (int i = 0; i < static_cast<int>(prepared.cone_shift.size()); ++i) {
+    RowMargin& o = (*out)[m + i];
+    const Contact& c = prepared.problem.contacts[i];
+    o.contact = i, o.cone = true, o.row = -1, o.slack = 0.0, o.facet = -1, o.upper = false;
+    o.parameters = t.active ? t.cone_margin[i] : 0.0;
+    o.measurement = std::max(0.0, prepared.cone_shift[i] - o.parameters);
+    if (have_forces) o.slack = ExactConeSlack(c.normal, c.friction, prepared.cone_shift[i], forces[i]);
+  }
+}
+
+}  // namespace tactforce::planner
