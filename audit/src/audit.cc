@@ -206,7 +206,11 @@ void ReportBlocks(ChannelEvaluator& all, const AuditOptions& o, const Selection&
   rep->block_times.push_back(d.t.back());
   for (Cause& c : rep->causes) {
     auto e = ParseEffect(c.effect);
-    if (e.ok()) internal::BlocksShowing(all, edges, s.params, internal::EffectOff(s.params, *e), o.min_gain, &c);
+    if (!e.ok()) continue;
+    // A cause of the blocked hold-out keeps the blocks its held-out scores showed.
+    const std::vector<int> held_out_blocks = c.blocks;
+    internal::BlocksShowing(all, edges, s.params, internal::EffectOff(s.params, *e), o.min_gain, &c);
+    if (c.found_by == "blocked") c.blocks = held_out_blocks;
   }
 }
 

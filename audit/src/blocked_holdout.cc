@@ -28,13 +28,11 @@ std::vector<int> BlockEdges(int n, int blocks) {
 
 namespace {
 
-// Fold k's data: blocks other than k in time order, then block k; a segment
-// starts at every block and at every trial start inside one.
-MeasuredData FoldData(const MeasuredData& d, const std::vector<int>& edges, int k) {
+// The blocks `which` (0-based, in time order), each a segment.
+MeasuredData BlocksData(const MeasuredData& d, const std::vector<int>& edges, const std::vector<int>& which) {
   MeasuredData f;
   f.source = d.source;
-  const int blocks = static_cast<int>(edges.size()) - 1;
-  auto append = [&](int b) {
+  for (int b : which) {
     f.segment_starts.push_back(static_cast<int>(f.t.size()));
     for (int i = edges[b]; i < edges[b + 1]; ++i) {
       if (i > edges[b] && std::binary_search(d.segment_starts.begin(), d.segment_starts.end(), i))
@@ -45,11 +43,18 @@ MeasuredData FoldData(const MeasuredData& d, const std::vector<int>& edges, int 
       if (!d.shear.empty()) f.shear.push_back(d.shear[i]);
       f.trial.push_back(d.trial.empty() ? 0 : d.trial[i]);
     }
-  };
-  for (int b = 0; b < blocks; ++b)
-    if (b != k) append(b);
-  append(k);
+  }
   return f;
+}
+
+// Fold k's data: blocks other than k in time order, then block k; a segment
+// starts at every block and at every trial start inside one.
+MeasuredData FoldData(const MeasuredData& d, const std::vector<int>& edges, int k) {
+  std::vector<int> order;
+  for (int b = 0; b + 1 < static_cast<int>(edges.size()); ++b)
+    if (b != k) order.push_back(b);
+  order.push_back(k);
+  return BlocksData(d, edges, order);
 }
 
 // One fold: its data, evaluator and selection state (the named effects
@@ -68,7 +73,29 @@ struct FoldedCandidate {
   int k = 0;       // parameters it adds (the largest over the folds)
   std::vector<EffectParams> params;
   std::vector<AffineFit> fits;
+  std::vector<int> shown;  // blocks (0-based) whose held-out RMS it lowers by >= min_gain
+  bool subset = false;     // scored as present in `shown` only
 };
+
+// Scores a folded candidate two ways and keeps the better held-out BIC:
+// stationary (in every block: the summed held-out RSS) or present only in
+// the blocks it improves by at least min_gain (their held-out RSS with it,
+// the others' without it; choosing the blocks counts as one more parameter).
+double ScoreFolded(const std::vector<Fold>& folds, int n, int k0, double min_gain, FoldedCandidate* fc) {
+  double rss_subset = 0;
+  fc->shown.clear();
+  for (size_t k = 0; k < folds.size(); ++k) {
+    const double r0 = folds[k].s.fit.rss_heldout, r1 = fc->fits[k].rss_heldout;
+    const bool shows = r0 > 0 && 1 - std::sqrt(r1 / r0) >= min_gain;
+    if (shows) fc->shown.push_back(static_cast<int>(k));
+    rss_subset += shows ? r1 : r0;
+  }
+  const double bic_all = Bic(fc->rss, n, k0 + fc->k);
+  const double bic_subset = Bic(rss_subset, n, k0 + fc->k + 1);
+  fc->subset = !fc->shown.empty() && fc->shown.size() < folds.size() && bic_subset < bic_all;
+  if (fc->subset) fc->rss = rss_subset;
+  return fc->subset ? bic_subset : bic_all;
+}
 
 FoldedCandidate FitOnFolds(std::vector<Fold>& folds, Effect e, Form form, const RunStats& st,
                            const AuditOptions& o) {
@@ -101,13 +128,14 @@ FoldedCandidate BestOnFolds(std::vector<Fold>& folds, const std::vector<Effect>&
       FoldedCandidate fc = FitOnFolds(folds, e, form, st, o);
       if (fc.k == 0) continue;  // e.g. no PI hysteresis found on any fold
       fc.candidate = static_cast<int>(ci);
-      const double bic = Bic(fc.rss, n, s.k + fc.k);
+      const double bic = ScoreFolded(folds, n, s.k, o.min_gain, &fc);
       CandidateScore cs;
       cs.round = round;
       cs.effect = EffectName(e);
       cs.form = FormName(form);
       cs.parameters = ParamsOf(e, fc.params.back(), st, o);
       cs.parameters["blocked_holdout"] = 1;
+      cs.parameters["blocks_showing"] = static_cast<double>(fc.shown.size());
       cs.heldout_rms = std::sqrt(fc.rss / n);
       cs.bic = bic;
       rep->candidates.push_back(cs);
@@ -185,15 +213,23 @@ void SelectCausesBlocked(ChannelEvaluator& eng, ChannelEvaluator& all, const std
       rep->candidates[i].accepted =
           rep->candidates[i].effect == EffectName(e) && rep->candidates[i].form == FormName(best.form);
     for (size_t k = 0; k < folds.size(); ++k) {
-      folds[k].s.params = best.params[k];
-      folds[k].s.fit = best.fits[k];
+      const bool shows = std::find(best.shown.begin(), best.shown.end(), static_cast<int>(k)) != best.shown.end();
+      if (!best.subset || shows) {
+        folds[k].s.params = best.params[k];
+        folds[k].s.fit = best.fits[k];
+      }
       folds[k].s.named.push_back(e);
       folds[k].s.k += best.k;
     }
-    // The model's parameters: the effect re-fitted on all samples.
+    // The model's parameters: the effect re-fitted on all samples, or on the
+    // blocks that show it when it is present in some only.
+    const MeasuredData subset = BlocksData(d, edges, best.subset ? best.shown : std::vector<int>{0});
+    ChannelEvaluator on_subset(subset, static_cast<int>(subset.t.size()));
+    ChannelEvaluator& fit_eng = best.subset ? on_subset : all;
     const EffectParams start = StartForForm(s->params, best.form);
-    FitResult fr = best.form == Form::kPrandtlIshlinskii ? FitPrandtlIshlinskii(all, start, s->Refitted(), st, o)
-                                                         : FitEffect(all, e, start, s->Refitted(), st, o, best.form);
+    FitResult fr = best.form == Form::kPrandtlIshlinskii
+                       ? FitPrandtlIshlinskii(fit_eng, start, s->Refitted(), st, o)
+                       : FitEffect(fit_eng, e, start, s->Refitted(), st, o, best.form);
     // An effect fitted to its "off" values adds nothing (the folds' gain came
     // from re-fitting the named effects).
     if (EffectOff(fr.p, e) == fr.p) return;
@@ -212,6 +248,8 @@ void SelectCausesBlocked(ChannelEvaluator& eng, ChannelEvaluator& all, const std
     c.gain = 100 * gain;
     c.delta_bic = bic - bic0;
     c.found_by = "blocked";
+    for (int b : best.shown) c.blocks.push_back(b + 1);
+
     rep->causes.push_back(c);
   }
 }

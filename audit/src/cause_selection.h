@@ -68,9 +68,9 @@ struct PhantomFit {
   double rss_heldout = 0;       // of the current model plus the phantom
   double bic = 0;
 };
-// Fits the phantom to the current model's residual on the training block
-// (decay on a log grid 0.02-30 s refined by golden section, force in closed
-// form, > 0) and scores it on the held-out block.
+// Fits the phantom on top of the current model on the training block (decay
+// on a log grid 0.02-30 s refined by golden section; coefficient, gain and
+// offset by least squares; force > 0) and scores it on the held-out block.
 PhantomFit FitPhantom(ChannelEvaluator& eng, const Selection& s);
 
 // ---- blocked hold-out (blocked_holdout.cc) ----

@@ -145,9 +145,12 @@ struct Cause {
   // How the cause was found: "final_block" (the split at heldout_fraction),
   // "blocked" (the blocked hold-out), "taxels" (per-taxel data).
   std::string found_by = "final_block";
-  // The time blocks (1-based, of AuditReport::block_times) in which the
-  // cause lowers the re-simulated residual RMS by at least min_gain, and the
-  // per-block relative drop (percent; empty for partial_activation).
+  // The time blocks (1-based, of AuditReport::block_times) that show the
+  // cause: for found_by "blocked" those whose held-out RMS it lowered by at
+  // least min_gain (fitted on the other blocks); otherwise those in which it
+  // lowers the residual RMS of the final model by at least min_gain. And the
+  // per-block drop of the final model's residual RMS (percent). Empty for
+  // partial_activation and phantom.
   std::vector<int> blocks;
   std::vector<double> block_gains;
 };
