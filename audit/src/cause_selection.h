@@ -77,10 +77,12 @@ PhantomFit FitPhantom(ChannelEvaluator& eng, const Selection& s);
 // The sample index where each of `blocks` equal contiguous blocks starts,
 // plus n.
 std::vector<int> BlockEdges(int n, int blocks);
-// Further causes chosen and scored by cross-validation over o.blocks
-// contiguous blocks (README, Method 4b); each accepted one is re-fitted on
-// all samples (`all`, an evaluator whose training block is every sample) and
-// scored on the final block with `eng` for the selection state.
+// The blocked hold-out (README, Method 4b): each of o.blocks contiguous
+// blocks audited on its own (one round on top of *s, the split at
+// heldout_fraction inside the block) and a cause named there confirmed with
+// the split reversed; the effect confirmed in the most blocks becomes a
+// cause (found_by "blocked", its blocks listed), re-fitted on those blocks.
+// `all` holds every sample as training; `eng` re-scores the selection.
 void SelectCausesBlocked(ChannelEvaluator& eng, ChannelEvaluator& all, const std::vector<Effect>& candidates,
                          const RunStats& st, const AuditOptions& o, Selection* s, AuditReport* rep);
 // Per block, the relative drop of the residual RMS of `with` versus
