@@ -66,15 +66,16 @@ absl::Status ValidateMeasuredData(const MeasuredData& d, int min_samples) {
         return absl::InvalidArgumentError(absl::StrCat(Where(d, i, col), ": not a finite number"));
     return absl::OkStatus();
   };
-  for (auto st : {check_finite(d.t, "t"), check_finite(d.reference, "reference"),
-                  check_finite(d.reading, "reading"), check_finite(d.shear, "shear")})
-    if (!st.ok()) return st;
+  // Taxels first: a bad taxel value also spoils the reading (their sum).
   for (size_t j = 0; j < d.taxels.size(); ++j) {
     const std::string col = absl::StrCat("taxel_", j);
     if (d.taxels[j].size() != n)
       return absl::InvalidArgumentError(absl::StrCat(Column(d, col.c_str()), " differs in length"));
     if (auto st = check_finite(d.taxels[j], col.c_str()); !st.ok()) return st;
   }
+  for (auto st : {check_finite(d.t, "t"), check_finite(d.reference, "reference"),
+                  check_finite(d.reading, "reading"), check_finite(d.shear, "shear")})
+    if (!st.ok()) return st;
   // Magnitudes far beyond any sensor: their squares and products (the fits'
   // sums) stay finite, so no answer is computed from an overflow.
   auto check_bounded = [&](const std::vector<double>& v, const char* col, double limit,
@@ -83,15 +84,15 @@ absl::Status ValidateMeasuredData(const MeasuredData& d, int min_samples) {
       if (!planner::IsBounded(v[i], limit)) return planner::MagnitudeError(Where(d, i, col), v[i], limit, unit);
     return absl::OkStatus();
   };
+  for (size_t j = 0; j < d.taxels.size(); ++j)
+    if (auto st = check_bounded(d.taxels[j], absl::StrCat("taxel_", j).c_str(), kMaxReading, "sensor units");
+        !st.ok())
+      return st;
   for (auto st : {check_bounded(d.t, "t", planner::kMaxTime, "s"),
                   check_bounded(d.reference, "reference", planner::kMaxForce, "N"),
                   check_bounded(d.reading, "reading", kMaxReading, "sensor units"),
                   check_bounded(d.shear, "shear", planner::kMaxForce, "N")})
     if (!st.ok()) return st;
-  for (size_t j = 0; j < d.taxels.size(); ++j)
-    if (auto st = check_bounded(d.taxels[j], absl::StrCat("taxel_", j).c_str(), kMaxReading, "sensor units");
-        !st.ok())
-      return st;
   std::vector<int> starts = d.segment_starts.empty() ? std::vector<int>{0} : d.segment_starts;
   for (size_t i = 1; i < n; ++i) {
     if (std::binary_search(starts.begin(), starts.end(), static_cast<int>(i))) continue;

@@ -28,7 +28,23 @@ struct Args {
   int seeds = 200;
   int blocks = 4;
   std::string suite = "all";
+  long long seed = -1;  // --suite one: the hidden-effect case of this seed (null case), summary printed
 };
+
+// One null hidden-effect case (MakeHiddenCase({}, seed)): prints the summary.
+void One(const Args& a) {
+  auto hc = testing::MakeHiddenCase({}, static_cast<uint64_t>(a.seed));
+  AuditOptions o = FastOptions(hc);
+  o.blocks = a.blocks;
+  auto rep = RunAudit(hc.data, o);
+  if (!rep.ok()) {
+    std::cout << rep.status() << "\n";
+    return;
+  }
+  std::cout << FormatAuditSummary(*rep);
+  for (const auto& c : rep->candidates)
+    if (c.accepted) std::cout << "accepted round " << c.round << " " << c.effect << " rms " << c.heldout_rms << "\n";
+}
 
 void Report(const std::string& what, int good, int n, const std::vector<std::string>& failures) {
   std::cout << what << " " << good << "/" << n << " = " << 100.0 * good / n << " %\n";
@@ -167,6 +183,7 @@ int main(int argc, char** argv) {
     if (k == "--seeds") a.seeds = std::atoi(v.c_str());
     else if (k == "--blocks") a.blocks = std::atoi(v.c_str());
     else if (k == "--suite") a.suite = v;
+    else if (k == "--seed") a.seed = std::atoll(v.c_str());
     else {
       std::cerr << "unknown flag " << k << "\n";
       return 2;
@@ -177,6 +194,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   std::cout << "audit_hidden_eval: " << a.seeds << " seeds, blocks " << a.blocks << "\n";
+  if (a.suite == "one") tactforce::audit::One(a);
   if (a.suite == "partial" || a.suite == "all") tactforce::audit::PartialActivation(a);
   if (a.suite == "phantom" || a.suite == "all") tactforce::audit::Phantom(a);
   if (a.suite == "late" || a.suite == "all") tactforce::audit::LateEffects(a);
