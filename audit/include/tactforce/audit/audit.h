@@ -24,6 +24,13 @@
 //     (default 1 %) AND by at least min_rms_drop x the reference force range
 //     (force equivalent; default 1e-6, an absolute floor); otherwise
 //     selection stops. At most max_causes.
+//     Each round also tries a phantom (a reading that persists after
+//     unloading), named when it beats the channel candidates.
+//  3b. Blocked hold-out (options.blocks contiguous blocks): each block
+//     audited on its own and confirmed with its split reversed, so an effect
+//     that appears only late is named; causes list the blocks that show them.
+//  3c. Per-taxel data: taxels that never activate (partial_activation),
+//     listed first.
 //  4. The extended model = nominal + named effects, jointly re-fitted, with
 //     1-sigma uncertainties (conditional Delta-RSS = sigma^2 intervals).
 //  5. Gain: the measured run re-simulated with both models
