@@ -130,11 +130,12 @@ sim::SensorModel MakeModel(const MeasuredData& data, const AuditOptions& o, cons
   return m;
 }
 
-// The nominal model (base) and the extended one (the selection's), with the
-// causes' uncertainties.
-void BuildModels(const MeasuredData& data, const AuditOptions& o, ChannelEvaluator& eng, const EffectParams& base,
-                 const Selection& s, AuditReport* rep) {
-  const AffineFit nominal_fit = eng.Evaluate(base, true);
+// The nominal model (base, fitted on the measured reading by `measured`) and
+// the extended one (the selection's, fitted on the working reading without
+// a named phantom), with the causes' uncertainties.
+void BuildModels(const MeasuredData& data, const AuditOptions& o, ChannelEvaluator& measured,
+                 ChannelEvaluator& eng, const EffectParams& base, const Selection& s, AuditReport* rep) {
+  const AffineFit nominal_fit = measured.Evaluate(base, true);
   rep->nominal_model = MakeModel(data, o, base, nominal_fit, eng.n_train(), s.k, "audit nominal fit");
   rep->extended_model = MakeModel(data, o, s.params, s.fit, eng.n_train(), s.k, "audit extended model");
   for (const auto& c : rep->causes)
@@ -255,7 +256,8 @@ absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOption
   if (auto pa = internal::FindPartialActivation(data, o)) rep.causes.insert(rep.causes.begin(), *pa);
   rep.nominal_adequate = rep.causes.empty();
 
-  BuildModels(data, o, eng, base, s, &rep);
+  ChannelEvaluator measured(data, n_train);
+  BuildModels(data, o, measured, eng, base, s, &rep);
   Resimulate(data, o, s, &rep);
   ReportClockOffset(data, s.params.delay, &rep);
   if (o.downstream_gain && !s.named.empty()) AddDownstreamGain(o, st, &rep);

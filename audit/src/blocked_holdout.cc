@@ -8,8 +8,12 @@
 // the causes already named). A cause named there must be confirmed with the
 // split reversed (fitted on the block's later part, scored on its earlier
 // part, the same BIC test, both gaining at least 2 x min_gain: several
-// blocks are searched), so a block's chance fit is not named. The effect confirmed in the most blocks (ties: the larger mean
-// held-out gain) becomes a cause, re-fitted on the blocks that show it.
+// blocks are searched), so a block's chance fit is not named; in both, the
+// effect must also beat the same fit with it switched off (the gain of a
+// round also holds the joint re-fit of the effects already named). The
+// effect confirmed in the most blocks (ties: the larger mean held-out gain)
+// becomes a cause, re-fitted on the blocks that show it, when the last block
+// is among them and it does not worsen the final block's held-out RMS.
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -88,6 +92,18 @@ Selection LocalSelection(ChannelEvaluator& eng, const Selection& global) {
 // block each were named with 1 x min_gain).
 constexpr double kBlockGainFactor = 2.0;
 
+// Whether effect e in p lowers the held-out RMS on `eng` by at least
+// min_gain, and its BIC (k parameters with it), against p with e off.
+bool AddsEnough(ChannelEvaluator& eng, const EffectParams& p, Effect e, int k, double min_gain) {
+  const AffineFit with = eng.Evaluate(p, true);
+  const EffectParams off_params = EffectOff(p, e);
+  const AffineFit off = eng.Evaluate(off_params, true);
+  const int n_h = eng.n_heldout();
+  const double rms_with = std::sqrt(with.rss_heldout / n_h), rms_off = std::sqrt(off.rss_heldout / n_h);
+  return rms_off > 0 && 1 - rms_with / rms_off >= min_gain &&
+         Bic(with.rss_heldout, n_h, k) < Bic(off.rss_heldout, n_h, k - NumParams(e, p));
+}
+
 // What one block showed: the effect named there and confirmed.
 struct BlockFinding {
   int block = 0;  // 0-based
@@ -115,6 +131,10 @@ std::optional<BlockFinding> AuditBlock(const MeasuredData& d, int first, int las
   const Cause& c = scratch.causes.front();
   auto e = ParseEffect(c.effect);
   if (!e.ok()) return std::nullopt;
+  // Credit the effect only with what it adds: the same fit with it switched
+  // off (the named effects as jointly re-fitted with it) must be worse by
+  // the gain asked for (else the gain came from re-fitting the named ones).
+  if (!AddsEnough(fe, fs.params, *e, fs.k, one.min_gain)) return std::nullopt;
   // Reversed: train on the block's later part, score on its earlier part.
   const int cut = first + (n - n_train);
   const MeasuredData reversed = RangesData(d, {{cut, last}, {first, cut}});
@@ -128,7 +148,7 @@ std::optional<BlockFinding> AuditBlock(const MeasuredData& d, int first, int las
   const double rms0 = std::sqrt(rs.fit.rss_heldout / re.n_heldout()), rms1 = std::sqrt(ev.rss_heldout / re.n_heldout());
   const bool confirmed = Bic(ev.rss_heldout, re.n_heldout(), rs.k + NumParams(*e, fr.p)) < rs.bic &&
                          rms0 > 0 && 1 - rms1 / rms0 >= one.min_gain;
-  if (!confirmed) return std::nullopt;
+  if (!confirmed || !AddsEnough(re, fr.p, *e, rs.k + NumParams(*e, fr.p), one.min_gain)) return std::nullopt;
   return BlockFinding{block, *e, c.form, c.heldout_rms_before, c.heldout_rms_after, c.gain, c.delta_bic};
 }
 
@@ -147,6 +167,11 @@ void SelectCausesBlocked(ChannelEvaluator& eng, ChannelEvaluator& all, const std
   const std::vector<BlockFinding>* best = nullptr;
   double best_gain = 0;
   for (const auto& [e, fs] : found) {
+    // The selection above trained on the run's start: what it missed and a
+    // block shows is named only when the last block shows it (an effect
+    // that appears late); a finding in earlier blocks alone is left out
+    // (on hysteresis data such findings were artefacts of one block's fit).
+    if (fs.back().block != o.blocks - 1) continue;
     double g = 0;
     for (const auto& f : fs) g += f.gain / fs.size();
     if (!best || fs.size() > best->size() || (fs.size() == best->size() && g > best_gain)) best = &fs, best_gain = g;
@@ -162,6 +187,11 @@ void SelectCausesBlocked(ChannelEvaluator& eng, ChannelEvaluator& all, const std
   FitResult fr = form == Form::kPrandtlIshlinskii ? FitPrandtlIshlinskii(on_shown, start, s->Refitted(), st, o)
                                                   : FitEffect(on_shown, e, start, s->Refitted(), st, o, form);
   if (EffectOff(fr.p, e) == fr.p) return;
+  // The selection's held-out block covers the end of the run: the effect
+  // must not make its error worse (gain/offset fitted on the earlier part,
+  // where a late effect is absent, so no gain is asked for).
+  const AffineFit on_final = eng.Evaluate(fr.p, true);
+  if (!(on_final.rss_heldout <= s->fit.rss_heldout)) return;
   const int k_added = NumParams(e, fr.p);
   s->named.push_back(e);
   s->params = fr.p;

@@ -28,12 +28,15 @@ struct Args {
   int seeds = 200;
   int blocks = 4;
   std::string suite = "all";
-  long long seed = -1;  // --suite one: the hidden-effect case of this seed (null case), summary printed
+  long long seed = -1;  // --suite one: the hidden-effect case of this seed, summary printed
+  std::string effect;   // --suite one: the hidden effect (empty: the null case)
 };
 
-// One null hidden-effect case (MakeHiddenCase({}, seed)): prints the summary.
+// One hidden-effect case (MakeHiddenCase({effect}, seed)): prints the summary.
 void One(const Args& a) {
-  auto hc = testing::MakeHiddenCase({}, static_cast<uint64_t>(a.seed));
+  std::vector<Effect> effects;
+  if (!a.effect.empty()) effects.push_back(*ParseEffect(a.effect));
+  auto hc = testing::MakeHiddenCase(effects, static_cast<uint64_t>(a.seed));
   AuditOptions o = FastOptions(hc);
   o.blocks = a.blocks;
   auto rep = RunAudit(hc.data, o);
@@ -176,6 +179,12 @@ void LateEffects(const Args& a) {
 }  // namespace
 }  // namespace tactforce::audit
 
+static bool ParseEffectOk(const std::string& v) {
+  if (tactforce::audit::ParseEffect(v).ok()) return true;
+  std::cerr << "--effect: unknown effect " << v << "\n";
+  std::exit(2);
+}
+
 int main(int argc, char** argv) {
   tactforce::audit::Args a;
   for (int i = 1; i + 1 < argc; i += 2) {
@@ -184,6 +193,7 @@ int main(int argc, char** argv) {
     else if (k == "--blocks") a.blocks = std::atoi(v.c_str());
     else if (k == "--suite") a.suite = v;
     else if (k == "--seed") a.seed = std::atoll(v.c_str());
+    else if (k == "--effect" && ParseEffectOk(v)) a.effect = v;
     else {
       std::cerr << "unknown flag " << k << "\n";
       return 2;
