@@ -13,7 +13,7 @@
 // round also holds the joint re-fit of the effects already named). The
 // effect confirmed in the most blocks (ties: the larger mean held-out gain)
 // becomes a cause, re-fitted on the blocks that show it, when the last block
-// is among them and it does not worsen the final block's held-out RMS.
+// is among them.
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -187,11 +187,6 @@ void SelectCausesBlocked(ChannelEvaluator& eng, ChannelEvaluator& all, const std
   FitResult fr = form == Form::kPrandtlIshlinskii ? FitPrandtlIshlinskii(on_shown, start, s->Refitted(), st, o)
                                                   : FitEffect(on_shown, e, start, s->Refitted(), st, o, form);
   if (EffectOff(fr.p, e) == fr.p) return;
-  // The selection's held-out block covers the end of the run: the effect
-  // must not make its error worse (gain/offset fitted on the earlier part,
-  // where a late effect is absent, so no gain is asked for).
-  const AffineFit on_final = eng.Evaluate(fr.p, true);
-  if (!(on_final.rss_heldout <= s->fit.rss_heldout)) return;
   const int k_added = NumParams(e, fr.p);
   s->named.push_back(e);
   s->params = fr.p;
