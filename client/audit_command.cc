@@ -17,7 +17,9 @@ namespace tactforce::cli {
 CLI::App* AddAuditCommand(CLI::App& app, AuditArgs& args) {
   CLI::App* cmd = app.add_subcommand(
       "audit", "Show what the sensor model gets wrong on measured data, name the cause, extend it");
-  auto* csv = cmd->add_option("--csv", args.csv, "Measured data: t,reference,reading[,shear][,trial]; - = stdin")
+  auto* csv = cmd->add_option("--csv", args.csv,
+                              "Measured data: t,reference,reading[,shear][,trial], or per taxel "
+                              "t,reference,taxel_0,...,taxel_<N-1>[,reading][,shear][,trial]; - = stdin")
                   ->type_name("FILE");
   auto* ref = cmd->add_option("--reference", args.reference_path, "Reference stream: t,value[,shear]; - = stdin")
                   ->type_name("FILE");
@@ -57,6 +59,16 @@ CLI::App* AddAuditCommand(CLI::App& app, AuditArgs& args) {
   cmd->add_option("--max-causes", args.max_causes, "At most this many causes")
       ->check(Between(0, 20))
       ->capture_default_str();
+  cmd->add_option("--taxels", args.taxels,
+                  "Per-taxel CSV (t,reference,taxel_0..taxel_<N-1>): the taxel count expected; a missing column is "
+                  "named (default: the highest taxel_<j> + 1)")
+      ->check(Between(1, audit::kMaxTaxels))
+      ->needs(csv);
+  cmd->add_option("--blocks", args.blocks,
+                  "Blocked hold-out: audit this many contiguous time blocks on their own too, so an effect that "
+                  "appears only late is found (0 = off)")
+      ->check(Between(0, 10))
+      ->capture_default_str();
   cmd->add_flag("--quiet", args.quiet, "Do not print the summary");
   AddOutputFlags(cmd, &args.output, "report.json");
   cmd->footer(
@@ -72,7 +84,7 @@ CLI::App* AddAuditCommand(CLI::App& app, AuditArgs& args) {
 int RunAuditCommand(const AuditArgs& args) {
   absl::StatusOr<audit::MeasuredData> data;
   if (!args.csv.empty()) {
-    data = audit::ReadMeasuredCsv(args.csv);
+    data = audit::ReadMeasuredCsv(args.csv, args.taxels);
   } else if (!args.reference_path.empty()) {
     audit::AlignOptions align;
     if (args.clock_offset_given) {
@@ -94,6 +106,7 @@ int RunAuditCommand(const AuditArgs& args) {
   audit::AuditOptions options;
   options.heldout_fraction = args.heldout_fraction;
   options.max_causes = args.max_causes;
+  options.blocks = args.blocks;
   options.reading_units = args.units;
   if (!args.model_path.empty()) {
     absl::StatusOr<sim::SensorModel> model = sim::LoadSensorModel(args.model_path);

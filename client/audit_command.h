@@ -10,7 +10,7 @@
 namespace tactforce::cli {
 
 struct AuditArgs {
-  std::string csv;             // t,reference,reading[,shear][,trial]
+  std::string csv;             // t,reference,reading[,shear][,trial] or per taxel t,reference,taxel_0..
   std::string reference_path;  // two-stream mode: t,value[,shear]
   std::string reading_path;    //                  t,value
   // Two streams: the clock offset (reading clock minus reference clock) is
@@ -29,6 +29,8 @@ struct AuditArgs {
   std::string units = "reading units";
   double heldout_fraction = 0.35;
   int max_causes = 3;
+  int taxels = 0;              // per-taxel CSV: expected taxel_<j> columns (0 = as found)
+  int blocks = 4;              // blocked hold-out: contiguous blocks (0 = off)
   bool quiet = false;
   OutputFormat output;  // table: the summary; json: report.json
 };

@@ -333,6 +333,34 @@ absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& r
   return FiniteAnswer<v1::FrictionResponse>(std::move(out));
 }
 
+namespace {
+
+// The samples' per-taxel readings into data->taxels (taxel-major); every
+// sample must carry the same count (InvalidArgument naming the sample).
+absl::Status ReadAuditTaxels(const v1::AuditRequest& request, audit::MeasuredData* data) {
+  if (request.samples_size() == 0 || request.samples(0).taxels_size() == 0) {
+    for (int k = 0; k < request.samples_size(); ++k)
+      if (request.samples(k).taxels_size() != 0)
+        return absl::InvalidArgumentError(absl::StrCat("samples[", k, "].taxels: ", request.samples(k).taxels_size(),
+                                                       " values, samples[0] has none"));
+    return absl::OkStatus();
+  }
+  const int m = request.samples(0).taxels_size();
+  if (m > audit::kMaxTaxels)
+    return absl::InvalidArgumentError(absl::StrCat("samples[0].taxels: ", m, " values exceed ", audit::kMaxTaxels));
+  data->taxels.assign(m, std::vector<double>(request.samples_size()));
+  for (int k = 0; k < request.samples_size(); ++k) {
+    const v1::AuditSample& s = request.samples(k);
+    if (s.taxels_size() != m)
+      return absl::InvalidArgumentError(
+          absl::StrCat("samples[", k, "].taxels: ", s.taxels_size(), " values, samples[0] has ", m));
+    for (int j = 0; j < m; ++j) data->taxels[j][k] = s.taxels(j);
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
 absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request, const CallLimits& limits) {
   if (request.samples_size() > limits.max_audit_samples) {
     return absl::InvalidArgumentError(absl::StrCat("samples: ", request.samples_size(),
@@ -357,11 +385,13 @@ absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request, c
     if (k == 0 || s.trial() != segment_trial) data.segment_starts.push_back(k);
     segment_trial = s.trial();
   }
+  if (absl::Status taxels = ReadAuditTaxels(request, &data); !taxels.ok()) return taxels;
   if (absl::Status valid = audit::ValidateMeasuredData(data); !valid.ok()) return valid;
   audit::AuditOptions options;
   options.interrupt = limits.interrupt;
   if (request.has_heldout_fraction()) options.heldout_fraction = request.heldout_fraction();
   if (request.has_max_causes()) options.max_causes = request.max_causes();
+  if (request.has_blocks()) options.blocks = request.blocks();
   if (!request.reading_units().empty()) options.reading_units = request.reading_units();
   if (!request.model_json().empty()) {
     absl::StatusOr<sim::SensorModel> model = sim::SensorModelFromJson(request.model_json(), "model_json");
@@ -385,6 +415,8 @@ absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request, c
     cause->set_heldout_rms_before(c.heldout_rms_before);
     cause->set_heldout_rms_after(c.heldout_rms_after);
     cause->set_gain(c.gain);
+    cause->set_found_by(c.found_by);
+    for (int b : c.blocks) cause->add_blocks(b);
   }
   out.set_heldout_rms_before(report->heldout_rms_before);
   out.set_heldout_rms_after(report->heldout_rms_after);

@@ -36,6 +36,10 @@ absl::Status ValidateAuditInputs(const MeasuredData& data, const AuditOptions& o
     return absl::InvalidArgumentError(absl::StrCat("max_causes: must be in [0, 8], got ", o.max_causes));
   if (!(o.max_delay > 0) || !(o.max_lag > 0))
     return absl::InvalidArgumentError("max_delay/max_lag: must be > 0");
+  if (o.blocks < 0 || o.blocks > 10)
+    return absl::InvalidArgumentError(absl::StrCat("blocks: must be in [0, 10], got ", o.blocks));
+  if (!(o.silent_sigmas > 0) || !std::isfinite(o.silent_sigmas))
+    return absl::InvalidArgumentError(absl::StrCat("silent_sigmas: must be a finite number > 0, got ", o.silent_sigmas));
   if (o.max_evaluations < 0 || o.max_evaluations > 100000)
     return absl::InvalidArgumentError("max_evaluations: must be in [0, 100000]");
   if (o.min_samples < kMinAuditSamples)
@@ -126,20 +130,22 @@ sim::SensorModel MakeModel(const MeasuredData& data, const AuditOptions& o, cons
   return m;
 }
 
-// The nominal model (base) and the extended one (the selection's), with the
-// causes' uncertainties.
-void BuildModels(const MeasuredData& data, const AuditOptions& o, ChannelEvaluator& eng, const EffectParams& base,
-                 const Selection& s, AuditReport* rep) {
-  const AffineFit nominal_fit = eng.Evaluate(base, true);
+// The nominal model (base, fitted on the measured reading by `measured`) and
+// the extended one (the selection's, fitted on the working reading without
+// a named phantom), with the causes' uncertainties.
+void BuildModels(const MeasuredData& data, const AuditOptions& o, ChannelEvaluator& measured,
+                 ChannelEvaluator& eng, const EffectParams& base, const Selection& s, AuditReport* rep) {
+  const AffineFit nominal_fit = measured.Evaluate(base, true);
   rep->nominal_model = MakeModel(data, o, base, nominal_fit, eng.n_train(), s.k, "audit nominal fit");
   rep->extended_model = MakeModel(data, o, s.params, s.fit, eng.n_train(), s.k, "audit extended model");
   for (const auto& c : rep->causes)
     for (const auto& [k, v] : c.uncertainties) rep->extended_model.uncertainty[k] = v;
 }
 
-// Re-simulates the run with both models: the predicted series, their
-// diagnostics, held-out RMS before/after and the percent gain.
-void Resimulate(const MeasuredData& data, const AuditOptions& o, AuditReport* rep) {
+// Re-simulates the run with both models: the predicted series (the extended
+// one with a named phantom added), their diagnostics, held-out RMS
+// before/after and the percent gain.
+void Resimulate(const MeasuredData& data, const AuditOptions& o, const Selection& s, AuditReport* rep) {
   rep->t = data.t;
   rep->reference = data.reference;
   rep->reading = data.reading;
@@ -147,6 +153,11 @@ void Resimulate(const MeasuredData& data, const AuditOptions& o, AuditReport* re
       sim::PredictReading(rep->nominal_model, data.t, data.reference, data.shear, data.segment_starts);
   rep->predicted_extended =
       sim::PredictReading(rep->extended_model, data.t, data.reference, data.shear, data.segment_starts);
+  if (s.phantom) {
+    const auto profile = internal::PhantomProfile(data, s.release_level, s.phantom_decay);
+    for (size_t i = 0; i < profile.size(); ++i)
+      rep->predicted_extended[i] += rep->extended_model.gain * s.phantom_force * profile[i];
+  }
   rep->nominal =
       internal::Diagnose(data, rep->predicted_nominal, rep->nominal_model.gain, rep->n_train, o.max_delay);
   rep->extended =
@@ -186,6 +197,24 @@ void AddDownstreamGain(const AuditOptions& o, const RunStats& st, AuditReport* r
   else rep->notes.push_back(absl::StrCat("downstream gain not measured: ", dg.status().message()));
 }
 
+// The blocked hold-out's block times, and for every channel cause the
+// blocks in which it lowers the re-simulated residual.
+void ReportBlocks(ChannelEvaluator& all, const AuditOptions& o, const Selection& s, AuditReport* rep) {
+  const MeasuredData& d = all.data();
+  if (o.blocks < 2) return;
+  const std::vector<int> edges = internal::BlockEdges(static_cast<int>(d.t.size()), o.blocks);
+  for (size_t b = 0; b + 1 < edges.size(); ++b) rep->block_times.push_back(d.t[edges[b]]);
+  rep->block_times.push_back(d.t.back());
+  for (Cause& c : rep->causes) {
+    auto e = ParseEffect(c.effect);
+    if (!e.ok()) continue;
+    // A cause of the blocked hold-out keeps the blocks its held-out scores showed.
+    const std::vector<int> held_out_blocks = c.blocks;
+    internal::BlocksShowing(all, edges, s.params, internal::EffectOff(s.params, *e), o.min_gain, &c);
+    if (c.found_by == "blocked") c.blocks = held_out_blocks;
+  }
+}
+
 }  // namespace
 
 absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOptions& o) {
@@ -194,7 +223,10 @@ absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOption
   const int n_train = static_cast<int>(std::lround(n * (1 - o.heldout_fraction)));
   const RunStats st = internal::ComputeRunStats(data);
   AuditReport rep = StartReport(data, o, n_train);
-  ChannelEvaluator eng(data, n_train);
+  // The working copy: a named phantom is subtracted from its reading.
+  MeasuredData work = data;
+  ChannelEvaluator eng(work, n_train);
+  ChannelEvaluator all(work, n);  // every sample a training sample
   EffectParams base = BaseEffects(o, st);
   if (o.model) rep.given_model_heldout_rms = GivenModelHeldoutRms(*o.model, data, n_train);
   std::vector<Effect> candidates = ChooseCandidates(o, st, &rep.notes);
@@ -206,16 +238,27 @@ absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOption
   };
   if (auto stop = interrupted("before the cause selection"); !stop.ok()) return stop;
   Selection s = internal::StartSelection(eng, base, std::move(nuisance));
-  internal::SelectCauses(eng, candidates, st, o, &s, &rep);
+  s.release_level = st.fmin + 0.05 * st.range;
+  internal::SelectCauses(eng, candidates, st, o, &s, &rep, &work);
+  internal::SelectCausesBlocked(eng, all, candidates, st, o, &s, &rep);
   if (auto stop = interrupted("during the cause selection"); !stop.ok()) return stop;
-  rep.nominal_adequate = s.named.empty();
-  internal::RefitJointly(eng, st, o, &s, &rep.causes);
+  // A cause found by the blocked hold-out may be absent from the training
+  // block: the final fits then use every sample.
+  const bool blocked = std::any_of(rep.causes.begin(), rep.causes.end(),
+                                   [](const Cause& c) { return c.found_by == "blocked"; });
+  ChannelEvaluator& final_eng = blocked ? all : eng;
+  internal::RefitJointly(final_eng, st, o, &s, &rep.causes);
   if (auto stop = interrupted("after the joint refit"); !stop.ok()) return stop;
-  if (o.uncertainties && !s.named.empty()) internal::EstimateUncertainties(eng, st, o, s, &rep.causes);
+  if (o.uncertainties && !s.named.empty()) internal::EstimateUncertainties(final_eng, st, o, s, &rep.causes);
   if (auto stop = interrupted("after the uncertainties"); !stop.ok()) return stop;
+  s.fit = eng.Evaluate(s.params, true);
+  ReportBlocks(all, o, s, &rep);
+  if (auto pa = internal::FindPartialActivation(data, o)) rep.causes.insert(rep.causes.begin(), *pa);
+  rep.nominal_adequate = rep.causes.empty();
 
-  BuildModels(data, o, eng, base, s, &rep);
-  Resimulate(data, o, &rep);
+  ChannelEvaluator measured(data, n_train);
+  BuildModels(data, o, measured, eng, base, s, &rep);
+  Resimulate(data, o, s, &rep);
   ReportClockOffset(data, s.params.delay, &rep);
   if (o.downstream_gain && !s.named.empty()) AddDownstreamGain(o, st, &rep);
   return rep;

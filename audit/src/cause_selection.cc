@@ -37,8 +37,6 @@ Selection StartSelection(ChannelEvaluator& eng, const EffectParams& base, std::v
   return s;
 }
 
-namespace {
-
 // Re-converges the named effects with the budget a candidate's joint
 // refinement gets; keeps the result when it lowers the training RSS.
 void ReconvergeNamed(ChannelEvaluator& eng, const RunStats& st, const AuditOptions& o, Selection* s) {
@@ -52,6 +50,10 @@ void ReconvergeNamed(ChannelEvaluator& eng, const RunStats& st, const AuditOptio
     s->bic = Bic(s->fit.rss_heldout, eng.n_heldout(), s->k);
   }
 }
+
+namespace {
+
+}  // namespace
 
 // The forms a candidate is fitted in: the default, plus the second form of
 // hysteresis (Prandtl-Ishlinskii) and nonlinearity (power law).
@@ -78,6 +80,8 @@ EffectParams StartForForm(const EffectParams& current, Form form) {
   }
   return start;
 }
+
+namespace {
 
 // The best candidate of a round.
 struct RoundBest {
@@ -163,14 +167,59 @@ bool AcceptBest(const RoundBest& best, const std::vector<Effect>& candidates, in
   return true;
 }
 
+// Records the phantom candidate of a round; when it beats the round's best
+// channel candidate and passes AcceptBest's tests, names it: the phantom is
+// subtracted from the working reading and the model re-scored. Returns
+// whether it was named.
+bool ConsiderPhantom(ChannelEvaluator& eng, const PhantomFit& ph, const RoundBest& best, int round,
+                     const RunStats& st, const AuditOptions& o, Selection* s, AuditReport* rep, MeasuredData* work) {
+  CandidateScore cs;
+  cs.round = round;
+  cs.effect = kPhantom;
+  cs.parameters = {{"phantom_force", ph.force}, {"phantom_decay", ph.decay}};
+  const int n_h = eng.n_heldout();
+  cs.heldout_rms = std::sqrt(ph.rss_heldout / n_h);
+  cs.bic = ph.bic;
+  rep->candidates.push_back(cs);
+  if (!(ph.bic < best.bic)) return false;
+  const double rms_before = std::sqrt(s->fit.rss_heldout / n_h);
+  const double gain = rms_before > 0 ? 1 - cs.heldout_rms / rms_before : 0;
+  const double scale = std::abs(s->fit.a) > 0 ? std::abs(s->fit.a) : 1;
+  const bool material = (rms_before - cs.heldout_rms) / scale >= o.min_rms_drop * st.range;
+  if (!(ph.bic < s->bic && gain >= o.min_gain && material)) return false;
+  rep->candidates.back().accepted = true;
+  const std::vector<double> profile = PhantomProfile(*work, s->release_level, ph.decay);
+  for (size_t i = 0; i < profile.size(); ++i) work->reading[i] -= ph.coefficient * profile[i];
+  Cause c;
+  c.effect = kPhantom;
+  c.parameters = cs.parameters;
+  c.parameters["release_level"] = s->release_level;
+  c.heldout_rms_before = rms_before;
+  c.heldout_rms_after = cs.heldout_rms;
+  c.gain = 100 * gain;
+  c.delta_bic = ph.bic - s->bic;
+  rep->causes.push_back(c);
+  s->phantom = true;
+  s->phantom_force = ph.force;
+  s->phantom_decay = ph.decay;
+  s->k += 2;
+  s->fit = eng.Evaluate(s->params, true);
+  s->bic = Bic(s->fit.rss_heldout, n_h, s->k);
+  return true;
+}
+
 }  // namespace
 
 void SelectCauses(ChannelEvaluator& eng, const std::vector<Effect>& candidates, const RunStats& st,
-                  const AuditOptions& o, Selection* s, AuditReport* rep) {
-  for (int round = 1; round <= o.max_causes; ++round) {
+                  const AuditOptions& o, Selection* s, AuditReport* rep, MeasuredData* work) {
+  for (int round = 1; static_cast<int>(rep->causes.size()) < o.max_causes; ++round) {
     if (o.interrupt && o.interrupt()) return;  // RunAudit reports it
     if (!s->named.empty()) ReconvergeNamed(eng, st, o, s);
     const RoundBest best = ScoreRound(eng, candidates, round, st, o, *s, rep);
+    if (work && o.phantom && !s->phantom) {
+      const PhantomFit ph = FitPhantom(eng, *s);
+      if (ph.ok && ConsiderPhantom(eng, ph, best, round, st, o, s, rep, work)) continue;
+    }
     if (best.candidate < 0) break;
     if (!AcceptBest(best, candidates, eng.n_heldout(), st, o, s, rep)) break;
   }

@@ -62,4 +62,11 @@ const std::vector<double>& ChannelEvaluator::TrainChannel(const sim::EffectParam
   return channel_;
 }
 
+const std::vector<double>& ChannelEvaluator::FullChannel(const sim::EffectParams& p) {
+  sim::ChannelInput in = input_;
+  in.n = static_cast<int>(data_.t.size());
+  sim::ApplyChannel(p, in, &channel_);
+  return channel_;
+}
+
 }  // namespace tactforce::audit::internal

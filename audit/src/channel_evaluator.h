@@ -30,6 +30,9 @@ class ChannelEvaluator {
   // Force-domain channel output on the training block (N; valid until the
   // next call).
   const std::vector<double>& TrainChannel(const sim::EffectParams& p);
+  // Force-domain channel output on all samples (N; valid until the next call).
+  const std::vector<double>& FullChannel(const sim::EffectParams& p);
+  const MeasuredData& data() const { return data_; }
 
   int n_train() const { return n_train_; }
   int n_heldout() const { return static_cast<int>(data_.t.size()) - n_train_; }

@@ -35,6 +35,14 @@ const std::vector<Effect>& AllEffects() {
   return all;
 }
 
+std::vector<std::string> AllEffectNames() {
+  std::vector<std::string> names;
+  for (Effect e : AllEffects()) names.push_back(EffectName(e));
+  names.push_back(kPartialActivation);
+  names.push_back(kPhantom);
+  return names;
+}
+
 absl::StatusOr<Effect> ParseEffect(const std::string& name) {
   for (Effect e : AllEffects())
     if (name == EffectName(e)) return e;

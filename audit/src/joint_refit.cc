@@ -31,6 +31,7 @@ void RefitJointly(ChannelEvaluator& eng, const RunStats& st, const AuditOptions&
   }
   for (auto& c : *causes) {
     auto e = ParseEffect(c.effect);
+    if (!e.ok()) continue;  // phantom, partial_activation: not channel effects
     c.parameters = ParamsOf(*e, s->params, st, o);
     c.array_parameters = ArrayParamsOf(*e, s->params);
   }
@@ -90,6 +91,7 @@ void EstimateUncertainties(ChannelEvaluator& eng, const RunStats& st, const Audi
   const double sigma2 = rss0 / std::max(1, eng.n_train() - k_total);
   for (auto& c : *causes) {
     auto e = ParseEffect(c.effect);
+    if (!e.ok()) continue;
     for (const Slot& sl : SlotsFor(*e, st, o, FormOf(*e, s.params), &s.params))
       c.uncertainties[sl.field] = Uncertainty(eng, s.params, sl, rss0, sigma2);
   }

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <string_view>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
@@ -65,6 +66,13 @@ absl::Status ValidateMeasuredData(const MeasuredData& d, int min_samples) {
         return absl::InvalidArgumentError(absl::StrCat(Where(d, i, col), ": not a finite number"));
     return absl::OkStatus();
   };
+  // Taxels first: a bad taxel value also spoils the reading (their sum).
+  for (size_t j = 0; j < d.taxels.size(); ++j) {
+    const std::string col = absl::StrCat("taxel_", j);
+    if (d.taxels[j].size() != n)
+      return absl::InvalidArgumentError(absl::StrCat(Column(d, col.c_str()), " differs in length"));
+    if (auto st = check_finite(d.taxels[j], col.c_str()); !st.ok()) return st;
+  }
   for (auto st : {check_finite(d.t, "t"), check_finite(d.reference, "reference"),
                   check_finite(d.reading, "reading"), check_finite(d.shear, "shear")})
     if (!st.ok()) return st;
@@ -76,6 +84,10 @@ absl::Status ValidateMeasuredData(const MeasuredData& d, int min_samples) {
       if (!planner::IsBounded(v[i], limit)) return planner::MagnitudeError(Where(d, i, col), v[i], limit, unit);
     return absl::OkStatus();
   };
+  for (size_t j = 0; j < d.taxels.size(); ++j)
+    if (auto st = check_bounded(d.taxels[j], absl::StrCat("taxel_", j).c_str(), kMaxReading, "sensor units");
+        !st.ok())
+      return st;
   for (auto st : {check_bounded(d.t, "t", planner::kMaxTime, "s"),
                   check_bounded(d.reference, "reference", planner::kMaxForce, "N"),
                   check_bounded(d.reading, "reading", kMaxReading, "sensor units"),
@@ -107,13 +119,65 @@ absl::Status ValidateMeasuredData(const MeasuredData& d, int min_samples) {
   return absl::OkStatus();
 }
 
-absl::StatusOr<MeasuredData> MeasuredDataFromCsv(const io::CsvTable& table) {
-  if (auto st = table.Require({"t", "reference", "reading"}); !st.ok()) return st;
+namespace {
+
+// The taxel index of a column named taxel_<j> (j a decimal integer), or -1.
+int TaxelIndex(const std::string& column) {
+  constexpr std::string_view kPrefix = "taxel_";
+  if (column.size() <= kPrefix.size() || column.compare(0, kPrefix.size(), kPrefix) != 0) return -1;
+  long j = 0;
+  for (size_t k = kPrefix.size(); k < column.size(); ++k) {
+    if (column[k] < '0' || column[k] > '9' || j > kMaxTaxels) return -1;
+    j = 10 * j + (column[k] - '0');
+  }
+  return j <= kMaxTaxels ? static_cast<int>(j) : -1;
+}
+
+// The taxel columns of `table` into d->taxels (taxel_0 ... taxel_<N-1>);
+// 'reading' = their sum when the table has none. Errors name the missing
+// taxel columns.
+absl::Status ReadTaxelColumns(const io::CsvTable& table, int expected, MeasuredData* d) {
+  if (expected < 0 || expected > kMaxTaxels)
+    return absl::InvalidArgumentError(absl::StrCat("taxels: must be in [1, ", kMaxTaxels, "], got ", expected));
+  int highest = -1;
+  for (const auto& c : table.columns) highest = std::max(highest, TaxelIndex(c));
+  const int n_taxels = expected > 0 ? expected : highest + 1;
+  if (n_taxels == 0) return absl::OkStatus();
+  if (highest >= n_taxels)
+    return absl::InvalidArgumentError(absl::StrCat(table.source, ": column 'taxel_", highest, "' beyond the ",
+                                                   n_taxels, " taxels expected (taxel_0 ... taxel_", n_taxels - 1,
+                                                   ")"));
+  std::string missing;
+  for (int j = 0; j < n_taxels; ++j)
+    if (!table.Has(absl::StrCat("taxel_", j))) absl::StrAppend(&missing, missing.empty() ? "" : ", ", "taxel_", j);
+  if (!missing.empty())
+    return absl::InvalidArgumentError(absl::StrCat(table.source, ": missing column(s) ", missing,
+                                                   " (per-taxel data needs taxel_0 ... taxel_", n_taxels - 1, ")"));
+  for (int j = 0; j < n_taxels; ++j) d->taxels.push_back(table.Column(absl::StrCat("taxel_", j)));
+  if (!table.Has("reading")) {
+    d->reading.assign(d->t.size(), 0.0);
+    for (const auto& col : d->taxels)
+      for (size_t i = 0; i < col.size(); ++i) d->reading[i] += col[i];
+    d->notes.push_back(absl::StrCat("reading = the sum of the ", n_taxels, " taxel columns (the fingertip force)"));
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::StatusOr<MeasuredData> MeasuredDataFromCsv(const io::CsvTable& table, int expected_taxels) {
+  if (auto st = table.Require({"t", "reference"}); !st.ok()) return st;
   MeasuredData d;
   d.source = table.source;
   d.t = table.Column("t");
   d.reference = table.Column("reference");
-  d.reading = table.Column("reading");
+  if (table.Has("reading")) d.reading = table.Column("reading");
+  if (auto st = ReadTaxelColumns(table, expected_taxels, &d); !st.ok()) return st;
+  if (d.reading.empty()) {
+    if (auto st = table.Require({"t", "reference", "reading"}); !st.ok())
+      return absl::InvalidArgumentError(
+          absl::StrCat(st.message(), " (or per-taxel columns taxel_0 ... taxel_<N-1>)"));
+  }
   if (table.Has("shear")) d.shear = table.Column("shear");
   d.line = table.line_numbers;
   d.skipped_nan_rows = table.skipped_rows;
@@ -143,20 +207,21 @@ absl::StatusOr<MeasuredData> MeasuredDataFromCsv(const io::CsvTable& table) {
   return d;
 }
 
-absl::StatusOr<MeasuredData> ParseMeasuredCsv(const std::string& text, const std::string& source) {
+absl::StatusOr<MeasuredData> ParseMeasuredCsv(const std::string& text, const std::string& source,
+                                              int expected_taxels) {
   io::CsvOptions opt;
   opt.skip_nan_rows = true;
   auto table = io::ParseCsv(text, source, opt);
   if (!table.ok()) return table.status();
-  return MeasuredDataFromCsv(*table);
+  return MeasuredDataFromCsv(*table, expected_taxels);
 }
 
-absl::StatusOr<MeasuredData> ReadMeasuredCsv(const std::string& path) {
+absl::StatusOr<MeasuredData> ReadMeasuredCsv(const std::string& path, int expected_taxels) {
   io::CsvOptions opt;
   opt.skip_nan_rows = true;
   auto table = io::ReadCsvFile(path, opt);
   if (!table.ok()) return table.status();
-  return MeasuredDataFromCsv(*table);
+  return MeasuredDataFromCsv(*table, expected_taxels);
 }
 
 namespace {

@@ -88,6 +88,9 @@ void WriteCauses(io::JsonWriter& w, const std::vector<Cause>& causes) {
     w.Field("heldout_rms_after", c.heldout_rms_after);
     w.Field("gain", c.gain);
     w.Field("delta_bic", c.delta_bic);
+    w.Field("found_by", c.found_by);
+    w.NumberArray("blocks", std::vector<double>(c.blocks.begin(), c.blocks.end()));
+    w.NumberArray("block_gains", c.block_gains);
     w.EndObject();
   }
   w.EndArray();
@@ -214,6 +217,17 @@ std::string CauseLine(const Cause& c) {
   return p;
 }
 
+// Where a cause was found and which time blocks show it.
+std::string BlocksNote(const Cause& c, const std::vector<double>& block_times) {
+  if (c.found_by == "taxels") return "; from the per-taxel data";
+  if (c.blocks.empty() || block_times.size() < 2) return "";
+  std::string b;
+  for (int k : c.blocks)
+    absl::StrAppendFormat(&b, "%s%d (%.4g-%.4g s)", b.empty() ? "" : ", ", k, block_times[k - 1], block_times[k]);
+  return absl::StrCat(c.found_by == "blocked" ? "; found by the blocked hold-out" : "", "; shown in block(s) ", b,
+                      " of ", block_times.size() - 1);
+}
+
 }  // namespace
 
 std::string AuditReportJson(const AuditReport& r, const std::string& extended_model_path) {
@@ -233,6 +247,7 @@ std::string AuditReportJson(const AuditReport& r, const std::string& extended_mo
   w.FieldInt("n_heldout", r.n_heldout);
   w.FieldInt("skipped_nan_rows", r.skipped_nan_rows);
   w.Field("split_time", r.split_time);
+  w.NumberArray("block_times", r.block_times);
   WriteClockOffset(w, r);
   w.Key("nominal_model");
   w.BeginObject();
@@ -306,8 +321,9 @@ std::string FormatAuditSummary(const AuditReport& r) {
     s += "Causes (strongest first):\n";
     int i = 1;
     for (const auto& c : r.causes)
-      absl::StrAppendFormat(&s, "  %d. %-12s %s; held-out RMS %.4g -> %.4g (gain %.1f %%)\n", i++, c.effect,
-                            CauseLine(c), c.heldout_rms_before, c.heldout_rms_after, c.gain);
+      absl::StrAppendFormat(&s, "  %d. %-12s %s; held-out RMS %.4g -> %.4g (gain %.1f %%)%s\n", i++, c.effect,
+                            CauseLine(c), c.heldout_rms_before, c.heldout_rms_after, c.gain,
+                            BlocksNote(c, r.block_times));
     absl::StrAppendFormat(&s, "Extended model (re-simulated): held-out RMS %.4g -> %.4g, gain %.1f %%\n",
                           r.heldout_rms_before, r.heldout_rms_after, r.gain);
   }

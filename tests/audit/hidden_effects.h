@@ -240,4 +240,160 @@ inline Recovery CheckParameters(Effect e, const sim::EffectParams& truth, const 
   return r;
 }
 
+// ---- issue 26: late-only effects, phantom forces, per-taxel data ----------
+
+// A single effect that appears only in the last third of the run: the
+// reading is the effect-free sensor's (same gain, offset, noise seed) before
+// t0 + 2/3 of the duration and the sensor with the effect after (a drift
+// starts from zero there).
+inline HiddenCase MakeLateCase(Effect e, uint64_t seed) {
+  HiddenCase hc = MakeHiddenCase({e}, seed);
+  sim::SensorModel clean = hc.model;
+  clean.effects = sim::EffectParams{};
+  auto with = sim::SimulateSensor(hc.model, hc.sim);
+  auto without = sim::SimulateSensor(clean, hc.sim);
+  if (!with.ok() || !without.ok()) return hc;
+  const double t0 = without->t.front(), t_switch = t0 + (without->t.back() - t0) * 2.0 / 3.0;
+  for (size_t i = 0; i < without->t.size(); ++i)
+    if (without->t[i] >= t_switch)
+      without->reading[i] = with->reading[i] - hc.model.gain * hc.model.effects.drift * (t_switch - t0);
+  auto data = ParseMeasuredCsv(sim::SimRunCsv(*without), "late.csv");
+  if (data.ok()) hc.data = *data;
+  return hc;
+}
+
+// The phantom the audit names (audit.h): exp(-(t - t_r)/decay) at every
+// sample whose reference is <= release after a loaded sample, t_r the first
+// such sample; written here independently of the audit's code.
+inline std::vector<double> PhantomShape(const std::vector<double>& t, const std::vector<double>& f, double release,
+                                        double decay) {
+  std::vector<double> out(t.size(), 0.0);
+  bool loaded = false;
+  double t_release = -1;
+  for (size_t i = 0; i < t.size(); ++i) {
+    if (f[i] > release) {
+      loaded = true;
+      t_release = -1;
+    } else if (loaded) {
+      if (t_release < 0) t_release = t[i];
+      out[i] = std::exp(-(t[i] - t_release) / decay);
+    }
+  }
+  return out;
+}
+
+struct PhantomCase {
+  HiddenCase hc;
+  double force = 0, decay = 0;  // N, s (truth)
+};
+
+// A phantom force of 0.2-1 N decaying with 0.3-3 s after every release, on
+// top of the press-release run of MakeHiddenCase (no other effect).
+inline PhantomCase MakePhantomCase(uint64_t seed) {
+  PhantomCase pc;
+  pc.hc = MakeHiddenCase({}, seed);
+  std::mt19937_64 rng(seed * 104729 + 3);
+  pc.force = std::uniform_real_distribution<double>(0.2, 1.0)(rng);
+  pc.decay = std::uniform_real_distribution<double>(0.3, 3.0)(rng);
+  auto run = sim::SimulateSensor(pc.hc.model, pc.hc.sim);
+  if (!run.ok()) return pc;
+  auto [lo, hi] = std::minmax_element(run->reference.begin(), run->reference.end());
+  const auto shape = PhantomShape(run->t, run->reference, *lo + 0.05 * (*hi - *lo), pc.decay);
+  for (size_t i = 0; i < shape.size(); ++i) run->reading[i] += pc.hc.model.gain * pc.force * shape[i];
+  auto data = ParseMeasuredCsv(sim::SimRunCsv(*run), "phantom.csv");
+  if (data.ok()) pc.hc.data = *data;
+  return pc;
+}
+
+// Per-taxel data: the 42-taxel fingertip of sim/ (DefaultFingertip) pressed
+// at every taxel once, in a random order (a calibration sweep): per press a
+// peak of 4-8 N (ramp 0.25 s, hold 0.1 s, release 0.25 s, rest 0.15 s); each
+// taxel's load = the force x its share of a Gaussian patch of radius
+// 3 mm + 1.5 mm sqrt(F / 1 N) around the pressed taxel, weighted by the
+// cosine between the normals (shares sum to 1). Each taxel has its own draw
+// (GeoDEx's ranges): activation threshold 0.1-0.5 N (a jump), hysteresis
+// 0-0.2 N, noise 0.01-0.03 N; half the cases in counts (per-taxel gain 0.9-1.1
+// x 20-80 /N, offset 500-1500). `dead` taxels (drawn) read only their offset
+// and noise. 100-200 Hz.
+struct TaxelCase {
+  MeasuredData data;
+  std::vector<int> dead;  // taxel indices that never activate
+  int taxels = 0;
+  std::string csv;        // the CSV text (t,reference,taxel_0..)
+};
+
+inline TaxelCase MakeTaxelCase(uint64_t seed, int dead_count) {
+  std::mt19937_64 rng(seed * 6007 + 11);
+  auto uni = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
+  const auto tips = sim::DefaultFingertip();
+  const int m = static_cast<int>(tips.size());
+  TaxelCase tc;
+  tc.taxels = m;
+  std::vector<int> order(m);
+  for (int j = 0; j < m; ++j) order[j] = j;
+  std::shuffle(order.begin(), order.end(), rng);
+  tc.dead.assign(order.begin(), order.begin() + dead_count);
+  std::shuffle(order.begin(), order.end(), rng);
+  const double rate = uni(100, 200), press = 0.75;
+  const int per_press = static_cast<int>(press * rate);
+  const int n = per_press * m + static_cast<int>(0.3 * rate);
+  std::vector<double> t(n), force(n, 0.0);
+  std::vector<std::vector<double>> load(m, std::vector<double>(n, 0.0));
+  for (int i = 0; i < n; ++i) t[i] = i / rate;
+  for (int k = 0; k < m; ++k) {
+    const double peak = uni(4, 8);
+    const int c = order[k];
+    for (int q = 0; q < per_press; ++q) {
+      const double tau = q / rate;
+      const double f = tau < 0.25 ? peak * tau / 0.25 : tau < 0.35 ? peak : tau < 0.6 ? peak * (0.6 - tau) / 0.25 : 0;
+      const int i = k * per_press + q + static_cast<int>(0.15 * rate);
+      force[i] = f;
+      if (f <= 0) continue;
+      const double a = 0.003 + 0.0015 * std::sqrt(f);
+      std::vector<double> w(m);
+      double ws = 0;
+      for (int j = 0; j < m; ++j) {
+        const double d2 = (tips[j].position - tips[c].position).squaredNorm();
+        w[j] = std::exp(-d2 / (2 * a * a)) * std::max(0.0, tips[j].normal.dot(tips[c].normal));
+        ws += w[j];
+      }
+      for (int j = 0; j < m; ++j) load[j][i] = f * w[j] / ws;
+    }
+  }
+  const bool counts = uni(0, 1) < 0.5;
+  const double base_gain = counts ? uni(20, 80) : 1.0;
+  std::normal_distribution<double> gauss(0, 1);
+  std::string csv = "t,reference";
+  for (int j = 0; j < m; ++j) csv += ",taxel_" + std::to_string(j);
+  csv += "\n";
+  std::vector<std::vector<double>> reading(m, std::vector<double>(n));
+  for (int j = 0; j < m; ++j) {
+    sim::EffectParams p;
+    p.threshold = uni(0.1, 0.5);
+    p.hysteresis_width = uni(0, 0.2);
+    const double noise = uni(0.01, 0.03), gain = counts ? base_gain * uni(0.9, 1.1) : 1.0;
+    const double offset = counts ? uni(500, 1500) : 0.0;
+    const bool dead = std::find(tc.dead.begin(), tc.dead.end(), j) != tc.dead.end();
+    std::vector<double> u(n, 0.0);
+    if (!dead) {
+      sim::ChannelInput in;
+      in.t = t.data();
+      in.force = load[j].data();
+      in.n = n;
+      in.t0 = 0;
+      sim::ApplyChannel(p, in, &u);
+    }
+    for (int i = 0; i < n; ++i) reading[j][i] = gain * (u[i] + noise * gauss(rng)) + offset;
+  }
+  for (int i = 0; i < n; ++i) {
+    csv += std::to_string(t[i]) + "," + std::to_string(force[i]);
+    for (int j = 0; j < m; ++j) csv += "," + std::to_string(reading[j][i]);
+    csv += "\n";
+  }
+  auto data = ParseMeasuredCsv(csv, "taxels.csv");
+  if (data.ok()) tc.data = *data;
+  tc.csv = std::move(csv);
+  return tc;
+}
+
 }  // namespace tactforce::audit::testing

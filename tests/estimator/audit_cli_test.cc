@@ -42,6 +42,22 @@ TEST_F(CliTest, AuditBadInputNamesTheProblem) {
   EXPECT_NE(m.err.find("missing column(s) reading"), std::string::npos) << m.err;
 }
 
+// A per-taxel CSV (issue 26): a missing taxel column is named, exit 2,
+// nothing written; with --taxels the expected count is enforced.
+TEST_F(CliTest, AuditPerTaxelCsvNamesAMissingColumn) {
+  std::string csv = "t,reference,taxel_0,taxel_2\n";
+  for (int i = 0; i < 60; ++i) csv += std::to_string(0.01 * i) + "," + std::to_string(i % 7) + ",1,2\n";
+  const auto gap = Write("gap.csv", csv);
+  const std::string out = (dir() / "taxel_report").string();
+  const CliRun run = Tactforce({"audit", "--csv", gap.string(), "--out", out});
+  ExpectBadInput(run);
+  EXPECT_NE(run.err.find("missing column(s) taxel_1"), std::string::npos) << run.err;
+  EXPECT_FALSE(std::filesystem::exists(out + "/report.json"));
+  const CliRun more = Tactforce({"audit", "--csv", gap.string(), "--taxels", "4", "--out", out});
+  ExpectBadInput(more);
+  EXPECT_NE(more.err.find("taxel_1, taxel_3"), std::string::npos) << more.err;
+}
+
 // `audit --out` as `simulate --out`: an earlier report's folder is refused
 // (exit 2, nothing written or removed) unless --force, which replaces only
 // the report's own files.

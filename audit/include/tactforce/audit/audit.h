@@ -24,6 +24,13 @@
 //     (default 1 %) AND by at least min_rms_drop x the reference force range
 //     (force equivalent; default 1e-6, an absolute floor); otherwise
 //     selection stops. At most max_causes.
+//     Each round also tries a phantom (a reading that persists after
+//     unloading), named when it beats the channel candidates.
+//  3b. Blocked hold-out (options.blocks contiguous blocks): each block
+//     audited on its own and confirmed with its split reversed, so an effect
+//     that appears only late is named; causes list the blocks that show them.
+//  3c. Per-taxel data: taxels that never activate (partial_activation),
+//     listed first.
 //  4. The extended model = nominal + named effects, jointly re-fitted, with
 //     1-sigma uncertainties (conditional Delta-RSS = sigma^2 intervals).
 //  5. Gain: the measured run re-simulated with both models
@@ -47,12 +54,37 @@ inline constexpr int kNumEffects = 8;
 const char* EffectName(Effect e);  // "deadzone", ... (report.json vocabulary)
 absl::StatusOr<Effect> ParseEffect(const std::string& name);
 const std::vector<Effect>& AllEffects();
+// Two more effects the audit names that are not operators of the sensor
+// model's channel (sim/ has no fields for them; they are reported in
+// report.json, not written into extended_model.json):
+//  - partial_activation (per-taxel data only): a fraction of the taxels never
+//    activates (reading never leaves its baseline noise); parameters fraction,
+//    silent_taxels (count), taxels (count); array silent_taxel_indices.
+//  - phantom: a reading that persists after unloading, P * exp(-(t - t_r)/tau)
+//    on top of the channel for every sample at which the reference is
+//    unloaded (<= F_min + 5 % of the range) after a release at t_r;
+//    parameters phantom_force P (N, > 0) and phantom_decay tau (s).
+inline constexpr char kPartialActivation[] = "partial_activation";
+inline constexpr char kPhantom[] = "phantom";
+// The whole vocabulary: the eight channel effects, then the two above.
+std::vector<std::string> AllEffectNames();
 // Sensor-model fields an effect owns, all forms (e.g. deadzone: threshold,
 // threshold_shift; hysteresis: hysteresis_width, pi_thresholds, pi_weights).
 std::vector<std::string> EffectFields(Effect e);
 
 struct AuditOptions {
   double heldout_fraction = 0.35;   // later block used for scoring, (0.1, 0.6)
+  // Blocked hold-out (k-fold in time): after the selection on the final
+  // block, further causes are chosen and scored by cross-validation over
+  // `blocks` contiguous time blocks (each held out in turn, fitted on the
+  // others), so an effect that appears only late is found. 0 or 1 = off;
+  // at most 10.
+  int blocks = 4;
+  // Per-taxel data: a taxel is silent (never activates) when the largest
+  // deviation of its 5-sample moving mean from its median stays below
+  // silent_sigmas x its noise (robust, from first differences) / sqrt(5).
+  double silent_sigmas = 8;
+  bool phantom = true;              // try the phantom candidate (each round)
   double min_gain = 0.01;           // relative held-out RMS gain to accept a cause
   // Absolute floor beside min_gain: the held-out RMS (force equivalent,
   // reading units / |gain|) must also fall by at least this fraction of the
@@ -117,6 +149,17 @@ struct Cause {
   double heldout_rms_after = 0;
   double gain = 0;                               // percent
   double delta_bic = 0;                          // BIC_h(after) - BIC_h(before) (< 0)
+  // How the cause was found: "final_block" (the split at heldout_fraction),
+  // "blocked" (the blocked hold-out), "taxels" (per-taxel data).
+  std::string found_by = "final_block";
+  // The time blocks (1-based, of AuditReport::block_times) that show the
+  // cause: for found_by "blocked" those whose held-out RMS it lowered by at
+  // least min_gain (fitted on the other blocks); otherwise those in which it
+  // lowers the residual RMS of the final model by at least min_gain. And the
+  // per-block drop of the final model's residual RMS (percent). Empty for
+  // partial_activation and phantom.
+  std::vector<int> blocks;
+  std::vector<double> block_gains;
 };
 
 struct CandidateScore {
@@ -145,6 +188,9 @@ struct AuditReport {
   std::string source;
   int n_samples = 0, n_train = 0, n_heldout = 0, skipped_nan_rows = 0;
   double split_time = 0;       // first held-out time
+  // Blocked hold-out: the first time of each block and the last sample's
+  // time (blocks + 1 values; empty when off).
+  std::vector<double> block_times;
   std::string reading_units;
   bool nominal_adequate = true;
   std::vector<Cause> causes;   // strongest first

@@ -3,6 +3,12 @@
 //
 // Formats (see README):
 //   one CSV      t,reference,reading[,shear][,trial]
+//   per taxel    t,reference,taxel_0,...,taxel_<N-1>[,reading][,shear][,trial]:
+//                one column per taxel (its reading, any units); 'reading'
+//                (the fingertip's) defaults to the sum of the taxels, as
+//                GeoDEx defines the fingertip force. Taxel columns must be
+//                numbered 0..N-1 without gaps (N = expected_taxels when given,
+//                else the highest index + 1); a gap is an error naming it.
 //   two streams  reference file t,value[,shear]; reading file t,value.
 //                The reference is interpolated (linearly) onto the reading
 //                times; reading samples outside the reference span are
@@ -38,6 +44,9 @@ struct MeasuredData {
   std::vector<int> trial;             // per sample (0 when absent)
   std::vector<int> segment_starts;    // first sample index of each trial (starts with 0)
   std::vector<int> line;              // source line per sample (may be empty)
+  // Per-taxel readings (sensor units), taxels[j][i] = taxel j at sample i;
+  // empty unless the CSV has taxel_<j> columns.
+  std::vector<std::vector<double>> taxels;
   int skipped_nan_rows = 0;
   std::vector<std::string> notes;     // e.g. alignment facts
   // Two streams only.
@@ -60,9 +69,15 @@ inline constexpr int kMinAuditSamples = 40;
 // "<file>: column 'reference' is constant (2 N): ..."; too few samples
 // ("<file>: too few samples: 12 valid rows (3 NaN rows skipped), the audit
 // needs at least 40").
-absl::StatusOr<MeasuredData> MeasuredDataFromCsv(const io::CsvTable& table);
-absl::StatusOr<MeasuredData> ReadMeasuredCsv(const std::string& path);
-absl::StatusOr<MeasuredData> ParseMeasuredCsv(const std::string& text, const std::string& source);
+// Per-taxel CSVs: "<file>: missing column(s) taxel_5, taxel_17 (per-taxel
+// data needs taxel_0 ... taxel_41)". expected_taxels = 0: N is the highest
+// taxel index + 1 (a CSV without taxel columns is single-channel data).
+absl::StatusOr<MeasuredData> MeasuredDataFromCsv(const io::CsvTable& table, int expected_taxels = 0);
+absl::StatusOr<MeasuredData> ReadMeasuredCsv(const std::string& path, int expected_taxels = 0);
+absl::StatusOr<MeasuredData> ParseMeasuredCsv(const std::string& text, const std::string& source,
+                                              int expected_taxels = 0);
+// The largest taxel count a per-taxel CSV may declare.
+inline constexpr int kMaxTaxels = 4096;
 
 enum class ClockOffsetMode {
   kFixed,     // use clock_offset as given (default: 0)
