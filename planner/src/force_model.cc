@@ -10,15 +10,10 @@
 
 #include "absl/strings/str_cat.h"
 #include "tactforce/planner/parameter_uncertainty.h"
+#include "tactforce/planner/skew.h"
 
 namespace tactforce::planner {
 namespace {
-
-Eigen::Matrix3d Skew(const Vec3& v) {
-  Eigen::Matrix3d s;
-  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return s;
-}
 
 // Householder QR in place: `a` (rows x cols, rows >= cols or not) becomes R
 // in its upper part; reflector k (unit, zero above row k) goes to

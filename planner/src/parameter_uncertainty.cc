@@ -11,16 +11,11 @@
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
+#include "tactforce/planner/skew.h"
 #include "tactforce/planner/validation.h"
 
 namespace tactforce::planner {
 namespace {
-
-Eigen::Matrix3d Skew(const Vec3& v) {
-  Eigen::Matrix3d s;
-  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return s;
-}
 
 // L(v) with I_o v = L(v) (I_xx, I_yy, I_zz, I_xy, I_xz, I_yz).
 Eigen::Matrix<double, 3, 6> InertiaProductMap(const Vec3& v) {

@@ -13,6 +13,7 @@
 #include "tactforce/inertia/fit.h"
 #include "tactforce/inertia/hull.h"
 #include "tactforce/inertia/types.h"
+#include "tactforce/planner/skew.h"
 
 namespace tactforce::inertia::internal {
 
@@ -59,7 +60,7 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 using Matrix6x10 = Eigen::Matrix<double, 6, 10>;
 using Matrix10d = Eigen::Matrix<double, 10, 10>;
 
-Eigen::Matrix3d Skew(const Vec3& v);
+using planner::Skew;  // the cross-product matrix
 Vec3 LogSO3(const Eigen::Matrix3d& R);
 Eigen::Matrix3d ExpSO3(const Vec3& w);
 

@@ -14,12 +14,6 @@
 
 namespace tactforce::inertia::internal {
 
-Eigen::Matrix3d Skew(const Vec3& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
 Vec3 LogSO3(const Eigen::Matrix3d& R) {
   Eigen::Quaterniond q(R);
   q.normalize();
