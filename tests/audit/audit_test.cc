@@ -401,7 +401,9 @@ TEST(GainFloor, RoundOffResidualNamesNoFurtherCause) {
     ASSERT_EQ(rep->causes.size(), deadzone ? 1u : 0u)
         << "run " << run << " (gain " << m.gain << "): last named " << rep->causes.back().effect << " with gain "
         << rep->causes.back().gain << " % on a held-out RMS of " << rep->causes.back().heldout_rms_before;
-    if (deadzone) EXPECT_EQ(rep->causes[0].effect, "deadzone") << "run " << run;
+    if (deadzone) {
+      EXPECT_EQ(rep->causes[0].effect, "deadzone") << "run " << run;
+    }
     AuditOptions no_floor = Quick();
     no_floor.min_rms_drop = 0;
     auto relative_only = RunAudit(*d, no_floor);
