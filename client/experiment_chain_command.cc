@@ -47,6 +47,7 @@ std::string RowJson(const ex::ChainRow& r) {
                       JsonEscape(ex::ToString(r.planning)), ",\"successes\":", r.successes, ",\"trials\":", r.trials,
                       ",\"median_squeeze_n\":", ran ? JsonNumber(r.median_squeeze_n) : "null",
                       ",\"min_slip_margin\":", ran ? JsonNumber(r.min_slip_margin) : "null",
+                      ",\"median_trial_slip_margin\":", ran ? JsonNumber(r.median_trial_slip_margin) : "null",
                       ",\"plan_failures\":", r.plan_failures, ",\"plan_failure\":", JsonEscape(r.plan_failure),
                       ",\"estimates_off\":", r.estimates_off ? "true" : "false", "}");
 }
@@ -77,15 +78,16 @@ std::string ReportTable(const ChainArgs& a, const ex::ChainReport& r) {
   std::string out = absl::StrFormat(
       "Probe -> fit -> plan -> lift (estimated-force feedback), %d seeds from %d, %d trials each\n", a.seeds, a.seed,
       a.trials);
-  absl::StrAppend(&out, absl::StrFormat("%-9s %-10s %10s %8s %16s %16s %6s\n", "object", "planning", "success",
-                                        "rate", "median squeeze N", "min slip margin", "off"));
+  absl::StrAppend(&out, absl::StrFormat("%-9s %-10s %10s %8s %16s %16s %14s %6s\n", "object", "planning", "success",
+                                        "rate", "median squeeze N", "min slip margin", "median of min", "off"));
   for (const ex::ChainRow& w : r.rows) {
     const bool ran = w.trials_run > 0;
-    absl::StrAppend(&out, absl::StrFormat("%-9s %-10s %6d/%-3d %7.0f%% %16s %16s %6s%s\n", ex::ToString(w.object),
+    absl::StrAppend(&out, absl::StrFormat("%-9s %-10s %6d/%-3d %7.0f%% %16s %16s %14s %6s%s\n", ex::ToString(w.object),
                                           ex::ToString(w.planning), w.successes, w.trials,
                                           100.0 * w.successes / w.trials,
                                           ran ? absl::StrFormat("%.3f", w.median_squeeze_n) : "-",
                                           ran ? absl::StrFormat("%.3f", w.min_slip_margin) : "-",
+                                          ran ? absl::StrFormat("%.3f", w.median_trial_slip_margin) : "-",
                                           w.estimates_off ? "yes" : "no",
                                           w.plan_failures ? absl::StrCat("  (", w.plan_failures, " plans failed: ",
                                                                          w.plan_failure, ")")

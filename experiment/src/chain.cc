@@ -120,7 +120,7 @@ absl::StatusOr<ChainEstimates> Estimate(const ChainConfig& config, GraspObject o
 
 // One batch into its row; an infeasible plan counts its trials as failures.
 absl::Status RunPlanned(const ChainConfig& config, const ChainEstimates& e, ChainRow* row,
-                        std::vector<double>* squeezes) {
+                        std::vector<double>* squeezes, std::vector<double>* margins) {
   GraspConfig gc = config.grasp;
   gc.object = e.object;
   gc.seed = e.seed;
@@ -138,6 +138,7 @@ absl::Status RunPlanned(const ChainConfig& config, const ChainEstimates& e, Chai
   row->trials_run += b->trials;
   for (const TrialResult& t : b->results) {
     squeezes->push_back(t.squeeze);
+    margins->push_back(t.min_slip_margin);
     row->min_slip_margin = std::min(row->min_slip_margin, t.min_slip_margin);
   }
   return absl::OkStatus();
@@ -197,20 +198,21 @@ absl::StatusOr<ChainReport> RunChain(const ChainConfig& config, const std::funct
     absl::StatusOr<Truth> truth = ObjectTruth(config, object);
     if (!truth.ok()) return truth.status();
     std::vector<ChainRow> rows(3);
-    std::vector<std::vector<double>> squeezes(3);
+    std::vector<std::vector<double>> squeezes(3), margins(3);
     for (int p = 0; p < 3; ++p) rows[p].object = object, rows[p].planning = static_cast<Planning>(p);
     for (int s = 0; s < config.seeds; ++s) {
       absl::StatusOr<ChainEstimates> e = Estimate(config, object, config.seed + s, *truth);
       if (!e.ok()) return e.status();
       if (progress) progress(++done, total);
       for (int p = 0; p < 3; ++p) {
-        if (absl::Status st = RunPlanned(config, *e, &rows[p], &squeezes[p]); !st.ok()) return st;
+        if (absl::Status st = RunPlanned(config, *e, &rows[p], &squeezes[p], &margins[p]); !st.ok()) return st;
         if (progress) progress(++done, total);
       }
       report.estimates.push_back(*e);
     }
     for (int p = 0; p < 3; ++p) {
       rows[p].median_squeeze_n = Median(squeezes[p]);
+      rows[p].median_trial_slip_margin = Median(margins[p]);
       report.rows.push_back(rows[p]);
     }
   }

@@ -71,6 +71,7 @@ struct ChainRow {
   int trials_run = 0;               // trials actually simulated (the two figures below are over these)
   double median_squeeze_n = 0;      // N, median over trials of the mean sum of normal forces
   double min_slip_margin = 1;       // smallest over trials (TrialResult::min_slip_margin)
+  double median_trial_slip_margin = 1;  // median over trials of each trial's smallest
   bool estimates_off = false;       // any seed's estimates off by more than their standard error
 };
 
