@@ -351,7 +351,7 @@ int RunSlope(const ExperimentArgs& a) {
 }  // namespace
 
 CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args) {
-  CLI::App* cmd = app.add_subcommand("experiment", "Closed-loop experiments in MuJoCo (grasp, slope, probe, inhand, ablation)");
+  CLI::App* cmd = app.add_subcommand("experiment", "Closed-loop experiments in MuJoCo (grasp, slope, probe, inhand, ablation, chain)");
   cmd->require_subcommand(1);
   CLI::App* g = cmd->add_subcommand(
       "grasp", "Grasp-and-lift trials with force feedback on raw or estimated tactile forces (GeoDEx Table III)");
@@ -414,6 +414,7 @@ CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args) {
   AddInHandSubcommand(cmd, args.inhand);
   AddAblationSubcommand(cmd, args.ablation);
   AddProbeCommand(cmd, args.probe);
+  AddChainCommand(cmd, args.chain);
   return cmd;
 }
 
@@ -423,7 +424,8 @@ int RunExperiment(const ExperimentArgs& args) {
   if (args.inhand.cmd && args.inhand.cmd->parsed()) return RunInHandCommand(args.inhand);
   if (args.ablation.cmd && args.ablation.cmd->parsed()) return RunAblationCommand(args.ablation);
   if (args.probe.app && args.probe.app->parsed()) return RunProbe(args.probe);
-  return ReportError(absl::InvalidArgumentError("experiment: give grasp, slope, probe, inhand or ablation"));
+  if (args.chain.app && args.chain.app->parsed()) return RunChainCommand(args.chain);
+  return ReportError(absl::InvalidArgumentError("experiment: give grasp, slope, probe, inhand, ablation or chain"));
 }
 
 }  // namespace tactforce::cli

@@ -9,6 +9,7 @@
 #include "CLI/CLI.hpp"
 #include "cli_common.h"
 #include "experiment_ablation_command.h"
+#include "experiment_chain_command.h"
 #include "experiment_inhand_command.h"
 #include "experiment_probe_command.h"
 
@@ -41,6 +42,7 @@ struct ExperimentArgs {
   InHandArgs inhand;                // `experiment inhand`
   AblationArgs ablation;            // `experiment ablation`
   ProbeArgs probe;  // `experiment probe` (experiment_probe_command.h)
+  ChainArgs chain;  // `experiment chain` (experiment_chain_command.h)
 };
 CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args);
 int RunExperiment(const ExperimentArgs& args);

@@ -42,6 +42,10 @@ struct GraspSetup::Impl {
   std::vector<std::string> finger_names;
   planner::PlanProblem base;        // object frame, intrinsic contacts first
   planner::Inertia inertia;         // about the CoM (kg m^2)
+  // What the plans and the estimator use: `base` and `inertia`, or the
+  // config's PlanningModel applied to them (the simulation keeps the truth).
+  planner::PlanProblem plan_base;
+  planner::Inertia plan_inertia;
   int n_fingers = 0;
   planner::Vec3 rest_origin = planner::Vec3::Zero();  // object origin (world) at rest
   bool pivot = false;               // cube: rotate about `pivot_point` around +x

@@ -23,6 +23,22 @@ using Eigen::Matrix3d;
 
 std::string V3(const Vec3& v) { return absl::StrFormat("%.9g %.9g %.9g", v.x(), v.y(), v.z()); }
 
+// The planner's view of the object: the truth, or the planning model's mass,
+// CoM, inertia, uncertainty and fingertip friction in its place.
+void ApplyPlanningModel(const std::optional<PlanningModel>& model, planner::PlanProblem* problem,
+                        planner::Inertia* inertia) {
+  if (!model.has_value()) return;
+  problem->object.mass = model->mass;
+  problem->object.com = model->com;
+  problem->object.uncertainty = model->uncertainty;
+  *inertia = model->inertia;
+  for (planner::Contact& c : problem->contacts)
+    if (c.kind == planner::ContactKind::kIntrinsic) {
+      c.friction = model->friction;
+      c.friction_sigma = model->friction_sigma;
+    }
+}
+
 // The object (grasp problem, inertia, rest pose), the hand's motion (lift or
 // pivot) and the fingers, from the spec; returns the plan options.
 absl::StatusOr<planner::PlanOptions> SetUpObjectAndMotion(const GraspConfig& config, const ObjectSpec& spec,
@@ -31,6 +47,9 @@ absl::StatusOr<planner::PlanOptions> SetUpObjectAndMotion(const GraspConfig& con
   if (!grasp.ok()) return grasp.status();
   im->base = grasp->problem;
   im->inertia = spec.inertia(im->base.object.mass);
+  im->plan_base = im->base;
+  im->plan_inertia = im->inertia;
+  ApplyPlanningModel(config.planning_model, &im->plan_base, &im->plan_inertia);
   im->rest_origin = spec.rest_origin;
   im->pivot = spec.pivot_point.has_value();
   if (im->pivot) im->pivot_point = *spec.pivot_point;
@@ -53,7 +72,7 @@ planner::TrajectoryProblem TickTrajectory(const GraspSetup::Impl& im, double dt_
                                           int first) {
   planner::TrajectoryProblem traj;
   traj.base = base;
-  traj.inertia = im.inertia;
+  traj.inertia = im.plan_inertia;
   for (int j = first; j < im.ticks; ++j) {
     const HandMotion h = im.Motion(j * dt_tick);
     planner::TrajectoryStep step;
@@ -77,7 +96,7 @@ planner::TrajectoryProblem TickTrajectory(const GraspSetup::Impl& im, double dt_
 absl::Status PlanTicks(const GraspConfig& config, const planner::PlanOptions& options, GraspSetup::Impl* im) {
   const double dt_tick = 1.0 / config.control_rate;
   im->ticks = static_cast<int>(std::ceil(im->timeline.t_end / dt_tick)) + 1;
-  const planner::TrajectoryProblem traj = TickTrajectory(*im, dt_tick, im->base, 0);
+  const planner::TrajectoryProblem traj = TickTrajectory(*im, dt_tick, im->plan_base, 0);
   auto planned = planner::PlanTrajectory(traj, options, planner::SolverKind::kGeometric, true);
   if (!planned.ok()) return absl::InternalError(absl::StrCat("planner: ", planned.status().message()));
   for (int j = 0; j < im->ticks; ++j) {
@@ -165,8 +184,10 @@ std::string GraspMjcf(const GraspConfig& config, const ObjectSpec& spec, const G
 
 absl::StatusOr<TickPlans> PlanTickRange(const GraspConfig& config, const GraspSetup::Impl& im,
                                         const std::vector<planner::Contact>& contacts, int first) {
-  planner::PlanProblem base = im.base;
+  planner::PlanProblem base = im.plan_base;
   base.contacts = contacts;
+  planner::Inertia unused;
+  ApplyPlanningModel(config.planning_model, &base, &unused);
   const planner::TrajectoryProblem traj = TickTrajectory(im, 1.0 / config.control_rate, base, first);
   auto planned = planner::PlanTrajectory(traj, im.plan_options, planner::SolverKind::kGeometric, true);
   if (!planned.ok()) return absl::InternalError(absl::StrCat("planner: ", planned.status().message()));

@@ -178,7 +178,7 @@ class TrialRun {
   double kd_ = 0;
   Readings readings_;
   bool est_ok_ = false;
-  double err_sum_ = 0, fb_sum_ = 0;
+  double err_sum_ = 0, fb_sum_ = 0, squeeze_sum_ = 0;
   std::vector<double> finger_err_, finger_loop_;
   long err_n_ = 0;
   double ok_since_ = -1;
@@ -428,6 +428,10 @@ void TrialRun::AccumulateForceError(const std::vector<double>& desired) {
     fb_sum_ += std::abs(readings_.observed[i] - readings_.truth[i]);
     finger_err_[i] += std::abs(readings_.truth[i] - desired[i]);
     finger_loop_[i] += std::abs(readings_.observed[i] - desired[i]);
+    squeeze_sum_ += readings_.truth[i];
+    const double mu = im_.base.contacts[i].friction;  // the simulated (true) mu
+    if (readings_.truth[i] >= 0.05 && mu > 0)
+      res_.min_slip_margin = std::min(res_.min_slip_margin, 1 - readings_.shear[i] / (mu * readings_.truth[i]));
   }
   ++err_n_;
 }
@@ -496,6 +500,7 @@ TrialResult TrialRun::Finish() {
   res_.dropped = dropped_;
   res_.force_error = err_n_ > 0 ? err_sum_ / (err_n_ * nf_) : 0;
   res_.feedback_error = err_n_ > 0 ? fb_sum_ / (err_n_ * nf_) : 0;
+  res_.squeeze = err_n_ > 0 ? squeeze_sum_ / err_n_ : 0;
   for (size_t i = 0; i < finger_err_.size(); ++i) {
     res_.finger_force_error.push_back(finger_err_[i] / err_n_);
     res_.finger_loop_error.push_back(finger_loop_[i] / err_n_);

@@ -21,6 +21,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -121,6 +122,20 @@ struct SensorFault {
   double start = 0;      // s
 };
 
+// Parameters the plans and the estimator's problems use in place of the
+// simulated object's (issue 28's chain: point estimates, or estimates with
+// their uncertainty); MuJoCo always simulates the true object. Object frame,
+// SI; `inertia` about the CoM; `friction` and `friction_sigma` replace every
+// fingertip contact's (extrinsic contacts keep theirs).
+struct PlanningModel {
+  double mass = 0;                                   // kg
+  planner::Vec3 com = planner::Vec3::Zero();         // m
+  planner::Inertia inertia;                          // kg m^2, about the CoM
+  double friction = 0;                               // mu of the fingertips
+  double friction_sigma = 0;                         // std. dev. of mu (0 = known)
+  planner::ParameterUncertainty uncertainty;         // of pi about the origin (zero = known)
+};
+
 struct GraspConfig {
   GraspObject object = GraspObject::kWrench;
   Feedback feedback = Feedback::kEstimated;
@@ -150,6 +165,7 @@ struct GraspConfig {
   double drop_distance = 0.02;    // m, object this far from where the hand holds it = dropped
   PhysicsSettings physics;
   int trace_trials = 0;          // record TraceSamples for trials 0..trace_trials-1
+  std::optional<PlanningModel> planning_model;  // empty: plan with the true parameters
 };
 absl::Status ValidateGraspConfig(const GraspConfig& c);
 
@@ -179,6 +195,12 @@ struct TrialResult {
   // estimated values"), hold..hold_lifted, over fingertips; and both errors per fingertip (N).
   double loop_error = 0;
   std::vector<double> finger_force_error, finger_loop_error;
+  // Hold, lift and lifted hold, from MuJoCo's true contact forces: the
+  // squeeze (sum of the fingertips' normal forces, N, mean over control
+  // ticks) and the smallest slip margin 1 - |f_t| / (mu f_n) over ticks and
+  // fingertips pressing with f_n >= 0.05 N (1 = no shear, 0 = on the cone).
+  double squeeze = 0;
+  double min_slip_margin = 1;
   double converge_time = -1;    // s after settle start until the loop's own error stays
                                 // below max(0.1 N, 10 %) for 0.1 s; -1 = never
   int estimate_failures = 0;    // ticks where the estimator gave no answer (raw used)
