@@ -37,6 +37,44 @@ constexpr const char* kParameterNames[10] = {"m",   "m*cx", "m*cy", "m*cz", "Ixx
 // Largest |covariance| entry allowed: (kMaxInertia)^2, beyond any object.
 constexpr double kMaxCovarianceEntry = kMaxInertia * kMaxInertia;
 
+// True when a symmetrically pivoted LDL^T of the symmetric s has only
+// positive pivots, or stops at a remaining block that is exactly zero (a
+// covariance with known parameters, e.g. the mass-and-CoM short form): then
+// s is PSD up to the factorisation's backward error (~1e-15 relative), far
+// inside CheckCovariance's 1e-9. False means "not shown", not "not PSD".
+bool PivotedLdltAccepts(const Matrix10d& s) {
+  Matrix10d a = s;  // lower triangle is the working Schur complement
+  int order[10];
+  for (int i = 0; i < 10; ++i) order[i] = i;
+  for (int k = 0; k < 10; ++k) {
+    int best = k;
+    for (int i = k + 1; i < 10; ++i) {
+      if (a(order[i], order[i]) > a(order[best], order[best])) best = i;
+    }
+    std::swap(order[k], order[best]);
+    const int p = order[k];
+    const double pivot = a(p, p);
+    if (!(pivot > 0.0)) {
+      for (int i = k; i < 10; ++i) {
+        for (int j = k; j < 10; ++j) {
+          if (a(order[i], order[j]) != 0.0) return false;
+        }
+      }
+      return true;
+    }
+    for (int i = k + 1; i < 10; ++i) {
+      const int r = order[i];
+      const double l = a(r, p) / pivot;
+      for (int j = k + 1; j <= i; ++j) {
+        const int c = order[j];
+        a(r, c) -= l * a(c, p);
+        a(c, r) = a(r, c);
+      }
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 const char* ToString(UncertaintySource source) {
@@ -134,14 +172,14 @@ absl::Status ValidateParameterUncertainty(const ParameterUncertainty& u) {
     }
   }
   if (u.covariance.isZero(0.0)) return absl::OkStatus();
-  // Fast path in fixed size for the common valid case (this runs every solve).
+  // Fast path for the common valid case (this runs on every solve): a
+  // fixed-size pivoted LDL^T that only accepts; anything doubtful goes to
+  // CheckCovariance, which names the offending entry.
   const Matrix10d& s = u.covariance;
   const double scale = s.cwiseAbs().maxCoeff();
-  const bool plain = s.allFinite() && scale <= kMaxCovarianceEntry && (s - s.transpose()).cwiseAbs().maxCoeff() <= 1e-9 * scale;
-  if (plain && s.diagonal().minCoeff() >= 0.0) {
-    const Eigen::LDLT<Matrix10d> ldlt(s);
-    if (ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() >= 0.0) return absl::OkStatus();
-  }
+  const bool plain = s.allFinite() && scale <= kMaxCovarianceEntry &&
+                     (s - s.transpose()).cwiseAbs().maxCoeff() <= 1e-9 * scale;
+  if (plain && s.diagonal().minCoeff() >= 0.0 && PivotedLdltAccepts(s)) return absl::OkStatus();
   return CheckCovariance("object.uncertainty.covariance", u.covariance, kMaxCovarianceEntry, kParameterNames);
 }
 
@@ -173,13 +211,40 @@ namespace {
 
 using SmallMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
 
+// Solves m z = b in place (b <- m^-1 b) by Gaussian elimination with
+// partial pivoting, in fixed size: Eigen's PartialPivLU routes 6x6 solves
+// through its blocked triangular kernels, several times this cost.
+template <int kCols>
+void SolveSixInPlace(Eigen::Matrix<double, 6, 6> m, Eigen::Matrix<double, 6, kCols>* b) {
+  for (int k = 0; k < 6; ++k) {
+    int p = k;
+    for (int i = k + 1; i < 6; ++i) {
+      if (std::abs(m(i, k)) > std::abs(m(p, k))) p = i;
+    }
+    if (p != k) {
+      m.row(p).swap(m.row(k));
+      b->row(p).swap(b->row(k));
+    }
+    for (int i = k + 1; i < 6; ++i) {
+      const double l = m(i, k) / m(k, k);
+      for (int j = k + 1; j < 6; ++j) m(i, j) -= l * m(k, j);
+      b->row(i) -= l * b->row(k);
+    }
+  }
+  for (int k = 5; k >= 0; --k) {
+    for (int j = k + 1; j < 6; ++j) b->row(k) -= m(k, j) * b->row(j);
+    b->row(k) /= m(k, k);
+  }
+}
+
 // P_i = (G^+ S_b G^+T)_ii for every contact. With U the orthonormal rows
 // spanning G's row space (r x 3n) and M = G U^T (6 x r, full column rank),
 // G^+ = U^T X with X = (M^T M)^-1 M^T, so P_i = U_i^T (X S_b X^T) U_i.
 // Returns the size (N, N m) of the part of the kappa_b wrench ellipsoid no
 // contact force can balance: sqrt(lambda_max((I - M X) S_b (I - M X)^T)).
 // Full rank (r = 6, every grasp that resists all wrenches): M is square, so
-// G^+ = U^T M^-1; all in fixed sizes, M's columns from G's structure.
+// G^+ = U^T M^-1 and K = M^-1 S_b M^-T by two solves; all in fixed sizes,
+// M's columns from G's structure.
 void ContactCovariancesFullRank(const ForceEquilibrium& eq, const Eigen::Matrix<double, 6, 6>& wrench_cov,
                                 std::vector<Eigen::Matrix3d>* out) {
   const int n = static_cast<int>(eq.grasp_matrix.cols() / 3);
@@ -188,15 +253,17 @@ void ContactCovariancesFullRank(const ForceEquilibrium& eq, const Eigen::Matrix<
     const Eigen::Matrix<double, 6, 3> u = eq.independent_rows.middleCols<3>(3 * i);  // 6 x 3
     const Eigen::Matrix3d skew = eq.grasp_matrix.block<3, 3>(3, 3 * i);
     m.topRows<3>().noalias() += u.transpose();
-    m.bottomRows<3>().noalias() += skew * u.transpose();
+    m.bottomRows<3>().noalias() += skew.lazyProduct(u.transpose());
   }
-  const Eigen::PartialPivLU<Eigen::Matrix<double, 6, 6>> lu(m);
-  const Eigen::Matrix<double, 6, 6> x = lu.inverse();
-  const Eigen::Matrix<double, 6, 6> k = x * wrench_cov * x.transpose();
+  Eigen::Matrix<double, 6, 6> k = wrench_cov;  // M^-1 S_b
+  SolveSixInPlace(m, &k);
+  k.transposeInPlace();
+  SolveSixInPlace(m, &k);  // M^-1 (M^-1 S_b)^T = M^-1 S_b M^-T
   out->resize(n);
   for (int i = 0; i < n; ++i) {
     const Eigen::Matrix<double, 6, 3> u = eq.independent_rows.middleCols<3>(3 * i);
-    (*out)[i].noalias() = u.transpose() * k * u;
+    const Eigen::Matrix<double, 6, 3> ku = k.lazyProduct(u);
+    (*out)[i] = u.transpose().lazyProduct(ku);
   }
 }
 
@@ -239,7 +306,10 @@ void TightenForParameters(const PlanOptions& options, PreparedProblem* p) {
     return;
   }
   const WrenchRegressorMatrix y = WrenchRegressor(p->problem.object.gravity, p->problem.motion);
-  t.wrench_covariance.noalias() = y * u.covariance * y.transpose();
+  // Coefficient-based products: at these sizes Eigen's GEMM path costs more
+  // than the arithmetic.
+  const Eigen::Matrix<double, 6, 10> ys = y.lazyProduct(u.covariance);
+  t.wrench_covariance = ys.lazyProduct(y.transpose());
   const double unbalanced = ContactCovariances(p->equilibrium, t.wrench_covariance, &t.contact_covariance);
   ForceEquilibrium& eq = p->equilibrium;
   if (t.confidence * unbalanced > 1e-8 * std::max(1.0, eq.wrench.norm())) {
