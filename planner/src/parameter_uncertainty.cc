@@ -37,39 +37,22 @@ constexpr const char* kParameterNames[10] = {"m",   "m*cx", "m*cy", "m*cz", "Ixx
 // Largest |covariance| entry allowed: (kMaxInertia)^2, beyond any object.
 constexpr double kMaxCovarianceEntry = kMaxInertia * kMaxInertia;
 
-// True when a symmetrically pivoted LDL^T of the symmetric s has only
-// positive pivots, or stops at a remaining block that is exactly zero (a
-// covariance with known parameters, e.g. the mass-and-CoM short form): then
-// s is PSD up to the factorisation's backward error (~1e-15 relative), far
-// inside CheckCovariance's 1e-9. False means "not shown", not "not PSD".
-bool PivotedLdltAccepts(const Matrix10d& s) {
-  Matrix10d a = s;  // lower triangle is the working Schur complement
-  int order[10];
-  for (int i = 0; i < 10; ++i) order[i] = i;
+// True when an LDL^T of the symmetric s has only positive pivots, where a
+// zero pivot is allowed when its whole remaining column is exactly zero (a
+// parameter known exactly, e.g. the inertia in the mass-and-CoM short form):
+// then s is PSD up to the factorisation's backward error (~1e-15 relative),
+// far inside CheckCovariance's 1e-9. False means "not shown", not "not PSD".
+bool LdltShowsPsd(const Matrix10d& s) {
+  Matrix10d a = s;  // lower triangle: the working Schur complement
   for (int k = 0; k < 10; ++k) {
-    int best = k;
-    for (int i = k + 1; i < 10; ++i) {
-      if (a(order[i], order[i]) > a(order[best], order[best])) best = i;
-    }
-    std::swap(order[k], order[best]);
-    const int p = order[k];
-    const double pivot = a(p, p);
+    const double pivot = a(k, k);
     if (!(pivot > 0.0)) {
-      for (int i = k; i < 10; ++i) {
-        for (int j = k; j < 10; ++j) {
-          if (a(order[i], order[j]) != 0.0) return false;
-        }
-      }
-      return true;
+      if (pivot != 0.0 || !a.col(k).tail(9 - k).isZero(0.0)) return false;
+      continue;
     }
-    for (int i = k + 1; i < 10; ++i) {
-      const int r = order[i];
-      const double l = a(r, p) / pivot;
-      for (int j = k + 1; j <= i; ++j) {
-        const int c = order[j];
-        a(r, c) -= l * a(c, p);
-        a(c, r) = a(r, c);
-      }
+    for (int j = k + 1; j < 10; ++j) {
+      const double l = a(j, k) / pivot;
+      for (int i = j; i < 10; ++i) a(i, j) -= l * a(i, k);
     }
   }
   return true;
@@ -173,13 +156,13 @@ absl::Status ValidateParameterUncertainty(const ParameterUncertainty& u) {
   }
   if (u.covariance.isZero(0.0)) return absl::OkStatus();
   // Fast path for the common valid case (this runs on every solve): a
-  // fixed-size pivoted LDL^T that only accepts; anything doubtful goes to
+  // fixed-size LDL^T that only accepts; anything doubtful goes to
   // CheckCovariance, which names the offending entry.
   const Matrix10d& s = u.covariance;
   const double scale = s.cwiseAbs().maxCoeff();
   const bool plain = s.allFinite() && scale <= kMaxCovarianceEntry &&
                      (s - s.transpose()).cwiseAbs().maxCoeff() <= 1e-9 * scale;
-  if (plain && s.diagonal().minCoeff() >= 0.0 && PivotedLdltAccepts(s)) return absl::OkStatus();
+  if (plain && s.diagonal().minCoeff() >= 0.0 && LdltShowsPsd(s)) return absl::OkStatus();
   return CheckCovariance("object.uncertainty.covariance", u.covariance, kMaxCovarianceEntry, kParameterNames);
 }
 
@@ -214,8 +197,10 @@ using SmallMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 
 // Solves m z = b in place (b <- m^-1 b) by Gaussian elimination with
 // partial pivoting, in fixed size: Eigen's PartialPivLU routes 6x6 solves
 // through its blocked triangular kernels, several times this cost.
-template <int kCols>
-void SolveSixInPlace(Eigen::Matrix<double, 6, 6> m, Eigen::Matrix<double, 6, kCols>* b) {
+using RowMajor6d = Eigen::Matrix<double, 6, 6, Eigen::RowMajor>;
+
+// Row-major, so each row operation is one contiguous vector operation.
+void SolveSixInPlace(RowMajor6d m, RowMajor6d* b) {
   for (int k = 0; k < 6; ++k) {
     int p = k;
     for (int i = k + 1; i < 6; ++i) {
@@ -248,16 +233,16 @@ void SolveSixInPlace(Eigen::Matrix<double, 6, 6> m, Eigen::Matrix<double, 6, kCo
 void ContactCovariancesFullRank(const ForceEquilibrium& eq, const Eigen::Matrix<double, 6, 6>& wrench_cov,
                                 std::vector<Eigen::Matrix3d>* out) {
   const int n = static_cast<int>(eq.grasp_matrix.cols() / 3);
-  Eigen::Matrix<double, 6, 6> m = Eigen::Matrix<double, 6, 6>::Zero();
+  RowMajor6d m = RowMajor6d::Zero();
   for (int i = 0; i < n; ++i) {
     const Eigen::Matrix<double, 6, 3> u = eq.independent_rows.middleCols<3>(3 * i);  // 6 x 3
     const Eigen::Matrix3d skew = eq.grasp_matrix.block<3, 3>(3, 3 * i);
     m.topRows<3>().noalias() += u.transpose();
     m.bottomRows<3>().noalias() += skew.lazyProduct(u.transpose());
   }
-  Eigen::Matrix<double, 6, 6> k = wrench_cov;  // M^-1 S_b
-  SolveSixInPlace(m, &k);
-  k.transposeInPlace();
+  RowMajor6d x_s = wrench_cov;  // M^-1 S_b
+  SolveSixInPlace(m, &x_s);
+  RowMajor6d k = x_s.transpose();
   SolveSixInPlace(m, &k);  // M^-1 (M^-1 S_b)^T = M^-1 S_b M^-T
   out->resize(n);
   for (int i = 0; i < n; ++i) {
