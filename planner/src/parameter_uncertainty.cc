@@ -200,7 +200,8 @@ using SmallMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 
 using RowMajor6d = Eigen::Matrix<double, 6, 6, Eigen::RowMajor>;
 
 // Row-major, so each row operation is one contiguous vector operation.
-void SolveSixInPlace(RowMajor6d m, RowMajor6d* b) {
+template <int kCols>
+void SolveSixInPlace(RowMajor6d m, Eigen::Matrix<double, 6, kCols, Eigen::RowMajor>* b) {
   for (int k = 0; k < 6; ++k) {
     int p = k;
     for (int i = k + 1; i < 6; ++i) {
@@ -222,17 +223,23 @@ void SolveSixInPlace(RowMajor6d m, RowMajor6d* b) {
   }
 }
 
-// P_i = (G^+ S_b G^+T)_ii for every contact. With U the orthonormal rows
-// spanning G's row space (r x 3n) and M = G U^T (6 x r, full column rank),
-// G^+ = U^T X with X = (M^T M)^-1 M^T, so P_i = U_i^T (X S_b X^T) U_i.
-// Returns the size (N, N m) of the part of the kappa_b wrench ellipsoid no
-// contact force can balance: sqrt(lambda_max((I - M X) S_b (I - M X)^T)).
-// Full rank (r = 6, every grasp that resists all wrenches): M is square, so
-// G^+ = U^T M^-1 and K = M^-1 S_b M^-T by two solves; all in fixed sizes,
-// M's columns from G's structure.
-void ContactCovariancesFullRank(const ForceEquilibrium& eq, const Eigen::Matrix<double, 6, 6>& wrench_cov,
-                                std::vector<Eigen::Matrix3d>* out) {
+// With U the orthonormal rows spanning G's row space (r x 3n) and M = G U^T
+// (6 x r, full column rank), G^+ = U^T X with X = (M^T M)^-1 M^T, so
+// P_i = (G^+ S_b G^+T)_ii = U_i^T (X S_b X^T) U_i.
+//
+// Full rank (r = 6, every grasp that resists all wrenches): M is square and
+// X = M^-1, so with Z = M^-1 Y (one solve) K = X S_b X^T = Z S_pi Z^T. Only
+// Y's first kParams columns may be non-zero (4: no rotation, where the
+// inertia does not enter the wrench). All in fixed sizes, M's columns from
+// G's structure. Fills S_b too.
+template <int kParams>
+void TightenFullRank(const ForceEquilibrium& eq, const WrenchRegressorMatrix& y_full,
+                     const Matrix10d& covariance, ParameterTightening* t) {
   const int n = static_cast<int>(eq.grasp_matrix.cols() / 3);
+  const Eigen::Matrix<double, 6, kParams> y = y_full.leftCols<kParams>();
+  const Eigen::Matrix<double, kParams, kParams> s = covariance.topLeftCorner<kParams, kParams>();
+  const Eigen::Matrix<double, 6, kParams> ys = y.lazyProduct(s);
+  t->wrench_covariance = ys.lazyProduct(y.transpose());
   RowMajor6d m = RowMajor6d::Zero();
   for (int i = 0; i < n; ++i) {
     const Eigen::Matrix<double, 6, 3> u = eq.independent_rows.middleCols<3>(3 * i);  // 6 x 3
@@ -240,26 +247,25 @@ void ContactCovariancesFullRank(const ForceEquilibrium& eq, const Eigen::Matrix<
     m.topRows<3>().noalias() += u.transpose();
     m.bottomRows<3>().noalias() += skew.lazyProduct(u.transpose());
   }
-  RowMajor6d x_s = wrench_cov;  // M^-1 S_b
-  SolveSixInPlace(m, &x_s);
-  RowMajor6d k = x_s.transpose();
-  SolveSixInPlace(m, &k);  // M^-1 (M^-1 S_b)^T = M^-1 S_b M^-T
-  out->resize(n);
+  Eigen::Matrix<double, 6, kParams, Eigen::RowMajor> z = y;
+  SolveSixInPlace(m, &z);
+  const Eigen::Matrix<double, 6, kParams> zs = z.lazyProduct(s);
+  const Eigen::Matrix<double, 6, 6> k = zs.lazyProduct(z.transpose());
+  t->contact_covariance.resize(n);
   for (int i = 0; i < n; ++i) {
     const Eigen::Matrix<double, 6, 3> u = eq.independent_rows.middleCols<3>(3 * i);
     const Eigen::Matrix<double, 6, 3> ku = k.lazyProduct(u);
-    (*out)[i] = u.transpose().lazyProduct(ku);
+    t->contact_covariance[i] = u.transpose().lazyProduct(ku);
   }
 }
 
+// The general case (any rank r < 6). Returns the size (N, N m) of the part
+// of the kappa_b wrench ellipsoid no contact force can balance:
+// sqrt(lambda_max((I - M X) S_b (I - M X)^T)).
 double ContactCovariances(const ForceEquilibrium& eq, const Eigen::Matrix<double, 6, 6>& wrench_cov,
                           std::vector<Eigen::Matrix3d>* out) {
   const int n = static_cast<int>(eq.grasp_matrix.cols() / 3);
   const int r = static_cast<int>(eq.independent_rows.rows());
-  if (r == 6) {
-    ContactCovariancesFullRank(eq, wrench_cov, out);
-    return 0.0;
-  }
   const SmallMatrix m = eq.grasp_matrix * eq.independent_rows.transpose();  // 6 x r
   const SmallMatrix normal = m.transpose() * m;
   const SmallMatrix x = normal.llt().solve(m.transpose());  // r x 6
@@ -276,6 +282,30 @@ double ContactCovariances(const ForceEquilibrium& eq, const Eigen::Matrix<double
                                      rest, Eigen::EigenvaluesOnly).eigenvalues()(5)));
 }
 
+// S_b and every P_i; marks the equilibrium inconsistent when some wrench in
+// the kappa_b ellipsoid cannot be balanced by any contact force.
+void ParameterCovariances(const PlanProblem& problem, ForceEquilibrium* eq, ParameterTightening* t) {
+  const WrenchRegressorMatrix y = WrenchRegressor(problem.object.gravity, problem.motion);
+  const Matrix10d& covariance = problem.object.uncertainty.covariance;
+  if (eq->independent_rows.rows() == 6) {
+    if (y.rightCols<6>().isZero(0.0)) {
+      TightenFullRank<4>(*eq, y, covariance, t);
+    } else {
+      TightenFullRank<10>(*eq, y, covariance, t);
+    }
+    return;
+  }
+  // Coefficient-based products: at these sizes Eigen's GEMM path costs more
+  // than the arithmetic.
+  const Eigen::Matrix<double, 6, 10> ys = y.lazyProduct(covariance);
+  t->wrench_covariance = ys.lazyProduct(y.transpose());
+  const double unbalanced = ContactCovariances(*eq, t->wrench_covariance, &t->contact_covariance);
+  if (t->confidence * unbalanced > 1e-8 * std::max(1.0, eq->wrench.norm())) {
+    eq->consistent = false;
+    eq->residual = std::max(eq->residual, t->confidence * unbalanced);
+  }
+}
+
 }  // namespace
 
 void TightenForParameters(const PlanOptions& options, PreparedProblem* p) {
@@ -290,18 +320,7 @@ void TightenForParameters(const PlanOptions& options, PreparedProblem* p) {
     t.row_margin.resize(0);
     return;
   }
-  const WrenchRegressorMatrix y = WrenchRegressor(p->problem.object.gravity, p->problem.motion);
-  // Coefficient-based products: at these sizes Eigen's GEMM path costs more
-  // than the arithmetic.
-  const Eigen::Matrix<double, 6, 10> ys = y.lazyProduct(u.covariance);
-  t.wrench_covariance = ys.lazyProduct(y.transpose());
-  const double unbalanced = ContactCovariances(p->equilibrium, t.wrench_covariance, &t.contact_covariance);
-  ForceEquilibrium& eq = p->equilibrium;
-  if (t.confidence * unbalanced > 1e-8 * std::max(1.0, eq.wrench.norm())) {
-    // Some wrench in the ellipsoid cannot be balanced by any contact force.
-    eq.consistent = false;
-    eq.residual = std::max(eq.residual, t.confidence * unbalanced);
-  }
+  ParameterCovariances(p->problem, &p->equilibrium, &t);
   ConstraintRows& rows = p->rows;
   const int m = static_cast<int>(rows.info.size());
   t.row_margin.resize(m);
