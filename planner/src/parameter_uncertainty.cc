@@ -228,18 +228,16 @@ void SolveSixInPlace(RowMajor6d m, Eigen::Matrix<double, 6, kCols, Eigen::RowMaj
 // P_i = (G^+ S_b G^+T)_ii = U_i^T (X S_b X^T) U_i.
 //
 // Full rank (r = 6, every grasp that resists all wrenches): M is square and
-// X = M^-1, so with Z = M^-1 Y (one solve) K = X S_b X^T = Z S_pi Z^T. Only
+// X = M^-1, so with Z = M^-1 Y (one solve) and V_i = U_i^T Z (3 x 10),
+// P_i = V_i S_pi V_i^T; neither S_b nor the 6x6 X S_b X^T is formed. Only
 // Y's first kParams columns may be non-zero (4: no rotation, where the
 // inertia does not enter the wrench). All in fixed sizes, M's columns from
-// G's structure. Fills S_b too.
+// G's structure.
 template <int kParams>
-void TightenFullRank(const ForceEquilibrium& eq, const WrenchRegressorMatrix& y_full,
-                     const Matrix10d& covariance, ParameterTightening* t) {
+void ContactCovariancesFullRank(const ForceEquilibrium& eq, const WrenchRegressorMatrix& y_full,
+                                const Matrix10d& covariance, std::vector<Eigen::Matrix3d>* out) {
   const int n = static_cast<int>(eq.grasp_matrix.cols() / 3);
-  const Eigen::Matrix<double, 6, kParams> y = y_full.leftCols<kParams>();
   const Eigen::Matrix<double, kParams, kParams> s = covariance.topLeftCorner<kParams, kParams>();
-  const Eigen::Matrix<double, 6, kParams> ys = y.lazyProduct(s);
-  t->wrench_covariance = ys.lazyProduct(y.transpose());
   RowMajor6d m = RowMajor6d::Zero();
   for (int i = 0; i < n; ++i) {
     const Eigen::Matrix<double, 6, 3> u = eq.independent_rows.middleCols<3>(3 * i);  // 6 x 3
@@ -247,15 +245,14 @@ void TightenFullRank(const ForceEquilibrium& eq, const WrenchRegressorMatrix& y_
     m.topRows<3>().noalias() += u.transpose();
     m.bottomRows<3>().noalias() += skew.lazyProduct(u.transpose());
   }
-  Eigen::Matrix<double, 6, kParams, Eigen::RowMajor> z = y;
+  Eigen::Matrix<double, 6, kParams, Eigen::RowMajor> z = y_full.leftCols<kParams>();
   SolveSixInPlace(m, &z);
-  const Eigen::Matrix<double, 6, kParams> zs = z.lazyProduct(s);
-  const Eigen::Matrix<double, 6, 6> k = zs.lazyProduct(z.transpose());
-  t->contact_covariance.resize(n);
+  out->resize(n);
   for (int i = 0; i < n; ++i) {
     const Eigen::Matrix<double, 6, 3> u = eq.independent_rows.middleCols<3>(3 * i);
-    const Eigen::Matrix<double, 6, 3> ku = k.lazyProduct(u);
-    t->contact_covariance[i] = u.transpose().lazyProduct(ku);
+    const Eigen::Matrix<double, 3, kParams> v = u.transpose().lazyProduct(z);
+    const Eigen::Matrix<double, 3, kParams> vs = v.lazyProduct(s);
+    (*out)[i] = vs.lazyProduct(v.transpose());
   }
 }
 
@@ -282,24 +279,24 @@ double ContactCovariances(const ForceEquilibrium& eq, const Eigen::Matrix<double
                                      rest, Eigen::EigenvaluesOnly).eigenvalues()(5)));
 }
 
-// S_b and every P_i; marks the equilibrium inconsistent when some wrench in
+// Every P_i; marks the equilibrium inconsistent when some wrench in
 // the kappa_b ellipsoid cannot be balanced by any contact force.
 void ParameterCovariances(const PlanProblem& problem, ForceEquilibrium* eq, ParameterTightening* t) {
   const WrenchRegressorMatrix y = WrenchRegressor(problem.object.gravity, problem.motion);
   const Matrix10d& covariance = problem.object.uncertainty.covariance;
   if (eq->independent_rows.rows() == 6) {
     if (y.rightCols<6>().isZero(0.0)) {
-      TightenFullRank<4>(*eq, y, covariance, t);
+      ContactCovariancesFullRank<4>(*eq, y, covariance, &t->contact_covariance);
     } else {
-      TightenFullRank<10>(*eq, y, covariance, t);
+      ContactCovariancesFullRank<10>(*eq, y, covariance, &t->contact_covariance);
     }
     return;
   }
   // Coefficient-based products: at these sizes Eigen's GEMM path costs more
   // than the arithmetic.
   const Eigen::Matrix<double, 6, 10> ys = y.lazyProduct(covariance);
-  t->wrench_covariance = ys.lazyProduct(y.transpose());
-  const double unbalanced = ContactCovariances(*eq, t->wrench_covariance, &t->contact_covariance);
+  const Eigen::Matrix<double, 6, 6> wrench_covariance = ys.lazyProduct(y.transpose());  // S_b
+  const double unbalanced = ContactCovariances(*eq, wrench_covariance, &t->contact_covariance);
   if (t->confidence * unbalanced > 1e-8 * std::max(1.0, eq->wrench.norm())) {
     eq->consistent = false;
     eq->residual = std::max(eq->residual, t->confidence * unbalanced);
@@ -315,7 +312,6 @@ void TightenForParameters(const PlanOptions& options, PreparedProblem* p) {
   t.active = t.confidence > 0.0 && !u.covariance.isZero(0.0);
   t.cone_margin.clear();
   if (!t.active) {
-    t.wrench_covariance.setZero();
     t.contact_covariance.clear();
     t.row_margin.resize(0);
     return;
