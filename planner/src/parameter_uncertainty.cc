@@ -348,15 +348,20 @@ void FillRowMargins(const PreparedProblem& prepared, const std::vector<Vec3>& fo
   const int m = static_cast<int>(rows.info.size());
   const bool have_forces = static_cast<int>(forces.size()) == prepared.num_contacts();
   out->resize(m + prepared.cone_shift.size());
+  // Locals, so the stores into `out` do not force every read to be redone.
+  RowMargin* o = out->data();
+  const RowInfo* info = rows.info.data();
+  const double* rhs = rows.rhs.data();
+  const double* nominal = rows.nominal_rhs.data();
+  const double* parameters = t.active ? t.row_margin.data() : nullptr;
   for (int r = 0; r < m; ++r) {
-    RowMargin& o = (*out)[r];
-    const int c = rows.info[r].contact;
-    o.contact = c, o.cone = false, o.row = r, o.slack = 0.0;
-    o.facet = rows.info[r].kind == RowKind::kFrictionFacet ? rows.info[r].facet : -1;
-    o.upper = rows.info[r].kind == RowKind::kMaxNormal;
-    o.parameters = t.active ? t.row_margin(r) : 0.0;
-    o.measurement = std::max(0.0, rows.nominal_rhs(r) - rows.rhs(r) - o.parameters);
-    if (have_forces) o.slack = rows.rhs(r) - rows.matrix.block<1, 3>(r, 3 * c).dot(forces[c].transpose());
+    const int c = info[r].contact;
+    const RowKind kind = info[r].kind;
+    const double part = parameters ? parameters[r] : 0.0;
+    const double slack =
+        have_forces ? rhs[r] - rows.matrix.block<1, 3>(r, 3 * c).dot(forces[c].transpose()) : 0.0;
+    o[r] = RowMargin{c, false, r, kind == RowKind::kFrictionFacet ? info[r].facet : -1,
+                     kind == RowKind::kMaxNormal, slack, std::max(0.0, nominal[r] - rhs[r] - part), part};
   }
   for (int i = 0; i < static_cast<int>(prepared.cone_shift.size()); ++i) {
     RowMargin& o = (*out)[m + i];
