@@ -58,6 +58,19 @@ bool LdltShowsPsd(const Matrix10d& s) {
   return true;
 }
 
+// Finite, within kMaxCovarianceEntry, symmetric (relative 1e-9), a
+// non-negative diagonal and LdltShowsPsd: CheckCovariance would accept it.
+bool PlainPsd(const Matrix10d& s) {
+  if (!s.allFinite()) return false;
+  const double scale = s.cwiseAbs().maxCoeff();
+  if (scale > kMaxCovarianceEntry || s.diagonal().minCoeff() < 0.0) return false;
+  double asymmetry = 0.0;
+  for (int j = 0; j < 10; ++j) {
+    for (int i = j + 1; i < 10; ++i) asymmetry = std::max(asymmetry, std::abs(s(i, j) - s(j, i)));
+  }
+  return asymmetry <= 1e-9 * scale && LdltShowsPsd(s);
+}
+
 }  // namespace
 
 const char* ToString(UncertaintySource source) {
@@ -158,11 +171,7 @@ absl::Status ValidateParameterUncertainty(const ParameterUncertainty& u) {
   // Fast path for the common valid case (this runs on every solve): a
   // fixed-size LDL^T that only accepts; anything doubtful goes to
   // CheckCovariance, which names the offending entry.
-  const Matrix10d& s = u.covariance;
-  const double scale = s.cwiseAbs().maxCoeff();
-  const bool plain = s.allFinite() && scale <= kMaxCovarianceEntry &&
-                     (s - s.transpose()).cwiseAbs().maxCoeff() <= 1e-9 * scale;
-  if (plain && s.diagonal().minCoeff() >= 0.0 && LdltShowsPsd(s)) return absl::OkStatus();
+  if (PlainPsd(u.covariance)) return absl::OkStatus();
   return CheckCovariance("object.uncertainty.covariance", u.covariance, kMaxCovarianceEntry, kParameterNames);
 }
 
@@ -320,11 +329,17 @@ void TightenForParameters(const PlanOptions& options, PreparedProblem* p) {
   ConstraintRows& rows = p->rows;
   const int m = static_cast<int>(rows.info.size());
   t.row_margin.resize(m);
+  // Locals, so the stores do not force every read to be redone.
+  const double kappa_b = t.confidence;
+  const RowInfo* info = rows.info.data();
+  const Eigen::Matrix3d* covariance = t.contact_covariance.data();
+  double* margin = t.row_margin.data();
+  double* rhs = rows.rhs.data();
   for (int r = 0; r < m; ++r) {
-    const int c = rows.info[r].contact;
+    const int c = info[r].contact;
     const Vec3 a = rows.matrix.block<1, 3>(r, 3 * c).transpose();
-    t.row_margin(r) = t.confidence * std::sqrt(std::max(0.0, a.dot(t.contact_covariance[c] * a)));
-    rows.rhs(r) -= t.row_margin(r);
+    margin[r] = kappa_b * std::sqrt(std::max(0.0, a.dot(covariance[c] * a)));
+    rhs[r] -= margin[r];
   }
   if (p->cone_shift.empty()) return;
   t.cone_margin.resize(p->cone_shift.size());
