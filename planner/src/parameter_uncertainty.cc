@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -33,6 +35,22 @@ Eigen::Matrix<double, 3, 6> InertiaProductMap(const Vec3& v) {
 
 constexpr const char* kParameterNames[10] = {"m",   "m*cx", "m*cy", "m*cz", "Ixx",
                                              "Iyy", "Izz",  "Ixy",  "Ixz",  "Iyz"};
+
+// Every entry +0 or -0 (Eigen's isZero(0.0)), column by column as one OR
+// over the bits without the sign: cheap both on the plain path (a zero
+// matrix) and on a covariance (out at its first column). A NaN is not zero.
+bool IsZeroCovariance(const Matrix10d& s) {
+  for (int j = 0; j < 10; ++j) {
+    uint64_t bits = 0;
+    for (int i = 0; i < 10; ++i) {
+      uint64_t v;
+      std::memcpy(&v, s.data() + 10 * j + i, sizeof v);
+      bits |= v << 1;
+    }
+    if (bits != 0) return false;
+  }
+  return true;
+}
 
 // Largest |covariance| entry allowed: (kMaxInertia)^2, beyond any object.
 constexpr double kMaxCovarianceEntry = kMaxInertia * kMaxInertia;
@@ -167,7 +185,7 @@ absl::Status ValidateParameterUncertainty(const ParameterUncertainty& u) {
                                                      PlanOptions::kMaxConfidence, "], got ", k));
     }
   }
-  if (u.covariance.isZero(0.0)) return absl::OkStatus();
+  if (IsZeroCovariance(u.covariance)) return absl::OkStatus();
   // Fast path for the common valid case (this runs on every solve): a
   // fixed-size LDL^T that only accepts; anything doubtful goes to
   // CheckCovariance, which names the offending entry.
@@ -176,7 +194,7 @@ absl::Status ValidateParameterUncertainty(const ParameterUncertainty& u) {
 }
 
 bool HasModelUncertainty(const PlanProblem& problem) {
-  if (!problem.object.uncertainty.covariance.isZero(0.0)) return true;
+  if (!IsZeroCovariance(problem.object.uncertainty.covariance)) return true;
   for (const Contact& c : problem.contacts) {
     if (c.friction_sigma > 0.0) return true;
   }
@@ -238,12 +256,12 @@ void SolveSixInPlace(RowMajor6d m, Eigen::Matrix<double, 6, kCols, Eigen::RowMaj
 //
 // Full rank (r = 6, every grasp that resists all wrenches): M is square and
 // X = M^-1, so with Z = M^-1 Y (one solve) and V_i = U_i^T Z (3 x 10),
-// P_i = V_i S_pi V_i^T; neither S_b nor the 6x6 X S_b X^T is formed. Only
-// Y's first kParams columns may be non-zero (4: no rotation, where the
-// inertia does not enter the wrench). All in fixed sizes, M's columns from
-// G's structure.
+// P_i = V_i S_pi V_i^T; neither S_b nor the 6x6 X S_b X^T is formed. `y`
+// holds Y's first kParams columns, the rest being zero (4: no rotation, where
+// the inertia does not enter the wrench). All in fixed sizes, M's columns
+// from G's structure.
 template <int kParams>
-void ContactCovariancesFullRank(const ForceEquilibrium& eq, const WrenchRegressorMatrix& y_full,
+void ContactCovariancesFullRank(const ForceEquilibrium& eq, const Eigen::Matrix<double, 6, kParams>& y,
                                 const Matrix10d& covariance, std::vector<Eigen::Matrix3d>* out) {
   const int n = static_cast<int>(eq.grasp_matrix.cols() / 3);
   const Eigen::Matrix<double, kParams, kParams> s = covariance.topLeftCorner<kParams, kParams>();
@@ -254,7 +272,7 @@ void ContactCovariancesFullRank(const ForceEquilibrium& eq, const WrenchRegresso
     m.topRows<3>().noalias() += u.transpose();
     m.bottomRows<3>().noalias() += skew.lazyProduct(u.transpose());
   }
-  Eigen::Matrix<double, 6, kParams, Eigen::RowMajor> z = y_full.leftCols<kParams>();
+  Eigen::Matrix<double, 6, kParams, Eigen::RowMajor> z = y;
   SolveSixInPlace(m, &z);
   out->resize(n);
   for (int i = 0; i < n; ++i) {
@@ -291,14 +309,22 @@ double ContactCovariances(const ForceEquilibrium& eq, const Eigen::Matrix<double
 // Every P_i; marks the equilibrium inconsistent when some wrench in
 // the kappa_b ellipsoid cannot be balanced by any contact force.
 void ParameterCovariances(const PlanProblem& problem, ForceEquilibrium* eq, ParameterTightening* t) {
-  const WrenchRegressorMatrix y = WrenchRegressor(problem.object.gravity, problem.motion);
   const Matrix10d& covariance = problem.object.uncertainty.covariance;
+  const Motion& motion = problem.motion;
+  if (eq->independent_rows.rows() == 6 && motion.angular_velocity.isZero(0.0) &&
+      motion.angular_acceleration.isZero(0.0)) {
+    // Without rotation Y = [a - g, 0, 0; 0, -[a - g]x, 0] (WrenchRegressor):
+    // only the mass and the first moment enter.
+    const Vec3 a_minus_g = motion.linear_acceleration - problem.object.gravity;
+    Eigen::Matrix<double, 6, 4> y = Eigen::Matrix<double, 6, 4>::Zero();
+    y.block<3, 1>(0, 0) = a_minus_g;
+    y.block<3, 3>(3, 1) = -Skew(a_minus_g);
+    ContactCovariancesFullRank<4>(*eq, y, covariance, &t->contact_covariance);
+    return;
+  }
+  const WrenchRegressorMatrix y = WrenchRegressor(problem.object.gravity, motion);
   if (eq->independent_rows.rows() == 6) {
-    if (y.rightCols<6>().isZero(0.0)) {
-      ContactCovariancesFullRank<4>(*eq, y, covariance, &t->contact_covariance);
-    } else {
-      ContactCovariancesFullRank<10>(*eq, y, covariance, &t->contact_covariance);
-    }
+    ContactCovariancesFullRank<10>(*eq, y, covariance, &t->contact_covariance);
     return;
   }
   // Coefficient-based products: at these sizes Eigen's GEMM path costs more
@@ -318,7 +344,7 @@ void TightenForParameters(const PlanOptions& options, PreparedProblem* p) {
   ParameterTightening& t = p->parameters;
   const ParameterUncertainty& u = p->problem.object.uncertainty;
   t.confidence = u.confidence.value_or(options.confidence);
-  t.active = t.confidence > 0.0 && !u.covariance.isZero(0.0);
+  t.active = t.confidence > 0.0 && !IsZeroCovariance(u.covariance);
   t.cone_margin.clear();
   if (!t.active) {
     t.contact_covariance.clear();
