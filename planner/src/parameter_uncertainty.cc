@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -29,8 +31,58 @@ Eigen::Matrix<double, 3, 6> InertiaProductMap(const Vec3& v) {
 constexpr const char* kParameterNames[10] = {"m",   "m*cx", "m*cy", "m*cz", "Ixx",
                                              "Iyy", "Izz",  "Ixy",  "Ixz",  "Iyz"};
 
+// Every entry +0 or -0 (Eigen's isZero(0.0)), column by column as one OR
+// over the bits without the sign: cheap both on the plain path (a zero
+// matrix) and on a covariance (out at its first column). A NaN is not zero.
+bool IsZeroCovariance(const Matrix10d& s) {
+  for (int j = 0; j < 10; ++j) {
+    uint64_t bits = 0;
+    for (int i = 0; i < 10; ++i) {
+      uint64_t v;
+      std::memcpy(&v, s.data() + 10 * j + i, sizeof v);
+      bits |= v << 1;
+    }
+    if (bits != 0) return false;
+  }
+  return true;
+}
+
 // Largest |covariance| entry allowed: (kMaxInertia)^2, beyond any object.
 constexpr double kMaxCovarianceEntry = kMaxInertia * kMaxInertia;
+
+// True when an LDL^T of the symmetric s has only positive pivots, where a
+// zero pivot is allowed when its whole remaining column is exactly zero (a
+// parameter known exactly, e.g. the inertia in the mass-and-CoM short form):
+// then s is PSD up to the factorisation's backward error (~1e-15 relative),
+// far inside CheckCovariance's 1e-9. False means "not shown", not "not PSD".
+bool LdltShowsPsd(const Matrix10d& s) {
+  Matrix10d a = s;  // lower triangle: the working Schur complement
+  for (int k = 0; k < 10; ++k) {
+    const double pivot = a(k, k);
+    if (!(pivot > 0.0)) {
+      if (pivot != 0.0 || !a.col(k).tail(9 - k).isZero(0.0)) return false;
+      continue;
+    }
+    for (int j = k + 1; j < 10; ++j) {
+      const double l = a(j, k) / pivot;
+      for (int i = j; i < 10; ++i) a(i, j) -= l * a(i, k);
+    }
+  }
+  return true;
+}
+
+// Finite, within kMaxCovarianceEntry, symmetric (relative 1e-9), a
+// non-negative diagonal and LdltShowsPsd: CheckCovariance would accept it.
+bool PlainPsd(const Matrix10d& s) {
+  if (!s.allFinite()) return false;
+  const double scale = s.cwiseAbs().maxCoeff();
+  if (scale > kMaxCovarianceEntry || s.diagonal().minCoeff() < 0.0) return false;
+  double asymmetry = 0.0;
+  for (int j = 0; j < 10; ++j) {
+    for (int i = j + 1; i < 10; ++i) asymmetry = std::max(asymmetry, std::abs(s(i, j) - s(j, i)));
+  }
+  return asymmetry <= 1e-9 * scale && LdltShowsPsd(s);
+}
 
 }  // namespace
 
@@ -128,20 +180,16 @@ absl::Status ValidateParameterUncertainty(const ParameterUncertainty& u) {
                                                      PlanOptions::kMaxConfidence, "], got ", k));
     }
   }
-  if (u.covariance.isZero(0.0)) return absl::OkStatus();
-  // Fast path in fixed size for the common valid case (this runs every solve).
-  const Matrix10d& s = u.covariance;
-  const double scale = s.cwiseAbs().maxCoeff();
-  const bool plain = s.allFinite() && scale <= kMaxCovarianceEntry && (s - s.transpose()).cwiseAbs().maxCoeff() <= 1e-9 * scale;
-  if (plain && s.diagonal().minCoeff() >= 0.0) {
-    const Eigen::LDLT<Matrix10d> ldlt(s);
-    if (ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() >= 0.0) return absl::OkStatus();
-  }
+  if (IsZeroCovariance(u.covariance)) return absl::OkStatus();
+  // Fast path for the common valid case (this runs on every solve): a
+  // fixed-size LDL^T that only accepts; anything doubtful goes to
+  // CheckCovariance, which names the offending entry.
+  if (PlainPsd(u.covariance)) return absl::OkStatus();
   return CheckCovariance("object.uncertainty.covariance", u.covariance, kMaxCovarianceEntry, kParameterNames);
 }
 
 bool HasModelUncertainty(const PlanProblem& problem) {
-  if (!problem.object.uncertainty.covariance.isZero(0.0)) return true;
+  if (!IsZeroCovariance(problem.object.uncertainty.covariance)) return true;
   for (const Contact& c : problem.contacts) {
     if (c.friction_sigma > 0.0) return true;
   }
@@ -168,41 +216,75 @@ namespace {
 
 using SmallMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
 
-// P_i = (G^+ S_b G^+T)_ii for every contact. With U the orthonormal rows
-// spanning G's row space (r x 3n) and M = G U^T (6 x r, full column rank),
-// G^+ = U^T X with X = (M^T M)^-1 M^T, so P_i = U_i^T (X S_b X^T) U_i.
-// Returns the size (N, N m) of the part of the kappa_b wrench ellipsoid no
-// contact force can balance: sqrt(lambda_max((I - M X) S_b (I - M X)^T)).
-// Full rank (r = 6, every grasp that resists all wrenches): M is square, so
-// G^+ = U^T M^-1; all in fixed sizes, M's columns from G's structure.
-void ContactCovariancesFullRank(const ForceEquilibrium& eq, const Eigen::Matrix<double, 6, 6>& wrench_cov,
-                                std::vector<Eigen::Matrix3d>* out) {
+// Solves m z = b in place (b <- m^-1 b) by Gaussian elimination with
+// partial pivoting, in fixed size: Eigen's PartialPivLU routes 6x6 solves
+// through its blocked triangular kernels, several times this cost.
+using RowMajor6d = Eigen::Matrix<double, 6, 6, Eigen::RowMajor>;
+
+// Row-major, so each row operation is one contiguous vector operation.
+template <int kCols>
+void SolveSixInPlace(RowMajor6d m, Eigen::Matrix<double, 6, kCols, Eigen::RowMajor>* b) {
+  for (int k = 0; k < 6; ++k) {
+    int p = k;
+    for (int i = k + 1; i < 6; ++i) {
+      if (std::abs(m(i, k)) > std::abs(m(p, k))) p = i;
+    }
+    if (p != k) {
+      m.row(p).swap(m.row(k));
+      b->row(p).swap(b->row(k));
+    }
+    for (int i = k + 1; i < 6; ++i) {
+      const double l = m(i, k) / m(k, k);
+      for (int j = k + 1; j < 6; ++j) m(i, j) -= l * m(k, j);
+      b->row(i) -= l * b->row(k);
+    }
+  }
+  for (int k = 5; k >= 0; --k) {
+    for (int j = k + 1; j < 6; ++j) b->row(k) -= m(k, j) * b->row(j);
+    b->row(k) /= m(k, k);
+  }
+}
+
+// With U the orthonormal rows spanning G's row space (r x 3n) and M = G U^T
+// (6 x r, full column rank), G^+ = U^T X with X = (M^T M)^-1 M^T, so
+// P_i = (G^+ S_b G^+T)_ii = U_i^T (X S_b X^T) U_i.
+//
+// Full rank (r = 6, every grasp that resists all wrenches): M is square and
+// X = M^-1, so with Z = M^-1 Y (one solve) and V_i = U_i^T Z (3 x 10),
+// P_i = V_i S_pi V_i^T; neither S_b nor the 6x6 X S_b X^T is formed. `y`
+// holds Y's first kParams columns, the rest being zero (4: no rotation, where
+// the inertia does not enter the wrench). All in fixed sizes, M's columns
+// from G's structure.
+template <int kParams>
+void ContactCovariancesFullRank(const ForceEquilibrium& eq, const Eigen::Matrix<double, 6, kParams>& y,
+                                const Matrix10d& covariance, std::vector<Eigen::Matrix3d>* out) {
   const int n = static_cast<int>(eq.grasp_matrix.cols() / 3);
-  Eigen::Matrix<double, 6, 6> m = Eigen::Matrix<double, 6, 6>::Zero();
+  const Eigen::Matrix<double, kParams, kParams> s = covariance.topLeftCorner<kParams, kParams>();
+  RowMajor6d m = RowMajor6d::Zero();
   for (int i = 0; i < n; ++i) {
     const Eigen::Matrix<double, 6, 3> u = eq.independent_rows.middleCols<3>(3 * i);  // 6 x 3
     const Eigen::Matrix3d skew = eq.grasp_matrix.block<3, 3>(3, 3 * i);
     m.topRows<3>().noalias() += u.transpose();
-    m.bottomRows<3>().noalias() += skew * u.transpose();
+    m.bottomRows<3>().noalias() += skew.lazyProduct(u.transpose());
   }
-  const Eigen::PartialPivLU<Eigen::Matrix<double, 6, 6>> lu(m);
-  const Eigen::Matrix<double, 6, 6> x = lu.inverse();
-  const Eigen::Matrix<double, 6, 6> k = x * wrench_cov * x.transpose();
+  Eigen::Matrix<double, 6, kParams, Eigen::RowMajor> z = y;
+  SolveSixInPlace(m, &z);
   out->resize(n);
   for (int i = 0; i < n; ++i) {
     const Eigen::Matrix<double, 6, 3> u = eq.independent_rows.middleCols<3>(3 * i);
-    (*out)[i].noalias() = u.transpose() * k * u;
+    const Eigen::Matrix<double, 3, kParams> v = u.transpose().lazyProduct(z);
+    const Eigen::Matrix<double, 3, kParams> vs = v.lazyProduct(s);
+    (*out)[i] = vs.lazyProduct(v.transpose());
   }
 }
 
+// The general case (any rank r < 6). Returns the size (N, N m) of the part
+// of the kappa_b wrench ellipsoid no contact force can balance:
+// sqrt(lambda_max((I - M X) S_b (I - M X)^T)).
 double ContactCovariances(const ForceEquilibrium& eq, const Eigen::Matrix<double, 6, 6>& wrench_cov,
                           std::vector<Eigen::Matrix3d>* out) {
   const int n = static_cast<int>(eq.grasp_matrix.cols() / 3);
   const int r = static_cast<int>(eq.independent_rows.rows());
-  if (r == 6) {
-    ContactCovariancesFullRank(eq, wrench_cov, out);
-    return 0.0;
-  }
   const SmallMatrix m = eq.grasp_matrix * eq.independent_rows.transpose();  // 6 x r
   const SmallMatrix normal = m.transpose() * m;
   const SmallMatrix x = normal.llt().solve(m.transpose());  // r x 6
@@ -219,37 +301,66 @@ double ContactCovariances(const ForceEquilibrium& eq, const Eigen::Matrix<double
                                      rest, Eigen::EigenvaluesOnly).eigenvalues()(5)));
 }
 
+// Every P_i; marks the equilibrium inconsistent when some wrench in
+// the kappa_b ellipsoid cannot be balanced by any contact force.
+void ParameterCovariances(const PlanProblem& problem, ForceEquilibrium* eq, ParameterTightening* t) {
+  const Matrix10d& covariance = problem.object.uncertainty.covariance;
+  const Motion& motion = problem.motion;
+  if (eq->independent_rows.rows() == 6 && motion.angular_velocity.isZero(0.0) &&
+      motion.angular_acceleration.isZero(0.0)) {
+    // Without rotation Y = [a - g, 0, 0; 0, -[a - g]x, 0] (WrenchRegressor):
+    // only the mass and the first moment enter.
+    const Vec3 a_minus_g = motion.linear_acceleration - problem.object.gravity;
+    Eigen::Matrix<double, 6, 4> y = Eigen::Matrix<double, 6, 4>::Zero();
+    y.block<3, 1>(0, 0) = a_minus_g;
+    y.block<3, 3>(3, 1) = -Skew(a_minus_g);
+    ContactCovariancesFullRank<4>(*eq, y, covariance, &t->contact_covariance);
+    return;
+  }
+  const WrenchRegressorMatrix y = WrenchRegressor(problem.object.gravity, motion);
+  if (eq->independent_rows.rows() == 6) {
+    ContactCovariancesFullRank<10>(*eq, y, covariance, &t->contact_covariance);
+    return;
+  }
+  // Coefficient-based products: at these sizes Eigen's GEMM path costs more
+  // than the arithmetic.
+  const Eigen::Matrix<double, 6, 10> ys = y.lazyProduct(covariance);
+  const Eigen::Matrix<double, 6, 6> wrench_covariance = ys.lazyProduct(y.transpose());  // S_b
+  const double unbalanced = ContactCovariances(*eq, wrench_covariance, &t->contact_covariance);
+  if (t->confidence * unbalanced > 1e-8 * std::max(1.0, eq->wrench.norm())) {
+    eq->consistent = false;
+    eq->residual = std::max(eq->residual, t->confidence * unbalanced);
+  }
+}
+
 }  // namespace
 
 void TightenForParameters(const PlanOptions& options, PreparedProblem* p) {
   ParameterTightening& t = p->parameters;
   const ParameterUncertainty& u = p->problem.object.uncertainty;
   t.confidence = u.confidence.value_or(options.confidence);
-  t.active = t.confidence > 0.0 && !u.covariance.isZero(0.0);
+  t.active = t.confidence > 0.0 && !IsZeroCovariance(u.covariance);
   t.cone_margin.clear();
   if (!t.active) {
-    t.wrench_covariance.setZero();
     t.contact_covariance.clear();
     t.row_margin.resize(0);
     return;
   }
-  const WrenchRegressorMatrix y = WrenchRegressor(p->problem.object.gravity, p->problem.motion);
-  t.wrench_covariance.noalias() = y * u.covariance * y.transpose();
-  const double unbalanced = ContactCovariances(p->equilibrium, t.wrench_covariance, &t.contact_covariance);
-  ForceEquilibrium& eq = p->equilibrium;
-  if (t.confidence * unbalanced > 1e-8 * std::max(1.0, eq.wrench.norm())) {
-    // Some wrench in the ellipsoid cannot be balanced by any contact force.
-    eq.consistent = false;
-    eq.residual = std::max(eq.residual, t.confidence * unbalanced);
-  }
+  ParameterCovariances(p->problem, &p->equilibrium, &t);
   ConstraintRows& rows = p->rows;
   const int m = static_cast<int>(rows.info.size());
   t.row_margin.resize(m);
+  // Locals, so the stores do not force every read to be redone.
+  const double kappa_b = t.confidence;
+  const RowInfo* info = rows.info.data();
+  const Eigen::Matrix3d* covariance = t.contact_covariance.data();
+  double* margin = t.row_margin.data();
+  double* rhs = rows.rhs.data();
   for (int r = 0; r < m; ++r) {
-    const int c = rows.info[r].contact;
+    const int c = info[r].contact;
     const Vec3 a = rows.matrix.block<1, 3>(r, 3 * c).transpose();
-    t.row_margin(r) = t.confidence * std::sqrt(std::max(0.0, a.dot(t.contact_covariance[c] * a)));
-    rows.rhs(r) -= t.row_margin(r);
+    margin[r] = kappa_b * std::sqrt(std::max(0.0, a.dot(covariance[c] * a)));
+    rhs[r] -= margin[r];
   }
   if (p->cone_shift.empty()) return;
   t.cone_margin.resize(p->cone_shift.size());
@@ -273,15 +384,20 @@ void FillRowMargins(const PreparedProblem& prepared, const std::vector<Vec3>& fo
   const int m = static_cast<int>(rows.info.size());
   const bool have_forces = static_cast<int>(forces.size()) == prepared.num_contacts();
   out->resize(m + prepared.cone_shift.size());
+  // Locals, so the stores into `out` do not force every read to be redone.
+  RowMargin* o = out->data();
+  const RowInfo* info = rows.info.data();
+  const double* rhs = rows.rhs.data();
+  const double* nominal = rows.nominal_rhs.data();
+  const double* parameters = t.active ? t.row_margin.data() : nullptr;
   for (int r = 0; r < m; ++r) {
-    RowMargin& o = (*out)[r];
-    const int c = rows.info[r].contact;
-    o.contact = c, o.cone = false, o.row = r, o.slack = 0.0;
-    o.facet = rows.info[r].kind == RowKind::kFrictionFacet ? rows.info[r].facet : -1;
-    o.upper = rows.info[r].kind == RowKind::kMaxNormal;
-    o.parameters = t.active ? t.row_margin(r) : 0.0;
-    o.measurement = std::max(0.0, rows.nominal_rhs(r) - rows.rhs(r) - o.parameters);
-    if (have_forces) o.slack = rows.rhs(r) - rows.matrix.block<1, 3>(r, 3 * c).dot(forces[c].transpose());
+    const int c = info[r].contact;
+    const RowKind kind = info[r].kind;
+    const double part = parameters ? parameters[r] : 0.0;
+    const double slack =
+        have_forces ? rhs[r] - rows.matrix.block<1, 3>(r, 3 * c).dot(forces[c].transpose()) : 0.0;
+    o[r] = RowMargin{c, false, r, kind == RowKind::kFrictionFacet ? info[r].facet : -1,
+                     kind == RowKind::kMaxNormal, slack, std::max(0.0, nominal[r] - rhs[r] - part), part};
   }
   for (int i = 0; i < static_cast<int>(prepared.cone_shift.size()); ++i) {
     RowMargin& o = (*out)[m + i];

@@ -36,6 +36,14 @@ double MinMargin(const PreparedProblem& prepared, const PlanOptions& options,
   return std::isfinite(margin) ? margin : 0.0;
 }
 
+// The same minimum from a filled row-margin report (every row and, for
+// ConeModel::kExact, every cone; FillRowMargins).
+double MinSlack(const std::vector<RowMargin>& margins) {
+  double margin = std::numeric_limits<double>::infinity();
+  for (const RowMargin& m : margins) margin = std::min(margin, m.slack);
+  return std::isfinite(margin) ? margin : 0.0;
+}
+
 // A margin of round-off size (an active row's slack, e.g. -2.8e-17 N) is
 // reported as exactly 0 so no output reads like a violation: below
 // kMarginRoundOff times the largest force (at least 1 N) no backend resolves it.
@@ -92,10 +100,16 @@ void FinishResult(const PreparedProblem& prepared, const PlanOptions& options,
     result->normal_forces[i] = problem.contacts[i].normal.dot(result->forces[i]);
     result->objective += result->forces[i].squaredNorm();
   }
-  result->min_margin = SnapRoundOff(MinMargin(prepared, options, result->forces), result->forces);
+  double margin = 0.0;
   if (!prepared.nominal_friction.empty() || prepared.parameters.active) {
+    // The report holds every slack MinMargin would compute, by the same
+    // expressions: take the minimum from it rather than computing them twice.
     FillRowMargins(prepared, result->forces, &result->row_margins);
+    margin = MinSlack(result->row_margins);
+  } else {
+    margin = MinMargin(prepared, options, result->forces);
   }
+  result->min_margin = SnapRoundOff(margin, result->forces);
   // Never an OPTIMAL answer that is not a number: overflow anywhere in a
   // backend becomes a named failure instead of a silent wrong answer.
   if (!std::isfinite(result->objective) || !std::isfinite(result->min_margin)) {

@@ -161,7 +161,6 @@ double ExactConeSlack(const Vec3& normal, double mu, double shift, const Vec3& f
 struct ParameterTightening {
   bool active = false;      // non-zero covariance and kappa_b > 0
   double confidence = 0.0;  // kappa_b
-  Eigen::Matrix<double, 6, 6> wrench_covariance = Eigen::Matrix<double, 6, 6>::Zero();  // S_b
   std::vector<Eigen::Matrix3d> contact_covariance;  // P_i = (G^+ S_b G^+T)_ii (N^2)
   VectorXd row_margin;             // kappa_b sqrt(a^T P_i a) per row (N), taken off rhs
   std::vector<double> cone_margin;  // EXACT: kappa_b (mu rho_n,b + rho_t,b) (N), in cone_shift
