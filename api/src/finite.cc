@@ -141,12 +141,20 @@ std::optional<std::pair<const char*, double>> NonFiniteScalar(double v) {
   return std::nullopt;
 }
 
+std::optional<std::pair<const char*, double>> NonFiniteMargin(const v1::RowMargin& m) {
+  if (!std::isfinite(m.slack())) return std::make_pair(".slack", m.slack());
+  if (!std::isfinite(m.measurement())) return std::make_pair(".measurement", m.measurement());
+  if (!std::isfinite(m.parameters())) return std::make_pair(".parameters", m.parameters());
+  return std::nullopt;
+}
+
 std::optional<std::pair<std::string, double>> FindInPlan(const v1::PlanResponse& r) {
   if (auto bad = FirstNonFinite(r.forces(), "forces", NonFiniteComponent)) return bad;
   if (auto bad = FirstNonFinite(r.normal_forces(), "normal_forces", NonFiniteScalar)) return bad;
   if (auto bad = FirstNonFinite(r.normal_force_sigma(), "normal_force_sigma", NonFiniteScalar)) return bad;
   if (!std::isfinite(r.objective())) return std::make_pair(std::string("objective"), r.objective());
   if (!std::isfinite(r.min_margin())) return std::make_pair(std::string("min_margin"), r.min_margin());
+  if (auto bad = FirstNonFinite(r.row_margins(), "row_margins", NonFiniteMargin)) return bad;
   const v1::CrossCheck& c = r.cross_check();
   if (!std::isfinite(c.max_force_diff()))
     return std::make_pair(std::string("cross_check.max_force_diff"), c.max_force_diff());
