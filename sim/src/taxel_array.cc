@@ -5,7 +5,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <numbers>
 #include <utility>
+
+#include <Eigen/Geometry>
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
@@ -109,6 +113,59 @@ std::string TaxelRangesToJson(const TaxelRanges& r) {
   return w.str();
 }
 
+namespace {
+
+constexpr int kPatchRays = 64;  // rays of the patch integral (the radial part is exact)
+
+// The surface normal at `contact`, blended smoothly from the taxels near it
+// (weights (1 - d / reach)^2), or the nearest taxel's if none is that close.
+Eigen::Vector3d SurfaceNormal(const std::vector<Taxel>& taxels, const Eigen::Vector3d& contact, double reach) {
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  size_t nearest = 0;
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < taxels.size(); ++i) {
+    const double d = (taxels[i].position - contact).norm();
+    if (d < best) best = d, nearest = i;
+    if (d < reach) n += std::pow(1 - d / reach, 2) * taxels[i].normal;
+  }
+  return n.norm() > 1e-12 ? n.normalized() : taxels[nearest].normal;
+}
+
+// Hertz pressure p(r) ~ sqrt(1 - r^2 / a^2): the fraction of the patch's force
+// within radius r of its centre (r <= a).
+double HertzFraction(double r, double a) { return 1 - std::pow(std::max(0.0, 1 - r * r / (a * a)), 1.5); }
+
+// Adds to `share` each taxel's fraction of the pressure along one ray c + r u
+// (r in [0, a]) of the patch: every point belongs to its nearest taxel, and
+// along a straight ray the nearest changes where a squared-distance difference
+// (linear in r) crosses zero, so the radial integral is exact.
+void IntegrateRay(const std::vector<Taxel>& taxels, const std::vector<size_t>& candidates,
+                  const Eigen::Vector3d& c, const Eigen::Vector3d& u, double a, double ray_weight,
+                  std::vector<double>* share) {
+  size_t cur = candidates[0];
+  for (size_t j : candidates)
+    if ((taxels[j].position - c).squaredNorm() < (taxels[cur].position - c).squaredNorm()) cur = j;
+  double r = 0;
+  while (r < a) {
+    // |c + r u - p_j|^2 - |c + r u - p_cur|^2 = A_j + 2 r B_j.
+    double next = a;
+    size_t next_taxel = cur;
+    for (size_t j : candidates) {
+      if (j == cur) continue;
+      const double A = (taxels[j].position - c).squaredNorm() - (taxels[cur].position - c).squaredNorm();
+      const double B = u.dot(taxels[cur].position - taxels[j].position);
+      if (B >= 0) continue;  // taxel j never gets nearer along this ray
+      const double cross = -A / (2 * B);
+      if (cross > r + 1e-12 && cross < next) next = cross, next_taxel = j;
+    }
+    (*share)[cur] += ray_weight * (HertzFraction(next, a) - HertzFraction(r, a));
+    r = next;
+    cur = next_taxel;
+  }
+}
+
+}  // namespace
+
 TaxelLoads ComputeTaxelLoads(const std::vector<Taxel>& taxels, const TaxelRanges& r, const Eigen::Vector3d& contact,
                              const Eigen::Vector3d& force) {
   const size_t n = taxels.size();
@@ -117,23 +174,30 @@ TaxelLoads ComputeTaxelLoads(const std::vector<Taxel>& taxels, const TaxelRanges
   out.coverage.assign(n, 0.0);
   out.misalignment.assign(n, 1.0);
   const double f = force.norm();
-  if (!(f > 0) || !contact.allFinite()) return out;
+  if (!(f > 0) || !contact.allFinite() || n == 0) return out;
   out.patch_radius = std::min(r.patch_radius_max, r.patch_radius_coeff * std::cbrt(f));
-  const double reach = out.patch_radius + r.taxel_radius;
-  std::vector<double> w(n, 0.0);
-  double wsum = 0;
+  const double a = out.patch_radius, reach = a + r.taxel_radius;
+  // Taxels that can own part of the patch: the nearest one's cell reaches at
+  // most its distance + 2a from the contact.
+  double nearest = std::numeric_limits<double>::infinity();
+  for (const Taxel& t : taxels) nearest = std::min(nearest, (t.position - contact).norm());
+  std::vector<size_t> candidates;
   for (size_t i = 0; i < n; ++i) {
     const double d = (taxels[i].position - contact).norm();
-    if (d >= reach) continue;
-    w[i] = std::sqrt(1 - (d / reach) * (d / reach));
-    wsum += w[i];
+    if (d <= nearest + 2 * a) candidates.push_back(i);
     out.coverage[i] = std::clamp((reach - d) / (2 * r.taxel_radius), 0.0, 1.0);
   }
-  if (wsum <= 0) return out;  // the contact fell between taxels
+  const Eigen::Vector3d normal = SurfaceNormal(taxels, contact, reach);
+  const Eigen::Vector3d e1 = normal.unitOrthogonal(), e2 = normal.cross(e1);
+  std::vector<double> share(n, 0.0);
+  for (int k = 0; k < kPatchRays; ++k) {
+    const double th = 2 * std::numbers::pi * (k + 0.5) / kPatchRays;
+    IntegrateRay(taxels, candidates, contact, std::cos(th) * e1 + std::sin(th) * e2, a, 1.0 / kPatchRays, &share);
+  }
   for (size_t i = 0; i < n; ++i) {
     const double cosine = std::max(0.0, -force.dot(taxels[i].normal) / f);
     out.misalignment[i] = 1 - cosine;
-    out.load[i] = w[i] / wsum * f * cosine;
+    out.load[i] = share[i] * f * cosine;
   }
   return out;
 }

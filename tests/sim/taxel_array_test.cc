@@ -59,6 +59,35 @@ TEST(TaxelArray, LoadsArePressureShareTimesCosine) {
   EXPECT_GT(ComputeTaxelLoads(taxels, TaxelRanges{}, kApex, 8 * force).patch_radius, l.patch_radius);
 }
 
+// Each taxel senses the pressure on its own part of the surface, so at a fixed
+// contact no taxel's load falls while the force grows (the patch spreads, but
+// the pressure under every point rises), and the loads add up to the force
+// pressing along the taxels' normals. Contacts drawn from the test's seed.
+TEST(TaxelArray, NoTaxelLoadFallsAsTheForceGrows) {
+  const std::vector<Taxel> taxels = DefaultFingertip();
+  const FingertipGeometry g;
+  std::mt19937_64 rng(TestSeed() + 3);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (int rep = 0; rep < 20; ++rep) {
+    const double polar = 1.0 * u(rng), az = 2 * M_PI * u(rng);
+    const Eigen::Vector3d n_out(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az), std::cos(polar));
+    const Eigen::Vector3d contact = Eigen::Vector3d(0, 0, g.body_length) + g.radius * n_out;
+    std::vector<double> prev(taxels.size(), 0.0);
+    for (int k = 1; k <= 80; ++k) {
+      const double f = 0.1 * k;
+      const TaxelLoads l = ComputeTaxelLoads(taxels, TaxelRanges{}, contact, -f * n_out);
+      double sum = 0;
+      for (size_t i = 0; i < taxels.size(); ++i) {
+        EXPECT_GE(l.load[i], prev[i] - 1e-9) << "rep " << rep << " taxel " << i << " at " << f << " N";
+        prev[i] = l.load[i];
+        sum += l.load[i];
+      }
+      EXPECT_LE(sum, f + 1e-9);
+      EXPECT_GT(sum, 0.85 * f) << "rep " << rep << " at " << f << " N: the patch's force is on the taxels";
+    }
+  }
+}
+
 // A slow press at the apex, noise off: every step where the summed reading
 // jumps is a step where taxels cross their thresholds, one jump per crossing.
 TEST(TaxelArray, PressGivesOneJumpPerTaxelCrossingThreshold) {
