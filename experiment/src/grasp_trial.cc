@@ -134,7 +134,7 @@ class TrialRun {
   void UpdateTargets(int tick);
   void TrackConvergence(double t, const std::vector<double>& desired);
   void AccumulateForceError(const std::vector<double>& desired);
-  void TrackObjectPose(const HandMotion& hm, double* slip, double* rot);
+  void TrackObjectPose(Phase phase, const HandMotion& hm, double* slip, double* rot);
   void RecordTrace(double t, Phase phase, const std::vector<double>& desired, double slip, double rot);
   void ApplyFingertipPd(double t, Phase phase, const HandMotion& hm);
   void ReadTaxels(double t);
@@ -182,9 +182,9 @@ class TrialRun {
   std::vector<double> finger_err_, finger_loop_;
   long err_n_ = 0;
   double ok_since_ = -1;
-  bool lift_started_ = false;
-  Vec3 p_lift_ = Vec3::Zero();
-  Matrix3d R_lift_ = Matrix3d::Identity();
+  bool pose_tracked_ = false, lift_started_ = false;  // the object's pose at the settle's and the lift's start
+  Vec3 p_ref_ = Vec3::Zero(), p_lift_ = Vec3::Zero();
+  Matrix3d R_ref_ = Matrix3d::Identity();
   bool dropped_ = false;
 };
 
@@ -266,12 +266,16 @@ void TrialRun::ControlTick(double t, Phase phase, const HandMotion& hm) {
     if (phase == Phase::kSettle || phase == Phase::kHold) TrackConvergence(t, desired);
   }
   if (phase == Phase::kHold || phase == Phase::kLift || phase == Phase::kHoldLifted) AccumulateForceError(desired);
-  if (phase == Phase::kSettle || phase == Phase::kHold || phase == Phase::kLift || phase == Phase::kHoldLifted)
-    if (!failure_seen_) causes_.Tick(t, readings_.truth, readings_.raw);
+  // Judged from the settle to the end of the lifted hold: the causes and the object's pose.
+  const bool judged =
+      phase == Phase::kSettle || phase == Phase::kHold || phase == Phase::kLift || phase == Phase::kHoldLifted;
+  if (judged && !failure_seen_) causes_.Tick(t, readings_.truth, readings_.raw);
   double slip = 0, rot = 0;
-  if (phase == Phase::kLift || phase == Phase::kHoldLifted) {
-    TrackObjectPose(hm, &slip, &rot);
-    failure_seen_ = failure_seen_ || dropped_ || slip >= cfg_.max_slip || rot >= cfg_.max_rotation_deg;
+  if (judged) {
+    TrackObjectPose(phase, hm, &slip, &rot);
+    const bool failed = dropped_ || slip >= cfg_.max_slip || rot >= cfg_.max_rotation_deg;
+    if (failed && !failure_seen_) res_.failure_time = t;
+    failure_seen_ = failure_seen_ || failed;
   }
   if (phase == Phase::kSwitched) TrackSwitched(desired);
   if (trial_ < cfg_.trace_trials) RecordTrace(t, phase, desired, slip, rot);
@@ -436,25 +440,30 @@ void TrialRun::AccumulateForceError(const std::vector<double>& desired) {
   ++err_n_;
 }
 
-// Object pose versus where the hand holds it: the hand's motion since the
-// lift started applied to the object's pose then (the hand is at rest when
-// the lift starts).
-void TrialRun::TrackObjectPose(const HandMotion& hm, double* slip, double* rot) {
+// Object pose versus where the hand holds it, from the settle on: the hand's
+// motion since then (none until the lift) applied to the object's pose when
+// the settle started. The grasp must keep the object still on the table
+// before the lift as well (GeoDEx IV-C: the pose "remains static" over the
+// 20 s hold; success = no noticeable movement), so a loop that moves the
+// object before the lift fails too. Dropped (the trial ends): from the lift
+// on, drop_distance away from where the hand's motion since the lift's start
+// puts the object's pose then.
+void TrialRun::TrackObjectPose(Phase phase, const HandMotion& hm, double* slip, double* rot) {
   const double* q = d_->qpos + obj_q_;
   const Vec3 p(q[0], q[1], q[2]);
   const Matrix3d R = Eigen::Quaterniond(q[3], q[4], q[5], q[6]).toRotationMatrix();
-  if (!lift_started_) {
-    lift_started_ = true;
-    p_lift_ = p;
-    R_lift_ = R;
-  }
-  const Vec3 p_exp = im_.Apply(hm, p_lift_);
-  const Matrix3d R_exp = hm.R * R_lift_;
-  *slip = (p - p_exp).norm();
-  *rot = AngleDeg(R * R_exp.transpose());
+  if (!pose_tracked_) pose_tracked_ = true, p_ref_ = p, R_ref_ = R;
+  *slip = (p - im_.Apply(hm, p_ref_)).norm();
+  *rot = AngleDeg(R * (hm.R * R_ref_).transpose());
   res_.max_slip = std::max(res_.max_slip, *slip);
   res_.max_rotation_deg = std::max(res_.max_rotation_deg, *rot);
-  if (*slip > cfg_.drop_distance) dropped_ = true;
+  if (phase == Phase::kSettle || phase == Phase::kHold) {
+    res_.max_slip_before_lift = std::max(res_.max_slip_before_lift, *slip);
+    res_.max_rotation_before_lift_deg = std::max(res_.max_rotation_before_lift_deg, *rot);
+    return;
+  }
+  if (!lift_started_) lift_started_ = true, p_lift_ = p;
+  if ((p - im_.Apply(hm, p_lift_)).norm() > cfg_.drop_distance) dropped_ = true;
 }
 
 void TrialRun::RecordTrace(double t, Phase phase, const std::vector<double>& desired, double slip, double rot) {
@@ -506,7 +515,11 @@ TrialResult TrialRun::Finish() {
     res_.finger_loop_error.push_back(finger_loop_[i] / err_n_);
     res_.loop_error += finger_loop_[i] / (err_n_ * nf_);
   }
-  if (dropped_) res_.failure = "dropped";
+  if (res_.failure_time >= 0 && res_.failure_time < im_.timeline.t_lift)
+    res_.failure = absl::StrFormat("moved before the lift (slip %.1f mm, rotation %.2f deg)%s",
+                                   res_.max_slip_before_lift * 1e3, res_.max_rotation_before_lift_deg,
+                                   dropped_ ? ", then dropped" : "");
+  else if (dropped_) res_.failure = "dropped";
   else if (res_.max_slip >= cfg_.max_slip) res_.failure = absl::StrFormat("slip %.1f mm", res_.max_slip * 1e3);
   else if (res_.max_rotation_deg >= cfg_.max_rotation_deg)
     res_.failure = absl::StrFormat("rotation %.2f deg", res_.max_rotation_deg);

@@ -142,6 +142,35 @@ TEST(TaxelGrasp, PaperProtocolSwitchesFeedback) {
   for (double e : r->switched_force_error) EXPECT_GT(e, 0);
 }
 
+// The grasp must keep the object still before the lift too (GeoDEx: the pose
+// "remains static" over the hold). Raw feedback winds up the planned friction
+// it never reads, and over a 4 s hold on the table that carries the cylinder
+// off its rest pose: a failure before the lift, whatever the lift does after.
+// Estimated feedback on the same draws keeps it still. Seed drawn at test time.
+TEST(TaxelGrasp, MovingTheObjectBeforeTheLiftFails) {
+  for (Feedback feedback : {Feedback::kRaw, Feedback::kEstimated}) {
+    GraspConfig c = TaxelConfig(GraspObject::kCylinder, feedback);
+    c.seed = TestSeed();
+    c.phases.hold = 4.0;
+    auto setup = GraspSetup::Create(c);
+    ASSERT_TRUE(setup.ok()) << setup.status();
+    auto r = RunGraspTrial(**setup, 0);
+    ASSERT_TRUE(r.ok()) << r.status();
+    const double t_lift = c.phases.close + c.phases.settle + c.phases.hold;
+    if (feedback == Feedback::kRaw) {
+      EXPECT_FALSE(r->success);
+      EXPECT_GE(r->max_slip_before_lift, c.max_slip);
+      EXPECT_GE(r->failure_time, c.phases.close);
+      EXPECT_LT(r->failure_time, t_lift);
+      EXPECT_NE(r->failure.find("before the lift"), std::string::npos) << r->failure;
+    } else {
+      EXPECT_LT(r->max_slip_before_lift, 0.001);
+      EXPECT_LT(r->max_rotation_before_lift_deg, 0.5);
+      EXPECT_TRUE(r->failure.find("before the lift") == std::string::npos) << r->failure;
+    }
+  }
+}
+
 TEST(TaxelGrasp, BadConfigNamesTheField) {
   GraspConfig c = TaxelConfig(GraspObject::kWrench, Feedback::kRaw);
   c.taxel_ranges.threshold_min = -0.1;

@@ -160,7 +160,7 @@ struct GraspConfig {
   double fingertip_mass = 0.05;   // kg (gravity compensated)
   double fingertip_radius = 0.012;  // m
   double confidence = 1.0;        // planner kappa
-  double max_rotation_deg = 1.0;  // success thresholds during lift + hold
+  double max_rotation_deg = 1.0;  // success thresholds from the settle to the end of the lifted hold
   double max_slip = 0.005;        // m
   double drop_distance = 0.02;    // m, object this far from where the hand holds it = dropped
   PhysicsSettings physics;
@@ -185,10 +185,16 @@ struct TrialResult {
   uint64_t seed = 0;
   bool success = false;
   bool dropped = false;
-  std::string failure;          // "", "dropped", "slip 7.1 mm", "rotation 2.3 deg"
+  std::string failure;          // "", "dropped", "slip 7.1 mm", "rotation 2.3 deg", "moved before the lift (...)"
   FailureCause cause = FailureCause::kNone;  // kNone when successful
-  double max_slip = 0;          // m, during lift + hold
+  // The object's pose from the settle's start to the end of the lifted hold,
+  // against where the hand's motion since then puts it (m, deg), and the
+  // same over the settle and hold alone (the hand at rest: the object should
+  // not move); failure_time: when a criterion was first met (s, -1 = never).
+  double max_slip = 0;
   double max_rotation_deg = 0;
+  double max_slip_before_lift = 0, max_rotation_before_lift_deg = 0;
+  double failure_time = -1;
   double force_error = 0;       // N, mean |fn_true - fn_desired| over fingertips, hold..hold_lifted
   double feedback_error = 0;    // N, mean |fn_observed - fn_true| (what the loop was told vs truth)
   // The loop's own error, mean |fn_desired - fn_observed| (GeoDEx's "error between the desired force and the
