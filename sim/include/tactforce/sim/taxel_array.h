@@ -6,11 +6,15 @@
 //
 // Per sample (TaxelArray::Step) the input is the contact point and the 3D
 // force the object exerts on the fingertip, both in the fingertip frame of
-// DefaultFingertip (simulate.h). A Hertz-like contact patch of radius
-//   a = patch_radius_coeff * cbrt(|F| / 1 N), capped at patch_radius_max
-// spreads the force over the taxels within a + taxel_radius of the contact
-// point with weights sqrt(1 - (d / (a + taxel_radius))^2); taxel i's load is
+// DefaultFingertip (simulate.h). A Hertz contact patch of radius
+//   a = patch_radius_coeff * cbrt(|F| / 1 N), capped at patch_radius_max,
+// with pressure ~ sqrt(1 - r^2 / a^2) lies in the surface's tangent plane at
+// the contact point; every point of it belongs to its nearest taxel (the
+// taxels tile the surface), so taxel i's share is the fraction of the
+// patch's force on its own cell (shares sum to 1), and its load is
 //   load_i = share_i * |F| * max(0, cos_i),  cos_i = -F.n_i / |F|.
+// The pressure under every point rises with |F|, so at a fixed contact no
+// taxel's load falls as the force grows (the readings stay monotone).
 // Each taxel then runs, in this order:
 //   activation: inactive until load >= threshold (a jump of about threshold);
 //   hysteresis: a play operator of radius `hysteresis` started at the load on
