@@ -122,6 +122,14 @@ grpc::ServerUnaryReactor* PlannerService::Plan(grpc::CallbackServerContext* cont
                                                const v1::PlanRequest* request,
                                                v1::PlanResponse* response) {
   grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+  // The guard lives on the call's arena (plan_messages_), as long as the
+  // request, which api:: may read until `done` has run: no allocation of
+  // its own and no shared count on the hot path.
+  if (google::protobuf::Arena* arena = request->GetArena(); arena != nullptr) {
+    const RpcGuard* guard = google::protobuf::Arena::Create<RpcGuard>(arena, context);
+    plans_.Dispatch(*request, response, api::CallLog("Plan", *guard), *guard, FinishUnary(reactor));
+    return reactor;
+  }
   auto guard = std::make_shared<const RpcGuard>(context);
   plans_.Dispatch(*request, response, api::CallLog("Plan", *guard), *guard,
                   FinishUnary(reactor, guard));
