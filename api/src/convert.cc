@@ -130,8 +130,10 @@ absl::StatusOr<planner::Contact> ContactFromProto(const v1::Contact& in, const s
   c.normal = FromProto(in.normal());
   c.friction = in.friction();
   c.friction_sigma = in.friction_sigma();
-  absl::StatusOr<planner::ContactKind> kind = ContactKindFromProto(in.kind(), path + ".kind");
-  if (!kind.ok()) return kind.status();
+  absl::StatusOr<planner::ContactKind> kind = ContactKindFromProto(in.kind(), "kind");
+  // The field's full path is built only for the error: this runs for every
+  // contact of every Plan.
+  if (!kind.ok()) return ContactKindFromProto(in.kind(), path + ".kind").status();
   c.kind = *kind;
   c.sigma = in.sigma();
   c.min_normal_force = in.min_normal_force();
@@ -332,6 +334,13 @@ v1::PlanRequest ToRequest(const planner::PlanProblem& problem,
 
 v1::PlanResponse ToProto(const planner::PlanResult& result) {
   v1::PlanResponse response;
+  ToProto(result, &response);
+  return response;
+}
+
+void ToProto(const planner::PlanResult& result, v1::PlanResponse* out) {
+  v1::PlanResponse& response = *out;
+  response.Clear();
   response.set_status(ToProto(result.status));
   response.set_message(result.message);
   for (const planner::Vec3& f : result.forces) *response.add_forces() = ToProto(f);
@@ -365,7 +374,6 @@ v1::PlanResponse ToProto(const planner::PlanResult& result) {
     out->set_parameters(m.parameters);
   }
   response.set_infeasible_source(ToProto(result.infeasible_source));
-  return response;
 }
 
 absl::StatusOr<planner::TrajectoryProblem> ToTrajectoryProblem(const v1::TrajectoryRequest& request,

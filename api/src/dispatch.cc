@@ -32,13 +32,14 @@ absl::Status ExecutePlan(PlanCall& call, const CallControl& control, PlanBuffers
                          v1::PlanResponse* response, CallLog& log) {
   if (control.ShouldStop()) return control.StopReason("before the solve started");
   call.options.interrupt = control.Interrupt();
-  absl::StatusOr<v1::PlanResponse> planned =
-      SolvePlan(call, buffers != nullptr ? buffers : &ThreadPlanBuffers());
-  if (!planned.ok()) return planned.status();
-  if (control.ShouldStop()) {
-    return control.StopReason(absl::StrCat("after ", planned->solve_time_us(), " us of solving"));
+  // Into the caller's response (a unary Plan's lives on the call's arena).
+  if (absl::Status s = SolvePlan(call, buffers != nullptr ? buffers : &ThreadPlanBuffers(), response);
+      !s.ok()) {
+    return s;
   }
-  *response = *std::move(planned);
+  if (control.ShouldStop()) {
+    return control.StopReason(absl::StrCat("after ", response->solve_time_us(), " us of solving"));
+  }
   if (spdlog::should_log(spdlog::level::info)) {
     log.set_results(absl::StrCat("plan_status=", StatusName(response->status()),
                                  " solve_us=", response->solve_time_us()));

@@ -14,6 +14,7 @@
 #include "tactforce/sim/sensor_model.h"
 #include "tactforce/estimator/force_estimation.h"
 #include "tactforce/estimator/friction.h"
+#include "tactforce/io/status_macros.h"
 #include "tactforce/planner/solver.h"
 #include "tactforce/planner/trajectory.h"
 #include "tactforce/planner/validation.h"
@@ -145,12 +146,16 @@ PlanBuffers& ThreadPlanBuffers() {
 }
 
 absl::StatusOr<v1::PlanResponse> SolvePlan(const PlanCall& call, PlanBuffers* buffers) {
-  if (absl::Status s = planner::Plan(call.problem, call.options, call.solver, &buffers->workspace,
-                                     &buffers->result);
-      !s.ok()) {
-    return s;
-  }
-  return FiniteAnswer<v1::PlanResponse>(api::ToProto(buffers->result));
+  v1::PlanResponse response;
+  TF_RETURN_IF_ERROR(SolvePlan(call, buffers, &response));
+  return response;
+}
+
+absl::Status SolvePlan(const PlanCall& call, PlanBuffers* buffers, v1::PlanResponse* response) {
+  TF_RETURN_IF_ERROR(planner::Plan(call.problem, call.options, call.solver, &buffers->workspace,
+                                   &buffers->result));
+  api::ToProto(buffers->result, response);
+  return CheckFiniteAnswer(*response);
 }
 
 absl::StatusOr<v1::PlanResponse> SolvePlan(const PlanCall& call) {

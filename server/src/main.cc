@@ -78,10 +78,11 @@ void LogStart(const ServerConfig& c, const tactforce::server::ServerHost& host,
                "max_inertia_samples={} max_inflight_samples={} max_inflight_bytes={} max_fit_bytes={} max_audit_samples={} "
                "max_streams={} stream_idle_timeout_ms={} max_streams_per_connection={} max_trajectory_work={}",
                host.bound_address(), host.tls(), !c.tls_client_ca.empty(), c.reflection, pool.workers(),
-               c.ipopt_workers, pool.max_queued(), c.max_contacts, c.solve_timeout_ms, c.inline_max_contacts,
-               c.max_message_bytes, c.max_inertia_samples, c.max_inflight_samples, c.max_inflight_bytes, c.max_fit_bytes,
-               c.max_audit_samples, c.max_streams, c.stream_idle_timeout_ms, c.max_streams_per_connection,
-               c.max_trajectory_work);
+               c.ipopt_workers, pool.max_queued(), c.limits.max_contacts, c.solve_timeout_ms(),
+               c.inline_max_contacts, c.limits.max_response_bytes, c.max_inertia_samples,
+               c.max_inflight_samples, c.max_inflight_bytes, c.limits.max_fit_bytes,
+               c.limits.max_audit_samples, c.max_streams, c.stream_idle_timeout_ms,
+               c.max_streams_per_connection, c.limits.max_trajectory_work);
 }
 
 }  // namespace
@@ -126,11 +127,10 @@ int main(int argc, char** argv) {
   tactforce::server::StreamRegistry streams(config.ToStreamLimits());
   tactforce::server::ServerHost host(config.ToServerOptions());
   host.AddService(std::make_unique<tactforce::server::PlannerService>(
-      &pool, &ipopt_lane, &streams, config.ToPlannerOptions()));
+      &pool, &ipopt_lane, &streams, config.ToPlanSettings()));
   host.AddService(std::make_unique<tactforce::server::EstimatorService>(
-      &pool, &streams, config.ToEstimatorOptions()));
-  host.AddService(std::make_unique<tactforce::server::AuditService>(
-      &pool, config.ToEstimatorOptions()));
+      &pool, &streams, config.limits, config.max_inertia_samples));
+  host.AddService(std::make_unique<tactforce::server::AuditService>(&pool, config.limits));
   host.AddService(std::make_unique<tactforce::server::InfoService>(&host));
 
   if (absl::Status started = host.Start(); !started.ok()) {

@@ -78,4 +78,8 @@ api::CallDone FinishUnary(grpc::ServerUnaryReactor* reactor, std::shared_ptr<con
   };
 }
 
+api::CallDone FinishUnary(grpc::ServerUnaryReactor* reactor) {
+  return [reactor](const absl::Status& status) { reactor->Finish(ToGrpcStatus(status)); };
+}
+
 }  // namespace tactforce::server

@@ -3,9 +3,30 @@
 #include "tactforce/server/server_config.h"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <string>
 #include <thread>
 
 namespace tactforce::server {
+
+api::CallLimits ServerConfig::DefaultCallLimits() {
+  api::CallLimits limits;
+  limits.max_response_bytes = 4 << 20;
+  limits.max_fit_bytes = int64_t{256} << 20;
+  limits.max_call_seconds = 10.0;
+  limits.ipopt_max_cpu_seconds = 10.0;
+  return limits;
+}
+
+void ServerConfig::SetSolveTimeoutMs(int ms) {
+  limits.max_call_seconds = ms / 1000.0;
+  limits.ipopt_max_cpu_seconds = ms / 1000.0;
+}
+
+int ServerConfig::solve_timeout_ms() const {
+  return static_cast<int>(std::lround(limits.max_call_seconds * 1000.0));
+}
 
 int ServerConfig::EffectiveWorkers() const {
   if (workers > 0) return workers;
@@ -15,7 +36,7 @@ int ServerConfig::EffectiveWorkers() const {
 ServerOptions ServerConfig::ToServerOptions() const {
   ServerOptions options;
   options.listen = listen;
-  options.max_message_bytes = max_message_bytes;
+  options.max_message_bytes = static_cast<int>(limits.max_response_bytes);
   options.tls.cert = tls_cert;
   options.tls.key = tls_key;
   options.tls.client_ca = tls_client_ca;
@@ -25,24 +46,11 @@ ServerOptions ServerConfig::ToServerOptions() const {
   return options;
 }
 
-PlannerServiceOptions ServerConfig::ToPlannerOptions() const {
-  PlannerServiceOptions options;
-  options.max_contacts = max_contacts;
-  options.solve_timeout_ms = solve_timeout_ms;
-  options.inline_max_contacts = inline_max_contacts;
-  options.max_trajectory_work = max_trajectory_work;
-  options.max_response_bytes = max_message_bytes;
-  return options;
-}
-
-EstimatorServiceOptions ServerConfig::ToEstimatorOptions() const {
-  EstimatorServiceOptions options;
-  options.max_contacts = max_contacts;
-  options.max_inertia_samples = max_inertia_samples;
-  options.max_audit_samples = max_audit_samples;
-  options.solve_timeout_ms = solve_timeout_ms;
-  options.max_fit_bytes = max_fit_bytes;
-  return options;
+api::PlanSettings ServerConfig::ToPlanSettings() const {
+  api::PlanSettings settings;
+  settings.limits = limits;
+  settings.inline_max_contacts = inline_max_contacts;
+  return settings;
 }
 
 StreamLimits ServerConfig::ToStreamLimits() const {
@@ -93,27 +101,29 @@ void RegisterFlags(CLI::App& app, ServerConfig* c) {
                  "Solves that may wait for a worker; beyond that requests fail with "
                  "RESOURCE_EXHAUSTED")
       ->check(CLI::Range(0, 1'000'000));
-  app.add_option("--max-message-bytes", c->max_message_bytes,
+  app.add_option("--max-message-bytes", c->limits.max_response_bytes,
                  "Largest request or response message; bigger ones fail with RESOURCE_EXHAUSTED")
-      ->check(CLI::Range(1024, 1 << 30));
-  app.add_option("--max-contacts", c->max_contacts,
+      ->check(CLI::Range(int64_t{1024}, int64_t{1} << 30));
+  app.add_option("--max-contacts", c->limits.max_contacts,
                  "Most contacts a request may have (INVALID_ARGUMENT 'contacts: ...' beyond)")
       ->check(CLI::Range(1, 100'000));
   app.add_option("--max-inertia-samples", c->max_inertia_samples,
                  "Most samples one FitInertia stream may carry (INVALID_ARGUMENT 'samples: ...' beyond)")
       ->check(CLI::Range(int64_t{10}, int64_t{100'000'000}));
-  app.add_option("--max-trajectory-work", c->max_trajectory_work,
+  app.add_option("--max-trajectory-work", c->limits.max_trajectory_work,
                  "Most steps x contacts x cone sides one PlanTrajectory or PlanFrictionProbe may ask "
                  "for (INVALID_ARGUMENT 'steps: ...' beyond, before any solve)")
       ->check(CLI::Range(int64_t{1}, int64_t{1'000'000'000}));
-  app.add_option("--solve-timeout-ms", c->solve_timeout_ms,
+  app.add_option_function<int>(
+         "--solve-timeout-ms", [c](int ms) { c->SetSolveTimeoutMs(ms); },
                  "Work limit of one call in ms (0 = none), counted from when its work starts "
                  "(queue wait excluded): PlanTrajectory, PlanFrictionProbe, FitInertia, "
                  "AuditModel, EstimateFriction and EstimateForces stop with RESOURCE_EXHAUSTED "
                  "when they reach it; each Ipopt solve is capped to this much CPU time and "
                  "then returns PLAN_STATUS_SOLVER_FAILURE")
+      ->default_str(std::to_string(c->solve_timeout_ms()))
       ->check(CLI::Range(0, 3'600'000));
-  app.add_option("--max-audit-samples", c->max_audit_samples,
+  app.add_option("--max-audit-samples", c->limits.max_audit_samples,
                  "Most samples one AuditModel request may carry (INVALID_ARGUMENT 'samples: ...' beyond)")
       ->check(CLI::Range(int64_t{40}, int64_t{100'000'000}));
   app.add_option("--max-streams", c->max_streams,
@@ -135,7 +145,7 @@ void RegisterFlags(CLI::App& app, ServerConfig* c) {
                  "ends its stream with RESOURCE_EXHAUSTED (0 = no limit). The default, 256 MiB, is a "
                  "quarter of the shipped Kubernetes memory limit")
       ->check(CLI::Range(int64_t{0}, int64_t{1} << 40));
-  app.add_option("--max-fit-bytes", c->max_fit_bytes,
+  app.add_option("--max-fit-bytes", c->limits.max_fit_bytes,
                  "Most working memory one FitInertia fit may take, estimated from its method and "
                  "sample count before it starts (FACTOR_GRAPH ~4.5 KB per sample, the others ~2 KB); "
                  "a bigger fit is refused with INVALID_ARGUMENT naming the most samples it may have "

@@ -52,6 +52,8 @@ v1::PlanRequest ToRequest(const planner::PlanProblem& problem,
                           const planner::PlanOptions& options,
                           planner::SolverKind solver);
 v1::PlanResponse ToProto(const planner::PlanResult& result);
+// The same into `out` (cleared first; on its arena, without a copy).
+void ToProto(const planner::PlanResult& result, v1::PlanResponse* out);
 
 // ObjectModel.uncertainty of an object of `mass` and `com`: the 10x10
 // covariance (100 entries, checked by the planner's validation) or the

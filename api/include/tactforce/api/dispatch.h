@@ -8,11 +8,11 @@
 //   PlanDispatcher::Dispatch   Planner.Plan and each PlanStream request:
 //                              convert + limits, validation before queueing,
 //                              inline or pool, solve, log.
-//   DispatchOnPool             every other unary RPC: an api::Handle*
-//                              function on the pool.
-//   RunCall                    the step both end in (and the FitInertia
-//                              stream): run inline or on the pool, refuse
-//                              when the pool is full, log, done(status).
+//   DispatchOnPool             every other unary RPC (an api::Handle*
+//                              function) and the FitInertia fit, on the pool.
+//   RunCall                    the step both end in: run inline or on the
+//                              pool, refuse when the pool is full, log,
+//                              done(status).
 //
 // Threads: `done` runs exactly once, on the dispatching thread (inline work,
 // invalid request, full pool) or on a worker thread. Nothing the caller

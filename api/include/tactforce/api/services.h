@@ -67,6 +67,9 @@ PlanBuffers& ThreadPlanBuffers();
 // SolvePlan with `buffers` (a warm GEOMETRIC solve allocates only the
 // response).
 absl::StatusOr<v1::PlanResponse> SolvePlan(const PlanCall& call, PlanBuffers* buffers);
+// The same into `response` (the caller's, e.g. on a gRPC call's arena:
+// filled in place, no copy); on an error its content is unspecified.
+absl::Status SolvePlan(const PlanCall& call, PlanBuffers* buffers, v1::PlanResponse* response);
 
 // PreparePlan + SolvePlan.
 absl::StatusOr<v1::PlanResponse> HandlePlan(const v1::PlanRequest& request,

@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 
 #include "tactforce/api/inertia.h"
 #include "tactforce/api/services.h"
@@ -20,17 +21,6 @@
 
 namespace tactforce::server {
 
-// Limits of the Estimator and Audit services (the server's flags).
-struct EstimatorServiceOptions {
-  int max_contacts = api::CallLimits{}.max_contacts;
-  int64_t max_inertia_samples = api::kDefaultMaxInertiaSamples;  // per FitInertia stream
-  int64_t max_audit_samples = api::CallLimits{}.max_audit_samples;  // per AuditModel request
-  int solve_timeout_ms = 10'000;  // work budget of every call (CallLimits::max_call_seconds); 0 = none
-  // Working memory of one FitInertia fit (CallLimits::max_fit_bytes); 0 = none.
-  int64_t max_fit_bytes = int64_t{256} << 20;
-
-  api::CallLimits Limits() const;
-};
 
 // FitInertia is registered raw (its reactor parses each message itself:
 // see estimator_service.cc); the unary RPCs are typed.
@@ -40,9 +30,12 @@ using EstimatorBase = v1::Estimator::WithCallbackMethod_EstimateForces<
 
 class EstimatorService final : public EstimatorBase, public HostedService {
  public:
-  // `pool` and `streams` must outlive the service.
-  EstimatorService(WorkerPool* pool, StreamRegistry* streams, EstimatorServiceOptions options)
-      : pool_(pool), streams_(streams), options_(options) {}
+  // `pool` and `streams` must outlive the service. `limits` hold for every
+  // call; `max_inertia_samples`: most samples one FitInertia stream may carry.
+  EstimatorService(WorkerPool* pool, StreamRegistry* streams, api::CallLimits limits,
+                   int64_t max_inertia_samples = api::kDefaultMaxInertiaSamples)
+      : pool_(pool), streams_(streams), limits_(std::move(limits)),
+        max_inertia_samples_(max_inertia_samples) {}
 
   std::string service_name() const override {
     return std::string(v1::Estimator::service_full_name());
@@ -61,14 +54,15 @@ class EstimatorService final : public EstimatorBase, public HostedService {
  private:
   WorkerPool* pool_;
   StreamRegistry* streams_;  // FitInertia's admission, idle timeout and sample budget
-  EstimatorServiceOptions options_;
+  api::CallLimits limits_;
+  int64_t max_inertia_samples_;
 };
 
 // tactforce.v1.Audit: AuditModel on the pool (an audit fits many candidate
 // models: tens of milliseconds to seconds).
 class AuditService final : public v1::Audit::CallbackService, public HostedService {
  public:
-  AuditService(WorkerPool* pool, EstimatorServiceOptions options) : pool_(pool), options_(options) {}
+  AuditService(WorkerPool* pool, api::CallLimits limits) : pool_(pool), limits_(std::move(limits)) {}
   std::string service_name() const override { return std::string(v1::Audit::service_full_name()); }
   grpc::Service* grpc_service() override { return this; }
   grpc::ServerUnaryReactor* AuditModel(grpc::CallbackServerContext* context,
@@ -77,7 +71,7 @@ class AuditService final : public v1::Audit::CallbackService, public HostedServi
 
  private:
   WorkerPool* pool_;
-  EstimatorServiceOptions options_;
+  api::CallLimits limits_;
 };
 
 }  // namespace tactforce::server

@@ -44,16 +44,6 @@
 
 namespace tactforce::server {
 
-struct PlannerServiceOptions {
-  int max_contacts = api::CallLimits{}.max_contacts;  // PlanOptions::max_contacts
-  // Ipopt's CPU cap per solve (PlanOptions::ipopt_max_cpu_seconds) and the
-  // work budget of every call (CallLimits::max_call_seconds); 0 = none.
-  int solve_timeout_ms = 10'000;
-  int inline_max_contacts = api::PlanSettings{}.inline_max_contacts;  // 0 = never inline
-  int64_t max_trajectory_work = api::CallLimits{}.max_trajectory_work;  // steps x contacts x cone sides
-  int64_t max_response_bytes = 0;  // the server's --max-message-bytes (0 = unchecked)
-};
-
 // PlanStream is registered raw (its reactor parses each message itself: see
 // planner_service.cc); the unary RPCs are typed.
 using PlannerBase = v1::Planner::WithCallbackMethod_Plan<v1::Planner::WithRawCallbackMethod_PlanStream<
@@ -63,11 +53,12 @@ using PlannerBase = v1::Planner::WithCallbackMethod_Plan<v1::Planner::WithRawCal
 class PlannerService final : public PlannerBase, public HostedService {
  public:
   // `pool`, `ipopt_lane` and `streams` must outlive the service (and the
-  // gRPC server it is hosted on). Work that runs Ipopt (SOLVER_IPOPT,
-  // SOLVER_CROSS_CHECK, in Plan, PlanStream, PlanTrajectory and
-  // PlanFrictionProbe) goes to `ipopt_lane`, everything else to `pool`.
+  // gRPC server it is hosted on). `settings.limits` hold for every Planner
+  // RPC. Work that runs Ipopt (SOLVER_IPOPT, SOLVER_CROSS_CHECK, in Plan,
+  // PlanStream, PlanTrajectory and PlanFrictionProbe) goes to `ipopt_lane`,
+  // everything else to `pool`.
   PlannerService(WorkerPool* pool, WorkerPool* ipopt_lane, StreamRegistry* streams,
-                 PlannerServiceOptions options);
+                 api::PlanSettings settings);
 
   std::string service_name() const override;
   grpc::Service* grpc_service() override { return this; }

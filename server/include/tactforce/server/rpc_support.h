@@ -104,6 +104,9 @@ class RpcGuard final : public api::CallControl {
 // with the call's status and keeps `guard` (the call's CallControl) alive
 // until then.
 api::CallDone FinishUnary(grpc::ServerUnaryReactor* reactor, std::shared_ptr<const RpcGuard> guard);
+// The same when the guard outlives the call on its own (e.g. on the call's
+// arena).
+api::CallDone FinishUnary(grpc::ServerUnaryReactor* reactor);
 
 // Request and response of a unary callback RPC on one protobuf Arena whose
 // first block lives inside the holder: one heap allocation per call instead

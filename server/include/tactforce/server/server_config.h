@@ -5,8 +5,9 @@
 #include <string>
 
 #include "CLI/CLI.hpp"
-#include "tactforce/server/estimator_service.h"
-#include "tactforce/server/planner_service.h"
+#include "tactforce/api/dispatch.h"
+#include "tactforce/api/inertia.h"
+#include "tactforce/api/services.h"
 #include "tactforce/server/server_host.h"
 #include "tactforce/server/stream_registry.h"
 
@@ -17,18 +18,17 @@ struct ServerConfig {
   int workers = 0;  // 0 = std::thread::hardware_concurrency()
   int ipopt_workers = 1;  // the Ipopt lane's threads (Ipopt runs one solve at a time per process)
   int queue = 64;   // solves waiting for a worker, beyond which RESOURCE_EXHAUSTED
-  int max_message_bytes = 4 << 20;
-  int max_contacts = PlannerServiceOptions{}.max_contacts;
-  int solve_timeout_ms = PlannerServiceOptions{}.solve_timeout_ms;
-  int inline_max_contacts = PlannerServiceOptions{}.inline_max_contacts;
-  int64_t max_inertia_samples = EstimatorServiceOptions{}.max_inertia_samples;  // per FitInertia stream
-  int64_t max_trajectory_work = PlannerServiceOptions{}.max_trajectory_work;  // steps x contacts x cone sides
-  int64_t max_audit_samples = EstimatorServiceOptions{}.max_audit_samples;  // per AuditModel request
+  // The limits of every call, filled by the flags: --max-contacts,
+  // --max-trajectory-work, --max-audit-samples, --max-fit-bytes,
+  // --max-message-bytes (max_response_bytes, also the transport's limit) and
+  // --solve-timeout-ms (max_call_seconds and ipopt_max_cpu_seconds).
+  api::CallLimits limits = DefaultCallLimits();
+  int inline_max_contacts = api::PlanSettings{}.inline_max_contacts;
+  int64_t max_inertia_samples = api::kDefaultMaxInertiaSamples;  // per FitInertia stream
   int max_streams = StreamLimits{}.max_streams;
   int stream_idle_timeout_ms = static_cast<int>(StreamLimits{}.idle_timeout.count());
   int64_t max_inflight_samples = StreamLimits{}.max_inflight_samples;
   int64_t max_inflight_bytes = StreamLimits{}.max_inflight_bytes;
-  int64_t max_fit_bytes = EstimatorServiceOptions{}.max_fit_bytes;  // per FitInertia fit
   int max_streams_per_connection = ServerOptions{}.max_streams_per_connection;
   bool reflection = true;
   bool reuse_port = false;
@@ -38,10 +38,16 @@ struct ServerConfig {
   std::string log_level = "warn";
   int grace_ms = 10'000;
 
+  // The server's defaults: api's, with a 4 MiB message limit, 10 s of work
+  // per call and 256 MiB per inertia fit.
+  static api::CallLimits DefaultCallLimits();
+  // --solve-timeout-ms: the one place milliseconds become limits' seconds.
+  void SetSolveTimeoutMs(int ms);
+  int solve_timeout_ms() const;
+
   int EffectiveWorkers() const;
   ServerOptions ToServerOptions() const;
-  PlannerServiceOptions ToPlannerOptions() const;
-  EstimatorServiceOptions ToEstimatorOptions() const;
+  api::PlanSettings ToPlanSettings() const;
   StreamLimits ToStreamLimits() const;
 };
 
