@@ -11,6 +11,7 @@
 #include "progress.h"
 #include "remote_call.h"
 #include "tactforce/api/inertia.h"
+#include "tactforce/io/status_macros.h"
 #include "tactforce/v1/audit.grpc.pb.h"
 #include "tactforce/v1/estimator.grpc.pb.h"
 #include "tactforce/v1/planner.grpc.pb.h"
@@ -47,10 +48,17 @@ absl::Status MeshTooLargeError(const std::string& target, const grpc::Status& st
       " bytes: start tactforce-server with a larger --max-message-bytes, or give a smaller mesh)"));
 }
 
-// The measured data and options as the wire carries them.
-v1::AuditRequest AuditRequestFor(const AuditCall& call) {
-  v1::AuditRequest request;
+// The measured data and options as the wire carries them. AuditRequest has
+// no clock offset: two aligned streams (whose offset the audit refines and
+// whose 'delay' candidate depends on it) are audited locally only.
+absl::StatusOr<v1::AuditRequest> AuditRequestFor(const AuditCall& call) {
   const audit::MeasuredData& data = call.data;
+  if (data.clock_offset_source != audit::MeasuredData::ClockOffset::kNone) {
+    return absl::InvalidArgumentError(
+        "--server: Audit.AuditModel takes one CSV (--csv); two streams (--reference, --reading) carry a clock "
+        "offset the request cannot: audit them in this process (without --server)");
+  }
+  v1::AuditRequest request;
   request.set_source(data.source);
   for (size_t i = 0; i < data.t.size(); ++i) {
     v1::AuditSample* s = request.add_samples();
@@ -122,13 +130,12 @@ absl::StatusOr<InertiaAnswer> RemoteBackend::FitInertia(const InertiaCall& call)
 }
 
 absl::StatusOr<AuditAnswer> RemoteBackend::AuditModel(const AuditCall& call) {
-  absl::StatusOr<v1::AuditResponse> response =
-      CallUnary(server_, audit_, &v1::Audit::Stub::AuditModel, AuditRequestFor(call));
-  if (!response.ok()) return response.status();
+  TF_ASSIGN_OR_RETURN(v1::AuditRequest request, AuditRequestFor(call));
+  TF_ASSIGN_OR_RETURN(v1::AuditResponse response, CallUnary(server_, audit_, &v1::Audit::Stub::AuditModel, request));
   AuditAnswer answer;
-  answer.report_json = response->report_json();
-  answer.summary = response->summary();
-  answer.extended_model_json = response->extended_model_json();
+  answer.report_json = response.report_json();
+  answer.summary = response.summary();
+  answer.extended_model_json = response.extended_model_json();
   return answer;
 }
 

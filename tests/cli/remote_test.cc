@@ -198,12 +198,12 @@ TEST_F(UnreachableTest, EveryRpcCommandTakesServer) {
   // unreachable address is exit 3 naming it.
   const std::string examples = (testing::SourceDir() / "client/examples").string();
   ASSERT_EQ(Tactforce({"simulate", "friction", "--trials", "2", "--out", dir_.Path("fr")}).exit_code, 0);
+  ASSERT_EQ(Tactforce({"simulate", "sensor", "--seconds", "5", "--out", dir_.Path("run")}).exit_code, 0);
   const std::vector<std::vector<std::string>> commands = {
       {"plan", "--request", examples + "/sphere_pinch.json"},
       {"estimate", "--request", examples + "/estimate_request.json"},
       {"friction", dir_.Path("fr/trial0.csv"), "--normal", "0,0,-1"},
-      {"audit", "--reference", examples + "/reference.csv", "--reading", examples + "/reading.csv", "--out",
-       dir_.Path("audit")},
+      {"audit", "--csv", dir_.Path("run/run.csv"), "--out", dir_.Path("audit")},
       {"inertia", "--csv", examples + "/inertia_log.csv"},
   };
   for (std::vector<std::string> args : commands) {
@@ -304,9 +304,12 @@ TEST_F(BackendConventionTest, FrictionAndAuditOnTheServerEqualLocal) {
   ASSERT_EQ(remote.exit_code, 0) << Describe(remote);
   EXPECT_EQ(local.out, remote.out);
 
-  const std::string examples = (testing::SourceDir() / "client/examples").string();
-  const std::vector<std::string> audit = {"audit", "--reference", examples + "/reference.csv", "--reading",
-                                          examples + "/reading.csv", "--max-causes", "1", "--blocks", "0"};
+  ASSERT_EQ(Tactforce({"simulate", "sensor", "--model", (testing::SourceDir() / "client/examples/sensor_model.json").string(),
+                       "--seconds", "10", "--out", dir_.Path("run")})
+                .exit_code,
+            0);
+  const std::vector<std::string> audit = {"audit", "--csv", dir_.Path("run/run.csv"), "--max-causes", "1",
+                                          "--blocks", "0"};
   std::vector<std::string> audit_local = audit, audit_remote = audit;
   audit_local.insert(audit_local.end(), {"--out", dir_.Path("local")});
   audit_remote.insert(audit_remote.end(), {"--out", dir_.Path("remote"), "--server", address()});
@@ -318,6 +321,14 @@ TEST_F(BackendConventionTest, FrictionAndAuditOnTheServerEqualLocal) {
   for (const char* file : {"report.json", "summary.txt", "extended_model.json"}) {
     EXPECT_TRUE(std::filesystem::exists(dir_.Path("remote") + "/" + file)) << file;
   }
+  // Two streams carry a clock offset AuditRequest cannot: refused, naming --server.
+  const std::string examples = (testing::SourceDir() / "client/examples").string();
+  const ProcessResult streams = Tactforce({"audit", "--reference", examples + "/reference.csv", "--reading",
+                                           examples + "/reading.csv", "--out", dir_.Path("streams"), "--server",
+                                           address()});
+  EXPECT_EQ(streams.exit_code, kExitBadInput) << Describe(streams);
+  EXPECT_THAT(streams.err, HasSubstr("--server"));
+  ExpectOneLineError(streams);
 }
 
 class RemoteInertiaTest : public RemoteCliTest {};
