@@ -23,8 +23,8 @@ using namespace tactforce::cli;
 // and each has its own examples.
 constexpr char kFooter[] =
     "Examples:\n"
-    "  tactforce plan --request client/examples/sphere_pinch.json\n"
-    "  cat client/examples/sphere_pinch.json | tactforce plan --request -\n"
+    "  tactforce plan --local --request client/examples/sphere_pinch.json\n"
+    "  cat client/examples/sphere_pinch.json | tactforce plan --local --request -\n"
     "  tactforce plan --server localhost:50051 --request client/examples/sphere_pinch.json\n"
     "  tactforce health --server localhost:50051\n"
     "  tactforce load --target localhost:50051 --rpc plan --concurrency 8 --duration 5\n"

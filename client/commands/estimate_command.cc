@@ -22,9 +22,9 @@ CLI::App* AddEstimateCommand(CLI::App& app, EstimateArgs& args) {
   cmd->footer(
       "Prints the force of every contact (request order, object frame, N) and the\n"
       "residual of every reading. Examples:\n"
-      "  tactforce estimate --request client/examples/estimate_request.json\n"
+      "  tactforce estimate --local --request client/examples/estimate_request.json\n"
       "  tactforce estimate --server localhost:50051 --request client/examples/estimate_request.json --json\n"
-      "  cat client/examples/estimate_request.json | tactforce estimate --request -");
+      "  cat client/examples/estimate_request.json | tactforce estimate --local --request -");
   return cmd;
 }
 

@@ -22,6 +22,7 @@
 #include "tactforce/api/plan_plot.h"
 #include "tactforce/api/services.h"
 #include "tactforce/api/table.h"
+#include "tactforce/io/status_macros.h"
 #include "tactforce/io/text_file.h"
 #include "tactforce/v1/planner.grpc.pb.h"
 
@@ -110,19 +111,31 @@ std::string FormatTrajectoryTable(const v1::TrajectoryResponse& response) {
   return out;
 }
 
+// A request file with a `plan` (TrajectoryRequest, FrictionProbeRequest),
+// the solver flags applied to it; errors name `flag` or the file.
+template <class Request>
+absl::StatusOr<Request> ReadPlanningRequest(const PlanArgs& args, const std::string& path, const std::string& flag) {
+  TF_ASSIGN_OR_RETURN(std::string text, ReadInput(path, flag));
+  Request request;
+  TF_RETURN_IF_ERROR(api::ParseJson(text, &request, InputName(path)));
+  ApplySolverFlags(args, request.mutable_plan());
+  return request;
+}
+
 // --trajectory: the TrajectoryRequest planned by the backend.
 int RunTrajectory(const PlanArgs& args) {
-  absl::StatusOr<std::string> text = ReadInput(args.trajectory_path, "--trajectory");
-  if (!text.ok()) return ReportError(text.status());
-  v1::TrajectoryRequest request;
-  if (absl::Status s = api::ParseJson(*text, &request, InputName(args.trajectory_path)); !s.ok()) return ReportError(s);
-  ApplySolverFlags(args, request.mutable_plan());
+  absl::StatusOr<v1::TrajectoryRequest> request =
+      ReadPlanningRequest<v1::TrajectoryRequest>(args, args.trajectory_path, "--trajectory");
+  if (!request.ok()) return ReportError(request.status());
   absl::StatusOr<std::unique_ptr<Backend>> backend = MakeBackend(args.backend);
   if (!backend.ok()) return ReportError(backend.status());
-  absl::StatusOr<v1::TrajectoryResponse> response = (*backend)->PlanTrajectory(request);
+  absl::StatusOr<v1::TrajectoryResponse> response = (*backend)->PlanTrajectory(*request);
   if (!response.ok()) return ReportError(response.status());
   if (!args.plot_path.empty()) {
-    if (absl::Status s = WritePlot(args.plot_path, api::TrajectorySvg(request, *response, InputName(args.trajectory_path))); !s.ok()) return ReportError(s);
+    const std::string name = InputName(args.trajectory_path);
+    if (absl::Status s = WritePlot(args.plot_path, api::TrajectorySvg(*request, *response, name)); !s.ok()) {
+      return ReportError(s);
+    }
   }
   std::cout << (args.output.json() ? api::ToJson(*response) : FormatTrajectoryTable(*response));
   return std::cout ? kExitOk : kExitFailure;
@@ -150,14 +163,12 @@ std::string FormatProbeTable(const v1::FrictionProbeResponse& response) {
 
 // --friction-probe: the FrictionProbeRequest planned by the backend.
 int RunFrictionProbe(const PlanArgs& args) {
-  absl::StatusOr<std::string> text = ReadInput(args.probe_path, "--friction-probe");
-  if (!text.ok()) return ReportError(text.status());
-  v1::FrictionProbeRequest request;
-  if (absl::Status s = api::ParseJson(*text, &request, InputName(args.probe_path)); !s.ok()) return ReportError(s);
-  ApplySolverFlags(args, request.mutable_plan());
+  absl::StatusOr<v1::FrictionProbeRequest> request =
+      ReadPlanningRequest<v1::FrictionProbeRequest>(args, args.probe_path, "--friction-probe");
+  if (!request.ok()) return ReportError(request.status());
   absl::StatusOr<std::unique_ptr<Backend>> backend = MakeBackend(args.backend);
   if (!backend.ok()) return ReportError(backend.status());
-  absl::StatusOr<v1::FrictionProbeResponse> response = (*backend)->PlanFrictionProbe(request);
+  absl::StatusOr<v1::FrictionProbeResponse> response = (*backend)->PlanFrictionProbe(*request);
   if (!response.ok()) return ReportError(response.status());
   std::cout << (args.output.json() ? api::ToJson(*response) : FormatProbeTable(*response));
   return std::cout ? kExitOk : kExitFailure;
@@ -212,7 +223,7 @@ CLI::App* AddPlanCommand(CLI::App& app, PlanArgs& args) {
       "status), 2 for bad input (the message names the field), 3 when the server\n"
       "cannot be reached, 4 when it did not answer within --deadline-ms, 1 otherwise.\n"
       "Examples:\n"
-      "  tactforce plan --request client/examples/sphere_pinch.json\n"
+      "  tactforce plan --local --request client/examples/sphere_pinch.json\n"
       "  tactforce plan --local --request client/examples/sphere_pinch.json --solver cross-check --json\n"
       "  tactforce plan --server localhost:50051 --request client/examples/sphere_pinch.json --plot plan.svg\n"
       "  tactforce plan --local --trajectory client/examples/wrench_lift_trajectory.json\n"
