@@ -111,4 +111,15 @@ CLI::Option* AddBackendFlags(CLI::App* cmd, BackendArgs* args, const std::string
 // The backend `args` chose.
 absl::StatusOr<std::unique_ptr<Backend>> MakeBackend(const BackendArgs& args);
 
+// One call of `method` on the backend `args` chose (a command's single
+// call): MakeBackend's errors first, then the call's.
+template <class Answer, class Request>
+absl::StatusOr<Answer> CallBackend(const BackendArgs& args,
+                                   absl::StatusOr<Answer> (Backend::*method)(const Request&),
+                                   const Request& request) {
+  absl::StatusOr<std::unique_ptr<Backend>> backend = MakeBackend(args);
+  if (!backend.ok()) return backend.status();
+  return ((**backend).*method)(request);
+}
+
 }  // namespace tactforce::cli

@@ -140,9 +140,7 @@ absl::Status WriteReportFiles(const AuditArgs& args, const AuditAnswer& answer) 
 int RunAuditCommand(const AuditArgs& args) {
   absl::StatusOr<AuditCall> call = BuildAuditCall(args);
   if (!call.ok()) return ReportError(call.status());
-  absl::StatusOr<std::unique_ptr<Backend>> backend = MakeBackend(args.backend);
-  if (!backend.ok()) return ReportError(backend.status());
-  absl::StatusOr<AuditAnswer> answer = (*backend)->AuditModel(*call);
+  absl::StatusOr<AuditAnswer> answer = CallBackend(args.backend, &Backend::AuditModel, *call);
   if (!answer.ok()) return ReportError(answer.status());
   // As `simulate --out`: an earlier report is never mixed with this one.
   if (absl::Status s = PrepareOutputDir(args.out_dir, args.force, audit::AuditReportFileNames(), "--out",

@@ -56,9 +56,8 @@ int RunEstimate(const EstimateArgs& args) {
   if (!text.ok()) return ReportError(text.status());
   v1::EstimateRequest request;
   if (absl::Status s = api::ParseJson(*text, &request, InputName(args.request_path)); !s.ok()) return ReportError(s);
-  absl::StatusOr<std::unique_ptr<Backend>> backend = MakeBackend(args.backend);
-  if (!backend.ok()) return ReportError(backend.status());
-  absl::StatusOr<v1::EstimateResponse> response = (*backend)->EstimateForces(request);
+  absl::StatusOr<v1::EstimateResponse> response =
+      CallBackend(args.backend, &Backend::EstimateForces, request);
   if (!response.ok()) return ReportError(response.status());
   std::cout << (args.output.json() ? api::ToJson(*response) : FormatEstimateTable(request, *response));
   return std::cout ? kExitOk : kExitFailure;

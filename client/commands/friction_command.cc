@@ -113,9 +113,8 @@ std::string FormatFrictionTable(const v1::FrictionResponse& response) {
 int RunFriction(const FrictionArgs& args) {
   absl::StatusOr<v1::FrictionRequest> request = BuildFrictionRequest(args);
   if (!request.ok()) return ReportError(request.status());
-  absl::StatusOr<std::unique_ptr<Backend>> backend = MakeBackend(args.backend);
-  if (!backend.ok()) return ReportError(backend.status());
-  absl::StatusOr<v1::FrictionResponse> response = (*backend)->EstimateFriction(*request);
+  absl::StatusOr<v1::FrictionResponse> response =
+      CallBackend(args.backend, &Backend::EstimateFriction, *request);
   if (!response.ok()) return ReportError(response.status());
   std::cout << (args.output.json() ? api::ToJson(*response) : FormatFrictionTable(*response));
   return std::cout ? kExitOk : kExitFailure;

@@ -388,9 +388,7 @@ int RunInertia(const InertiaArgs& args) {
   call.samples = &*samples;
   call.batch = args.batch;
   call.show_progress = args.progress || ProgressBar::StderrIsTerminal();
-  absl::StatusOr<std::unique_ptr<Backend>> backend = MakeBackend(args.backend);
-  if (!backend.ok()) return ReportError(backend.status());
-  absl::StatusOr<InertiaAnswer> answer = (*backend)->FitInertia(call);
+  absl::StatusOr<InertiaAnswer> answer = CallBackend(args.backend, &Backend::FitInertia, call);
   if (!answer.ok()) return ReportError(answer.status());
   if (!args.plot_path.empty() && mesh) {
     if (absl::Status s = WritePlot(args, *mesh, answer->fit, call.options); !s.ok()) return ReportError(s);

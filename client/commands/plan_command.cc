@@ -127,9 +127,8 @@ int RunTrajectory(const PlanArgs& args) {
   absl::StatusOr<v1::TrajectoryRequest> request =
       ReadPlanningRequest<v1::TrajectoryRequest>(args, args.trajectory_path, "--trajectory");
   if (!request.ok()) return ReportError(request.status());
-  absl::StatusOr<std::unique_ptr<Backend>> backend = MakeBackend(args.backend);
-  if (!backend.ok()) return ReportError(backend.status());
-  absl::StatusOr<v1::TrajectoryResponse> response = (*backend)->PlanTrajectory(*request);
+  absl::StatusOr<v1::TrajectoryResponse> response =
+      CallBackend(args.backend, &Backend::PlanTrajectory, *request);
   if (!response.ok()) return ReportError(response.status());
   if (!args.plot_path.empty()) {
     const std::string name = InputName(args.trajectory_path);
@@ -166,9 +165,8 @@ int RunFrictionProbe(const PlanArgs& args) {
   absl::StatusOr<v1::FrictionProbeRequest> request =
       ReadPlanningRequest<v1::FrictionProbeRequest>(args, args.probe_path, "--friction-probe");
   if (!request.ok()) return ReportError(request.status());
-  absl::StatusOr<std::unique_ptr<Backend>> backend = MakeBackend(args.backend);
-  if (!backend.ok()) return ReportError(backend.status());
-  absl::StatusOr<v1::FrictionProbeResponse> response = (*backend)->PlanFrictionProbe(*request);
+  absl::StatusOr<v1::FrictionProbeResponse> response =
+      CallBackend(args.backend, &Backend::PlanFrictionProbe, *request);
   if (!response.ok()) return ReportError(response.status());
   std::cout << (args.output.json() ? api::ToJson(*response) : FormatProbeTable(*response));
   return std::cout ? kExitOk : kExitFailure;
