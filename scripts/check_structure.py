@@ -6,6 +6,9 @@
    a folder above it, nor a sibling it is not listed with.
 2. Function length: no function in library code is longer than MAX_LINES
    (signature line to closing brace).
+3. Inside client/: client/ (the shared library) includes neither load/ nor
+   commands/, load/ does not include commands/; only main.cc includes the
+   command table.
 
 Usage: check_structure.py [--root DIR] [--longest N]
 Prints every violation as path:line: message and exits 1 if there is one;
@@ -50,6 +53,18 @@ ALLOWED = {
     "examples": {"io", "planner", "estimator", "inertia", "sim", "audit", "v1", "api"},
 }
 
+# Inside client/: its libraries point down too. A file in a folder may
+# include (as "sub/header.h") only the client subfolders listed for it;
+# main.cc walks the command table and may include commands/.
+CLIENT_SUBFOLDERS = ["client/load", "client/commands"]
+CLIENT_ALLOWED = {
+    "client": set(),
+    "client/load": set(),
+    "client/commands": {"client/load"},
+}
+CLIENT_MAIN = "client/main.cc"
+CLIENT_INCLUDE_RE = re.compile(r'^\s*#\s*include\s*"(load|commands)/')
+
 # Library code whose functions must stay short.
 LENGTH_CHECKED = ["io", "planner", "estimator", "sim", "audit", "experiment", "api", "server", "client",
                   "examples"]
@@ -91,6 +106,30 @@ def check_layers(root):
                         errors.append("%s:%d: %s/ may not include tactforce/%s/ (allowed: %s)" % (
                             os.path.relpath(path, root), lineno, lib, used,
                             ", ".join(sorted(ALLOWED.get(lib, set()))) or "nothing"))
+    return errors
+
+
+def client_folder(rel):
+    for sub in CLIENT_SUBFOLDERS:
+        if rel.startswith(sub + "/"):
+            return sub
+    return "client"
+
+
+def check_client_layers(root):
+    errors = []
+    for path in sources(root, "client"):
+        rel = os.path.relpath(path, root)
+        if rel.startswith("client/python/") or rel == CLIENT_MAIN:
+            continue
+        folder = client_folder(rel)
+        with open(path, encoding="utf-8", errors="replace") as f:
+            for lineno, line in enumerate(f, 1):
+                m = CLIENT_INCLUDE_RE.match(line)
+                if m and "client/" + m.group(1) not in CLIENT_ALLOWED[folder]:
+                    errors.append("%s:%d: %s/ may not include client/%s/ (allowed: %s)" % (
+                        rel, lineno, folder, m.group(1),
+                        ", ".join(sorted(CLIENT_ALLOWED[folder])) or "nothing"))
     return errors
 
 
@@ -188,7 +227,7 @@ def main():
     parser.add_argument("--longest", type=int, default=5)
     args = parser.parse_args()
     root = os.path.abspath(args.root)
-    errors = check_layers(root)
+    errors = check_layers(root) + check_client_layers(root)
     length_errors, found = check_lengths(root)
     errors += length_errors
     print("longest functions:")

@@ -22,7 +22,7 @@ using ::testing::Not;
 
 class CliConventionsTest : public CliTest {};
 
-std::string Example(const std::string& name) { return SourceDir() + "/client/examples/" + name; }
+std::string Example(const std::string& name) { return SourceDir().string() + "/client/examples/" + name; }
 
 TEST_F(CliConventionsTest, EveryBadNumericFlagNamesItselfAndExitsTwo) {
   const std::string out = (dir() / "out").string();

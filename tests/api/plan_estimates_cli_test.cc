@@ -28,7 +28,7 @@ class PlanEstimatesCliTest : public testing::CliTest {
  protected:
   // The fit of the shipped inertia example, as `tactforce inertia --json` writes it.
   std::string FitJson() {
-    const std::string csv = testing::SourceDir() +
+    const std::string csv = testing::SourceDir().string() +
                             "/client/examples/inertia_log.csv";
     const testing::CliRun run = Tactforce({"inertia", "--csv", csv, "--json"});
     EXPECT_EQ(run.exit_code, 0) << run.err;

@@ -29,6 +29,7 @@
 #include "tactforce/inertia/density_plot.h"
 #include "tactforce/io/svg.h"
 #include "support/svg_legibility.h"
+#include "support/temp_dir.h"
 
 namespace tactforce {
 namespace {
@@ -193,8 +194,8 @@ TEST(PlotLegibility, AuditPlotsOfADrawnSensorLog) {
   options.downstream_gain = false;
   absl::StatusOr<audit::AuditReport> report = audit::RunAudit(data, options);
   ASSERT_TRUE(report.ok()) << report.status();
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "tactforce_plot_legibility_audit";
-  std::filesystem::remove_all(dir);
+  const tactforce::testing::TempDir temp("tactforce_plot_legibility_audit");
+  const std::filesystem::path dir = temp.path();
   ASSERT_TRUE(audit::WriteAuditReport(*report, dir.string(), "drawn_run.csv").ok());
   for (const char* name : {"reading_vs_reference.svg", "residual_vs_reference.svg", "residual_vs_time.svg"}) {
     std::ifstream in(dir / name);

@@ -13,6 +13,7 @@
 #include "hidden_effects.h"
 #include "absl/strings/str_cat.h"
 #include "tactforce/io/json.h"
+#include "support/temp_dir.h"
 
 namespace tactforce::audit {
 namespace {
@@ -265,8 +266,8 @@ TEST(Report, FormsAndPrandtlIshlinskiiArraysRoundTrip) {
     ASSERT_FALSE(rep->causes.empty());
     EXPECT_EQ(rep->causes[0].effect, EffectName(k.e));
     EXPECT_EQ(rep->causes[0].form, k.name);
-    const fs::path dir = fs::temp_directory_path() / (std::string("tactforce_audit_forms_") + k.name);
-    fs::remove_all(dir);
+    const tactforce::testing::TempDir temp(std::string("tactforce_audit_forms_") + k.name);
+    const fs::path dir = temp.path();
     ASSERT_TRUE(WriteAuditReport(*rep, dir.string()).ok());
     std::ifstream in(dir / "report.json");
     std::stringstream ss;
@@ -311,8 +312,8 @@ TEST(Report, FilesAndExtendedModelRoundTrip) {
   auto rep = RunAudit(hc.data, o);
   ASSERT_TRUE(rep.ok()) << rep.status();
   ASSERT_GE(rep->causes.size(), 2u);
-  const fs::path dir = fs::temp_directory_path() / "tactforce_audit_report_test";
-  fs::remove_all(dir);
+  const tactforce::testing::TempDir temp("tactforce_audit_report_test");
+  const fs::path dir = temp.path();
   ASSERT_TRUE(WriteAuditReport(*rep, dir.string()).ok());
   for (const char* f : {"report.json", "summary.txt", "extended_model.json", "reading_vs_reference.svg",
                         "residual_vs_reference.svg", "residual_vs_time.svg"})
@@ -452,10 +453,10 @@ TEST(RealData, PiezoresistiveTaxelCalibration) {
     EXPECT_GT(rep->causes[0].gain, 0);
     EXPECT_GT(rep->gain, 0);
     EXPECT_LT(rep->nominal_model.gain, 0) << "the ADC reading falls as force rises";
-    const fs::path out = fs::temp_directory_path() / ("tactforce_audit_real_" + entry.path().stem().string());
+    const tactforce::testing::TempDir temp("tactforce_audit_real_" + entry.path().stem().string());
+    const fs::path out = temp.path();
     ASSERT_TRUE(WriteAuditReport(*rep, out.string()).ok());
     EXPECT_TRUE(fs::exists(out / "report.json"));
-    fs::remove_all(out);
   }
   if (files == 0) GTEST_SKIP() << "no CSV files in " << dir;
 }

@@ -8,6 +8,7 @@
 #include "gtest/gtest.h"
 #include "tactforce/audit/measured_data.h"
 #include "tactforce/sim/simulate.h"
+#include "support/temp_dir.h"
 
 namespace tactforce::sim {
 namespace {
@@ -340,8 +341,8 @@ TEST(Simulate, WriterProducesTheAuditFormat) {
   m.effects.hysteresis_width = 0.1;
   auto run = SimulateSensor(m, Short());
   ASSERT_TRUE(run.ok());
-  const auto dir = std::filesystem::temp_directory_path() / "tactforce_sim_writer_test";
-  std::filesystem::remove_all(dir);
+  const tactforce::testing::TempDir temp("tactforce_sim_writer_test");
+  const std::filesystem::path dir = temp.path();
   ASSERT_TRUE(WriteSimRun(*run, dir.string()).ok());
   auto data = audit::ReadMeasuredCsv((dir / "run.csv").string());
   ASSERT_TRUE(data.ok()) << data.status();

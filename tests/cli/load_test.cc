@@ -18,7 +18,7 @@
 
 #include "support/svg_legibility.h"
 #include "absl/strings/str_cat.h"
-#include "cli_test_support.h"
+#include "support/cli_fixture.h"
 #include "tactforce/api/inertia.h"
 #include "tactforce/api/json.h"
 #include "tactforce/inertia/simulate.h"

@@ -16,7 +16,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "cli_test_support.h"
+#include "support/cli_fixture.h"
 #include "tactforce/api/json.h"
 #include "tactforce/io/json.h"
 #include "tactforce/v1/planner.pb.h"

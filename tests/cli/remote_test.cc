@@ -3,13 +3,14 @@
 // exit codes (cli_common.h: 2 invalid, 3 unavailable, 4 deadline exceeded).
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <string>
 #include <vector>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "cli_test_support.h"
+#include "support/cli_fixture.h"
 
 namespace tactforce::cli_testing {
 namespace {
@@ -178,14 +179,42 @@ TEST_F(UnreachableTest, HealthAndLoadAreExit3) {
   ExpectOneLineError(run);
 }
 
-TEST_F(UnreachableTest, PlanUsesTheServerByDefault) {
-  // Without --local and --server the CLI asks localhost:50051. Whatever
-  // listens there (usually nothing), a failure must name that address.
+TEST_F(UnreachableTest, EveryCommandIsLocalByDefault) {
+  // Without --local and --server a command computes in this process
+  // (client/README.md, "Local or server: one convention"): no server is
+  // asked, so none is needed.
   const std::string path = dir_.Write("pinch.json", ExampleRequestJson());
-  const ProcessResult run = Tactforce({"plan", "--json", "--request", path, "--deadline-ms", "2000"});
-  if (run.exit_code != 0) {
-    EXPECT_THAT(run.err, HasSubstr("localhost:50051")) << Describe(run);
+  const ProcessResult plan = Tactforce({"plan", "--json", "--request", path});
+  ASSERT_EQ(plan.exit_code, 0) << Describe(plan);
+  EXPECT_TRUE(ParsePlanResponse(plan.out).ok()) << plan.out;
+  EXPECT_THAT(plan.err, Not(HasSubstr("localhost:50051")));
+  const std::string example = (testing::SourceDir() / "client/examples/estimate_request.json").string();
+  const ProcessResult estimate = Tactforce({"estimate", "--request", example});
+  EXPECT_EQ(estimate.exit_code, 0) << Describe(estimate);
+}
+
+TEST_F(UnreachableTest, EveryRpcCommandTakesServer) {
+  // The same --server flag in every command that makes an RPC: an
+  // unreachable address is exit 3 naming it.
+  const std::string examples = (testing::SourceDir() / "client/examples").string();
+  ASSERT_EQ(Tactforce({"simulate", "friction", "--trials", "2", "--out", dir_.Path("fr")}).exit_code, 0);
+  ASSERT_EQ(Tactforce({"simulate", "sensor", "--seconds", "5", "--out", dir_.Path("run")}).exit_code, 0);
+  const std::vector<std::vector<std::string>> commands = {
+      {"plan", "--request", examples + "/sphere_pinch.json"},
+      {"estimate", "--request", examples + "/estimate_request.json"},
+      {"friction", dir_.Path("fr/trial0.csv"), "--normal", "0,0,-1"},
+      {"audit", "--csv", dir_.Path("run/run.csv"), "--out", dir_.Path("audit")},
+      {"inertia", "--csv", examples + "/inertia_log.csv"},
+  };
+  for (std::vector<std::string> args : commands) {
+    SCOPED_TRACE(args[0]);
+    for (const char* a : {"--server", address_.c_str(), "--deadline-ms", "2000"}) args.push_back(a);
+    const ProcessResult run = Tactforce(args);
+    EXPECT_EQ(run.exit_code, kExitUnavailable) << Describe(run);
+    EXPECT_THAT(run.err, StartsWith("error: cannot reach " + address_));
     ExpectOneLineError(run);
+    args.push_back("--local");
+    EXPECT_EQ(Tactforce(args).exit_code, kExitBadInput) << "--local excludes --server";
   }
 }
 
@@ -256,6 +285,50 @@ TEST(RemoteTlsTest, MutualTls) {
   run = Tactforce({"health", "--server", server->address(), "--deadline-ms", "2000"});
   EXPECT_EQ(run.exit_code, kExitUnavailable) << Describe(run);
   EXPECT_EQ(server->Stop(), 0);
+}
+
+class BackendConventionTest : public RemoteCliTest {};
+
+// friction and audit, which had no --server before, give the server's
+// answer as they give the local one.
+TEST_F(BackendConventionTest, FrictionAndAuditOnTheServerEqualLocal) {
+  ASSERT_EQ(Tactforce({"simulate", "friction", "--trials", "3", "--seed", "4", "--out", dir_.Path("fr")}).exit_code,
+            0);
+  const std::vector<std::string> friction = {"friction", dir_.Path("fr/trial0.csv"), dir_.Path("fr/trial1.csv"),
+                                             dir_.Path("fr/trial2.csv"), "--normal", "0,0,-1"};
+  const ProcessResult local = Tactforce(friction);
+  std::vector<std::string> remote_args = friction;
+  remote_args.insert(remote_args.end(), {"--server", address()});
+  const ProcessResult remote = Tactforce(remote_args);
+  ASSERT_EQ(local.exit_code, 0) << Describe(local);
+  ASSERT_EQ(remote.exit_code, 0) << Describe(remote);
+  EXPECT_EQ(local.out, remote.out);
+
+  ASSERT_EQ(Tactforce({"simulate", "sensor", "--model", (testing::SourceDir() / "client/examples/sensor_model.json").string(),
+                       "--seconds", "10", "--out", dir_.Path("run")})
+                .exit_code,
+            0);
+  const std::vector<std::string> audit = {"audit", "--csv", dir_.Path("run/run.csv"), "--max-causes", "1",
+                                          "--blocks", "0"};
+  std::vector<std::string> audit_local = audit, audit_remote = audit;
+  audit_local.insert(audit_local.end(), {"--out", dir_.Path("local")});
+  audit_remote.insert(audit_remote.end(), {"--out", dir_.Path("remote"), "--server", address()});
+  const ProcessResult a = Tactforce(audit_local, std::chrono::seconds(120));
+  const ProcessResult b = Tactforce(audit_remote, std::chrono::seconds(120));
+  ASSERT_EQ(a.exit_code, 0) << Describe(a);
+  ASSERT_EQ(b.exit_code, 0) << Describe(b);
+  EXPECT_EQ(a.out, b.out);  // the summary
+  for (const char* file : {"report.json", "summary.txt", "extended_model.json"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir_.Path("remote") + "/" + file)) << file;
+  }
+  // Two streams carry a clock offset AuditRequest cannot: refused, naming --server.
+  const std::string examples = (testing::SourceDir() / "client/examples").string();
+  const ProcessResult streams = Tactforce({"audit", "--reference", examples + "/reference.csv", "--reading",
+                                           examples + "/reading.csv", "--out", dir_.Path("streams"), "--server",
+                                           address()});
+  EXPECT_EQ(streams.exit_code, kExitBadInput) << Describe(streams);
+  EXPECT_THAT(streams.err, HasSubstr("--server"));
+  ExpectOneLineError(streams);
 }
 
 class RemoteInertiaTest : public RemoteCliTest {};

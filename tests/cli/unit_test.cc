@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "connection.h"
-#include "latency_histogram.h"
+#include "load/latency_histogram.h"
 
 namespace tactforce::cli {
 namespace {

@@ -62,7 +62,7 @@ TEST_F(CliTest, AuditPerTaxelCsvNamesAMissingColumn) {
 // (exit 2, nothing written or removed) unless --force, which replaces only
 // the report's own files.
 TEST_F(CliTest, AuditOutRefusesAFolderWithFilesUnlessForce) {
-  const std::string examples = SourceDir() + "/client/examples/";
+  const std::string examples = SourceDir().string() + "/client/examples/";
   const std::vector<std::string> audit = {"audit", "--reference", examples + "reference.csv", "--reading",
                                           examples + "reading.csv", "--quiet", "--out"};
   const std::string out = (dir() / "report").string();

@@ -97,7 +97,7 @@ namespace tactforce::testing {
 namespace {
 
 TEST_F(CliTest, PlanTrajectoryLocal) {
-  const std::string example = SourceDir() + "/client/examples/wrench_lift_trajectory.json";
+  const std::string example = SourceDir().string() + "/client/examples/wrench_lift_trajectory.json";
   const CliRun run = Tactforce({"plan", "--json", "--local", "--trajectory", example});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   v1::TrajectoryResponse r;

@@ -126,7 +126,7 @@ TEST_F(ChainCliTest, JsonHasTheContractFields) {
 }
 
 TEST_F(ChainCliTest, BadInputExits2NamingTheFlag) {
-  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+  const std::vector<testing::BadFlagCase> cases = {
       {{"--objects", "banana"}, "--objects"},
       {{"--trials", "0"}, "--trials"},
       {{"--seeds", "0"}, "--seeds"},
@@ -135,13 +135,7 @@ TEST_F(ChainCliTest, BadInputExits2NamingTheFlag) {
       {{"--confidence", "-1"}, "--confidence"},
       {{"--fit-method", "guess"}, "--fit-method"},
   };
-  for (const auto& [flags, name] : cases) {
-    std::vector<std::string> args = {"experiment", "chain", "--no-progress"};
-    args.insert(args.end(), flags.begin(), flags.end());
-    auto r = Tactforce(args);
-    ExpectBadInput(r);
-    EXPECT_NE(r.err.find(name), std::string::npos) << flags[0] << ": " << r.err;
-  }
+  ExpectBadFlags({"experiment", "chain", "--no-progress"}, cases);
 }
 
 }  // namespace

@@ -197,7 +197,7 @@ TEST_F(ProbeCliTest, TableShowsThePapersMedian) {
 
 TEST_F(ProbeCliTest, BadInputExits2NamingTheFlag) {
   const auto neg = Write("neg.json", R"({"size": [0.07, 0.05, 0.05], "mass": -0.12})");
-  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+  const std::vector<testing::BadFlagCase> cases = {
       {{"--object", "banana"}, "--object"},
       {{"--object", neg.string()}, "mass"},
       {{"--object", (dir() / "missing.json").string()}, "missing.json"},
@@ -209,13 +209,7 @@ TEST_F(ProbeCliTest, BadInputExits2NamingTheFlag) {
       {{"--admittance-gain", "2"}, "--admittance-gain"},
       {{"--pre-slip", "guess"}, "--pre-slip"},
   };
-  for (const auto& [flags, name] : cases) {
-    std::vector<std::string> args = {"experiment", "probe"};
-    args.insert(args.end(), flags.begin(), flags.end());
-    auto r = Tactforce(args);
-    ExpectBadInput(r);
-    EXPECT_NE(r.err.find(name), std::string::npos) << flags[0] << ": " << r.err;
-  }
+  ExpectBadFlags({"experiment", "probe"}, cases);
 }
 
 }  // namespace

@@ -28,6 +28,7 @@
 #include "absl/strings/str_format.h"
 #include "gtest/gtest.h"
 #include "tactforce/io/mesh.h"
+#include "support/temp_dir.h"
 
 namespace tactforce::io {
 namespace {
@@ -185,13 +186,8 @@ std::string WithCount(const std::string& ply, const std::string& name, uint64_t 
 
 class MeshRead : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("tactforce_mesh_read_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
+  tactforce::testing::TempDir temp_{"tactforce_mesh_read"};
+  fs::path dir_ = temp_.path();
 };
 
 // ------------------------------------------------------------ valid files

@@ -10,6 +10,7 @@
 #include "gtest/gtest.h"
 #include "tactforce/io/csv.h"
 #include "tactforce/io/mesh.h"
+#include "support/temp_dir.h"
 
 namespace tactforce::io {
 namespace {
@@ -18,14 +19,9 @@ namespace fs = std::filesystem;
 
 class IoTextFile : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("tactforce_io_text_file_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
   std::string Path(const std::string& name) const { return (dir_ / name).string(); }
-  fs::path dir_;
+  tactforce::testing::TempDir temp_{"tactforce_io_text_file"};
+  fs::path dir_ = temp_.path();
 };
 
 TEST_F(IoTextFile, ReadsBackExactlyTheBytesWritten) {

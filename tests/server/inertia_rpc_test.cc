@@ -20,6 +20,7 @@
 #include "tactforce/v1/estimator.grpc.pb.h"
 #include "request_builders.h"
 #include "test_support.h"
+#include "support/temp_dir.h"
 
 namespace tactforce::testing {
 namespace {
@@ -262,8 +263,9 @@ TEST_F(InertiaRpcMessageLimitTest, OversizeMeshIsRefusedAndTheServerKeepsServing
   EXPECT_TRUE(response.density_realizable());
 
   // The CLI: the same refusal, with the flag to raise; exit code 1.
-  std::string pattern = (fs::temp_directory_path() / "tactforce_mesh.XXXXXX").string();
-  ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+  const TempDir temp("tactforce_mesh");
+  const std::string pattern = temp.path().string();
+  ASSERT_FALSE(pattern.empty());
   ASSERT_TRUE(inertia::WriteSimulation(sim, pattern + "/log.csv", pattern + "/truth.json").ok());
   std::ofstream(pattern + "/big.obj") << ObjText(sim.object.mesh, 100'000);
   const ProcessResult cli = RunProcess({BinaryPath("tactforce").string(), "inertia", "--csv", pattern + "/log.csv",
@@ -273,7 +275,6 @@ TEST_F(InertiaRpcMessageLimitTest, OversizeMeshIsRefusedAndTheServerKeepsServing
   EXPECT_NE(cli.err.find("65536"), std::string::npos) << cli.err;
   EXPECT_NE(cli.err.find("--max-message-bytes"), std::string::npos) << cli.err;
   EXPECT_NE(cli.err.find("big.obj"), std::string::npos) << cli.err;
-  fs::remove_all(pattern);
 
   const grpc::Status again = StreamInertia(*stub, sim.samples, DensityOptions(sim), 50, &response);
   EXPECT_TRUE(again.ok()) << again.error_message();

@@ -15,6 +15,7 @@
 #include "tactforce/api/json.h"
 #include "tactforce/inertia/samples.h"
 #include "tactforce/inertia/simulate.h"
+#include "support/temp_dir.h"
 #include "test_support.h"
 
 namespace tactforce::testing {
@@ -64,14 +65,14 @@ TEST_F(PythonClientTest, PlansAJsonFileOverAStreamAndPrintsATable) {
 }
 
 TEST_F(PythonClientTest, ReportsInvalidRequestsAndUnreachableServers) {
-  std::string pattern = (fs::temp_directory_path() / "tactforce_py.XXXXXX").string();
-  ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+  const TempDir temp("tactforce_py");
+  const std::string pattern = temp.path().string();
+  ASSERT_FALSE(pattern.empty());
   const fs::path bad = fs::path(pattern) / "bad.json";
   std::ofstream(bad) << R"({"object": {"mass": 0.1}, "contacts": [{"normal": {}}]})";
   ProcessResult run = Python({"--server", server_->address(), "--request", bad.string()});
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_THAT(run.err, HasSubstr("INVALID_ARGUMENT: contacts[0].normal: zero length"));
-  fs::remove_all(pattern);
 
   const std::string address = server_->address();
   // Close our idle connection first: an idle C-core client answers the
@@ -108,8 +109,9 @@ TEST_F(PythonClientTest, HealthStubsImportBesideTheRealGrpc) {
 // batches; its answer equals the in-process fit of the same file, and a bad
 // row is reported with its line before anything wrong reaches the server.
 TEST_F(PythonClientTest, StreamsAnInertiaCsvLikeTheCppFit) {
-  std::string pattern = (fs::temp_directory_path() / "tactforce_py.XXXXXX").string();
-  ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+  const TempDir temp("tactforce_py");
+  const std::string pattern = temp.path().string();
+  ASSERT_FALSE(pattern.empty());
   inertia::SimulationOptions o;
   o.duration = 3.0;
   o.noise.force_sigma = 0.3;
@@ -145,7 +147,6 @@ TEST_F(PythonClientTest, StreamsAnInertiaCsvLikeTheCppFit) {
   run = Python({"--server", server_->address(), "--csv", pattern + "/bad.csv"}, "client/python/inertia_client.py");
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_THAT(run.err, HasSubstr("bad.csv:3: column 'py': not a number"));
-  fs::remove_all(pattern);
 }
 
 // --mesh: the mesh file's bytes go in the first message (format from the
@@ -153,8 +154,9 @@ TEST_F(PythonClientTest, StreamsAnInertiaCsvLikeTheCppFit) {
 // in-process fit with the same MeshInput. A descriptor JSON carries the
 // placement; bad flags are refused before any call.
 TEST_F(PythonClientTest, SendsAMeshForADensityFit) {
-  std::string pattern = (fs::temp_directory_path() / "tactforce_py.XXXXXX").string();
-  ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+  const TempDir temp("tactforce_py");
+  const std::string pattern = temp.path().string();
+  ASSERT_FALSE(pattern.empty());
   inertia::SimulationOptions o;
   o.object = "box";
   o.mode = inertia::SimulationMode::kWristWrench;
@@ -229,7 +231,6 @@ TEST_F(PythonClientTest, SendsAMeshForADensityFit) {
                "client/python/inertia_client.py");
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_THAT(run.err, HasSubstr("INVALID_ARGUMENT: options.mesh: open.obj: 3 boundary edges"));
-  fs::remove_all(pattern);
 }
 
 class PythonClientMessageLimitTest : public PythonClientTest {
@@ -240,8 +241,9 @@ class PythonClientMessageLimitTest : public PythonClientTest {
 // A mesh over the server's message limit: RESOURCE_EXHAUSTED (exit 1) with
 // the flag that raises it.
 TEST_F(PythonClientMessageLimitTest, OversizeMeshNamesTheServersLimit) {
-  std::string pattern = (fs::temp_directory_path() / "tactforce_py.XXXXXX").string();
-  ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+  const TempDir temp("tactforce_py");
+  const std::string pattern = temp.path().string();
+  ASSERT_FALSE(pattern.empty());
   inertia::SimulationOptions o;
   o.object = "box";
   o.duration = 2.0;
@@ -266,7 +268,6 @@ TEST_F(PythonClientMessageLimitTest, OversizeMeshNamesTheServersLimit) {
                "client/python/inertia_client.py");
   EXPECT_EQ(run.exit_code, 0) << run.err;
   EXPECT_THAT(run.out, HasSubstr("density-realizable: yes"));
-  fs::remove_all(pattern);
 }
 
 }  // namespace

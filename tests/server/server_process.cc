@@ -30,12 +30,6 @@ std::string ReadAll(const fs::path& path) {
   return s.str();
 }
 
-fs::path MakeTempDir(const char* stem) {
-  std::string pattern = (fs::temp_directory_path() / (std::string(stem) + ".XXXXXX")).string();
-  if (mkdtemp(pattern.data()) == nullptr) return {};
-  return pattern;
-}
-
 int DecodeWaitStatus(int status) {
   if (WIFEXITED(status)) return WEXITSTATUS(status);
   if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
@@ -90,13 +84,14 @@ fs::path SourceDir() {
 }
 
 ProcessResult RunProcess(const std::vector<std::string>& argv_in, const std::vector<std::string>& env_extra,
-               std::chrono::milliseconds timeout) {
+               std::chrono::milliseconds timeout, const std::string& stdin_path) {
   ProcessResult run;
-  const fs::path dir = MakeTempDir("tactforce_run");
+  const TempDir temp("tactforce_run");
+  const fs::path dir = temp.path();
   const fs::path out = dir / "stdout", err = dir / "stderr";
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 0, stdin_path.c_str(), O_RDONLY, 0);
   posix_spawn_file_actions_addopen(&actions, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
   posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
   std::vector<std::string> args = argv_in;
@@ -107,7 +102,6 @@ ProcessResult RunProcess(const std::vector<std::string>& argv_in, const std::vec
   posix_spawn_file_actions_destroy(&actions);
   if (rc != 0) {
     run.err = std::string("posix_spawn failed: ") + std::strerror(rc);
-    fs::remove_all(dir);
     return run;
   }
   std::optional<int> code = WaitPid(pid, timeout);
@@ -119,14 +113,14 @@ ProcessResult RunProcess(const std::vector<std::string>& argv_in, const std::vec
   run.exit_code = code.value_or(-1);
   run.out = ReadAll(out);
   run.err += ReadAll(err);
-  fs::remove_all(dir);
   return run;
 }
 
 std::unique_ptr<ServerProcess> ServerProcess::Start(const std::vector<std::string>& flags,
                                                     std::string* error) {
   std::unique_ptr<ServerProcess> server(new ServerProcess());
-  server->dir_ = MakeTempDir("tactforce_server");
+  server->temp_ = std::make_unique<TempDir>("tactforce_server");
+  server->dir_ = server->temp_->path();
   const fs::path binary = BinaryPath("tactforce-server");
   if (!fs::exists(binary)) {
     *error = "no server binary at " + binary.string();
@@ -196,10 +190,6 @@ ServerProcess::~ServerProcess() {
     WaitExit(std::chrono::seconds(10));
   }
   if (stdout_fd_ >= 0) close(stdout_fd_);
-  if (!dir_.empty()) {
-    std::error_code ignored;
-    fs::remove_all(dir_, ignored);
-  }
 }
 
 void ServerProcess::Signal(int signal_number) const {

@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "support/temp_dir.h"
+
 namespace tactforce::testing {
 
 struct ProcessResult {
@@ -26,10 +28,12 @@ std::filesystem::path BinaryPath(const std::string& name);
 // $TACTFORCE_SOURCE_DIR, or the source tree this was built from.
 std::filesystem::path SourceDir();
 
-// Runs `argv` to completion (stdin /dev/null), capturing output; `env`
-// entries ("K=V") are added to the environment. Kills it after `timeout`.
+// Runs `argv` to completion (stdin from `stdin_path`), capturing output;
+// `env` entries ("K=V") are added to the environment. Kills it after
+// `timeout`.
 ProcessResult RunProcess(const std::vector<std::string>& argv, const std::vector<std::string>& env = {},
-               std::chrono::milliseconds timeout = std::chrono::seconds(30));
+               std::chrono::milliseconds timeout = std::chrono::seconds(30),
+               const std::string& stdin_path = "/dev/null");
 
 class ServerProcess {
  public:
@@ -58,6 +62,7 @@ class ServerProcess {
   pid_t pid_ = -1;
   int stdout_fd_ = -1;
   std::optional<int> exit_code_;
+  std::unique_ptr<TempDir> temp_;  // removed with the process object
   std::filesystem::path dir_;
   std::string address_;
 };

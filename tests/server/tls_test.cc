@@ -11,6 +11,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "support/temp_dir.h"
 #include "test_support.h"
 
 namespace tactforce::testing {
@@ -30,9 +31,8 @@ class Certificates {
  public:
   // Returns an empty string on success, else what failed.
   std::string Make() {
-    std::string pattern = (fs::temp_directory_path() / "tactforce_tls.XXXXXX").string();
-    if (mkdtemp(pattern.data()) == nullptr) return "mkdtemp failed";
-    dir_ = pattern;
+    if (temp_.path().empty()) return "mkdtemp failed";
+    dir_ = temp_.path();
     std::ofstream(dir_ / "server.ext")
         << "subjectAltName=DNS:localhost,IP:127.0.0.1\nextendedKeyUsage=serverAuth\n";
     std::ofstream(dir_ / "client.ext") << "extendedKeyUsage=clientAuth\n";
@@ -51,13 +51,6 @@ class Certificates {
     if (std::string e = Leaf("client", "tactforce-test-client", "ca", "client.ext"); !e.empty())
       return e;
     return Leaf("rogue-client", "tactforce-rogue-client", "rogue-ca", "client.ext");
-  }
-
-  ~Certificates() {
-    if (!dir_.empty()) {
-      std::error_code ignored;
-      fs::remove_all(dir_, ignored);
-    }
   }
 
   std::string Path(const std::string& name) const { return (dir_ / name).string(); }
@@ -97,6 +90,7 @@ class Certificates {
                     Path(name + ".crt"), "-extfile", Path(ext)});
   }
 
+  TempDir temp_{"tactforce_tls"};
   fs::path dir_;
 };
 
