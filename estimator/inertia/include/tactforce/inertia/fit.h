@@ -156,7 +156,7 @@ struct FactorGraphOptions {
 };
 
 // DENSITY.
-struct DensityOptions {
+struct DensityFitOptions {
   RegionOptions regions;
   // Strength of the smoothness regulariser between neighbouring regions
   // (relative units, see README); < 0: chosen by held-out time blocks.
@@ -190,7 +190,7 @@ struct InertiaOptions {
   BaselineLsOptions baseline_ls;
   ConstrainedOptions constrained;
   FactorGraphOptions factor_graph;
-  DensityOptions density;
+  DensityFitOptions density;
 
   // CONSTRAINED and DENSITY (their shared generalised least squares):
   // local-polynomial window (samples, odd) for kinematics from poses or for
