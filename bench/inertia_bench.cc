@@ -227,7 +227,7 @@ int main(int argc, char** argv) {
         Run(sim->samples, sim->truth.params, o, 0.0, st, a.fg);
         InertiaOptions og = o;
         og.method = InertiaMethod::kBaselineLs;
-        og.savitzky_golay = true;
+        og.baseline_ls.savitzky_golay = true;
         absl::StatusOr<InertiaFit> f = FitInertia(sim->samples, og);
         if (f.ok()) sg.Add(CompareInertia(sim->truth.params, f->params), 0.0, *f);
         std::fprintf(stderr, ".");

@@ -105,7 +105,7 @@ void FitInto(const InertiaSamples& s, const InertialParameters& truth, InertiaOp
   if (v.mesh) {
     o.mesh = mesh;
     o.mesh_name = mesh_name;
-    o.regions.scheme = v.regions;
+    o.density.regions.scheme = v.regions;
   }
   absl::StatusOr<InertiaFit> f = FitInertia(s, o);
   if (!f.ok()) {
@@ -277,7 +277,7 @@ int main(int argc, char** argv) {
         o.method = InertiaMethod::kDensity;
         o.mesh = std::make_shared<const io::TriangleMesh>(m->mesh);
         o.mesh_name = m->name;
-        o.regions = ro;
+        o.density.regions = ro;
         absl::StatusOr<InertiaFit> fit = FitInertia(s, o);
         double c3 = CpuSeconds();
         l.push_back(c1 - c0), b.push_back(c2 - c1), f.push_back(c3 - c2);

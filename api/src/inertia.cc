@@ -289,7 +289,7 @@ absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::Inerti
   out.noise.angular_velocity_sigma = n.angular_velocity_sigma();
   out.noise.linear_acceleration_sigma = n.linear_acceleration_sigma();
   out.noise.angular_acceleration_sigma = n.angular_acceleration_sigma();
-  out.savitzky_golay = o.savitzky_golay();
+  out.baseline_ls.savitzky_golay = o.savitzky_golay();
   // uint32 counts past int's range are named here, not wrapped negative.
   for (const auto& [value, field] : {std::pair{o.savitzky_golay_window(), "savitzky_golay_window"},
                                      std::pair{o.smoothing_window(), "smoothing_window"},
@@ -299,34 +299,35 @@ absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::Inerti
                                                      std::numeric_limits<int>::max(), ")"));
     }
   }
-  if (o.savitzky_golay_window() != 0) out.savitzky_golay_window = static_cast<int>(o.savitzky_golay_window());
+  if (o.savitzky_golay_window() != 0)
+    out.baseline_ls.savitzky_golay_window = static_cast<int>(o.savitzky_golay_window());
   out.smoothing_window = static_cast<int>(o.smoothing_window());
   if (o.max_iterations() != 0) out.max_iterations = static_cast<int>(o.max_iterations());
-  if (o.has_regularization()) out.regularization = o.regularization();
+  if (o.has_regularization()) out.constrained.regularization = o.regularization();
   absl::StatusOr<inertia::RegionScheme> scheme = RegionSchemeFromProto(o.regions());
   if (!scheme.ok()) return scheme.status();
-  out.regions.scheme = *scheme;
+  out.density.regions.scheme = *scheme;
   absl::StatusOr<inertia::FactorGraphVariant> variant = FactorGraphVariantFromProto(o.fg_variant());
   if (!variant.ok()) return variant.status();
-  out.fg_variant = *variant;
+  out.factor_graph.variant = *variant;
   if (o.target_regions() != 0) {
     if (o.target_regions() > static_cast<uint32_t>(inertia::kMaxTargetRegions))
       return absl::InvalidArgumentError(
           absl::StrCat("options.target_regions: must be in 1..", inertia::kMaxTargetRegions,
                        ", 0 = 12 (got ", o.target_regions(), ")"));
-    out.regions.target_regions = static_cast<int>(o.target_regions());
+    out.density.regions.target_regions = static_cast<int>(o.target_regions());
   }
-  if (o.has_density_regularization()) out.density_regularization = o.density_regularization();
-  if (o.has_mesh_prior_weight()) out.mesh_prior_weight = o.mesh_prior_weight();
+  if (o.has_density_regularization()) out.density.regularization = o.density_regularization();
+  if (o.has_mesh_prior_weight()) out.constrained.mesh_prior_weight = o.mesh_prior_weight();
   if (o.has_contradiction_ratio()) {
     if (o.contradiction_ratio() != 0)
       return absl::InvalidArgumentError(absl::StrCat(
           "options.contradiction_ratio: ", o.contradiction_ratio(),
           " is no longer used (only 0, which disables the mesh test); set options.mesh_tolerance instead "
           "(first-order Riemannian, default ", inertia::kDefaultMeshTolerance, ", 0 disables)"));
-    out.mesh_tolerance = 0;
+    out.density.mesh_tolerance = 0;
   }
-  if (o.has_mesh_tolerance()) out.mesh_tolerance = o.mesh_tolerance();
+  if (o.has_mesh_tolerance()) out.density.mesh_tolerance = o.mesh_tolerance();
   if (o.has_mesh()) {
     absl::StatusOr<ObjectMesh> mesh = MeshFromProto(o.mesh());
     if (!mesh.ok()) return mesh.status();

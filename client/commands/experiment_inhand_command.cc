@@ -95,7 +95,7 @@ std::vector<MethodRow> FitAll(const ex::InHandRun& run) {
       {"density", inertia::InertiaMethod::kDensity}};
   for (const auto& [name, method] : methods) {
     inertia::InertiaOptions o = ex::InHandFitOptions(run, method);
-    o.savitzky_golay = absl::EndsWith(name, "sg51");
+    o.baseline_ls.savitzky_golay = absl::EndsWith(name, "sg51");
     MethodRow r{name, inertia::FitInertia(run.samples, o), {}};
     if (r.fit.ok()) r.errors = inertia::CompareInertia(run.truth, r.fit->params);
     rows.push_back(std::move(r));

@@ -60,14 +60,14 @@ inertia::InertiaOptions AblationOptions(AblationMethod m, const AblationData& da
     case AblationMethod::kBaselineLs: o.method = InertiaMethod::kBaselineLs; break;
     case AblationMethod::kBaselineLsSg:
       o.method = InertiaMethod::kBaselineLs;
-      o.savitzky_golay = true;
-      o.savitzky_golay_window = 51;
+      o.baseline_ls.savitzky_golay = true;
+      o.baseline_ls.savitzky_golay_window = 51;
       break;
-    case AblationMethod::kBaselineFg: o.fg_variant = FactorGraphVariant::kBaselineFg; break;
-    case AblationMethod::kFgNoC: o.fg_variant = FactorGraphVariant::kNoConstraint; break;
-    case AblationMethod::kFgC: o.fg_variant = FactorGraphVariant::kConstraint; break;
+    case AblationMethod::kBaselineFg: o.factor_graph.variant = FactorGraphVariant::kBaselineFg; break;
+    case AblationMethod::kFgNoC: o.factor_graph.variant = FactorGraphVariant::kNoConstraint; break;
+    case AblationMethod::kFgC: o.factor_graph.variant = FactorGraphVariant::kConstraint; break;
     case AblationMethod::kFgCG:
-      o.fg_variant = FactorGraphVariant::kConstraintPrior;
+      o.factor_graph.variant = FactorGraphVariant::kConstraintPrior;
       o.prior = inertia::InertiaPrior{data.truth, 1.0};  // the paper: "the prior ... the ground truth"
       break;
     case AblationMethod::kConstrained: o.method = InertiaMethod::kConstrained; break;

@@ -7,63 +7,58 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "tactforce/io/enum_names.h"
 
 namespace tactforce::experiment {
 
-const char* ToString(GraspObject o) {
-  switch (o) {
-    case GraspObject::kSphere: return "sphere";
-    case GraspObject::kWrench: return "wrench";
-    case GraspObject::kCylinder: return "cylinder";
-    case GraspObject::kCube: return "cube";
-  }
-  return "?";
-}
+namespace {
+
+// Enum names (io/enum_names.h); parse errors name the config field.
+constexpr io::EnumNameRow<GraspObject> kObjectNames[] = {{GraspObject::kSphere, "sphere"},
+                                                         {GraspObject::kWrench, "wrench"},
+                                                         {GraspObject::kCylinder, "cylinder"},
+                                                         {GraspObject::kCube, "cube"}};
+constexpr io::EnumNameRow<Feedback> kFeedbackNames[] = {{Feedback::kRaw, "raw"}, {Feedback::kEstimated, "estimated"}};
+constexpr io::EnumNameRow<Admittance> kAdmittanceNames[] = {{Admittance::kFull, "full"},
+                                                            {Admittance::kNormal, "normal"}};
+constexpr io::EnumNameRow<SensorArray> kSensorNames[] = {{SensorArray::kTaxel, "taxel"},
+                                                         {SensorArray::kChannel, "channel"}};
+constexpr io::EnumNameRow<Protocol> kProtocolNames[] = {{Protocol::kShort, "short"}, {Protocol::kPaper, "paper"}};
+
+}  // namespace
+
+const char* ToString(GraspObject o) { return io::EnumName(kObjectNames, o); }
 
 absl::StatusOr<GraspObject> ParseGraspObject(std::string_view name) {
-  for (GraspObject o : AllGraspObjects())
-    if (name == ToString(o)) return o;
-  return absl::InvalidArgumentError(
-      absl::StrCat("object: unknown '", std::string(name), "' (expected sphere, wrench, cylinder or cube)"));
+  return io::ParseEnumName(kObjectNames, name, "object");
 }
 
 std::vector<GraspObject> AllGraspObjects() {
   return {GraspObject::kSphere, GraspObject::kWrench, GraspObject::kCylinder, GraspObject::kCube};
 }
 
-const char* ToString(Feedback f) { return f == Feedback::kRaw ? "raw" : "estimated"; }
+const char* ToString(Feedback f) { return io::EnumName(kFeedbackNames, f); }
 
 absl::StatusOr<Feedback> ParseFeedback(std::string_view name) {
-  if (name == "raw") return Feedback::kRaw;
-  if (name == "estimated") return Feedback::kEstimated;
-  return absl::InvalidArgumentError(absl::StrCat("feedback: unknown '", std::string(name), "' (expected raw or estimated)"));
+  return io::ParseEnumName(kFeedbackNames, name, "feedback");
 }
 
-const char* ToString(Admittance a) { return a == Admittance::kFull ? "full" : "normal"; }
+const char* ToString(Admittance a) { return io::EnumName(kAdmittanceNames, a); }
 
 absl::StatusOr<Admittance> ParseAdmittance(std::string_view name) {
-  if (name == "full") return Admittance::kFull;
-  if (name == "normal") return Admittance::kNormal;
-  return absl::InvalidArgumentError(
-      absl::StrCat("admittance: unknown '", std::string(name), "' (expected full or normal)"));
+  return io::ParseEnumName(kAdmittanceNames, name, "admittance");
 }
 
-const char* ToString(SensorArray s) { return s == SensorArray::kChannel ? "channel" : "taxel"; }
+const char* ToString(SensorArray s) { return io::EnumName(kSensorNames, s); }
 
 absl::StatusOr<SensorArray> ParseSensorArray(std::string_view name) {
-  if (name == "channel") return SensorArray::kChannel;
-  if (name == "taxel") return SensorArray::kTaxel;
-  return absl::InvalidArgumentError(
-      absl::StrCat("sensors: unknown '", std::string(name), "' (expected taxel or channel)"));
+  return io::ParseEnumName(kSensorNames, name, "sensors");
 }
 
-const char* ToString(Protocol p) { return p == Protocol::kShort ? "short" : "paper"; }
+const char* ToString(Protocol p) { return io::EnumName(kProtocolNames, p); }
 
 absl::StatusOr<Protocol> ParseProtocol(std::string_view name) {
-  if (name == "short") return Protocol::kShort;
-  if (name == "paper") return Protocol::kPaper;
-  return absl::InvalidArgumentError(
-      absl::StrCat("protocol: unknown '", std::string(name), "' (expected short or paper)"));
+  return io::ParseEnumName(kProtocolNames, name, "protocol");
 }
 
 PhaseDurations ProtocolPhases(Protocol p) {

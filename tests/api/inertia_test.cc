@@ -247,23 +247,23 @@ TEST(InertiaMeshInput, PlacedCadMeshGivesTheObjectFrameBoxAndADensityFit) {
   ASSERT_TRUE(converted.ok()) << converted.status();
   EXPECT_EQ(converted->method, inertia::InertiaMethod::kDensity);
   EXPECT_EQ(converted->mesh_name, "box.obj");
-  EXPECT_EQ(converted->regions.scheme, inertia::RegionScheme::kGrid);
-  EXPECT_EQ(converted->regions.target_regions, 8);
-  EXPECT_LT(converted->density_regularization, 0);  // automatic
+  EXPECT_EQ(converted->density.regions.scheme, inertia::RegionScheme::kGrid);
+  EXPECT_EQ(converted->density.regions.target_regions, 8);
+  EXPECT_LT(converted->density.regularization, 0);  // automatic
   options.set_density_regularization(0.5);
   options.set_mesh_prior_weight(2.0);
   options.set_mesh_tolerance(0.05);
   converted = InertiaOptionsFromProto(options);
   ASSERT_TRUE(converted.ok()) << converted.status();
-  EXPECT_EQ(converted->density_regularization, 0.5);
-  EXPECT_EQ(converted->mesh_prior_weight, 2.0);
-  EXPECT_EQ(converted->mesh_tolerance, 0.05);
+  EXPECT_EQ(converted->density.regularization, 0.5);
+  EXPECT_EQ(converted->constrained.mesh_prior_weight, 2.0);
+  EXPECT_EQ(converted->density.mesh_tolerance, 0.05);
   options.clear_mesh_tolerance();
   // The replaced ratio: 0 still disables the mesh test, any other value is refused by name.
   options.set_contradiction_ratio(0.0);
   converted = InertiaOptionsFromProto(options);
   ASSERT_TRUE(converted.ok()) << converted.status();
-  EXPECT_EQ(converted->mesh_tolerance, 0.0);
+  EXPECT_EQ(converted->density.mesh_tolerance, 0.0);
   options.set_contradiction_ratio(1.2);
   converted = InertiaOptionsFromProto(options);
   ASSERT_FALSE(converted.ok());

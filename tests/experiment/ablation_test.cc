@@ -92,9 +92,9 @@ TEST(Ablation, OptionsMatchTheMethodNames) {
     EXPECT_EQ(o.prior.has_value(), m == AblationMethod::kFgCG);
     EXPECT_EQ(o.mesh != nullptr, m == AblationMethod::kDensity);
     EXPECT_FALSE(o.hull.empty());  // the mesh's vertices
-    EXPECT_EQ(o.savitzky_golay, m == AblationMethod::kBaselineLsSg);
+    EXPECT_EQ(o.baseline_ls.savitzky_golay, m == AblationMethod::kBaselineLsSg);
     if (o.method == inertia::InertiaMethod::kFactorGraph)
-      EXPECT_EQ(std::string(ToString(o.fg_variant)), ToString(m));  // the variants' own names
+      EXPECT_EQ(std::string(ToString(o.factor_graph.variant)), ToString(m));  // the variants' own names
   }
 }
 

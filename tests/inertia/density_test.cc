@@ -250,8 +250,8 @@ TEST(DensityFit, RecoversTwoMaterialsWithin2Percent) {
     InertiaOptions o = DensityOptions(box.mesh);
     GiveNoise("low", &o);
     if (!colours) {
-      o.regions.scheme = RegionScheme::kGrid;
-      o.regions.target_regions = 2;  // the grid's two cells are the two halves
+      o.density.regions.scheme = RegionScheme::kGrid;
+      o.density.regions.target_regions = 2;  // the grid's two cells are the two halves
     }
     absl::StatusOr<InertiaFit> fit = FitInertia(sim->samples, o);
     ASSERT_TRUE(fit.ok()) << fit.status();
@@ -273,7 +273,7 @@ TEST(DensityFit, UniformBoxFromNoiseFreeDataIsExact) {
   ASSERT_TRUE(sim.ok()) << sim.status();
   for (RegionScheme scheme : {RegionScheme::kSingle, RegionScheme::kGrid}) {
     InertiaOptions o = DensityOptions(box.mesh);
-    o.regions.scheme = scheme;
+    o.density.regions.scheme = scheme;
     absl::StatusOr<InertiaFit> fit = FitInertia(sim->samples, o);
     ASSERT_TRUE(fit.ok()) << fit.status();
     const InertiaErrors e = CompareInertia(box.params, fit->params);
@@ -433,7 +433,7 @@ TEST(DensityFit, BadInputIsNamed) {
       << message(DensityOptions(tiny));
 
   InertiaOptions regions = DensityOptions(box.mesh);
-  regions.regions.target_regions = 0;
+  regions.density.regions.target_regions = 0;
   EXPECT_NE(message(regions).find("regions.target_regions"), std::string::npos);
 }
 

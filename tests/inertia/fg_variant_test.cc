@@ -52,7 +52,7 @@ SimulationResult Simulate(uint64_t seed, double force_variance = 0.0) {
 InertiaOptions Options(FactorGraphVariant v) {
   InertiaOptions o;
   o.method = InertiaMethod::kFactorGraph;
-  o.fg_variant = v;
+  o.factor_graph.variant = v;
   return o;
 }
 
@@ -69,7 +69,7 @@ TEST(FactorGraphVariant, SpellingsRoundTrip) {
   absl::StatusOr<FactorGraphVariant> bad = ParseFactorGraphVariant("fg-x");
   ASSERT_FALSE(bad.ok());
   EXPECT_NE(bad.status().message().find("fg_variant"), std::string::npos) << bad.status();
-  EXPECT_EQ(InertiaOptions().fg_variant, FactorGraphVariant::kConstraint);  // today's factor-graph
+  EXPECT_EQ(InertiaOptions().factor_graph.variant, FactorGraphVariant::kConstraint);  // today's factor-graph
 }
 
 TEST(FactorGraphVariant, PriorVariantWithoutPriorIsAnErrorNamingTheField) {
@@ -82,7 +82,7 @@ TEST(FactorGraphVariant, PriorVariantWithoutPriorIsAnErrorNamingTheField) {
   InertiaOptions other = Options(FactorGraphVariant::kConstraintPrior);
   other.method = InertiaMethod::kConstrained;
   EXPECT_TRUE(ValidateInertiaOptions(other).ok());
-  other.fg_variant = FactorGraphVariant::kNoConstraint;
+  other.factor_graph.variant = FactorGraphVariant::kNoConstraint;
   absl::StatusOr<InertiaFit> constrained = FitInertia(sim.samples, other);
   ASSERT_TRUE(constrained.ok()) << constrained.status();
   EXPECT_NE(std::find(constrained->notes.begin(), constrained->notes.end(),

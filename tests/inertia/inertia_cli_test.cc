@@ -123,10 +123,10 @@ TEST(InertiaFgVariantProto, RoundTrip) {
     ASSERT_TRUE(api::ParseJson(api::ToJson(o), &back).ok());
     absl::StatusOr<inertia::InertiaOptions> lib = api::InertiaOptionsFromProto(back);
     ASSERT_TRUE(lib.ok()) << lib.status();
-    EXPECT_EQ(lib->fg_variant, v);
+    EXPECT_EQ(lib->factor_graph.variant, v);
   }
   v1::InertiaFitOptions unspecified;
-  EXPECT_EQ(api::InertiaOptionsFromProto(unspecified)->fg_variant, inertia::FactorGraphVariant::kConstraint);
+  EXPECT_EQ(api::InertiaOptionsFromProto(unspecified)->factor_graph.variant, inertia::FactorGraphVariant::kConstraint);
   v1::InertiaFitOptions bad;
   bad.set_fg_variant(static_cast<v1::FactorGraphVariant>(17));
   absl::StatusOr<inertia::InertiaOptions> lib = api::InertiaOptionsFromProto(bad);

@@ -85,7 +85,7 @@ TEST(Interrupt, BaselineLsStopsPromptly) {
   const SimulationResult& data = BoxData(400.0, 500.0);
   InertiaOptions o;
   o.method = InertiaMethod::kBaselineLs;
-  o.savitzky_golay = true;
+  o.baseline_ls.savitzky_golay = true;
   ExpectStopsPromptly(data.samples, o);
 }
 
@@ -104,8 +104,8 @@ TEST(Interrupt, DensityWithManyRegionsStopsPromptly) {
   InertiaOptions o;
   o.method = InertiaMethod::kDensity;
   o.mesh = std::make_shared<const io::TriangleMesh>(data.object.mesh);
-  o.regions.scheme = RegionScheme::kGrid;
-  o.regions.target_regions = kMaxTargetRegions;
+  o.density.regions.scheme = RegionScheme::kGrid;
+  o.density.regions.target_regions = kMaxTargetRegions;
   ExpectStopsPromptly(data.samples, o);
 }
 
@@ -129,9 +129,9 @@ TEST(TargetRegions, AboveTheLimitIsInvalidArgumentNamingTheFieldAndLimit) {
   InertiaOptions o;
   o.method = InertiaMethod::kDensity;
   o.mesh = std::make_shared<const io::TriangleMesh>(data.object.mesh);
-  o.regions.target_regions = kMaxTargetRegions;
+  o.density.regions.target_regions = kMaxTargetRegions;
   EXPECT_TRUE(ValidateInertiaOptions(o).ok());
-  o.regions.target_regions = kMaxTargetRegions + 1;
+  o.density.regions.target_regions = kMaxTargetRegions + 1;
   const absl::Status st = ValidateInertiaOptions(o);
   EXPECT_EQ(st.code(), absl::StatusCode::kInvalidArgument);
   EXPECT_NE(st.message().find("regions.target_regions"), std::string::npos) << st;

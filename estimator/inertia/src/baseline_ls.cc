@@ -137,8 +137,8 @@ absl::StatusOr<MethodOutput> FitBaselineLs(const InertiaSamples& s, const Inerti
   for (int i = 0; i < n && !poll.Tick(); ++i) wrench[i] = SampleWrench(s.samples[kin[i].index], s.source);
   if (poll.stopped()) return Interrupted();
 
-  if (o.savitzky_golay && n >= 5) {
-    const int window = std::min(o.savitzky_golay_window, n % 2 ? n : n - 1);
+  if (o.baseline_ls.savitzky_golay && n >= 5) {
+    const int window = std::min(o.baseline_ls.savitzky_golay_window, n % 2 ? n : n - 1);
     SmoothInPlace(window, &kin, &wrench, &poll);
     if (poll.stopped()) return Interrupted();
     out.notes.push_back(absl::StrCat("Savitzky-Golay smoothing: cubic, window ", window));

@@ -11,28 +11,24 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "gls.h"
 #include "internal.h"
-#include "tactforce/inertia/metrics.h"
+#include "tactforce/inertia/pseudo_inertia.h"
 
 namespace tactforce::inertia::internal {
 namespace {
 
-// Index maps: U (upper triangular, 4x4) entries <-> theta, P entries <-> p.
-constexpr int kUr[10] = {0, 1, 2, 3, 0, 0, 0, 1, 1, 2};
-constexpr int kUc[10] = {0, 1, 2, 3, 1, 2, 3, 2, 3, 3};
-constexpr int kPi[10] = {0, 1, 2, 3, 0, 0, 0, 1, 1, 2};
-constexpr int kPj[10] = {0, 1, 2, 3, 1, 2, 3, 2, 3, 3};
+// theta: log-Cholesky coordinates of the scaled pseudo-inertia; p: its
+// entries (pseudo_inertia.h), both indexed by kUr/kUc.
+using LC = LogCholeskyParameters;
+constexpr const int* kUr = LC::kRow;
+constexpr const int* kUc = LC::kCol;
 
-Eigen::Matrix4d UFromTheta(const Vector10d& th) {
-  Eigen::Matrix4d U = Eigen::Matrix4d::Zero();
-  for (int a = 0; a < 10; ++a) U(kUr[a], kUc[a]) = a < 4 ? std::exp(th(a)) : th(a);
-  return U;
-}
+Eigen::Matrix4d UFromTheta(const Vector10d& th) { return LC{th}.U(); }
 
-Vector10d PVec(const Eigen::Matrix4d& P) {
-  Vector10d p;
-  for (int k = 0; k < 10; ++k) p(k) = P(kPi[k], kPj[k]);
-  return p;
+// Entries p of U U^T.
+Vector10d EntriesOfFactor(const Eigen::Matrix4d& U) {
+  return PseudoInertiaD::FromMatrix(Eigen::Matrix4d(U * U.transpose())).Entries();
 }
 
 // The quadratic model in scaled pseudo-inertia entries p:
@@ -49,7 +45,7 @@ struct Model {
 
   double F(const Vector10d& th) const {
     const Eigen::Matrix4d U = UFromTheta(th);
-    const Vector10d p = PVec(U * U.transpose());
+    const Vector10d p = EntriesOfFactor(U);
     double f = 0.5 * p.dot(A * p) - b.dot(p);
     if (w > 0) f += w * (q.dot(p) - 2.0 * th.head<4>().sum());
     return f / scale;
@@ -58,7 +54,7 @@ struct Model {
   // Value, gradient and exact Hessian in theta.
   double Eval(const Vector10d& th, Vector10d* g, Matrix10d* H) const {
     const Eigen::Matrix4d U = UFromTheta(th);
-    const Vector10d p = PVec(U * U.transpose());
+    const Vector10d p = EntriesOfFactor(U);
     const Matrix10d J = Jacobian(th, U);
     const Vector10d gp = A * p - b + w * q;
     double f = 0.5 * p.dot(A * p) - b.dot(p);
@@ -70,8 +66,8 @@ struct Model {
       // Gamma: tr(Gamma P) = gp . p.
       Eigen::Matrix4d Gm = Eigen::Matrix4d::Zero();
       for (int k = 0; k < 10; ++k) {
-        if (kPi[k] == kPj[k]) Gm(kPi[k], kPi[k]) = gp(k);
-        else Gm(kPi[k], kPj[k]) = Gm(kPj[k], kPi[k]) = 0.5 * gp(k);
+        if (kUr[k] == kUc[k]) Gm(kUr[k], kUr[k]) = gp(k);
+        else Gm(kUr[k], kUc[k]) = Gm(kUc[k], kUr[k]) = 0.5 * gp(k);
       }
       const Eigen::Matrix4d GU = Gm * U;
       Matrix10d Hs = J.transpose() * A * J;
@@ -92,7 +88,7 @@ struct Model {
   static Matrix10d Jacobian(const Vector10d& th, const Eigen::Matrix4d& U) {
     Matrix10d J = Matrix10d::Zero();
     for (int k = 0; k < 10; ++k) {
-      const int i = kPi[k], j = kPj[k];
+      const int i = kUr[k], j = kUc[k];
       for (int a = 0; a < 10; ++a) {
         const int r = kUr[a], c = kUc[a];
         double d = 0;
@@ -111,14 +107,7 @@ Vector10d ThetaFromP(const Eigen::Matrix4d& Pin) {
   const double top = std::max(l(3), 1e-12);
   for (int i = 0; i < 4; ++i) l(i) = std::max(l(i), 1e-3 * top);
   const Eigen::Matrix4d P = es.eigenvectors() * l.asDiagonal() * es.eigenvectors().transpose();
-  // P = U U^T with U upper triangular: Cholesky of the index-reversed matrix.
-  Eigen::Matrix4d X = P.reverse();
-  Eigen::LLT<Eigen::Matrix4d> llt(0.5 * (X + X.transpose()));
-  const Eigen::Matrix4d L = llt.matrixL();
-  const Eigen::Matrix4d U = L.reverse();
-  Vector10d th;
-  for (int a = 0; a < 10; ++a) th(a) = a < 4 ? std::log(std::max(U(kUr[a], kUc[a]), 1e-300)) : U(kUr[a], kUc[a]);
-  return th;
+  return LC::FromPseudoInertia(PseudoInertiaD::FromMatrix(Eigen::Matrix4d(0.5 * (P + P.transpose())))).theta;
 }
 
 // Lower bound on the log-diagonal of U: keeps P strictly positive definite
@@ -196,7 +185,7 @@ void SlsqpConstraints(unsigned m, double* result, unsigned n, const double* x, d
   auto* d = static_cast<SlsqpData*>(data);
   const Vector10d th = Eigen::Map<const Vector10d>(x);
   const Eigen::Matrix4d U = UFromTheta(th);
-  const Vector10d p = PVec(U * U.transpose());
+  const Vector10d p = EntriesOfFactor(U);
   Matrix10d J;
   if (grad) J = Model::Jacobian(th, U);
   for (unsigned j = 0; j < m; ++j) {
@@ -210,12 +199,7 @@ void SlsqpConstraints(unsigned m, double* result, unsigned n, const double* x, d
 }
 
 // Index of the scaled pseudo-inertia entry P(i, j) in p (i, j in 0..3).
-constexpr int PIndex(int i, int j) {
-  if (i > j) std::swap(i, j);
-  for (int k = 0; k < 10; ++k)
-    if (kPi[k] == i && kPj[k] == j) return k;
-  return -1;
-}
+constexpr int PIndex(int i, int j) { return LC::Index(i, j); }
 
 // Minimum-norm solution of M x = r, M symmetric positive semi-definite:
 // eigen-directions below 1e-14 of the largest eigenvalue are dropped.
@@ -236,7 +220,7 @@ Vector10d MinimumNormSolve(const Eigen::MatrixBase<Derived>& M, const Vector10d&
 Vector10d BarrierWeights(const Eigen::Vector4d& D, const Eigen::Matrix4d& P0) {
   const Eigen::Matrix4d G = (D.asDiagonal() * P0 * D.asDiagonal()).inverse();
   Vector10d q;
-  for (int k = 0; k < 10; ++k) q(k) = kPi[k] == kPj[k] ? G(kPi[k], kPi[k]) : 2.0 * G(kPi[k], kPj[k]);
+  for (int k = 0; k < 10; ++k) q(k) = kUr[k] == kUc[k] ? G(kUr[k], kUr[k]) : 2.0 * G(kUr[k], kUc[k]);
   return q;
 }
 
@@ -299,7 +283,7 @@ ScaledCoordinates MakeScaledCoordinates(double m0, double len) {
 Model FixedModelTerms(const ScaledCoordinates& sc, double len, const InertiaOptions& o, const ConvexHull* hull) {
   Model model;
   if (o.prior && o.prior->weight > 0) {
-    model.q = BarrierWeights(sc.D, PseudoInertia(o.prior->params));
+    model.q = BarrierWeights(sc.D, PseudoInertiaD::FromParameters(o.prior->params).Matrix());
     model.w = o.prior->weight;
   }
   if (hull) {
@@ -332,17 +316,16 @@ void AddEntropicRegulariser(const Eigen::Matrix4d& Pt, const ScaledCoordinates& 
   }
   double t = (Pu.topLeftCorner<3, 3>().trace() - mg * cg.squaredNorm()) / (3.0 * mg);
   if (!(t > 1e-6 * len * len) || !std::isfinite(t)) t = hull ? std::pow(0.25 * hull->size, 2) : len * len / 3.0;
-  Eigen::Matrix4d P0 = Eigen::Matrix4d::Zero();
-  P0.topLeftCorner<3, 3>() = mg * (cg * cg.transpose() + t * Eigen::Matrix3d::Identity());
-  P0.topRightCorner<3, 1>() = mg * cg;
-  P0.bottomLeftCorner<1, 3>() = mg * cg.transpose();
-  P0(3, 3) = mg;
-  model->q = BarrierWeights(sc.D, P0);
-  model->w = o.regularization;
+  PseudoInertiaD guess;
+  guess.mass = mg;
+  guess.h = mg * cg;
+  guess.sigma = mg * (cg * cg.transpose() + t * Eigen::Matrix3d::Identity());
+  model->q = BarrierWeights(sc.D, guess.Matrix());
+  model->w = o.constrained.regularization;
   notes->push_back(absl::StrFormat(
       "weak entropic regularisation (weight %g) towards m %.4g, c (%.4g, %.4g, %.4g), isotropic second "
       "moment %.3g m^2 per axis",
-      o.regularization, mg, cg.x(), cg.y(), cg.z(), t));
+      o.constrained.regularization, mg, cg.x(), cg.y(), cg.z(), t));
 }
 
 // The start of the first Newton solve: the unconstrained GLS estimate of
@@ -351,10 +334,12 @@ void AddEntropicRegulariser(const Eigen::Matrix4d& Pt, const ScaledCoordinates& 
 Vector10d InitialTheta(const ScaledCoordinates& sc, const Scales& scales, const InertiaOptions& o,
                        const ConvexHull* hull, Model* model, std::vector<std::string>* notes) {
   const Vector10d p = MinimumNormSolve(model->A, model->b);
-  Eigen::Matrix4d Pt = Eigen::Matrix4d::Zero();
-  for (int k = 0; k < 10; ++k) Pt(kPi[k], kPj[k]) = Pt(kPj[k], kPi[k]) = p(k);
-  if (o.prior) Pt = 0.5 * Pt + 0.5 * sc.D.asDiagonal() * PseudoInertia(o.prior->params) * sc.D.asDiagonal();
-  if (!o.prior && o.regularization > 0) AddEntropicRegulariser(Pt, sc, scales, o, hull, model, notes);
+  Eigen::Matrix4d Pt = PseudoInertiaD::FromEntries(p).Matrix();
+  if (o.prior) {
+    const Eigen::Matrix4d prior = PseudoInertiaD::FromParameters(o.prior->params).Matrix();
+    Pt = 0.5 * Pt + 0.5 * sc.D.asDiagonal() * prior * sc.D.asDiagonal();
+  }
+  if (!o.prior && o.constrained.regularization > 0) AddEntropicRegulariser(Pt, sc, scales, o, hull, model, notes);
   Vector10d theta = ThetaFromP(Pt);
   for (int i = 0; i < 4; ++i) theta(i) = std::max(theta(i), kMinLogDiag);
   return theta;
@@ -370,7 +355,7 @@ constexpr double kHullContradiction = 0.02;
 Vector10d EnforceHullRows(const Model& model, const Vector10d& theta, const InertiaOptions& o, bool last_round,
                           MethodOutput* out) {
   const Eigen::Matrix4d U = UFromTheta(theta);
-  const Vector10d p = PVec(U * U.transpose());
+  const Vector10d p = EntriesOfFactor(U);
   double worst = -1;
   for (const auto& a : model.rows) worst = std::max(worst, a.dot(p) / p(PIndex(3, 3)));
   if (!(worst > 1e-9)) return theta;
@@ -431,129 +416,6 @@ Matrix10d UpdateDataTerm(const GlsData& gls, const Vector10d& pi, const ScaledCo
 
 }  // namespace
 
-GlsData PrepareGls(const InertiaSamples& s, const InertiaOptions& o, std::vector<std::string>* notes,
-                   InterruptPoll* poll) {
-  GlsData d;
-  d.kin = SmoothedKinematics(s, o.gravity, o.noise, o.smoothing_window, notes, poll);
-  if (poll->stopped()) return d;
-  const int n = static_cast<int>(d.kin.size());
-  d.wrench.resize(n);
-  d.wcov.resize(n);
-  d.Y.resize(n);
-  double f2 = 0, t2 = 0;
-  for (int k = 0; k < n; ++k) {
-    if (poll->Tick()) return d;
-    const InertiaSample& x = s.samples[d.kin[k].index];
-    d.wrench[k] = SampleWrench(x, s.source);
-    d.known = WrenchCovariance(x, s.source, o.noise, &d.wcov[k]) && d.known;
-    d.Y[k] = Regressor(d.kin[k].w, d.kin[k].dw, d.kin[k].a_minus_g);
-    f2 += d.wrench[k].head<3>().squaredNorm();
-    t2 += d.wrench[k].tail<3>().squaredNorm();
-  }
-  notes->push_back(d.known ? "wrench noise: from the given sigmas" : "wrench noise: estimated from residuals");
-  // Floors keep the weights finite on noise-free data.
-  d.floor_f = 1e-18 * std::max(f2 / (3.0 * n), 1e-300);
-  d.floor_t = 1e-18 * std::max(t2 / (3.0 * n), 1e-300);
-  for (int k = 0; k < n; ++k) {
-    if (poll->Tick()) return d;
-    d.YtY += d.Y[k].transpose() * d.Y[k];
-    d.Ytb += d.Y[k].transpose() * d.wrench[k];
-  }
-  return d;
-}
-
-void AccumulateGls(const GlsData& d, const Vector10d& pi, InterruptPoll* poll, GlsSums* total, int blocks,
-                   std::vector<GlsSums>* per_block, std::vector<Matrix6d>* whiteners) {
-  const int n = static_cast<int>(d.kin.size());
-  Matrix6x10 unit_a[3], unit_dw[3];  // d Y / d(a - g), d Y / d dw (constant)
-  for (int j = 0; j < 3; ++j) {
-    unit_a[j] = Regressor(Vec3::Zero(), Vec3::Zero(), Vec3::Unit(j));
-    unit_dw[j] = Regressor(Vec3::Zero(), Vec3::Unit(j), Vec3::Zero());
-  }
-  // Residual covariance per sample.
-  Matrix6d est = Matrix6d::Zero();
-  if (!d.known) {
-    for (int k = 0; k < n; ++k) {
-      if (poll->Tick()) return;
-      const Vector6d r = d.Y[k] * pi - d.wrench[k];
-      est += r * r.transpose();
-    }
-    est /= std::max(1, n - 2);
-  }
-  const InertialParameters cur = InertialParameters::FromStandard(pi);
-  const Eigen::Matrix3d Io = cur.InertiaOrigin();
-  const Vec3 h = pi.segment<3>(1);
-  *total = GlsSums();
-  if (per_block) per_block->assign(blocks, GlsSums());
-  if (whiteners) whiteners->resize(n);
-  Matrix10d& A = total->A;
-  Vector10d& bvec = total->b;
-  Matrix10d& bias = total->bias;
-  for (int k = 0; k < n; ++k) {
-    if (poll->Tick(4)) return;
-    Matrix6d C = d.known ? d.wcov[k] : est;
-    const KinPoint& q = d.kin[k];
-    // Kinematic errors propagated through the model at the current pi.
-    Eigen::Matrix<double, 6, 3> Ja, Jw, Jdw, Jr;
-    Ja << pi(0) * Eigen::Matrix3d::Identity(), Skew(h);
-    Jw << -Skew(q.w.cross(h)) - Skew(q.w) * Skew(h), -Skew(Io * q.w) + Skew(q.w) * Io;
-    Jdw << -Skew(h), Io;
-    Jr = Ja * Skew(q.a_minus_g);
-    Matrix6d Ck = q.var_a * Ja * Ja.transpose() + q.var_w * Jw * Jw.transpose() +
-                  q.var_dw * Jdw * Jdw.transpose() + q.var_rot * Jr * Jr.transpose();
-    if (d.known) C += Ck;
-    C.diagonal().head<3>().array() += d.floor_f;
-    C.diagonal().tail<3>().array() += d.floor_t;
-    const Eigen::LLT<Matrix6d> llt(C);
-    const Matrix6d W = llt.matrixL().solve(Matrix6d::Identity());  // W^T W = C^-1
-    const Matrix6x10 WY = W.lazyProduct(d.Y[k]);
-    const Vector6d Ww = W * d.wrench[k];
-    A.noalias() += WY.transpose().lazyProduct(WY);
-    bvec.noalias() += WY.transpose() * Ww;
-    total->c += Ww.squaredNorm();
-    ++total->count;
-    GlsSums* blk = per_block ? &(*per_block)[BlockOf(k, n, blocks)] : nullptr;
-    if (blk) {
-      blk->A.noalias() += WY.transpose().lazyProduct(WY);
-      blk->b.noalias() += WY.transpose() * Ww;
-      blk->c += Ww.squaredNorm();
-      ++blk->count;
-    }
-    if (whiteners) (*whiteners)[k] = W;
-    // Errors-in-variables bias of Y^T W Y: E[dY^T W dY] (first order).
-    auto add_bias = [&](double var, const Matrix6x10& D) {
-      const Matrix6x10 WD = W.lazyProduct(D);
-      bias.noalias() += var * WD.transpose().lazyProduct(WD);
-      if (blk) blk->bias.noalias() += var * WD.transpose().lazyProduct(WD);
-    };
-    for (int j = 0; j < 3; ++j) {
-      const Vec3 e = Vec3::Unit(j);
-      if (q.var_a > 0) add_bias(q.var_a, unit_a[j]);
-      if (q.var_dw > 0) add_bias(q.var_dw, unit_dw[j]);
-      if (q.var_rot > 0) add_bias(q.var_rot, Regressor(Vec3::Zero(), Vec3::Zero(), Skew(q.a_minus_g) * e));
-      if (q.var_w > 0) {
-        const double eps = 1e-4 * std::max(1.0, q.w.norm());
-        add_bias(q.var_w, (Regressor(q.w + eps * e, Vec3::Zero(), Vec3::Zero()) -
-                           Regressor(q.w - eps * e, Vec3::Zero(), Vec3::Zero())) /
-                              (2 * eps));
-      }
-    }
-  }
-}
-
-Matrix10d BiasCorrected(const GlsSums& sums, const Vector10d& scale, bool* applied) {
-  *applied = false;
-  if (!(sums.bias.norm() > 0)) return sums.A;
-  const Matrix10d S = scale.asDiagonal();
-  Eigen::SelfAdjointEigenSolver<Matrix10d> e1(S * sums.A * S, Eigen::EigenvaluesOnly);
-  Eigen::SelfAdjointEigenSolver<Matrix10d> e2(S * (sums.A - sums.bias) * S, Eigen::EigenvaluesOnly);
-  if (e2.eigenvalues()(0) > 0.5 * e1.eigenvalues()(0)) {
-    *applied = true;
-    return sums.A - sums.bias;
-  }
-  return sums.A;
-}
-
 absl::StatusOr<MethodOutput> FitConstrained(const InertiaSamples& s, const InertiaOptions& o,
                                             const ConvexHull* hull) {
   InterruptPoll poll(o.interrupt);
@@ -577,7 +439,7 @@ absl::StatusOr<MethodOutput> FitConstrained(const InertiaSamples& s, const Inert
     theta = Newton(model, theta, o.max_iterations, &out.iterations);
     if (!model.rows.empty()) theta = EnforceHullRows(model, theta, o, last_round, &out);
     const Eigen::Matrix4d U = UFromTheta(theta);
-    pi = sc.T * PVec(U * U.transpose());
+    pi = sc.T * EntriesOfFactor(U);
     if (o.progress) o.progress(0.9 * (round + 1) / o.reweighting_rounds);
   }
   out.pi = pi;

@@ -3,7 +3,6 @@
 #include "tactforce/inertia/density.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <map>
 #include <unordered_map>
@@ -13,6 +12,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "internal.h"
+#include "tactforce/io/enum_names.h"
 
 namespace tactforce::inertia {
 namespace {
@@ -291,26 +291,21 @@ SolidMoments OctantMoments(const io::TriangleMesh& mesh, const Eigen::Matrix3d& 
   return Rotated(OctantMomentsInFrame(v, mesh.triangles, boxes, corner), frame);
 }
 
-const char* ToString(RegionScheme s) {
-  switch (s) {
-    case RegionScheme::kAuto: return "auto";
-    case RegionScheme::kGrid: return "grid";
-    case RegionScheme::kColors: return "colors";
-    case RegionScheme::kSingle: return "single";
-  }
-  return "?";
-}
+namespace {
+
+// Enum names (io/enum_names.h); "", "unspecified", "colours" and "uniform" are aliases.
+constexpr io::EnumNameRow<RegionScheme> kSchemeNames[] = {
+    {RegionScheme::kAuto, "auto"},          {RegionScheme::kGrid, "grid"},
+    {RegionScheme::kColors, "colors"},      {RegionScheme::kSingle, "single"},
+    {RegionScheme::kAuto, "", "", false},   {RegionScheme::kAuto, "unspecified", "", false},
+    {RegionScheme::kColors, "colours", "", false}, {RegionScheme::kSingle, "uniform", "", false}};
+
+}  // namespace
+
+const char* ToString(RegionScheme s) { return io::EnumName(kSchemeNames, s); }
 
 absl::StatusOr<RegionScheme> ParseRegionScheme(std::string_view text) {
-  std::string s;
-  for (char c : text) s += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (s.rfind("region_scheme_", 0) == 0) s = s.substr(14);
-  if (s == "auto" || s.empty() || s == "unspecified") return RegionScheme::kAuto;
-  if (s == "grid") return RegionScheme::kGrid;
-  if (s == "colors" || s == "colours") return RegionScheme::kColors;
-  if (s == "single" || s == "uniform") return RegionScheme::kSingle;
-  return absl::InvalidArgumentError(
-      absl::StrCat("regions: unknown '", std::string(text), "' (expected auto, grid, colors or single)"));
+  return io::ParseEnumName(kSchemeNames, text, "regions", "region-scheme-");
 }
 
 absl::StatusOr<RegionModel> BuildRegions(const io::TriangleMesh& mesh, const RegionOptions& options,

@@ -14,7 +14,9 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "gls.h"
 #include "internal.h"
+#include "tactforce/inertia/pseudo_inertia.h"
 
 namespace tactforce::inertia::internal {
 namespace {
@@ -319,26 +321,6 @@ void HeldOutContradiction(const GlsData& gls, const DensityBasis& b, int folds, 
   out->heldout_z = var > 0 ? mean / std::sqrt(var / n) : (mean > 0 ? HUGE_VAL : 0.0);
 }
 
-// Pseudo-inertia [[Sigma, h], [h^T, m]] of standard parameters, Sigma the
-// second moment about the origin; and back. Both maps are linear.
-Eigen::Matrix4d PseudoOfStandard(const Vector10d& pi) {
-  Eigen::Matrix3d io;
-  io << pi(4), pi(7), pi(8), pi(7), pi(5), pi(9), pi(8), pi(9), pi(6);
-  Eigen::Matrix4d P;
-  P.topLeftCorner<3, 3>() = 0.5 * io.trace() * Eigen::Matrix3d::Identity() - io;
-  P.topRightCorner<3, 1>() = pi.segment<3>(1);
-  P.bottomLeftCorner<1, 3>() = pi.segment<3>(1).transpose();
-  P(3, 3) = pi(0);
-  return P;
-}
-Vector10d StandardOfPseudo(const Eigen::Matrix4d& P) {
-  const Eigen::Matrix3d sigma = P.topLeftCorner<3, 3>();
-  const Eigen::Matrix3d io = sigma.trace() * Eigen::Matrix3d::Identity() - sigma;
-  Vector10d pi;
-  pi << P(3, 3), P(0, 3), P(1, 3), P(2, 3), io(0, 0), io(1, 1), io(2, 2), io(0, 1), io(0, 2), io(1, 2);
-  return pi;
-}
-
 // Columns: the standard parameters of dP = S Z S for the 10 unit symmetric
 // Z (off-diagonal pairs 1/sqrt(2) each), S = P_ref^(1/2). Then |z| = |S^-1
 // dP S^-1|_F, the first-order affine-invariant (Riemannian) distance from
@@ -356,7 +338,7 @@ Matrix10d WhitenedBasis(const Eigen::Matrix4d& p_ref) {
       Eigen::Matrix4d Z = Eigen::Matrix4d::Zero();
       const double v = i == j ? 1.0 : std::sqrt(0.5);
       Z(i, j) = v, Z(j, i) = v;
-      G.col(col++) = StandardOfPseudo(S * Z * S);
+      G.col(col++) = PseudoInertiaD::FromMatrix(Eigen::Matrix4d(S * Z * S)).Standard();
     }
   }
   return G;
@@ -483,7 +465,7 @@ double ChiSquareQuantile(int dof, double z) {
 // freedom) of the free fit.
 void MeshConsistency(const GlsData& gls, const DensityBasis& b, DensityState* st, MethodOutput* out,
                      InterruptPoll* poll) {
-  const Matrix10d G = WhitenedBasis(PseudoOfStandard(st->pi));
+  const Matrix10d G = WhitenedBasis(PseudoInertiaD::FromStandard(st->pi).Matrix());
   const Eigen::FullPivLU<Matrix10d> lu(G);
   const FreeFit f = FreeFitOwnWeights(gls, b, G, st->pi, poll);
   if (poll->stopped()) return;
@@ -514,12 +496,12 @@ absl::StatusOr<MethodOutput> FitDensity(const InertiaSamples& s, const InertiaOp
   if (!basis.ok()) return basis.status();
   out.scale = basis->parameter_scale;
 
-  const int folds = std::clamp(o.density_folds, 2, std::max(2, n / 10));
-  const bool choose = o.density_regularization < 0;
+  const int folds = std::clamp(o.density.folds, 2, std::max(2, n / 10));
+  const bool choose = o.density.regularization < 0;
   DensityState st;
   st.pi = basis->pi_uniform;
   st.u = VectorXd::Ones(basis->K);
-  st.lambda_rel = choose ? 0.0 : o.density_regularization;
+  st.lambda_rel = choose ? 0.0 : o.density.regularization;
   for (int round = 0; round < o.reweighting_rounds; ++round) {
     if (poll.Check()) return Interrupted();
     if (absl::Status r = DensityRound(gls, *basis, regions, o, round, folds, choose, &st, &out, &poll); !r.ok())

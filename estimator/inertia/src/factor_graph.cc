@@ -32,7 +32,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "internal.h"
-#include "tactforce/inertia/metrics.h"
+#include "tactforce/inertia/pseudo_inertia.h"
 
 namespace tactforce::inertia::internal {
 namespace {
@@ -126,16 +126,15 @@ M3<T> InertiaFromEntries(const Eigen::Matrix<T, 6, 1>& h) {
   return H;
 }
 
+// Pseudo-inertia of the paper's variables: second moment about the origin
+// Sigma = R diag(L) R^T, first moment m c.
 template <typename T>
-Eigen::Matrix<T, 4, 4> Pseudo(const T& m, const V3<T>& c, const V3<T>& L, const M3<T>& Rl) {
-  // Second moment about the origin: Sigma = R diag(L) R^T.
-  const M3<T> S = Rl * L.asDiagonal() * Rl.transpose();
-  Eigen::Matrix<T, 4, 4> P;
-  P.template topLeftCorner<3, 3>() = S;
-  P.template topRightCorner<3, 1>() = m * c;
-  P.template bottomLeftCorner<1, 3>() = (m * c).transpose();
-  P(3, 3) = m;
-  return P;
+PseudoInertiaTpl<T> PseudoOfVariables(const T& m, const V3<T>& c, const V3<T>& L, const M3<T>& Rl) {
+  PseudoInertiaTpl<T> j;
+  j.mass = m;
+  j.h = m * c;
+  j.sigma = Rl * L.asDiagonal() * Rl.transpose();
+  return j;
 }
 
 // The inertial variables: [m, c, L, R] (the paper's w), or with `raw`
@@ -347,7 +346,9 @@ bool SolveStep(const NormalEquations& ne, double lambda, Eigen::VectorXd* step, 
 bool UsesConstraints(FactorGraphVariant v) {
   return v == FactorGraphVariant::kConstraint || v == FactorGraphVariant::kConstraintPrior;
 }
-bool UsesPrior(const InertiaOptions& o) { return UsesConstraints(o.fg_variant) && o.prior.has_value(); }
+bool UsesPrior(const InertiaOptions& o) {
+  return UsesConstraints(o.factor_graph.variant) && o.prior.has_value();
+}
 
 class Problem {
  public:
@@ -361,12 +362,12 @@ class Problem {
       meas_[k].R = s.samples[k].orientation.toRotationMatrix();
       meas_[k].p = s.samples[k].position;
     }
-    sig_p_ = std::max(o.noise.position_sigma, o.fg_min_position_sigma);
-    sig_r_ = std::max(o.noise.orientation_sigma, o.fg_min_orientation_sigma);
+    sig_p_ = std::max(o.noise.position_sigma, o.factor_graph.min_position_sigma);
+    sig_r_ = std::max(o.noise.orientation_sigma, o.factor_graph.min_orientation_sigma);
     // Whitening of each dynamics factor: (Sigma_D + G Sigma_f G^T)^-1/2.
     InertiaNoise floored = o.noise;
-    floored.force_sigma = std::max(o.noise.force_sigma, o.fg_min_force_sigma);
-    floored.torque_sigma = std::max(o.noise.torque_sigma, o.fg_min_torque_sigma);
+    floored.force_sigma = std::max(o.noise.force_sigma, o.factor_graph.min_force_sigma);
+    floored.torque_sigma = std::max(o.noise.torque_sigma, o.factor_graph.min_torque_sigma);
     whiten_.reserve(std::max(0, n_ - 2));
     wrench_.reserve(std::max(0, n_ - 2));
     for (int k = 0; k + 2 < n_; ++k) {
@@ -374,8 +375,9 @@ class Problem {
       const InertiaSample& x = s.samples[k];
       Matrix6d C;
       WrenchCovariance(x, s.source, floored, &C);
-      C.diagonal().head<3>().array() += o.fg_dynamics_force_sigma * o.fg_dynamics_force_sigma;
-      C.diagonal().tail<3>().array() += o.fg_dynamics_torque_sigma * o.fg_dynamics_torque_sigma;
+      const FactorGraphOptions& fg = o.factor_graph;
+      C.diagonal().head<3>().array() += fg.dynamics_force_sigma * fg.dynamics_force_sigma;
+      C.diagonal().tail<3>().array() += fg.dynamics_torque_sigma * fg.dynamics_torque_sigma;
       // W with W^T W = C^-1: W = L^-1 for C = L L^T.
       const Eigen::LLT<Matrix6d> llt(C);
       Matrix6d W = llt.matrixL().solve(Matrix6d::Identity());
@@ -388,7 +390,7 @@ class Problem {
   // three-point kinematics; second moment of a small ball around c.
   void Initialise(double m0, const Vec3& c0, double radius) {
     poses_ = meas_;
-    in_.raw = o_.fg_variant == FactorGraphVariant::kBaselineFg;
+    in_.raw = o_.factor_graph.variant == FactorGraphVariant::kBaselineFg;
     in_.m = m0;
     in_.c = c0;
     in_.SetSecondMoment(m0 * (c0 * c0.transpose() + radius * radius * Eigen::Matrix3d::Identity()));
@@ -514,9 +516,9 @@ class Problem {
   // Constraint factors on the inertial block, active only when violated
   // (fg-c and fg-c-g only).
   void AddConstraintFactors(NormalEquations* ne, double* cost) const {
-    if (!UsesConstraints(o_.fg_variant)) return;
-    const double sm = o_.fg_constraint_sigma * m_scale_, sl = o_.fg_constraint_sigma * m_scale_ * l_scale_ * l_scale_,
-                 sc = o_.fg_constraint_sigma * l_scale_;
+    if (!UsesConstraints(o_.factor_graph.variant)) return;
+    const double sigma = o_.factor_graph.constraint_sigma;
+    const double sm = sigma * m_scale_, sl = sigma * m_scale_ * l_scale_ * l_scale_, sc = sigma * l_scale_;
     const double m_min = 1e-6 * m_scale_;
     if (in_.m < m_min) AddInertialResidual((m_min - in_.m) / sm, -Vector10d::Unit(0) / sm, ne, cost);
     for (int i = 0; i < 3; ++i)
@@ -536,13 +538,13 @@ class Problem {
   void AddTracePrior(NormalEquations* ne, double* cost) const {
     if (!UsesPrior(o_) || !(o_.prior->weight > 0)) return;
     const double sw = std::sqrt(o_.prior->weight);
-    const Eigen::Matrix4d P0inv = PseudoInertia(o_.prior->params).inverse();
+    const Eigen::Matrix4d P0inv = PseudoInertiaD::FromParameters(o_.prior->params).Matrix().inverse();
     const Jet m = Var(in_.m, 18);
     const V3<Jet> c(Var(in_.c(0), 19), Var(in_.c(1), 20), Var(in_.c(2), 21));
     const V3<Jet> L(Var(in_.L(0), 22), Var(in_.L(1), 23), Var(in_.L(2), 24));
     const V3<Jet> dr(Var(0, 25), Var(0, 26), Var(0, 27));
     const M3<Jet> Rl = in_.R.cast<Jet>() * (M3<Jet>::Identity() + Hat<Jet>(dr));
-    const Eigen::Matrix<Jet, 4, 4> P = Pseudo<Jet>(m, c, L, Rl);
+    const Eigen::Matrix<Jet, 4, 4> P = PseudoOfVariables<Jet>(m, c, L, Rl).Matrix();
     Jet tr = Const(0);
     for (int i = 0; i < 4; ++i)
       for (int j = 0; j < 4; ++j) tr += P0inv(i, j) * P(j, i);
@@ -624,7 +626,7 @@ InitialInertial InitialFromForces(const InertiaSamples& s, const InertiaOptions&
 // What the variant optimises, for the fit's notes.
 std::string VariantNote(const InertiaOptions& o) {
   const char* what = "";
-  switch (o.fg_variant) {
+  switch (o.factor_graph.variant) {
     case FactorGraphVariant::kBaselineFg:
       what = "inertial variables [m, c, H_xx..H_yz] (H about the origin) as independent reals, no constraint, no prior";
       break;
@@ -639,7 +641,7 @@ std::string VariantNote(const InertiaOptions& o) {
       what = "[m, c, L, R], constraint factors m > 0, c in hull, L >= 0, trace prior";
       break;
   }
-  std::string note = absl::StrCat("factor-graph variant ", ToString(o.fg_variant), ": ", what);
+  std::string note = absl::StrCat("factor-graph variant ", ToString(o.factor_graph.variant), ": ", what);
   if (o.prior && !UsesPrior(o)) absl::StrAppend(&note, " (prior ignored)");
   return note;
 }
@@ -729,7 +731,7 @@ absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const Inert
   prob.Initialise(init.m0, init.c0, init.len);
   if (UsesPrior(o)) {
     // Start from the prior's inertia.
-    prob.inertial().SetSecondMoment(PseudoInertia(o.prior->params).topLeftCorner<3, 3>());
+    prob.inertial().SetSecondMoment(PseudoInertiaD::FromParameters(o.prior->params).sigma);
   }
 
   NormalEquations ne;

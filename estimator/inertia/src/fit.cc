@@ -10,7 +10,6 @@
 #include <time.h>
 
 #include <chrono>
-#include <cctype>
 #include <cmath>
 
 #include <Eigen/Eigenvalues>
@@ -18,6 +17,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "internal.h"
+#include "tactforce/io/enum_names.h"
 #include "tactforce/inertia/hull.h"
 #include "tactforce/inertia/metrics.h"
 #include "tactforce/inertia/samples.h"
@@ -29,51 +29,31 @@ int64_t FitWorkingBytes(InertiaMethod method, int64_t samples) {
   return samples * per_sample;
 }
 
-const char* ToString(InertiaMethod m) {
-  switch (m) {
-    case InertiaMethod::kBaselineLs: return "baseline-ls";
-    case InertiaMethod::kFactorGraph: return "factor-graph";
-    case InertiaMethod::kConstrained: return "constrained";
-    case InertiaMethod::kDensity: return "density";
-  }
-  return "?";
-}
+namespace {
+
+// Enum names (io/enum_names.h): the CLI spelling, and the proto's after its prefix.
+constexpr io::EnumNameRow<InertiaMethod> kMethodNames[] = {{InertiaMethod::kBaselineLs, "baseline-ls"},
+                                                           {InertiaMethod::kFactorGraph, "factor-graph"},
+                                                           {InertiaMethod::kConstrained, "constrained"},
+                                                           {InertiaMethod::kDensity, "density"}};
+constexpr io::EnumNameRow<FactorGraphVariant> kVariantNames[] = {
+    {FactorGraphVariant::kBaselineFg, "baseline-fg"},
+    {FactorGraphVariant::kNoConstraint, "fg-no-c", "no-c"},
+    {FactorGraphVariant::kConstraint, "fg-c", "c"},
+    {FactorGraphVariant::kConstraintPrior, "fg-c-g", "c-g"}};
+
+}  // namespace
+
+const char* ToString(InertiaMethod m) { return io::EnumName(kMethodNames, m); }
 
 absl::StatusOr<InertiaMethod> ParseInertiaMethod(std::string_view text) {
-  std::string s;
-  for (char c : text) s += c == '_' ? '-' : static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (s.rfind("inertia-method-", 0) == 0) s = s.substr(15);
-  if (s == "baseline-ls") return InertiaMethod::kBaselineLs;
-  if (s == "factor-graph") return InertiaMethod::kFactorGraph;
-  if (s == "constrained") return InertiaMethod::kConstrained;
-  if (s == "density") return InertiaMethod::kDensity;
-  return absl::InvalidArgumentError(absl::StrCat(
-      "method: unknown '", std::string(text), "' (expected baseline-ls, factor-graph, constrained or density)"));
+  return io::ParseEnumName(kMethodNames, text, "method", "inertia-method-");
 }
 
-const char* ToString(FactorGraphVariant v) {
-  switch (v) {
-    case FactorGraphVariant::kBaselineFg: return "baseline-fg";
-    case FactorGraphVariant::kNoConstraint: return "fg-no-c";
-    case FactorGraphVariant::kConstraint: return "fg-c";
-    case FactorGraphVariant::kConstraintPrior: return "fg-c-g";
-  }
-  return "?";
-}
+const char* ToString(FactorGraphVariant v) { return io::EnumName(kVariantNames, v); }
 
 absl::StatusOr<FactorGraphVariant> ParseFactorGraphVariant(std::string_view text) {
-  std::string s;
-  for (char c : text) s += c == '_' ? '-' : static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (s.rfind("factor-graph-variant-", 0) == 0) {
-    s = s.substr(21);
-    if (s == "baseline-fg") return FactorGraphVariant::kBaselineFg;
-    s = "fg-" + s;
-  }
-  for (FactorGraphVariant v : {FactorGraphVariant::kBaselineFg, FactorGraphVariant::kNoConstraint,
-                               FactorGraphVariant::kConstraint, FactorGraphVariant::kConstraintPrior})
-    if (s == ToString(v)) return v;
-  return absl::InvalidArgumentError(absl::StrCat("fg_variant: unknown '", std::string(text),
-                                                 "' (expected baseline-fg, fg-no-c, fg-c or fg-c-g)"));
+  return io::ParseEnumName(kVariantNames, text, "fg_variant", "factor-graph-variant-");
 }
 
 int MinimumSamples(const InertiaSamples& s, InertiaMethod method) {
@@ -98,14 +78,14 @@ absl::Status CheckPositive(double v, const char* name) {
 std::string Vec(const Vec3& v) { return absl::StrFormat("(%.6g, %.6g, %.6g)", v.x(), v.y(), v.z()); }
 
 absl::Status ValidateMeshOptions(const InertiaOptions& o) {
-  if (absl::Status st = CheckSigma(o.mesh_prior_weight, "mesh_prior_weight"); !st.ok()) return st;
-  if (!std::isfinite(o.density_regularization))
+  if (absl::Status st = CheckSigma(o.constrained.mesh_prior_weight, "mesh_prior_weight"); !st.ok()) return st;
+  if (!std::isfinite(o.density.regularization))
     return absl::InvalidArgumentError("density_regularization: must be finite (< 0 = automatic)");
-  if (o.density_folds < 2) return absl::InvalidArgumentError("density_folds: must be >= 2");
-  if (absl::Status st = CheckSigma(o.mesh_tolerance, "mesh_tolerance"); !st.ok()) return st;
-  if (o.regions.target_regions < 1 || o.regions.target_regions > kMaxTargetRegions)
+  if (o.density.folds < 2) return absl::InvalidArgumentError("density.folds: must be >= 2");
+  if (absl::Status st = CheckSigma(o.density.mesh_tolerance, "mesh_tolerance"); !st.ok()) return st;
+  if (o.density.regions.target_regions < 1 || o.density.regions.target_regions > kMaxTargetRegions)
     return absl::InvalidArgumentError(absl::StrCat("regions.target_regions: must be in 1..", kMaxTargetRegions,
-                                                   " (got ", o.regions.target_regions, ")"));
+                                                   " (got ", o.density.regions.target_regions, ")"));
   if (o.method == InertiaMethod::kDensity && !o.mesh)
     return absl::InvalidArgumentError("mesh: the density method needs the object's closed mesh (--mesh)");
   if (o.mesh) {
@@ -140,23 +120,26 @@ absl::Status ValidateInertiaOptions(const InertiaOptions& o) {
       {n.angular_acceleration_sigma, "noise.angular_acceleration_sigma"}};
   for (const auto& [v, name] : sigmas)
     if (absl::Status st = CheckSigma(v, name); !st.ok()) return st;
-  if (o.savitzky_golay && (o.savitzky_golay_window < 5 || o.savitzky_golay_window % 2 == 0))
+  const BaselineLsOptions& ls = o.baseline_ls;
+  if (ls.savitzky_golay && (ls.savitzky_golay_window < 5 || ls.savitzky_golay_window % 2 == 0))
     return absl::InvalidArgumentError(absl::StrCat("savitzky_golay_window: must be odd and >= 5 (got ",
-                                                   o.savitzky_golay_window, ")"));
+                                                   ls.savitzky_golay_window, ")"));
   if (o.smoothing_window != 0 && (o.smoothing_window < 5 || o.smoothing_window % 2 == 0))
     return absl::InvalidArgumentError(absl::StrCat("smoothing_window: must be 0 (automatic) or odd and >= 5 (got ",
                                                    o.smoothing_window, ")"));
-  if (!std::isfinite(o.regularization) || o.regularization < 0)
+  if (!std::isfinite(o.constrained.regularization) || o.constrained.regularization < 0)
     return absl::InvalidArgumentError("regularization: must be finite and >= 0");
   if (o.reweighting_rounds < 1) return absl::InvalidArgumentError("reweighting_rounds: must be >= 1");
   if (o.max_iterations < 1) return absl::InvalidArgumentError("max_iterations: must be >= 1");
-  const std::pair<double, const char*> pos[] = {{o.fg_dynamics_force_sigma, "fg_dynamics_force_sigma"},
-                                                {o.fg_dynamics_torque_sigma, "fg_dynamics_torque_sigma"},
-                                                {o.fg_min_force_sigma, "fg_min_force_sigma"},
-                                                {o.fg_min_torque_sigma, "fg_min_torque_sigma"},
-                                                {o.fg_min_position_sigma, "fg_min_position_sigma"},
-                                                {o.fg_min_orientation_sigma, "fg_min_orientation_sigma"},
-                                                {o.fg_constraint_sigma, "fg_constraint_sigma"}};
+  const FactorGraphOptions& fg = o.factor_graph;
+  const std::pair<double, const char*> pos[] = {
+      {fg.dynamics_force_sigma, "factor_graph.dynamics_force_sigma"},
+      {fg.dynamics_torque_sigma, "factor_graph.dynamics_torque_sigma"},
+      {fg.min_force_sigma, "factor_graph.min_force_sigma"},
+      {fg.min_torque_sigma, "factor_graph.min_torque_sigma"},
+      {fg.min_position_sigma, "factor_graph.min_position_sigma"},
+      {fg.min_orientation_sigma, "factor_graph.min_orientation_sigma"},
+      {fg.constraint_sigma, "factor_graph.constraint_sigma"}};
   for (const auto& [v, name] : pos)
     if (absl::Status st = CheckPositive(v, name); !st.ok()) return st;
   if (!(o.excitation_threshold >= 0 && o.excitation_threshold < 1))
@@ -168,7 +151,7 @@ absl::Status ValidateInertiaOptions(const InertiaOptions& o) {
     if (!h.ok()) return h.status();
     hull = *std::move(h);
   }
-  if (o.method == InertiaMethod::kFactorGraph && o.fg_variant == FactorGraphVariant::kConstraintPrior &&
+  if (o.method == InertiaMethod::kFactorGraph && o.factor_graph.variant == FactorGraphVariant::kConstraintPrior &&
       !o.prior)
     return absl::InvalidArgumentError(
         "prior: the factor-graph variant fg-c-g needs a prior (the geodesic prior factor B); give one or use fg-c");
@@ -317,24 +300,24 @@ namespace {
 absl::StatusOr<internal::MethodOutput> FitConstrainedWithMesh(const InertiaSamples& samples,
                                                               const InertiaOptions& options, const ConvexHull* hull) {
   absl::StatusOr<internal::MethodOutput> first = internal::FitConstrained(samples, options, hull);
-  if (!first.ok() || !options.mesh || options.prior || !(options.mesh_prior_weight > 0)) return first;
+  if (!first.ok() || !options.mesh || options.prior || !(options.constrained.mesh_prior_weight > 0)) return first;
   const SolidMoments solid = MeshMoments(*options.mesh);
   if (!(solid.volume > 0) || !(first->pi(0) > 0)) return first;
   InertiaOptions with_prior = options;
   with_prior.prior = InertiaPrior{InertialParameters::FromStandard(solid.Standard(first->pi(0) / solid.volume)),
-                                  options.mesh_prior_weight};
+                                  options.constrained.mesh_prior_weight};
   absl::StatusOr<internal::MethodOutput> second = internal::FitConstrained(samples, with_prior, hull);
   if (!second.ok()) return second;
   second->iterations += first->iterations;
   second->notes.push_back(absl::StrFormat(
       "prior: %s at uniform density %.4g kg/m^3 (the fitted mass %.6g kg), weight %g", options.mesh_name,
-      first->pi(0) / solid.volume, first->pi(0), options.mesh_prior_weight));
+      first->pi(0) / solid.volume, first->pi(0), options.constrained.mesh_prior_weight));
   return second;
 }
 
 // DENSITY; when the data contradict the mesh, CONSTRAINED's answer, marked.
 // The data contradict the mesh when every density its regions can carry lies
-// farther than options.mesh_tolerance, in first-order Riemannian units (the
+// farther than options.density.mesh_tolerance, in first-order Riemannian units (the
 // affine-invariant distance between pseudo-inertias, metrics.h), from every
 // parameter vector the data allow (the free fit's 99.9 % chi^2 ellipsoid):
 // significant AND physically large (kDefaultMeshTolerance says why 0.03).
@@ -342,7 +325,8 @@ absl::StatusOr<internal::MethodOutput> FitDensityOrFallBack(const InertiaSamples
                                                             const InertiaOptions& options, const ConvexHull* hull,
                                                             InertiaFit* fit) {
   fit->mesh_check = io::CheckMesh(*options.mesh);
-  absl::StatusOr<RegionModel> regions = BuildRegions(*options.mesh, options.regions, options.mesh_name, options.interrupt);
+  absl::StatusOr<RegionModel> regions =
+      BuildRegions(*options.mesh, options.density.regions, options.mesh_name, options.interrupt);
   if (!regions.ok()) return regions.status();
   auto model = std::make_shared<const RegionModel>(*std::move(regions));
   absl::StatusOr<internal::MethodOutput> r = internal::FitDensity(samples, options, *model);
@@ -361,7 +345,7 @@ absl::StatusOr<internal::MethodOutput> FitDensityOrFallBack(const InertiaSamples
       r->heldout_ratio, r->heldout_z, 100 * r->heldout_mass_equivalent, 1000 * r->heldout_com_equivalent);
   r->notes.push_back(heldout_note);
   const Vec3& s = r->gyration_radii;
-  const double tolerance = options.mesh_tolerance;
+  const double tolerance = options.density.mesh_tolerance;
   const std::string mesh_note = absl::StrFormat(
       "mesh test: the densities this mesh can carry are %.3g (first-order Riemannian) from the parameters the "
       "data allow (least chi^2 excess %.3g, bound %.3g at 99.9 %%); tolerance %g: a %g %% error of the mass or a "
@@ -465,8 +449,9 @@ absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in, const In
   if (!r.ok()) return r.status();
   if (options.mesh && (options.method == InertiaMethod::kBaselineLs || options.method == InertiaMethod::kFactorGraph))
     r->notes.push_back(absl::StrCat("mesh ignored by ", ToString(options.method)));
-  if (options.method != InertiaMethod::kFactorGraph && options.fg_variant != FactorGraphVariant::kConstraint)
-    r->notes.push_back(absl::StrCat("fg_variant ", ToString(options.fg_variant), " ignored by ", ToString(options.method)));
+  const FactorGraphVariant variant = options.factor_graph.variant;
+  if (options.method != InertiaMethod::kFactorGraph && variant != FactorGraphVariant::kConstraint)
+    r->notes.push_back(absl::StrCat("fg_variant ", ToString(variant), " ignored by ", ToString(options.method)));
 
   fit.method = options.method;
   fit.standard = r->pi;

@@ -9,25 +9,14 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
+#include "tactforce/inertia/pseudo_inertia.h"
+
 namespace tactforce::inertia {
 
-Eigen::Matrix4d PseudoInertia(const InertialParameters& p) {
-  const Eigen::Matrix3d io = p.InertiaOrigin();
-  Eigen::Matrix4d P = Eigen::Matrix4d::Zero();
-  P.topLeftCorner<3, 3>() = 0.5 * io.trace() * Eigen::Matrix3d::Identity() - io;
-  P.topRightCorner<3, 1>() = p.mass * p.com;
-  P.bottomLeftCorner<1, 3>() = (p.mass * p.com).transpose();
-  P(3, 3) = p.mass;
-  return P;
-}
+Eigen::Matrix4d PseudoInertia(const InertialParameters& p) { return PseudoInertiaD::FromParameters(p).Matrix(); }
 
 InertialParameters FromPseudoInertia(const Eigen::Matrix4d& P) {
-  const Eigen::Matrix3d sigma = 0.5 * (P.topLeftCorner<3, 3>() + P.topLeftCorner<3, 3>().transpose());
-  const Eigen::Matrix3d io = sigma.trace() * Eigen::Matrix3d::Identity() - sigma;
-  Vector10d pi;
-  const Vec3 h = 0.5 * (P.topRightCorner<3, 1>() + P.bottomLeftCorner<1, 3>().transpose());
-  pi << P(3, 3), h.x(), h.y(), h.z(), io(0, 0), io(1, 1), io(2, 2), io(0, 1), io(0, 2), io(1, 2);
-  return InertialParameters::FromStandard(pi);
+  return PseudoInertiaD::FromMatrix(Eigen::Matrix4d(0.5 * (P + P.transpose()))).Parameters();
 }
 
 double ScaledPseudoInertiaMinEigenvalue(const InertialParameters& p) {

@@ -117,6 +117,59 @@ struct InertiaNoise {
 // gyration, so smaller disagreements are not called contradictions.
 inline constexpr double kDefaultMeshTolerance = 0.03;
 
+// Options of one method each (as ProxSuite and Drake keep settings per
+// solver); a method ignores the others'.
+
+// BASELINE_LS: Savitzky-Golay smoothing of the wrench and kinematics.
+struct BaselineLsOptions {
+  bool savitzky_golay = false;
+  int savitzky_golay_window = 51;  // odd, >= 5 (cubic); clipped to the data
+};
+
+// CONSTRAINED.
+struct ConstrainedOptions {
+  // Without a prior: weight of a weak entropic (Bregman) regulariser towards
+  // an isotropic guess built from the data (mass and CoM of the
+  // unconstrained fit, its mean second moment). In chi^2 units: 1 = "each
+  // principal second moment within a factor ~e of the guess" as strong as
+  // ONE sample; it only matters in poorly excited directions and keeps them
+  // off the boundary of the consistent set. 0 disables.
+  double regularization = 1.0;
+  // With a mesh and no `prior`: weight of the mesh's uniform-density
+  // inertia, scaled to the fitted mass, as the prior (>= 0, chi^2 units like
+  // prior.weight).
+  double mesh_prior_weight = 1.0;
+};
+
+// FACTOR_GRAPH: factor noise (the paper tuned these once on noise-free
+// simulation and kept them fixed). Measurement-factor sigmas come from
+// InertiaOptions::noise (floored at the values below when 0/unknown).
+struct FactorGraphOptions {
+  double dynamics_force_sigma = 0.01;   // N
+  double dynamics_torque_sigma = 0.01;  // N m
+  double min_force_sigma = 0.01;        // N
+  double min_torque_sigma = 0.001;      // N m
+  double min_position_sigma = 1e-6;     // m
+  double min_orientation_sigma = 1e-6;  // rad
+  double constraint_sigma = 1e-4;       // relative: active constraint factors
+  FactorGraphVariant variant = FactorGraphVariant::kConstraint;
+};
+
+// DENSITY.
+struct DensityFitOptions {
+  RegionOptions regions;
+  // Strength of the smoothness regulariser between neighbouring regions
+  // (relative units, see README); < 0: chosen by held-out time blocks.
+  double regularization = -1.0;
+  int folds = 5;  // contiguous time blocks for the held-out choice (>= 2)
+  // The mesh test (README, "the mesh test"): the mesh is rejected when
+  // every density its regions can carry is farther than this (first-order
+  // Riemannian; 0.03 = 3 % of the mass or of a principal second moment, or a
+  // CoM move of 3 %/sqrt(2) of the radius of gyration) from the free
+  // 10-parameter fit's 99.9 % chi^2 ellipsoid. >= 0; 0 disables the test.
+  double mesh_tolerance = kDefaultMeshTolerance;
+};
+
 struct InertiaOptions {
   InertiaMethod method = InertiaMethod::kConstrained;
   Vec3 gravity = Vec3(0, 0, -9.81);  // world frame (m/s^2)
@@ -127,54 +180,24 @@ struct InertiaOptions {
   InertiaNoise noise;
 
   // Closed mesh of the object (object frame, m) and its name for messages.
-  // Needed by DENSITY; CONSTRAINED uses its uniform-density inertia, scaled
-  // to the fitted mass, as the prior (weight `mesh_prior_weight`) when no
-  // `prior` is given. Other methods ignore it (noted). The mesh's vertices
-  // also serve as the hull when `hull` is empty.
+  // Needed by DENSITY; CONSTRAINED uses its uniform-density inertia as the
+  // prior (constrained.mesh_prior_weight) when no `prior` is given. Other
+  // methods ignore it (noted). The mesh's vertices also serve as the hull
+  // when `hull` is empty.
   std::shared_ptr<const io::TriangleMesh> mesh;
   std::string mesh_name = "mesh";
-  double mesh_prior_weight = 1.0;  // >= 0, chi^2 units like prior.weight
 
-  // DENSITY.
-  RegionOptions regions;
-  // Strength of the smoothness regulariser between neighbouring regions
-  // (relative units, see README); < 0: chosen by held-out time blocks.
-  double density_regularization = -1.0;
-  int density_folds = 5;  // contiguous time blocks for the held-out choice (>= 2)
-  // The mesh test (README, "the mesh test"): the mesh is rejected when
-  // every density its regions can carry is farther than this (first-order
-  // Riemannian; 0.03 = 3 % of the mass or of a principal second moment, or a
-  // CoM move of 3 %/sqrt(2) of the radius of gyration) from the free
-  // 10-parameter fit's 99.9 % chi^2 ellipsoid. >= 0; 0 disables the test.
-  double mesh_tolerance = kDefaultMeshTolerance;
+  BaselineLsOptions baseline_ls;
+  ConstrainedOptions constrained;
+  FactorGraphOptions factor_graph;
+  DensityFitOptions density;
 
-  // BASELINE_LS: Savitzky-Golay smoothing of the wrench and kinematics.
-  bool savitzky_golay = false;
-  int savitzky_golay_window = 51;  // odd, >= 5 (cubic); clipped to the data
-
-  // CONSTRAINED: local-polynomial window (samples, odd) for kinematics from
-  // poses or for smoothing noisy measured kinematics. 0 = automatic.
+  // CONSTRAINED and DENSITY (their shared generalised least squares):
+  // local-polynomial window (samples, odd) for kinematics from poses or for
+  // smoothing noisy measured kinematics, 0 = automatic; GLS re-weighting
+  // rounds (>= 1).
   int smoothing_window = 0;
-  int reweighting_rounds = 3;  // GLS re-weighting rounds (>= 1)
-  // CONSTRAINED without a prior: weight of a weak entropic (Bregman)
-  // regulariser towards an isotropic guess built from the data (mass and
-  // CoM of the unconstrained fit, its mean second moment). In chi^2 units:
-  // 1 = "each principal second moment within a factor ~e of the guess" as
-  // strong as ONE sample; it only matters in poorly excited directions and
-  // keeps them off the boundary of the consistent set. 0 disables.
-  double regularization = 1.0;
-
-  // FACTOR_GRAPH: factor noise (the paper tuned these once on noise-free
-  // simulation and kept them fixed). Measurement-factor sigmas come from
-  // `noise` (floored at the values below when 0/unknown).
-  double fg_dynamics_force_sigma = 0.01;   // N
-  double fg_dynamics_torque_sigma = 0.01;  // N m
-  double fg_min_force_sigma = 0.01;        // N
-  double fg_min_torque_sigma = 0.001;      // N m
-  double fg_min_position_sigma = 1e-6;     // m
-  double fg_min_orientation_sigma = 1e-6;  // rad
-  double fg_constraint_sigma = 1e-4;       // relative: active constraint factors
-  FactorGraphVariant fg_variant = FactorGraphVariant::kConstraint;
+  int reweighting_rounds = 3;
 
   int max_iterations = 100;  // FACTOR_GRAPH LM / CONSTRAINED Newton iterations
   // Directions whose relative singular value (scaled regressor) is below

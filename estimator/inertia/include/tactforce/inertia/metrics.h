@@ -15,8 +15,10 @@
 
 namespace tactforce::inertia {
 
+// PseudoInertiaD::FromParameters(p).Matrix() (pseudo_inertia.h).
 Eigen::Matrix4d PseudoInertia(const InertialParameters& p);
-// Inverse of PseudoInertia (P need not be positive definite).
+// Inverse of PseudoInertia from the symmetric part of P (P need not be
+// positive definite).
 InertialParameters FromPseudoInertia(const Eigen::Matrix4d& P);
 
 // Positive definite (Cholesky succeeds and the smallest eigenvalue of P
