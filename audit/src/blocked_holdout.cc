@@ -15,6 +15,8 @@
 // becomes a cause, re-fitted on the blocks that show it, when the last block
 // is among them.
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -48,26 +50,6 @@ EffectParams EffectOff(EffectParams p, Effect e) {
 }
 
 namespace {
-
-// The sample ranges [first, last) of d in the given order, each a segment
-// (and a segment at every trial start inside one).
-MeasuredData RangesData(const MeasuredData& d, const std::vector<std::pair<int, int>>& ranges) {
-  MeasuredData f;
-  f.source = d.source;
-  for (const auto& [first, last] : ranges) {
-    f.segment_starts.push_back(static_cast<int>(f.t.size()));
-    for (int i = first; i < last; ++i) {
-      if (i > first && std::binary_search(d.segment_starts.begin(), d.segment_starts.end(), i))
-        f.segment_starts.push_back(static_cast<int>(f.t.size()));
-      f.t.push_back(d.t[i]);
-      f.reference.push_back(d.reference[i]);
-      f.reading.push_back(d.reading[i]);
-      if (!d.shear.empty()) f.shear.push_back(d.shear[i]);
-      f.trial.push_back(d.trial.empty() ? 0 : d.trial[i]);
-    }
-  }
-  return f;
-}
 
 // The form named by FormName (kOnly for "").
 Form FormFromName(const std::string& name) {
@@ -119,14 +101,20 @@ std::optional<BlockFinding> AuditBlock(const MeasuredData& d, int first, int las
                                        const AuditOptions& o, const Selection& global) {
   const int n = last - first, n_train = static_cast<int>(std::lround(n * (1 - o.heldout_fraction)));
   if (n_train < o.min_samples / 2 || n - n_train < o.min_samples / 2) return std::nullopt;
-  const MeasuredData forward = RangesData(d, {{first, last}});
-  ChannelEvaluator fe(forward, n_train);
+  ChannelEvaluator fe(d, {{first, first + n_train}}, {{first + n_train, last}});
   Selection fs = LocalSelection(fe, global);
   AuditOptions one = o;
   one.max_causes = 1;
   one.min_gain = kBlockGainFactor * o.min_gain;
   AuditReport scratch;
   SelectCauses(fe, candidates, st, one, &fs, &scratch);
+  static const bool dbg = std::getenv("TF_BLOCK_DEBUG") != nullptr;
+  if (dbg) {
+    for (const auto& cand : scratch.candidates)
+      std::fprintf(stderr, "  block %d cand %s%s rms %.4g acc %d\n", block + 1, cand.effect.c_str(), cand.form.c_str(), cand.heldout_rms, int(cand.accepted));
+    std::fprintf(stderr, "  block %d base rms %.4g named %s\n", block + 1, std::sqrt(fs.fit.rss_heldout / fe.n_heldout()),
+                 scratch.causes.empty() ? "-" : scratch.causes.front().effect.c_str());
+  }
   if (scratch.causes.empty()) return std::nullopt;
   const Cause& c = scratch.causes.front();
   auto e = ParseEffect(c.effect);
@@ -137,8 +125,7 @@ std::optional<BlockFinding> AuditBlock(const MeasuredData& d, int first, int las
   if (!AddsEnough(fe, fs.params, *e, fs.k, one.min_gain)) return std::nullopt;
   // Reversed: train on the block's later part, score on its earlier part.
   const int cut = first + (n - n_train);
-  const MeasuredData reversed = RangesData(d, {{cut, last}, {first, cut}});
-  ChannelEvaluator re(reversed, last - cut);
+  ChannelEvaluator re(d, {{cut, last}}, {{first, cut}});
   Selection rs = LocalSelection(re, global);
   const Form form = FormFromName(c.form);
   const EffectParams start = StartForForm(rs.params, form);
@@ -148,8 +135,36 @@ std::optional<BlockFinding> AuditBlock(const MeasuredData& d, int first, int las
   const double rms0 = std::sqrt(rs.fit.rss_heldout / re.n_heldout()), rms1 = std::sqrt(ev.rss_heldout / re.n_heldout());
   const bool confirmed = Bic(ev.rss_heldout, re.n_heldout(), rs.k + NumParams(*e, fr.p)) < rs.bic &&
                          rms0 > 0 && 1 - rms1 / rms0 >= one.min_gain;
+  if (dbg) std::fprintf(stderr, "  block %d reversed %s rms %.4g -> %.4g confirmed %d\n", block + 1, c.effect.c_str(), rms0, rms1, int(confirmed));
   if (!confirmed || !AddsEnough(re, fr.p, *e, rs.k + NumParams(*e, fr.p), one.min_gain)) return std::nullopt;
   return BlockFinding{block, *e, c.form, c.heldout_rms_before, c.heldout_rms_after, c.gain, c.delta_bic};
+}
+
+// The mean held-out gain of an effect's block findings (percent).
+double MeanGain(const std::vector<BlockFinding>& fs) {
+  double g = 0;
+  for (const auto& f : fs) g += f.gain / fs.size();
+  return g;
+}
+
+// The effects' findings, most blocks first (ties: the larger mean gain).
+std::vector<const std::vector<BlockFinding>*> Ranked(const std::map<Effect, std::vector<BlockFinding>>& found) {
+  std::vector<const std::vector<BlockFinding>*> ranked;
+  for (const auto& [e, fs] : found) ranked.push_back(&fs);
+  std::stable_sort(ranked.begin(), ranked.end(), [](const auto* x, const auto* y) {
+    return x->size() != y->size() ? x->size() > y->size() : MeanGain(*x) > MeanGain(*y);
+  });
+  return ranked;
+}
+
+// Whether effect e, at its values in p (fitted elsewhere), lowers the
+// residual of the samples from `first` to the end (gain/offset fitted there,
+// with and without it) by kBlockGainFactor x min_gain and their BIC (e's
+// parameters counted though not fitted there).
+bool PredictsLater(const MeasuredData& d, int first, const EffectParams& p, Effect e, int k, double min_gain) {
+  const SampleRanges later = {{first, static_cast<int>(d.t.size())}};
+  ChannelEvaluator ev(d, later, later);
+  return AddsEnough(ev, p, e, k, kBlockGainFactor * min_gain);
 }
 
 }  // namespace
@@ -165,28 +180,30 @@ void SelectCausesBlocked(ChannelEvaluator& eng, ChannelEvaluator& all, const std
     if (auto f = AuditBlock(d, edges[b], edges[b + 1], b, candidates, st, o, *s)) found[f->effect].push_back(*f);
   }
   const std::vector<BlockFinding>* best = nullptr;
-  double best_gain = 0;
-  for (const auto& [e, fs] : found) {
-    // The selection above trained on the run's start: what it missed and a
-    // block shows is named only when the last block shows it (an effect
-    // that appears late); a finding in earlier blocks alone is left out
-    // (on hysteresis data such findings were artefacts of one block's fit).
-    if (fs.back().block != o.blocks - 1) continue;
-    double g = 0;
-    for (const auto& f : fs) g += f.gain / fs.size();
-    if (!best || fs.size() > best->size() || (fs.size() == best->size() && g > best_gain)) best = &fs, best_gain = g;
+  FitResult fr;
+  for (const std::vector<BlockFinding>* fs : Ranked(found)) {
+    if (o.interrupt && o.interrupt()) return;
+    SampleRanges ranges;
+    for (const auto& f : *fs) ranges.emplace_back(edges[f.block], edges[f.block + 1]);
+    ChannelEvaluator on_shown(d, ranges, {});
+    const Effect e = fs->front().effect;
+    const Form form = FormFromName(fs->front().form);
+    const EffectParams start = StartForForm(s->params, form);
+    fr = form == Form::kPrandtlIshlinskii ? FitPrandtlIshlinskii(on_shown, start, s->Refitted(), st, o)
+                                          : FitEffect(on_shown, e, start, s->Refitted(), st, o, form);
+    if (EffectOff(fr.p, e) == fr.p) continue;
+    // The selection above trained on the run's start: what a block shows
+    // and it missed is a change of the sensor, named only when it persists
+    // to the end: the last block shows it, or the fit on the blocks that
+    // show it predicts every later block (their samples unused by it).
+    const int after = fs->back().block + 1;
+    if (after == o.blocks || PredictsLater(d, edges[after], fr.p, e, s->k + NumParams(e, fr.p), o.min_gain)) {
+      best = fs;
+      break;
+    }
   }
   if (!best) return;
   const Effect e = best->front().effect;
-  std::vector<std::pair<int, int>> ranges;
-  for (const auto& f : *best) ranges.emplace_back(edges[f.block], edges[f.block + 1]);
-  const MeasuredData shown = RangesData(d, ranges);
-  ChannelEvaluator on_shown(shown, static_cast<int>(shown.t.size()));
-  const Form form = FormFromName(best->front().form);
-  const EffectParams start = StartForForm(s->params, form);
-  FitResult fr = form == Form::kPrandtlIshlinskii ? FitPrandtlIshlinskii(on_shown, start, s->Refitted(), st, o)
-                                                  : FitEffect(on_shown, e, start, s->Refitted(), st, o, form);
-  if (EffectOff(fr.p, e) == fr.p) return;
   const int k_added = NumParams(e, fr.p);
   s->named.push_back(e);
   s->params = fr.p;
@@ -205,7 +222,8 @@ void SelectCausesBlocked(ChannelEvaluator& eng, ChannelEvaluator& all, const std
     c.delta_bic += f.delta_bic;
     c.blocks.push_back(f.block + 1);
   }
-  c.gain = best_gain;
+  for (int b = best->back().block + 2; b <= o.blocks; ++b) c.blocks.push_back(b);  // the later blocks it predicts
+  c.gain = MeanGain(*best);
   c.found_by = "blocked";
   rep->causes.push_back(c);
 }
