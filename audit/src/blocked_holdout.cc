@@ -5,18 +5,21 @@
 // like drift). So each of `blocks` contiguous blocks of equal sample count is
 // audited on its own, with the same held-out rule inside the block: its first
 // 1 - heldout_fraction trains, its rest scores (one selection round on top of
-// the causes already named). A cause named there must be confirmed with the
-// split reversed (fitted on the block's later part, scored on its earlier
-// part, the same BIC test, both gaining at least 2 x min_gain: several
-// blocks are searched), so a block's chance fit is not named; in both, the
-// effect must also beat the same fit with it switched off (the gain of a
-// round also holds the joint re-fit of the effects already named). The
-// effect confirmed in the most blocks (ties: the larger mean held-out gain)
-// becomes a cause, re-fitted on the blocks that show it, when the last block
-// is among them.
+// the causes already named). The channel always runs from the recording's
+// start: a block is a range of sample indices, not a segment of its own, so
+// hysteresis, lag and delay enter it in the state the recording leads to (a
+// restart at the block edge, often mid-press, is a transient the block's fit
+// would explain with an extra effect). A cause named there must be confirmed
+// with the split reversed (fitted on the block's later part, scored on its
+// earlier part, the same BIC test, both gaining at least 2 x min_gain:
+// several blocks are searched), or, when the later part holds no trace of
+// it (an intermittent effect), explain the forward training part by that
+// gain too; in both, the effect must beat the same fit with it switched off
+// (the gain of a round also holds the joint re-fit of the effects already
+// named). The effect confirmed in the most blocks (ties: the larger mean
+// held-out gain) that no later sample contradicts becomes a cause, re-fitted
+// on the blocks that show it.
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -94,6 +97,38 @@ struct BlockFinding {
   double rms_before = 0, rms_after = 0, gain = 0, delta_bic = 0;
 };
 
+// How much effect e in p lowers the training RMS on `eng` (relative; gain and
+// offset fitted with and without it).
+double TrainGain(ChannelEvaluator& eng, const EffectParams& p, Effect e) {
+  const double rss_with = eng.Evaluate(p, false).rss_train, rss_off = eng.Evaluate(EffectOff(p, e), false).rss_train;
+  return rss_off > 0 ? 1 - std::sqrt(rss_with / rss_off) : 0;
+}
+
+// The reversed split's verdict on effect e found in a block's forward split.
+enum class Reversed { kConfirms, kRefutes, kCannotTell };
+
+// Fits e (in `form`) on the block's later part [cut, last) on top of
+// `global` and scores it on the earlier part [first, cut) with the block
+// tests (BIC, min_gain, beats the same fit with e off): kConfirms when it
+// passes; kCannotTell when the later part holds no trace of e (e lowers its
+// training RMS by less than min_gain: an intermittent effect, e.g. no force
+// above a saturation level there); else kRefutes.
+Reversed CheckReversed(const MeasuredData& d, int first, int cut, int last, Effect e, Form form, const RunStats& st,
+                       const AuditOptions& o, double min_gain, const Selection& global) {
+  ChannelEvaluator re(d, {{cut, last}}, {{first, cut}});
+  Selection rs = LocalSelection(re, global);
+  const EffectParams start = StartForForm(rs.params, form);
+  FitResult fr = form == Form::kPrandtlIshlinskii ? FitPrandtlIshlinskii(re, start, rs.Refitted(), st, o)
+                                                  : FitEffect(re, e, start, rs.Refitted(), st, o, form);
+  const AffineFit ev = re.Evaluate(fr.p, true);
+  const int k = rs.k + NumParams(e, fr.p);
+  const double rms0 = std::sqrt(rs.fit.rss_heldout / re.n_heldout()), rms1 = std::sqrt(ev.rss_heldout / re.n_heldout());
+  if (Bic(ev.rss_heldout, re.n_heldout(), k) < rs.bic && rms0 > 0 && 1 - rms1 / rms0 >= min_gain &&
+      AddsEnough(re, fr.p, e, k, min_gain))
+    return Reversed::kConfirms;
+  return TrainGain(re, fr.p, e) >= min_gain ? Reversed::kRefutes : Reversed::kCannotTell;
+}
+
 // The block's own audit (one round on top of `global`) and the reversed-split
 // confirmation; nullopt when nothing is named or it is not confirmed.
 std::optional<BlockFinding> AuditBlock(const MeasuredData& d, int first, int last, int block,
@@ -108,13 +143,6 @@ std::optional<BlockFinding> AuditBlock(const MeasuredData& d, int first, int las
   one.min_gain = kBlockGainFactor * o.min_gain;
   AuditReport scratch;
   SelectCauses(fe, candidates, st, one, &fs, &scratch);
-  static const bool dbg = std::getenv("TF_BLOCK_DEBUG") != nullptr;
-  if (dbg) {
-    for (const auto& cand : scratch.candidates)
-      std::fprintf(stderr, "  block %d cand %s%s rms %.4g acc %d\n", block + 1, cand.effect.c_str(), cand.form.c_str(), cand.heldout_rms, int(cand.accepted));
-    std::fprintf(stderr, "  block %d base rms %.4g named %s\n", block + 1, std::sqrt(fs.fit.rss_heldout / fe.n_heldout()),
-                 scratch.causes.empty() ? "-" : scratch.causes.front().effect.c_str());
-  }
   if (scratch.causes.empty()) return std::nullopt;
   const Cause& c = scratch.causes.front();
   auto e = ParseEffect(c.effect);
@@ -124,19 +152,14 @@ std::optional<BlockFinding> AuditBlock(const MeasuredData& d, int first, int las
   // the gain asked for (else the gain came from re-fitting the named ones).
   if (!AddsEnough(fe, fs.params, *e, fs.k, one.min_gain)) return std::nullopt;
   // Reversed: train on the block's later part, score on its earlier part.
-  const int cut = first + (n - n_train);
-  ChannelEvaluator re(d, {{cut, last}}, {{first, cut}});
-  Selection rs = LocalSelection(re, global);
-  const Form form = FormFromName(c.form);
-  const EffectParams start = StartForForm(rs.params, form);
-  FitResult fr = form == Form::kPrandtlIshlinskii ? FitPrandtlIshlinskii(re, start, rs.Refitted(), st, o)
-                                                  : FitEffect(re, *e, start, rs.Refitted(), st, o, form);
-  const AffineFit ev = re.Evaluate(fr.p, true);
-  const double rms0 = std::sqrt(rs.fit.rss_heldout / re.n_heldout()), rms1 = std::sqrt(ev.rss_heldout / re.n_heldout());
-  const bool confirmed = Bic(ev.rss_heldout, re.n_heldout(), rs.k + NumParams(*e, fr.p)) < rs.bic &&
-                         rms0 > 0 && 1 - rms1 / rms0 >= one.min_gain;
-  if (dbg) std::fprintf(stderr, "  block %d reversed %s rms %.4g -> %.4g confirmed %d\n", block + 1, c.effect.c_str(), rms0, rms1, int(confirmed));
-  if (!confirmed || !AddsEnough(re, fr.p, *e, rs.k + NumParams(*e, fr.p), one.min_gain)) return std::nullopt;
+  const Reversed r = CheckReversed(d, first, first + (n - n_train), last, *e, FormFromName(c.form), st, o,
+                                   one.min_gain, global);
+  // A reversed split that cannot tell leaves the forward split alone: the
+  // effect must then explain its own training part too, by the same gain. A
+  // fit to noise lowers the training RSS by about (its parameters) / n, far
+  // below that (the chance findings of a block pass only on held-out data).
+  if (r == Reversed::kRefutes || (r == Reversed::kCannotTell && TrainGain(fe, fs.params, *e) < one.min_gain))
+    return std::nullopt;
   return BlockFinding{block, *e, c.form, c.heldout_rms_before, c.heldout_rms_after, c.gain, c.delta_bic};
 }
 
@@ -157,14 +180,16 @@ std::vector<const std::vector<BlockFinding>*> Ranked(const std::map<Effect, std:
   return ranked;
 }
 
-// Whether effect e, at its values in p (fitted elsewhere), lowers the
-// residual of the samples from `first` to the end (gain/offset fitted there,
-// with and without it) by kBlockGainFactor x min_gain and their BIC (e's
-// parameters counted though not fitted there).
-bool PredictsLater(const MeasuredData& d, int first, const EffectParams& p, Effect e, int k, double min_gain) {
+// Whether the samples from `first` to the end contradict effect e at its
+// values in p (fitted on earlier samples): with it, their residual RMS
+// (gain/offset fitted there, with and without it) is higher by min_gain or
+// more. Data that cannot show the effect (e.g. no force above a saturation
+// level) leave the RMS unchanged and do not contradict it.
+bool Contradicts(const MeasuredData& d, int first, const EffectParams& p, Effect e, double min_gain) {
   const SampleRanges later = {{first, static_cast<int>(d.t.size())}};
-  ChannelEvaluator ev(d, later, later);
-  return AddsEnough(ev, p, e, k, kBlockGainFactor * min_gain);
+  ChannelEvaluator ev(d, later, {});
+  const double rss_with = ev.Evaluate(p, false).rss_train, rss_off = ev.Evaluate(EffectOff(p, e), false).rss_train;
+  return rss_with > 0 && 1 - std::sqrt(rss_off / rss_with) >= min_gain;
 }
 
 }  // namespace
@@ -193,11 +218,11 @@ void SelectCausesBlocked(ChannelEvaluator& eng, ChannelEvaluator& all, const std
                                           : FitEffect(on_shown, e, start, s->Refitted(), st, o, form);
     if (EffectOff(fr.p, e) == fr.p) continue;
     // The selection above trained on the run's start: what a block shows
-    // and it missed is a change of the sensor, named only when it persists
-    // to the end: the last block shows it, or the fit on the blocks that
-    // show it predicts every later block (their samples unused by it).
+    // and it missed is a change of the sensor, named when nothing later
+    // contradicts it (a sensor change persists; a block's chance fit or a
+    // transient is worse than nothing on the later blocks).
     const int after = fs->back().block + 1;
-    if (after == o.blocks || PredictsLater(d, edges[after], fr.p, e, s->k + NumParams(e, fr.p), o.min_gain)) {
+    if (after == o.blocks || !Contradicts(d, edges[after], fr.p, e, o.min_gain)) {
       best = fs;
       break;
     }
@@ -222,7 +247,6 @@ void SelectCausesBlocked(ChannelEvaluator& eng, ChannelEvaluator& all, const std
     c.delta_bic += f.delta_bic;
     c.blocks.push_back(f.block + 1);
   }
-  for (int b = best->back().block + 2; b <= o.blocks; ++b) c.blocks.push_back(b);  // the later blocks it predicts
   c.gain = MeanGain(*best);
   c.found_by = "blocked";
   rep->causes.push_back(c);

@@ -63,9 +63,15 @@ def read_samples(path: str, taxels: Optional[int] = None) -> Tuple[List[audit_pb
     number, and the number of rows skipped for an empty or NaN field.
     Per-taxel columns go into AuditSample.taxels (see the module doc)."""
     col, rows = open_table(path, ["t", "reference"])
-    taxel_names = taxel_columns(path, col, taxels)
-    if "reading" not in col and not taxel_names:
-        raise BadInput(f"{path}: missing column(s) reading (or per-taxel columns taxel_0 ... taxel_<N-1>)")
+    try:
+        taxel_names = taxel_columns(path, col, taxels)
+        if "reading" not in col and not taxel_names:
+            raise BadInput(f"{path}: missing column(s) reading (or per-taxel columns taxel_0 ... taxel_<N-1>)")
+    except BadInput:
+        # The rows' generator holds the open file: start and close it.
+        next(rows, None)
+        rows.close()
+        raise
     # Taxels before the reading: a bad taxel value also spoils their sum.
     fields = ["t", "reference"] + taxel_names + [name for name in ("reading", "shear", "trial") if name in col]
     samples, skipped = [], 0
