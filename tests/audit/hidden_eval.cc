@@ -10,7 +10,7 @@
 //            hidden-effect tolerance, the last block among those showing it
 // Usage: audit_hidden_eval [--seeds N] [--first-seed I] [--blocks K]
 //          [--suite partial|phantom|late|all] [--effect E (late: only E)]
-//        audit_hidden_eval --suite one|one-late --seed S [--effect E]
+//        audit_hidden_eval --suite one|one-late --seed S [--effect E [--effect2 E2]]
 // Seed indices I .. I + N - 1 (0-199 and 1000-1199 are the README's two
 // ranges). Prints one line per case type and every failure; a late
 // saturation's failure also says how much of the last third lies above the
@@ -38,6 +38,7 @@ struct Args {
   int first_seed = 0;   // seed indices first_seed .. first_seed + seeds - 1
   long long seed = -1;  // --suite one: the hidden-effect case of this seed, summary printed
   bool late = false;    // --suite one-late: MakeLateCase
+  std::string effect2;  // --suite one: a second hidden effect (--effect2)
   std::string effect;   // --suite one: the hidden effect (empty: the null case)
 };
 
@@ -45,6 +46,7 @@ struct Args {
 void One(const Args& a) {
   std::vector<Effect> effects;
   if (!a.effect.empty()) effects.push_back(*ParseEffect(a.effect));
+  if (!a.effect2.empty()) effects.push_back(*ParseEffect(a.effect2));
   auto hc = a.late && effects.size() == 1 ? testing::MakeLateCase(effects[0], static_cast<uint64_t>(a.seed))
                                           : testing::MakeHiddenCase(effects, static_cast<uint64_t>(a.seed));
   AuditOptions o = FastOptions(hc);
@@ -233,6 +235,7 @@ int main(int argc, char** argv) {
     else if (k == "--suite") a.suite = v;
     else if (k == "--seed") a.seed = std::atoll(v.c_str());
     else if (k == "--effect" && ParseEffectOk(v)) a.effect = v;
+    else if (k == "--effect2" && ParseEffectOk(v)) a.effect2 = v;
     else {
       std::cerr << "unknown flag " << k << "\n";
       return 2;
