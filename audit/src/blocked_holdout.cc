@@ -17,8 +17,8 @@
 // gain too; in both, the effect must beat the same fit with it switched off
 // (the gain of a round also holds the joint re-fit of the effects already
 // named). The effect confirmed in the most blocks (ties: the larger mean
-// held-out gain) that no later sample contradicts becomes a cause, re-fitted
-// on the blocks that show it.
+// held-out gain) that persists to the end becomes a cause, re-fitted on the
+// blocks that show it.
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -180,16 +180,24 @@ std::vector<const std::vector<BlockFinding>*> Ranked(const std::map<Effect, std:
   return ranked;
 }
 
-// Whether the samples from `first` to the end contradict effect e at its
-// values in p (fitted on earlier samples): with it, their residual RMS
-// (gain/offset fitted there, with and without it) is higher by min_gain or
-// more. Data that cannot show the effect (e.g. no force above a saturation
-// level) leave the RMS unchanged and do not contradict it.
-bool Contradicts(const MeasuredData& d, int first, const EffectParams& p, Effect e, double min_gain) {
+// Whether effect e, at its values in p (fitted on earlier samples), persists
+// on the samples from `first` to the end (gain/offset fitted there, with and
+// without it): they show it (its residual RMS drops by min_gain or more), or
+// they cannot show it (it changes their predicted reading by less than
+// min_gain x their residual RMS, e.g. no force above a saturation level).
+// A chance fit or a transient changes the prediction there and does not help.
+bool PersistsLater(const MeasuredData& d, int first, const EffectParams& p, Effect e, double min_gain) {
   const SampleRanges later = {{first, static_cast<int>(d.t.size())}};
   ChannelEvaluator ev(d, later, {});
-  const double rss_with = ev.Evaluate(p, false).rss_train, rss_off = ev.Evaluate(EffectOff(p, e), false).rss_train;
-  return rss_with > 0 && 1 - std::sqrt(rss_off / rss_with) >= min_gain;
+  const EffectParams off_params = EffectOff(p, e);
+  const AffineFit with = ev.Evaluate(p, false), off = ev.Evaluate(off_params, false);
+  if (!(off.rss_train > 0)) return false;
+  if (1 - std::sqrt(with.rss_train / off.rss_train) >= min_gain) return true;
+  const std::vector<double> g_with = ev.TrainChannel(p);
+  const std::vector<double>& g_off = ev.TrainChannel(off_params);
+  double change = 0;
+  for (size_t i = 0; i < g_with.size(); ++i) change += std::pow(off.a * (g_with[i] - g_off[i]), 2);
+  return std::sqrt(change / off.rss_train) < min_gain;
 }
 
 }  // namespace
@@ -218,11 +226,10 @@ void SelectCausesBlocked(ChannelEvaluator& eng, ChannelEvaluator& all, const std
                                           : FitEffect(on_shown, e, start, s->Refitted(), st, o, form);
     if (EffectOff(fr.p, e) == fr.p) continue;
     // The selection above trained on the run's start: what a block shows
-    // and it missed is a change of the sensor, named when nothing later
-    // contradicts it (a sensor change persists; a block's chance fit or a
-    // transient is worse than nothing on the later blocks).
+    // and it missed is a change of the sensor, named when it persists to
+    // the end (a block's chance fit or a transient does not).
     const int after = fs->back().block + 1;
-    if (after == o.blocks || !Contradicts(d, edges[after], fr.p, e, o.min_gain)) {
+    if (after == o.blocks || PersistsLater(d, edges[after], fr.p, e, o.min_gain)) {
       best = fs;
       break;
     }
