@@ -5,15 +5,20 @@
 // like drift). So each of `blocks` contiguous blocks of equal sample count is
 // audited on its own, with the same held-out rule inside the block: its first
 // 1 - heldout_fraction trains, its rest scores (one selection round on top of
-// the causes already named). A cause named there must be confirmed with the
-// split reversed (fitted on the block's later part, scored on its earlier
-// part, the same BIC test, both gaining at least 2 x min_gain: several
-// blocks are searched), so a block's chance fit is not named; in both, the
-// effect must also beat the same fit with it switched off (the gain of a
-// round also holds the joint re-fit of the effects already named). The
-// effect confirmed in the most blocks (ties: the larger mean held-out gain)
-// becomes a cause, re-fitted on the blocks that show it, when the last block
-// is among them.
+// the causes already named). The channel always runs from the recording's
+// start: a block is a range of sample indices, not a segment of its own, so
+// hysteresis, lag and delay enter it in the state the recording leads to (a
+// restart at the block edge, often mid-press, is a transient the block's fit
+// would explain with an extra effect). A cause named there must be confirmed
+// with the split reversed (fitted on the block's later part, scored on its
+// earlier part, the same BIC test, both gaining at least 2 x min_gain:
+// several blocks are searched), or, when the later part holds no trace of
+// it (an intermittent effect), explain the forward training part by that
+// gain too; in both, the effect must beat the same fit with it switched off
+// (the gain of a round also holds the joint re-fit of the effects already
+// named). The effect confirmed in the most blocks (ties: the larger mean
+// held-out gain) that persists to the end becomes a cause, re-fitted on the
+// blocks that show it.
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -48,26 +53,6 @@ EffectParams EffectOff(EffectParams p, Effect e) {
 }
 
 namespace {
-
-// The sample ranges [first, last) of d in the given order, each a segment
-// (and a segment at every trial start inside one).
-MeasuredData RangesData(const MeasuredData& d, const std::vector<std::pair<int, int>>& ranges) {
-  MeasuredData f;
-  f.source = d.source;
-  for (const auto& [first, last] : ranges) {
-    f.segment_starts.push_back(static_cast<int>(f.t.size()));
-    for (int i = first; i < last; ++i) {
-      if (i > first && std::binary_search(d.segment_starts.begin(), d.segment_starts.end(), i))
-        f.segment_starts.push_back(static_cast<int>(f.t.size()));
-      f.t.push_back(d.t[i]);
-      f.reference.push_back(d.reference[i]);
-      f.reading.push_back(d.reading[i]);
-      if (!d.shear.empty()) f.shear.push_back(d.shear[i]);
-      f.trial.push_back(d.trial.empty() ? 0 : d.trial[i]);
-    }
-  }
-  return f;
-}
 
 // The form named by FormName (kOnly for "").
 Form FormFromName(const std::string& name) {
@@ -112,6 +97,38 @@ struct BlockFinding {
   double rms_before = 0, rms_after = 0, gain = 0, delta_bic = 0;
 };
 
+// How much effect e in p lowers the training RMS on `eng` (relative; gain and
+// offset fitted with and without it).
+double TrainGain(ChannelEvaluator& eng, const EffectParams& p, Effect e) {
+  const double rss_with = eng.Evaluate(p, false).rss_train, rss_off = eng.Evaluate(EffectOff(p, e), false).rss_train;
+  return rss_off > 0 ? 1 - std::sqrt(rss_with / rss_off) : 0;
+}
+
+// The reversed split's verdict on effect e found in a block's forward split.
+enum class Reversed { kConfirms, kRefutes, kCannotTell };
+
+// Fits e (in `form`) on the block's later part [cut, last) on top of
+// `global` and scores it on the earlier part [first, cut) with the block
+// tests (BIC, min_gain, beats the same fit with e off): kConfirms when it
+// passes; kCannotTell when the later part holds no trace of e (e lowers its
+// training RMS by less than min_gain: an intermittent effect, e.g. no force
+// above a saturation level there); else kRefutes.
+Reversed CheckReversed(const MeasuredData& d, int first, int cut, int last, Effect e, Form form, const RunStats& st,
+                       const AuditOptions& o, double min_gain, const Selection& global) {
+  ChannelEvaluator re(d, {{cut, last}}, {{first, cut}});
+  Selection rs = LocalSelection(re, global);
+  const EffectParams start = StartForForm(rs.params, form);
+  FitResult fr = form == Form::kPrandtlIshlinskii ? FitPrandtlIshlinskii(re, start, rs.Refitted(), st, o)
+                                                  : FitEffect(re, e, start, rs.Refitted(), st, o, form);
+  const AffineFit ev = re.Evaluate(fr.p, true);
+  const int k = rs.k + NumParams(e, fr.p);
+  const double rms0 = std::sqrt(rs.fit.rss_heldout / re.n_heldout()), rms1 = std::sqrt(ev.rss_heldout / re.n_heldout());
+  if (Bic(ev.rss_heldout, re.n_heldout(), k) < rs.bic && rms0 > 0 && 1 - rms1 / rms0 >= min_gain &&
+      AddsEnough(re, fr.p, e, k, min_gain))
+    return Reversed::kConfirms;
+  return TrainGain(re, fr.p, e) >= min_gain ? Reversed::kRefutes : Reversed::kCannotTell;
+}
+
 // The block's own audit (one round on top of `global`) and the reversed-split
 // confirmation; nullopt when nothing is named or it is not confirmed.
 std::optional<BlockFinding> AuditBlock(const MeasuredData& d, int first, int last, int block,
@@ -119,8 +136,7 @@ std::optional<BlockFinding> AuditBlock(const MeasuredData& d, int first, int las
                                        const AuditOptions& o, const Selection& global) {
   const int n = last - first, n_train = static_cast<int>(std::lround(n * (1 - o.heldout_fraction)));
   if (n_train < o.min_samples / 2 || n - n_train < o.min_samples / 2) return std::nullopt;
-  const MeasuredData forward = RangesData(d, {{first, last}});
-  ChannelEvaluator fe(forward, n_train);
+  ChannelEvaluator fe(d, {{first, first + n_train}}, {{first + n_train, last}});
   Selection fs = LocalSelection(fe, global);
   AuditOptions one = o;
   one.max_causes = 1;
@@ -136,20 +152,52 @@ std::optional<BlockFinding> AuditBlock(const MeasuredData& d, int first, int las
   // the gain asked for (else the gain came from re-fitting the named ones).
   if (!AddsEnough(fe, fs.params, *e, fs.k, one.min_gain)) return std::nullopt;
   // Reversed: train on the block's later part, score on its earlier part.
-  const int cut = first + (n - n_train);
-  const MeasuredData reversed = RangesData(d, {{cut, last}, {first, cut}});
-  ChannelEvaluator re(reversed, last - cut);
-  Selection rs = LocalSelection(re, global);
-  const Form form = FormFromName(c.form);
-  const EffectParams start = StartForForm(rs.params, form);
-  FitResult fr = form == Form::kPrandtlIshlinskii ? FitPrandtlIshlinskii(re, start, rs.Refitted(), st, o)
-                                                  : FitEffect(re, *e, start, rs.Refitted(), st, o, form);
-  const AffineFit ev = re.Evaluate(fr.p, true);
-  const double rms0 = std::sqrt(rs.fit.rss_heldout / re.n_heldout()), rms1 = std::sqrt(ev.rss_heldout / re.n_heldout());
-  const bool confirmed = Bic(ev.rss_heldout, re.n_heldout(), rs.k + NumParams(*e, fr.p)) < rs.bic &&
-                         rms0 > 0 && 1 - rms1 / rms0 >= one.min_gain;
-  if (!confirmed || !AddsEnough(re, fr.p, *e, rs.k + NumParams(*e, fr.p), one.min_gain)) return std::nullopt;
+  const Reversed r = CheckReversed(d, first, first + (n - n_train), last, *e, FormFromName(c.form), st, o,
+                                   one.min_gain, global);
+  // A reversed split that cannot tell leaves the forward split alone: the
+  // effect must then explain its own training part too, by the same gain. A
+  // fit to noise lowers the training RSS by about (its parameters) / n, far
+  // below that (the chance findings of a block pass only on held-out data).
+  if (r == Reversed::kRefutes || (r == Reversed::kCannotTell && TrainGain(fe, fs.params, *e) < one.min_gain))
+    return std::nullopt;
   return BlockFinding{block, *e, c.form, c.heldout_rms_before, c.heldout_rms_after, c.gain, c.delta_bic};
+}
+
+// The mean held-out gain of an effect's block findings (percent).
+double MeanGain(const std::vector<BlockFinding>& fs) {
+  double g = 0;
+  for (const auto& f : fs) g += f.gain / fs.size();
+  return g;
+}
+
+// The effects' findings, most blocks first (ties: the larger mean gain).
+std::vector<const std::vector<BlockFinding>*> Ranked(const std::map<Effect, std::vector<BlockFinding>>& found) {
+  std::vector<const std::vector<BlockFinding>*> ranked;
+  for (const auto& [e, fs] : found) ranked.push_back(&fs);
+  std::stable_sort(ranked.begin(), ranked.end(), [](const auto* x, const auto* y) {
+    return x->size() != y->size() ? x->size() > y->size() : MeanGain(*x) > MeanGain(*y);
+  });
+  return ranked;
+}
+
+// Whether effect e, at its values in p (fitted on earlier samples), persists
+// on the samples from `first` to the end (gain/offset fitted there, with and
+// without it): they show it (its residual RMS drops by min_gain or more), or
+// they cannot show it (it changes their predicted reading by less than
+// min_gain x their residual RMS, e.g. no force above a saturation level).
+// A chance fit or a transient changes the prediction there and does not help.
+bool PersistsLater(const MeasuredData& d, int first, const EffectParams& p, Effect e, double min_gain) {
+  const SampleRanges later = {{first, static_cast<int>(d.t.size())}};
+  ChannelEvaluator ev(d, later, {});
+  const EffectParams off_params = EffectOff(p, e);
+  const AffineFit with = ev.Evaluate(p, false), off = ev.Evaluate(off_params, false);
+  if (!(off.rss_train > 0)) return false;
+  if (1 - std::sqrt(with.rss_train / off.rss_train) >= min_gain) return true;
+  const std::vector<double> g_with = ev.TrainChannel(p);
+  const std::vector<double>& g_off = ev.TrainChannel(off_params);
+  double change = 0;
+  for (size_t i = 0; i < g_with.size(); ++i) change += std::pow(off.a * (g_with[i] - g_off[i]), 2);
+  return std::sqrt(change / off.rss_train) < min_gain;
 }
 
 }  // namespace
@@ -165,28 +213,29 @@ void SelectCausesBlocked(ChannelEvaluator& eng, ChannelEvaluator& all, const std
     if (auto f = AuditBlock(d, edges[b], edges[b + 1], b, candidates, st, o, *s)) found[f->effect].push_back(*f);
   }
   const std::vector<BlockFinding>* best = nullptr;
-  double best_gain = 0;
-  for (const auto& [e, fs] : found) {
-    // The selection above trained on the run's start: what it missed and a
-    // block shows is named only when the last block shows it (an effect
-    // that appears late); a finding in earlier blocks alone is left out
-    // (on hysteresis data such findings were artefacts of one block's fit).
-    if (fs.back().block != o.blocks - 1) continue;
-    double g = 0;
-    for (const auto& f : fs) g += f.gain / fs.size();
-    if (!best || fs.size() > best->size() || (fs.size() == best->size() && g > best_gain)) best = &fs, best_gain = g;
+  FitResult fr;
+  for (const std::vector<BlockFinding>* fs : Ranked(found)) {
+    if (o.interrupt && o.interrupt()) return;
+    SampleRanges ranges;
+    for (const auto& f : *fs) ranges.emplace_back(edges[f.block], edges[f.block + 1]);
+    ChannelEvaluator on_shown(d, ranges, {});
+    const Effect e = fs->front().effect;
+    const Form form = FormFromName(fs->front().form);
+    const EffectParams start = StartForForm(s->params, form);
+    fr = form == Form::kPrandtlIshlinskii ? FitPrandtlIshlinskii(on_shown, start, s->Refitted(), st, o)
+                                          : FitEffect(on_shown, e, start, s->Refitted(), st, o, form);
+    if (EffectOff(fr.p, e) == fr.p) continue;
+    // The selection above trained on the run's start: what a block shows
+    // and it missed is a change of the sensor, named when it persists to
+    // the end (a block's chance fit or a transient does not).
+    const int after = fs->back().block + 1;
+    if (after == o.blocks || PersistsLater(d, edges[after], fr.p, e, o.min_gain)) {
+      best = fs;
+      break;
+    }
   }
   if (!best) return;
   const Effect e = best->front().effect;
-  std::vector<std::pair<int, int>> ranges;
-  for (const auto& f : *best) ranges.emplace_back(edges[f.block], edges[f.block + 1]);
-  const MeasuredData shown = RangesData(d, ranges);
-  ChannelEvaluator on_shown(shown, static_cast<int>(shown.t.size()));
-  const Form form = FormFromName(best->front().form);
-  const EffectParams start = StartForForm(s->params, form);
-  FitResult fr = form == Form::kPrandtlIshlinskii ? FitPrandtlIshlinskii(on_shown, start, s->Refitted(), st, o)
-                                                  : FitEffect(on_shown, e, start, s->Refitted(), st, o, form);
-  if (EffectOff(fr.p, e) == fr.p) return;
   const int k_added = NumParams(e, fr.p);
   s->named.push_back(e);
   s->params = fr.p;
@@ -205,7 +254,7 @@ void SelectCausesBlocked(ChannelEvaluator& eng, ChannelEvaluator& all, const std
     c.delta_bic += f.delta_bic;
     c.blocks.push_back(f.block + 1);
   }
-  c.gain = best_gain;
+  c.gain = MeanGain(*best);
   c.found_by = "blocked";
   rep->causes.push_back(c);
 }

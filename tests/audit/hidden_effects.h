@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
+#include <iostream>
 #include <algorithm>
 #include <atomic>
 #include <random>
@@ -26,6 +28,18 @@ struct HiddenCase {
 };
 
 inline constexpr double kMaxPeak = 8.0;
+
+// The seed of the cases drawn at test time: TACTFORCE_TEST_SEED or a random
+// one, printed so that a failure can be repeated.
+inline uint64_t TestSeed() {
+  static const uint64_t seed = [] {
+    const char* env = std::getenv("TACTFORCE_TEST_SEED");
+    const uint64_t s = env ? std::strtoull(env, nullptr, 10) : std::random_device{}();
+    std::cout << "[ seed ] TACTFORCE_TEST_SEED=" << s << "\n";
+    return s;
+  }();
+  return seed;
+}
 
 // Audit options for the many-seed tests: no downstream gain, no
 // uncertainties (the expensive extras), the case's reading units.

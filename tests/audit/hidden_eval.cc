@@ -8,8 +8,15 @@
 //   late     each of the eight effects only in the last third of the run:
 //            named (any rank), named first, parameter within the
 //            hidden-effect tolerance, the last block among those showing it
-// Usage: audit_hidden_eval [--seeds N] [--blocks K] [--suite partial|phantom|late|all]
-// Prints one line per case type and every failure.
+// Usage: audit_hidden_eval [--seeds N] [--first-seed I] [--blocks K]
+//          [--suite partial|phantom|late|all] [--effect E (late: only E)]
+//        audit_hidden_eval --suite one|one-late --seed S [--effect E [--effect2 E2]]
+// Seed indices I .. I + N - 1 (0-199 and 1000-1199 are the README's two
+// ranges). Prints one line per case type and every failure; a late
+// saturation's failure also says how much of the last third lies above the
+// saturation level (none: the data hold no trace of it). one: the summary of
+// one hidden-effect case (one-late: its late-only variant).
+#include <algorithm>
 #include <atomic>
 #include <cstdlib>
 #include <iostream>
@@ -28,7 +35,10 @@ struct Args {
   int seeds = 200;
   int blocks = 4;
   std::string suite = "all";
+  int first_seed = 0;   // seed indices first_seed .. first_seed + seeds - 1
   long long seed = -1;  // --suite one: the hidden-effect case of this seed, summary printed
+  bool late = false;    // --suite one-late: MakeLateCase
+  std::string effect2;  // --suite one: a second hidden effect (--effect2)
   std::string effect;   // --suite one: the hidden effect (empty: the null case)
 };
 
@@ -36,7 +46,9 @@ struct Args {
 void One(const Args& a) {
   std::vector<Effect> effects;
   if (!a.effect.empty()) effects.push_back(*ParseEffect(a.effect));
-  auto hc = testing::MakeHiddenCase(effects, static_cast<uint64_t>(a.seed));
+  if (!a.effect2.empty()) effects.push_back(*ParseEffect(a.effect2));
+  auto hc = a.late && effects.size() == 1 ? testing::MakeLateCase(effects[0], static_cast<uint64_t>(a.seed))
+                                          : testing::MakeHiddenCase(effects, static_cast<uint64_t>(a.seed));
   AuditOptions o = FastOptions(hc);
   o.blocks = a.blocks;
   auto rep = RunAudit(hc.data, o);
@@ -58,7 +70,8 @@ void PartialActivation(const Args& a) {
   std::atomic<int> named_first{0}, fraction_ok{0}, clean_not_named{0};
   std::mutex mu;
   std::vector<std::string> fails, false_named;
-  ForSeeds(a.seeds, [&](int i) {
+  ForSeeds(a.seeds, [&](int j) {
+    const int i = a.first_seed + j;
     const int dead = 1 + i % 8;
     auto tc = testing::MakeTaxelCase(2600000 + i, dead);
     AuditOptions o;
@@ -106,7 +119,7 @@ void Phantom(const Args& a) {
   std::mutex mu;
   std::vector<std::string> fails;
   ForSeeds(a.seeds, [&](int i) {
-    const uint64_t seed = 2800000 + i;
+    const uint64_t seed = 2800000 + a.first_seed + i;
     auto pc = testing::MakePhantomCase(seed);
     AuditOptions o = FastOptions(pc.hc);
     o.blocks = a.blocks;
@@ -137,14 +150,40 @@ void Phantom(const Args& a) {
   Report("[phantom] named first + phantom_force within 0.05 N + 20 %", correct, a.seeds, fails);
 }
 
+// Seed index i of effect e: 3000000 + 100000 floor(i / 1000) + 1000 e + i mod 1000
+// (indices 0-999 as before; 1000-1999 a disjoint range for every effect).
+uint64_t LateSeed(Effect e, int i) {
+  return 3000000 + 100000 * static_cast<uint64_t>(i / 1000) + 1000 * static_cast<int>(e) + i % 1000;
+}
+
+// For a late saturation: how much of the last third's force lies above the
+// level ("" for other effects), the evidence there is to find.
+std::string LateSaturationNote(const testing::HiddenCase& hc) {
+  const double level = hc.model.effects.saturation;
+  if (level <= 0) return "";
+  const auto& t = hc.data.t;
+  const double t_switch = t.front() + (t.back() - t.front()) * 2.0 / 3.0;
+  double peak = 0;
+  int above = 0, late = 0;
+  for (size_t i = 0; i < t.size(); ++i)
+    if (t[i] >= t_switch) {
+      ++late;
+      peak = std::max(peak, hc.data.reference[i]);
+      above += hc.data.reference[i] > level;
+    }
+  return "  [late peak " + std::to_string(peak) + " N, level " + std::to_string(level) + " N, " +
+         std::to_string(above) + "/" + std::to_string(late) + " late samples above]";
+}
+
 void LateEffects(const Args& a) {
   int all_named = 0, total = 0;
   for (Effect e : AllEffects()) {
+    if (!a.effect.empty() && EffectName(e) != a.effect) continue;
     std::atomic<int> named{0}, first{0}, param{0}, last_block{0};
     std::mutex mu;
     std::vector<std::string> fails;
     ForSeeds(a.seeds, [&](int i) {
-      const uint64_t seed = 3000000 + 1000 * static_cast<int>(e) + i;
+      const uint64_t seed = LateSeed(e, a.first_seed + i);
       auto hc = testing::MakeLateCase(e, seed);
       AuditOptions o = FastOptions(hc);
       o.blocks = a.blocks;
@@ -164,7 +203,8 @@ void LateEffects(const Args& a) {
         }
       if (!found) {
         std::lock_guard<std::mutex> lock(mu);
-        fails.push_back("seed " + std::to_string(seed) + ": named " + (got.empty() ? "nothing" : got));
+        fails.push_back("seed " + std::to_string(seed) + ": named " + (got.empty() ? "nothing" : got) +
+                        LateSaturationNote(hc));
       }
     });
     std::cout << "[late " << EffectName(e) << "] named " << named << "/" << a.seeds << ", first " << first
@@ -190,10 +230,12 @@ int main(int argc, char** argv) {
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
     if (k == "--seeds") a.seeds = std::atoi(v.c_str());
+    else if (k == "--first-seed") a.first_seed = std::atoi(v.c_str());
     else if (k == "--blocks") a.blocks = std::atoi(v.c_str());
     else if (k == "--suite") a.suite = v;
     else if (k == "--seed") a.seed = std::atoll(v.c_str());
     else if (k == "--effect" && ParseEffectOk(v)) a.effect = v;
+    else if (k == "--effect2" && ParseEffectOk(v)) a.effect2 = v;
     else {
       std::cerr << "unknown flag " << k << "\n";
       return 2;
@@ -204,7 +246,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   std::cout << "audit_hidden_eval: " << a.seeds << " seeds, blocks " << a.blocks << "\n";
-  if (a.suite == "one") tactforce::audit::One(a);
+  a.late = a.suite == "one-late";
+  if (a.suite == "one" || a.late) tactforce::audit::One(a);
   if (a.suite == "partial" || a.suite == "all") tactforce::audit::PartialActivation(a);
   if (a.suite == "phantom" || a.suite == "all") tactforce::audit::Phantom(a);
   if (a.suite == "late" || a.suite == "all") tactforce::audit::LateEffects(a);

@@ -10,6 +10,7 @@
 #include "channel_evaluator.h"
 #include "effect_space.h"
 #include "gtest/gtest.h"
+#include "hidden_effects.h"
 
 namespace tactforce::audit::internal {
 namespace {
@@ -69,6 +70,49 @@ TEST(ChannelEvaluator, ClosedFormGainOffsetAndHeldOutRss) {
   EXPECT_NEAR(fit.rss_train, 0, 1e-9);
   EXPECT_NEAR(fit.rss_heldout, 50 * 0.25, 1e-6);
   EXPECT_EQ(eng.Evaluate(sim::EffectParams{}, false).rss_heldout, 0);
+}
+
+// Ranges of a run (the blocked hold-out's blocks) see the channel in the
+// state the whole run leads to: a lag and a hysteresis mid-run are not
+// restarted at the range's start, so a reading made by the same channel over
+// the whole run fits exactly on any range, training or held-out.
+TEST(ChannelEvaluator, RangesCarryTheChannelStateFromTheRunStart) {
+  std::mt19937_64 rng(testing::TestSeed() + 26);
+  MeasuredData d = Smooth(600);
+  sim::EffectParams p;
+  p.lag = std::uniform_real_distribution<double>(0.02, 0.1)(rng);
+  p.hysteresis_width = std::uniform_real_distribution<double>(0.1, 0.4)(rng);
+  ChannelEvaluator whole(d, 600);
+  const std::vector<double> g = whole.FullChannel(p);
+  for (int i = 0; i < 600; ++i) d.reading[i] = 2 * g[i] - 1;
+  const int first = 230 + static_cast<int>(rng() % 40), cut = first + 120, last = cut + 100;  // mid-press
+  ChannelEvaluator forward(d, {{first, cut}}, {{cut, last}});
+  ChannelEvaluator reversed(d, {{cut, last}}, {{first, cut}});
+  for (ChannelEvaluator* eng : {&forward, &reversed}) {
+    const AffineFit fit = eng->Evaluate(p, true);
+    EXPECT_NEAR(fit.a, 2, 1e-9);
+    EXPECT_NEAR(fit.b, -1, 1e-9);
+    EXPECT_NEAR(fit.rss_train, 0, 1e-8);  // round-off of the closed form
+    EXPECT_NEAR(fit.rss_heldout, 0, 1e-8);
+  }
+  EXPECT_EQ(forward.n_train(), 120);
+  EXPECT_EQ(reversed.n_heldout(), 120);
+  const std::vector<double>& train = reversed.TrainChannel(p);
+  ASSERT_EQ(train.size(), 100u);
+  for (int i = 0; i < 100; ++i) EXPECT_DOUBLE_EQ(train[i], g[cut + i]);
+  EXPECT_EQ(reversed.reading().front(), d.reading[cut]);
+  // The same range cut out as a segment of its own restarts the lag and
+  // the hysteresis: the fit is no longer exact (what the blocks did before).
+  MeasuredData cutout;
+  cutout.source = "cut";
+  cutout.segment_starts = {0};
+  for (int i = first; i < last; ++i) {
+    cutout.t.push_back(d.t[i]);
+    cutout.reference.push_back(d.reference[i]);
+    cutout.reading.push_back(d.reading[i]);
+  }
+  ChannelEvaluator restarted(cutout, last - first);
+  EXPECT_GT(restarted.Evaluate(p, false).rss_train, 1e-4);
 }
 
 TEST(Diagnostics, ResidualRmsSplitsTrainingAndHeldOut) {

@@ -16,15 +16,7 @@ namespace {
 
 using ::testing::HasSubstr;
 
-uint64_t TestSeed() {
-  static const uint64_t seed = [] {
-    const char* env = std::getenv("TACTFORCE_TEST_SEED");
-    const uint64_t s = env ? std::strtoull(env, nullptr, 10) : std::random_device{}();
-    std::cout << "[ seed ] TACTFORCE_TEST_SEED=" << s << "\n";
-    return s;
-  }();
-  return seed;
-}
+using testing::TestSeed;
 
 AuditOptions Fast() {
   AuditOptions o;

@@ -477,6 +477,78 @@ class CsvReadersTest(unittest.TestCase):
             read_samples(str(bad))
 
 
+    def test_audit_taxel_csv_names_the_silent_taxels(self):
+        from tactforce.audit import audit_request, read_samples
+        rng = random.Random(SEED + 2)
+        n_taxels = rng.randint(6, 12)
+        dead = sorted(rng.sample(range(n_taxels), rng.randint(1, 3)))
+        path = TMP / "audit_taxels.csv"
+        write_taxel_csv(path, n_taxels, dead, rng)
+        samples, skipped = read_samples(str(path))
+        self.assertEqual(skipped, 0)
+        self.assertTrue(all(len(s.taxels) == n_taxels for s in samples))
+        # No reading column: the reading is the taxels' sum (the fingertip force).
+        self.assertTrue(all(math.isclose(s.reading, math.fsum(s.taxels)) for s in samples))
+        request = audit_request(str(path), reading_units="N", taxels=n_taxels, blocks=0)
+        self.assertTrue(request.HasField("blocks"))
+        self.assertEqual(request.blocks, 0)
+        response = self.client.AuditModel(request)
+        self.assertEqual(response.causes[0].effect, "partial_activation", response.summary)
+        self.assertEqual(response.causes[0].found_by, "taxels")
+        self.assertEqual(response.causes[0].parameters["silent_taxels"], len(dead), response.summary)
+        self.assertAlmostEqual(response.causes[0].parameters["fraction"], len(dead) / n_taxels)
+
+    def test_audit_taxel_csv_errors(self):
+        from tactforce._csv import BadInput
+        from tactforce.audit import audit_request, read_samples
+        bad = TMP / "bad_taxels.csv"
+        bad.write_text("t,reference,taxel_0,taxel_2\n0,1,2,3\n", encoding="utf-8")
+        with self.assertRaisesRegex(BadInput, r"bad_taxels.csv: missing column\(s\) taxel_1 "
+                                              r"\(per-taxel data needs taxel_0 ... taxel_2\)"):
+            read_samples(str(bad))
+        with self.assertRaisesRegex(BadInput, r"missing column\(s\) taxel_1, taxel_3, taxel_4"):
+            read_samples(str(bad), taxels=5)
+        with self.assertRaisesRegex(BadInput, r"column 'taxel_2' beyond the 2 taxels expected"):
+            read_samples(str(bad), taxels=2)
+        with self.assertRaisesRegex(BadInput, r"taxels: must be in \[1, 4096\], got 0"):
+            read_samples(str(bad), taxels=0)
+        bad.write_text("t,reference,taxel_0,taxel_1\n0,1,2,3\n0.1,1,x,3\n", encoding="utf-8")
+        with self.assertRaisesRegex(BadInput, r"bad_taxels.csv:3: column 'taxel_0': not a number"):
+            read_samples(str(bad))
+        bad.write_text("t,reference\n0,1\n", encoding="utf-8")
+        with self.assertRaisesRegex(BadInput, r"missing column\(s\) reading \(or per-taxel columns"):
+            read_samples(str(bad))
+        bad.write_text("t,reference,taxel_0\n0,1,2\n", encoding="utf-8")
+        with self.assertRaisesRegex(BadInput, r"blocks: must be in \[0, 10\], got 11"):
+            audit_request(str(bad), blocks=11)
+
+def write_taxel_csv(path, n_taxels, dead, rng, rate=100.0):
+    """A calibration sweep of `n_taxels` taxels: each pressed once in random
+    order (0.3 s ramp up, 0.1 s hold, 0.3 s down, 0.2 s rest, peak 2-5 N),
+    the pressed taxel taking 70 % of the load and its neighbours 15 % each;
+    every taxel with its own noise (0.005-0.02 N); the `dead` ones read
+    noise only. No reading column (the audit sums the taxels)."""
+    order = list(range(n_taxels))
+    rng.shuffle(order)
+    noise = [rng.uniform(0.005, 0.02) for _ in range(n_taxels)]
+    rows = ["t,reference," + ",".join(f"taxel_{j}" for j in range(n_taxels))]
+    k = 0
+    for pressed in order:
+        peak = rng.uniform(2.0, 5.0)
+        for step in range(int(0.9 * rate)):
+            u = step / rate
+            force = peak * min(1.0, u / 0.3, max(0.0, (0.7 - u) / 0.3))
+            share = [0.0] * n_taxels
+            share[pressed] = 0.7
+            share[(pressed - 1) % n_taxels] += 0.15
+            share[(pressed + 1) % n_taxels] += 0.15
+            taxels = [(0.0 if j in dead else force * share[j]) + rng.gauss(0.0, noise[j])
+                      for j in range(n_taxels)]
+            rows.append(f"{k / rate!r},{force!r}," + ",".join(repr(v) for v in taxels))
+            k += 1
+    path.write_text("\n".join(rows) + "\n", encoding="utf-8")
+
+
 def audit_request_from(threshold, rng, seconds=15.0, rate=50.0):
     """audit_request's deadzone sensor with a drawn threshold and noise."""
     request = audit_pb2.AuditRequest(source="drawn")
