@@ -171,6 +171,12 @@ class ActiveSetSolver {
     return std::max({1.0, std::abs(w_.rhs(k)), w_.normal_norms(k) * f_.x.norm()});
   }
   int Active() const { return static_cast<int>(w_.active.size()); }
+  // |z| > tolerance max(1, |a_k|): constraint k is not (numerically) a
+  // combination of the active ones. Squared, without a square root.
+  bool DirectionIsLong(int k) const {
+    const double length = settings_.tolerance * std::max(1.0, w_.normal_norms(k));
+    return f_.z.squaredNorm() > length * length;
+  }
   // Normals, right-hand sides, J = L^-T and the unconstrained minimum;
   // false if H is not positive definite.
   bool Initialize();
@@ -581,7 +587,7 @@ int ActiveSetSolver<Factors>::AddEqualities() {
     EnsureNormal(k);
     Directions(k);
     const double zn = f_.z.dot(Normal(k));
-    if (f_.z.norm() <= tol * std::max(1.0, Normal(k).norm()) || std::abs(zn) <= tol) {
+    if (!DirectionIsLong(k) || std::abs(zn) <= tol) {
       // Dependent on earlier equalities: redundant if already satisfied.
       if (std::abs(Slack(k)) <= 1e3 * tol * Scale(k)) continue;
       return k;
@@ -625,7 +631,7 @@ std::optional<DenseQpStatus> ActiveSetSolver<Factors>::AddInequality(int k, int 
     const int drop = BlockingActive(&t1);
     const double zn = f_.z.dot(Normal(k));
     double t2 = kInf;  // full step length
-    if (f_.z.norm() > tol * std::max(1.0, Normal(k).norm()) && zn > tol * tol) {
+    if (DirectionIsLong(k) && zn > tol * tol) {
       t2 = -Slack(k) / zn;
     }
     if (t1 == kInf && t2 == kInf) return DenseQpStatus::kInfeasible;
