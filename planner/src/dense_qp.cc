@@ -148,8 +148,7 @@ class ActiveSetSolver {
   // 1 / |a|, the distance bounds and (structured) the unit rows, once norms
   // are known.
   void PrepareRowScales();
-  // A row 0^T x <= b with b < 0 (no x satisfies it), or -1.
-  int ViolatedZeroRow() const;
+
   // The bound of inequality row i while it is inactive (RowScales()).
   double DistanceBound(int i) const {
     return -settings_.tolerance * std::max(1.0, std::abs(qp_.in_rhs(i))) * w_.inverse_norms(i);
@@ -213,6 +212,7 @@ class ActiveSetSolver {
   const bool structured_;
   const int m_;
   int iterations_ = 0;
+  int impossible_row_ = -1;  // a row 0^T x <= b with b < 0 (PrepareRowScales), or -1
 };
 
 // Plain loops over contiguous columns: for the few variables of these QPs a
@@ -358,12 +358,12 @@ void ActiveSetSolver<Factors>::StructuredNorms() {
     const double g0 = g[0], g1 = 2.0 * g[1], g2 = 2.0 * g[2], g3 = g[3], g4 = 2.0 * g[4],
                  g5 = g[5];
     const int end = qp_.in_block_first[b + 1];
-    for (int i = qp_.in_block_first[b]; i < end; ++i) {
-      const double q = ax[i] * (g0 * ax[i] + g1 * ay[i] + g2 * az[i]) +
-                       ay[i] * (g3 * ay[i] + g4 * az[i]) + g5 * az[i] * az[i];
-      norms[i] = std::sqrt(std::max(0.0, q));
+    for (int i = qp_.in_block_first[b]; i < end; ++i) {  // squared norms: vectorised
+      norms[i] = ax[i] * (g0 * ax[i] + g1 * ay[i] + g2 * az[i]) +
+                 ay[i] * (g3 * ay[i] + g4 * az[i]) + g5 * az[i] * az[i];
     }
   }
+  for (int i = 0; i < m_; ++i) norms[i] = std::sqrt(std::max(0.0, norms[i]));
 }
 
 template <class Factors>
@@ -382,9 +382,20 @@ void ActiveSetSolver<Factors>::PrepareRowScales() {
   // A zero row (0 <= b) gets inverse norm 0: distance 0 and bound -0, so it
   // is never selected; Run reports it first when b < 0.
   const double* norms = w_.normal_norms.data() + p_;
+  const double* b = qp_.in_rhs.data();
+  const double tol = settings_.tolerance;
+  impossible_row_ = -1;
   for (int i = 0; i < m_; ++i) {
-    w_.inverse_norms(i) = norms[i] > kZeroNorm ? 1.0 / norms[i] : 0.0;
-    w_.distance_bound(i) = DistanceBound(i);
+    const double size = std::max(1.0, std::abs(b[i]));
+    if (norms[i] > kZeroNorm) {
+      const double inverse = 1.0 / norms[i];
+      w_.inverse_norms(i) = inverse;
+      w_.distance_bound(i) = -tol * size * inverse;
+    } else {
+      w_.inverse_norms(i) = 0.0;
+      w_.distance_bound(i) = -0.0;
+      if (impossible_row_ < 0 && b[i] < -tol * size) impossible_row_ = p_ + i;
+    }
   }
   if (!structured_) return;
   // The structured scan's rows scaled to unit normals: a distance is then
@@ -395,17 +406,6 @@ void ActiveSetSolver<Factors>::PrepareRowScales() {
     w_.unit_rows.col(c).array() = qp_.in_directions.col(c).array() * inverse;
   }
   w_.unit_rows.col(3).array() = qp_.in_rhs.array() * inverse;
-}
-
-template <class Factors>
-int ActiveSetSolver<Factors>::ViolatedZeroRow() const {
-  for (int i = 0; i < m_; ++i) {
-    const double b = qp_.in_rhs(i);
-    if (w_.inverse_norms(i) == 0.0 && b < -settings_.tolerance * std::max(1.0, std::abs(b))) {
-      return p_ + i;
-    }
-  }
-  return -1;
 }
 
 template <class Factors>
@@ -468,12 +468,23 @@ void ActiveSetSolver<Factors>::ScanBlocks(double* worst_distance, int* worst) {
   for (int block = 0; block < blocks; ++block) {
     const double* __restrict map = qp_.in_block_maps.data() + 3 * block;
     double y0 = 0.0, y1 = 0.0, y2 = 0.0;
+#ifdef __SSE2__
+    __m128d y01 = _mm_setzero_pd();
+    for (int j = 0; j < N(); ++j) {
+      const double* column = map + j * values;
+      y01 = _mm_add_pd(y01, _mm_mul_pd(_mm_set1_pd(x[j]), _mm_loadu_pd(column)));
+      y2 += x[j] * column[2];
+    }
+    y0 = _mm_cvtsd_f64(y01);
+    y1 = _mm_cvtsd_f64(_mm_unpackhi_pd(y01, y01));
+#else
     for (int j = 0; j < N(); ++j) {
       const double* column = map + j * values;
       y0 += x[j] * column[0];
       y1 += x[j] * column[1];
       y2 += x[j] * column[2];
     }
+#endif
     const int first = qp_.in_block_first[block], end = qp_.in_block_first[block + 1];
     const double least = UnitRowDistances(unit.data() + first, m_, end - first, y0, y1, y2,
                                           w_.distance.data() + first);
@@ -663,9 +674,7 @@ void ActiveSetSolver<Factors>::Run(DenseQpResult* out) {
   if (const int inconsistent = AddEqualities(); inconsistent >= 0) {
     return Finish(DenseQpStatus::kInfeasible, inconsistent, out);
   }
-  if (const int impossible = ViolatedZeroRow(); impossible >= 0) {
-    return Finish(DenseQpStatus::kInfeasible, impossible, out);
-  }
+  if (impossible_row_ >= 0) return Finish(DenseQpStatus::kInfeasible, impossible_row_, out);
   while (true) {
     const int k = MostViolated();
     if (k < 0) return Finish(DenseQpStatus::kOptimal, -1, out);
