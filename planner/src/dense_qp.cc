@@ -14,6 +14,10 @@
 #include <limits>
 #include <optional>
 
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
 #include <Eigen/Cholesky>
 
 namespace tactforce::planner {
@@ -23,6 +27,8 @@ using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// Rows with a normal shorter than this are treated as 0^T x <= b.
+constexpr double kZeroNorm = 1e-200;
 
 // Rotation (c, s) with [c s; -s c] [a; b] = [h; 0]. sqrt(a^2 + b^2) unless
 // that would over- or underflow (std::hypot costs several times more).
@@ -41,6 +47,37 @@ void Givens(double a, double b, double* c, double* s, double* h) {
 // The row structure applies when `in_matrix` has no rows and the structure
 // describes exactly the rows of `in_rhs` (a workspace's DenseQp reused by a
 // caller that fills `in_matrix` keeps stale structure, which is then ignored).
+// distance[r] = b'_r - a'_r . y for `count` unit rows (the 4 columns of
+// `unit`, `stride` apart: a'_x, a'_y, a'_z, b'), and their least value: the
+// innermost loop of the solver, two rows per SSE2 instruction.
+double UnitRowDistances(const double* __restrict unit, int stride, int count, double y0,
+                        double y1, double y2, double* __restrict distance) {
+  const double* ux = unit;
+  const double* uy = unit + stride;
+  const double* uz = unit + 2 * stride;
+  const double* ub = unit + 3 * stride;
+  double least = kInf;
+  int r = 0;
+#ifdef __SSE2__
+  const __m128d vy0 = _mm_set1_pd(y0), vy1 = _mm_set1_pd(y1), vy2 = _mm_set1_pd(y2);
+  __m128d vleast = _mm_set1_pd(kInf);
+  for (; r + 1 < count; r += 2) {
+    const __m128d dot = _mm_add_pd(
+        _mm_add_pd(_mm_mul_pd(_mm_loadu_pd(ux + r), vy0), _mm_mul_pd(_mm_loadu_pd(uy + r), vy1)),
+        _mm_mul_pd(_mm_loadu_pd(uz + r), vy2));
+    const __m128d d = _mm_sub_pd(_mm_loadu_pd(ub + r), dot);
+    _mm_storeu_pd(distance + r, d);
+    vleast = _mm_min_pd(vleast, d);
+  }
+  least = std::min(_mm_cvtsd_f64(vleast), _mm_cvtsd_f64(_mm_unpackhi_pd(vleast, vleast)));
+#endif
+  for (; r < count; ++r) {
+    distance[r] = ub[r] - (ux[r] * y0 + uy[r] * y1 + uz[r] * y2);
+    least = std::min(least, distance[r]);
+  }
+  return least;
+}
+
 bool UsesRowStructure(const DenseQp& qp) {
   const Eigen::Index m = qp.in_rhs.size();
   const std::vector<int>& first = qp.in_block_first;
@@ -106,18 +143,39 @@ class ActiveSetSolver {
   void EnsureNormal(int k);
   // The norms of every structured row's normal, without forming them.
   void StructuredNorms();
-  // slack = b - A x of every inequality row (dense rows), into w_.slack.
+  // The norms of every dense inequality row.
+  void DenseNorms();
+  // 1 / |a|, the distance bounds and (structured) the unit rows, once norms
+  // are known.
+  void PrepareRowScales();
+
+  // The bound of inequality row i while it is inactive (RowScales()).
+  double DistanceBound(int i) const {
+    return -settings_.tolerance * std::max(1.0, std::abs(qp_.in_rhs(i))) * w_.inverse_norms(i);
+  }
+  // distance = (b - A x) / |a| of every inequality row (dense rows), into
+  // w_.distance.
   void ScanRows();
-  // The same for structured rows, block by block.
-  void ScanBlocks();
-  // Most violated row of w_.slack in [begin, end), if worse than *worst_ratio.
-  void SelectRows(int begin, int end, double x_norm, int* worst, double* worst_ratio);
+  // The same for structured rows, block by block, each block's rows
+  // considered as its distances are formed (SelectInRange).
+  void ScanBlocks(double* worst_distance, int* worst);
+  // Rows [begin, end) of w_.distance, whose least entry is `least`: the
+  // inactive row farthest outside its half-space, if it is violated and
+  // farther than *worst_distance.
+  void SelectInRange(int begin, int end, double least, double* worst_distance,
+                     int* worst) const;
 
   double Slack(int k) const { return w_.rhs(k) - w_.normals.col(k).dot(f_.x); }
   double Scale(int k) const {
     return std::max({1.0, std::abs(w_.rhs(k)), w_.normal_norms(k) * f_.x.norm()});
   }
   int Active() const { return static_cast<int>(w_.active.size()); }
+  // |z| > tolerance max(1, |a_k|): constraint k is not (numerically) a
+  // combination of the active ones. Squared, without a square root.
+  bool DirectionIsLong(int k) const {
+    const double length = settings_.tolerance * std::max(1.0, w_.normal_norms(k));
+    return f_.z.squaredNorm() > length * length;
+  }
   // Normals, right-hand sides, J = L^-T and the unconstrained minimum;
   // false if H is not positive definite.
   bool Initialize();
@@ -154,6 +212,7 @@ class ActiveSetSolver {
   const bool structured_;
   const int m_;
   int iterations_ = 0;
+  int impossible_row_ = -1;  // a row 0^T x <= b with b < 0 (PrepareRowScales), or -1
 };
 
 // Plain loops over contiguous columns: for the few variables of these QPs a
@@ -210,6 +269,7 @@ void ActiveSetSolver<Factors>::Activate(int k, double u) {
   f_.u(Active()) = u;
   w_.active.push_back(k);
   w_.is_active[k] = 1;
+  if (k >= p_) w_.distance_bound(k - p_) = -kInf;
 }
 
 template <class Factors>
@@ -217,7 +277,9 @@ void ActiveSetSolver<Factors>::DropFromFactorization(int position) {
   const int q = Active();  // before removal
   auto& R = f_.R;
   auto& J = f_.J;
-  w_.is_active[w_.active[position]] = 0;
+  const int leaving = w_.active[position];
+  w_.is_active[leaving] = 0;
+  if (leaving >= p_) w_.distance_bound(leaving - p_) = DistanceBound(leaving - p_);
   for (int col = position; col < q - 1; ++col) R.col(col) = R.col(col + 1);
   R.col(q - 1).setZero();
   for (int j = position; j < q - 1; ++j) {
@@ -258,8 +320,10 @@ void ActiveSetSolver<Factors>::EnsureNormal(int k) {
     }
     w_.has_normal[k] = 1;
     return;
-  } else {
+  } else {  // its norm is already known (DenseNorms)
     for (int j = 0; j < N(); ++j) normal[j] = qp_.in_matrix(k - p_, j);
+    w_.has_normal[k] = 1;
+    return;
   }
   w_.normal_norms(k) = w_.normals.col(k).norm();
   w_.has_normal[k] = 1;
@@ -285,82 +349,146 @@ void ActiveSetSolver<Factors>::StructuredNorms() {
       g[5] += c[2] * c[2];
     }
   }
-  const double* ax = qp_.in_directions.col(0).data();
-  const double* ay = qp_.in_directions.col(1).data();
-  const double* az = qp_.in_directions.col(2).data();
-  double* norms = w_.normal_norms.data() + p_;
+  const double* __restrict ax = qp_.in_directions.col(0).data();
+  const double* __restrict ay = qp_.in_directions.col(1).data();
+  const double* __restrict az = qp_.in_directions.col(2).data();
+  double* __restrict norms = w_.normal_norms.data() + p_;
   for (int b = 0; b < blocks; ++b) {
     const double* g = gram + 6 * b;
-    for (int i = qp_.in_block_first[b]; i < qp_.in_block_first[b + 1]; ++i) {
-      const double q = ax[i] * (g[0] * ax[i] + 2.0 * (g[1] * ay[i] + g[2] * az[i])) +
-                       ay[i] * (g[3] * ay[i] + 2.0 * g[4] * az[i]) + az[i] * g[5] * az[i];
-      norms[i] = std::sqrt(std::max(0.0, q));
+    const double g0 = g[0], g1 = 2.0 * g[1], g2 = 2.0 * g[2], g3 = g[3], g4 = 2.0 * g[4],
+                 g5 = g[5];
+    const int end = qp_.in_block_first[b + 1];
+    for (int i = qp_.in_block_first[b]; i < end; ++i) {  // squared norms: vectorised
+      norms[i] = ax[i] * (g0 * ax[i] + g1 * ay[i] + g2 * az[i]) +
+                 ay[i] * (g3 * ay[i] + g4 * az[i]) + g5 * az[i] * az[i];
+    }
+  }
+  for (int i = 0; i < m_; ++i) norms[i] = std::sqrt(std::max(0.0, norms[i]));
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::DenseNorms() {
+  double* __restrict norms = w_.normal_norms.data() + p_;
+  std::fill(norms, norms + m_, 0.0);
+  for (int j = 0; j < N(); ++j) {
+    const double* __restrict column = qp_.in_matrix.col(j).data();
+    for (int i = 0; i < m_; ++i) norms[i] += column[i] * column[i];
+  }
+  for (int i = 0; i < m_; ++i) norms[i] = std::sqrt(norms[i]);
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::PrepareRowScales() {
+  // A zero row (0 <= b) gets inverse norm 0: distance 0 and bound -0, so it
+  // is never selected; Run reports it first when b < 0.
+  const double* norms = w_.normal_norms.data() + p_;
+  const double* b = qp_.in_rhs.data();
+  const double tol = settings_.tolerance;
+  impossible_row_ = -1;
+  for (int i = 0; i < m_; ++i) {
+    const double size = std::max(1.0, std::abs(b[i]));
+    if (norms[i] > kZeroNorm) {
+      const double inverse = 1.0 / norms[i];
+      w_.inverse_norms(i) = inverse;
+      w_.distance_bound(i) = -tol * size * inverse;
+    } else {
+      w_.inverse_norms(i) = 0.0;
+      w_.distance_bound(i) = -0.0;
+      if (impossible_row_ < 0 && b[i] < -tol * size) impossible_row_ = p_ + i;
+    }
+  }
+  if (!structured_) return;
+  // The structured scan's rows scaled to unit normals: a distance is then
+  // b' - a' . y, 3 products per row and no division.
+  w_.unit_rows.resize(m_, 4);
+  const auto inverse = w_.inverse_norms.array();
+  for (int c = 0; c < 3; ++c) {
+    w_.unit_rows.col(c).array() = qp_.in_directions.col(c).array() * inverse;
+  }
+  w_.unit_rows.col(3).array() = qp_.in_rhs.array() * inverse;
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::ScanRows() {
+  double* __restrict distance = w_.distance.data();
+  const double* __restrict b = qp_.in_rhs.data();
+  const double* __restrict inverse = w_.inverse_norms.data();
+  // slack = b - A x, column by column (A is m x n, column-major)
+  std::copy(b, b + m_, distance);
+  for (int j = 0; j < N(); ++j) {
+    const double xj = f_.x(j);
+    const double* __restrict column = qp_.in_matrix.col(j).data();
+    for (int i = 0; i < m_; ++i) distance[i] -= xj * column[i];
+  }
+  for (int i = 0; i < m_; ++i) distance[i] *= inverse[i];
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::SelectInRange(int begin, int end, double least,
+                                             double* worst_distance, int* worst) const {
+  // Violated: slack < -tolerance max(1, |b|, |a| |x|), i.e. a distance below
+  // both the row's bound and -tolerance |x| (*worst_distance starts there;
+  // active rows have bound -inf). The farthest violated row enters (DAQP's
+  // rule on normalised rows), which takes fewer steps here than the largest
+  // relative violation. Rows are visited one by one only when the range's
+  // least distance beats *worst_distance.
+  if (!(least < *worst_distance)) return;
+  const double* distance = w_.distance.data();
+  const double* bound = w_.distance_bound.data();
+  for (int i = begin; i < end; ++i) {
+    if (distance[i] == least) {
+      if (least < bound[i]) {  // the usual case: the farthest row is violated
+        *worst_distance = least;
+        *worst = i;
+        return;
+      }
+      break;
+    }
+  }
+  for (int i = begin; i < end; ++i) {  // it is active or within tolerance
+    const double d = distance[i];
+    if (d < bound[i] && d < *worst_distance) {
+      *worst_distance = d;
+      *worst = i;
     }
   }
 }
 
 template <class Factors>
-void ActiveSetSolver<Factors>::ScanRows() {
-  double* __restrict slack = w_.slack.data();
-  const double* __restrict b = qp_.in_rhs.data();
-  // slack = b - A x, column by column (A is m x n, column-major)
-  std::copy(b, b + m_, slack);
-  for (int j = 0; j < N(); ++j) {
-    const double xj = f_.x(j);
-    const double* __restrict column = qp_.in_matrix.col(j).data();
-    for (int i = 0; i < m_; ++i) slack[i] -= xj * column[i];
-  }
-}
-
-template <class Factors>
-void ActiveSetSolver<Factors>::ScanBlocks() {
+void ActiveSetSolver<Factors>::ScanBlocks(double* worst_distance, int* worst) {
   // Per block: y = M_b x (3 N products, unrolled for FixedFactors), then 3
-  // products per row. (Skipping blocks whose rows provably stay satisfied,
-  // by |a_r| |y_b - y_ref|, was tried: on the planner's grasps nearly every
-  // block holds an active or nearly active row, and the test cost more.)
+  // products per unit row. (Skipping blocks whose rows provably stay
+  // satisfied, by |a_r| |y_b - y_ref|, was tried: on the planner's grasps
+  // nearly every block holds an active or nearly active row, and the test
+  // cost more.)
   const int values = static_cast<int>(qp_.in_block_maps.rows());
-  const double* __restrict ax = qp_.in_directions.col(0).data();
-  const double* __restrict ay = qp_.in_directions.col(1).data();
-  const double* __restrict az = qp_.in_directions.col(2).data();
-  const double* __restrict b = qp_.in_rhs.data();
-  double* __restrict slack = w_.slack.data();
+  const auto& unit = w_.unit_rows;
   const double* __restrict x = f_.x.data();
   const int blocks = values / 3;
   for (int block = 0; block < blocks; ++block) {
     const double* __restrict map = qp_.in_block_maps.data() + 3 * block;
     double y0 = 0.0, y1 = 0.0, y2 = 0.0;
+#ifdef __SSE2__
+    __m128d y01 = _mm_setzero_pd();
+    for (int j = 0; j < N(); ++j) {
+      const double* column = map + j * values;
+      y01 = _mm_add_pd(y01, _mm_mul_pd(_mm_set1_pd(x[j]), _mm_loadu_pd(column)));
+      y2 += x[j] * column[2];
+    }
+    y0 = _mm_cvtsd_f64(y01);
+    y1 = _mm_cvtsd_f64(_mm_unpackhi_pd(y01, y01));
+#else
     for (int j = 0; j < N(); ++j) {
       const double* column = map + j * values;
       y0 += x[j] * column[0];
       y1 += x[j] * column[1];
       y2 += x[j] * column[2];
     }
+#endif
     const int first = qp_.in_block_first[block], end = qp_.in_block_first[block + 1];
-    for (int i = first; i < end; ++i) {
-      slack[i] = b[i] - (ax[i] * y0 + ay[i] * y1 + az[i] * y2);
-    }
-  }
-}
-
-template <class Factors>
-void ActiveSetSolver<Factors>::SelectRows(int begin, int end, double x_norm, int* worst,
-                                          double* worst_ratio) {
-  // Relative violation: slack / max(1, |b|, |a| |x|).
-  const double* slack = w_.slack.data();
-  const double* bound = w_.slack_bound.data();
-  for (int i = begin; i < end; ++i) {
-    // The ratio's denominator is at least max(1, |b|): rows above this
-    // bound are not violated, and need no normal.
-    if (slack[i] >= bound[i]) continue;
-    const int k = p_ + i;
-    if (w_.is_active[k]) continue;
-    if (!structured_) EnsureNormal(k);
-    const double ratio =
-        slack[i] / std::max({1.0, std::abs(w_.rhs(k)), w_.normal_norms(k) * x_norm});
-    if (ratio < *worst_ratio) {
-      *worst_ratio = ratio;
-      *worst = k;
-    }
+    const double least = UnitRowDistances(unit.data() + first, m_, end - first, y0, y1, y2,
+                                          w_.distance.data() + first);
+    SelectInRange(first, end, least, worst_distance, worst);
   }
 }
 
@@ -378,16 +506,18 @@ int ActiveSetSolver<Factors>::MostViolated() {
     EnsureNormal(k);
     if (violation(k, Slack(k)) < -tol) return k;
   }
+  if (m_ == 0) return -1;
+  double worst_distance = -tol * x_norm;
   int worst = -1;
-  double worst_ratio = -tol;
-  if (m_ == 0) return worst;
   if (structured_) {
-    ScanBlocks();
+    ScanBlocks(&worst_distance, &worst);
   } else {
     ScanRows();
+    const double least =
+        m_ > 0 ? *std::min_element(w_.distance.data(), w_.distance.data() + m_) : kInf;
+    SelectInRange(0, m_, least, &worst_distance, &worst);
   }
-  SelectRows(0, m_, x_norm, &worst, &worst_ratio);
-  return worst;
+  return worst < 0 ? -1 : p_ + worst;
 }
 
 template <class Factors>
@@ -427,12 +557,15 @@ bool ActiveSetSolver<Factors>::Initialize() {
   w_.rhs.head(p_) = qp_.eq_rhs;
   w_.rhs.tail(m_) = qp_.in_rhs;
   w_.normal_norms.resize(p_ + m_);
-  w_.slack.resize(m_);
-  w_.slack_bound.resize(m_);
-  for (int i = 0; i < m_; ++i) {
-    w_.slack_bound(i) = -settings_.tolerance * std::max(1.0, std::abs(qp_.in_rhs(i)));
+  w_.distance.resize(m_);
+  w_.distance_bound.resize(m_);
+  w_.inverse_norms.resize(m_);
+  if (structured_) {
+    StructuredNorms();
+  } else {
+    DenseNorms();
   }
-  if (structured_) StructuredNorms();
+  PrepareRowScales();
   f_.x.resize(N());
   f_.d.resize(N());
   f_.z.resize(N());
@@ -465,7 +598,7 @@ int ActiveSetSolver<Factors>::AddEqualities() {
     EnsureNormal(k);
     Directions(k);
     const double zn = f_.z.dot(Normal(k));
-    if (f_.z.norm() <= tol * std::max(1.0, Normal(k).norm()) || std::abs(zn) <= tol) {
+    if (!DirectionIsLong(k) || std::abs(zn) <= tol) {
       // Dependent on earlier equalities: redundant if already satisfied.
       if (std::abs(Slack(k)) <= 1e3 * tol * Scale(k)) continue;
       return k;
@@ -509,7 +642,7 @@ std::optional<DenseQpStatus> ActiveSetSolver<Factors>::AddInequality(int k, int 
     const int drop = BlockingActive(&t1);
     const double zn = f_.z.dot(Normal(k));
     double t2 = kInf;  // full step length
-    if (f_.z.norm() > tol * std::max(1.0, Normal(k).norm()) && zn > tol * tol) {
+    if (DirectionIsLong(k) && zn > tol * tol) {
       t2 = -Slack(k) / zn;
     }
     if (t1 == kInf && t2 == kInf) return DenseQpStatus::kInfeasible;
@@ -541,6 +674,7 @@ void ActiveSetSolver<Factors>::Run(DenseQpResult* out) {
   if (const int inconsistent = AddEqualities(); inconsistent >= 0) {
     return Finish(DenseQpStatus::kInfeasible, inconsistent, out);
   }
+  if (impossible_row_ >= 0) return Finish(DenseQpStatus::kInfeasible, impossible_row_, out);
   while (true) {
     const int k = MostViolated();
     if (k < 0) return Finish(DenseQpStatus::kOptimal, -1, out);

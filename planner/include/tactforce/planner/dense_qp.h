@@ -76,8 +76,10 @@ struct DenseQpWorkspace {
   Eigen::VectorXd rhs;          // p + m
   Eigen::VectorXd normal_norms; // p + m (where formed)
   std::vector<char> has_normal; // p + m: column formed in this solve
-  Eigen::VectorXd slack;        // m
-  Eigen::VectorXd slack_bound;  // m: -tolerance max(1, |b|), below which a row may be violated
+  Eigen::VectorXd distance;     // m: (b - a^T x) / |a| at the last scan
+  Eigen::VectorXd inverse_norms;  // m: 1 / |a|
+  Eigen::VectorXd distance_bound;  // m: -tolerance max(1, |b|) / |a|; -inf while active
+  Eigen::Matrix<double, Eigen::Dynamic, 4> unit_rows;  // m x 4: a_r / |a|, b / |a| (structured)
   Eigen::VectorXd block_values; // 6 blocks: per-block Gram M_b M_b^T (structured rows)
   Eigen::VectorXd x, d, z, r, u;  // n each (r, u: leading q entries used)
   Eigen::MatrixXd J, R;         // n x n
