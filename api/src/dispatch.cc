@@ -15,7 +15,7 @@
 #include "absl/strings/str_cat.h"
 #include "spdlog/spdlog.h"
 #include "tactforce/api/names.h"
-#include "tactforce/planner/validation.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::api {
 namespace {
@@ -26,19 +26,19 @@ int64_t MicrosSince(std::chrono::steady_clock::time_point start) {
       .count();
 }
 
-// Solves a prepared request (the pool task or the inline call) with the
-// stream's buffers, or the running thread's when `buffers` is null.
-absl::Status ExecutePlan(PlanCall& call, const CallControl& control, PlanBuffers* buffers,
+// Solves a request (the inline call: validated by the solve itself; the
+// pool task: validated before it was queued) with the stream's buffers, or
+// the running thread's when `buffers` is null.
+template <class Call>
+absl::Status ExecutePlan(const Call& call, const CallControl& control, PlanBuffers* buffers,
                          v1::PlanResponse* response, CallLog& log) {
   if (control.ShouldStop()) return control.StopReason("before the solve started");
-  call.options.interrupt = control.Interrupt();
-  absl::StatusOr<v1::PlanResponse> planned =
-      SolvePlan(call, buffers != nullptr ? buffers : &ThreadPlanBuffers());
-  if (!planned.ok()) return planned.status();
+  TF_ASSIGN_OR_RETURN(v1::PlanResponse planned,
+                      SolvePlan(call, CallState{control.Interrupt()}, buffers));
   if (control.ShouldStop()) {
-    return control.StopReason(absl::StrCat("after ", planned->solve_time_us(), " us of solving"));
+    return control.StopReason(absl::StrCat("after ", planned.solve_time_us(), " us of solving"));
   }
-  *response = *std::move(planned);
+  *response = std::move(planned);
   if (spdlog::should_log(spdlog::level::info)) {
     log.set_results(absl::StrCat("plan_status=", StatusName(response->status()),
                                  " solve_us=", response->solve_time_us()));
@@ -180,13 +180,6 @@ void PlanDispatcher::Dispatch(const v1::PlanRequest& request, v1::PlanResponse* 
                            " contacts=", request.contacts_size());
     log.set_details(details);
   }
-  const bool inline_solve = call.ok() && RunsInline(*call);
-  if (call.ok() && !inline_solve) {
-    if (absl::Status valid = planner::ValidateProblem(call->problem, call->options).status();
-        !valid.ok()) {
-      call = valid;
-    }
-  }
   if (!call.ok()) {
     log.Emit(call.status());
     done(call.status());
@@ -194,14 +187,30 @@ void PlanDispatcher::Dispatch(const v1::PlanRequest& request, v1::PlanResponse* 
   }
   // From here on `log` may be logged (and `response` freed) on a worker
   // thread before RunCall returns: only locals are used after it.
+  if (RunsInline(*call)) {  // validated once, by the solve, into the thread's buffers
+    auto work = [&call, &control, buffers, response](CallLog& call_log) {
+      return ExecutePlan(*call, control, buffers, response, call_log);
+    };
+    RunCall(std::move(log), nullptr, std::move(work), std::move(done), kSolveWords);
+    return;
+  }
+  // Validated once, here, so that a bad request is INVALID_ARGUMENT even
+  // under overload and never takes a queue slot; the worker solves the
+  // validated plan without a second check.
+  absl::StatusOr<ValidPlanCall> valid = ValidatePlan(*call);
+  if (!valid.ok()) {
+    log.Emit(valid.status());
+    done(valid.status());
+    return;
+  }
   std::string rpc_name;
-  if (debug && !inline_solve) rpc_name = log.rpc();
-  auto work = [prepared = *std::move(call), &control, buffers, response](CallLog& call_log) mutable {
-    return ExecutePlan(prepared, control, buffers, response, call_log);
+  if (debug) rpc_name = log.rpc();
+  auto work = [valid = *std::move(valid), &control, buffers, response](CallLog& call_log) {
+    return ExecutePlan(valid, control, buffers, response, call_log);
   };
-  Executor* where = inline_solve ? nullptr : UsesIpopt(request.solver()) ? ipopt_lane_ : pool_;
+  Executor* where = UsesIpopt(request.solver()) ? ipopt_lane_ : pool_;
   const bool queued = RunCall(std::move(log), where, std::move(work), std::move(done), kSolveWords);
-  if (debug && queued && !inline_solve) spdlog::debug("rpc={} event=queued {}", rpc_name, details);
+  if (debug && queued) spdlog::debug("rpc={} event=queued {}", rpc_name, details);
 }
 
 }  // namespace tactforce::api

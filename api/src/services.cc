@@ -8,6 +8,7 @@
 
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
+#include "tactforce/io/status_macros.h"
 #include "tactforce/api/convert.h"
 #include "tactforce/api/finite.h"
 #include "tactforce/audit/audit.h"
@@ -127,16 +128,20 @@ absl::Status CheckHoldingGrasp(const PlanCall& call) {
 }  // namespace
 
 absl::StatusOr<PlanCall> PreparePlan(const v1::PlanRequest& request, const CallLimits& limits) {
-  absl::StatusOr<PlanCall> call = FromProto(request);
-  if (!call.ok()) return call.status();
-  call->options.max_contacts = limits.max_contacts;
+  TF_ASSIGN_OR_RETURN(PlanCall call, FromProto(request));
+  call.options.max_contacts = limits.max_contacts;
   // The tighter of the request's and the server's CPU limits (0 = none).
-  const double asked = call->options.ipopt_max_cpu_seconds;
-  if (limits.ipopt_max_cpu_seconds > 0 && (asked == 0 || limits.ipopt_max_cpu_seconds < asked)) {
-    call->options.ipopt_max_cpu_seconds = limits.ipopt_max_cpu_seconds;
-  }
-  call->options.interrupt = limits.interrupt;
+  const double cap = limits.solve_timeout_seconds();
+  double& asked = call.options.ipopt.max_cpu_seconds;
+  if (cap > 0 && (asked == 0 || cap < asked)) asked = cap;
   return call;
+}
+
+absl::StatusOr<ValidPlanCall> ValidatePlan(const PlanCall& call) {
+  ValidPlanCall valid;
+  TF_RETURN_IF_ERROR(planner::ValidatePlan(call.problem, call.options, &valid.plan));
+  valid.solver = call.solver;
+  return valid;
 }
 
 PlanBuffers& ThreadPlanBuffers() {
@@ -144,28 +149,39 @@ PlanBuffers& ThreadPlanBuffers() {
   return buffers;
 }
 
-absl::StatusOr<v1::PlanResponse> SolvePlan(const PlanCall& call, PlanBuffers* buffers) {
-  if (absl::Status s = planner::Plan(call.problem, call.options, call.solver, &buffers->workspace,
-                                     &buffers->result);
-      !s.ok()) {
-    return s;
-  }
-  return FiniteAnswer<v1::PlanResponse>(api::ToProto(buffers->result));
+namespace {
+
+absl::StatusOr<v1::PlanResponse> PlanResponseOf(const PlanBuffers& buffers) {
+  return FiniteAnswer<v1::PlanResponse>(api::ToProto(buffers.result));
 }
 
-absl::StatusOr<v1::PlanResponse> SolvePlan(const PlanCall& call) {
-  return SolvePlan(call, &ThreadPlanBuffers());
+}  // namespace
+
+absl::StatusOr<v1::PlanResponse> SolvePlan(const PlanCall& call, const CallState& state,
+                                           PlanBuffers* buffers) {
+  PlanBuffers& b = buffers != nullptr ? *buffers : ThreadPlanBuffers();
+  TF_RETURN_IF_ERROR(planner::Plan(call.problem, call.options, call.solver, &b.workspace, &b.result,
+                                   planner::SolveControl{state.interrupt}));
+  return PlanResponseOf(b);
+}
+
+absl::StatusOr<v1::PlanResponse> SolvePlan(const ValidPlanCall& call, const CallState& state,
+                                           PlanBuffers* buffers) {
+  PlanBuffers& b = buffers != nullptr ? *buffers : ThreadPlanBuffers();
+  TF_RETURN_IF_ERROR(planner::CachedSolver(call.solver).Solve(
+      call.plan, &b.workspace, &b.result, planner::SolveControl{state.interrupt}));
+  return PlanResponseOf(b);
 }
 
 absl::StatusOr<v1::PlanResponse> HandlePlan(const v1::PlanRequest& request,
-                                            const CallLimits& limits) {
-  absl::StatusOr<PlanCall> call = PreparePlan(request, limits);
-  if (!call.ok()) return call.status();
-  return SolvePlan(*call);
+                                            const CallLimits& limits, const CallState& state) {
+  TF_ASSIGN_OR_RETURN(const PlanCall call, PreparePlan(request, limits));
+  return SolvePlan(call, state);
 }
 
 absl::StatusOr<v1::TrajectoryResponse> HandleTrajectory(const v1::TrajectoryRequest& request,
-                                                        const CallLimits& limits) {
+                                                        const CallLimits& limits,
+                                                        const CallState& state) {
   absl::StatusOr<PlanCall> call = PreparePlan(request.plan(), limits);
   if (!call.ok()) return Nested(call.status(), "plan.");
   if (absl::Status s = CheckHoldingGrasp(*call); !s.ok()) return s;
@@ -174,13 +190,14 @@ absl::StatusOr<v1::TrajectoryResponse> HandleTrajectory(const v1::TrajectoryRequ
   if (absl::Status s = CheckTrajectorySize(*t, call->options, limits); !s.ok()) return s;
   const bool warm = !request.has_warm_start() || request.warm_start();
   absl::StatusOr<planner::TrajectoryResult> r =
-      planner::PlanTrajectory(*t, call->options, call->solver, warm);
+      planner::PlanTrajectory(*t, call->options, call->solver, warm,
+                              planner::SolveControl{state.interrupt});
   if (!r.ok()) return r.status();
   return FiniteAnswer<v1::TrajectoryResponse>(ToProto(*r));
 }
 
 absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
-    const v1::FrictionProbeRequest& request, const CallLimits& limits) {
+    const v1::FrictionProbeRequest& request, const CallLimits& limits, const CallState& state) {
   absl::StatusOr<PlanCall> call = PreparePlan(request.plan(), limits);
   if (!call.ok()) return Nested(call.status(), "plan.");
   if (absl::Status s = CheckHoldingGrasp(*call); !s.ok()) return s;
@@ -208,7 +225,8 @@ absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
     return s;
   }
   absl::StatusOr<planner::ProbePlan> plan =
-      planner::PlanFrictionProbe(call->problem, probe, call->options, call->solver);
+      planner::PlanFrictionProbe(call->problem, probe, call->options, call->solver,
+                                 planner::SolveControl{state.interrupt});
   if (!plan.ok()) return plan.status();
   v1::FrictionProbeResponse out;
   for (double t : plan->times) out.add_times(t);
@@ -218,7 +236,8 @@ absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
 }
 
 absl::StatusOr<v1::EstimateResponse> HandleEstimate(const v1::EstimateRequest& request,
-                                                    const CallLimits& limits) {
+                                                    const CallLimits& limits,
+                                                    const CallState& /*state*/) {
   v1::PlanRequest as_plan;
   *as_plan.mutable_object() = request.object();
   *as_plan.mutable_contacts() = request.contacts();
@@ -264,7 +283,8 @@ absl::StatusOr<v1::EstimateResponse> HandleEstimate(const v1::EstimateRequest& r
 }
 
 absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& request,
-                                                    const CallLimits& limits) {
+                                                    const CallLimits& /*limits*/,
+                                                    const CallState& state) {
   std::vector<estimator::FrictionTrial> trials;
   for (int i = 0; i < request.trials_size(); ++i) {
     const v1::FrictionTrial& in = request.trials(i);
@@ -282,7 +302,7 @@ absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& r
     trials.push_back(std::move(trial));
   }
   estimator::FrictionOptions o;
-  o.interrupt = limits.interrupt;
+  o.interrupt = state.interrupt;
   if (request.mesh().triangles_size() > 0 || request.mesh().vertices_size() > 0) {
     io::TriangleMesh mesh;
     for (int i = 0; i < request.mesh().vertices_size(); ++i) {
@@ -361,7 +381,8 @@ absl::Status ReadAuditTaxels(const v1::AuditRequest& request, audit::MeasuredDat
 
 }  // namespace
 
-absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request, const CallLimits& limits) {
+absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request, const CallLimits& limits,
+                                              const CallState& state) {
   if (request.samples_size() > limits.max_audit_samples) {
     return absl::InvalidArgumentError(absl::StrCat("samples: ", request.samples_size(),
                                                    " samples exceed the limit of ", limits.max_audit_samples,
@@ -388,7 +409,7 @@ absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request, c
   if (absl::Status taxels = ReadAuditTaxels(request, &data); !taxels.ok()) return taxels;
   if (absl::Status valid = audit::ValidateMeasuredData(data); !valid.ok()) return valid;
   audit::AuditOptions options;
-  options.interrupt = limits.interrupt;
+  options.interrupt = state.interrupt;
   if (request.has_heldout_fraction()) options.heldout_fraction = request.heldout_fraction();
   if (request.has_max_causes()) options.max_causes = request.max_causes();
   if (request.has_blocks()) options.blocks = request.blocks();

@@ -132,9 +132,9 @@ class FitInertiaReactor final : public grpc::ServerReadReactor<grpc::ByteBuffer>
       if (guard_.ShouldStop()) return guard_.StopReason("before the fit started");
       const api::WorkBudget budget(max_call_seconds_, guard_.Interrupt());
       api::CallLimits limits;
-      limits.interrupt = budget.Interrupt();
       limits.max_fit_bytes = max_fit_bytes_;
-      absl::StatusOr<v1::FitInertiaResponse> result = stream_.Fit(limits);
+      absl::StatusOr<v1::FitInertiaResponse> result =
+          stream_.Fit(limits, {}, api::CallState{budget.Interrupt()});
       if (!result.ok()) return guard_.ShouldStop() ? result.status() : budget.Explain(result.status());
       return SerializeMessage(*result, response_);
     };
@@ -185,7 +185,7 @@ api::CallLimits EstimatorServiceOptions::Limits() const {
   api::CallLimits limits;
   limits.max_contacts = max_contacts;
   limits.max_audit_samples = max_audit_samples;
-  limits.max_call_seconds = solve_timeout_ms / 1000.0;
+  limits.solve_timeout_ms = solve_timeout_ms;
   return limits;
 }
 
@@ -207,7 +207,9 @@ grpc::ServerUnaryReactor* EstimatorService::EstimateFriction(grpc::CallbackServe
                                                              v1::FrictionResponse* response) {
   return ServeOnPool<v1::FrictionRequest, v1::FrictionResponse>(
       "EstimateFriction", context, request, response, pool_, options_.Limits(),
-      [](const v1::FrictionRequest& r, const api::CallLimits& l) { return api::HandleFriction(r, l); });
+      [](const v1::FrictionRequest& r, const api::CallLimits& l, const api::CallState& c) {
+        return api::HandleFriction(r, l, c);
+      });
 }
 
 grpc::ServerUnaryReactor* AuditService::AuditModel(grpc::CallbackServerContext* context,
@@ -215,7 +217,9 @@ grpc::ServerUnaryReactor* AuditService::AuditModel(grpc::CallbackServerContext* 
                                                    v1::AuditResponse* response) {
   return ServeOnPool<v1::AuditRequest, v1::AuditResponse>(
       "AuditModel", context, request, response, pool_, options_.Limits(),
-      [](const v1::AuditRequest& r, const api::CallLimits& l) { return api::HandleAudit(r, l); });
+      [](const v1::AuditRequest& r, const api::CallLimits& l, const api::CallState& c) {
+        return api::HandleAudit(r, l, c);
+      });
 }
 
 }  // namespace tactforce::server

@@ -25,11 +25,10 @@ using Clock = std::chrono::steady_clock;
 api::PlanSettings ToPlanSettings(const PlannerServiceOptions& options) {
   api::PlanSettings settings;
   settings.limits.max_contacts = options.max_contacts;
-  settings.limits.ipopt_max_cpu_seconds = options.solve_timeout_ms / 1000.0;
+  settings.limits.solve_timeout_ms = options.solve_timeout_ms;
   settings.inline_max_contacts = options.inline_max_contacts;
   settings.limits.max_trajectory_work = options.max_trajectory_work;
   settings.limits.max_response_bytes = options.max_response_bytes;
-  settings.limits.max_call_seconds = options.solve_timeout_ms / 1000.0;
   return settings;
 }
 
