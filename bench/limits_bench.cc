@@ -77,8 +77,8 @@ void BM_Trajectory64_AtWorkLimit(benchmark::State& state) {
   for (int k = 0; k < steps; ++k) request.add_steps()->mutable_gravity()->set_z(-9.81);
   for (auto _ : state) {
     const WorkBudget budget(10.0, nullptr);
-    const CallState state{budget.Interrupt()};
-    absl::StatusOr<v1::TrajectoryResponse> r = HandleTrajectory(request, CallLimits{}, state);
+    const CallState call_state{budget.Interrupt()};
+    absl::StatusOr<v1::TrajectoryResponse> r = HandleTrajectory(request, CallLimits{}, call_state);
     const absl::Status status = r.ok() ? absl::OkStatus() : budget.Explain(r.status());
     state.counters["stopped_by_budget"] = status.code() == absl::StatusCode::kResourceExhausted;
     state.counters["steps"] = steps;
