@@ -40,7 +40,7 @@ v1::PlanRequest LargestRequest(planner::SolverKind solver, planner::ConeModel co
 void RunPlan(benchmark::State& state, planner::SolverKind solver, planner::ConeModel cone, int sides) {
   const v1::PlanRequest request = LargestRequest(solver, cone, sides);
   CallLimits limits;
-  limits.ipopt_max_cpu_seconds = 10.0;  // the server's default --solve-timeout-ms
+  limits.solve_timeout_ms = 10'000;  // the server's default --solve-timeout-ms
   for (auto _ : state) {
     absl::StatusOr<v1::PlanResponse> r = HandlePlan(request, limits);
     if (!r.ok()) state.SkipWithError(std::string(r.status().message()).c_str());
@@ -77,9 +77,8 @@ void BM_Trajectory64_AtWorkLimit(benchmark::State& state) {
   for (int k = 0; k < steps; ++k) request.add_steps()->mutable_gravity()->set_z(-9.81);
   for (auto _ : state) {
     const WorkBudget budget(10.0, nullptr);
-    CallLimits limits;
-    limits.interrupt = budget.Interrupt();
-    absl::StatusOr<v1::TrajectoryResponse> r = HandleTrajectory(request, limits);
+    const CallState call_state{budget.Interrupt()};
+    absl::StatusOr<v1::TrajectoryResponse> r = HandleTrajectory(request, CallLimits{}, call_state);
     const absl::Status status = r.ok() ? absl::OkStatus() : budget.Explain(r.status());
     state.counters["stopped_by_budget"] = status.code() == absl::StatusCode::kResourceExhausted;
     state.counters["steps"] = steps;

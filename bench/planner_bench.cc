@@ -26,7 +26,10 @@
 #include <vector>
 
 #include "instruction_counter.h"
+#include "spdlog/spdlog.h"
 #include "support/allocation_counter.h"
+#include "tactforce/api/convert.h"
+#include "tactforce/api/dispatch.h"
 #include "tactforce/planner/dense_qp.h"
 #include "tactforce/planner/random_grasps.h"
 #include "tactforce/planner/solver.h"
@@ -232,7 +235,9 @@ namespace {
 // --callgrind-run=N,C[,qp]: no Google Benchmark; N workspace solves of the
 // C-contact grasps (cycling over all 64, after one warm-up pass), or with
 // ",qp" N solves of their FE-plane QPs alone (TimedQpSolve), for
-// scripts/count_instructions.sh to count under callgrind.
+// scripts/count_instructions.sh to count under callgrind; ",dispatch": N
+// Plan requests through api::PlanDispatcher inline (TimedDispatchPlan),
+// ",cross": N CROSS_CHECK solves in place (TimedCrossCheckSolve).
 int CallgrindQpRun(int solves, int contacts) {
   const auto& qps = PlaneQps(contacts);
   DenseQpWorkspace workspace;
@@ -249,12 +254,77 @@ int CallgrindQpRun(int solves, int contacts) {
   return failures == 0 ? 0 : 1;
 }
 
+// A caller that never stops (the inline dispatch of a Plan).
+class NeverStop final : public api::CallControl {
+ public:
+  bool ShouldStop() const override { return false; }
+  absl::Status StopReason(std::string_view) const override { return absl::OkStatus(); }
+  std::string Peer() const override { return ""; }
+};
+
+// The timed call of the dispatch run: one Planner.Plan request through
+// api::PlanDispatcher (inline: GEOMETRIC, <= 8 contacts), conversion,
+// limits, solve and response included.
+bool DispatchPlan(const api::PlanDispatcher& dispatcher, const v1::PlanRequest& request,
+                  v1::PlanResponse* response) {
+  static const NeverStop control;
+  bool ok = false;
+  dispatcher.Dispatch(request, response, api::CallLog("Plan", control), control,
+                      [&ok](const absl::Status& s) { ok = s.ok(); });
+  return ok && response->status() == v1::PLAN_STATUS_OPTIMAL;
+}
+[[gnu::noinline]] bool TimedDispatchPlan(const api::PlanDispatcher& dispatcher,
+                                         const v1::PlanRequest& request,
+                                         v1::PlanResponse* response) {
+  return DispatchPlan(dispatcher, request, response);
+}
+
+// The timed call of the cross-check run: GEOMETRIC and IPOPT compared.
+bool CrossCheckSolve(const PlanProblem& problem, PlanningWorkspace* workspace, PlanResult* result) {
+  return Plan(problem, PlanOptions{}, SolverKind::kCrossCheck, workspace, result).ok() &&
+         result->status == PlanStatus::kOptimal;
+}
+[[gnu::noinline]] bool TimedCrossCheckSolve(const PlanProblem& problem,
+                                            PlanningWorkspace* workspace, PlanResult* result) {
+  return CrossCheckSolve(problem, workspace, result);
+}
+
+// --callgrind-run=N,C,dispatch and --callgrind-run=N,C,cross (see below).
+int CallgrindDispatchRun(int solves, int contacts, bool cross) {
+  spdlog::set_level(spdlog::level::warn);  // the call log line is not what is measured
+  const auto& grasps = Grasps(contacts);
+  std::vector<v1::PlanRequest> requests;
+  for (const PlanProblem& p : grasps) {
+    requests.push_back(api::ToRequest(p, PlanOptions{}, SolverKind::kGeometric));
+  }
+  const api::PlanDispatcher dispatcher(nullptr, api::PlanSettings{});
+  PlanningWorkspace workspace;
+  PlanResult result;
+  v1::PlanResponse response;
+  for (size_t g = 0; g < grasps.size(); ++g) {  // warm-up, not counted
+    (void)(cross ? CrossCheckSolve(grasps[g], &workspace, &result)
+                 : DispatchPlan(dispatcher, requests[g], &response));
+  }
+  int failures = 0;
+  for (int i = 0; i < solves; ++i) {
+    const size_t g = i % grasps.size();
+    const bool ok = cross ? TimedCrossCheckSolve(grasps[g], &workspace, &result)
+                          : TimedDispatchPlan(dispatcher, requests[g], &response);
+    if (!ok) ++failures;
+  }
+  std::printf("%d %s runs of %d contacts (after one warm-up pass), %d failures\n", solves,
+              cross ? "cross-check" : "dispatch", contacts, failures);
+  return failures == 0 ? 0 : 1;
+}
+
 int CallgrindRun(const std::string& spec) {
   const size_t comma = spec.find(',');
   const int solves = std::stoi(spec.substr(0, comma));
   const std::string rest = comma == std::string::npos ? "" : spec.substr(comma + 1);
   const int contacts = rest.empty() ? 4 : std::stoi(rest);
   if (rest.find(",qp") != std::string::npos) return CallgrindQpRun(solves, contacts);
+  if (rest.find(",dispatch") != std::string::npos) return CallgrindDispatchRun(solves, contacts, false);
+  if (rest.find(",cross") != std::string::npos) return CallgrindDispatchRun(solves, contacts, true);
   const auto& grasps = Grasps(contacts);
   const auto solver = MakeSolver(SolverKind::kGeometric);
   PlanningWorkspace workspace;

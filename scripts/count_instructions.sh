@@ -1,20 +1,23 @@
 #!/usr/bin/env bash
 # Instructions per call of a bench's out-of-line timed function, by callgrind
 # (for machines where perf_event_open is refused, as in containers).
-#   scripts/count_instructions.sh [CONTACTS] [SOLVES] [qp]
+#   scripts/count_instructions.sh [CONTACTS] [SOLVES] [qp|dispatch|cross]
 # defaults: 4 contacts, 640 solves (each of planner_bench's 64 grasps 10
 # times, after a warm-up pass) through the workspace path; with "qp", only
-# the FE-plane QPs of the same grasps (TimedQpSolve).
+# the FE-plane QPs of the same grasps (TimedQpSolve); "dispatch": Plan
+# requests through api::PlanDispatcher inline (TimedDispatchPlan); "cross":
+# CROSS_CHECK solves (TimedCrossCheckSolve).
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 contacts="${1:-4}"
 solves="${2:-640}"
 function=TimedWorkspaceSolve
 run="$solves,$contacts"
-if [[ "${3:-}" == qp ]]; then
-  function=TimedQpSolve
-  run="$run,qp"
-fi
+case "${3:-}" in
+  qp) function=TimedQpSolve; run="$run,qp" ;;
+  dispatch) function=TimedDispatchPlan; run="$run,dispatch" ;;
+  cross) function=TimedCrossCheckSolve; run="$run,cross" ;;
+esac
 out="$(mktemp -d)"
 valgrind --tool=callgrind --callgrind-out-file="$out/cg.out" \
   --toggle-collect="*${function}*" build/bin/planner_bench \

@@ -196,13 +196,13 @@ absl::StatusOr<planner::PlanOptions> ToOptions(const v1::PlanRequest& request) {
 }
 
 absl::Status ApplySolverOptions(const v1::SolverOptions& in, planner::PlanOptions* options) {
-  if (in.has_ipopt_tolerance()) options->ipopt_tolerance = in.ipopt_tolerance();
+  if (in.has_ipopt_tolerance()) options->ipopt.tolerance = in.ipopt_tolerance();
   if (in.has_ipopt_max_iterations()) {
     // uint32 beyond int's range would wrap negative.
-    options->ipopt_max_iterations =
+    options->ipopt.max_iterations =
         static_cast<int>(std::min<uint32_t>(in.ipopt_max_iterations(), std::numeric_limits<int>::max()));
   }
-  if (in.has_ipopt_max_cpu_seconds()) options->ipopt_max_cpu_seconds = in.ipopt_max_cpu_seconds();
+  if (in.has_ipopt_max_cpu_seconds()) options->ipopt.max_cpu_seconds = in.ipopt_max_cpu_seconds();
   if (in.has_rank_tolerance()) options->rank_tolerance = in.rank_tolerance();
   if (in.has_agreement_tolerance()) options->agreement_tolerance = in.agreement_tolerance();
   // Only the solver fields are named here; the request's other settings
@@ -317,12 +317,12 @@ v1::PlanRequest ToRequest(const planner::PlanProblem& problem,
   request.set_solver(ToProto(solver));
   const planner::PlanOptions defaults;
   v1::SolverOptions* solver_options = request.mutable_solver_options();
-  if (options.ipopt_tolerance != defaults.ipopt_tolerance) solver_options->set_ipopt_tolerance(options.ipopt_tolerance);
-  if (options.ipopt_max_iterations != defaults.ipopt_max_iterations && options.ipopt_max_iterations > 0) {
-    solver_options->set_ipopt_max_iterations(static_cast<uint32_t>(options.ipopt_max_iterations));
+  if (options.ipopt.tolerance != defaults.ipopt.tolerance) solver_options->set_ipopt_tolerance(options.ipopt.tolerance);
+  if (options.ipopt.max_iterations != defaults.ipopt.max_iterations && options.ipopt.max_iterations > 0) {
+    solver_options->set_ipopt_max_iterations(static_cast<uint32_t>(options.ipopt.max_iterations));
   }
-  if (options.ipopt_max_cpu_seconds != defaults.ipopt_max_cpu_seconds) {
-    solver_options->set_ipopt_max_cpu_seconds(options.ipopt_max_cpu_seconds);
+  if (options.ipopt.max_cpu_seconds != defaults.ipopt.max_cpu_seconds) {
+    solver_options->set_ipopt_max_cpu_seconds(options.ipopt.max_cpu_seconds);
   }
   if (options.rank_tolerance != defaults.rank_tolerance) solver_options->set_rank_tolerance(options.rank_tolerance);
   if (options.agreement_tolerance != defaults.agreement_tolerance) {

@@ -15,7 +15,7 @@
 #include "absl/strings/str_cat.h"
 #include "spdlog/spdlog.h"
 #include "tactforce/api/names.h"
-#include "tactforce/planner/validation.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::api {
 namespace {
@@ -26,17 +26,15 @@ int64_t MicrosSince(std::chrono::steady_clock::time_point start) {
       .count();
 }
 
-// Solves a prepared request (the pool task or the inline call) with the
-// stream's buffers, or the running thread's when `buffers` is null.
-absl::Status ExecutePlan(PlanCall& call, const CallControl& control, PlanBuffers* buffers,
+// Solves a request (the inline call: validated by the solve itself; the
+// pool task: validated before it was queued) with the stream's buffers, or
+// the running thread's when `buffers` is null.
+template <class Call>
+absl::Status ExecutePlan(const Call& call, const CallControl& control, PlanBuffers* buffers,
                          v1::PlanResponse* response, CallLog& log) {
   if (control.ShouldStop()) return control.StopReason("before the solve started");
-  call.options.interrupt = control.Interrupt();
   // Into the caller's response (a unary Plan's lives on the call's arena).
-  if (absl::Status s = SolvePlan(call, buffers != nullptr ? buffers : &ThreadPlanBuffers(), response);
-      !s.ok()) {
-    return s;
-  }
+  TF_RETURN_IF_ERROR(SolvePlan(call, CallState{control.Interrupt()}, buffers, response));
   if (control.ShouldStop()) {
     return control.StopReason(absl::StrCat("after ", response->solve_time_us(), " us of solving"));
   }
@@ -181,13 +179,6 @@ void PlanDispatcher::Dispatch(const v1::PlanRequest& request, v1::PlanResponse* 
                            " contacts=", request.contacts_size());
     log.set_details(details);
   }
-  const bool inline_solve = call.ok() && RunsInline(*call);
-  if (call.ok() && !inline_solve) {
-    if (absl::Status valid = planner::ValidateProblem(call->problem, call->options).status();
-        !valid.ok()) {
-      call = valid;
-    }
-  }
   if (!call.ok()) {
     log.Emit(call.status());
     done(call.status());
@@ -195,14 +186,30 @@ void PlanDispatcher::Dispatch(const v1::PlanRequest& request, v1::PlanResponse* 
   }
   // From here on `log` may be logged (and `response` freed) on a worker
   // thread before RunCall returns: only locals are used after it.
+  if (RunsInline(*call)) {  // validated once, by the solve, into the thread's buffers
+    auto work = [&call, &control, buffers, response](CallLog& call_log) {
+      return ExecutePlan(*call, control, buffers, response, call_log);
+    };
+    RunCall(std::move(log), nullptr, std::move(work), std::move(done), kSolveWords);
+    return;
+  }
+  // Validated once, here, so that a bad request is INVALID_ARGUMENT even
+  // under overload and never takes a queue slot; the worker solves the
+  // validated plan without a second check.
+  absl::StatusOr<ValidPlanCall> valid = ValidatePlan(*call);
+  if (!valid.ok()) {
+    log.Emit(valid.status());
+    done(valid.status());
+    return;
+  }
   std::string rpc_name;
-  if (debug && !inline_solve) rpc_name = log.rpc();
-  auto work = [prepared = *std::move(call), &control, buffers, response](CallLog& call_log) mutable {
-    return ExecutePlan(prepared, control, buffers, response, call_log);
+  if (debug) rpc_name = log.rpc();
+  auto work = [valid = *std::move(valid), &control, buffers, response](CallLog& call_log) {
+    return ExecutePlan(valid, control, buffers, response, call_log);
   };
-  Executor* where = inline_solve ? nullptr : UsesIpopt(request.solver()) ? ipopt_lane_ : pool_;
+  Executor* where = UsesIpopt(request.solver()) ? ipopt_lane_ : pool_;
   const bool queued = RunCall(std::move(log), where, std::move(work), std::move(done), kSolveWords);
-  if (debug && queued && !inline_solve) spdlog::debug("rpc={} event=queued {}", rpc_name, details);
+  if (debug && queued) spdlog::debug("rpc={} event=queued {}", rpc_name, details);
 }
 
 }  // namespace tactforce::api

@@ -461,7 +461,8 @@ absl::StatusOr<v1::FitInertiaResponse> FitInertiaSamples(const inertia::InertiaS
                                                          const v1::InertiaFitOptions& options,
                                                          const CallLimits& limits,
                                                          std::function<void(double)> progress,
-                                                         inertia::InertiaFit* fit_out) {
+                                                         inertia::InertiaFit* fit_out,
+                                                         const CallState& state) {
   absl::StatusOr<inertia::InertiaOptions> converted = InertiaOptionsFromProto(options);
   if (!converted.ok()) return converted.status();
   const int64_t n = static_cast<int64_t>(samples.samples.size());
@@ -473,7 +474,7 @@ absl::StatusOr<v1::FitInertiaResponse> FitInertiaSamples(const inertia::InertiaS
         limits.max_fit_bytes / inertia::FitWorkingBytes(converted->method, 1), " samples"));
   }
   converted->progress = std::move(progress);
-  converted->interrupt = limits.interrupt;
+  converted->interrupt = state.interrupt;
   absl::StatusOr<inertia::InertiaFit> fit = inertia::FitInertia(samples, *converted);
   if (!fit.ok()) return fit.status();
   v1::FitInertiaResponse response = InertiaFitToProto(*fit);
@@ -577,9 +578,10 @@ absl::Status InertiaStream::Add(const v1::FitInertiaRequest& message) {
 }
 
 absl::StatusOr<v1::FitInertiaResponse> InertiaStream::Fit(const CallLimits& limits,
-                                                          std::function<void(double)> progress) const {
+                                                          std::function<void(double)> progress,
+                                                          const CallState& state) const {
   if (samples_.samples.empty()) return absl::InvalidArgumentError("samples: the stream carried no samples");
-  return FitInertiaSamples(samples_, options_, limits, std::move(progress));
+  return FitInertiaSamples(samples_, options_, limits, std::move(progress), nullptr, state);
 }
 
 }  // namespace tactforce::api

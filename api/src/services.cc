@@ -128,16 +128,20 @@ absl::Status CheckHoldingGrasp(const PlanCall& call) {
 }  // namespace
 
 absl::StatusOr<PlanCall> PreparePlan(const v1::PlanRequest& request, const CallLimits& limits) {
-  absl::StatusOr<PlanCall> call = FromProto(request);
-  if (!call.ok()) return call.status();
-  call->options.max_contacts = limits.max_contacts;
+  TF_ASSIGN_OR_RETURN(PlanCall call, FromProto(request));
+  call.options.max_contacts = limits.max_contacts;
   // The tighter of the request's and the server's CPU limits (0 = none).
-  const double asked = call->options.ipopt_max_cpu_seconds;
-  if (limits.ipopt_max_cpu_seconds > 0 && (asked == 0 || limits.ipopt_max_cpu_seconds < asked)) {
-    call->options.ipopt_max_cpu_seconds = limits.ipopt_max_cpu_seconds;
-  }
-  call->options.interrupt = limits.interrupt;
+  const double cap = limits.solve_timeout_seconds();
+  double& asked = call.options.ipopt.max_cpu_seconds;
+  if (cap > 0 && (asked == 0 || cap < asked)) asked = cap;
   return call;
+}
+
+absl::StatusOr<ValidPlanCall> ValidatePlan(const PlanCall& call) {
+  ValidPlanCall valid;
+  TF_RETURN_IF_ERROR(planner::ValidatePlan(call.problem, call.options, &valid.plan));
+  valid.solver = call.solver;
+  return valid;
 }
 
 PlanBuffers& ThreadPlanBuffers() {
@@ -145,32 +149,60 @@ PlanBuffers& ThreadPlanBuffers() {
   return buffers;
 }
 
-absl::StatusOr<v1::PlanResponse> SolvePlan(const PlanCall& call, PlanBuffers* buffers) {
-  v1::PlanResponse response;
-  TF_RETURN_IF_ERROR(SolvePlan(call, buffers, &response));
-  return response;
-}
+namespace {
 
-absl::Status SolvePlan(const PlanCall& call, PlanBuffers* buffers, v1::PlanResponse* response) {
-  TF_RETURN_IF_ERROR(planner::Plan(call.problem, call.options, call.solver, &buffers->workspace,
-                                   &buffers->result));
-  api::ToProto(buffers->result, response);
+// Into `response` (the caller's, e.g. on a gRPC call's arena: filled in
+// place, no copy), then the finite check every answer gets.
+absl::Status FillPlanResponse(const PlanBuffers& buffers, v1::PlanResponse* response) {
+  api::ToProto(buffers.result, response);
   return CheckFiniteAnswer(*response);
 }
 
-absl::StatusOr<v1::PlanResponse> SolvePlan(const PlanCall& call) {
-  return SolvePlan(call, &ThreadPlanBuffers());
+template <class Call>
+absl::StatusOr<v1::PlanResponse> SolvePlanToValue(const Call& call, const CallState& state,
+                                                  PlanBuffers* buffers) {
+  v1::PlanResponse response;
+  TF_RETURN_IF_ERROR(SolvePlan(call, state, buffers, &response));
+  return response;
+}
+
+}  // namespace
+
+absl::Status SolvePlan(const PlanCall& call, const CallState& state, PlanBuffers* buffers,
+                       v1::PlanResponse* response) {
+  PlanBuffers& b = buffers != nullptr ? *buffers : ThreadPlanBuffers();
+  TF_RETURN_IF_ERROR(planner::Plan(call.problem, call.options, call.solver, &b.workspace, &b.result,
+                                   planner::SolveControl{state.interrupt}));
+  return FillPlanResponse(b, response);
+}
+
+absl::Status SolvePlan(const ValidPlanCall& call, const CallState& state, PlanBuffers* buffers,
+                       v1::PlanResponse* response) {
+  PlanBuffers& b = buffers != nullptr ? *buffers : ThreadPlanBuffers();
+  TF_RETURN_IF_ERROR(planner::CachedSolver(call.solver).Solve(
+      call.plan, &b.workspace, &b.result, planner::SolveControl{state.interrupt}));
+  return FillPlanResponse(b, response);
+}
+
+absl::StatusOr<v1::PlanResponse> SolvePlan(const PlanCall& call, const CallState& state,
+                                           PlanBuffers* buffers) {
+  return SolvePlanToValue(call, state, buffers);
+}
+
+absl::StatusOr<v1::PlanResponse> SolvePlan(const ValidPlanCall& call, const CallState& state,
+                                           PlanBuffers* buffers) {
+  return SolvePlanToValue(call, state, buffers);
 }
 
 absl::StatusOr<v1::PlanResponse> HandlePlan(const v1::PlanRequest& request,
-                                            const CallLimits& limits) {
-  absl::StatusOr<PlanCall> call = PreparePlan(request, limits);
-  if (!call.ok()) return call.status();
-  return SolvePlan(*call);
+                                            const CallLimits& limits, const CallState& state) {
+  TF_ASSIGN_OR_RETURN(const PlanCall call, PreparePlan(request, limits));
+  return SolvePlan(call, state);
 }
 
 absl::StatusOr<v1::TrajectoryResponse> HandleTrajectory(const v1::TrajectoryRequest& request,
-                                                        const CallLimits& limits) {
+                                                        const CallLimits& limits,
+                                                        const CallState& state) {
   absl::StatusOr<PlanCall> call = PreparePlan(request.plan(), limits);
   if (!call.ok()) return Nested(call.status(), "plan.");
   if (absl::Status s = CheckHoldingGrasp(*call); !s.ok()) return s;
@@ -179,13 +211,14 @@ absl::StatusOr<v1::TrajectoryResponse> HandleTrajectory(const v1::TrajectoryRequ
   if (absl::Status s = CheckTrajectorySize(*t, call->options, limits); !s.ok()) return s;
   const bool warm = !request.has_warm_start() || request.warm_start();
   absl::StatusOr<planner::TrajectoryResult> r =
-      planner::PlanTrajectory(*t, call->options, call->solver, warm);
+      planner::PlanTrajectory(*t, call->options, call->solver, warm,
+                              planner::SolveControl{state.interrupt});
   if (!r.ok()) return r.status();
   return FiniteAnswer<v1::TrajectoryResponse>(ToProto(*r));
 }
 
 absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
-    const v1::FrictionProbeRequest& request, const CallLimits& limits) {
+    const v1::FrictionProbeRequest& request, const CallLimits& limits, const CallState& state) {
   absl::StatusOr<PlanCall> call = PreparePlan(request.plan(), limits);
   if (!call.ok()) return Nested(call.status(), "plan.");
   if (absl::Status s = CheckHoldingGrasp(*call); !s.ok()) return s;
@@ -213,7 +246,8 @@ absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
     return s;
   }
   absl::StatusOr<planner::ProbePlan> plan =
-      planner::PlanFrictionProbe(call->problem, probe, call->options, call->solver);
+      planner::PlanFrictionProbe(call->problem, probe, call->options, call->solver,
+                                 planner::SolveControl{state.interrupt});
   if (!plan.ok()) return plan.status();
   v1::FrictionProbeResponse out;
   for (double t : plan->times) out.add_times(t);
@@ -223,7 +257,8 @@ absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
 }
 
 absl::StatusOr<v1::EstimateResponse> HandleEstimate(const v1::EstimateRequest& request,
-                                                    const CallLimits& limits) {
+                                                    const CallLimits& limits,
+                                                    const CallState& /*state*/) {
   v1::PlanRequest as_plan;
   *as_plan.mutable_object() = request.object();
   *as_plan.mutable_contacts() = request.contacts();
@@ -269,7 +304,8 @@ absl::StatusOr<v1::EstimateResponse> HandleEstimate(const v1::EstimateRequest& r
 }
 
 absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& request,
-                                                    const CallLimits& limits) {
+                                                    const CallLimits& /*limits*/,
+                                                    const CallState& state) {
   std::vector<estimator::FrictionTrial> trials;
   for (int i = 0; i < request.trials_size(); ++i) {
     const v1::FrictionTrial& in = request.trials(i);
@@ -287,7 +323,7 @@ absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& r
     trials.push_back(std::move(trial));
   }
   estimator::FrictionOptions o;
-  o.interrupt = limits.interrupt;
+  o.interrupt = state.interrupt;
   if (request.mesh().triangles_size() > 0 || request.mesh().vertices_size() > 0) {
     io::TriangleMesh mesh;
     for (int i = 0; i < request.mesh().vertices_size(); ++i) {
@@ -366,7 +402,8 @@ absl::Status ReadAuditTaxels(const v1::AuditRequest& request, audit::MeasuredDat
 
 }  // namespace
 
-absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request, const CallLimits& limits) {
+absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request, const CallLimits& limits,
+                                              const CallState& state) {
   if (request.samples_size() > limits.max_audit_samples) {
     return absl::InvalidArgumentError(absl::StrCat("samples: ", request.samples_size(),
                                                    " samples exceed the limit of ", limits.max_audit_samples,
@@ -393,7 +430,7 @@ absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request, c
   if (absl::Status taxels = ReadAuditTaxels(request, &data); !taxels.ok()) return taxels;
   if (absl::Status valid = audit::ValidateMeasuredData(data); !valid.ok()) return valid;
   audit::AuditOptions options;
-  options.interrupt = limits.interrupt;
+  options.interrupt = state.interrupt;
   if (request.has_heldout_fraction()) options.heldout_fraction = request.heldout_fraction();
   if (request.has_max_causes()) options.max_causes = request.max_causes();
   if (request.has_blocks()) options.blocks = request.blocks();

@@ -25,45 +25,41 @@ class CrossCheckSolver final : public ForceSolver {
     return absl::OkStatus();
   }
 
-  void DoSolve(const PlanOptions& options, PlanningWorkspace* workspace,
-               PlanResult* out) const override {
-    *out = Compare(workspace->prepared, options);
+  // Both backends on the one prepared workspace (validated and prepared
+  // once by Solve): the geometric answer into `out`, Ipopt's beside it.
+  void DoSolve(const PlanOptions& options, const SolveControl& control,
+               PlanningWorkspace* workspace, PlanResult* out) const override {
+    SolvePrepared(*geometric_, options, control, workspace, out);
+    PlanResult ipopt;
+    SolvePrepared(*ipopt_, options, control, workspace, &ipopt);
+    Compare(ipopt, options, out);
   }
 
  private:
-  PlanResult Compare(const PreparedProblem& prepared, const PlanOptions& options) const {
-    absl::StatusOr<PlanResult> geometric = geometric_->Solve(prepared.problem, options);
-    absl::StatusOr<PlanResult> ipopt = ipopt_->Solve(prepared.problem, options);
-    if (!geometric.ok() || !ipopt.ok()) {  // cannot happen after validation
-      PlanResult failed;
-      failed.status = PlanStatus::kSolverFailure;
-      failed.message = std::string((!geometric.ok() ? geometric.status() : ipopt.status()).message());
-      return failed;
-    }
-    PlanResult result = *geometric;
+  static void Compare(const PlanResult& ipopt, const PlanOptions& options, PlanResult* result) {
+    const PlanResult& geometric = *result;
     CrossCheckReport report;
-    report.geometric_time_us = geometric->solve_time_us;
-    report.ipopt_time_us = ipopt->solve_time_us;
-    report.ipopt_status = ipopt->status;
-    report.ipopt_message = ipopt->message;
-    const bool same_status = geometric->status == ipopt->status;
-    if (same_status && geometric->status == PlanStatus::kOptimal) {
-      for (size_t i = 0; i < geometric->forces.size(); ++i) {
+    report.geometric_time_us = geometric.solve_time_us;
+    report.ipopt_time_us = ipopt.solve_time_us;
+    report.ipopt_status = ipopt.status;
+    report.ipopt_message = ipopt.message;
+    const bool same_status = geometric.status == ipopt.status;
+    if (same_status && geometric.status == PlanStatus::kOptimal) {
+      for (size_t i = 0; i < geometric.forces.size(); ++i) {
         report.max_force_diff = std::max(
-            report.max_force_diff, (geometric->forces[i] - ipopt->forces[i]).cwiseAbs().maxCoeff());
+            report.max_force_diff, (geometric.forces[i] - ipopt.forces[i]).cwiseAbs().maxCoeff());
       }
-      report.objective_rel_diff = std::abs(geometric->objective - ipopt->objective) /
-                                  std::max(1.0, std::abs(ipopt->objective));
+      report.objective_rel_diff = std::abs(geometric.objective - ipopt.objective) /
+                                  std::max(1.0, std::abs(ipopt.objective));
     }
     report.agree = same_status && report.max_force_diff <= options.agreement_tolerance;
     if (!same_status) {
-      absl::StrAppend(&result.message, result.message.empty() ? "" : "; ",
-                      "cross-check: Ipopt says ", ToString(ipopt->status),
-                      ipopt->message.empty() ? "" : absl::StrCat(" (", ipopt->message, ")"));
+      absl::StrAppend(&result->message, result->message.empty() ? "" : "; ",
+                      "cross-check: Ipopt says ", ToString(ipopt.status),
+                      ipopt.message.empty() ? "" : absl::StrCat(" (", ipopt.message, ")"));
     }
-    result.iterations = geometric->iterations;
-    result.cross_check = report;
-    return result;
+    result->ipopt = ipopt.ipopt;
+    result->cross_check = std::move(report);
   }
 
   std::unique_ptr<ForceSolver> geometric_;

@@ -76,8 +76,8 @@ class GeometricSolver final : public ForceSolver {
     return absl::OkStatus();
   }
 
-  void DoSolve(const PlanOptions& options, PlanningWorkspace* workspace,
-               PlanResult* result) const override {
+  void DoSolve(const PlanOptions& options, const SolveControl& /*control*/,
+               PlanningWorkspace* workspace, PlanResult* result) const override {
     const PreparedProblem& prepared = workspace->prepared;
     const ForceEquilibrium& eq = prepared.equilibrium;
     if (!eq.consistent) {

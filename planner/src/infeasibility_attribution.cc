@@ -1,10 +1,12 @@
 // ForceSolver::AttributeInfeasibility (solver.h): which uncertainty source
 // made a plan infeasible, found by solving again without each source.
+#include <chrono>
 #include <string>
 
 #include "absl/strings/str_cat.h"
 #include "tactforce/planner/parameter_uncertainty.h"
 #include "tactforce/planner/solver.h"
+#include "tactforce/planner/validation.h"
 
 namespace tactforce::planner {
 namespace {
@@ -55,11 +57,15 @@ int DominantContact(const PlanProblem& problem, const std::vector<RowMargin>& ma
 }  // namespace
 
 void ForceSolver::AttributeInfeasibility(const PlanProblem& problem, const PlanOptions& options,
-                                         PlanResult* result) const {
+                                         const SolveControl& control, PlanResult* result) const {
+  // Each candidate is a new problem (a source removed): validated, solved
+  // and finished, never attributed itself.
   const auto feasible = [&](const PlanProblem& q) {
     PlanningWorkspace workspace;
     PlanResult r;
-    return SolveOnce(q, options, &workspace, &r).ok() && r.status == PlanStatus::kOptimal;
+    return ValidateProblem(q, options, &workspace.prepared.problem).ok() &&
+           SolveValidated(options, control, std::chrono::steady_clock::now(), &workspace, &r).ok() &&
+           r.status == PlanStatus::kOptimal;
   };
   if (!feasible(WithoutMeasurement(WithoutFriction(WithoutParameters(problem))))) {
     result->infeasible_source = UncertaintySource::kNominal;

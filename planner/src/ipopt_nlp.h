@@ -42,7 +42,7 @@ double ThreadCpuSeconds();
 struct StopConditions {
   double limit_seconds = 0.0;  // thread CPU budget (s); <= 0: none
   double start_seconds = 0.0;  // ThreadCpuSeconds() at the start of the solve
-  const std::function<bool()>* interrupt = nullptr;  // options.interrupt; may be null or empty
+  const std::function<bool()>* interrupt = nullptr;  // SolveControl::interrupt; may be null or empty
 
   enum Reason { kNone, kTimeLimit, kInterrupted };
   // The interrupt is polled first; then the budget.

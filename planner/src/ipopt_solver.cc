@@ -25,8 +25,8 @@
 // the full iteration budget and the heuristic off.
 //
 // Ipopt settings (all explicit; no ipopt.opt file is read):
-//   tol                 options.ipopt_tolerance (scaled overall NLP error)
-//   max_iter            options.ipopt_max_iterations per run (the first
+//   tol                 options.ipopt.tolerance (scaled overall NLP error)
+//   max_iter            options.ipopt.max_iterations per run (the first
 //                       run: at most kFirstRunIterations)
 //   print_level 0, sb yes, and no console journal: Ipopt never prints.
 //   linear_solver       mumps (the only one in Debian's build), with
@@ -45,13 +45,13 @@
 //                       is re-evaluated); jac_c_constant yes always (the
 //                       equalities are linear in both models).
 //
-// Time limit: options.ipopt_max_cpu_seconds > 0 is a budget on the CPU time
+// Time limit: options.ipopt.max_cpu_seconds > 0 is a budget on the CPU time
 // of the calling thread (CLOCK_THREAD_CPUTIME_ID) for the whole solve,
 // checked after every Ipopt iteration. Ipopt's own max_cpu_time is not used:
 // Ipopt 3.11 measures it with getrusage(RUSAGE_SELF), the CPU time of the
 // whole process, so with concurrent solves in the server it would stop them
 // far too early. (Ipopt, sequential MUMPS and the reference BLAS run in the
-// calling thread, so its clock sees all of the work.) options.interrupt is
+// calling thread, so its clock sees all of the work.) control.interrupt is
 // polled at the same points and while waiting for the MUMPS lock.
 //
 // Thread safety: every solve has its own IpoptApplication, NLP and data.
@@ -174,7 +174,7 @@ std::string ConfigureIpopt(Ipopt::IpoptApplication& app, const PlanOptions& opti
   std::string r;
   NoteRejected(o.SetIntegerValue("print_level", 0), "print_level", &r);
   NoteRejected(o.SetStringValue("sb", "yes"), "sb", &r);
-  NoteRejected(o.SetNumericValue("tol", options.ipopt_tolerance), "tol", &r);
+  NoteRejected(o.SetNumericValue("tol", options.ipopt.tolerance), "tol", &r);
   NoteRejected(o.SetIntegerValue("max_iter", max_iter), "max_iter", &r);
   NoteRejected(o.SetStringValue("mu_strategy", "monotone"), "mu_strategy", &r);
   NoteRejected(o.SetStringValue("linear_solver", "mumps"), "linear_solver", &r);
@@ -296,7 +296,7 @@ class IpoptSession {
   // 1. The minimum-norm problem, with Ipopt's quick infeasibility heuristic.
   PlanResult Solve() {
     const IpoptRun first = Run(Phase::kMinimumNorm, form_.start,
-                               std::min(options_.ipopt_max_iterations, kFirstRunIterations),
+                               std::min(options_.ipopt.max_iterations, kFirstRunIterations),
                                kExpectInfeasibleFirst);
     if (first.stopped != StopConditions::kNone) return Stopped(first.stopped);
     if (Converged(first, Phase::kMinimumNorm)) return Optimal(first);
@@ -306,11 +306,13 @@ class IpoptSession {
   }
 
  private:
-  // One Ipopt run; adds its iterations to the count.
+  // One Ipopt run; adds its iterations to the count and notes its status.
   IpoptRun Run(Phase phase, VectorXd start, int max_iter, bool expect_infeasible) {
     IpoptRun run =
         RunIpopt(form_, phase, std::move(start), max_iter, expect_infeasible, options_, stop_);
     iterations_ += run.iterations;
+    ++runs_;
+    last_status_ = run.status;
     return run;
   }
 
@@ -329,7 +331,7 @@ class IpoptSession {
   //    again from a feasible point with the heuristic off.
   PlanResult DecideFeasibility(const IpoptRun& first) {
     const IpoptRun phase1 = Run(Phase::kFeasibility, PhaseOneStart(),
-                                options_.ipopt_max_iterations, /*expect_infeasible=*/false);
+                                options_.ipopt.max_iterations, /*expect_infeasible=*/false);
     if (phase1.stopped != StopConditions::kNone) return Stopped(phase1.stopped);
     if (!Converged(phase1, Phase::kFeasibility)) {
       return Finish(Failure(std::string("Ipopt failed: ") + StatusName(first.status) +
@@ -345,7 +347,7 @@ class IpoptSession {
                                "violation found is " + FormatNumber(violation) + " N)"));
     }
     const IpoptRun retry = Run(Phase::kMinimumNorm, RetryStart(std::move(x1)),
-                               options_.ipopt_max_iterations, /*expect_infeasible=*/false);
+                               options_.ipopt.max_iterations, /*expect_infeasible=*/false);
     if (retry.stopped != StopConditions::kNone) return Stopped(retry.stopped);
     if (Converged(retry, Phase::kMinimumNorm)) return Optimal(retry);
     return Failed(retry);
@@ -403,7 +405,7 @@ class IpoptSession {
       return false;
     }
     const double tol = kFeasibilityTolerance * form_.scale;
-    return run.last_mu <= 10.0 * options_.ipopt_tolerance &&
+    return run.last_mu <= 10.0 * options_.ipopt.tolerance &&
            form_.EquilibriumResidual(run.solution) <= tol &&
            (phase == Phase::kFeasibility || form_.MaxViolation(run.solution) <= tol);
   }
@@ -427,7 +429,7 @@ class IpoptSession {
     const std::string after = " after " + std::to_string(iterations_) + " Ipopt iterations";
     if (reason == StopConditions::kInterrupted) return Finish(Failure("interrupted" + after));
     return Finish(Failure("Ipopt stopped at the time limit (" +
-                          FormatNumber(options_.ipopt_max_cpu_seconds) + " s CPU)" + after));
+                          FormatNumber(options_.ipopt.max_cpu_seconds) + " s CPU)" + after));
   }
 
   PlanResult Failed(const IpoptRun& run) const {
@@ -438,6 +440,11 @@ class IpoptSession {
 
   PlanResult Finish(PlanResult result) const {
     result.iterations = iterations_;
+    result.ipopt.runs = runs_;
+    if (runs_ > 0) {
+      result.ipopt.status = static_cast<int>(last_status_);
+      result.ipopt.status_name = StatusName(last_status_);
+    }
     return result;
   }
 
@@ -445,11 +452,13 @@ class IpoptSession {
   const PlanOptions& options_;
   const StopConditions& stop_;
   int iterations_ = 0;
+  int runs_ = 0;
+  Ipopt::ApplicationReturnStatus last_status_ = Ipopt::Solve_Succeeded;
 };
 
-PlanResult SolveOrThrow(const PreparedProblem& prepared, const PlanOptions& options) {
-  const StopConditions stop{options.ipopt_max_cpu_seconds, ThreadCpuSeconds(),
-                            &options.interrupt};
+PlanResult SolveOrThrow(const PreparedProblem& prepared, const PlanOptions& options,
+                        const SolveControl& control) {
+  const StopConditions stop{options.ipopt.max_cpu_seconds, ThreadCpuSeconds(), &control.interrupt};
   const ForceEquilibrium& eq = prepared.equilibrium;
   if (!eq.consistent) {
     return Infeasible("the contacts cannot resist this wrench (rank " + std::to_string(eq.rank) +
@@ -468,15 +477,16 @@ class IpoptSolver final : public ForceSolver {
   IpoptSolver() : ForceSolver(SolverKind::kIpopt) {}
 
  protected:
-  void DoSolve(const PlanOptions& options, PlanningWorkspace* workspace,
-               PlanResult* result) const override {
-    *result = Run(workspace->prepared, options);
+  void DoSolve(const PlanOptions& options, const SolveControl& control,
+               PlanningWorkspace* workspace, PlanResult* result) const override {
+    *result = Run(workspace->prepared, options, control);
   }
 
  private:
-  static PlanResult Run(const PreparedProblem& prepared, const PlanOptions& options) {
+  static PlanResult Run(const PreparedProblem& prepared, const PlanOptions& options,
+                        const SolveControl& control) {
     try {
-      return SolveOrThrow(prepared, options);
+      return SolveOrThrow(prepared, options, control);
     } catch (const Ipopt::IpoptException& e) {
       return Failure("Ipopt raised " + e.Message());
     } catch (const std::exception& e) {

@@ -1,5 +1,6 @@
 // ForceSolver::Solve(), the part every backend shares (validation,
-// preparation, timing, reported quantities), and MakeSolver()/Plan().
+// preparation, timing, reported quantities), SolvePrepared (a backend on a
+// workspace prepared already), and MakeSolver()/Plan().
 #include "tactforce/planner/solver.h"
 
 #include <algorithm>
@@ -8,6 +9,7 @@
 #include <limits>
 
 #include "planner/src/backends.h"
+#include "tactforce/io/status_macros.h"
 #include "tactforce/planner/parameter_uncertainty.h"
 #include "tactforce/planner/validation.h"
 
@@ -53,6 +55,12 @@ double SnapRoundOff(double margin, const std::vector<Vec3>& forces) {
   return std::abs(margin) <= kMarginRoundOff * scale ? 0.0 : margin;
 }
 
+int64_t MicrosSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() -
+                                                               start)
+      .count();
+}
+
 void ResetResult(PlanResult* result) {
   result->row_margins.clear();
   result->infeasible_source = UncertaintySource::kNone;
@@ -64,6 +72,9 @@ void ResetResult(PlanResult* result) {
   result->min_margin = 0.0;
   result->iterations = 0;
   result->cross_check.reset();
+  result->ipopt.runs = 0;
+  result->ipopt.status = 0;
+  result->ipopt.status_name.clear();
   result->active_set.clear();
 }
 
@@ -121,39 +132,67 @@ void FinishResult(const PreparedProblem& prepared, const PlanOptions& options,
 }  // namespace
 
 absl::Status ForceSolver::Solve(const PlanProblem& problem, const PlanOptions& options,
-                                PlanningWorkspace* workspace, PlanResult* result) const {
-  absl::Status status = SolveOnce(problem, options, workspace, result);
-  if (status.ok() && result->status == PlanStatus::kInfeasible && HasModelUncertainty(problem)) {
-    AttributeInfeasibility(problem, options, result);
-  }
-  return status;
-}
-
-absl::Status ForceSolver::SolveOnce(const PlanProblem& problem, const PlanOptions& options,
-                                    PlanningWorkspace* workspace, PlanResult* result) const {
+                                PlanningWorkspace* workspace, PlanResult* result,
+                                const SolveControl& control) const {
   const auto start = std::chrono::steady_clock::now();
-  PreparedProblem& prepared = workspace->prepared;
-  if (absl::Status valid = ValidateProblem(problem, options, &prepared.problem); !valid.ok()) {
-    return valid;
+  TF_RETURN_IF_ERROR(ValidateProblem(problem, options, &workspace->prepared.problem));
+  TF_RETURN_IF_ERROR(SolveValidated(options, control, start, workspace, result));
+  if (result->status == PlanStatus::kInfeasible && HasModelUncertainty(problem)) {
+    AttributeInfeasibility(problem, options, control, result);
   }
-  if (absl::Status supported = CheckSupported(options); !supported.ok()) return supported;
-
-  PrepareInPlace(options, &workspace->equilibrium_scratch, &prepared);
-  ResetResult(result);
-  DoSolve(options, workspace, result);
-  result->solver = kind_;
-  FinishResult(prepared, options, result);
-  result->solve_time_us = std::chrono::duration_cast<std::chrono::microseconds>(
-                              std::chrono::steady_clock::now() - start)
-                              .count();
   return absl::OkStatus();
 }
 
+absl::Status ForceSolver::Solve(const ValidatedPlan& plan, PlanningWorkspace* workspace,
+                                PlanResult* result, const SolveControl& control) const {
+  const auto start = std::chrono::steady_clock::now();
+  if (!plan.validated()) {
+    return absl::InvalidArgumentError("plan: not validated (make it with planner::ValidatePlan)");
+  }
+  workspace->prepared.problem = plan.problem();  // element-wise: keeps capacity
+  TF_RETURN_IF_ERROR(SolveValidated(plan.options(), control, start, workspace, result));
+  if (result->status == PlanStatus::kInfeasible && HasModelUncertainty(plan.problem())) {
+    AttributeInfeasibility(plan.problem(), plan.options(), control, result);
+  }
+  return absl::OkStatus();
+}
+
+absl::Status ForceSolver::SolveValidated(const PlanOptions& options, const SolveControl& control,
+                                         std::chrono::steady_clock::time_point start,
+                                         PlanningWorkspace* workspace, PlanResult* result) const {
+  TF_RETURN_IF_ERROR(CheckSupported(options));
+  PrepareInPlace(options, &workspace->equilibrium_scratch, &workspace->prepared);
+  SolveAndFinish(options, control, workspace, result);
+  result->solve_time_us = MicrosSince(start);
+  return absl::OkStatus();
+}
+
+void ForceSolver::SolveAndFinish(const PlanOptions& options, const SolveControl& control,
+                                 PlanningWorkspace* workspace, PlanResult* result) const {
+  ResetResult(result);
+  DoSolve(options, control, workspace, result);
+  result->solver = kind_;
+  FinishResult(workspace->prepared, options, result);
+}
+
+void ForceSolver::SolvePrepared(const ForceSolver& backend, const PlanOptions& options,
+                                const SolveControl& control, PlanningWorkspace* workspace,
+                                PlanResult* result) {
+  const auto start = std::chrono::steady_clock::now();
+  backend.SolveAndFinish(options, control, workspace, result);
+  result->solve_time_us = MicrosSince(start);
+  const PlanProblem& prepared = workspace->prepared.problem;
+  if (result->status == PlanStatus::kInfeasible && HasModelUncertainty(prepared)) {
+    backend.AttributeInfeasibility(prepared, options, control, result);
+  }
+}
+
 absl::StatusOr<PlanResult> ForceSolver::Solve(const PlanProblem& problem,
-                                              const PlanOptions& options) const {
+                                              const PlanOptions& options,
+                                              const SolveControl& control) const {
   PlanningWorkspace workspace;
   PlanResult result;
-  if (absl::Status s = Solve(problem, options, &workspace, &result); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(Solve(problem, options, &workspace, &result, control));
   return result;
 }
 
@@ -179,13 +218,13 @@ const ForceSolver& CachedSolver(SolverKind kind) {
 }
 
 absl::StatusOr<PlanResult> Plan(const PlanProblem& problem, const PlanOptions& options,
-                                SolverKind kind) {
-  return CachedSolver(kind).Solve(problem, options);
+                                SolverKind kind, const SolveControl& control) {
+  return CachedSolver(kind).Solve(problem, options, control);
 }
 
 absl::Status Plan(const PlanProblem& problem, const PlanOptions& options, SolverKind kind,
-                  PlanningWorkspace* workspace, PlanResult* result) {
-  return CachedSolver(kind).Solve(problem, options, workspace, result);
+                  PlanningWorkspace* workspace, PlanResult* result, const SolveControl& control) {
+  return CachedSolver(kind).Solve(problem, options, workspace, result, control);
 }
 
 }  // namespace tactforce::planner

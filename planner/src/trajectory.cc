@@ -56,7 +56,7 @@ constexpr double kMaxProbeSteps = 100000;
 
 absl::StatusOr<TrajectoryResult> PlanTrajectory(const TrajectoryProblem& t,
                                                 const PlanOptions& options, SolverKind kind,
-                                                bool warm_start) {
+                                                bool warm_start, const SolveControl& control) {
   const auto start = std::chrono::steady_clock::now();
   if (t.steps.empty()) return absl::InvalidArgumentError("steps: at least one step is required");
   if (t.inertia) {
@@ -73,11 +73,11 @@ absl::StatusOr<TrajectoryResult> PlanTrajectory(const TrajectoryProblem& t,
   PlanningWorkspace workspace;  // one for the whole motion
   for (int i = 0; i < static_cast<int>(t.steps.size()); ++i) {
     // Deadlines, cancellation and shutdown end a long motion between steps.
-    if (options.interrupt && options.interrupt()) {
+    if (control.interrupt && control.interrupt()) {
       return absl::CancelledError(absl::StrCat("interrupted after ", i, " of ", t.steps.size(), " steps"));
     }
     PlanResult& r = out.steps.emplace_back();
-    if (absl::Status s = solver->Solve(StepProblem(t, i), step_options, &workspace, &r);
+    if (absl::Status s = solver->Solve(StepProblem(t, i), step_options, &workspace, &r, control);
         !s.ok()) {
       const std::string msg(s.message());
       // Field paths of a step's own contacts are reported under the step.
@@ -100,7 +100,8 @@ absl::StatusOr<TrajectoryResult> PlanTrajectory(const TrajectoryProblem& t,
 
 absl::StatusOr<ProbePlan> PlanFrictionProbe(const PlanProblem& holding_grasp,
                                             const FrictionProbe& probe,
-                                            const PlanOptions& options, SolverKind kind) {
+                                            const PlanOptions& options, SolverKind kind,
+                                            const SolveControl& control) {
   Vec3 n, t;
   if (absl::Status s = ValidateFrictionProbe(probe, &n, &t); !s.ok()) return s;
   const double duration = (probe.initial_normal_force - probe.final_normal_force) / probe.ramp_rate;
@@ -125,7 +126,7 @@ absl::StatusOr<ProbePlan> PlanFrictionProbe(const PlanProblem& holding_grasp,
     step.external_wrench = {f, probe.position.cross(f)};
     trajectory.steps.push_back(step);
   }
-  absl::StatusOr<TrajectoryResult> holding = PlanTrajectory(trajectory, options, kind, true);
+  absl::StatusOr<TrajectoryResult> holding = PlanTrajectory(trajectory, options, kind, true, control);
   if (!holding.ok()) return holding.status();
   plan.holding = *std::move(holding);
   return plan;

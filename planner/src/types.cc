@@ -21,10 +21,10 @@ bool PlanOptions::IsValid(std::string* error) const {
   if (!std::isfinite(rank_tolerance) || rank_tolerance <= 0.0 || rank_tolerance >= 1e-2)
     return fail("rank_tolerance: must be in (0, 1e-2)");
   if (max_contacts < 1) return fail("max_contacts: must be >= 1");
-  if (!(ipopt_tolerance > 0.0) || !std::isfinite(ipopt_tolerance))
+  if (!(ipopt.tolerance > 0.0) || !std::isfinite(ipopt.tolerance))
     return fail("ipopt_tolerance: must be finite and > 0");
-  if (ipopt_max_iterations < 1) return fail("ipopt_max_iterations: must be >= 1");
-  if (!std::isfinite(ipopt_max_cpu_seconds) || ipopt_max_cpu_seconds < 0.0)
+  if (ipopt.max_iterations < 1) return fail("ipopt_max_iterations: must be >= 1");
+  if (!std::isfinite(ipopt.max_cpu_seconds) || ipopt.max_cpu_seconds < 0.0)
     return fail("ipopt_max_cpu_seconds: must be finite and >= 0");
   if (!(agreement_tolerance > 0.0) || !std::isfinite(agreement_tolerance))
     return fail("agreement_tolerance: must be finite and > 0");

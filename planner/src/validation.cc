@@ -8,6 +8,7 @@
 #include <string>
 
 #include "absl/strings/str_cat.h"
+#include "tactforce/io/status_macros.h"
 #include "tactforce/planner/parameter_uncertainty.h"
 
 namespace tactforce::planner {
@@ -226,6 +227,21 @@ absl::StatusOr<PlanProblem> ValidateProblem(const PlanProblem& problem,
   PlanProblem out;
   if (absl::Status s = ValidateProblem(problem, options, &out); !s.ok()) return s;
   return out;
+}
+
+absl::Status ValidatePlan(const PlanProblem& problem, const PlanOptions& options,
+                          ValidatedPlan* plan) {
+  plan->validated_ = false;
+  TF_RETURN_IF_ERROR(ValidateProblem(problem, options, &plan->problem_));
+  plan->options_ = options;
+  plan->validated_ = true;
+  return absl::OkStatus();
+}
+
+absl::StatusOr<ValidatedPlan> ValidatePlan(const PlanProblem& problem, const PlanOptions& options) {
+  ValidatedPlan plan;
+  TF_RETURN_IF_ERROR(ValidatePlan(problem, options, &plan));
+  return plan;
 }
 
 }  // namespace tactforce::planner

@@ -64,9 +64,8 @@ class FitInertiaReactor final : public AdmittedStream<grpc::ServerReadReactor<gr
     if (!TakeOver()) return;
     api::DispatchOnPool<api::InertiaStream, v1::FitInertiaResponse>(
         stream_, &fit_, Log(), pool_, guard(), limits_,
-        [](const api::InertiaStream& stream, const api::CallLimits& limits) {
-          return stream.Fit(limits);
-        },
+        [](const api::InertiaStream& stream, const api::CallLimits& limits,
+           const api::CallState& state) { return stream.Fit(limits, {}, state); },
         [this](const absl::Status& status) {
           FinishTakenOver(status.ok() ? SerializeMessage(fit_, response_) : status);
         });
@@ -116,7 +115,7 @@ grpc::ServerUnaryReactor* EstimatorService::EstimateFriction(grpc::CallbackServe
                                                              v1::FrictionResponse* response) {
   return ServeOnPool<v1::FrictionRequest, v1::FrictionResponse>(
       "EstimateFriction", context, request, response, pool_, limits_,
-      [](const v1::FrictionRequest& r, const api::CallLimits& l) { return api::HandleFriction(r, l); });
+      &api::HandleFriction);
 }
 
 grpc::ServerUnaryReactor* AuditService::AuditModel(grpc::CallbackServerContext* context,
@@ -124,7 +123,7 @@ grpc::ServerUnaryReactor* AuditService::AuditModel(grpc::CallbackServerContext* 
                                                    v1::AuditResponse* response) {
   return ServeOnPool<v1::AuditRequest, v1::AuditResponse>(
       "AuditModel", context, request, response, pool_, limits_,
-      [](const v1::AuditRequest& r, const api::CallLimits& l) { return api::HandleAudit(r, l); });
+      &api::HandleAudit);
 }
 
 }  // namespace tactforce::server

@@ -14,19 +14,13 @@ api::CallLimits ServerConfig::DefaultCallLimits() {
   api::CallLimits limits;
   limits.max_response_bytes = 4 << 20;
   limits.max_fit_bytes = int64_t{256} << 20;
-  limits.max_call_seconds = 10.0;
-  limits.ipopt_max_cpu_seconds = 10.0;
+  limits.solve_timeout_ms = 10'000;
   return limits;
 }
 
-void ServerConfig::SetSolveTimeoutMs(int ms) {
-  limits.max_call_seconds = ms / 1000.0;
-  limits.ipopt_max_cpu_seconds = ms / 1000.0;
-}
+void ServerConfig::SetSolveTimeoutMs(int ms) { limits.solve_timeout_ms = ms; }
 
-int ServerConfig::solve_timeout_ms() const {
-  return static_cast<int>(std::lround(limits.max_call_seconds * 1000.0));
-}
+int ServerConfig::solve_timeout_ms() const { return static_cast<int>(limits.solve_timeout_ms); }
 
 int ServerConfig::EffectiveWorkers() const {
   if (workers > 0) return workers;

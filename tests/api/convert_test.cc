@@ -174,9 +174,9 @@ TEST(ConvertTest, SolverOptionsReachThePlannerAndAreValidated) {
   o->set_agreement_tolerance(1e-4);
   absl::StatusOr<planner::PlanOptions> options = ToOptions(request);
   ASSERT_TRUE(options.ok()) << options.status();
-  EXPECT_EQ(options->ipopt_tolerance, 1e-7);
-  EXPECT_EQ(options->ipopt_max_iterations, 50);
-  EXPECT_EQ(options->ipopt_max_cpu_seconds, 0.5);
+  EXPECT_EQ(options->ipopt.tolerance, 1e-7);
+  EXPECT_EQ(options->ipopt.max_iterations, 50);
+  EXPECT_EQ(options->ipopt.max_cpu_seconds, 0.5);
   EXPECT_EQ(options->rank_tolerance, 1e-8);
   EXPECT_EQ(options->agreement_tolerance, 1e-4);
   // Round trip through the proto keeps them; defaults are not written.

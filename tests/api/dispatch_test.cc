@@ -209,10 +209,11 @@ TEST_F(ApiPlanDispatchTest, QueuedPlanPastItsDeadlineIsNotSolved) {
   EXPECT_EQ(response_.forces_size(), 0);
 }
 
-absl::StatusOr<v1::PlanResponse> EchoMaxContacts(const v1::PlanRequest&, const CallLimits& limits) {
+absl::StatusOr<v1::PlanResponse> EchoMaxContacts(const v1::PlanRequest&, const CallLimits& limits,
+                                                 const CallState& state) {
   v1::PlanResponse response;
   response.set_iterations(limits.max_contacts);
-  response.set_message(limits.interrupt && !limits.interrupt() ? "interruptible" : "no interrupt");
+  response.set_message(state.interrupt && !state.interrupt() ? "interruptible" : "no interrupt");
   return response;
 }
 
@@ -326,10 +327,11 @@ TEST(ApiDispatchOnPoolTest, StoppedCallAndFullPool) {
 }
 
 // A handler that loops until its interrupt fires, as the long RPCs do.
-absl::StatusOr<v1::PlanResponse> SpinUntilInterrupted(const v1::PlanRequest&, const CallLimits& limits) {
+absl::StatusOr<v1::PlanResponse> SpinUntilInterrupted(const v1::PlanRequest&, const CallLimits&,
+                                                      const CallState& state) {
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
   int steps = 0;
-  while (!(limits.interrupt && limits.interrupt())) {
+  while (!(state.interrupt && state.interrupt())) {
     if (std::chrono::steady_clock::now() > give_up) return v1::PlanResponse();  // never interrupted
     ++steps;
   }
@@ -340,7 +342,7 @@ TEST(ApiWorkBudgetTest, SpentBudgetBecomesResourceExhaustedNamingTheFlag) {
   ManualPool pool(1);
   TestCaller caller;
   CallLimits limits;
-  limits.max_call_seconds = 0.02;
+  limits.solve_timeout_ms = 20;
   v1::PlanRequest request;
   v1::PlanResponse response;
   Outcome outcome;

@@ -530,10 +530,10 @@ TEST(MagnitudeLimits, RandomHugeValuesAreNamedOrAnsweredFinite) {
 TEST(ResponseSize, ProbeAndAuditAreRefusedBeforeAnySolve) {
   int polls = 0;
   CallLimits limits;
-  limits.interrupt = [&polls] {
+  const CallState state{[&polls] {
     ++polls;
     return false;
-  };
+  }};
   limits.max_response_bytes = 4096;
   v1::FrictionProbeRequest probe = Probe();
   probe.set_sample_rate(10000);  // 25,001 steps: megabytes
@@ -542,9 +542,9 @@ TEST(ResponseSize, ProbeAndAuditAreRefusedBeforeAnySolve) {
   for (int k = 0; k < audit.samples_size(); ++k) audit.mutable_samples(k)->set_t(0.01 * k);
 
   const auto start = std::chrono::steady_clock::now();
-  absl::StatusOr<v1::FrictionProbeResponse> p = HandleFrictionProbe(probe, limits);
+  absl::StatusOr<v1::FrictionProbeResponse> p = HandleFrictionProbe(probe, limits, state);
   limits.max_response_bytes = 1000;
-  absl::StatusOr<v1::AuditResponse> a = HandleAudit(audit, limits);
+  absl::StatusOr<v1::AuditResponse> a = HandleAudit(audit, limits, state);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   ASSERT_EQ(p.status().code(), absl::StatusCode::kInvalidArgument) << p.status();

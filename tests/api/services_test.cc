@@ -170,15 +170,15 @@ TEST(HandlerTest, AuditNamesSamplesByTheirPathAndBoundsTheirNumber) {
 
 TEST(HandlerTest, AuditAndFrictionStopWhenInterrupted) {
   CallLimits limits;
-  limits.interrupt = [] { return true; };
-  const absl::Status audit = HandleAudit(RampAudit(200), limits).status();
+  const CallState state{[] { return true; }};
+  const absl::Status audit = HandleAudit(RampAudit(200), limits, state).status();
   EXPECT_EQ(audit.code(), absl::StatusCode::kCancelled) << audit;
   EXPECT_THAT(std::string(audit.message()), HasSubstr("interrupted"));
   v1::FrictionRequest request;
   v1::FrictionTrial* trial = request.add_trials();
   trial->mutable_normal()->set_z(1);
   for (int k = 0; k < 5; ++k) trial->add_samples()->set_t(k);
-  EXPECT_EQ(HandleFriction(request, limits).status().message(), "interrupted after 0 of 1 trials");
+  EXPECT_EQ(HandleFriction(request, limits, state).status().message(), "interrupted after 0 of 1 trials");
 }
 
 TEST(HandlerTest, InertiaCountsPastIntRangeAreNamedNotWrapped) {

@@ -135,8 +135,8 @@ TEST(Trajectory, InterruptEndsTheMotionBetweenSteps) {
   const TrajectoryProblem t = LiftAndRotate(200);
   int polls = 0;
   PlanOptions o;
-  o.interrupt = [&polls] { return ++polls > 3; };
-  absl::StatusOr<TrajectoryResult> r = PlanTrajectory(t, o, SolverKind::kGeometric);
+  const SolveControl control{[&polls] { return ++polls > 3; }};
+  absl::StatusOr<TrajectoryResult> r = PlanTrajectory(t, o, SolverKind::kGeometric, true, control);
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.status().code(), absl::StatusCode::kCancelled);
   EXPECT_EQ(r.status().message(), "interrupted after 3 of 200 steps");

@@ -25,8 +25,9 @@ using fixtures::ThreeFingerGrasp;
 
 constexpr double kG = 9.81;
 
-PlanResult SolveIpopt(const PlanProblem& problem, const PlanOptions& options) {
-  absl::StatusOr<PlanResult> r = MakeSolver(SolverKind::kIpopt)->Solve(problem, options);
+PlanResult SolveIpopt(const PlanProblem& problem, const PlanOptions& options,
+                      const SolveControl& control = {}) {
+  absl::StatusOr<PlanResult> r = MakeSolver(SolverKind::kIpopt)->Solve(problem, options, control);
   EXPECT_TRUE(r.ok()) << r.status();
   return r.ok() ? *r : PlanResult{};
 }
@@ -206,7 +207,7 @@ TEST(IpoptSolver, RobustExactPlanKeepsItsMargin) {
 
 TEST(IpoptSolver, TimeLimitStopsTheSolveQuickly) {
   PlanOptions o = Options(ConeModel::kExact);
-  o.ipopt_max_cpu_seconds = 1e-9;
+  o.ipopt.max_cpu_seconds = 1e-9;
   const auto start = std::chrono::steady_clock::now();
   const PlanResult r = SolveIpopt(ThreeFingerGrasp(4), o);
   const double seconds =
@@ -219,9 +220,9 @@ TEST(IpoptSolver, TimeLimitStopsTheSolveQuickly) {
 
 TEST(IpoptSolver, InterruptStopsTheSolve) {
   std::atomic<int> polls = 0;
-  PlanOptions o = Options(ConeModel::kPyramid);
-  o.interrupt = [&polls] { return ++polls >= 3; };
-  const PlanResult r = SolveIpopt(ThreeFingerGrasp(4), o);
+  const PlanOptions o = Options(ConeModel::kPyramid);
+  const SolveControl control{[&polls] { return ++polls >= 3; }};
+  const PlanResult r = SolveIpopt(ThreeFingerGrasp(4), o, control);
   EXPECT_EQ(r.status, PlanStatus::kSolverFailure);
   EXPECT_EQ(r.message.rfind("interrupted", 0), 0u) << r.message;
   EXPECT_GE(polls.load(), 3);

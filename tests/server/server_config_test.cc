@@ -27,8 +27,7 @@ TEST(ServerConfigTest, DefaultsAreTheServersLimits) {
   EXPECT_EQ(config.limits.max_response_bytes, 4 << 20);
   EXPECT_EQ(config.limits.max_fit_bytes, int64_t{256} << 20);
   EXPECT_EQ(config.solve_timeout_ms(), 10'000);
-  EXPECT_DOUBLE_EQ(config.limits.max_call_seconds, 10.0);
-  EXPECT_DOUBLE_EQ(config.limits.ipopt_max_cpu_seconds, 10.0);
+  EXPECT_DOUBLE_EQ(config.limits.solve_timeout_seconds(), 10.0);
   EXPECT_EQ(config.limits.max_contacts, api::CallLimits{}.max_contacts);
   EXPECT_EQ(config.ToServerOptions().max_message_bytes, 4 << 20);
 }
@@ -52,8 +51,7 @@ TEST(ServerConfigTest, FlagsFillTheOneCallLimits) {
     const api::CallLimits& limits = config.limits;
     EXPECT_EQ(limits.max_contacts, contacts);
     EXPECT_EQ(config.solve_timeout_ms(), timeout_ms);
-    EXPECT_DOUBLE_EQ(limits.max_call_seconds, timeout_ms / 1000.0);
-    EXPECT_DOUBLE_EQ(limits.ipopt_max_cpu_seconds, timeout_ms / 1000.0);
+    EXPECT_DOUBLE_EQ(limits.solve_timeout_seconds(), timeout_ms / 1000.0);
     EXPECT_EQ(limits.max_response_bytes, message_bytes);
     EXPECT_EQ(config.ToServerOptions().max_message_bytes, message_bytes);
     EXPECT_EQ(limits.max_trajectory_work, work);
@@ -63,7 +61,7 @@ TEST(ServerConfigTest, FlagsFillTheOneCallLimits) {
     const api::PlanSettings plan = config.ToPlanSettings();
     EXPECT_EQ(plan.inline_max_contacts, 3);
     EXPECT_EQ(plan.limits.max_contacts, contacts);
-    EXPECT_DOUBLE_EQ(plan.limits.max_call_seconds, limits.max_call_seconds);
+    EXPECT_EQ(plan.limits.solve_timeout_ms, limits.solve_timeout_ms);
     EXPECT_EQ(plan.limits.max_response_bytes, message_bytes);
   }
 }

@@ -58,7 +58,7 @@ class CallControl {
   virtual absl::Status StopReason(std::string_view when) const = 0;
   // Who is calling, for the log ("ipv4:127.0.0.1:40512"); may be empty.
   virtual std::string Peer() const = 0;
-  // For CallLimits / PlanOptions::interrupt: true once ShouldStop(). Valid
+  // For CallState::interrupt: true once ShouldStop(). Valid
   // while this object is (an implementation may return a self-contained copy).
   virtual std::function<bool()> Interrupt() const {
     return [this] { return ShouldStop(); };
@@ -126,7 +126,7 @@ bool RunCall(CallLog log, Executor* pool, CallWork work, CallDone done,
 
 // Settings of the Plan path (tactforce-server's flags).
 struct PlanSettings {
-  CallLimits limits;            // `interrupt` unused: each call polls its CallControl
+  CallLimits limits;            // each call polls its own CallControl
   int inline_max_contacts = 8;  // GEOMETRIC solves this small run inline; 0 = never
 };
 
@@ -143,14 +143,15 @@ struct PlanSettings {
 //     noise of the shared box (median 5,400 vs 5,100 plans/s).
 //   * on the pool otherwise: SOLVER_IPOPT and SOLVER_CROSS_CHECK (~20-200
 //     ms) and larger geometric problems (cost grows ~n^3: 16 contacts p50
-//     2 ms, 64 contacts ~66 ms). Validated first (planner::ValidateProblem,
-//     a few microseconds) so that a bad request is INVALID_ARGUMENT even
-//     under overload and never takes a queue slot; a full pool is
+//     2 ms, 64 contacts ~66 ms). Validated first (ValidatePlan, a few
+//     microseconds) so that a bad request is INVALID_ARGUMENT even under
+//     overload and never takes a queue slot, and the worker solves that
+//     validated plan without checking it again; a full pool is
 //     RESOURCE_EXHAUSTED ("... solver workers busy and N solves queued;
 //     retry later").
-// The solve checks the CallControl before it starts ("before the solve
-// started") and after it ends ("after N us of solving"), and polls it in
-// between (PlanOptions::interrupt). Log details: "solver=<SOLVER|-> contacts=N";
+// Either way a request is validated once. The solve checks the CallControl
+// before it starts ("before the solve started") and after it ends ("after
+// N us of solving"), and polls it in between (CallState::interrupt). Log details: "solver=<SOLVER|-> contacts=N";
 // results on OK: "plan_status=<STATUS> solve_us=N". A queued request also
 // logs "rpc=<rpc> event=queued solver=... contacts=N" at debug.
 class PlanDispatcher {
@@ -185,14 +186,14 @@ class PlanDispatcher {
 // work belongs on the server's Ipopt lane.
 bool UsesIpopt(v1::Solver solver);
 
-// The time budget of one call's work (CallLimits::max_call_seconds),
+// The time budget of one call's work (CallLimits::solve_timeout_ms),
 // counted from construction, i.e. from when the work starts.
 class WorkBudget {
  public:
   // `seconds` <= 0: no budget. `interrupt`: the caller's (may be empty).
   WorkBudget(double seconds, std::function<bool()> interrupt);
   // True once `interrupt` is or the budget is spent; self-contained (a
-  // copy outliving this object stays valid), for CallLimits::interrupt.
+  // copy outliving this object stays valid), for CallState::interrupt.
   std::function<bool()> Interrupt() const;
   bool Spent() const;
   // `status` unchanged unless it failed while the budget was spent: then
@@ -207,11 +208,13 @@ class WorkBudget {
 };
 
 template <class Request, class Response>
-using UnaryHandler = std::function<absl::StatusOr<Response>(const Request&, const CallLimits&)>;
+using UnaryHandler =
+    std::function<absl::StatusOr<Response>(const Request&, const CallLimits&, const CallState&)>;
 
 // A unary request on the pool (never inline): `handler` (an api::Handle*
-// function) runs on a worker with `limits` and the CallControl as
-// interrupt, extended by the WorkBudget of limits.max_call_seconds; the
+// function) runs on a worker with `limits` and, as its CallState, the
+// CallControl as interrupt extended by the WorkBudget of
+// limits.solve_timeout_ms; the
 // call stops with the CallControl's reason "before the work started" or
 // "after the work finished", or RESOURCE_EXHAUSTED when the budget ran out. `request`, `response` and
 // `control` must stay valid until done(status) has run.
@@ -220,11 +223,10 @@ void DispatchOnPool(const Request& request, Response* response, CallLog log, Exe
                     const CallControl& control, CallLimits limits,
                     UnaryHandler<Request, Response> handler, CallDone done) {
   auto work = [&request, response, &control, limits = std::move(limits),
-               handler = std::move(handler)](CallLog&) mutable -> absl::Status {
+               handler = std::move(handler)](CallLog&) -> absl::Status {
     if (control.ShouldStop()) return control.StopReason("before the work started");
-    const WorkBudget budget(limits.max_call_seconds, control.Interrupt());
-    limits.interrupt = budget.Interrupt();
-    absl::StatusOr<Response> result = handler(request, limits);
+    const WorkBudget budget(limits.solve_timeout_seconds(), control.Interrupt());
+    absl::StatusOr<Response> result = handler(request, limits, CallState{budget.Interrupt()});
     if (!result.ok()) return control.ShouldStop() ? result.status() : budget.Explain(result.status());
     if (control.ShouldStop()) return control.StopReason("after the work finished");
     *response = *std::move(result);

@@ -59,7 +59,8 @@ v1::FitInertiaResponse InertiaFitToProto(const inertia::InertiaFit& fit);
 // inertia::DescribeFit); `standard` is recomputed from the parameters.
 inertia::InertiaFit InertiaFitFromProto(const v1::FitInertiaResponse& response);
 
-// Fits `samples` (validated here) with `options`; the response carries the
+// Fits `samples` (validated here) with `options` under `limits`
+// (max_fit_bytes), polling `state.interrupt`; the response carries the
 // error metrics when options.truth is set. Used by the CLI's local mode and
 // by InertiaStream::Fit. `progress` receives the fraction done (may be empty).
 // `fit`, when not null, receives the library's result as well (with the
@@ -67,7 +68,7 @@ inertia::InertiaFit InertiaFitFromProto(const v1::FitInertiaResponse& response);
 absl::StatusOr<v1::FitInertiaResponse> FitInertiaSamples(
     const inertia::InertiaSamples& samples, const v1::InertiaFitOptions& options,
     const CallLimits& limits = {}, std::function<void(double)> progress = {},
-    inertia::InertiaFit* fit = nullptr);
+    inertia::InertiaFit* fit = nullptr, const CallState& state = {});
 
 // The FitInertia request stream, one message at a time. Samples are
 // converted as they arrive (the proto messages are not kept). Add() fails
@@ -90,7 +91,8 @@ class InertiaStream {
 
   // After the last message: validates everything and fits.
   absl::StatusOr<v1::FitInertiaResponse> Fit(const CallLimits& limits = {},
-                                             std::function<void(double)> progress = {}) const;
+                                             std::function<void(double)> progress = {},
+                                             const CallState& state = {}) const;
 
  private:
   int64_t max_samples_;

@@ -8,12 +8,11 @@
 // errors.
 #pragma once
 
-#include <cstdint>
-#include <functional>
-
 #include "absl/status/statusor.h"
+#include "tactforce/api/call_limits.h"
 #include "tactforce/api/convert.h"
 #include "tactforce/planner/types.h"
+#include "tactforce/planner/validation.h"
 #include "tactforce/planner/workspace.h"
 #include "tactforce/v1/audit.pb.h"
 #include "tactforce/v1/estimator.pb.h"
@@ -21,39 +20,20 @@
 
 namespace tactforce::api {
 
-// Limits a service imposes on every call (the CLI uses the defaults).
-struct CallLimits {
-  int max_contacts = planner::PlanOptions{}.max_contacts;
-  double ipopt_max_cpu_seconds = 0.0;  // 0 = none
-  std::function<bool()> interrupt;     // deadline / cancellation
-  // PlanTrajectory / PlanFrictionProbe: at most this many steps x contacts x
-  // cone sides, checked before any solve (the server's --max-trajectory-work).
-  int64_t max_trajectory_work = 4'000'000;
-  // Largest response the caller can send (bytes; 0 = no limit): a
-  // trajectory, probe or audit whose answer cannot fit is refused before
-  // any work (InvalidArgument naming the limit).
-  int64_t max_response_bytes = 0;
-  // Time one call's work may take, in seconds (0 = none): wall clock on
-  // the thread doing it, from when the work starts (queue wait excluded);
-  // the server's --solve-timeout-ms. Long loops poll `interrupt`, which the
-  // dispatcher extends with this budget (WorkBudget, dispatch.h); a call
-  // that runs out stops with RESOURCE_EXHAUSTED naming the flag.
-  double max_call_seconds = 0.0;
-  // AuditModel: most samples one request may carry (the server's
-  // --max-audit-samples).
-  int64_t max_audit_samples = 1'000'000;
-  // FitInertia: most working memory one fit may take (bytes, estimated
-  // before it starts with inertia::FitWorkingBytes; 0 = no limit; the
-  // server's --max-fit-bytes).
-  int64_t max_fit_bytes = 0;
-};
-
-// A PlanRequest converted (FromProto) with `limits` applied to its options.
-// Errors: InvalidArgument("<field path>: unknown value N"); the numeric
-// checks are planner::ValidateProblem's, which every solve runs.
+// A PlanRequest converted (FromProto) with `limits` applied to its options
+// (max_contacts; the Ipopt CPU cap, the tighter of the request's and
+// solve_timeout_ms). Errors: InvalidArgument("<field path>: unknown value
+// N"); the numeric checks are ValidatePlan's.
 absl::StatusOr<PlanCall> PreparePlan(const v1::PlanRequest& request, const CallLimits& limits);
-// Plans a prepared request (validation included) and converts the answer.
-absl::StatusOr<v1::PlanResponse> SolvePlan(const PlanCall& call);
+
+// A PlanCall whose problem passed planner::ValidateProblem: made only by
+// ValidatePlan, solved by SolvePlan without a second check.
+struct ValidPlanCall {
+  planner::ValidatedPlan plan;  // the problem and its options
+  planner::SolverKind solver = planner::SolverKind::kGeometric;
+};
+// InvalidArgument naming the field ("contacts[2].normal: zero length").
+absl::StatusOr<ValidPlanCall> ValidatePlan(const PlanCall& call);
 
 // What a plan reuses from call to call: the planner's workspace and result.
 // One per thread (the default) or per stream (PlanStream: one solve at a
@@ -64,25 +44,39 @@ struct PlanBuffers {
 };
 // The calling thread's PlanBuffers.
 PlanBuffers& ThreadPlanBuffers();
-// SolvePlan with `buffers` (a warm GEOMETRIC solve allocates only the
-// response).
-absl::StatusOr<v1::PlanResponse> SolvePlan(const PlanCall& call, PlanBuffers* buffers);
+// Plans a request with `buffers` (the calling thread's when null) and
+// converts the answer; `state.interrupt` is polled by Ipopt. The PlanCall
+// form validates into the buffers (a warm GEOMETRIC solve allocates only
+// the response), the ValidPlanCall form checks nothing again.
+absl::StatusOr<v1::PlanResponse> SolvePlan(const PlanCall& call, const CallState& state = {},
+                                           PlanBuffers* buffers = nullptr);
+absl::StatusOr<v1::PlanResponse> SolvePlan(const ValidPlanCall& call, const CallState& state = {},
+                                           PlanBuffers* buffers = nullptr);
 // The same into `response` (the caller's, e.g. on a gRPC call's arena:
 // filled in place, no copy); on an error its content is unspecified.
-absl::Status SolvePlan(const PlanCall& call, PlanBuffers* buffers, v1::PlanResponse* response);
+absl::Status SolvePlan(const PlanCall& call, const CallState& state, PlanBuffers* buffers,
+                       v1::PlanResponse* response);
+absl::Status SolvePlan(const ValidPlanCall& call, const CallState& state, PlanBuffers* buffers,
+                       v1::PlanResponse* response);
 
 // PreparePlan + SolvePlan.
 absl::StatusOr<v1::PlanResponse> HandlePlan(const v1::PlanRequest& request,
-                                            const CallLimits& limits = {});
+                                            const CallLimits& limits = {},
+                                            const CallState& state = {});
 absl::StatusOr<v1::TrajectoryResponse> HandleTrajectory(const v1::TrajectoryRequest& request,
-                                                        const CallLimits& limits = {});
+                                                        const CallLimits& limits = {},
+                                                        const CallState& state = {});
 absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
-    const v1::FrictionProbeRequest& request, const CallLimits& limits = {});
+    const v1::FrictionProbeRequest& request, const CallLimits& limits = {},
+                                             const CallState& state = {});
 absl::StatusOr<v1::EstimateResponse> HandleEstimate(const v1::EstimateRequest& request,
-                                                    const CallLimits& limits = {});
+                                                    const CallLimits& limits = {},
+                                                    const CallState& state = {});
 absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& request,
-                                                    const CallLimits& limits = {});
+                                                    const CallLimits& limits = {},
+                                                    const CallState& state = {});
 absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request,
-                                              const CallLimits& limits = {});
+                                              const CallLimits& limits = {},
+                                              const CallState& state = {});
 
 }  // namespace tactforce::api

@@ -52,9 +52,12 @@ PlanProblem StepProblem(const TrajectoryProblem& trajectory, int step);
 // Plans every step with `kind`. With `warm_start` the geometric backend
 // starts each step from the previous step's active set. Errors name the
 // field ("steps[3].angular_velocity: ...", "steps[3].contacts[1].normal: ...").
+// `control.interrupt` is polled between steps (CancelledError "interrupted
+// after i of n steps") and by each step's Ipopt solves.
 absl::StatusOr<TrajectoryResult> PlanTrajectory(const TrajectoryProblem& trajectory,
                                                 const PlanOptions& options, SolverKind kind,
-                                                bool warm_start = true);
+                                                bool warm_start = true,
+                                                const SolveControl& control = {});
 
 // Friction probing (Sundaralingam & Hermans III-A): a probe finger pushes at
 // `position` with a constant tangential force along `tangent` while its
@@ -80,6 +83,7 @@ struct ProbePlan {
 // Errors name the field ("probe.normal: zero length", ...).
 absl::StatusOr<ProbePlan> PlanFrictionProbe(const PlanProblem& holding_grasp,
                                             const FrictionProbe& probe,
-                                            const PlanOptions& options, SolverKind kind);
+                                            const PlanOptions& options, SolverKind kind,
+                                            const SolveControl& control = {});
 
 }  // namespace tactforce::planner

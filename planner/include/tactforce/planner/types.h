@@ -80,9 +80,18 @@ struct PlanProblem {
 enum class ConeModel { kPyramid, kExact };
 enum class SolverKind { kGeometric, kIpopt, kCrossCheck };
 
-// Settings shared by every backend (Ceres-style: IsValid explains itself).
-// The member initialisers are THE defaults: front ends (the API's unset
-// fields, the CLI) take them from PlanOptions{} rather than repeating them.
+// Settings of the IPOPT backend (and of CROSS_CHECK's reference solve),
+// kept apart from the geometric ones as Drake keeps options per solver.
+struct IpoptOptions {
+  double tolerance = 1e-9;      // Ipopt's tol (scaled overall NLP error)
+  int max_iterations = 3000;    // per Ipopt run
+  double max_cpu_seconds = 0.0; // CPU budget of one solve; 0 = no limit
+};
+
+// Settings of a plan (Ceres-style: IsValid explains itself). The member
+// initialisers are THE defaults: front ends (the API's unset fields, the
+// CLI) take them from PlanOptions{} rather than repeating them. The state
+// of one call (its interrupt) is not a setting: SolveControl (below).
 struct PlanOptions {
   static constexpr int kMinConeSides = 3;
   static constexpr int kMaxConeSides = 64;
@@ -93,26 +102,28 @@ struct PlanOptions {
   int cone_sides = 12;       // k, facets of the inscribed pyramid, kMin..kMaxConeSides
   double confidence = 1.0;   // kappa >= 0: rows tightened by kappa * ellipsoid support
   double rank_tolerance = 1e-9;  // relative singular-value cut-off for null(G)
-  int max_contacts = 64;
-
-  // Ipopt reference.
-  double ipopt_tolerance = 1e-9;
-  int ipopt_max_iterations = 3000;
-  double ipopt_max_cpu_seconds = 0.0;  // 0 = no limit
-
-  // Cross-check agreement threshold on forces (N).
-  double agreement_tolerance = 1e-5;
+  int max_contacts = 64;     // a limit of the caller (api::CallLimits), checked by validation
 
   // Geometric backend: constraint rows active at a previous, similar solve
   // (PlanResult::active_set). Only speeds things up; never changes the answer.
   std::vector<int> warm_start;
 
-  // Polled between iterations by iterative backends (Ipopt); returning true
-  // stops the solve with kSolverFailure and a message starting
-  // "interrupted". Used for RPC deadlines and cancellation. May be empty.
-  std::function<bool()> interrupt;
+  IpoptOptions ipopt;  // the Ipopt reference
+
+  // Cross-check agreement threshold on forces (N).
+  double agreement_tolerance = 1e-5;
 
   bool IsValid(std::string* error) const;
+};
+
+// The state of one solve, apart from its options (which describe the
+// problem): what the caller can stop it with.
+struct SolveControl {
+  // Polled between iterations by iterative backends (Ipopt) and between the
+  // steps of a motion; returning true stops the solve with kSolverFailure
+  // and a message starting "interrupted". RPC deadlines and cancellation.
+  // May be empty.
+  std::function<bool()> interrupt;
 };
 
 enum class PlanStatus { kOptimal, kInfeasible, kSolverFailure };
@@ -148,6 +159,17 @@ struct CrossCheckReport {
   std::string ipopt_message;
 };
 
+// What the IPOPT backend reports beyond the common result (after Drake's
+// IpoptSolverDetails): Ipopt's own return status of the last run and how
+// many runs the solve took (1: the minimum-norm problem; 3: phase one and
+// a retry from its feasible point). Empty (runs 0) for other backends and
+// for answers decided without Ipopt (e.g. a wrench G cannot resist).
+struct IpoptDetails {
+  int runs = 0;
+  int status = 0;           // Ipopt::ApplicationReturnStatus of the last run
+  std::string status_name;  // its name ("Solve_Succeeded")
+};
+
 // Relative size below which a margin is round-off (see PlanResult::min_margin).
 inline constexpr double kMarginRoundOff = 1e-9;
 
@@ -166,6 +188,9 @@ struct PlanResult {
   int64_t solve_time_us = 0;
   int iterations = 0;
   std::optional<CrossCheckReport> cross_check;
+  // IPOPT (and CROSS_CHECK's reference solve, inside cross_check's report
+  // fields): Ipopt's own status.
+  IpoptDetails ipopt;
   // Geometric backend: active constraint rows at the optimum (warm starts).
   std::vector<int> active_set;
   // Only when the problem carries uncertainty (object.uncertainty or a

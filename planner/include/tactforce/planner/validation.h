@@ -64,6 +64,32 @@ absl::StatusOr<PlanProblem> ValidateProblem(const PlanProblem& problem,
 absl::Status ValidateProblem(const PlanProblem& problem, const PlanOptions& options,
                              PlanProblem* validated);
 
+// A problem and the options it passed ValidateProblem with: normals of unit
+// length, every number in range, the options valid. Only ValidatePlan fills
+// one, so a solve that takes it (ForceSolver::Solve) checks nothing again:
+// a front end that must refuse a bad request early (before queueing it)
+// validates once and passes this down.
+class ValidatedPlan {
+ public:
+  ValidatedPlan() = default;  // holds nothing validated: Solve refuses it
+  const PlanProblem& problem() const { return problem_; }
+  const PlanOptions& options() const { return options_; }
+  bool validated() const { return validated_; }
+
+ private:
+  friend absl::Status ValidatePlan(const PlanProblem& problem, const PlanOptions& options,
+                                   ValidatedPlan* plan);
+  PlanProblem problem_;
+  PlanOptions options_;
+  bool validated_ = false;
+};
+
+// ValidateProblem's checks (same errors) into a ValidatedPlan; in place
+// reusing `plan`'s storage (on error `plan` holds nothing validated).
+absl::StatusOr<ValidatedPlan> ValidatePlan(const PlanProblem& problem, const PlanOptions& options);
+absl::Status ValidatePlan(const PlanProblem& problem, const PlanOptions& options,
+                          ValidatedPlan* plan);
+
 // A rotational inertia about the CoM (kg m^2) that an object can have:
 // finite, components at most kMaxInertia, positive semidefinite, principal moments obeying the triangle
 // inequality (up to rounding). InvalidArgument("object.inertia: ...").

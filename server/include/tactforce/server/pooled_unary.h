@@ -2,7 +2,7 @@
 // handler (an api::Handle* function) runs on the WorkerPool, never on a
 // gRPC thread; a full pool answers RESOURCE_EXHAUSTED; the deadline and
 // cancellation are checked before the work starts and after it ends, and
-// polled through CallLimits::interrupt; one log line per call at info.
+// polled through CallState::interrupt; one log line per call at info.
 #pragma once
 
 #include <memory>

@@ -21,7 +21,7 @@ struct ServerConfig {
   // The limits of every call, filled by the flags: --max-contacts,
   // --max-trajectory-work, --max-audit-samples, --max-fit-bytes,
   // --max-message-bytes (max_response_bytes, also the transport's limit) and
-  // --solve-timeout-ms (max_call_seconds and ipopt_max_cpu_seconds).
+  // --solve-timeout-ms (solve_timeout_ms: the work budget and Ipopt's CPU cap).
   api::CallLimits limits = DefaultCallLimits();
   int inline_max_contacts = api::PlanSettings{}.inline_max_contacts;
   int64_t max_inertia_samples = api::kDefaultMaxInertiaSamples;  // per FitInertia stream
