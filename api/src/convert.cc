@@ -14,6 +14,7 @@
 #include "absl/strings/str_cat.h"
 #include "tactforce/planner/parameter_uncertainty.h"
 #include "tactforce/planner/validation.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::api {
 namespace {
@@ -191,7 +192,7 @@ absl::StatusOr<planner::PlanOptions> ToOptions(const v1::PlanRequest& request) {
   }
   if (request.cone_sides() != 0) options.cone_sides = static_cast<int>(request.cone_sides());
   if (request.has_confidence()) options.confidence = request.confidence();
-  if (absl::Status s = ApplySolverOptions(request.solver_options(), &options); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(ApplySolverOptions(request.solver_options(), &options));
   return options;
 }
 

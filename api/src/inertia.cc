@@ -18,6 +18,7 @@
 #include "tactforce/inertia/metrics.h"
 #include "tactforce/inertia/samples.h"
 #include "tactforce/planner/validation.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::api {
 namespace {
@@ -120,8 +121,8 @@ io::MeshCheck MeshCheckFromProto(const v1::MeshCheck& c) {
 // Inertial parameters given in the options (prior, truth) within the
 // planner's limits: "options.truth.inertia.ixx: magnitude exceeds 1e+12 kg m^2".
 absl::Status CheckParameterMagnitudes(const std::string& path, const v1::InertialParameters& p) {
-  if (auto s = planner::CheckMagnitude(path + ".mass", p.mass(), planner::kMaxMass, "kg"); !s.ok()) return s;
-  if (auto s = planner::CheckMagnitude(path + ".com", FromProto(p.com()), planner::kMaxLength, "m"); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(planner::CheckMagnitude(path + ".mass", p.mass(), planner::kMaxMass, "kg"));
+  TF_RETURN_IF_ERROR(planner::CheckMagnitude(path + ".com", FromProto(p.com()), planner::kMaxLength, "m"));
   const v1::Inertia& in = p.inertia();
   const std::pair<const char*, double> moments[] = {{"ixx", in.ixx()}, {"iyy", in.iyy()}, {"izz", in.izz()},
                                                     {"ixy", in.ixy()}, {"ixz", in.ixz()}, {"iyz", in.iyz()}};
@@ -145,10 +146,10 @@ absl::Status CheckOptionMagnitudes(const v1::InertiaFitOptions& o) {
                                      "m");
   }
   if (o.has_prior()) {
-    if (auto s = CheckParameterMagnitudes("options.prior.params", o.prior().params()); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(CheckParameterMagnitudes("options.prior.params", o.prior().params()));
   }
   if (o.has_truth()) {
-    if (auto s = CheckParameterMagnitudes("options.truth", o.truth()); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(CheckParameterMagnitudes("options.truth", o.truth()));
   }
   const v1::InertiaNoise& n = o.noise();
   const std::tuple<const char*, double, double, const char*> sigmas[] = {
@@ -160,7 +161,7 @@ absl::Status CheckOptionMagnitudes(const v1::InertiaFitOptions& o) {
       {"options.noise.angular_acceleration_sigma", n.angular_acceleration_sigma(), planner::kMaxAngularAcceleration,
        "rad/s^2"}};
   for (const auto& [field, v, limit, unit] : sigmas) {
-    if (auto s = CheckMagnitude(field, v, limit, unit); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(CheckMagnitude(field, v, limit, unit));
   }
   return absl::OkStatus();
 }
@@ -210,7 +211,7 @@ absl::StatusOr<ObjectMesh> MeshFromProto(const v1::MeshInput& input, std::string
     const v1::Quaternion& q = input.orientation();
     placement.orientation = Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z());
   }
-  if (absl::Status s = io::ValidatePlacement(placement, field); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(io::ValidatePlacement(placement, field));
   absl::StatusOr<io::TriangleMesh> mesh = io::ReadMeshBytes(input.data(), format, out.name);
   if (!mesh.ok()) return Prefixed(mesh.status(), absl::StrCat(field, ": "));
   out.mesh = io::TransformToObjectFrame(*mesh, placement);
@@ -265,7 +266,7 @@ v1::InertialParameters InertialParametersToProto(const inertia::InertialParamete
 
 absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::InertiaFitOptions& o) {
   inertia::InertiaOptions out;
-  if (absl::Status s = CheckOptionMagnitudes(o); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(CheckOptionMagnitudes(o));
   if (!v1::InertiaMethod_IsValid(o.method()))
     return absl::InvalidArgumentError(absl::StrCat("options.method: unknown value ", o.method()));
   if (o.method() == v1::INERTIA_METHOD_UNSPECIFIED) {

@@ -21,6 +21,7 @@
 #include "absl/strings/match.h"
 #include "google/protobuf/descriptor.h"
 #include "google/protobuf/util/json_util.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::api {
 namespace {
@@ -64,7 +65,7 @@ class FieldChecker {
       }
       if (member.is_null()) continue;
       const std::string where = path.empty() ? field->name() : absl::StrCat(path, ".", field->name());
-      if (absl::Status s = Field(member, field, where); !s.ok()) return s;
+      TF_RETURN_IF_ERROR(Field(member, field, where));
     }
     return absl::OkStatus();
   }
@@ -76,14 +77,14 @@ class FieldChecker {
       const FieldDescriptor* mapped = field->message_type()->map_value();
       for (const auto& [key, entry] : value.members()) {
         if (entry.is_null()) continue;
-        if (absl::Status s = Element(entry, mapped, absl::StrCat(path, "[\"", key, "\"]")); !s.ok()) return s;
+        TF_RETURN_IF_ERROR(Element(entry, mapped, absl::StrCat(path, "[\"", key, "\"]")));
       }
       return absl::OkStatus();
     }
     if (!field->is_repeated()) return Element(value, field, path);
     if (!value.is_array()) return Error(value.line(), value.column(), path, "expected a JSON array");
     for (size_t k = 0; k < value.array().size(); ++k) {
-      if (absl::Status s = Element(value.array()[k], field, absl::StrCat(path, "[", k, "]")); !s.ok()) return s;
+      TF_RETURN_IF_ERROR(Element(value.array()[k], field, absl::StrCat(path, "[", k, "]")));
     }
     return absl::OkStatus();
   }
@@ -186,7 +187,7 @@ absl::Status ParseJson(std::string_view json, google::protobuf::Message* message
   }
   absl::StatusOr<io::JsonValue> tree = io::ParseJson(json, what);
   if (!tree.ok()) return tree.status();
-  if (absl::Status s = FieldChecker(what).Message(*tree, message->GetDescriptor(), ""); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(FieldChecker(what).Message(*tree, message->GetDescriptor(), ""));
   google::protobuf::util::JsonParseOptions options;
   options.ignore_unknown_fields = false;  // a misspelt field is an error
   options.case_insensitive_enum_parsing = false;

@@ -205,10 +205,10 @@ absl::StatusOr<v1::TrajectoryResponse> HandleTrajectory(const v1::TrajectoryRequ
                                                         const CallState& state) {
   absl::StatusOr<PlanCall> call = PreparePlan(request.plan(), limits);
   if (!call.ok()) return Nested(call.status(), "plan.");
-  if (absl::Status s = CheckHoldingGrasp(*call); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(CheckHoldingGrasp(*call));
   absl::StatusOr<planner::TrajectoryProblem> t = ToTrajectoryProblem(request, call->problem);
   if (!t.ok()) return t.status();
-  if (absl::Status s = CheckTrajectorySize(*t, call->options, limits); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(CheckTrajectorySize(*t, call->options, limits));
   const bool warm = !request.has_warm_start() || request.warm_start();
   absl::StatusOr<planner::TrajectoryResult> r =
       planner::PlanTrajectory(*t, call->options, call->solver, warm,
@@ -221,7 +221,7 @@ absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
     const v1::FrictionProbeRequest& request, const CallLimits& limits, const CallState& state) {
   absl::StatusOr<PlanCall> call = PreparePlan(request.plan(), limits);
   if (!call.ok()) return Nested(call.status(), "plan.");
-  if (absl::Status s = CheckHoldingGrasp(*call); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(CheckHoldingGrasp(*call));
   planner::FrictionProbe probe;
   probe.position = FromProto(request.position());
   probe.normal = FromProto(request.normal());
@@ -231,7 +231,7 @@ absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
   probe.final_normal_force = request.final_normal_force();
   probe.ramp_rate = request.ramp_rate();
   probe.sample_rate = request.sample_rate();
-  if (absl::Status s = CheckProbe(probe); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(CheckProbe(probe));
   // The same work and size bounds as a trajectory, on the step count the
   // ramp implies (in double: it may be beyond any integer).
   const double steps = std::floor((probe.initial_normal_force - probe.final_normal_force) / probe.ramp_rate *
@@ -409,7 +409,7 @@ absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request, c
                                                    " samples exceed the limit of ", limits.max_audit_samples,
                                                    " per request (the server's --max-audit-samples)"));
   }
-  if (absl::Status s = CheckAuditResponseSize(request, limits); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(CheckAuditResponseSize(request, limits));
   audit::MeasuredData data;
   data.source = request.source().empty() ? "request" : request.source();
   bool any_shear = false;
@@ -427,8 +427,8 @@ absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request, c
     if (k == 0 || s.trial() != segment_trial) data.segment_starts.push_back(k);
     segment_trial = s.trial();
   }
-  if (absl::Status taxels = ReadAuditTaxels(request, &data); !taxels.ok()) return taxels;
-  if (absl::Status valid = audit::ValidateMeasuredData(data); !valid.ok()) return valid;
+  TF_RETURN_IF_ERROR(ReadAuditTaxels(request, &data));
+  TF_RETURN_IF_ERROR(audit::ValidateMeasuredData(data));
   audit::AuditOptions options;
   options.interrupt = state.interrupt;
   if (request.has_heldout_fraction()) options.heldout_fraction = request.heldout_fraction();

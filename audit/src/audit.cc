@@ -13,6 +13,7 @@
 #include "cause_selection.h"
 #include "effect_fit.h"
 #include "tactforce/audit/audit.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::audit {
 namespace {
@@ -44,9 +45,9 @@ absl::Status ValidateAuditInputs(const MeasuredData& data, const AuditOptions& o
     return absl::InvalidArgumentError("max_evaluations: must be in [0, 100000]");
   if (o.min_samples < kMinAuditSamples)
     return absl::InvalidArgumentError(absl::StrCat("min_samples: must be >= ", kMinAuditSamples));
-  if (auto st = ValidateMeasuredData(data, o.min_samples); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(ValidateMeasuredData(data, o.min_samples));
   if (o.model) {
-    if (auto st = sim::ValidateSensorModel(*o.model); !st.ok()) return st;
+    TF_RETURN_IF_ERROR(sim::ValidateSensorModel(*o.model));
   }
   return absl::OkStatus();
 }
@@ -218,7 +219,7 @@ void ReportBlocks(ChannelEvaluator& all, const AuditOptions& o, const Selection&
 }  // namespace
 
 absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOptions& o) {
-  if (auto st = ValidateAuditInputs(data, o); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(ValidateAuditInputs(data, o));
   const int n = static_cast<int>(data.t.size());
   const int n_train = static_cast<int>(std::lround(n * (1 - o.heldout_fraction)));
   const RunStats st = internal::ComputeRunStats(data);
@@ -236,21 +237,21 @@ absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOption
     if (o.interrupt && o.interrupt()) return absl::CancelledError(absl::StrCat("interrupted ", stage));
     return absl::OkStatus();
   };
-  if (auto stop = interrupted("before the cause selection"); !stop.ok()) return stop;
+  TF_RETURN_IF_ERROR(interrupted("before the cause selection"));
   Selection s = internal::StartSelection(eng, base, std::move(nuisance));
   s.release_level = st.fmin + 0.05 * st.range;
   internal::SelectCauses(eng, candidates, st, o, &s, &rep, &work);
   internal::SelectCausesBlocked(eng, all, candidates, st, o, &s, &rep);
-  if (auto stop = interrupted("during the cause selection"); !stop.ok()) return stop;
+  TF_RETURN_IF_ERROR(interrupted("during the cause selection"));
   // A cause found by the blocked hold-out may be absent from the training
   // block: the final fits then use every sample.
   const bool blocked = std::any_of(rep.causes.begin(), rep.causes.end(),
                                    [](const Cause& c) { return c.found_by == "blocked"; });
   ChannelEvaluator& final_eng = blocked ? all : eng;
   internal::RefitJointly(final_eng, st, o, &s, &rep.causes);
-  if (auto stop = interrupted("after the joint refit"); !stop.ok()) return stop;
+  TF_RETURN_IF_ERROR(interrupted("after the joint refit"));
   if (o.uncertainties && !s.named.empty()) internal::EstimateUncertainties(final_eng, st, o, s, &rep.causes);
-  if (auto stop = interrupted("after the uncertainties"); !stop.ok()) return stop;
+  TF_RETURN_IF_ERROR(interrupted("after the uncertainties"));
   s.fit = eng.Evaluate(s.params, true);
   ReportBlocks(all, o, s, &rep);
   if (auto pa = internal::FindPartialActivation(data, o)) rep.causes.insert(rep.causes.begin(), *pa);

@@ -18,6 +18,7 @@
 #include "absl/strings/str_format.h"
 #include "audit_internal.h"
 #include "tactforce/planner/validation.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::audit {
 
@@ -71,7 +72,7 @@ absl::Status ValidateMeasuredData(const MeasuredData& d, int min_samples) {
     const std::string col = absl::StrCat("taxel_", j);
     if (d.taxels[j].size() != n)
       return absl::InvalidArgumentError(absl::StrCat(Column(d, col.c_str()), " differs in length"));
-    if (auto st = check_finite(d.taxels[j], col.c_str()); !st.ok()) return st;
+    TF_RETURN_IF_ERROR(check_finite(d.taxels[j], col.c_str()));
   }
   for (auto st : {check_finite(d.t, "t"), check_finite(d.reference, "reference"),
                   check_finite(d.reading, "reading"), check_finite(d.shear, "shear")})
@@ -166,13 +167,13 @@ absl::Status ReadTaxelColumns(const io::CsvTable& table, int expected, MeasuredD
 }  // namespace
 
 absl::StatusOr<MeasuredData> MeasuredDataFromCsv(const io::CsvTable& table, int expected_taxels) {
-  if (auto st = table.Require({"t", "reference"}); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(table.Require({"t", "reference"}));
   MeasuredData d;
   d.source = table.source;
   d.t = table.Column("t");
   d.reference = table.Column("reference");
   if (table.Has("reading")) d.reading = table.Column("reading");
-  if (auto st = ReadTaxelColumns(table, expected_taxels, &d); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(ReadTaxelColumns(table, expected_taxels, &d));
   if (d.reading.empty()) {
     if (auto st = table.Require({"t", "reference", "reading"}); !st.ok())
       return absl::InvalidArgumentError(
@@ -203,7 +204,7 @@ absl::StatusOr<MeasuredData> MeasuredDataFromCsv(const io::CsvTable& table, int 
   if (d.segment_starts.empty()) d.segment_starts.push_back(0);
   if (d.skipped_nan_rows > 0)
     d.notes.push_back(absl::StrCat(d.skipped_nan_rows, " row(s) with NaN/empty fields skipped"));
-  if (auto st = ValidateMeasuredData(d); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(ValidateMeasuredData(d));
   return d;
 }
 
@@ -338,7 +339,7 @@ CorrelationPeak GoldenSectionPeak(const std::function<double(double)>& corr, dou
 absl::StatusOr<ClockOffsetEstimate> EstimateClockOffset(const std::vector<double>& rt, const std::vector<double>& rv,
                                                         const std::vector<double>& qt, const std::vector<double>& qv,
                                                         double centre, double max_offset) {
-  if (auto st = CheckClockOffsetSearch(rt, rv, qt, qv, centre, max_offset); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(CheckClockOffsetSearch(rt, rv, qt, qv, centre, max_offset));
   // Reading samples inside the reference span for every offset searched.
   const double lo = rt.front() + centre + max_offset, hi = rt.back() + centre - max_offset;
   const size_t first = std::lower_bound(qt.begin(), qt.end(), lo) - qt.begin();
@@ -418,15 +419,15 @@ int InterpolateReference(const std::vector<double>& rt, const std::vector<double
 
 absl::StatusOr<MeasuredData> AlignStreams(const io::CsvTable& ref, const io::CsvTable& rd,
                                           const AlignOptions& options) {
-  if (auto st = ref.Require({"t", "value"}); !st.ok()) return st;
-  if (auto st = rd.Require({"t", "value"}); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(ref.Require({"t", "value"}));
+  TF_RETURN_IF_ERROR(rd.Require({"t", "value"}));
   if (!std::isfinite(options.clock_offset))
     return absl::InvalidArgumentError("clock_offset: not a finite number");
   const auto rt = ref.Column("t"), rv = ref.Column("value");
   const auto rs = ref.Has("shear") ? ref.Column("shear") : std::vector<double>{};
   const auto qt = rd.Column("t"), qv = rd.Column("value");
-  if (auto st = CheckTimeIncreasing(ref, rt); !st.ok()) return st;
-  if (auto st = CheckTimeIncreasing(rd, qt); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(CheckTimeIncreasing(ref, rt));
+  TF_RETURN_IF_ERROR(CheckTimeIncreasing(rd, qt));
   if (rt.size() < 2)
     return absl::InvalidArgumentError(absl::StrCat(ref.source, ": too few samples: ", rt.size(),
                                                    ", need at least 2 to interpolate"));
@@ -471,7 +472,7 @@ absl::StatusOr<MeasuredData> AlignStreams(const io::CsvTable& ref, const io::Csv
         d.source, ": the streams do not overlap in time (reference ", G(rt.front()), "..", G(rt.back()),
         " s, reading ", G(qt.front()), "..", G(qt.back()), " s, clock offset ", G(clock_offset),
         " s); give the clock offset (--clock-offset) or a search centre (--clock-offset-centre)"));
-  if (auto st = ValidateMeasuredData(d); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(ValidateMeasuredData(d));
   return d;
 }
 

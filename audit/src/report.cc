@@ -12,6 +12,7 @@
 #include "tactforce/io/json.h"
 #include "tactforce/io/svg.h"
 #include "tactforce/io/text_file.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::audit {
 namespace {
@@ -347,12 +348,12 @@ absl::Status WriteAuditReport(const AuditReport& r, const std::string& dir, cons
   std::filesystem::create_directories(dir, ec);
   if (ec) return absl::InternalError(absl::StrCat(dir, ": cannot create directory: ", ec.message()));
   const std::string model_path = dir + "/extended_model.json";
-  if (auto st = sim::SaveSensorModel(r.extended_model, model_path); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(sim::SaveSensorModel(r.extended_model, model_path));
   auto write = [&](const std::string& name, const std::string& text) {
     return io::WriteTextFile(dir + "/" + name, text);
   };
-  if (auto st = write("report.json", AuditReportJson(r, model_path)); !st.ok()) return st;
-  if (auto st = write("summary.txt", FormatAuditSummary(r)); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(write("report.json", AuditReportJson(r, model_path)));
+  TF_RETURN_IF_ERROR(write("summary.txt", FormatAuditSummary(r)));
 
   const double gn = r.nominal_model.gain != 0 ? r.nominal_model.gain : 1;
   const double ge = r.extended_model.gain != 0 ? r.extended_model.gain : 1;

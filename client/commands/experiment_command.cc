@@ -25,6 +25,7 @@
 #include "tactforce/sim/taxel_array.h"
 #include "tactforce/io/json.h"
 #include "tactforce/io/text_file.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::cli {
 namespace {
@@ -116,11 +117,11 @@ absl::Status SetSensorsAndProtocol(const ExperimentArgs& a, ex::GraspConfig* bas
 
 absl::StatusOr<GraspRun> GraspRunFromFlags(const ExperimentArgs& a) {
   GraspRun run;
-  if (absl::Status s = SetObjectsAndModes(a, &run); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(SetObjectsAndModes(a, &run));
   if (a.trials < 1) return absl::InvalidArgumentError(absl::StrFormat("--trials: must be >= 1, got %d", a.trials));
   // Sensors first: a flag that does not apply to --sensors taxel is named before its file is read.
-  if (absl::Status s = SetSensorsAndProtocol(a, &run.base); !s.ok()) return s;
-  if (absl::Status s = SetBaseConfig(a, &run.base); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(SetSensorsAndProtocol(a, &run.base));
+  TF_RETURN_IF_ERROR(SetBaseConfig(a, &run.base));
   return run;
 }
 
@@ -173,7 +174,7 @@ absl::StatusOr<std::vector<ex::BatchSummary>> RunGraspBatches(const ExperimentAr
       }
       done_before += a.trials;
       if (!a.plots_dir.empty() && !b->results.empty()) {
-        if (absl::Status s = WriteTracePlot(a.plots_dir, c, b->results[0]); !s.ok()) return s;
+        TF_RETURN_IF_ERROR(WriteTracePlot(a.plots_dir, c, b->results[0]));
       }
       if (a.details && !a.output.json()) PrintTrialDetails(c, *b);
       b->results.clear();

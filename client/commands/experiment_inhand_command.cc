@@ -19,6 +19,7 @@
 #include "tactforce/experiment/inhand.h"
 #include "tactforce/inertia/fit.h"
 #include "tactforce/inertia/metrics.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::cli {
 namespace {
@@ -74,7 +75,7 @@ absl::StatusOr<ex::InHandConfig> ConfigFromFlags(const InHandArgs& a) {
   c.ideal_forces = a.ideal_forces;
   c.ideal_tracking = a.ideal_tracking;
   c.support_fraction = a.support_fraction;
-  if (absl::Status s = ParseBreaks(a.breaks, &c); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(ParseBreaks(a.breaks, &c));
   if (absl::Status s = ex::ValidateInHandConfig(c); !s.ok()) return FlagError(s, a.object);
   return c;
 }

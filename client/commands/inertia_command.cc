@@ -38,6 +38,7 @@
 #include "tactforce/io/mesh.h"
 #include "tactforce/io/text_file.h"
 #include "tactforce/v1/estimator.grpc.pb.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::cli {
 namespace {
@@ -59,7 +60,7 @@ absl::StatusOr<std::vector<Vec3>> ReadHullVertices(const std::string& path) {
   }
   absl::StatusOr<io::CsvTable> table = io::ReadCsvFile(path);
   if (!table.ok()) return table.status();
-  if (absl::Status s = table->Require({"x", "y", "z"}); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(table->Require({"x", "y", "z"}));
   const int ix = table->ColumnIndex("x"), iy = table->ColumnIndex("y"), iz = table->ColumnIndex("z");
   std::vector<Vec3> out;
   for (const std::vector<double>& row : table->rows) out.emplace_back(row[ix], row[iy], row[iz]);
@@ -232,9 +233,9 @@ absl::Status SetDensityOptions(const InertiaArgs& args, v1::InertiaFitOptions* o
 // files). `mesh` receives the loaded --mesh.
 absl::StatusOr<v1::InertiaFitOptions> BuildOptions(const InertiaArgs& args, std::optional<FlagMesh>* mesh) {
   v1::InertiaFitOptions o;
-  if (absl::Status s = SetModelOptions(args, &o); !s.ok()) return s;
-  if (absl::Status s = SetSolverOptions(args, &o); !s.ok()) return s;
-  if (absl::Status s = SetDensityOptions(args, &o); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(SetModelOptions(args, &o));
+  TF_RETURN_IF_ERROR(SetSolverOptions(args, &o));
+  TF_RETURN_IF_ERROR(SetDensityOptions(args, &o));
   if (!args.mesh_path.empty()) {
     absl::StatusOr<FlagMesh> loaded = LoadFlagMesh(args);
     if (!loaded.ok()) return loaded.status();

@@ -25,6 +25,7 @@
 #include "load/load_generator.h"
 #include "load/load_plot.h"
 #include "load/load_requests.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::cli {
 namespace {
@@ -115,7 +116,7 @@ absl::StatusOr<LoadSpec> LoadSpecFromFlags(const LoadArgs& args) {
   LoadSpec spec;
   absl::StatusOr<LoadRpc> rpc = ParseRpc(args.rpc);
   if (!rpc.ok()) return rpc.status();
-  if (absl::Status s = CheckFlagsForRpc(args, *rpc); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(CheckFlagsForRpc(args, *rpc));
   spec.rpc = *rpc;
   spec.engine = args.engine == "sync" ? LoadEngine::kSync : LoadEngine::kCallback;
   spec.rate = args.rate;
@@ -131,7 +132,7 @@ absl::StatusOr<LoadSpec> LoadSpecFromFlags(const LoadArgs& args) {
   source.seed = args.seed;
   source.mix_size = args.mix_size;
   if (args.batch > 0) source.batch = args.batch;
-  if (absl::Status s = SetLoadRequests(source, &spec); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(SetLoadRequests(source, &spec));
   return spec;
 }
 

@@ -69,7 +69,7 @@ absl::Status ApplyEstimateFlags(const PlanArgs& args, v1::PlanRequest* request) 
     if (absl::Status s = api::ParseJson(*text, &fit, InputName(args.inertia_path)); !s.ok()) {
       return absl::InvalidArgumentError(absl::StrCat("--inertia: ", s.message()));
     }
-    if (absl::Status s = api::ApplyInertiaFit(fit, "--inertia", request); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(api::ApplyInertiaFit(fit, "--inertia", request));
   }
   if (!args.friction_path.empty()) {
     absl::StatusOr<std::string> text = ReadInput(args.friction_path);
@@ -78,7 +78,7 @@ absl::Status ApplyEstimateFlags(const PlanArgs& args, v1::PlanRequest* request) 
     if (absl::Status s = api::ParseJson(*text, &friction, InputName(args.friction_path)); !s.ok()) {
       return absl::InvalidArgumentError(absl::StrCat("--friction: ", s.message()));
     }
-    if (absl::Status s = api::ApplyFrictionEstimate(friction, "--friction", request); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(api::ApplyFrictionEstimate(friction, "--friction", request));
   }
   return absl::OkStatus();
 }

@@ -20,6 +20,7 @@
 #include "tactforce/io/json.h"
 #include "tactforce/io/mesh.h"
 #include "tactforce/io/text_file.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::cli {
 namespace {
@@ -186,13 +187,13 @@ absl::Status SetTrajectory(const SimulateInertiaArgs& args, inertia::SimulationO
 // The simulation the flags ask for; errors name the flag or file.
 absl::StatusOr<inertia::SimulationOptions> SimulationOptionsFromFlags(const SimulateInertiaArgs& args) {
   inertia::SimulationOptions o;
-  if (absl::Status s = SetObject(args, &o); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(SetObject(args, &o));
   o.mode = args.mode == "wrist" ? inertia::SimulationMode::kWristWrench : inertia::SimulationMode::kInHand;
   o.num_contacts = args.contacts;
   o.duration = args.seconds;
   o.rate_hz = args.rate;
-  if (absl::Status s = SetNoise(args, &o); !s.ok()) return s;
-  if (absl::Status s = SetTrajectory(args, &o); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(SetNoise(args, &o));
+  TF_RETURN_IF_ERROR(SetTrajectory(args, &o));
   o.seed = args.seed;
   return o;
 }
@@ -202,11 +203,11 @@ absl::StatusOr<inertia::SimulationOptions> SimulationOptionsFromFlags(const Simu
 absl::Status WriteSimulationFiles(const inertia::SimulationResult& result, const std::string& out_dir) {
   const std::string csv = (std::filesystem::path(out_dir) / "inertia.csv").string();
   const std::string truth = (std::filesystem::path(out_dir) / "truth.json").string();
-  if (absl::Status s = inertia::WriteSimulation(result, csv, truth); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(inertia::WriteSimulation(result, csv, truth));
   const std::string mesh = (std::filesystem::path(out_dir) / "mesh.stl").string();
   const bool has_mesh = !result.object.mesh.triangles.empty();
   if (has_mesh) {
-    if (absl::Status s = WriteBinaryStl(result.object.mesh, mesh, result.object.name); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(WriteBinaryStl(result.object.mesh, mesh, result.object.name));
   }
   std::cerr << "wrote " << result.samples.samples.size() << " samples of '" << result.object.name << "' to "
             << csv << " (+ truth.json" << (has_mesh ? ", mesh.stl" : "") << ")\n";

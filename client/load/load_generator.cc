@@ -16,6 +16,7 @@
 #include "tactforce/api/convert.h"
 #include "tactforce/io/json.h"
 #include "tactforce/planner/random_grasps.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::cli {
 namespace {
@@ -120,7 +121,7 @@ std::string Number(double value) {
 
 absl::StatusOr<LoadReport> RunLoad(const LoadSpec& spec,
                                    const std::vector<std::shared_ptr<grpc::Channel>>& channels) {
-  if (absl::Status s = CheckSpec(spec, channels.size()); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(CheckSpec(spec, channels.size()));
   Run run(spec, channels);
   const int n = static_cast<int>(channels.size());
   bool interrupted = false;
@@ -163,7 +164,7 @@ absl::StatusOr<std::vector<std::shared_ptr<grpc::Channel>>> ConnectLoadChannels(
       // sure each is used (and the request accepted) before measuring.
       const RemoteServer server(*channel, target, deadline_ms);
       for (int i = 0; i < 2 * addresses; ++i) {
-        if (absl::Status s = WarmUpCall(server, spec); !s.ok()) return s;
+        TF_RETURN_IF_ERROR(WarmUpCall(server, spec));
       }
       channels.push_back(*std::move(channel));
     }

@@ -19,6 +19,7 @@
 #include "tactforce/io/text_file.h"
 #include "tactforce/planner/examples.h"
 #include "tactforce/sim/simulate.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::cli {
 namespace {
@@ -86,7 +87,7 @@ absl::StatusOr<std::vector<T>> ParseJsonMessages(const std::string& text,
   std::vector<T> out;
   if (FirstNonSpace(text) != '[') {
     T message;
-    if (absl::Status s = api::ParseJson(text, &message, source); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(api::ParseJson(text, &message, source));
     out.push_back(std::move(message));
     return out;
   }
@@ -100,7 +101,7 @@ absl::StatusOr<std::vector<T>> ParseJsonMessages(const std::string& text,
         absl::StrCat(std::string(at.line - 1, '\n'), std::string(at.column - 1, ' '),
                      absl::string_view(text).substr(begin, end - begin));
     T message;
-    if (absl::Status s = api::ParseJson(element, &message, source); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(api::ParseJson(element, &message, source));
     out.push_back(std::move(message));
   }
   if (out.empty()) return absl::InvalidArgumentError(absl::StrCat(source, ": empty list"));

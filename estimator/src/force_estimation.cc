@@ -12,6 +12,7 @@
 #include "tactforce/planner/dense_qp.h"
 #include "tactforce/planner/force_model.h"
 #include "tactforce/planner/validation.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::estimator {
 namespace {
@@ -190,7 +191,7 @@ absl::Status CheckRequest(const PlanProblem& problem, const std::vector<double>&
   plan_options.rank_tolerance = options.rank_tolerance;
   plan_options.max_contacts = options.max_contacts;
   PlanProblem& p = ws->planning.prepared.problem;
-  if (absl::Status s = planner::ValidateProblem(problem, plan_options, &p); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(planner::ValidateProblem(problem, plan_options, &p));
   Classify(p, ws);
   if (readings.size() != ws->intrinsic.size()) {
     return absl::InvalidArgumentError(
@@ -230,7 +231,7 @@ absl::Status EstimateForces(const PlanProblem& problem, const std::vector<double
                             ForceEstimate* out) {
   const auto start = std::chrono::steady_clock::now();
   Reset(out, options.method);
-  if (absl::Status s = CheckRequest(problem, readings, options, ws, out); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(CheckRequest(problem, readings, options, ws, out));
   PlanProblem& p = ws->planning.prepared.problem;
   ForceEquilibrium& eq = ws->planning.prepared.equilibrium;
   planner::ComputeForceEquilibrium(p, options.rank_tolerance,

@@ -12,6 +12,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "tactforce/planner/validation.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::estimator {
 namespace {
@@ -215,9 +216,9 @@ absl::Status ValidateOptions(const FrictionOptions& o) {
 absl::StatusOr<FrictionEstimate> EstimateFriction(const std::vector<FrictionTrial>& trials,
                                                   const FrictionOptions& o) {
   if (trials.empty()) return absl::InvalidArgumentError("trials: empty");
-  if (absl::Status s = ValidateOptions(o); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(ValidateOptions(o));
   if (o.mesh) {
-    if (absl::Status s = io::ValidateMesh(*o.mesh); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(io::ValidateMesh(*o.mesh));
   }
   FrictionEstimate out;
   for (int i = 0; i < static_cast<int>(trials.size()); ++i) {
@@ -225,7 +226,7 @@ absl::StatusOr<FrictionEstimate> EstimateFriction(const std::vector<FrictionTria
       return absl::CancelledError(absl::StrCat("interrupted after ", i, " of ", trials.size(), " trials"));
     }
     const FrictionTrial& trial = trials[i];
-    if (absl::Status s = ValidateTrial(trial, i, 3); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(ValidateTrial(trial, i, 3));
     Vec3 n;
     int triangle = -1;
     if (trial.normal) {
@@ -268,7 +269,7 @@ absl::StatusOr<FrictionEstimate> EstimateFriction(const std::vector<FrictionTria
 }
 
 absl::StatusOr<FrictionTrial> FrictionTrialFromCsv(const io::CsvTable& table) {
-  if (absl::Status s = table.Require({"t", "fx", "fy", "fz", "px", "py", "pz"}); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(table.Require({"t", "fx", "fy", "fz", "px", "py", "pz"}));
   FrictionTrial trial;
   trial.name = table.source;
   const int slip = table.ColumnIndex("slip");

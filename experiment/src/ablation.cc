@@ -6,6 +6,7 @@
 #include "absl/strings/str_cat.h"
 #include "tactforce/experiment/ablation.h"
 #include "tactforce/inertia/metrics.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::experiment {
 
@@ -138,7 +139,7 @@ void FitAll(const AblationData& data, const std::vector<AblationMethod>& methods
 }  // namespace
 
 absl::StatusOr<AblationTable> RunAblation(const AblationConfig& config) {
-  if (absl::Status s = ValidateAblationConfig(config); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(ValidateAblationConfig(config));
   std::vector<AblationSource> chosen;
   const std::vector<AblationSource> all = BuiltInAblationSources(config);
   for (const std::string& name : config.sources) {
@@ -154,7 +155,7 @@ absl::StatusOr<AblationTable> RunAblation(const AblationConfig& config) {
 }
 
 absl::StatusOr<AblationTable> RunAblation(const AblationConfig& config, const std::vector<AblationSource>& sources) {
-  if (absl::Status s = ValidateAblationConfig(config); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(ValidateAblationConfig(config));
   AblationTable table;
   table.config = config;
   table.sources = sources;

@@ -12,6 +12,7 @@
 #include "absl/strings/str_format.h"
 #include "grasp_internal.h"
 #include "tactforce/inertia/fit.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::experiment {
 namespace {
@@ -111,7 +112,7 @@ absl::StatusOr<ChainEstimates> Estimate(const ChainConfig& config, GraspObject o
   e.mu_true = truth.mu;
   e.mass_true = truth.mass;
   e.com_true = truth.com;
-  if (absl::Status s = ProbeFriction(config, seed, &e); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(ProbeFriction(config, seed, &e));
   absl::StatusOr<inertia::InertiaFit> fit = FitInHand(config, seed, truth, object);
   if (!fit.ok()) return fit.status();
   FillModels(config, *fit, &e);
@@ -164,12 +165,12 @@ absl::Status ValidateChainConfig(const ChainConfig& c) {
   for (auto [f, v, lo] : {std::tuple{"seeds", double(c.seeds), 1.0}, {"trials", double(c.trials), 1.0},
                           {"probe_trials", double(c.probe_trials), 2.0}, {"inhand_duration", c.inhand_duration, 1.0},
                           {"confidence", c.confidence, 0.0}})
-    if (absl::Status s = at_least(f, v, lo); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(at_least(f, v, lo));
   if (!std::isfinite(c.confidence) || c.confidence > planner::PlanOptions::kMaxConfidence)
     return absl::InvalidArgumentError(absl::StrFormat("confidence: must be finite and <= %g, got %g",
                                                       planner::PlanOptions::kMaxConfidence, c.confidence));
-  if (absl::Status s = ValidateGraspConfig(c.grasp); !s.ok()) return s;
-  if (absl::Status s = ValidateProbeConfig(c.probe); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(ValidateGraspConfig(c.grasp));
+  TF_RETURN_IF_ERROR(ValidateProbeConfig(c.probe));
   return absl::OkStatus();
 }
 
@@ -189,7 +190,7 @@ InHandObject InHandEquivalent(const std::string& name, double mass, const Vec3& 
 }
 
 absl::StatusOr<ChainReport> RunChain(const ChainConfig& config, const std::function<void(int, int)>& progress) {
-  if (absl::Status s = ValidateChainConfig(config); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(ValidateChainConfig(config));
   const auto start = std::chrono::steady_clock::now();
   ChainReport report;
   const int total = static_cast<int>(config.objects.size()) * config.seeds * 4;
@@ -205,7 +206,7 @@ absl::StatusOr<ChainReport> RunChain(const ChainConfig& config, const std::funct
       if (!e.ok()) return e.status();
       if (progress) progress(++done, total);
       for (int p = 0; p < 3; ++p) {
-        if (absl::Status st = RunPlanned(config, *e, &rows[p], &squeezes[p], &margins[p]); !st.ok()) return st;
+        TF_RETURN_IF_ERROR(RunPlanned(config, *e, &rows[p], &squeezes[p], &margins[p]));
         if (progress) progress(++done, total);
       }
       report.estimates.push_back(*e);

@@ -8,6 +8,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "tactforce/io/enum_names.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::experiment {
 
@@ -132,7 +133,7 @@ absl::Status ValidateGraspConfig(const GraspConfig& c) {
   const PhaseDurations& p = c.phases;
   for (auto [name, v] : {std::pair{"phases.close", p.close}, {"phases.settle", p.settle}, {"phases.hold", p.hold},
                          {"phases.lift", p.lift}, {"phases.hold_lifted", p.hold_lifted}}) {
-    if (auto s = positive(name, v); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(positive(name, v));
   }
   for (auto [name, v] : {std::pair{"phases.place", p.place}, {"phases.placed", p.placed}, {"phases.switched", p.switched}})
     if (!(v >= 0 && std::isfinite(v))) return bad(name, absl::StrFormat("must be >= 0, got %g", v));
@@ -140,16 +141,16 @@ absl::Status ValidateGraspConfig(const GraspConfig& c) {
     return bad("lift_height", absl::StrFormat("must be in [0, 0.5] m, got %g", c.lift_height));
   if (!(c.pivot_angle_deg >= 0 && c.pivot_angle_deg <= 40))
     return bad("pivot_angle_deg", absl::StrFormat("must be in [0, 40], got %g", c.pivot_angle_deg));
-  if (auto s = positive("control_rate", c.control_rate); !s.ok()) return s;
-  if (auto s = ValidatePhysics(c.physics); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(positive("control_rate", c.control_rate));
+  TF_RETURN_IF_ERROR(ValidatePhysics(c.physics));
   if (c.control_rate * c.physics.timestep > 1.0 + 1e-9)
     return bad("control_rate", absl::StrFormat("%g Hz is faster than the physics (timestep %g s)", c.control_rate,
                                                c.physics.timestep));
   if (!(c.admittance_gain > 0 && c.admittance_gain <= 1))
     return bad("admittance_gain", absl::StrFormat("must be in (0, 1], got %g", c.admittance_gain));
-  if (auto s = positive("kp", c.kp); !s.ok()) return s;
-  if (auto s = positive("damping_ratio", c.damping_ratio); !s.ok()) return s;
-  if (auto s = positive("fingertip_mass", c.fingertip_mass); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(positive("kp", c.kp));
+  TF_RETURN_IF_ERROR(positive("damping_ratio", c.damping_ratio));
+  TF_RETURN_IF_ERROR(positive("fingertip_mass", c.fingertip_mass));
   if (std::sqrt(c.kp / c.fingertip_mass) * c.physics.timestep > 1.0)
     return bad("kp", absl::StrFormat("too stiff for fingertip_mass %g kg at timestep %g s (sqrt(kp/m) dt = %.2f > 1: "
                                      "the explicit PD would be unstable)",
@@ -159,17 +160,17 @@ absl::Status ValidateGraspConfig(const GraspConfig& c) {
     return bad("fingertip_radius", absl::StrFormat("must be in [0.003, 0.03] m, got %g", c.fingertip_radius));
   if (!(c.confidence >= 0 && std::isfinite(c.confidence)))
     return bad("confidence", absl::StrFormat("must be >= 0, got %g", c.confidence));
-  if (auto s = positive("max_rotation_deg", c.max_rotation_deg); !s.ok()) return s;
-  if (auto s = positive("max_slip", c.max_slip); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(positive("max_rotation_deg", c.max_rotation_deg));
+  TF_RETURN_IF_ERROR(positive("max_slip", c.max_slip));
   if (!(c.drop_distance > c.max_slip))
     return bad("drop_distance", absl::StrFormat("must exceed max_slip (%g m), got %g", c.max_slip, c.drop_distance));
   if (c.sensors == SensorMode::kGeoDexRandom) {
-    if (auto s = ValidateErrorRanges(c.error_ranges, "error_ranges."); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(ValidateErrorRanges(c.error_ranges, "error_ranges."));
   }
   if (c.sensor_array == SensorArray::kTaxel) {
-    if (auto s = sim::ValidateTaxelRanges(c.taxel_ranges, "taxel_ranges."); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(sim::ValidateTaxelRanges(c.taxel_ranges, "taxel_ranges."));
   }
-  if (auto s = ValidateFault(c.fault); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(ValidateFault(c.fault));
   if (c.sensors == SensorMode::kModel) {
     if (auto s = sim::ValidateSensorModel(c.sensor_model); !s.ok())
       return absl::InvalidArgumentError(absl::StrCat("sensor_model.", s.message()));

@@ -14,6 +14,7 @@
 #include "grasp_objects.h"
 #include "scene.h"
 #include "tactforce/planner/solver.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::experiment {
 namespace {
@@ -211,7 +212,7 @@ GraspSetup::~GraspSetup() = default;
 const std::vector<std::string>& GraspSetup::finger_names() const { return impl_->finger_names; }
 
 absl::StatusOr<std::unique_ptr<GraspSetup>> GraspSetup::Create(const GraspConfig& config) {
-  if (absl::Status s = ValidateGraspConfig(config); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(ValidateGraspConfig(config));
   const ObjectSpec* spec = FindObjectSpec(config.object);
   if (spec == nullptr)
     return absl::InternalError(absl::StrCat("object: no specification for '", ToString(config.object), "'"));
@@ -225,7 +226,7 @@ absl::StatusOr<std::unique_ptr<GraspSetup>> GraspSetup::Create(const GraspConfig
     return absl::InvalidArgumentError(absl::StrFormat("fault.finger: must be < %d (the %s grasp's fingers), got %d",
                                                       setup->impl_->n_fingers, ToString(config.object),
                                                       config.fault.finger));
-  if (absl::Status s = PlanTicks(config, *options, setup->impl_.get()); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(PlanTicks(config, *options, setup->impl_.get()));
   setup->mjcf_ = GraspMjcf(config, *spec, *setup->impl_);
   // Compile once here so model errors surface at set-up.
   auto scene = Scene::FromMjcf(setup->mjcf_);

@@ -19,6 +19,7 @@
 #include "absl/strings/str_format.h"
 #include "grasp_internal.h"
 #include "scene.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::experiment {
 namespace {
@@ -540,9 +541,9 @@ absl::StatusOr<TrialResult> RunGraspTrial(const GraspSetup& setup, int trial) {
   auto scene = Scene::FromMjcf(setup.mjcf());
   if (!scene.ok()) return scene.status();
   TrialRun run(setup, trial, **scene);
-  if (absl::Status s = run.DrawSensors(); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(run.DrawSensors());
   run.LocateFingertips();
-  if (absl::Status s = run.Simulate(); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(run.Simulate());
   TrialResult res = run.Finish();
   res.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   return res;

@@ -11,6 +11,7 @@
 #include "tactforce/experiment/inhand.h"
 #include "tactforce/io/json.h"
 #include "tactforce/io/text_file.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::experiment {
 namespace {
@@ -176,8 +177,8 @@ absl::StatusOr<InHandObject> ParseInHandObjectJson(const std::string& text, cons
   if (root->Find("dimensions") == nullptr) return FieldError(source, "missing key 'dimensions'");
   if (root->Find("mass") == nullptr) return FieldError(source, "missing key 'mass'");
   for (const auto& [key, value] : root->members())
-    if (absl::Status s = ReadObjectMember(key, value, absl::StrCat(source, ": ", key), &o); !s.ok()) return s;
-  if (absl::Status s = ValidateInHandObject(o, source + ": "); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(ReadObjectMember(key, value, absl::StrCat(source, ": ", key), &o));
+  TF_RETURN_IF_ERROR(ValidateInHandObject(o, source + ": "));
   return o;
 }
 
@@ -230,7 +231,7 @@ absl::StatusOr<TactileForceModel> NamedForceModel(const std::string& name) {
 absl::Status ValidateInHandConfig(const InHandConfig& c) {
   auto bad = [](const char* field, const std::string& why) { return FieldError(field, why); };
   if (c.custom) {
-    if (absl::Status s = ValidateInHandObject(*c.custom); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(ValidateInHandObject(*c.custom));
   } else if (absl::StatusOr<InHandObject> b = BuiltInInHandObject(c.object); !b.ok()) {
     return b.status();
   }

@@ -18,6 +18,7 @@
 #include "inhand_internal.h"
 #include "scene.h"
 #include "tactforce/planner/trajectory.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::experiment {
 namespace inhand_internal {
@@ -271,7 +272,7 @@ absl::StatusOr<InHandRun> RunInHand(const InHandConfig& config, const std::funct
   run.samples.source_name = absl::StrCat("inhand ", run.object_name);
   InHandSim sim(*setup, **scene);
   sim.Locate();
-  if (absl::Status st = sim.Simulate(progress, &run); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(sim.Simulate(progress, &run));
   sim.FinishForceStats(&run.stats);
   if (!config.ideal_tracking && config.tracker == Tracker::kVision) {
     run.tracker_position_sigma = config.vision.position_sigma;

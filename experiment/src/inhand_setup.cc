@@ -13,6 +13,7 @@
 #include "grasp_internal.h"
 #include "inhand_internal.h"
 #include "tactforce/planner/trajectory.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::experiment::inhand_internal {
 namespace {
@@ -214,7 +215,7 @@ int Setup::Tick(double t) const {
 }
 
 absl::StatusOr<Setup> PrepareInHand(const InHandConfig& config) {
-  if (absl::Status st = ValidateInHandConfig(config); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(ValidateInHandConfig(config));
   Setup s;
   s.cfg = config;
   if (config.custom) {
@@ -233,7 +234,7 @@ absl::StatusOr<Setup> PrepareInHand(const InHandConfig& config) {
   s.force_model = *fm;
   LayOutContacts(&s);
   s.excitation = ScaledExcitation(config);
-  if (absl::Status st = PlanTicks(&s); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(PlanTicks(&s));
   s.mjcf = InHandMjcf(s);
   return s;
 }

@@ -11,6 +11,7 @@
 #include "tactforce/inertia/truth.h"
 #include "tactforce/io/text_file.h"
 #include "tactforce/planner/trajectory.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::experiment {
 namespace inhand_internal {
@@ -177,10 +178,10 @@ absl::Status WriteInHandRun(const InHandRun& run, const std::string& dir) {
   inertia::InertiaTruth truth;
   truth.params = run.truth;
   truth.gravity_world = run.gravity;
-  if (absl::Status s = inertia::WriteInertiaCsvFile(run.samples, (d / "inertia.csv").string()); !s.ok()) return s;
-  if (absl::Status s = inertia::WriteTruthJsonFile(truth, (d / "truth.json").string()); !s.ok()) return s;
-  if (absl::Status s = io::WriteTextFile((d / "events.csv").string(), EventsCsv(run)); !s.ok()) return s;
-  if (absl::Status s = io::WriteTextFile((d / "truth_log.csv").string(), TruthLogCsv(run)); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(inertia::WriteInertiaCsvFile(run.samples, (d / "inertia.csv").string()));
+  TF_RETURN_IF_ERROR(inertia::WriteTruthJsonFile(truth, (d / "truth.json").string()));
+  TF_RETURN_IF_ERROR(io::WriteTextFile((d / "events.csv").string(), EventsCsv(run)));
+  TF_RETURN_IF_ERROR(io::WriteTextFile((d / "truth_log.csv").string(), TruthLogCsv(run)));
   if (run.mesh) return io::WriteTextFile((d / "mesh.obj").string(), MeshObj(*run.mesh, run.object_name));
   return absl::OkStatus();
 }

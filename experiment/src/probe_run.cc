@@ -9,6 +9,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "probe_internal.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::experiment {
 namespace {
@@ -144,8 +145,8 @@ absl::Status ValidateProbeConfig(const ProbeConfig& c) {
 absl::StatusOr<ProbeTrialResult> RunProbeTrial(const ProbeConfig& c, const SurfacePair& surface, int trial,
                                                double mu_slope) {
   const auto wall0 = std::chrono::steady_clock::now();
-  if (absl::Status s = ValidateProbeConfig(c); !s.ok()) return s;
-  if (absl::Status s = ValidateSurfaces({surface}); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(ValidateProbeConfig(c));
+  TF_RETURN_IF_ERROR(ValidateSurfaces({surface}));
   std::mt19937_64 rng(TrialSeed(c.seed, surface.name, trial));
   absl::StatusOr<ProbeSetup> setup = MakeProbeSetup(c, surface, rng);
   if (!setup.ok()) return setup.status();
@@ -173,8 +174,8 @@ absl::StatusOr<ProbeReport> RunProbeExperiment(const ProbeConfig& c, const std::
                                                int trials, const std::function<void(int, int)>& progress) {
   const auto wall0 = std::chrono::steady_clock::now();
   if (trials < 1) return absl::InvalidArgumentError(absl::StrFormat("trials: must be >= 1, got %d", trials));
-  if (absl::Status s = ValidateProbeConfig(c); !s.ok()) return s;
-  if (absl::Status s = ValidateSurfaces(surfaces); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(ValidateProbeConfig(c));
+  TF_RETURN_IF_ERROR(ValidateSurfaces(surfaces));
   ProbeReport report;
   const int total = trials * static_cast<int>(surfaces.size());
   for (const SurfacePair& surface : surfaces) {

@@ -8,11 +8,12 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::experiment {
 
 absl::StatusOr<SensorChannel> SensorChannel::Create(const sim::SensorModel& model, uint64_t seed) {
-  if (absl::Status s = sim::ValidateSensorModel(model); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(sim::ValidateSensorModel(model));
   return SensorChannel(model, seed);
 }
 
@@ -95,11 +96,11 @@ absl::Status ValidateErrorRanges(const ErrorRanges& r, const std::string& prefix
           absl::StrFormat("%s%s: must be >= %s (%g), got %g", prefix, hi_name, lo_name, lo, hi));
     return absl::OkStatus();
   };
-  if (auto s = range("threshold_min", r.threshold_min, "threshold_max", r.threshold_max); !s.ok()) return s;
-  if (auto s = range("hysteresis_max", 0.0, "hysteresis_max", r.hysteresis_max); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(range("threshold_min", r.threshold_min, "threshold_max", r.threshold_max));
+  TF_RETURN_IF_ERROR(range("hysteresis_max", 0.0, "hysteresis_max", r.hysteresis_max));
   if (auto s = range("force_error_min", r.force_error_min, "force_error_max", r.force_error_max); !s.ok())
     return s;
-  if (auto s = range("noise_min", r.noise_min, "noise_max", r.noise_max); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(range("noise_min", r.noise_min, "noise_max", r.noise_max));
   return absl::OkStatus();
 }
 

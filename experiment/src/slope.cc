@@ -13,6 +13,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "scene.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::experiment {
 namespace {
@@ -158,7 +159,7 @@ absl::Status ValidateSlopeConfig(const SlopeConfig& c) {
 absl::StatusOr<SlopeRow> RunSlopeAndProbe(const SlopeConfig& c, double mu) {
   SlopeConfig one = c;
   one.mus = {mu};
-  if (absl::Status s = ValidateSlopeConfig(one); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(ValidateSlopeConfig(one));
   SlopeRow row;
   row.mu = mu;
   absl::StatusOr<double> theta = SlipTilt(c, mu);
@@ -177,7 +178,7 @@ absl::StatusOr<SlopeRow> RunSlopeAndProbe(const SlopeConfig& c, double mu) {
 }
 
 absl::StatusOr<std::vector<SlopeRow>> RunSlopeTable(const SlopeConfig& c) {
-  if (absl::Status s = ValidateSlopeConfig(c); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(ValidateSlopeConfig(c));
   std::vector<SlopeRow> rows;
   for (double mu : c.mus) {
     auto r = RunSlopeAndProbe(c, mu);
@@ -189,7 +190,7 @@ absl::StatusOr<std::vector<SlopeRow>> RunSlopeTable(const SlopeConfig& c) {
 
 absl::StatusOr<double> MeasureCreep(const PhysicsSettings& physics, double mu, double load_ratio, double seconds,
                                     double settle, double fingertip_mass) {
-  if (absl::Status s = ValidatePhysics(physics); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(ValidatePhysics(physics));
   if (!(load_ratio >= 0 && load_ratio < 1))
     return absl::InvalidArgumentError(absl::StrFormat("load_ratio: must be in [0, 1), got %g", load_ratio));
   if (!(mu > 0)) return absl::InvalidArgumentError("mu: must be > 0");

@@ -13,6 +13,7 @@
 #include "absl/strings/ascii.h"
 #include "absl/strings/str_cat.h"
 #include "tactforce/io/text_file.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::io {
 namespace {
@@ -127,8 +128,8 @@ absl::Status ValidateMesh(const TriangleMesh& mesh) {
 
 absl::Status ValidatePlacement(const MeshPlacement& placement, std::string_view field_view) {
   const std::string field(field_view);
-  if (absl::Status s = CheckScale(placement.scale, absl::StrCat(field, ".scale")); !s.ok()) return s;
-  if (absl::Status s = CheckPosition(placement.position, absl::StrCat(field, ".position")); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(CheckScale(placement.scale, absl::StrCat(field, ".scale")));
+  TF_RETURN_IF_ERROR(CheckPosition(placement.position, absl::StrCat(field, ".position")));
   return CheckQuaternion(placement.orientation, absl::StrCat(field, ".orientation"));
 }
 
@@ -204,7 +205,7 @@ absl::StatusOr<LoadedMesh> LoadMesh(const MeshRequest& request) {
     out.placement.position = request.pose->position;
     out.placement.orientation = request.pose->orientation;
   }
-  if (absl::Status s = ValidatePlacement(out.placement); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(ValidatePlacement(out.placement));
   absl::StatusOr<std::string> format = MeshFormatFromPath(out.mesh_path);
   if (!format.ok()) return format.status();
   absl::StatusOr<TriangleMesh> mesh = ReadMeshFile(out.mesh_path);

@@ -25,6 +25,7 @@
 #include "tactforce/io/mesh.h"
 #include "tactforce/io/text_file.h"
 #include "mesh_internal.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::io {
 namespace {
@@ -187,7 +188,7 @@ absl::StatusOr<TriangleMesh> ReadMesh(std::string_view bytes, const std::string&
     if (!ply.assimp_bytes.empty()) bytes = ply.assimp_bytes;
   }
   if (hint == "stl") {
-    if (absl::Status stl = CheckStl(bytes, name); !stl.ok()) return stl;
+    TF_RETURN_IF_ERROR(CheckStl(bytes, name));
   }
   // No DefaultLogger is created, so assimp logs to its silent NullLogger.
   Assimp::Importer importer;
@@ -206,7 +207,7 @@ absl::StatusOr<TriangleMesh> ReadMesh(std::string_view bytes, const std::string&
   }
   absl::StatusOr<TriangleMesh> mesh = FromScene(*scene, name);
   if (!mesh.ok()) return mesh;
-  if (absl::Status limits = CheckLimits(*mesh, name); !limits.ok()) return limits;
+  TF_RETURN_IF_ERROR(CheckLimits(*mesh, name));
   // assimp keeps the file's face order; a count mismatch means it did not.
   if (mesh->face_colors.empty() && ply.face_colors.size() == mesh->triangles.size())
     mesh->face_colors = std::move(ply.face_colors);

@@ -27,6 +27,7 @@
 #include "absl/strings/string_view.h"
 #include "mesh_internal.h"
 #include "tactforce/io/mesh.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::io::internal {
 namespace {
@@ -406,7 +407,7 @@ absl::StatusOr<CheckedPly> CheckPly(std::string_view bytes_std, const std::strin
   if (!header.ok()) return header.status();
   if (absl::Status counts = CheckCounts(*header, bytes.substr(header->body_start), name); !counts.ok())
     return counts;
-  if (absl::Status elements = RequireMeshElements(*header, name); !elements.ok()) return elements;
+  TF_RETURN_IF_ERROR(RequireMeshElements(*header, name));
   absl::StatusOr<std::vector<uint32_t>> colors = WalkBody(*header, bytes, name);
   if (!colors.ok()) return colors.status();
   CheckedPly checked;

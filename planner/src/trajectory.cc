@@ -8,6 +8,7 @@
 #include "absl/strings/str_cat.h"
 #include "tactforce/planner/solver.h"
 #include "tactforce/planner/validation.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::planner {
 
@@ -60,11 +61,11 @@ absl::StatusOr<TrajectoryResult> PlanTrajectory(const TrajectoryProblem& t,
   const auto start = std::chrono::steady_clock::now();
   if (t.steps.empty()) return absl::InvalidArgumentError("steps: at least one step is required");
   if (t.inertia) {
-    if (absl::Status s = ValidateInertia(*t.inertia); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(ValidateInertia(*t.inertia));
   }
   // Every step before any solve: a bad last step must not cost the others.
   for (int i = 0; i < static_cast<int>(t.steps.size()); ++i) {
-    if (absl::Status s = ValidateTrajectoryStep(t.steps[i], i, t.inertia.has_value()); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(ValidateTrajectoryStep(t.steps[i], i, t.inertia.has_value()));
   }
   const std::unique_ptr<ForceSolver> solver = MakeSolver(kind);
   TrajectoryResult out;
@@ -103,7 +104,7 @@ absl::StatusOr<ProbePlan> PlanFrictionProbe(const PlanProblem& holding_grasp,
                                             const PlanOptions& options, SolverKind kind,
                                             const SolveControl& control) {
   Vec3 n, t;
-  if (absl::Status s = ValidateFrictionProbe(probe, &n, &t); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(ValidateFrictionProbe(probe, &n, &t));
   const double duration = (probe.initial_normal_force - probe.final_normal_force) / probe.ramp_rate;
   // Counted in double first: the product can exceed any int (UB to cast).
   const double step_count = std::floor(duration * probe.sample_rate) + 1;

@@ -107,16 +107,16 @@ absl::Status ValidateProblem(const PlanProblem& problem, const PlanOptions& opti
   out.external_wrench = problem.external_wrench;
   out.contacts = problem.contacts;  // element-wise: keeps capacity
   out.motion = problem.motion;
-  if (auto s = CheckMagnitude("object.mass", out.object.mass, kMaxMass, "kg"); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(CheckMagnitude("object.mass", out.object.mass, kMaxMass, "kg"));
   if (out.object.mass < 0.0) return Invalid("object.mass", "must be >= 0");
-  if (auto s = CheckMagnitude("object.com", out.object.com, kMaxLength, "m"); !s.ok()) return s;
-  if (auto s = CheckMagnitude("object.gravity", out.object.gravity, kMaxAcceleration, "m/s^2"); !s.ok()) return s;
-  if (auto s = CheckMagnitude("external_wrench.force", out.external_wrench.force, kMaxForce, "N"); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(CheckMagnitude("object.com", out.object.com, kMaxLength, "m"));
+  TF_RETURN_IF_ERROR(CheckMagnitude("object.gravity", out.object.gravity, kMaxAcceleration, "m/s^2"));
+  TF_RETURN_IF_ERROR(CheckMagnitude("external_wrench.force", out.external_wrench.force, kMaxForce, "N"));
   if (auto s = CheckMagnitude("external_wrench.torque", out.external_wrench.torque, kMaxForce, "N m"); !s.ok()) {
     return s;
   }
 
-  if (auto s = ValidateParameterUncertainty(out.object.uncertainty); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(ValidateParameterUncertainty(out.object.uncertainty));
   const Motion& motion = out.motion;
   if (auto s = CheckMagnitude("motion.linear_acceleration", motion.linear_acceleration, kMaxAcceleration, "m/s^2");
       !s.ok()) {
@@ -137,7 +137,7 @@ absl::Status ValidateProblem(const PlanProblem& problem, const PlanOptions& opti
     return Invalid("contacts", absl::StrCat(out.contacts.size(), " contacts exceed the limit of ",
                                             options.max_contacts));
   for (int i = 0; i < static_cast<int>(out.contacts.size()); ++i) {
-    if (auto s = CheckContact(i, out.contacts[i]); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(CheckContact(i, out.contacts[i]));
   }
   return absl::OkStatus();
 }
@@ -189,7 +189,7 @@ absl::Status ValidateTrajectoryStep(const TrajectoryStep& s, int index, bool has
 }
 
 absl::Status ValidateFrictionProbe(const FrictionProbe& probe, Vec3* unit_normal, Vec3* unit_tangent) {
-  if (auto s = CheckMagnitude("probe.position", probe.position, kMaxLength, "m"); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(CheckMagnitude("probe.position", probe.position, kMaxLength, "m"));
   Vec3 n = probe.normal;
   if (!NormalizeDirection(&n)) {
     return Invalid("probe.normal", Finite(n) ? "zero length" : "not a finite vector");
@@ -206,17 +206,17 @@ absl::Status ValidateFrictionProbe(const FrictionProbe& probe, Vec3* unit_normal
                                 std::pair{"probe.initial_normal_force", probe.initial_normal_force},
                                 std::pair{"probe.final_normal_force", probe.final_normal_force}}) {
     if (!std::isfinite(v) || v < 0) return Invalid(name, "must be finite and >= 0");
-    if (auto s = CheckMagnitude(name, v, kMaxForce, "N"); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(CheckMagnitude(name, v, kMaxForce, "N"));
   }
   if (!(probe.initial_normal_force > probe.final_normal_force))
     return Invalid("probe.final_normal_force", "must be below initial_normal_force");
   if (!std::isfinite(probe.ramp_rate) || probe.ramp_rate <= 0) return Invalid("probe.ramp_rate", "must be > 0");
-  if (auto s = CheckMagnitude("probe.ramp_rate", probe.ramp_rate, kMaxForce, "N/s"); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(CheckMagnitude("probe.ramp_rate", probe.ramp_rate, kMaxForce, "N/s"));
   if (!std::isfinite(probe.sample_rate) || probe.sample_rate <= 0) {
     return Invalid("probe.sample_rate", "must be > 0");
   }
   constexpr double kMaxSampleRate = 1e9;  // Hz: a sample per kMinTimeStep
-  if (auto s = CheckMagnitude("probe.sample_rate", probe.sample_rate, kMaxSampleRate, "Hz"); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(CheckMagnitude("probe.sample_rate", probe.sample_rate, kMaxSampleRate, "Hz"));
   *unit_normal = n;
   *unit_tangent = t;
   return absl::OkStatus();
@@ -225,7 +225,7 @@ absl::Status ValidateFrictionProbe(const FrictionProbe& probe, Vec3* unit_normal
 absl::StatusOr<PlanProblem> ValidateProblem(const PlanProblem& problem,
                                             const PlanOptions& options) {
   PlanProblem out;
-  if (absl::Status s = ValidateProblem(problem, options, &out); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(ValidateProblem(problem, options, &out));
   return out;
 }
 

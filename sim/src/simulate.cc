@@ -14,6 +14,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "tactforce/io/text_file.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::sim {
 namespace {
@@ -133,7 +134,7 @@ namespace {
 // Checks the options against the fingertip's taxel count; InvalidArgument
 // naming the option or the model field.
 absl::Status ValidateSimOptions(const SensorModel& model, const SimOptions& o, int n_taxels) {
-  if (auto st = ValidateSensorModel(model); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(ValidateSensorModel(model));
   if (!(o.seconds > 0) || o.seconds > 3600)
     return absl::InvalidArgumentError(absl::StrCat("seconds: must be in (0, 3600], got ", o.seconds));
   if (!(o.rate > 0) || o.rate > 100000)
@@ -344,7 +345,7 @@ void SampleOutputs(const SensorModel& model, const SimOptions& o, const std::vec
 
 absl::StatusOr<SimRun> SimulateSensor(const SensorModel& model, const SimOptions& o) {
   const std::vector<Taxel> taxels = DefaultFingertip();
-  if (auto st = ValidateSimOptions(model, o, static_cast<int>(taxels.size())); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(ValidateSimOptions(model, o, static_cast<int>(taxels.size())));
   std::mt19937_64 rng(o.seed);
   const ForceProfile profile = DrawForceProfile(o, rng);
   const std::vector<double> weight = ContactWeights(taxels, o);
@@ -372,7 +373,7 @@ absl::Status WriteSimRun(const SimRun& run, const std::string& dir) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) return absl::InternalError(absl::StrCat(dir, ": cannot create directory: ", ec.message()));
-  if (absl::Status s = io::WriteTextFile(dir + "/run.csv", SimRunCsv(run)); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(io::WriteTextFile(dir + "/run.csv", SimRunCsv(run)));
   std::string fingertip = "t,force,px,py,pz,nx,ny,nz\n";
   for (size_t i = 0; i < run.t.size(); ++i) {
     const auto& f = run.fingertip[i];
@@ -380,7 +381,7 @@ absl::Status WriteSimRun(const SimRun& run, const std::string& dir) {
                           f.location.x(), f.location.y(), f.location.z(), f.normal.x(), f.normal.y(),
                           f.normal.z());
   }
-  if (absl::Status s = io::WriteTextFile(dir + "/fingertip.csv", fingertip); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(io::WriteTextFile(dir + "/fingertip.csv", fingertip));
   SensorModel m = run.model;
   if (m.source.empty()) m.source = "simulated (true model)";
   return SaveSensorModel(m, dir + "/model.json");

@@ -17,6 +17,7 @@
 #include "tactforce/io/json.h"
 #include "tactforce/io/suggest.h"
 #include "tactforce/io/text_file.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::sim {
 namespace {
@@ -54,9 +55,9 @@ absl::Status ValidateTaxelRanges(const TaxelRanges& r, const std::string& prefix
           absl::StrFormat("%s%s: must be >= %s (%g), got %g", prefix, hi_name, lo_name, lo, hi));
     return absl::OkStatus();
   };
-  if (auto s = ordered("threshold_min", r.threshold_min, "threshold_max", r.threshold_max); !s.ok()) return s;
-  if (auto s = ordered("force_error_min", r.force_error_min, "force_error_max", r.force_error_max); !s.ok()) return s;
-  if (auto s = ordered("noise_min", r.noise_min, "noise_max", r.noise_max); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(ordered("threshold_min", r.threshold_min, "threshold_max", r.threshold_max));
+  TF_RETURN_IF_ERROR(ordered("force_error_min", r.force_error_min, "force_error_max", r.force_error_max));
+  TF_RETURN_IF_ERROR(ordered("noise_min", r.noise_min, "noise_max", r.noise_max));
   if (!(r.saturation > r.threshold_max))
     return absl::InvalidArgumentError(absl::StrFormat("%ssaturation: must exceed threshold_max (%g N), got %g",
                                                       prefix, r.threshold_max, r.saturation));
@@ -223,7 +224,7 @@ TaxelArray::TaxelArray(const TaxelRanges& r, uint64_t seed, const FingertipGeome
 
 absl::StatusOr<TaxelArray> TaxelArray::Create(const TaxelRanges& ranges, uint64_t seed,
                                               const FingertipGeometry& geometry) {
-  if (absl::Status s = ValidateTaxelRanges(ranges); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(ValidateTaxelRanges(ranges));
   if (!(geometry.radius > 0) || !(geometry.body_length >= 0))
     return absl::InvalidArgumentError("geometry: radius must be > 0 and body_length >= 0");
   return TaxelArray(ranges, seed, geometry);

@@ -23,6 +23,7 @@
 #include "tactforce/estimator/friction.h"
 #include "tactforce/inertia/simulate.h"
 #include "tactforce/planner/examples.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::api {
 namespace {
@@ -119,7 +120,7 @@ v1::FitInertiaRequest Inertia() {
 
 absl::StatusOr<v1::FitInertiaResponse> HandleInertia(const v1::FitInertiaRequest& request) {
   InertiaStream stream;
-  if (absl::Status s = stream.Add(request); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(stream.Add(request));
   return stream.Fit();
 }
 

@@ -22,6 +22,7 @@
 #include "tactforce/api/inertia.h"
 #include "tactforce/api/json.h"
 #include "tactforce/inertia/simulate.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::cli_testing {
 namespace {
@@ -295,7 +296,7 @@ class XmlParser {
     if (text_.substr(at_, 5) == "<?xml") at_ = text_.find("?>", at_) + 2;
     Skip();
     XmlElement root;
-    if (absl::Status s = Element(&root); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(Element(&root));
     Skip();
     if (at_ != text_.size()) return Error("content after the root element");
     return root;
@@ -341,7 +342,7 @@ class XmlParser {
     ++at_;
     e->name = Name();
     if (e->name.empty()) return Error("element without a name");
-    if (absl::Status s = Attributes(e); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(Attributes(e));
     if (text_[at_] == '/') {
       at_ += 2;  // "/>"
       return text_[at_ - 1] == '>' ? absl::OkStatus() : Error("bad empty-element tag");
@@ -363,7 +364,7 @@ class XmlParser {
         return absl::OkStatus();
       } else {
         e->children.emplace_back();
-        if (absl::Status s = Element(&e->children.back()); !s.ok()) return s;
+        TF_RETURN_IF_ERROR(Element(&e->children.back()));
       }
     }
   }

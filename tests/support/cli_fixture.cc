@@ -18,6 +18,7 @@
 #include "tactforce/api/convert.h"
 #include "tactforce/api/json.h"
 #include "tactforce/planner/random_grasps.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::testing {
 namespace fs = std::filesystem;
@@ -97,7 +98,7 @@ absl::StatusOr<google::protobuf::Struct> ParseJsonObject(const std::string& text
 
 absl::StatusOr<v1::PlanResponse> ParsePlanResponse(const std::string& text) {
   v1::PlanResponse response;
-  if (absl::Status s = api::ParseJson(text, &response); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(api::ParseJson(text, &response));
   return response;
 }
 

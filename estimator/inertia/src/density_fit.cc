@@ -17,6 +17,7 @@
 #include "gls.h"
 #include "internal.h"
 #include "tactforce/inertia/pseudo_inertia.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::inertia::internal {
 namespace {
@@ -235,7 +236,7 @@ absl::Status DensityRound(const GlsData& gls, const DensityBasis& b, const Regio
   AccumulateGls(gls, st->pi, poll, &st->total, folds, &st->blocks, last ? &st->whiteners : nullptr);
   if (poll->stopped()) return Interrupted();
   if (round == 0) {
-    if (absl::Status s = CheckComInBoundingBox(st->total, b.parameter_scale, o); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(CheckComInBoundingBox(st->total, b.parameter_scale, o));
   }
   bool corrected = false;
   const Matrix10d A = BiasCorrected(st->total, b.parameter_scale, &corrected);

@@ -28,6 +28,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "tactforce/io/svg.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::inertia {
 namespace {
@@ -484,7 +485,7 @@ double KeyHeight(const InertiaFit& fit, const std::vector<Marker>& markers) {
 
 absl::StatusOr<std::string> DensityPlotSvg(const io::TriangleMesh& mesh, const InertiaFit& fit,
                                            const DensityPlotOptions& options) {
-  if (absl::Status s = CheckInputs(mesh, fit); !s.ok()) return s;
+  TF_RETURN_IF_ERROR(CheckInputs(mesh, fit));
   const PrincipalGeometry geometry = InPrincipalFrame(mesh, fit, options);
   Layout layout = PlaceViews(geometry);
   const io::ColorRamp ramp = io::ColorRamp::Viridis();

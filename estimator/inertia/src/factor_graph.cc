@@ -33,6 +33,7 @@
 #include "absl/strings/str_format.h"
 #include "internal.h"
 #include "tactforce/inertia/pseudo_inertia.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::inertia::internal {
 namespace {
@@ -721,7 +722,7 @@ absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const Inert
   out.notes.push_back(VariantNote(o));
   out.notes.push_back("kinematics: three consecutive poses per dynamics factor (eq. 10-17)");
   if (s.HasKinematics()) out.notes.push_back("measured kinematics ignored by factor-graph (poses only, as the paper)");
-  if (absl::Status st = CheckRotationSteps(s, &poll); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(CheckRotationSteps(s, &poll));
 
   const std::vector<KinPoint> kin = FiniteDifferenceKinematics(s, o.gravity, &poll);
   const InitialInertial init = InitialFromForces(s, o, hull, kin, &poll);

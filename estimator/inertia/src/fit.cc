@@ -21,6 +21,7 @@
 #include "tactforce/inertia/hull.h"
 #include "tactforce/inertia/metrics.h"
 #include "tactforce/inertia/samples.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::inertia {
 
@@ -78,11 +79,11 @@ absl::Status CheckPositive(double v, const char* name) {
 std::string Vec(const Vec3& v) { return absl::StrFormat("(%.6g, %.6g, %.6g)", v.x(), v.y(), v.z()); }
 
 absl::Status ValidateMeshOptions(const InertiaOptions& o) {
-  if (absl::Status st = CheckSigma(o.constrained.mesh_prior_weight, "mesh_prior_weight"); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(CheckSigma(o.constrained.mesh_prior_weight, "mesh_prior_weight"));
   if (!std::isfinite(o.density.regularization))
     return absl::InvalidArgumentError("density_regularization: must be finite (< 0 = automatic)");
   if (o.density.folds < 2) return absl::InvalidArgumentError("density.folds: must be >= 2");
-  if (absl::Status st = CheckSigma(o.density.mesh_tolerance, "mesh_tolerance"); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(CheckSigma(o.density.mesh_tolerance, "mesh_tolerance"));
   if (o.density.regions.target_regions < 1 || o.density.regions.target_regions > kMaxTargetRegions)
     return absl::InvalidArgumentError(absl::StrCat("regions.target_regions: must be in 1..", kMaxTargetRegions,
                                                    " (got ", o.density.regions.target_regions, ")"));
@@ -119,7 +120,7 @@ absl::Status ValidateInertiaOptions(const InertiaOptions& o) {
       {n.linear_acceleration_sigma, "noise.linear_acceleration_sigma"},
       {n.angular_acceleration_sigma, "noise.angular_acceleration_sigma"}};
   for (const auto& [v, name] : sigmas)
-    if (absl::Status st = CheckSigma(v, name); !st.ok()) return st;
+    TF_RETURN_IF_ERROR(CheckSigma(v, name));
   const BaselineLsOptions& ls = o.baseline_ls;
   if (ls.savitzky_golay && (ls.savitzky_golay_window < 5 || ls.savitzky_golay_window % 2 == 0))
     return absl::InvalidArgumentError(absl::StrCat("savitzky_golay_window: must be odd and >= 5 (got ",
@@ -141,10 +142,10 @@ absl::Status ValidateInertiaOptions(const InertiaOptions& o) {
       {fg.min_orientation_sigma, "factor_graph.min_orientation_sigma"},
       {fg.constraint_sigma, "factor_graph.constraint_sigma"}};
   for (const auto& [v, name] : pos)
-    if (absl::Status st = CheckPositive(v, name); !st.ok()) return st;
+    TF_RETURN_IF_ERROR(CheckPositive(v, name));
   if (!(o.excitation_threshold >= 0 && o.excitation_threshold < 1))
     return absl::InvalidArgumentError("excitation_threshold: must be in [0, 1)");
-  if (absl::Status st = ValidateMeshOptions(o); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(ValidateMeshOptions(o));
   std::optional<ConvexHull> hull;
   if (!o.hull.empty()) {
     absl::StatusOr<ConvexHull> h = ComputeConvexHull(o.hull);
@@ -157,11 +158,11 @@ absl::Status ValidateInertiaOptions(const InertiaOptions& o) {
         "prior: the factor-graph variant fg-c-g needs a prior (the geodesic prior factor B); give one or use fg-c");
   if (o.prior) {
     const InertialParameters& p = o.prior->params;
-    if (absl::Status st = CheckPositive(p.mass, "prior.mass"); !st.ok()) return st;
+    TF_RETURN_IF_ERROR(CheckPositive(p.mass, "prior.mass"));
     if (!p.com.allFinite()) return absl::InvalidArgumentError("prior.com: not finite");
     for (double v : p.inertia_com.ToArray())
       if (!std::isfinite(v)) return absl::InvalidArgumentError("prior.inertia: not finite");
-    if (absl::Status st = CheckSigma(o.prior->weight, "prior.weight"); !st.ok()) return st;
+    TF_RETURN_IF_ERROR(CheckSigma(o.prior->weight, "prior.weight"));
     if (!IsPhysicallyConsistent(p))
       return absl::InvalidArgumentError(
           "prior: not physically consistent (its pseudo-inertia is not positive definite: check "
@@ -423,8 +424,8 @@ absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in, const In
   const auto start = std::chrono::steady_clock::now();
   const double cpu_start = ThreadCpuSeconds();
   internal::InterruptPoll poll(options.interrupt);
-  if (absl::Status st = internal::ValidateInertiaSamples(samples_in, &poll); !st.ok()) return st;
-  if (absl::Status st = ValidateInertiaOptions(options); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(internal::ValidateInertiaSamples(samples_in, &poll));
+  TF_RETURN_IF_ERROR(ValidateInertiaOptions(options));
   const int need = MinimumSamples(samples_in, options.method);
   if (static_cast<int>(samples_in.samples.size()) < need) {
     return absl::InvalidArgumentError(absl::StrCat(

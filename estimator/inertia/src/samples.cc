@@ -20,6 +20,7 @@
 #include "tactforce/io/text_file.h"
 #include "tactforce/planner/validation.h"
 #include "internal.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::inertia {
 namespace {
@@ -215,7 +216,7 @@ absl::Status DetectForceSource(const io::CsvTable& table, InertiaSamples* out) {
         "_...) are present; give one force source"));
   }
   if (any_wrench) {
-    if (absl::Status st = table.Require(kWrenchColumns); !st.ok()) return st;
+    TF_RETURN_IF_ERROR(table.Require(kWrenchColumns));
     out->source = ForceSource::kWrench;
     return absl::OkStatus();
   }
@@ -377,10 +378,10 @@ absl::Status ValidateInertiaSamples(const InertiaSamples& s, InterruptPoll* poll
   for (int i = 0; i < static_cast<int>(s.samples.size()); ++i) {
     if (poll->Tick()) return Interrupted();
     const InertiaSample& x = s.samples[i];
-    if (absl::Status st = ValidatePose(loc, s, i); !st.ok()) return st;
+    TF_RETURN_IF_ERROR(ValidatePose(loc, s, i));
     absl::Status forces = s.source == ForceSource::kWrench ? ValidateWrench(loc, x, i) : ValidateContacts(loc, s, i);
     if (!forces.ok()) return forces;
-    if (absl::Status st = ValidateKinematics(loc, x, i, kin); !st.ok()) return st;
+    TF_RETURN_IF_ERROR(ValidateKinematics(loc, x, i, kin));
   }
   return absl::OkStatus();
 }
@@ -404,18 +405,18 @@ InertiaSamples NormalizedCopy(const InertiaSamples& s, InterruptPoll* poll) {
 
 absl::StatusOr<InertiaSamples> InertiaSamplesFromCsv(const io::CsvTable& table) {
   const std::string& src = table.source;
-  if (absl::Status st = table.Require(kPoseColumns); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(table.Require(kPoseColumns));
   InertiaSamples out;
   out.source_name = src;
-  if (absl::Status st = DetectForceSource(table, &out); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(DetectForceSource(table, &out));
   absl::StatusOr<KinematicsColumns> kin = DetectKinematics(table);
   if (!kin.ok()) return kin.status();
   const RowLayout layout = LayoutRows(table, out, *kin);
   out.samples.reserve(table.rows.size());
   out.line_numbers = table.line_numbers;
   for (const std::vector<double>& row : table.rows) out.samples.push_back(ReadRow(row, layout, out.source));
-  if (absl::Status st = RejectNan(table); !st.ok()) return st;
-  if (absl::Status st = ValidateInertiaSamples(out); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(RejectNan(table));
+  TF_RETURN_IF_ERROR(ValidateInertiaSamples(out));
   const int need = MinimumSamples(out, InertiaMethod::kBaselineLs);  // the least of the methods
   if (static_cast<int>(out.samples.size()) < need) {
     return absl::InvalidArgumentError(absl::StrCat(

@@ -15,6 +15,7 @@
 #include "tactforce/inertia/metrics.h"
 #include "tactforce/inertia/samples.h"
 #include "tactforce/planner/trajectory.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::inertia {
 
@@ -242,7 +243,7 @@ void AddNoise(InertiaSamples& samples, const SimulationNoise& noise, uint64_t se
 }
 
 absl::StatusOr<SimulationResult> SimulateInertia(const SimulationOptions& o) {
-  if (absl::Status st = ValidateSimulationOptions(o); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(ValidateSimulationOptions(o));
   SimulatedObject object;
   if (o.custom) {
     object = *o.custom;
@@ -301,7 +302,7 @@ absl::StatusOr<SimulationResult> SimulateInertia(const SimulationOptions& o) {
     }
   }
   if (in_hand) {
-    if (absl::Status st = AddInHandForces(traj, object, o, &s); !st.ok()) return st;
+    TF_RETURN_IF_ERROR(AddInHandForces(traj, object, o, &s));
   }
   std::mt19937_64 rng(o.seed);
   for (InertiaSample& x : s.samples) NoisySample(rng, o.noise, s.source, x);
@@ -310,7 +311,7 @@ absl::StatusOr<SimulationResult> SimulateInertia(const SimulationOptions& o) {
 
 absl::Status WriteSimulation(const SimulationResult& r, const std::string& csv_path,
                              const std::string& truth_path) {
-  if (absl::Status st = WriteInertiaCsvFile(r.samples, csv_path); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(WriteInertiaCsvFile(r.samples, csv_path));
   return WriteTruthJsonFile(r.truth, truth_path);
 }
 

@@ -8,6 +8,7 @@
 #include "absl/strings/str_cat.h"
 #include "tactforce/io/json.h"
 #include "tactforce/io/text_file.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::inertia {
 
@@ -41,9 +42,9 @@ absl::StatusOr<InertiaTruth> ParseTruthJson(const std::string& text, const std::
   if (!(m->number() > 0)) return key_error("mass", "must be > 0");
   truth.params.mass = m->number();
   std::vector<double> com, inertia, g;
-  if (absl::Status st = array("com", 3, true, &com); !st.ok()) return st;
-  if (absl::Status st = array("inertia_com", 6, true, &inertia); !st.ok()) return st;
-  if (absl::Status st = array("gravity_world", 3, false, &g); !st.ok()) return st;
+  TF_RETURN_IF_ERROR(array("com", 3, true, &com));
+  TF_RETURN_IF_ERROR(array("inertia_com", 6, true, &inertia));
+  TF_RETURN_IF_ERROR(array("gravity_world", 3, false, &g));
   truth.params.com = Vec3(com[0], com[1], com[2]);
   truth.params.inertia_com =
       InertiaTensor::FromArray({inertia[0], inertia[1], inertia[2], inertia[3], inertia[4], inertia[5]});

@@ -15,6 +15,7 @@
 #include "absl/status/statusor.h"
 #include "google/protobuf/message.h"
 #include "tactforce/v1/planner.pb.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::api {
 
@@ -40,7 +41,7 @@ absl::Status CheckFiniteAnswer(const v1::PlanResponse& response);
 template <typename Response>
 absl::StatusOr<Response> FiniteAnswer(absl::StatusOr<Response> response) {
   if (response.ok()) {
-    if (absl::Status s = CheckFiniteAnswer(*response); !s.ok()) return s;
+    TF_RETURN_IF_ERROR(CheckFiniteAnswer(*response));
   }
   return response;
 }
