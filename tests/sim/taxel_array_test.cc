@@ -104,7 +104,7 @@ TEST(TaxelArray, PressGivesOneJumpPerTaxelCrossingThreshold) {
     std::vector<double> prev_load(42, 0.0);
     const int steps = 20000;
     for (int k = 1; k <= steps; ++k) {
-      const TaxelArrayReading& out = a->Step(k * 1e-4, kApex, (6.0 * k / steps) * dir);
+      const TaxelArrayReading& out = a->Step(k * 1e-4, kApex, (12.0 * k / steps) * dir);
       const double sum = out.fingertip.force;
       int new_active = 0;
       double jump_of_new = 0;
