@@ -36,7 +36,12 @@ void BM_Audit(benchmark::State& state) {
   }
   state.counters["causes"] = static_cast<double>(causes);
 }
-BENCHMARK(BM_Audit)->Args({1000, 0})->Args({3000, 0})->Args({3000, 1})->Args({10000, 1})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Audit)
+    ->Args({1000, 0})
+    ->Args({3000, 0})
+    ->Args({3000, 1})
+    ->Args({10000, 1})
+    ->Unit(benchmark::kMillisecond);
 
 void BM_Simulate(benchmark::State& state) {
   sim::SensorModel m;

@@ -42,7 +42,8 @@ std::vector<Case> MakeCases(int count, bool with_extrinsic) {
   std::vector<Case> out;
   while (static_cast<int>(out.size()) < count) {
     planner::RandomGrasp g = planner::MakeRandomGrasp(rng, ro);
-    for (auto& c : g.problem.contacts) c.sigma = c.kind == planner::ContactKind::kIntrinsic ? 0.3 : 0.0;
+    for (auto& c : g.problem.contacts)
+      c.sigma = c.kind == planner::ContactKind::kIntrinsic ? 0.3 : 0.0;
     int intrinsic = 0;
     for (auto& c : g.problem.contacts) intrinsic += c.kind == planner::ContactKind::kIntrinsic;
     if (intrinsic == 0) continue;
@@ -116,7 +117,8 @@ void BM_Estimate(benchmark::State& state, estimator::EstimateMethod method, bool
   std::sort(per_case.begin(), per_case.end());
   size_t i = 0;
   for (auto _ : state) {
-    auto e = estimator::EstimateForces(cases[i % cases.size()].problem, cases[i % cases.size()].readings, o);
+    auto e = estimator::EstimateForces(cases[i % cases.size()].problem,
+                                       cases[i % cases.size()].readings, o);
     benchmark::DoNotOptimize(e);
     ++i;
   }

@@ -39,9 +39,9 @@ void BM_GraspTrial(benchmark::State& state, GraspObject object, Feedback feedbac
   state.counters["sim_s_per_trial"] = trial > 0 ? sim / trial : 0.0;
 }
 
-#define TACTFORCE_GRASP_BENCH(object, name)                                                      \
-  BENCHMARK_CAPTURE(BM_GraspTrial, name##_raw, GraspObject::object, Feedback::kRaw)              \
-      ->Unit(benchmark::kMillisecond);                                                           \
+#define TACTFORCE_GRASP_BENCH(object, name)                                                     \
+  BENCHMARK_CAPTURE(BM_GraspTrial, name##_raw, GraspObject::object, Feedback::kRaw)             \
+      ->Unit(benchmark::kMillisecond);                                                          \
   BENCHMARK_CAPTURE(BM_GraspTrial, name##_estimated, GraspObject::object, Feedback::kEstimated) \
       ->Unit(benchmark::kMillisecond)
 

@@ -32,7 +32,8 @@ std::pair<double, double> Score(double noise, double ramp, PreSlipForce mode) {
     auto e = EstimateFriction(data.trials, o);
     std::vector<double> err;
     if (e.ok()) {
-      for (const auto& t : e->trials) err.push_back(t.valid && t.slipped ? std::abs(t.mu - sim.mu) : 1.0);
+      for (const auto& t : e->trials)
+        err.push_back(t.valid && t.slipped ? std::abs(t.mu - sim.mu) : 1.0);
     }
     std::sort(err.begin(), err.end());
     const double med = err.empty() ? 1.0 : 0.5 * (err[4] + err[5]);
@@ -46,8 +47,12 @@ std::pair<double, double> Score(double noise, double ramp, PreSlipForce mode) {
 }  // namespace
 
 int main() {
-  std::printf("Median |mu error| (pooled over mu = 0.2..1.0, 10 trials each; worst surface's median in brackets)\n\n");
-  std::printf("| force noise (N) | ramp (N/s) | window average (paper) | linear fit (ours) |\n|---:|---:|---:|---:|\n");
+  std::printf(
+      "Median |mu error| (pooled over mu = 0.2..1.0, 10 trials each; worst surface's median in "
+      "brackets)\n\n");
+  std::printf(
+      "| force noise (N) | ramp (N/s) | window average (paper) | linear fit (ours) "
+      "|\n|---:|---:|---:|---:|\n");
   for (double noise : {0.01, 0.05, 0.1}) {
     for (double ramp : {0.25, 0.5, 1.0, 2.0}) {
       const auto a = Score(noise, ramp, PreSlipForce::kWindowAverage);

@@ -98,15 +98,16 @@ InertiaOptions Options(InertiaMethod m, const SimulationNoise& n, bool give_kine
   return o;
 }
 
-void Run(const InertiaSamples& s, const InertialParameters& truth, const InertiaOptions& base, double size,
-         Stats (&stats)[3], bool fg) {
+void Run(const InertiaSamples& s, const InertialParameters& truth, const InertiaOptions& base,
+         double size, Stats (&stats)[3], bool fg) {
   for (int i = 0; i < 3; ++i) {
     if (kMethods[i] == InertiaMethod::kFactorGraph && !fg) continue;
     InertiaOptions o = base;
     o.method = kMethods[i];
     absl::StatusOr<InertiaFit> f = FitInertia(s, o);
     if (!f.ok()) {
-      std::fprintf(stderr, "fit failed (%s): %s\n", ToString(kMethods[i]), std::string(f.status().message()).c_str());
+      std::fprintf(stderr, "fit failed (%s): %s\n", ToString(kMethods[i]),
+                   std::string(f.status().message()).c_str());
       ++stats[i].failed;
       continue;
     }
@@ -136,27 +137,42 @@ int main(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (k == "--runs") a.runs = std::max(1, std::atoi(next()));
-    else if (k == "--tool-runs") a.tool_runs = std::max(1, std::atoi(next()));
-    else if (k == "--duration") a.duration = std::atof(next());
-    else if (k == "--tools") a.tools = next();
-    else if (k == "--no-tools") a.no_tools = true;
-    else if (k == "--no-factor-graph") a.fg = false;
-    else if (k == "--ablation-seeds") a.ablation_seeds = std::max(0, std::atoi(next()));
+    if (k == "--runs")
+      a.runs = std::max(1, std::atoi(next()));
+    else if (k == "--tool-runs")
+      a.tool_runs = std::max(1, std::atoi(next()));
+    else if (k == "--duration")
+      a.duration = std::atof(next());
+    else if (k == "--tools")
+      a.tools = next();
+    else if (k == "--no-tools")
+      a.no_tools = true;
+    else if (k == "--no-factor-graph")
+      a.fg = false;
+    else if (k == "--ablation-seeds")
+      a.ablation_seeds = std::max(0, std::atoi(next()));
     else {
       std::fprintf(stderr,
-                   "usage: inertia_bench [--runs N] [--tool-runs N] [--duration S] [--tools DIR] [--no-tools] "
+                   "usage: inertia_bench [--runs N] [--tool-runs N] [--duration S] [--tools DIR] "
+                   "[--no-tools] "
                    "[--no-factor-graph] [--ablation-seeds N]\n");
       return 2;
     }
   }
 
   // ---------------------------------------------------------------- 1
-  std::printf("## seed-table1, in-hand (4 fingertips, planner forces), %.0f s at 100 Hz, %d runs per row\n\n",
-              a.duration, a.runs);
-  std::printf("Force noise on every contact force component (variance in N^2); poses noise-free, kinematics from "
-              "poses. Mean over runs; Riemannian over consistent runs (count of inconsistent ones in brackets).\n\n");
-  std::printf("| var (N^2) | method | paper metric | Riemannian | mass %% | CoM mm | consistent | CPU ms | x LS |\n");
+  std::printf(
+      "## seed-table1, in-hand (4 fingertips, planner forces), %.0f s at 100 Hz, %d runs per "
+      "row\n\n",
+      a.duration, a.runs);
+  std::printf(
+      "Force noise on every contact force component (variance in N^2); poses noise-free, "
+      "kinematics from "
+      "poses. Mean over runs; Riemannian over consistent runs (count of inconsistent ones in "
+      "brackets).\n\n");
+  std::printf(
+      "| var (N^2) | method | paper metric | Riemannian | mass %% | CoM mm | consistent | CPU ms | "
+      "x LS |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|\n");
   struct TargetRow {
     double var, ratio;
@@ -174,7 +190,8 @@ int main(int argc, char** argv) {
       so.seed = 1000 + r;
       absl::StatusOr<SimulationResult> sim = SimulateInertia(so);
       if (!sim.ok()) {
-        std::fprintf(stderr, "simulation failed: %s\n", std::string(sim.status().message()).c_str());
+        std::fprintf(stderr, "simulation failed: %s\n",
+                     std::string(sim.status().message()).c_str());
         return 1;
       }
       samples_1000 = static_cast<int>(sim->samples.samples.size());
@@ -185,32 +202,41 @@ int main(int argc, char** argv) {
     const double ls_cpu = Mean(st[0].cpu);
     for (int i = 0; i < 3; ++i) {
       if (st[i].runs == 0) continue;
-      std::printf("| %s | %s | %s | %s | %s | %s | %d/%d | %s | %s |\n", Fmt(var).c_str(), ToString(kMethods[i]),
-                  Fmt(Mean(st[i].paper)).c_str(), Riem(st[i]).c_str(), Fmt(Mean(st[i].mass)).c_str(),
-                  Fmt(Mean(st[i].com_mm)).c_str(), st[i].consistent, st[i].runs, Fmt(1e3 * Mean(st[i].cpu)).c_str(),
+      std::printf("| %s | %s | %s | %s | %s | %s | %d/%d | %s | %s |\n", Fmt(var).c_str(),
+                  ToString(kMethods[i]), Fmt(Mean(st[i].paper)).c_str(), Riem(st[i]).c_str(),
+                  Fmt(Mean(st[i].mass)).c_str(), Fmt(Mean(st[i].com_mm)).c_str(), st[i].consistent,
+                  st[i].runs, Fmt(1e3 * Mean(st[i].cpu)).c_str(),
                   Fmt(Mean(st[i].cpu) / ls_cpu, "%.1f").c_str());
     }
     if (st[1].runs > 0 && st[2].runs > 0)
-      targets.push_back({var, Mean(st[2].paper) / Mean(st[1].paper), st[2].consistent == st[2].runs});
+      targets.push_back(
+          {var, Mean(st[2].paper) / Mean(st[1].paper), st[2].consistent == st[2].runs});
     cpu_constrained_1000 = Mean(st[2].cpu);
     wall_constrained_1000 = Mean(st[2].wall);
   }
-  std::printf("\nPaper Table I (best variant, for orientation): paper metric 0.39, 0.55, 1.26, 1.13, 1.05 at "
-              "variances 0, 0.1, 0.25, 0.5, 1.0; baselines about 4-5.\n\n");
+  std::printf(
+      "\nPaper Table I (best variant, for orientation): paper metric 0.39, 0.55, 1.26, 1.13, 1.05 "
+      "at "
+      "variances 0, 0.1, 0.25, 0.5, 1.0; baselines about 4-5.\n\n");
   std::printf("Target (CONSTRAINED paper metric <= 1/5 of FACTOR_GRAPH's, 100 %% consistent):\n\n");
   std::printf("| var (N^2) | CONSTRAINED / FACTOR_GRAPH | consistent | met |\n|---|---|---|---|\n");
   for (const TargetRow& t : targets)
-    std::printf("| %s | %s | %s | %s |\n", Fmt(t.var).c_str(), Fmt(t.ratio).c_str(), t.consistent ? "100 %" : "no",
-                t.ratio <= 0.2 && t.consistent ? "yes" : "NO");
+    std::printf("| %s | %s | %s | %s |\n", Fmt(t.var).c_str(), Fmt(t.ratio).c_str(),
+                t.consistent ? "100 %" : "no", t.ratio <= 0.2 && t.consistent ? "yes" : "NO");
   std::printf("\nSpeed: CONSTRAINED on %d samples: %s ms CPU (%s ms wall).\n\n", samples_1000,
               Fmt(1e3 * cpu_constrained_1000).c_str(), Fmt(1e3 * wall_constrained_1000).c_str());
 
   // ---------------------------------------------------------------- 1b
   {
-    std::printf("## seed-table1, in-hand, errors in forces AND poses, %d runs per row\n\n", a.tool_runs);
-    std::printf("Force variance 0.25 N^2 plus pose noise (position sigma, orientation sigma); the fits are given the "
-                "noise levels (BASELINE_LS with and without Savitzky-Golay smoothing).\n\n");
-    std::printf("| pose noise | method | paper metric | Riemannian | mass %% | CoM mm | consistent | CPU ms | x LS |\n");
+    std::printf("## seed-table1, in-hand, errors in forces AND poses, %d runs per row\n\n",
+                a.tool_runs);
+    std::printf(
+        "Force variance 0.25 N^2 plus pose noise (position sigma, orientation sigma); the fits are "
+        "given the "
+        "noise levels (BASELINE_LS with and without Savitzky-Golay smoothing).\n\n");
+    std::printf(
+        "| pose noise | method | paper metric | Riemannian | mass %% | CoM mm | consistent | CPU "
+        "ms | x LS |\n");
     std::printf("|---|---|---|---|---|---|---|---|---|\n");
     for (const auto& [ps, rs] : {std::pair{1e-4, 1e-3}, std::pair{5e-4, 5e-3}}) {
       Stats st[3], sg;
@@ -235,8 +261,9 @@ int main(int argc, char** argv) {
       const double ls_cpu = Mean(st[0].cpu);
       const std::string label = Fmt(ps * 1e3) + " mm, " + Fmt(rs * 1e3) + " mrad";
       auto row = [&](const char* name, const Stats& x) {
-        std::printf("| %s | %s | %s | %s | %s | %s | %d/%d | %s | %s |\n", label.c_str(), name, Fmt(Mean(x.paper)).c_str(),
-                    Riem(x).c_str(), Fmt(Mean(x.mass)).c_str(), Fmt(Mean(x.com_mm)).c_str(), x.consistent, x.runs,
+        std::printf("| %s | %s | %s | %s | %s | %s | %d/%d | %s | %s |\n", label.c_str(), name,
+                    Fmt(Mean(x.paper)).c_str(), Riem(x).c_str(), Fmt(Mean(x.mass)).c_str(),
+                    Fmt(Mean(x.com_mm)).c_str(), x.consistent, x.runs,
                     Fmt(1e3 * Mean(x.cpu)).c_str(), Fmt(Mean(x.cpu) / ls_cpu, "%.1f").c_str());
       };
       row("baseline-ls", st[0]);
@@ -249,14 +276,20 @@ int main(int argc, char** argv) {
 
   // ---------------------------------------------------------------- 2, 3
   auto wrist_table = [&](const std::string& title, const std::vector<std::string>& names,
-                         const std::vector<InertiaSamples>& data, const std::vector<InertialParameters>& truths,
+                         const std::vector<InertiaSamples>& data,
+                         const std::vector<InertialParameters>& truths,
                          const std::vector<Vec3>& gravities, int runs) {
     std::printf("## %s, %d runs per row\n\n", title.c_str(), runs);
-    std::printf("Noise (Nadeau et al. 2023) on measured accelerations and the wrench; the fits are given the noise "
-                "levels. CoM error in %% of the object's size (longest edge of the uniform box with the same "
-                "inertia).\n\n");
-    std::printf("| level | object | method | mass %% | CoM %% size | Riemannian | paper metric | consistent | CPU ms | "
-                "x LS |\n|---|---|---|---|---|---|---|---|---|---|\n");
+    std::printf(
+        "Noise (Nadeau et al. 2023) on measured accelerations and the wrench; the fits are given "
+        "the noise "
+        "levels. CoM error in %% of the object's size (longest edge of the uniform box with the "
+        "same "
+        "inertia).\n\n");
+    std::printf(
+        "| level | object | method | mass %% | CoM %% size | Riemannian | paper metric | "
+        "consistent | CPU ms | "
+        "x LS |\n|---|---|---|---|---|---|---|---|---|---|\n");
     bool all_met = true;
     for (const char* level : {"low", "moderate", "high"}) {
       const SimulationNoise noise = *NadeauNoise(level);
@@ -274,18 +307,22 @@ int main(int argc, char** argv) {
         const double ls_cpu = Mean(st[0].cpu);
         for (int i = 0; i < 3; ++i) {
           if (st[i].runs == 0) continue;
-          std::printf("| %s | %s | %s | %s | %s | %s | %s | %d/%d | %s | %s |\n", level, names[j].c_str(),
-                      ToString(kMethods[i]), Fmt(Mean(st[i].mass)).c_str(), Fmt(Mean(st[i].com_pct)).c_str(),
-                      Riem(st[i]).c_str(), Fmt(Mean(st[i].paper)).c_str(), st[i].consistent, st[i].runs,
-                      Fmt(1e3 * Mean(st[i].cpu)).c_str(), Fmt(Mean(st[i].cpu) / ls_cpu, "%.1f").c_str());
+          std::printf("| %s | %s | %s | %s | %s | %s | %s | %d/%d | %s | %s |\n", level,
+                      names[j].c_str(), ToString(kMethods[i]), Fmt(Mean(st[i].mass)).c_str(),
+                      Fmt(Mean(st[i].com_pct)).c_str(), Riem(st[i]).c_str(),
+                      Fmt(Mean(st[i].paper)).c_str(), st[i].consistent, st[i].runs,
+                      Fmt(1e3 * Mean(st[i].cpu)).c_str(),
+                      Fmt(Mean(st[i].cpu) / ls_cpu, "%.1f").c_str());
         }
         if (std::string(level) == "moderate") {
           const Stats& c = st[2];
           const bool met = Mean(c.mass) < 1.0 && Mean(c.com_pct) < 1.0 &&
                            static_cast<int>(c.riem.size()) == c.runs && Mean(c.riem) < 0.5;
           all_met = all_met && met;
-          std::printf("| | | *target (moderate): mass < 1 %%, CoM < 1 %%, Riemannian < 0.5* | | | | | | | %s |\n",
-                      met ? "met" : "NOT met");
+          std::printf(
+              "| | | *target (moderate): mass < 1 %%, CoM < 1 %%, Riemannian < 0.5* | | | | | | | "
+              "%s |\n",
+              met ? "met" : "NOT met");
         }
       }
     }
@@ -311,7 +348,8 @@ int main(int argc, char** argv) {
       truths.push_back(sim->truth.params);
       g.push_back(so.gravity);
     }
-    wrist_table("Wrist sensor, simulated (100 Hz, measured kinematics)", names, data, truths, g, a.tool_runs);
+    wrist_table("Wrist sensor, simulated (100 Hz, measured kinematics)", names, data, truths, g,
+                a.tool_runs);
   }
   if (!a.no_tools) {
     std::vector<std::string> names;
@@ -332,8 +370,8 @@ int main(int argc, char** argv) {
       g.push_back(t->gravity_world.value_or(Vec3(0, 0, -9.81)));
     }
     if (!names.empty())
-      wrist_table("Wrist sensor, shared workshop tools (Nadeau et al. 2023 simulation, 100 Hz)", names, data, truths,
-                  g, a.tool_runs);
+      wrist_table("Wrist sensor, shared workshop tools (Nadeau et al. 2023 simulation, 100 Hz)",
+                  names, data, truths, g, a.tool_runs);
   }
   if (a.ablation_seeds > 0) {
     tactforce::experiment::AblationConfig c;

@@ -99,8 +99,9 @@ InertiaOptions NoisyOptions(const SimulationNoise& n) {
   return o;
 }
 
-void FitInto(const InertiaSamples& s, const InertialParameters& truth, InertiaOptions o, const Variant& v,
-             const std::shared_ptr<const io::TriangleMesh>& mesh, const std::string& mesh_name, Cell* cell) {
+void FitInto(const InertiaSamples& s, const InertialParameters& truth, InertiaOptions o,
+             const Variant& v, const std::shared_ptr<const io::TriangleMesh>& mesh,
+             const std::string& mesh_name, Cell* cell) {
   o.method = v.method;
   if (v.mesh) {
     o.mesh = mesh;
@@ -109,7 +110,8 @@ void FitInto(const InertiaSamples& s, const InertialParameters& truth, InertiaOp
   }
   absl::StatusOr<InertiaFit> f = FitInertia(s, o);
   if (!f.ok()) {
-    std::fprintf(stderr, "\n%s (%s): %s\n", mesh_name.c_str(), v.name, std::string(f.status().message()).c_str());
+    std::fprintf(stderr, "\n%s (%s): %s\n", mesh_name.c_str(), v.name,
+                 std::string(f.status().message()).c_str());
     ++cell->failed;
     return;
   }
@@ -121,7 +123,9 @@ void FitInto(const InertiaSamples& s, const InertialParameters& truth, InertiaOp
   cell->consistent += e.consistent;
   cell->realizable += f->density_realizable;
   cell->contradicted += f->mesh_contradicted;
-  if (f->region_model) cell->regions = std::to_string(f->region_model->regions.size()) + " " + ToString(f->region_model->scheme);
+  if (f->region_model)
+    cell->regions =
+        std::to_string(f->region_model->regions.size()) + " " + ToString(f->region_model->scheme);
   ++cell->runs;
 }
 
@@ -137,9 +141,12 @@ struct Tool {
 
 void ToolTable(const std::vector<Tool>& tools, const std::string& level, int seeds) {
   const SimulationNoise noise = *NadeauNoise(level);
-  std::printf("### Shared workshop tools, '%s' noise, %d seeds per tool (median over seeds)\n\n", level.c_str(), seeds);
-  std::printf("| tool | method | Riemannian | mass %% | CoM mm | consistent | realizable | contradicted | regions | "
-              "CPU ms |\n|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("### Shared workshop tools, '%s' noise, %d seeds per tool (median over seeds)\n\n",
+              level.c_str(), seeds);
+  std::printf(
+      "| tool | method | Riemannian | mass %% | CoM mm | consistent | realizable | contradicted | "
+      "regions | "
+      "CPU ms |\n|---|---|---|---|---|---|---|---|---|---|\n");
   std::vector<std::vector<double>> per_tool(kNumVariants);  // median Riemannian per tool
   std::vector<double> max_mass(kNumVariants, 0.0);
   std::vector<int> realizable(kNumVariants, 0), runs(kNumVariants, 0);
@@ -150,7 +157,8 @@ void ToolTable(const std::vector<Tool>& tools, const std::string& level, int see
       AddNoise(s, noise, 12000 + 101 * seed + t);
       InertiaOptions o = NoisyOptions(noise);
       o.gravity = tools[t].gravity;
-      for (int v = 0; v < kNumVariants; ++v) FitInto(s, tools[t].truth, o, kVariants[v], tools[t].mesh, tools[t].mesh_name, &cells[v]);
+      for (int v = 0; v < kNumVariants; ++v)
+        FitInto(s, tools[t].truth, o, kVariants[v], tools[t].mesh, tools[t].mesh_name, &cells[v]);
       std::fprintf(stderr, ".");
     }
     for (int v = 0; v < kNumVariants; ++v) {
@@ -159,17 +167,21 @@ void ToolTable(const std::vector<Tool>& tools, const std::string& level, int see
       max_mass[v] = std::max(max_mass[v], Median(c.mass));
       realizable[v] += c.realizable;
       runs[v] += c.runs;
-      std::printf("| %s | %s | %s | %s | %s | %d/%d | %d/%d | %d | %s | %s |\n", tools[t].name.c_str(), kVariants[v].name,
-                  Fmt(Median(c.riem)).c_str(), Fmt(Median(c.mass)).c_str(), Fmt(Median(c.com_mm)).c_str(),
-                  c.consistent, c.runs, c.realizable, c.runs, c.contradicted, c.regions.empty() ? "-" : c.regions.c_str(),
+      std::printf("| %s | %s | %s | %s | %s | %d/%d | %d/%d | %d | %s | %s |\n",
+                  tools[t].name.c_str(), kVariants[v].name, Fmt(Median(c.riem)).c_str(),
+                  Fmt(Median(c.mass)).c_str(), Fmt(Median(c.com_mm)).c_str(), c.consistent, c.runs,
+                  c.realizable, c.runs, c.contradicted, c.regions.empty() ? "-" : c.regions.c_str(),
                   Fmt(1e3 * Median(c.cpu)).c_str());
     }
   }
-  std::printf("\n| method | median over tools (Riemannian) | worst tool | worst mass %% | realizable |\n|---|---|---|---|---|\n");
+  std::printf(
+      "\n| method | median over tools (Riemannian) | worst tool | worst mass %% | realizable "
+      "|\n|---|---|---|---|---|\n");
   for (int v = 0; v < kNumVariants; ++v) {
-    std::printf("| %s | %s | %s | %s | %d/%d |\n", kVariants[v].name, Fmt(Median(per_tool[v])).c_str(),
-                Fmt(*std::max_element(per_tool[v].begin(), per_tool[v].end())).c_str(), Fmt(max_mass[v]).c_str(),
-                realizable[v], runs[v]);
+    std::printf("| %s | %s | %s | %s | %d/%d |\n", kVariants[v].name,
+                Fmt(Median(per_tool[v])).c_str(),
+                Fmt(*std::max_element(per_tool[v].begin(), per_tool[v].end())).c_str(),
+                Fmt(max_mass[v]).c_str(), realizable[v], runs[v]);
   }
   std::printf("\n");
 }
@@ -185,14 +197,21 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string k = argv[i];
     auto next = [&]() { return i + 1 < argc ? argv[++i] : ""; };
-    if (k == "--seeds") seeds = std::max(1, std::atoi(next()));
-    else if (k == "--tools") dir = next();
-    else if (k == "--levels") levels = absl::StrSplit(next(), ',');
-    else if (k == "--no-speed") speed = false;
-    else if (k == "--no-in-hand") in_hand = false;
+    if (k == "--seeds")
+      seeds = std::max(1, std::atoi(next()));
+    else if (k == "--tools")
+      dir = next();
+    else if (k == "--levels")
+      levels = absl::StrSplit(next(), ',');
+    else if (k == "--no-speed")
+      speed = false;
+    else if (k == "--no-in-hand")
+      in_hand = false;
     else {
-      std::fprintf(stderr, "usage: inertia_mesh_bench [--seeds N] [--tools DIR] [--levels low,moderate,high] "
-                           "[--no-speed] [--no-in-hand]\n");
+      std::fprintf(
+          stderr,
+          "usage: inertia_mesh_bench [--seeds N] [--tools DIR] [--levels low,moderate,high] "
+          "[--no-speed] [--no-in-hand]\n");
       return 2;
     }
   }
@@ -205,8 +224,11 @@ int main(int argc, char** argv) {
     absl::StatusOr<InertiaTruth> truth = ReadTruthJsonFile(dir + "/" + name + ".truth.json");
     absl::StatusOr<io::LoadedMesh> mesh = io::LoadMesh({dir + "/" + name + ".mesh.json"});
     if (!s.ok() || !truth.ok() || !mesh.ok()) {
-      std::printf("Shared tools skipped: %s\n\n",
-                  std::string((!s.ok() ? s.status() : !truth.ok() ? truth.status() : mesh.status()).message()).c_str());
+      std::printf("Shared tools skipped: %s\n\n", std::string((!s.ok()       ? s.status()
+                                                               : !truth.ok() ? truth.status()
+                                                                             : mesh.status())
+                                                                  .message())
+                                                      .c_str());
       tools.clear();
       break;
     }
@@ -224,10 +246,15 @@ int main(int argc, char** argv) {
   }
 
   if (in_hand) {
-    std::printf("## 2. In-hand data (4 fingertips, planner forces, force variance 0.1 N^2), built-in objects with "
-                "their box meshes, %d seeds\n\n", seeds);
-    std::printf("| object | method | Riemannian | mass %% | CoM mm | consistent | realizable | contradicted | CPU ms |\n"
-                "|---|---|---|---|---|---|---|---|---|\n");
+    std::printf(
+        "## 2. In-hand data (4 fingertips, planner forces, force variance 0.1 N^2), built-in "
+        "objects with "
+        "their box meshes, %d seeds\n\n",
+        seeds);
+    std::printf(
+        "| object | method | Riemannian | mass %% | CoM mm | consistent | realizable | "
+        "contradicted | CPU ms |\n"
+        "|---|---|---|---|---|---|---|---|---|\n");
     for (const char* object : {"seed-table1", "box"}) {
       Cell cells[kNumVariants];
       for (int seed = 0; seed < seeds; ++seed) {
@@ -244,25 +271,32 @@ int main(int argc, char** argv) {
         auto mesh = std::make_shared<const io::TriangleMesh>(sim->object.mesh);
         InertiaOptions o;
         o.noise.force_sigma = so.noise.force_sigma;
-        for (int v : {1, 2, 3}) FitInto(sim->samples, sim->truth.params, o, kVariants[v], mesh, "box mesh", &cells[v]);
+        for (int v : {1, 2, 3})
+          FitInto(sim->samples, sim->truth.params, o, kVariants[v], mesh, "box mesh", &cells[v]);
         std::fprintf(stderr, ".");
       }
       for (int v : {1, 2, 3}) {
         const Cell& c = cells[v];
-        std::printf("| %s | %s | %s | %s | %s | %d/%d | %d/%d | %d | %s |\n", object, kVariants[v].name,
-                    Fmt(Median(c.riem)).c_str(), Fmt(Median(c.mass)).c_str(), Fmt(Median(c.com_mm)).c_str(),
-                    c.consistent, c.runs, c.realizable, c.runs, c.contradicted, Fmt(1e3 * Median(c.cpu)).c_str());
+        std::printf("| %s | %s | %s | %s | %s | %d/%d | %d/%d | %d | %s |\n", object,
+                    kVariants[v].name, Fmt(Median(c.riem)).c_str(), Fmt(Median(c.mass)).c_str(),
+                    Fmt(Median(c.com_mm)).c_str(), c.consistent, c.runs, c.realizable, c.runs,
+                    c.contradicted, Fmt(1e3 * Median(c.cpu)).c_str());
       }
     }
     std::printf("\n");
   }
 
   if (speed && !tools.empty()) {
-    std::printf("## 3. Speed: load the mesh + build the regions + fit 1,000 samples (DENSITY, 'moderate' noise; "
-                "CPU ms, median of 3)\n\n");
-    std::printf("| mesh | faces | regions | load | regions | fit (incl. regions) | total |\n|---|---|---|---|---|---|---|\n");
+    std::printf(
+        "## 3. Speed: load the mesh + build the regions + fit 1,000 samples (DENSITY, 'moderate' "
+        "noise; "
+        "CPU ms, median of 3)\n\n");
+    std::printf(
+        "| mesh | faces | regions | load | regions | fit (incl. regions) | total "
+        "|\n|---|---|---|---|---|---|---|\n");
     const SimulationNoise noise = *NadeauNoise("moderate");
-    auto time_one = [&](const Tool& t, RegionOptions ro, double* load, double* build, double* fit, int* k) {
+    auto time_one = [&](const Tool& t, RegionOptions ro, double* load, double* build, double* fit,
+                        int* k) {
       std::vector<double> l, b, f;
       for (int rep = 0; rep < 3; ++rep) {
         double c0 = CpuSeconds();
@@ -292,11 +326,14 @@ int main(int argc, char** argv) {
       RegionOptions grid;
       grid.scheme = RegionScheme::kGrid;
       time_one(t, grid, &load, &build, &fit, &k);
-      std::printf("| %s | %d | %d grid | %s | %s | %s | %s |\n", t.mesh_name.c_str(), t.faces, k, Fmt(1e3 * load).c_str(),
-                  Fmt(1e3 * build).c_str(), Fmt(1e3 * fit).c_str(), Fmt(1e3 * (load + fit)).c_str());
+      std::printf("| %s | %d | %d grid | %s | %s | %s | %s |\n", t.mesh_name.c_str(), t.faces, k,
+                  Fmt(1e3 * load).c_str(), Fmt(1e3 * build).c_str(), Fmt(1e3 * fit).c_str(),
+                  Fmt(1e3 * (load + fit)).c_str());
     }
-    std::printf("\nGrowth with the number of regions (Hammer.ply):\n\n| target regions | regions | regions ms | "
-                "fit ms (incl. regions) |\n|---|---|---|---|\n");
+    std::printf(
+        "\nGrowth with the number of regions (Hammer.ply):\n\n| target regions | regions | regions "
+        "ms | "
+        "fit ms (incl. regions) |\n|---|---|---|---|\n");
     for (int target : {4, 8, 16, 32, 64, kMaxTargetRegions}) {
       double load, build, fit;
       int k;
@@ -304,7 +341,8 @@ int main(int argc, char** argv) {
       grid.scheme = RegionScheme::kGrid;
       grid.target_regions = target;
       time_one(tools[0], grid, &load, &build, &fit, &k);
-      std::printf("| %d | %d | %s | %s |\n", target, k, Fmt(1e3 * build).c_str(), Fmt(1e3 * fit).c_str());
+      std::printf("| %d | %d | %s | %s |\n", target, k, Fmt(1e3 * build).c_str(),
+                  Fmt(1e3 * fit).c_str());
     }
     std::printf("\n");
   }

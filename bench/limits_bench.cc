@@ -26,7 +26,8 @@ constexpr int kContacts = 64;
 
 // One fixed 64-contact random grasp (feasibility not required: the cost of
 // an accepted request is what is measured).
-v1::PlanRequest LargestRequest(planner::SolverKind solver, planner::ConeModel cone, int cone_sides) {
+v1::PlanRequest LargestRequest(planner::SolverKind solver, planner::ConeModel cone,
+                               int cone_sides) {
   std::mt19937_64 rng(64);
   planner::RandomGraspOptions ro;
   ro.min_contacts = ro.max_contacts = kContacts;
@@ -37,7 +38,8 @@ v1::PlanRequest LargestRequest(planner::SolverKind solver, planner::ConeModel co
   return ToRequest(g.problem, options, solver);
 }
 
-void RunPlan(benchmark::State& state, planner::SolverKind solver, planner::ConeModel cone, int sides) {
+void RunPlan(benchmark::State& state, planner::SolverKind solver, planner::ConeModel cone,
+             int sides) {
   const v1::PlanRequest request = LargestRequest(solver, cone, sides);
   CallLimits limits;
   limits.solve_timeout_ms = 10'000;  // the server's default --solve-timeout-ms
@@ -68,7 +70,8 @@ void BM_Plan64_CrossCheck_k64(benchmark::State& s) {
 // A trajectory at the work limit, under the server's default 10 s budget.
 void BM_Trajectory64_AtWorkLimit(benchmark::State& state) {
   v1::TrajectoryRequest request;
-  *request.mutable_plan() = LargestRequest(planner::SolverKind::kGeometric, planner::ConeModel::kPyramid, 12);
+  *request.mutable_plan() =
+      LargestRequest(planner::SolverKind::kGeometric, planner::ConeModel::kPyramid, 12);
   v1::Inertia* inertia = request.mutable_plan()->mutable_object()->mutable_inertia();
   inertia->set_ixx(1e-3);
   inertia->set_iyy(1e-3);

@@ -67,8 +67,7 @@ class Counters {
   void Stop(benchmark::State& state, int n) {
     const double iterations = static_cast<double>(state.iterations());
     state.counters["contacts"] = n;
-    state.counters["allocs"] =
-        (tactforce::testing::AllocationCount() - allocations_) / iterations;
+    state.counters["allocs"] = (tactforce::testing::AllocationCount() - allocations_) / iterations;
     if (counter_.available()) {
       state.counters["instr"] = (counter_.Read() - instructions_) / iterations;
     }
@@ -101,8 +100,8 @@ void BM_Plan(benchmark::State& state, SolverKind kind) {
 // The timed call of BM_Workspace, kept out of line so that callgrind can
 // count exactly it: --toggle-collect='*TimedWorkspaceSolve*'.
 [[gnu::noinline]] bool TimedWorkspaceSolve(const ForceSolver& solver, const PlanProblem& problem,
-                                           const PlanOptions& options,
-                                           PlanningWorkspace* workspace, PlanResult* result) {
+                                           const PlanOptions& options, PlanningWorkspace* workspace,
+                                           PlanResult* result) {
   return solver.Solve(problem, options, workspace, result).ok() &&
          result->status == PlanStatus::kOptimal;
 }
@@ -202,7 +201,8 @@ class RatioReporter : public benchmark::ConsoleReporter {
   void Finalize() override {
     ConsoleReporter::Finalize();
     std::printf(
-        "\n| contacts | one-off Solve (us) | workspace Solve (us) | QP alone (us) | QP / workspace |"
+        "\n| contacts | one-off Solve (us) | workspace Solve (us) | QP alone (us) | QP / workspace "
+        "|"
         " QP iterations | ipopt (us) | ipopt / workspace | allocs per solve (one-off / workspace) |"
         " instructions per workspace solve / QP alone |\n"
         "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
@@ -213,8 +213,8 @@ class RatioReporter : public benchmark::ConsoleReporter {
         std::snprintf(instructions, sizeof(instructions), "%.0f / %.0f", w.instructions,
                       q.instructions);
       }
-      std::printf("| %d | %.2f | %.2f | %.2f | %.2f | %.1f | %.1f | %.0fx | %.1f / %.1f | %s |\n", n,
-                  g.us, w.us, q.us, q.us / w.us, w.qp_iterations, i.us, i.us / w.us, g.allocs,
+      std::printf("| %d | %.2f | %.2f | %.2f | %.2f | %.1f | %.1f | %.0fx | %.1f / %.1f | %s |\n",
+                  n, g.us, w.us, q.us, q.us / w.us, w.qp_iterations, i.us, i.us / w.us, g.allocs,
                   w.allocs, instructions);
     }
   }
@@ -249,8 +249,8 @@ int CallgrindQpRun(int solves, int contacts) {
     if (!TimedQpSolve(qps[i % qps.size()], &workspace, &result)) ++failures;
     iterations += result.iterations;
   }
-  std::printf("%d QP solves of %d contacts, %.2f iterations each, %d failures\n", solves,
-              contacts, static_cast<double>(iterations) / solves, failures);
+  std::printf("%d QP solves of %d contacts, %.2f iterations each, %d failures\n", solves, contacts,
+              static_cast<double>(iterations) / solves, failures);
   return failures == 0 ? 0 : 1;
 }
 
@@ -323,7 +323,8 @@ int CallgrindRun(const std::string& spec) {
   const std::string rest = comma == std::string::npos ? "" : spec.substr(comma + 1);
   const int contacts = rest.empty() ? 4 : std::stoi(rest);
   if (rest.find(",qp") != std::string::npos) return CallgrindQpRun(solves, contacts);
-  if (rest.find(",dispatch") != std::string::npos) return CallgrindDispatchRun(solves, contacts, false);
+  if (rest.find(",dispatch") != std::string::npos)
+    return CallgrindDispatchRun(solves, contacts, false);
   if (rest.find(",cross") != std::string::npos) return CallgrindDispatchRun(solves, contacts, true);
   const auto& grasps = Grasps(contacts);
   const auto solver = MakeSolver(SolverKind::kGeometric);

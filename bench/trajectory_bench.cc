@@ -43,20 +43,23 @@ class TableReporter : public benchmark::ConsoleReporter {
     for (const Run& r : runs) {
       if (r.error_occurred) continue;
       if (r.run_type == Run::RT_Aggregate && r.aggregate_name != "median") continue;
-      times_[r.run_name.function_name][std::stoi(r.run_name.args)] =
-          r.GetAdjustedRealTime();  // ms
+      times_[r.run_name.function_name][std::stoi(r.run_name.args)] = r.GetAdjustedRealTime();  // ms
     }
   }
   void Finalize() override {
     ConsoleReporter::Finalize();
-    std::printf("\n| steps | IPOPT total (ms) | geometric warm (ms) | geometric cold (ms) | per step IPOPT / warm (us) | IPOPT / warm | cold / warm |\n");
+    std::printf(
+        "\n| steps | IPOPT total (ms) | geometric warm (ms) | geometric cold (ms) | per step IPOPT "
+        "/ warm (us) | IPOPT / warm | cold / warm |\n");
     std::printf("|---:|---:|---:|---:|---:|---:|---:|\n");
     for (const auto& [steps, warm] : times_["BM_GeometricWarm"]) {
       const double ipopt = times_["BM_Ipopt"][steps], cold = times_["BM_GeometricCold"][steps];
       std::printf("| %d | %.1f | %.2f | %.2f | %.0f / %.1f | %.0fx | %.2fx |\n", steps, ipopt, warm,
                   cold, 1e3 * ipopt / steps, 1e3 * warm / steps, ipopt / warm, cold / warm);
     }
-    std::printf("\nGeoDEx Table II (paper): SOCP 4.81 s / 13.36 s vs geometric 0.31 s / 0.97 s (about 14x).\n");
+    std::printf(
+        "\nGeoDEx Table II (paper): SOCP 4.81 s / 13.36 s vs geometric 0.31 s / 0.97 s (about "
+        "14x).\n");
   }
 
  private:

@@ -3,8 +3,9 @@
 // covariance (mass 5 %, CoM 3 mm, inertia 10 % of m r^2, correlated).
 //   uncertainty_bench [SOLVES] [CONTACTS]   wall time per solve, both ways
 // Instructions: count the two out-of-line functions under callgrind,
-//   valgrind --tool=callgrind --toggle-collect='*TimedPlainSolve*' build/bin/uncertainty_bench 640 4
-//   valgrind --tool=callgrind --toggle-collect='*TimedUncertainSolve*' build/bin/uncertainty_bench 640 4
+//   valgrind --tool=callgrind --toggle-collect='*TimedPlainSolve*' build/bin/uncertainty_bench 640
+//   4 valgrind --tool=callgrind --toggle-collect='*TimedUncertainSolve*'
+//   build/bin/uncertainty_bench 640 4
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -42,7 +43,8 @@ void Grasps(int n, std::vector<PlanProblem>* plain, std::vector<PlanProblem>* un
     u.object.uncertainty.covariance = BenchCovariance(rng, p.object.mass);
     absl::StatusOr<PlanResult> a = Plan(p, PlanOptions{}, SolverKind::kGeometric);
     absl::StatusOr<PlanResult> b = Plan(u, PlanOptions{}, SolverKind::kGeometric);
-    if (a.ok() && b.ok() && a->status == PlanStatus::kOptimal && b->status == PlanStatus::kOptimal) {
+    if (a.ok() && b.ok() && a->status == PlanStatus::kOptimal &&
+        b->status == PlanStatus::kOptimal) {
       plain->push_back(p);
       uncertain->push_back(u);
     }
@@ -53,7 +55,8 @@ void Grasps(int n, std::vector<PlanProblem>* plain, std::vector<PlanProblem>* un
   return Plan(p, PlanOptions{}, SolverKind::kGeometric, w, r).ok();
 }
 
-[[gnu::noinline]] bool TimedUncertainSolve(const PlanProblem& p, PlanningWorkspace* w, PlanResult* r) {
+[[gnu::noinline]] bool TimedUncertainSolve(const PlanProblem& p, PlanningWorkspace* w,
+                                           PlanResult* r) {
   return Plan(p, PlanOptions{}, SolverKind::kGeometric, w, r).ok();
 }
 
@@ -64,7 +67,9 @@ double MicrosecondsPerSolve(const std::vector<PlanProblem>& grasps, int solves, 
   for (const PlanProblem& p : grasps) solve(p, &workspace, &result);  // warm-up
   const auto start = std::chrono::steady_clock::now();
   for (int i = 0; i < solves; ++i) solve(grasps[i % grasps.size()], &workspace, &result);
-  return std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count() / solves;
+  return std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start)
+             .count() /
+         solves;
 }
 
 }  // namespace
@@ -78,7 +83,8 @@ int main(int argc, char** argv) {
   Grasps(contacts, &plain, &uncertain);
   const double a = MicrosecondsPerSolve(plain, solves, TimedPlainSolve);
   const double b = MicrosecondsPerSolve(uncertain, solves, TimedUncertainSolve);
-  std::printf("%d contacts, %d solves each: plain %.2f us, with parameter covariance %.2f us (%+.0f %%)\n",
-              contacts, solves, a, b, 100.0 * (b / a - 1.0));
+  std::printf(
+      "%d contacts, %d solves each: plain %.2f us, with parameter covariance %.2f us (%+.0f %%)\n",
+      contacts, solves, a, b, 100.0 * (b / a - 1.0));
   return 0;
 }

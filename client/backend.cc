@@ -9,7 +9,8 @@ CLI::Option* AddBackendFlags(CLI::App* cmd, BackendArgs* args, const std::string
   CLI::Option* local = cmd->add_flag("--local", args->local, "Run in this process (the default)");
   CLI::Option* server = AddConnectionFlags(cmd, &args->connection, "--server", default_deadline_ms);
   // No default address shown: without --server nothing is sent anywhere.
-  server->description("Run on tactforce-server at ADDR (" + what + ") instead of in this process")->default_str("");
+  server->description("Run on tactforce-server at ADDR (" + what + ") instead of in this process")
+      ->default_str("");
   server->each([args](const std::string&) { args->remote = true; });
   local->excludes(server);
   return server;

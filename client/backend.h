@@ -73,11 +73,14 @@ class Backend {
   // ...", DeadlineExceeded, ...; RpcError in connection.h). ok(): a
   // computed answer, whatever its status.
   virtual absl::StatusOr<v1::PlanResponse> Plan(const v1::PlanRequest& request) = 0;
-  virtual absl::StatusOr<v1::TrajectoryResponse> PlanTrajectory(const v1::TrajectoryRequest& request) = 0;
+  virtual absl::StatusOr<v1::TrajectoryResponse> PlanTrajectory(
+      const v1::TrajectoryRequest& request) = 0;
   virtual absl::StatusOr<v1::FrictionProbeResponse> PlanFrictionProbe(
       const v1::FrictionProbeRequest& request) = 0;
-  virtual absl::StatusOr<v1::EstimateResponse> EstimateForces(const v1::EstimateRequest& request) = 0;
-  virtual absl::StatusOr<v1::FrictionResponse> EstimateFriction(const v1::FrictionRequest& request) = 0;
+  virtual absl::StatusOr<v1::EstimateResponse> EstimateForces(
+      const v1::EstimateRequest& request) = 0;
+  virtual absl::StatusOr<v1::FrictionResponse> EstimateFriction(
+      const v1::FrictionRequest& request) = 0;
   virtual absl::StatusOr<InertiaAnswer> FitInertia(const InertiaCall& call) = 0;
   virtual absl::StatusOr<AuditAnswer> AuditModel(const AuditCall& call) = 0;
   // For messages: "local", "localhost:50051", ...

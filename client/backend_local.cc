@@ -18,16 +18,19 @@ class LocalBackend final : public Backend {
   absl::StatusOr<v1::PlanResponse> Plan(const v1::PlanRequest& request) override {
     return api::HandlePlan(request);
   }
-  absl::StatusOr<v1::TrajectoryResponse> PlanTrajectory(const v1::TrajectoryRequest& request) override {
+  absl::StatusOr<v1::TrajectoryResponse> PlanTrajectory(
+      const v1::TrajectoryRequest& request) override {
     return api::HandleTrajectory(request);
   }
-  absl::StatusOr<v1::FrictionProbeResponse> PlanFrictionProbe(const v1::FrictionProbeRequest& request) override {
+  absl::StatusOr<v1::FrictionProbeResponse> PlanFrictionProbe(
+      const v1::FrictionProbeRequest& request) override {
     return api::HandleFrictionProbe(request);
   }
   absl::StatusOr<v1::EstimateResponse> EstimateForces(const v1::EstimateRequest& request) override {
     return api::HandleEstimate(request);
   }
-  absl::StatusOr<v1::FrictionResponse> EstimateFriction(const v1::FrictionRequest& request) override {
+  absl::StatusOr<v1::FrictionResponse> EstimateFriction(
+      const v1::FrictionRequest& request) override {
     return api::HandleFriction(request);
   }
   absl::StatusOr<InertiaAnswer> FitInertia(const InertiaCall& call) override;
@@ -40,8 +43,9 @@ absl::StatusOr<InertiaAnswer> LocalBackend::FitInertia(const InertiaCall& call) 
   ProgressBar bar("fit", call.show_progress);
   InertiaAnswer answer;
   TF_ASSIGN_OR_RETURN(answer.response,
-                      api::FitInertiaSamples(*call.samples, call.options, {},
-                                             [&bar](double fraction) { bar.Update(fraction); }, &answer.fit));
+                      api::FitInertiaSamples(
+                          *call.samples, call.options, {},
+                          [&bar](double fraction) { bar.Update(fraction); }, &answer.fit));
   return answer;
 }
 

@@ -24,14 +24,16 @@ namespace {
 // server ends the call (Finish() says why).
 void WriteFitStream(grpc::ClientWriter<v1::FitInertiaRequest>& writer, const InertiaCall& call,
                     ProgressBar& upload) {
-  FitInertiaMessages stream(*call.samples, call.options, static_cast<size_t>(std::max(1, call.batch)));
+  FitInertiaMessages stream(*call.samples, call.options,
+                            static_cast<size_t>(std::max(1, call.batch)));
   const size_t n = stream.samples_total();
   v1::FitInertiaRequest message;
   while (stream.Next(&message)) {
     if (!writer.Write(message)) break;
     if (message.samples_size() == 0 && n > 0) continue;  // the options alone
-    upload.Update(static_cast<double>(stream.samples_sent()) / static_cast<double>(std::max<size_t>(n, 1)),
-                  absl::StrCat(stream.samples_sent(), "/", n, " samples"));
+    upload.Update(
+        static_cast<double>(stream.samples_sent()) / static_cast<double>(std::max<size_t>(n, 1)),
+        absl::StrCat(stream.samples_sent(), "/", n, " samples"));
   }
   writer.WritesDone();
 }
@@ -43,8 +45,9 @@ absl::Status MeshTooLargeError(const std::string& target, const grpc::Status& st
   v1::FitInertiaRequest first;
   *first.mutable_options() = options;
   return absl::ResourceExhaustedError(absl::StrCat(
-      target, ": ", status.error_message(), " (the first FitInertia message, ", first.ByteSizeLong(),
-      " bytes, carries the mesh ", options.mesh().name(), " of ", options.mesh().data().size(),
+      target, ": ", status.error_message(), " (the first FitInertia message, ",
+      first.ByteSizeLong(), " bytes, carries the mesh ", options.mesh().name(), " of ",
+      options.mesh().data().size(),
       " bytes: start tactforce-server with a larger --max-message-bytes, or give a smaller mesh)"));
 }
 
@@ -55,7 +58,8 @@ absl::StatusOr<v1::AuditRequest> AuditRequestFor(const AuditCall& call) {
   const audit::MeasuredData& data = call.data;
   if (data.clock_offset_source != audit::MeasuredData::ClockOffset::kNone) {
     return absl::InvalidArgumentError(
-        "--server: Audit.AuditModel takes one CSV (--csv); two streams (--reference, --reading) carry a clock "
+        "--server: Audit.AuditModel takes one CSV (--csv); two streams (--reference, --reading) "
+        "carry a clock "
         "offset the request cannot: audit them in this process (without --server)");
   }
   v1::AuditRequest request;
@@ -88,16 +92,19 @@ class RemoteBackend final : public Backend {
   absl::StatusOr<v1::PlanResponse> Plan(const v1::PlanRequest& request) override {
     return CallUnary(server_, planner_, &v1::Planner::Stub::Plan, request);
   }
-  absl::StatusOr<v1::TrajectoryResponse> PlanTrajectory(const v1::TrajectoryRequest& request) override {
+  absl::StatusOr<v1::TrajectoryResponse> PlanTrajectory(
+      const v1::TrajectoryRequest& request) override {
     return CallUnary(server_, planner_, &v1::Planner::Stub::PlanTrajectory, request);
   }
-  absl::StatusOr<v1::FrictionProbeResponse> PlanFrictionProbe(const v1::FrictionProbeRequest& request) override {
+  absl::StatusOr<v1::FrictionProbeResponse> PlanFrictionProbe(
+      const v1::FrictionProbeRequest& request) override {
     return CallUnary(server_, planner_, &v1::Planner::Stub::PlanFrictionProbe, request);
   }
   absl::StatusOr<v1::EstimateResponse> EstimateForces(const v1::EstimateRequest& request) override {
     return CallUnary(server_, estimator_, &v1::Estimator::Stub::EstimateForces, request);
   }
-  absl::StatusOr<v1::FrictionResponse> EstimateFriction(const v1::FrictionRequest& request) override {
+  absl::StatusOr<v1::FrictionResponse> EstimateFriction(
+      const v1::FrictionRequest& request) override {
     return CallUnary(server_, estimator_, &v1::Estimator::Stub::EstimateFriction, request);
   }
   absl::StatusOr<InertiaAnswer> FitInertia(const InertiaCall& call) override;
@@ -131,7 +138,8 @@ absl::StatusOr<InertiaAnswer> RemoteBackend::FitInertia(const InertiaCall& call)
 
 absl::StatusOr<AuditAnswer> RemoteBackend::AuditModel(const AuditCall& call) {
   TF_ASSIGN_OR_RETURN(v1::AuditRequest request, AuditRequestFor(call));
-  TF_ASSIGN_OR_RETURN(v1::AuditResponse response, CallUnary(server_, audit_, &v1::Audit::Stub::AuditModel, request));
+  TF_ASSIGN_OR_RETURN(v1::AuditResponse response,
+                      CallUnary(server_, audit_, &v1::Audit::Stub::AuditModel, request));
   AuditAnswer answer;
   answer.report_json = response.report_json();
   answer.summary = response.summary();

@@ -43,14 +43,14 @@ absl::StatusOr<std::string> ReadInput(const std::string& path, const std::string
   }
   std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
   if (file.bad()) {
-    return absl::InvalidArgumentError(
-        absl::StrCat(flag, ": error while reading '", path, "'"));
+    return absl::InvalidArgumentError(absl::StrCat(flag, ": error while reading '", path, "'"));
   }
   return text;
 }
 
 void AddOutputFlags(CLI::App* cmd, OutputFormat* out, const std::string& json_what) {
-  CLI::Option* json = cmd->add_flag("--json", out->json_flag, "Print " + json_what + " as JSON instead of a table");
+  CLI::Option* json =
+      cmd->add_flag("--json", out->json_flag, "Print " + json_what + " as JSON instead of a table");
   cmd->add_option("--format", out->format, "Output: table or json (--json)")
       ->check(CLI::IsMember({"table", "json"}))
       ->capture_default_str()
@@ -60,12 +60,14 @@ void AddOutputFlags(CLI::App* cmd, OutputFormat* out, const std::string& json_wh
 namespace {
 
 // A validator of finite numbers for which `ok` holds; `rule` is "must be >= 1".
-CLI::Validator NumberCheck(std::function<bool(double)> ok, const std::string& rule, const std::string& name) {
+CLI::Validator NumberCheck(std::function<bool(double)> ok, const std::string& rule,
+                           const std::string& name) {
   return CLI::Validator(
       [ok, rule](std::string& text) -> std::string {
         char* end = nullptr;
         const double x = std::strtod(text.c_str(), &end);
-        if (text.empty() || end != text.c_str() + text.size()) return absl::StrCat("'", text, "' is not a number");
+        if (text.empty() || end != text.c_str() + text.size())
+          return absl::StrCat("'", text, "' is not a number");
         if (!std::isfinite(x) || !ok(x)) return absl::StrCat(rule, ", got ", text);
         return std::string();
       },
@@ -78,7 +80,8 @@ bool Matches(const std::string& name, const std::string& pattern) {
   const size_t star = pattern.find('*');
   if (star == std::string::npos) return name == pattern;
   const std::string prefix = pattern.substr(0, star), suffix = pattern.substr(star + 1);
-  return name.size() >= prefix.size() + suffix.size() && name.compare(0, prefix.size(), prefix) == 0 &&
+  return name.size() >= prefix.size() + suffix.size() &&
+         name.compare(0, prefix.size(), prefix) == 0 &&
          name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
@@ -88,22 +91,27 @@ CLI::Validator AtLeast(double min) {
   return NumberCheck([min](double x) { return x >= min; }, "must be >= " + Number(min), "AT_LEAST");
 }
 CLI::Validator GreaterThan(double min) {
-  return NumberCheck([min](double x) { return x > min; }, "must be > " + Number(min), "GREATER_THAN");
+  return NumberCheck([min](double x) { return x > min; }, "must be > " + Number(min),
+                     "GREATER_THAN");
 }
 CLI::Validator Between(double min, double max) {
   return NumberCheck([min, max](double x) { return x >= min && x <= max; },
                      absl::StrCat("must be in [", Number(min), ", ", Number(max), "]"), "BETWEEN");
 }
 
-absl::Status PrepareOutputDir(const std::string& dir, bool force, const std::vector<std::string>& patterns,
-                              const std::string& flag, const std::string& whose) {
+absl::Status PrepareOutputDir(const std::string& dir, bool force,
+                              const std::vector<std::string>& patterns, const std::string& flag,
+                              const std::string& whose) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (fs::exists(dir, ec) && !fs::is_directory(dir, ec)) {
-    return absl::InvalidArgumentError(absl::StrCat(flag, ": '", dir, "' exists and is not a folder"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(flag, ": '", dir, "' exists and is not a folder"));
   }
   fs::create_directories(dir, ec);
-  if (ec) return absl::InvalidArgumentError(absl::StrCat(flag, ": cannot create '", dir, "': ", ec.message()));
+  if (ec)
+    return absl::InvalidArgumentError(
+        absl::StrCat(flag, ": cannot create '", dir, "': ", ec.message()));
   std::vector<fs::path> ours;
   int others = 0;
   for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
@@ -116,17 +124,20 @@ absl::Status PrepareOutputDir(const std::string& dir, bool force, const std::vec
       ++others;
     }
   }
-  if (ec) return absl::InvalidArgumentError(absl::StrCat(flag, ": cannot list '", dir, "': ", ec.message()));
+  if (ec)
+    return absl::InvalidArgumentError(
+        absl::StrCat(flag, ": cannot list '", dir, "': ", ec.message()));
   if (ours.empty() && others == 0) return absl::OkStatus();
   if (!force) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        flag, ": '", dir, "' is not empty (", ours.size() + others, " entries",
-        ours.empty() ? "" : absl::StrCat(", e.g. ", ours.front().filename().string()),
-        "); choose an empty folder, or --force to replace ", whose, " files"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(flag, ": '", dir, "' is not empty (", ours.size() + others, " entries",
+                     ours.empty() ? "" : absl::StrCat(", e.g. ", ours.front().filename().string()),
+                     "); choose an empty folder, or --force to replace ", whose, " files"));
   }
   for (const fs::path& p : ours) {
     if (!fs::remove(p, ec) || ec) {
-      return absl::InvalidArgumentError(absl::StrCat(flag, ": cannot remove '", p.string(), "': ", ec.message()));
+      return absl::InvalidArgumentError(
+          absl::StrCat(flag, ": cannot remove '", p.string(), "': ", ec.message()));
     }
   }
   return absl::OkStatus();
@@ -177,7 +188,8 @@ absl::StatusOr<Eigen::Vector3d> ParseVec3(const std::string& text, const std::st
       return absl::InvalidArgumentError(absl::StrCat(flag, ": '", text, "' is not x,y,z"));
     v.push_back(x);
   }
-  if (v.size() != 3) return absl::InvalidArgumentError(absl::StrCat(flag, ": '", text, "' is not x,y,z"));
+  if (v.size() != 3)
+    return absl::InvalidArgumentError(absl::StrCat(flag, ": '", text, "' is not x,y,z"));
   return Eigen::Vector3d(v[0], v[1], v[2]);
 }
 
@@ -185,17 +197,20 @@ absl::Status CheckPlotPath(const std::string& path, const std::string& flag) {
   if (path.empty()) return absl::OkStatus();
   const std::filesystem::path file(path);
   if (absl::AsciiStrToLower(file.extension().string()) != ".svg") {
-    return absl::InvalidArgumentError(absl::StrCat(flag, ": '", path,
-                                                   "': pictures are SVG; give a .svg name (rsvg-convert makes a PNG)"));
+    return absl::InvalidArgumentError(absl::StrCat(
+        flag, ": '", path, "': pictures are SVG; give a .svg name (rsvg-convert makes a PNG)"));
   }
   std::error_code ec;
   if (std::filesystem::is_directory(file, ec))
-    return absl::InvalidArgumentError(absl::StrCat(flag, ": cannot write '", path, "': it is a directory"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(flag, ": cannot write '", path, "': it is a directory"));
   const std::string folder = file.parent_path().empty() ? "." : file.parent_path().string();
   if (!std::filesystem::is_directory(folder, ec))
-    return absl::InvalidArgumentError(absl::StrCat(flag, ": directory '", folder, "' of '", path, "' does not exist"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(flag, ": directory '", folder, "' of '", path, "' does not exist"));
   if (::access(folder.c_str(), W_OK) != 0)
-    return absl::InvalidArgumentError(absl::StrCat(flag, ": cannot write '", path, "': ", std::strerror(errno)));
+    return absl::InvalidArgumentError(
+        absl::StrCat(flag, ": cannot write '", path, "': ", std::strerror(errno)));
   return absl::OkStatus();
 }
 

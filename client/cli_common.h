@@ -60,9 +60,9 @@ void AddOutputFlags(CLI::App* cmd, OutputFormat* out, const std::string& json_wh
 
 // Numeric flag checks; a failure is a usage error (exit 2) naming the flag:
 // "--window: must be >= 1, got 0".
-CLI::Validator AtLeast(double min);             // finite and >= min
-CLI::Validator GreaterThan(double min);         // finite and > min
-CLI::Validator Between(double min, double max); // finite and in [min, max]
+CLI::Validator AtLeast(double min);              // finite and >= min
+CLI::Validator GreaterThan(double min);          // finite and > min
+CLI::Validator Between(double min, double max);  // finite and in [min, max]
 
 // Makes `dir` ready for a simulation's files: created when missing; when it
 // already holds files, InvalidArgument naming `flag` unless `force`, which
@@ -70,8 +70,10 @@ CLI::Validator Between(double min, double max); // finite and in [min, max]
 // `patterns`, "*" a wildcard: "trial*.csv"), so an earlier run's files can
 // never be mixed with the new ones. Other files are left alone.
 // `whose` names those files in the refusal ("this simulation's files").
-absl::Status PrepareOutputDir(const std::string& dir, bool force, const std::vector<std::string>& patterns,
-                              const std::string& flag = "--out", const std::string& whose = "this simulation's");
+absl::Status PrepareOutputDir(const std::string& dir, bool force,
+                              const std::vector<std::string>& patterns,
+                              const std::string& flag = "--out",
+                              const std::string& whose = "this simulation's");
 
 // How an input is named in messages: its path, "<stdin>" for "-".
 std::string InputName(const std::string& path);

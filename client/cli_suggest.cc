@@ -46,7 +46,8 @@ bool IsNumber(const std::string& token) {
 // A flag token's name: "--plot=x.svg" -> "--plot", "-n20" -> "-n" when "-n" exists.
 std::string FlagName(const CLI::App& app, const std::string& token) {
   std::string flag = token.substr(0, token.find('='));
-  if (token[1] != '-' && flag.size() > 2 && FindFlag(app, flag) == nullptr) flag = flag.substr(0, 2);
+  if (token[1] != '-' && flag.size() > 2 && FindFlag(app, flag) == nullptr)
+    flag = flag.substr(0, 2);
   return flag;
 }
 
@@ -69,7 +70,8 @@ ArgumentHint HintForArguments(const CLI::App& app, int argc, const char* const* 
       const std::string flag = FlagName(*current, token);
       const CLI::Option* option = FindFlag(*current, flag);
       if (option == nullptr) return {UnknownFlag(flag, *current, path), path};
-      const bool value_attached = token.find('=') != std::string::npos || flag.size() < token.size();
+      const bool value_attached =
+          token.find('=') != std::string::npos || flag.size() < token.size();
       if (!value_attached && option->get_type_size_min() > 0 && option->get_expected_min() > 0) ++i;
       continue;
     }
@@ -81,7 +83,9 @@ ArgumentHint HintForArguments(const CLI::App& app, int argc, const char* const* 
     std::vector<std::string> commands;
     for (const CLI::App* sub : Subcommands(*current)) commands.push_back(sub->get_name());
     if (!commands.empty() && current->get_require_subcommand_min() > 0) {
-      return {absl::StrCat("unknown command '", token, "' for '", path, "'", io::DidYouMean(token, commands)), path};
+      return {absl::StrCat("unknown command '", token, "' for '", path, "'",
+                           io::DidYouMean(token, commands)),
+              path};
     }
   }
   return {"", path};

@@ -28,8 +28,8 @@ absl::StatusOr<std::string> ReadPem(const std::string& path, const char* flag) {
 
 }  // namespace
 
-CLI::Option* AddConnectionFlags(CLI::App* cmd, ConnectionArgs* args,
-                                const std::string& server_flag, int default_deadline_ms) {
+CLI::Option* AddConnectionFlags(CLI::App* cmd, ConnectionArgs* args, const std::string& server_flag,
+                                int default_deadline_ms) {
   args->deadline_ms = default_deadline_ms;
   CLI::Option* server = nullptr;
   if (!server_flag.empty()) {
@@ -48,8 +48,7 @@ CLI::Option* AddConnectionFlags(CLI::App* cmd, ConnectionArgs* args,
                       "Use mutual TLS: PEM client certificate chain (needs --tls-key)")
           ->type_name("FILE")
           ->check(CLI::ExistingFile.description(""));
-  CLI::Option* key = cmd->add_option("--tls-key", args->tls_key,
-                                     "PEM private key of --tls-cert")
+  CLI::Option* key = cmd->add_option("--tls-key", args->tls_key, "PEM private key of --tls-cert")
                          ->type_name("FILE")
                          ->check(CLI::ExistingFile.description(""));
   cert->needs(key);
@@ -124,8 +123,8 @@ absl::Status RpcError(const grpc::Status& status, const std::string& target, int
                                                    ": no connection within ", deadline_ms,
                                                    " ms (--deadline-ms)"));
       }
-      return absl::DeadlineExceededError(absl::StrCat(
-          target, ": no answer within ", deadline_ms, " ms (--deadline-ms)"));
+      return absl::DeadlineExceededError(
+          absl::StrCat(target, ": no answer within ", deadline_ms, " ms (--deadline-ms)"));
     case grpc::StatusCode::INVALID_ARGUMENT:
       return absl::InvalidArgumentError(message);
     default:
@@ -157,8 +156,7 @@ absl::StatusOr<std::vector<std::string>> SplitTargets(const std::string& value) 
   for (absl::string_view part : absl::StrSplit(value, ',')) {
     part = absl::StripAsciiWhitespace(part);
     if (part.empty()) {
-      return absl::InvalidArgumentError(
-          absl::StrCat("--target: empty address in '", value, "'"));
+      return absl::InvalidArgumentError(absl::StrCat("--target: empty address in '", value, "'"));
     }
     targets.emplace_back(part);
   }

@@ -24,15 +24,14 @@ struct ConnectionArgs {
   std::string server = kDefaultServer;
   // TLS (mirrors the server's --tls-cert/--tls-key/--tls-client-ca). Any of
   // them switches TLS on; without --tls-ca the system roots are trusted.
-  std::string tls_ca;    // PEM CA bundle that signed the server's certificate
-  std::string tls_cert;  // PEM client certificate chain (mutual TLS)
-  std::string tls_key;   // PEM private key of tls_cert
+  std::string tls_ca;           // PEM CA bundle that signed the server's certificate
+  std::string tls_cert;         // PEM client certificate chain (mutual TLS)
+  std::string tls_key;          // PEM private key of tls_cert
   std::string tls_server_name;  // expected name in the server certificate
   int deadline_ms = 30'000;     // per call; 0 = none
 
   bool tls() const {
-    return !tls_ca.empty() || !tls_cert.empty() || !tls_key.empty() ||
-           !tls_server_name.empty();
+    return !tls_ca.empty() || !tls_cert.empty() || !tls_key.empty() || !tls_server_name.empty();
   }
 };
 

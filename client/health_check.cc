@@ -23,7 +23,8 @@ absl::StatusOr<std::string> CheckHealth(const RemoteServer& server, const std::s
   request.set_service(service);
   absl::StatusOr<HealthResponse> response =
       CallUnary(server, &grpc::health::v1::Health::Stub::Check, request);
-  if (response.status().code() == absl::StatusCode::kNotFound) return std::string("SERVICE_UNKNOWN");
+  if (response.status().code() == absl::StatusCode::kNotFound)
+    return std::string("SERVICE_UNKNOWN");
   if (!response.ok()) return response.status();
   return ServingName(response->status());
 }

@@ -29,7 +29,8 @@ constexpr char kFooter[] =
     "  tactforce health --server localhost:50051\n"
     "  tactforce load --target localhost:50051 --rpc plan --concurrency 8 --duration 5\n"
     "  tactforce demo [--server localhost:50051]\n"
-    "  tactforce simulate inertia --out sim/ && tactforce inertia --csv sim/inertia.csv --truth sim/truth.json\n"
+    "  tactforce simulate inertia --out sim/ && tactforce inertia --csv sim/inertia.csv --truth "
+    "sim/truth.json\n"
     "Run 'tactforce COMMAND --help' for the options of a command.";
 
 // A parse error as one line naming the command whose --help to read.

@@ -13,7 +13,10 @@
 namespace tactforce::cli {
 
 ProgressBar::ProgressBar(std::string label, bool enabled, std::chrono::milliseconds quiet_for)
-    : label_(std::move(label)), enabled_(enabled), tty_(StderrIsTerminal()), quiet_for_(quiet_for) {}
+    : label_(std::move(label)),
+      enabled_(enabled),
+      tty_(StderrIsTerminal()),
+      quiet_for_(quiet_for) {}
 
 bool ProgressBar::StderrIsTerminal() { return isatty(fileno(stderr)) == 1; }
 
@@ -27,9 +30,10 @@ void ProgressBar::Update(double fraction, const std::string& detail) {
     if (shown_ && now - last_ < std::chrono::milliseconds(100) && fraction < 1.0) return;
     constexpr int kWidth = 30;
     const int filled = static_cast<int>(fraction * kWidth + 0.5);
-    std::cerr << "\r" << label_ << " [" << std::string(filled, '#') << std::string(kWidth - filled, '.')
-              << "] " << absl::StrFormat("%3.0f%%", 100.0 * fraction)
-              << (detail.empty() ? "" : " ") << detail << "\x1b[K" << std::flush;
+    std::cerr << "\r" << label_ << " [" << std::string(filled, '#')
+              << std::string(kWidth - filled, '.') << "] "
+              << absl::StrFormat("%3.0f%%", 100.0 * fraction) << (detail.empty() ? "" : " ")
+              << detail << "\x1b[K" << std::flush;
   } else {
     if (decile <= last_decile_) return;
     std::cerr << label_ << ": " << absl::StrFormat("%.0f%%", 100.0 * fraction)

@@ -64,20 +64,26 @@ absl::StatusOr<planner::SolverKind> SolverFromProto(v1::Solver solver) {
 
 v1::UncertaintySource ToProto(planner::UncertaintySource source) {
   switch (source) {
-    case planner::UncertaintySource::kNone: return v1::UNCERTAINTY_SOURCE_UNSPECIFIED;
-    case planner::UncertaintySource::kNominal: return v1::UNCERTAINTY_SOURCE_NOMINAL;
-    case planner::UncertaintySource::kMeasurement: return v1::UNCERTAINTY_SOURCE_MEASUREMENT;
-    case planner::UncertaintySource::kParameters: return v1::UNCERTAINTY_SOURCE_PARAMETERS;
-    case planner::UncertaintySource::kFriction: return v1::UNCERTAINTY_SOURCE_FRICTION;
-    case planner::UncertaintySource::kCombined: return v1::UNCERTAINTY_SOURCE_COMBINED;
+    case planner::UncertaintySource::kNone:
+      return v1::UNCERTAINTY_SOURCE_UNSPECIFIED;
+    case planner::UncertaintySource::kNominal:
+      return v1::UNCERTAINTY_SOURCE_NOMINAL;
+    case planner::UncertaintySource::kMeasurement:
+      return v1::UNCERTAINTY_SOURCE_MEASUREMENT;
+    case planner::UncertaintySource::kParameters:
+      return v1::UNCERTAINTY_SOURCE_PARAMETERS;
+    case planner::UncertaintySource::kFriction:
+      return v1::UNCERTAINTY_SOURCE_FRICTION;
+    case planner::UncertaintySource::kCombined:
+      return v1::UNCERTAINTY_SOURCE_COMBINED;
   }
   return v1::UNCERTAINTY_SOURCE_UNSPECIFIED;
 }
 
 }  // namespace
 
-absl::Status UncertaintyFromProto(const v1::ParameterUncertainty& in, double mass, const planner::Vec3& com,
-                                  planner::ParameterUncertainty* out) {
+absl::Status UncertaintyFromProto(const v1::ParameterUncertainty& in, double mass,
+                                  const planner::Vec3& com, planner::ParameterUncertainty* out) {
   if (in.has_confidence()) out->confidence = in.confidence();
   const bool short_form = in.mass_sigma() != 0.0 || in.com_covariance_size() > 0;
   if (in.covariance_size() > 0 && short_form) {
@@ -86,26 +92,31 @@ absl::Status UncertaintyFromProto(const v1::ParameterUncertainty& in, double mas
   }
   if (in.covariance_size() > 0) {
     if (in.covariance_size() != 100) {
-      return absl::InvalidArgumentError(absl::StrCat("object.uncertainty.covariance: ", in.covariance_size(),
-                                                     " entries, need 100 (10x10 row-major)"));
+      return absl::InvalidArgumentError(
+          absl::StrCat("object.uncertainty.covariance: ", in.covariance_size(),
+                       " entries, need 100 (10x10 row-major)"));
     }
     for (int k = 0; k < 100; ++k) out->covariance(k / 10, k % 10) = in.covariance(k);
     return absl::OkStatus();  // checked by the planner's validation
   }
   if (!short_form) return absl::OkStatus();
-  if (!std::isfinite(in.mass_sigma()) || in.mass_sigma() < 0.0 || in.mass_sigma() > planner::kMaxMass) {
+  if (!std::isfinite(in.mass_sigma()) || in.mass_sigma() < 0.0 ||
+      in.mass_sigma() > planner::kMaxMass) {
     return absl::InvalidArgumentError(absl::StrCat("object.uncertainty.mass_sigma: must be in [0, ",
-                                                   planner::kMaxMass, "] kg, got ", in.mass_sigma()));
+                                                   planner::kMaxMass, "] kg, got ",
+                                                   in.mass_sigma()));
   }
   Eigen::Matrix3d com_covariance = Eigen::Matrix3d::Zero();
   if (in.com_covariance_size() > 0) {
     if (in.com_covariance_size() != 9) {
-      return absl::InvalidArgumentError(absl::StrCat("object.uncertainty.com_covariance: ",
-                                                     in.com_covariance_size(), " entries, need 9 (3x3 row-major)"));
+      return absl::InvalidArgumentError(
+          absl::StrCat("object.uncertainty.com_covariance: ", in.com_covariance_size(),
+                       " entries, need 9 (3x3 row-major)"));
     }
     for (int k = 0; k < 9; ++k) com_covariance(k / 3, k % 3) = in.com_covariance(k);
-    if (absl::Status s = planner::CheckCovariance("object.uncertainty.com_covariance", com_covariance,
-                                                  planner::kMaxLength * planner::kMaxLength);
+    if (absl::Status s =
+            planner::CheckCovariance("object.uncertainty.com_covariance", com_covariance,
+                                     planner::kMaxLength * planner::kMaxLength);
         !s.ok()) {
       return s;
     }
@@ -152,15 +163,16 @@ absl::StatusOr<planner::PlanProblem> ToProblem(const v1::PlanRequest& request) {
   // A single plan does not use the inertia, but a given one must be physical.
   if (object.has_inertia()) {
     const v1::Inertia& in = object.inertia();
-    if (absl::Status s = planner::ValidateInertia({in.ixx(), in.iyy(), in.izz(), in.ixy(), in.ixz(), in.iyz()});
+    if (absl::Status s =
+            planner::ValidateInertia({in.ixx(), in.iyy(), in.izz(), in.ixy(), in.ixz(), in.iyz()});
         !s.ok()) {
       return s;
     }
   }
 
   if (object.has_uncertainty()) {
-    if (absl::Status s = UncertaintyFromProto(object.uncertainty(), problem.object.mass, problem.object.com,
-                                              &problem.object.uncertainty);
+    if (absl::Status s = UncertaintyFromProto(object.uncertainty(), problem.object.mass,
+                                              problem.object.com, &problem.object.uncertainty);
         !s.ok()) {
       return s;
     }
@@ -186,9 +198,9 @@ absl::StatusOr<planner::PlanOptions> ToOptions(const v1::PlanRequest& request) {
   options.cone = *cone;
   if (request.cone_sides() > static_cast<uint32_t>(std::numeric_limits<int>::max())) {
     // Would wrap to a negative int; the planner's range check sees the rest.
-    return absl::InvalidArgumentError(absl::StrCat(
-        "cone_sides: must be in ", planner::PlanOptions::kMinConeSides, "..",
-        planner::PlanOptions::kMaxConeSides, ", got ", request.cone_sides()));
+    return absl::InvalidArgumentError(
+        absl::StrCat("cone_sides: must be in ", planner::PlanOptions::kMinConeSides, "..",
+                     planner::PlanOptions::kMaxConeSides, ", got ", request.cone_sides()));
   }
   if (request.cone_sides() != 0) options.cone_sides = static_cast<int>(request.cone_sides());
   if (request.has_confidence()) options.confidence = request.confidence();
@@ -200,8 +212,8 @@ absl::Status ApplySolverOptions(const v1::SolverOptions& in, planner::PlanOption
   if (in.has_ipopt_tolerance()) options->ipopt.tolerance = in.ipopt_tolerance();
   if (in.has_ipopt_max_iterations()) {
     // uint32 beyond int's range would wrap negative.
-    options->ipopt.max_iterations =
-        static_cast<int>(std::min<uint32_t>(in.ipopt_max_iterations(), std::numeric_limits<int>::max()));
+    options->ipopt.max_iterations = static_cast<int>(
+        std::min<uint32_t>(in.ipopt_max_iterations(), std::numeric_limits<int>::max()));
   }
   if (in.has_ipopt_max_cpu_seconds()) options->ipopt.max_cpu_seconds = in.ipopt_max_cpu_seconds();
   if (in.has_rank_tolerance()) options->rank_tolerance = in.rank_tolerance();
@@ -211,7 +223,8 @@ absl::Status ApplySolverOptions(const v1::SolverOptions& in, planner::PlanOption
   std::string error;
   if (!options->IsValid(&error)) {
     for (const char* field : {"ipopt_", "rank_tolerance", "agreement_tolerance"}) {
-      if (absl::StartsWith(error, field)) return absl::InvalidArgumentError(absl::StrCat("solver_options.", error));
+      if (absl::StartsWith(error, field))
+        return absl::InvalidArgumentError(absl::StrCat("solver_options.", error));
     }
   }
   return absl::OkStatus();
@@ -280,8 +293,7 @@ v1::ConeModel ToProto(planner::ConeModel cone) {
   return v1::CONE_MODEL_UNSPECIFIED;
 }
 
-v1::PlanRequest ToRequest(const planner::PlanProblem& problem,
-                          const planner::PlanOptions& options,
+v1::PlanRequest ToRequest(const planner::PlanProblem& problem, const planner::PlanOptions& options,
                           planner::SolverKind solver) {
   v1::PlanRequest request;
   v1::ObjectModel* object = request.mutable_object();
@@ -318,14 +330,17 @@ v1::PlanRequest ToRequest(const planner::PlanProblem& problem,
   request.set_solver(ToProto(solver));
   const planner::PlanOptions defaults;
   v1::SolverOptions* solver_options = request.mutable_solver_options();
-  if (options.ipopt.tolerance != defaults.ipopt.tolerance) solver_options->set_ipopt_tolerance(options.ipopt.tolerance);
-  if (options.ipopt.max_iterations != defaults.ipopt.max_iterations && options.ipopt.max_iterations > 0) {
+  if (options.ipopt.tolerance != defaults.ipopt.tolerance)
+    solver_options->set_ipopt_tolerance(options.ipopt.tolerance);
+  if (options.ipopt.max_iterations != defaults.ipopt.max_iterations &&
+      options.ipopt.max_iterations > 0) {
     solver_options->set_ipopt_max_iterations(static_cast<uint32_t>(options.ipopt.max_iterations));
   }
   if (options.ipopt.max_cpu_seconds != defaults.ipopt.max_cpu_seconds) {
     solver_options->set_ipopt_max_cpu_seconds(options.ipopt.max_cpu_seconds);
   }
-  if (options.rank_tolerance != defaults.rank_tolerance) solver_options->set_rank_tolerance(options.rank_tolerance);
+  if (options.rank_tolerance != defaults.rank_tolerance)
+    solver_options->set_rank_tolerance(options.rank_tolerance);
   if (options.agreement_tolerance != defaults.agreement_tolerance) {
     solver_options->set_agreement_tolerance(options.agreement_tolerance);
   }
@@ -366,7 +381,7 @@ void ToProto(const planner::PlanResult& result, v1::PlanResponse* out) {
   for (const planner::RowMargin& m : result.row_margins) {
     v1::RowMargin* out = response.add_row_margins();
     out->set_contact(m.contact);
-    out->set_constraint(m.cone ? "exact friction cone"
+    out->set_constraint(m.cone         ? "exact friction cone"
                         : m.facet >= 0 ? absl::StrCat("friction cone facet ", m.facet)
                         : m.upper      ? "maximum normal force"
                                        : "minimum normal force");

@@ -92,11 +92,20 @@ std::string LogValue(std::string_view text) {
   std::string out = "\"";
   for (char c : text) {
     switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
-      default: out += static_cast<unsigned char>(c) < 0x20 ? ' ' : c;
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
+      default:
+        out += static_cast<unsigned char>(c) < 0x20 ? ' ' : c;
     }
   }
   out += '"';
@@ -129,9 +138,9 @@ bool WorkBudget::Spent() const { return seconds_ > 0 && std::chrono::steady_cloc
 
 absl::Status WorkBudget::Explain(absl::Status status) const {
   if (status.ok() || !Spent()) return status;
-  return absl::ResourceExhaustedError(absl::StrCat(
-      "stopped at the server's limit of ", std::llround(seconds_ * 1000),
-      " ms of work per call (--solve-timeout-ms): ", status.message()));
+  return absl::ResourceExhaustedError(
+      absl::StrCat("stopped at the server's limit of ", std::llround(seconds_ * 1000),
+                   " ms of work per call (--solve-timeout-ms): ", status.message()));
 }
 
 bool RunCall(CallLog log, Executor* pool, CallWork work, CallDone done, const PoolWords& words) {

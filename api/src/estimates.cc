@@ -7,13 +7,15 @@
 
 namespace tactforce::api {
 
-absl::Status ApplyInertiaFit(const v1::FitInertiaResponse& fit, const char* field, v1::PlanRequest* request) {
+absl::Status ApplyInertiaFit(const v1::FitInertiaResponse& fit, const char* field,
+                             v1::PlanRequest* request) {
   if (!(fit.mass() > 0.0) || !std::isfinite(fit.mass())) {
-    return absl::InvalidArgumentError(absl::StrCat(field, ": the fit has no positive mass (", fit.mass(), " kg)"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(field, ": the fit has no positive mass (", fit.mass(), " kg)"));
   }
   if (fit.covariance_size() != 0 && fit.covariance_size() != 100) {
-    return absl::InvalidArgumentError(
-        absl::StrCat(field, ": covariance has ", fit.covariance_size(), " entries, need 100 (10x10 row-major)"));
+    return absl::InvalidArgumentError(absl::StrCat(
+        field, ": covariance has ", fit.covariance_size(), " entries, need 100 (10x10 row-major)"));
   }
   v1::ObjectModel* object = request->mutable_object();
   object->set_mass(fit.mass());
@@ -30,7 +32,8 @@ absl::Status ApplyInertiaFit(const v1::FitInertiaResponse& fit, const char* fiel
 absl::Status ApplyFrictionEstimate(const v1::FrictionResponse& friction, const char* field,
                                    v1::PlanRequest* request) {
   if (friction.count() <= 0) {
-    return absl::InvalidArgumentError(absl::StrCat(field, ": no trial slipped (count 0): no friction estimate"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(field, ": no trial slipped (count 0): no friction estimate"));
   }
   for (v1::Contact& c : *request->mutable_contacts()) {
     if (c.kind() == v1::CONTACT_KIND_EXTRINSIC) continue;

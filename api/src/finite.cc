@@ -55,7 +55,8 @@ std::optional<std::string> Find(const Message& m, double* value);
 
 // The value of one element of a message field (a map entry's value, or the
 // element itself), searched; the path below it ("", ".x", ".values[2]").
-std::optional<std::string> FindInElement(const Message& element, const FieldDescriptor* field, double* value) {
+std::optional<std::string> FindInElement(const Message& element, const FieldDescriptor* field,
+                                         double* value) {
   if (!field->is_map()) return Find(element, value);
   const FieldDescriptor* v = element.GetDescriptor()->map_value();
   if (IsNumber(v)) {
@@ -72,7 +73,8 @@ std::optional<std::string> FindInField(const Message& m, const FieldDescriptor* 
     const int n = f->is_repeated() ? r->FieldSize(m, f) : 1;
     for (int k = 0; k < n; ++k) {
       *value = NumberAt(m, f, f->is_repeated() ? k : -1);
-      if (Bad(*value, f)) return f->is_repeated() ? absl::StrCat(f->name(), "[", k, "]") : f->name();
+      if (Bad(*value, f))
+        return f->is_repeated() ? absl::StrCat(f->name(), "[", k, "]") : f->name();
     }
     return std::nullopt;
   }
@@ -87,7 +89,8 @@ std::optional<std::string> FindInField(const Message& m, const FieldDescriptor* 
     const Message& element = r->GetRepeatedMessage(m, f, k);
     std::optional<std::string> below = FindInElement(element, f, value);
     if (!below) continue;
-    const std::string head = absl::StrCat(f->name(), Subscript(f->is_map() ? &element : nullptr, k));
+    const std::string head =
+        absl::StrCat(f->name(), Subscript(f->is_map() ? &element : nullptr, k));
     return below->empty() ? head : absl::StrCat(head, ".", *below);
   }
   return std::nullopt;
@@ -119,8 +122,8 @@ absl::Status NonFiniteError(const std::string& path, double value, const Message
 // The first non-finite of `values` as "<field>[i]" (with `.x` etc. from
 // `component` when given).
 template <typename Repeated, typename Get>
-std::optional<std::pair<std::string, double>> FirstNonFinite(const Repeated& values, const char* field,
-                                                            Get get) {
+std::optional<std::pair<std::string, double>> FirstNonFinite(const Repeated& values,
+                                                             const char* field, Get get) {
   for (int i = 0; i < values.size(); ++i) {
     if (std::optional<std::pair<const char*, double>> bad = get(values.Get(i))) {
       return std::make_pair(absl::StrCat(field, "[", i, "]", bad->first), bad->second);
@@ -151,9 +154,11 @@ std::optional<std::pair<const char*, double>> NonFiniteMargin(const v1::RowMargi
 std::optional<std::pair<std::string, double>> FindInPlan(const v1::PlanResponse& r) {
   if (auto bad = FirstNonFinite(r.forces(), "forces", NonFiniteComponent)) return bad;
   if (auto bad = FirstNonFinite(r.normal_forces(), "normal_forces", NonFiniteScalar)) return bad;
-  if (auto bad = FirstNonFinite(r.normal_force_sigma(), "normal_force_sigma", NonFiniteScalar)) return bad;
+  if (auto bad = FirstNonFinite(r.normal_force_sigma(), "normal_force_sigma", NonFiniteScalar))
+    return bad;
   if (!std::isfinite(r.objective())) return std::make_pair(std::string("objective"), r.objective());
-  if (!std::isfinite(r.min_margin())) return std::make_pair(std::string("min_margin"), r.min_margin());
+  if (!std::isfinite(r.min_margin()))
+    return std::make_pair(std::string("min_margin"), r.min_margin());
   if (auto bad = FirstNonFinite(r.row_margins(), "row_margins", NonFiniteMargin)) return bad;
   const v1::CrossCheck& c = r.cross_check();
   if (!std::isfinite(c.max_force_diff()))

@@ -54,35 +54,52 @@ absl::Status PrefixedForField(const absl::Status& status, const std::string& mes
 
 absl::StatusOr<inertia::RegionScheme> RegionSchemeFromProto(v1::RegionScheme scheme) {
   switch (scheme) {
-    case v1::REGION_SCHEME_AUTO: return inertia::RegionScheme::kAuto;
-    case v1::REGION_SCHEME_GRID: return inertia::RegionScheme::kGrid;
-    case v1::REGION_SCHEME_COLORS: return inertia::RegionScheme::kColors;
-    case v1::REGION_SCHEME_SINGLE: return inertia::RegionScheme::kSingle;
-    default: break;
+    case v1::REGION_SCHEME_AUTO:
+      return inertia::RegionScheme::kAuto;
+    case v1::REGION_SCHEME_GRID:
+      return inertia::RegionScheme::kGrid;
+    case v1::REGION_SCHEME_COLORS:
+      return inertia::RegionScheme::kColors;
+    case v1::REGION_SCHEME_SINGLE:
+      return inertia::RegionScheme::kSingle;
+    default:
+      break;
   }
-  return absl::InvalidArgumentError(absl::StrCat("options.regions: unknown value ", static_cast<int>(scheme)));
+  return absl::InvalidArgumentError(
+      absl::StrCat("options.regions: unknown value ", static_cast<int>(scheme)));
 }
 
-absl::StatusOr<inertia::FactorGraphVariant> FactorGraphVariantFromProto(v1::FactorGraphVariant variant) {
+absl::StatusOr<inertia::FactorGraphVariant> FactorGraphVariantFromProto(
+    v1::FactorGraphVariant variant) {
   switch (variant) {
-    case v1::FACTOR_GRAPH_VARIANT_BASELINE_FG: return inertia::FactorGraphVariant::kBaselineFg;
-    case v1::FACTOR_GRAPH_VARIANT_NO_C: return inertia::FactorGraphVariant::kNoConstraint;
+    case v1::FACTOR_GRAPH_VARIANT_BASELINE_FG:
+      return inertia::FactorGraphVariant::kBaselineFg;
+    case v1::FACTOR_GRAPH_VARIANT_NO_C:
+      return inertia::FactorGraphVariant::kNoConstraint;
     case v1::FACTOR_GRAPH_VARIANT_UNSPECIFIED:
-    case v1::FACTOR_GRAPH_VARIANT_C: return inertia::FactorGraphVariant::kConstraint;
-    case v1::FACTOR_GRAPH_VARIANT_C_G: return inertia::FactorGraphVariant::kConstraintPrior;
-    default: break;
+    case v1::FACTOR_GRAPH_VARIANT_C:
+      return inertia::FactorGraphVariant::kConstraint;
+    case v1::FACTOR_GRAPH_VARIANT_C_G:
+      return inertia::FactorGraphVariant::kConstraintPrior;
+    default:
+      break;
   }
-  return absl::InvalidArgumentError(absl::StrCat("options.fg_variant: unknown value ", static_cast<int>(variant)));
+  return absl::InvalidArgumentError(
+      absl::StrCat("options.fg_variant: unknown value ", static_cast<int>(variant)));
 }
 
 // UNSPECIFIED and unknown numbers: CONSTRAINED (a response's method; a
 // request's is checked by InertiaOptionsFromProto first).
 inertia::InertiaMethod InertiaMethodFromProto(v1::InertiaMethod method) {
   switch (method) {
-    case v1::INERTIA_METHOD_BASELINE_LS: return inertia::InertiaMethod::kBaselineLs;
-    case v1::INERTIA_METHOD_FACTOR_GRAPH: return inertia::InertiaMethod::kFactorGraph;
-    case v1::INERTIA_METHOD_DENSITY: return inertia::InertiaMethod::kDensity;
-    default: return inertia::InertiaMethod::kConstrained;
+    case v1::INERTIA_METHOD_BASELINE_LS:
+      return inertia::InertiaMethod::kBaselineLs;
+    case v1::INERTIA_METHOD_FACTOR_GRAPH:
+      return inertia::InertiaMethod::kFactorGraph;
+    case v1::INERTIA_METHOD_DENSITY:
+      return inertia::InertiaMethod::kDensity;
+    default:
+      return inertia::InertiaMethod::kConstrained;
   }
 }
 
@@ -122,12 +139,15 @@ io::MeshCheck MeshCheckFromProto(const v1::MeshCheck& c) {
 // planner's limits: "options.truth.inertia.ixx: magnitude exceeds 1e+12 kg m^2".
 absl::Status CheckParameterMagnitudes(const std::string& path, const v1::InertialParameters& p) {
   TF_RETURN_IF_ERROR(planner::CheckMagnitude(path + ".mass", p.mass(), planner::kMaxMass, "kg"));
-  TF_RETURN_IF_ERROR(planner::CheckMagnitude(path + ".com", FromProto(p.com()), planner::kMaxLength, "m"));
+  TF_RETURN_IF_ERROR(
+      planner::CheckMagnitude(path + ".com", FromProto(p.com()), planner::kMaxLength, "m"));
   const v1::Inertia& in = p.inertia();
-  const std::pair<const char*, double> moments[] = {{"ixx", in.ixx()}, {"iyy", in.iyy()}, {"izz", in.izz()},
-                                                    {"ixy", in.ixy()}, {"ixz", in.ixz()}, {"iyz", in.iyz()}};
+  const std::pair<const char*, double> moments[] = {{"ixx", in.ixx()}, {"iyy", in.iyy()},
+                                                    {"izz", in.izz()}, {"ixy", in.ixy()},
+                                                    {"ixz", in.ixz()}, {"iyz", in.iyz()}};
   for (const auto& [name, v] : moments) {
-    if (auto s = planner::CheckMagnitude(absl::StrCat(path, ".inertia.", name), v, planner::kMaxInertia, "kg m^2");
+    if (auto s = planner::CheckMagnitude(absl::StrCat(path, ".inertia.", name), v,
+                                         planner::kMaxInertia, "kg m^2");
         !s.ok())
       return s;
   }
@@ -138,12 +158,14 @@ absl::Status CheckParameterMagnitudes(const std::string& path, const v1::Inertia
 // fit's products of them stay finite); other options are the library's.
 absl::Status CheckOptionMagnitudes(const v1::InertiaFitOptions& o) {
   using planner::CheckMagnitude;
-  if (auto s = CheckMagnitude("options.gravity", FromProto(o.gravity()), planner::kMaxAcceleration, "m/s^2"); !s.ok())
+  if (auto s = CheckMagnitude("options.gravity", FromProto(o.gravity()), planner::kMaxAcceleration,
+                              "m/s^2");
+      !s.ok())
     return s;
   for (int i = 0; i < o.hull_size(); ++i) {
     if (!planner::IsBounded(FromProto(o.hull(i)), planner::kMaxLength))
-      return planner::MagnitudeError(absl::StrCat("options.hull[", i, "]"), FromProto(o.hull(i)), planner::kMaxLength,
-                                     "m");
+      return planner::MagnitudeError(absl::StrCat("options.hull[", i, "]"), FromProto(o.hull(i)),
+                                     planner::kMaxLength, "m");
   }
   if (o.has_prior()) {
     TF_RETURN_IF_ERROR(CheckParameterMagnitudes("options.prior.params", o.prior().params()));
@@ -156,10 +178,12 @@ absl::Status CheckOptionMagnitudes(const v1::InertiaFitOptions& o) {
       {"options.noise.force_sigma", n.force_sigma(), planner::kMaxForce, "N"},
       {"options.noise.torque_sigma", n.torque_sigma(), planner::kMaxForce, "N m"},
       {"options.noise.position_sigma", n.position_sigma(), planner::kMaxLength, "m"},
-      {"options.noise.angular_velocity_sigma", n.angular_velocity_sigma(), planner::kMaxAngularVelocity, "rad/s"},
-      {"options.noise.linear_acceleration_sigma", n.linear_acceleration_sigma(), planner::kMaxAcceleration, "m/s^2"},
-      {"options.noise.angular_acceleration_sigma", n.angular_acceleration_sigma(), planner::kMaxAngularAcceleration,
-       "rad/s^2"}};
+      {"options.noise.angular_velocity_sigma", n.angular_velocity_sigma(),
+       planner::kMaxAngularVelocity, "rad/s"},
+      {"options.noise.linear_acceleration_sigma", n.linear_acceleration_sigma(),
+       planner::kMaxAcceleration, "m/s^2"},
+      {"options.noise.angular_acceleration_sigma", n.angular_acceleration_sigma(),
+       planner::kMaxAngularAcceleration, "rad/s^2"}};
   for (const auto& [field, v, limit, unit] : sigmas) {
     TF_RETURN_IF_ERROR(CheckMagnitude(field, v, limit, unit));
   }
@@ -170,20 +194,28 @@ absl::Status CheckOptionMagnitudes(const v1::InertiaFitOptions& o) {
 
 v1::FactorGraphVariant FactorGraphVariantToProto(inertia::FactorGraphVariant variant) {
   switch (variant) {
-    case inertia::FactorGraphVariant::kBaselineFg: return v1::FACTOR_GRAPH_VARIANT_BASELINE_FG;
-    case inertia::FactorGraphVariant::kNoConstraint: return v1::FACTOR_GRAPH_VARIANT_NO_C;
-    case inertia::FactorGraphVariant::kConstraint: return v1::FACTOR_GRAPH_VARIANT_C;
-    case inertia::FactorGraphVariant::kConstraintPrior: return v1::FACTOR_GRAPH_VARIANT_C_G;
+    case inertia::FactorGraphVariant::kBaselineFg:
+      return v1::FACTOR_GRAPH_VARIANT_BASELINE_FG;
+    case inertia::FactorGraphVariant::kNoConstraint:
+      return v1::FACTOR_GRAPH_VARIANT_NO_C;
+    case inertia::FactorGraphVariant::kConstraint:
+      return v1::FACTOR_GRAPH_VARIANT_C;
+    case inertia::FactorGraphVariant::kConstraintPrior:
+      return v1::FACTOR_GRAPH_VARIANT_C_G;
   }
   return v1::FACTOR_GRAPH_VARIANT_UNSPECIFIED;
 }
 
 v1::RegionScheme RegionSchemeToProto(inertia::RegionScheme scheme) {
   switch (scheme) {
-    case inertia::RegionScheme::kAuto: return v1::REGION_SCHEME_AUTO;
-    case inertia::RegionScheme::kGrid: return v1::REGION_SCHEME_GRID;
-    case inertia::RegionScheme::kColors: return v1::REGION_SCHEME_COLORS;
-    case inertia::RegionScheme::kSingle: return v1::REGION_SCHEME_SINGLE;
+    case inertia::RegionScheme::kAuto:
+      return v1::REGION_SCHEME_AUTO;
+    case inertia::RegionScheme::kGrid:
+      return v1::REGION_SCHEME_GRID;
+    case inertia::RegionScheme::kColors:
+      return v1::REGION_SCHEME_COLORS;
+    case inertia::RegionScheme::kSingle:
+      return v1::REGION_SCHEME_SINGLE;
   }
   return v1::REGION_SCHEME_AUTO;
 }
@@ -193,13 +225,13 @@ absl::StatusOr<ObjectMesh> MeshFromProto(const v1::MeshInput& input, std::string
   ObjectMesh out;
   out.name = input.name().empty() ? "mesh" : input.name();
   if (input.data().empty())
-    return absl::InvalidArgumentError(
-        absl::StrCat(field, ".data: empty (give the bytes of ", out.name, ", an STL, OBJ or PLY file)"));
+    return absl::InvalidArgumentError(absl::StrCat(field, ".data: empty (give the bytes of ",
+                                                   out.name, ", an STL, OBJ or PLY file)"));
   std::string format = input.format();
   if (format.empty()) {
     if (input.name().empty())
-      return absl::InvalidArgumentError(
-          absl::StrCat(field, ".format: empty and no name to take it from (give \"stl\", \"obj\" or \"ply\")"));
+      return absl::InvalidArgumentError(absl::StrCat(
+          field, ".format: empty and no name to take it from (give \"stl\", \"obj\" or \"ply\")"));
     absl::StatusOr<std::string> from_name = io::MeshFormatFromPath(input.name());
     if (!from_name.ok()) return Prefixed(from_name.status(), absl::StrCat(field, ".format: "));
     format = *from_name;
@@ -218,8 +250,8 @@ absl::StatusOr<ObjectMesh> MeshFromProto(const v1::MeshInput& input, std::string
   return out;
 }
 
-v1::MeshInput MeshInputToProto(std::string bytes, const std::string& format, const std::string& name,
-                               const io::MeshPlacement& placement) {
+v1::MeshInput MeshInputToProto(std::string bytes, const std::string& format,
+                               const std::string& name, const io::MeshPlacement& placement) {
   v1::MeshInput out;
   out.set_data(std::move(bytes));
   out.set_format(format);
@@ -236,10 +268,14 @@ v1::MeshInput MeshInputToProto(std::string bytes, const std::string& format, con
 
 v1::InertiaMethod InertiaMethodToProto(inertia::InertiaMethod method) {
   switch (method) {
-    case inertia::InertiaMethod::kBaselineLs: return v1::INERTIA_METHOD_BASELINE_LS;
-    case inertia::InertiaMethod::kFactorGraph: return v1::INERTIA_METHOD_FACTOR_GRAPH;
-    case inertia::InertiaMethod::kConstrained: return v1::INERTIA_METHOD_CONSTRAINED;
-    case inertia::InertiaMethod::kDensity: return v1::INERTIA_METHOD_DENSITY;
+    case inertia::InertiaMethod::kBaselineLs:
+      return v1::INERTIA_METHOD_BASELINE_LS;
+    case inertia::InertiaMethod::kFactorGraph:
+      return v1::INERTIA_METHOD_FACTOR_GRAPH;
+    case inertia::InertiaMethod::kConstrained:
+      return v1::INERTIA_METHOD_CONSTRAINED;
+    case inertia::InertiaMethod::kDensity:
+      return v1::INERTIA_METHOD_DENSITY;
   }
   return v1::INERTIA_METHOD_UNSPECIFIED;
 }
@@ -270,7 +306,8 @@ absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::Inerti
   if (!v1::InertiaMethod_IsValid(o.method()))
     return absl::InvalidArgumentError(absl::StrCat("options.method: unknown value ", o.method()));
   if (o.method() == v1::INERTIA_METHOD_UNSPECIFIED) {
-    out.method = o.has_mesh() ? inertia::InertiaMethod::kDensity : inertia::InertiaMethod::kConstrained;
+    out.method =
+        o.has_mesh() ? inertia::InertiaMethod::kDensity : inertia::InertiaMethod::kConstrained;
   } else {
     out.method = InertiaMethodFromProto(o.method());
   }
@@ -296,7 +333,8 @@ absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::Inerti
                                      std::pair{o.smoothing_window(), "smoothing_window"},
                                      std::pair{o.max_iterations(), "max_iterations"}}) {
     if (value > static_cast<uint32_t>(std::numeric_limits<int>::max())) {
-      return absl::InvalidArgumentError(absl::StrCat("options.", field, ": ", value, " is out of range (at most ",
+      return absl::InvalidArgumentError(absl::StrCat("options.", field, ": ", value,
+                                                     " is out of range (at most ",
                                                      std::numeric_limits<int>::max(), ")"));
     }
   }
@@ -313,19 +351,21 @@ absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::Inerti
   out.factor_graph.variant = *variant;
   if (o.target_regions() != 0) {
     if (o.target_regions() > static_cast<uint32_t>(inertia::kMaxTargetRegions))
-      return absl::InvalidArgumentError(
-          absl::StrCat("options.target_regions: must be in 1..", inertia::kMaxTargetRegions,
-                       ", 0 = 12 (got ", o.target_regions(), ")"));
+      return absl::InvalidArgumentError(absl::StrCat("options.target_regions: must be in 1..",
+                                                     inertia::kMaxTargetRegions, ", 0 = 12 (got ",
+                                                     o.target_regions(), ")"));
     out.density.regions.target_regions = static_cast<int>(o.target_regions());
   }
   if (o.has_density_regularization()) out.density.regularization = o.density_regularization();
   if (o.has_mesh_prior_weight()) out.constrained.mesh_prior_weight = o.mesh_prior_weight();
   if (o.has_contradiction_ratio()) {
     if (o.contradiction_ratio() != 0)
-      return absl::InvalidArgumentError(absl::StrCat(
-          "options.contradiction_ratio: ", o.contradiction_ratio(),
-          " is no longer used (only 0, which disables the mesh test); set options.mesh_tolerance instead "
-          "(first-order Riemannian, default ", inertia::kDefaultMeshTolerance, ", 0 disables)"));
+      return absl::InvalidArgumentError(
+          absl::StrCat("options.contradiction_ratio: ", o.contradiction_ratio(),
+                       " is no longer used (only 0, which disables the mesh test); set "
+                       "options.mesh_tolerance instead "
+                       "(first-order Riemannian, default ",
+                       inertia::kDefaultMeshTolerance, ", 0 disables)"));
     out.density.mesh_tolerance = 0;
   }
   if (o.has_mesh_tolerance()) out.density.mesh_tolerance = o.mesh_tolerance();
@@ -337,14 +377,16 @@ absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::Inerti
   }
   if (o.has_truth() && !inertia::IsPhysicallyConsistent(InertialParametersFromProto(o.truth()))) {
     return absl::InvalidArgumentError(
-        "options.truth: not physically consistent (mass > 0 and a positive-definite pseudo-inertia needed)");
+        "options.truth: not physically consistent (mass > 0 and a positive-definite pseudo-inertia "
+        "needed)");
   }
   if (absl::Status s = inertia::ValidateInertiaOptions(out); !s.ok())
     return PrefixedForField(s, out.mesh ? out.mesh_name : std::string());
   return out;
 }
 
-v1::InertiaSample InertiaSampleToProto(const inertia::InertiaSample& s, inertia::ForceSource source) {
+v1::InertiaSample InertiaSampleToProto(const inertia::InertiaSample& s,
+                                       inertia::ForceSource source) {
   v1::InertiaSample out;
   out.set_t(s.t);
   *out.mutable_position() = ToProto(s.position);
@@ -428,7 +470,8 @@ inertia::InertiaFit InertiaFitFromProto(const v1::FitInertiaResponse& r) {
   fit.params.inertia_com = TensorFromProto(r.inertia());
   fit.standard = fit.params.ToStandard();
   fit.principal_moments = FromProto(r.principal_moments());
-  for (int k = 0; k < std::min(3, r.principal_axes_size()); ++k) fit.principal_axes.col(k) = FromProto(r.principal_axes(k));
+  for (int k = 0; k < std::min(3, r.principal_axes_size()); ++k)
+    fit.principal_axes.col(k) = FromProto(r.principal_axes(k));
   fit.physically_consistent = r.physically_consistent();
   fit.pseudo_inertia_min_eigenvalue = r.pseudo_inertia_min_eigenvalue();
   fit.com_in_hull = r.com_in_hull();
@@ -467,11 +510,13 @@ absl::StatusOr<v1::FitInertiaResponse> FitInertiaSamples(const inertia::InertiaS
   absl::StatusOr<inertia::InertiaOptions> converted = InertiaOptionsFromProto(options);
   if (!converted.ok()) return converted.status();
   const int64_t n = static_cast<int64_t>(samples.samples.size());
-  if (limits.max_fit_bytes > 0 && inertia::FitWorkingBytes(converted->method, n) > limits.max_fit_bytes) {
+  if (limits.max_fit_bytes > 0 &&
+      inertia::FitWorkingBytes(converted->method, n) > limits.max_fit_bytes) {
     return absl::InvalidArgumentError(absl::StrCat(
         "samples: a ", InertiaMethodName(converted->method), " fit of ", n, " samples needs about ",
-        inertia::FitWorkingBytes(converted->method, n) >> 20, " MiB of working memory, over the server's limit of ",
-        limits.max_fit_bytes >> 20, " MiB (--max-fit-bytes): send at most ",
+        inertia::FitWorkingBytes(converted->method, n) >> 20,
+        " MiB of working memory, over the server's limit of ", limits.max_fit_bytes >> 20,
+        " MiB (--max-fit-bytes): send at most ",
         limits.max_fit_bytes / inertia::FitWorkingBytes(converted->method, 1), " samples"));
   }
   converted->progress = std::move(progress);
@@ -516,9 +561,11 @@ int64_t InertiaStream::held_bytes_after(const v1::FitInertiaRequest& message) co
   const size_t capacity = GrownCapacity(
       samples_.samples.capacity(),
       std::min<size_t>(samples_.samples.size() + message.samples_size(), max_samples_));
-  const size_t options = message.has_options() ? message.options().SpaceUsedLong() : options_.SpaceUsedLong();
+  const size_t options =
+      message.has_options() ? message.options().SpaceUsedLong() : options_.SpaceUsedLong();
   return static_cast<int64_t>(capacity * sizeof(inertia::InertiaSample) +
-                              (contacts_held_ + contacts) * sizeof(inertia::ContactReading) + options);
+                              (contacts_held_ + contacts) * sizeof(inertia::ContactReading) +
+                              options);
 }
 
 absl::Status InertiaStream::Add(const v1::FitInertiaRequest& message) {
@@ -528,36 +575,43 @@ absl::Status InertiaStream::Add(const v1::FitInertiaRequest& message) {
       std::min<size_t>(samples_.samples.size() + message.samples_size(), max_samples_)));
   if (message.has_options()) {
     if (index != 0) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          "options: only the first message of the stream may carry options (message ", index, " does)"));
+      return absl::InvalidArgumentError(
+          absl::StrCat("options: only the first message of the stream may carry options (message ",
+                       index, " does)"));
     }
     options_ = message.options();
   }
   for (const v1::InertiaSample& in : message.samples()) {
     const int64_t i = samples_received();
     if (i >= max_samples_) {
-      return absl::InvalidArgumentError(absl::StrCat("samples: more than ", max_samples_,
-                                                     " samples in one stream (the server's limit)"));
+      return absl::InvalidArgumentError(absl::StrCat(
+          "samples: more than ", max_samples_, " samples in one stream (the server's limit)"));
     }
     const std::string where = absl::StrCat("samples[", i, "]");
     const bool has_contacts = in.contacts_size() > 0;
     if (i == 0) {
       if (has_contacts == in.has_wrench()) {
-        return absl::InvalidArgumentError(absl::StrCat(
-            where, ": give exactly one force source, wrench or contacts (the first sample sets it for the stream)"));
+        return absl::InvalidArgumentError(
+            absl::StrCat(where,
+                         ": give exactly one force source, wrench or contacts (the first sample "
+                         "sets it for the stream)"));
       }
-      samples_.source = has_contacts ? inertia::ForceSource::kContacts : inertia::ForceSource::kWrench;
+      samples_.source =
+          has_contacts ? inertia::ForceSource::kContacts : inertia::ForceSource::kWrench;
       samples_.num_contacts = in.contacts_size();
-    } else if (samples_.source == inertia::ForceSource::kWrench && (has_contacts || !in.has_wrench())) {
-      return absl::InvalidArgumentError(absl::StrCat(where, ": wrench expected (samples[0] has a wrench)"));
+    } else if (samples_.source == inertia::ForceSource::kWrench &&
+               (has_contacts || !in.has_wrench())) {
+      return absl::InvalidArgumentError(
+          absl::StrCat(where, ": wrench expected (samples[0] has a wrench)"));
     } else if (samples_.source == inertia::ForceSource::kContacts && in.has_wrench()) {
-      return absl::InvalidArgumentError(absl::StrCat(where, ".wrench: contacts expected (samples[0] has contacts)"));
+      return absl::InvalidArgumentError(
+          absl::StrCat(where, ".wrench: contacts expected (samples[0] has contacts)"));
     }
     inertia::InertiaSample s;
     s.t = in.t();
     s.position = FromProto(in.position());
-    s.orientation = Eigen::Quaterniond(in.orientation().w(), in.orientation().x(), in.orientation().y(),
-                                       in.orientation().z());
+    s.orientation = Eigen::Quaterniond(in.orientation().w(), in.orientation().x(),
+                                       in.orientation().y(), in.orientation().z());
     s.force = FromProto(in.wrench().force());
     s.torque = FromProto(in.wrench().torque());
     s.force_sigma = in.force_sigma();
@@ -565,13 +619,14 @@ absl::Status InertiaStream::Add(const v1::FitInertiaRequest& message) {
     s.contacts.reserve(in.contacts_size());
     contacts_held_ += in.contacts_size();
     for (const v1::ContactSample& c : in.contacts()) {
-      s.contacts.push_back(inertia::ContactReading{FromProto(c.point()), FromProto(c.force()), c.sigma()});
+      s.contacts.push_back(
+          inertia::ContactReading{FromProto(c.point()), FromProto(c.force()), c.sigma()});
     }
     if (in.has_kinematics()) {
       const v1::MeasuredKinematics& k = in.kinematics();
-      s.kinematics = inertia::MeasuredKinematics{FromProto(k.angular_velocity()), FromProto(k.velocity()),
-                                                 FromProto(k.angular_acceleration()),
-                                                 FromProto(k.acceleration())};
+      s.kinematics = inertia::MeasuredKinematics{
+          FromProto(k.angular_velocity()), FromProto(k.velocity()),
+          FromProto(k.angular_acceleration()), FromProto(k.acceleration())};
     }
     samples_.samples.push_back(std::move(s));
   }
@@ -581,7 +636,8 @@ absl::Status InertiaStream::Add(const v1::FitInertiaRequest& message) {
 absl::StatusOr<v1::FitInertiaResponse> InertiaStream::Fit(const CallLimits& limits,
                                                           std::function<void(double)> progress,
                                                           const CallState& state) const {
-  if (samples_.samples.empty()) return absl::InvalidArgumentError("samples: the stream carried no samples");
+  if (samples_.samples.empty())
+    return absl::InvalidArgumentError("samples: the stream carried no samples");
   return FitInertiaSamples(samples_, options_, limits, std::move(progress), nullptr, state);
 }
 

@@ -53,27 +53,33 @@ class FieldChecker {
  public:
   explicit FieldChecker(std::string source) : source_(std::move(source)) {}
 
-  absl::Status Message(const io::JsonValue& value, const Descriptor* type, const std::string& path) {
-    if (!value.is_object()) return Error(value.line(), value.column(), path, "expected a JSON object");
+  absl::Status Message(const io::JsonValue& value, const Descriptor* type,
+                       const std::string& path) {
+    if (!value.is_object())
+      return Error(value.line(), value.column(), path, "expected a JSON object");
     for (size_t i = 0; i < value.members().size(); ++i) {
       const auto& [key, member] = value.members()[i];
       const FieldDescriptor* field = FindField(type, key);
       if (field == nullptr) {
         const io::JsonValue::Position at = value.KeyPosition(i);
         return Error(at.line, at.column, path,
-                     absl::StrCat("unknown field '", key, "' in ", type->name(), io::DidYouMean(key, FieldNames(type))));
+                     absl::StrCat("unknown field '", key, "' in ", type->name(),
+                                  io::DidYouMean(key, FieldNames(type))));
       }
       if (member.is_null()) continue;
-      const std::string where = path.empty() ? field->name() : absl::StrCat(path, ".", field->name());
+      const std::string where =
+          path.empty() ? field->name() : absl::StrCat(path, ".", field->name());
       TF_RETURN_IF_ERROR(Field(member, field, where));
     }
     return absl::OkStatus();
   }
 
  private:
-  absl::Status Field(const io::JsonValue& value, const FieldDescriptor* field, const std::string& path) {
+  absl::Status Field(const io::JsonValue& value, const FieldDescriptor* field,
+                     const std::string& path) {
     if (field->is_map()) {
-      if (!value.is_object()) return Error(value.line(), value.column(), path, "expected a JSON object (a map)");
+      if (!value.is_object())
+        return Error(value.line(), value.column(), path, "expected a JSON object (a map)");
       const FieldDescriptor* mapped = field->message_type()->map_value();
       for (const auto& [key, entry] : value.members()) {
         if (entry.is_null()) continue;
@@ -82,7 +88,8 @@ class FieldChecker {
       return absl::OkStatus();
     }
     if (!field->is_repeated()) return Element(value, field, path);
-    if (!value.is_array()) return Error(value.line(), value.column(), path, "expected a JSON array");
+    if (!value.is_array())
+      return Error(value.line(), value.column(), path, "expected a JSON array");
     for (size_t k = 0; k < value.array().size(); ++k) {
       TF_RETURN_IF_ERROR(Element(value.array()[k], field, absl::StrCat(path, "[", k, "]")));
     }
@@ -90,14 +97,16 @@ class FieldChecker {
   }
 
   // One value of `field` (an element when it is repeated).
-  absl::Status Element(const io::JsonValue& value, const FieldDescriptor* field, const std::string& path) {
+  absl::Status Element(const io::JsonValue& value, const FieldDescriptor* field,
+                       const std::string& path) {
     if (field->type() == FieldDescriptor::TYPE_MESSAGE &&
         !absl::StartsWith(field->message_type()->full_name(), "google.protobuf.")) {
       return Message(value, field->message_type(), path);
     }
     if (field->type() != FieldDescriptor::TYPE_ENUM) return Scalar(value, field, path);
     if (value.is_number()) return absl::OkStatus();  // numeric enum values
-    if (!value.is_string()) return Error(value.line(), value.column(), path, "expected an enum name (a string)");
+    if (!value.is_string())
+      return Error(value.line(), value.column(), path, "expected an enum name (a string)");
     const EnumDescriptor* type = field->enum_type();
     if (type->FindValueByName(value.string()) != nullptr) return absl::OkStatus();
     std::vector<std::string> names;
@@ -110,7 +119,8 @@ class FieldChecker {
   // The JSON kind of a scalar, so a wrong type keeps its line and column
   // (protobuf's own message has neither). Quoted numbers and "NaN" /
   // "Infinity" are proto3 JSON; their values are left to protobuf.
-  absl::Status Scalar(const io::JsonValue& value, const FieldDescriptor* field, const std::string& path) const {
+  absl::Status Scalar(const io::JsonValue& value, const FieldDescriptor* field,
+                      const std::string& path) const {
     const std::string type = field->type_name();
     switch (field->cpp_type()) {
       case FieldDescriptor::CPPTYPE_DOUBLE:
@@ -124,15 +134,18 @@ class FieldChecker {
       case FieldDescriptor::CPPTYPE_UINT32:
       case FieldDescriptor::CPPTYPE_UINT64:
         if (value.is_string() && QuotedNumber(value.string(), true)) return absl::OkStatus();
-        if (value.is_number() && value.number() == std::floor(value.number())) return absl::OkStatus();
+        if (value.is_number() && value.number() == std::floor(value.number()))
+          return absl::OkStatus();
         return Error(value.line(), value.column(), path,
                      absl::StrCat("expected an integer (", type, "), got ", Kind(value)));
       case FieldDescriptor::CPPTYPE_BOOL:
         if (value.is_bool()) return absl::OkStatus();
-        return Error(value.line(), value.column(), path, absl::StrCat("expected true or false, got ", Kind(value)));
+        return Error(value.line(), value.column(), path,
+                     absl::StrCat("expected true or false, got ", Kind(value)));
       case FieldDescriptor::CPPTYPE_STRING:
         if (value.is_string()) return absl::OkStatus();
-        return Error(value.line(), value.column(), path, absl::StrCat("expected a string, got ", Kind(value)));
+        return Error(value.line(), value.column(), path,
+                     absl::StrCat("expected a string, got ", Kind(value)));
       default:
         return absl::OkStatus();
     }
@@ -167,8 +180,8 @@ class FieldChecker {
     return names;
   }
   absl::Status Error(int line, int column, const std::string& path, const std::string& what) const {
-    return absl::InvalidArgumentError(
-        absl::StrCat(source_, ":", line, ":", column, ": ", path.empty() ? "" : absl::StrCat(path, ": "), what));
+    return absl::InvalidArgumentError(absl::StrCat(
+        source_, ":", line, ":", column, ": ", path.empty() ? "" : absl::StrCat(path, ": "), what));
   }
 
   std::string source_;
@@ -178,8 +191,8 @@ class FieldChecker {
 
 absl::Status ParseJson(std::string_view json, google::protobuf::Message* message,
                        std::string_view source) {
-  const std::string what =
-      source.empty() ? absl::StrCat(message->GetDescriptor()->name(), " JSON") : std::string(source);
+  const std::string what = source.empty() ? absl::StrCat(message->GetDescriptor()->name(), " JSON")
+                                          : std::string(source);
   message->Clear();
   // absl::string_view is not std::string_view in Debian 12's Abseil.
   if (absl::StripAsciiWhitespace(absl::string_view(json.data(), json.size())).empty()) {
@@ -201,7 +214,8 @@ absl::Status ParseJson(std::string_view json, google::protobuf::Message* message
   return absl::OkStatus();
 }
 
-absl::StatusOr<v1::PlanRequest> ParsePlanRequestJson(std::string_view json, std::string_view source) {
+absl::StatusOr<v1::PlanRequest> ParsePlanRequestJson(std::string_view json,
+                                                     std::string_view source) {
   v1::PlanRequest request;
   absl::Status status = ParseJson(json, &request, source.empty() ? "request JSON" : source);
   if (!status.ok()) return status;
@@ -224,6 +238,5 @@ std::string ToJson(const google::protobuf::Message& message, bool compact) {
   }
   return compact ? out : io::IndentJson(out);
 }
-
 
 }  // namespace tactforce::api

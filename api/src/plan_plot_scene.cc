@@ -21,7 +21,8 @@ namespace {
 // The drawn apex shift (N) of every contact: EXACT, cone_shift / mu (the
 // tightened cone itself); PYRAMID, the largest facet tightening
 // (nominal_rhs - rhs) over the facet row's normal component mu cos(pi / k).
-std::vector<double> ApexShifts(const planner::PreparedProblem& prepared, const planner::PlanOptions& options) {
+std::vector<double> ApexShifts(const planner::PreparedProblem& prepared,
+                               const planner::PlanOptions& options) {
   const int n = prepared.num_contacts();
   std::vector<double> shift(n, 0.0);
   if (options.cone == planner::ConeModel::kExact) {
@@ -42,12 +43,13 @@ std::vector<double> ApexShifts(const planner::PreparedProblem& prepared, const p
   return shift;
 }
 
-std::string Settings(const planner::PlanOptions& options, const v1::PlanResponse& response, int contacts) {
+std::string Settings(const planner::PlanOptions& options, const v1::PlanResponse& response,
+                     int contacts) {
   const std::string cone = options.cone == planner::ConeModel::kExact
                                ? std::string("exact cones")
                                : absl::StrCat(options.cone_sides, "-facet pyramids");
-  return absl::StrFormat("%d contacts, %s, confidence %g, solver %s", contacts, cone, options.confidence,
-                         SolverName(response.solver()));
+  return absl::StrFormat("%d contacts, %s, confidence %g, solver %s", contacts, cone,
+                         options.confidence, SolverName(response.solver()));
 }
 
 std::string Outcome(const v1::PlanResponse& response) {
@@ -56,7 +58,8 @@ std::string Outcome(const v1::PlanResponse& response) {
     out = absl::StrFormat("objective %.4g N\xc2\xb2, min margin %.4g N", response.objective(),
                           response.min_margin());
   }
-  if (!response.message().empty()) absl::StrAppend(&out, out.empty() ? "" : "; ", response.message());
+  if (!response.message().empty())
+    absl::StrAppend(&out, out.empty() ? "" : "; ", response.message());
   return out;
 }
 
@@ -75,7 +78,8 @@ absl::StatusOr<PlanScene> BuildPlanScene(const planner::PlanProblem& problem,
   scene.status = StatusName(response.status());
   scene.settings = Settings(options, response, n);
   scene.outcome = Outcome(response);
-  if (!forces) absl::StrAppend(&scene.outcome, scene.outcome.empty() ? "" : "; ", "no forces in the response");
+  if (!forces)
+    absl::StrAppend(&scene.outcome, scene.outcome.empty() ? "" : "; ", "no forces in the response");
   scene.com = prepared.problem.object.com;
   scene.gravity = prepared.problem.object.gravity;
   for (int i = 0; i < n; ++i) {
@@ -91,7 +95,8 @@ absl::StatusOr<PlanScene> BuildPlanScene(const planner::PlanProblem& problem,
     g.has_force = forces;
     if (forces) g.force = FromProto(response.forces(i));
     g.covariance = prepared.ellipsoid.ContactCovariance(i);
-    if (prepared.parameters.active) g.parameter_covariance = prepared.parameters.contact_covariance[i];
+    if (prepared.parameters.active)
+      g.parameter_covariance = prepared.parameters.contact_covariance[i];
     scene.contacts.push_back(std::move(g));
   }
   return scene;
@@ -106,7 +111,8 @@ std::vector<int> PlottedSteps(int steps, int max_steps) {
     return out;
   }
   for (int j = 0; j < max_steps; ++j) {
-    const int k = static_cast<int>(std::lround(static_cast<double>(j) * (steps - 1) / (max_steps - 1)));
+    const int k =
+        static_cast<int>(std::lround(static_cast<double>(j) * (steps - 1) / (max_steps - 1)));
     if (out.empty() || out.back() != k) out.push_back(k);
   }
   return out;

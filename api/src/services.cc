@@ -40,9 +40,12 @@ v1::TrajectoryResponse ToProto(const planner::TrajectoryResult& r) {
 
 v1::EstimateStatus ToProto(estimator::EstimateStatus s) {
   switch (s) {
-    case estimator::EstimateStatus::kOk: return v1::ESTIMATE_STATUS_OK;
-    case estimator::EstimateStatus::kInfeasible: return v1::ESTIMATE_STATUS_INFEASIBLE;
-    case estimator::EstimateStatus::kSolverFailure: return v1::ESTIMATE_STATUS_SOLVER_FAILURE;
+    case estimator::EstimateStatus::kOk:
+      return v1::ESTIMATE_STATUS_OK;
+    case estimator::EstimateStatus::kInfeasible:
+      return v1::ESTIMATE_STATUS_INFEASIBLE;
+    case estimator::EstimateStatus::kSolverFailure:
+      return v1::ESTIMATE_STATUS_SOLVER_FAILURE;
   }
   return v1::ESTIMATE_STATUS_UNSPECIFIED;
 }
@@ -65,8 +68,8 @@ absl::Status CheckPlannedSteps(const PlannedSteps& p, int cone_sides, const Call
   const double work = p.contacts * cone_sides;
   if (work > static_cast<double>(limits.max_trajectory_work)) {
     return absl::InvalidArgumentError(absl::StrCat(
-        p.field, ": ", p.steps, " ", p.steps_noun, " with ", p.contacts, " ", p.contacts_noun, " in all at ",
-        cone_sides, " cone sides exceed the limit of ", limits.max_trajectory_work,
+        p.field, ": ", p.steps, " ", p.steps_noun, " with ", p.contacts, " ", p.contacts_noun,
+        " in all at ", cone_sides, " cone sides exceed the limit of ", limits.max_trajectory_work,
         " (steps x contacts x cone sides; the server's --max-trajectory-work)"));
   }
   // A PlanResponse per step: status, solver, times (about 40 bytes) and per
@@ -74,9 +77,10 @@ absl::Status CheckPlannedSteps(const PlannedSteps& p, int cone_sides, const Call
   constexpr double kStepBytes = 40, kContactBytes = 60;
   const double bytes = p.steps * kStepBytes + p.contacts * kContactBytes + p.extra_bytes;
   if (limits.max_response_bytes > 0 && bytes > static_cast<double>(limits.max_response_bytes)) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        p.field, ": the response of ", p.steps, " ", p.steps_noun, " would be about ", bytes,
-        " bytes, over the limit of ", limits.max_response_bytes, " (the server's --max-message-bytes)"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(p.field, ": the response of ", p.steps, " ", p.steps_noun, " would be about ",
+                     bytes, " bytes, over the limit of ", limits.max_response_bytes,
+                     " (the server's --max-message-bytes)"));
   }
   return absl::OkStatus();
 }
@@ -88,24 +92,28 @@ absl::Status CheckPlannedSteps(const PlannedSteps& p, int cone_sides, const Call
 // given model (extended and reported).
 absl::Status CheckAuditResponseSize(const v1::AuditRequest& r, const CallLimits& limits) {
   constexpr double kAuditAnswerBytes = 64 * 1024;
-  const double bytes = kAuditAnswerBytes + 4.0 * static_cast<double>(r.source().size() + r.reading_units().size()) +
+  const double bytes = kAuditAnswerBytes +
+                       4.0 * static_cast<double>(r.source().size() + r.reading_units().size()) +
                        2.0 * static_cast<double>(r.model_json().size());
   if (limits.max_response_bytes > 0 && bytes > static_cast<double>(limits.max_response_bytes)) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "source, reading_units, model_json: the response (report, summary and models echoing them) would be up to ",
-        bytes, " bytes, over the limit of ", limits.max_response_bytes, " (the server's --max-message-bytes)"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("source, reading_units, model_json: the response (report, summary and models "
+                     "echoing them) would be up to ",
+                     bytes, " bytes, over the limit of ", limits.max_response_bytes,
+                     " (the server's --max-message-bytes)"));
   }
   return absl::OkStatus();
 }
 
-absl::Status CheckTrajectorySize(const planner::TrajectoryProblem& t, const planner::PlanOptions& options,
-                                 const CallLimits& limits) {
+absl::Status CheckTrajectorySize(const planner::TrajectoryProblem& t,
+                                 const planner::PlanOptions& options, const CallLimits& limits) {
   double contacts = 0;
   for (const planner::TrajectoryStep& step : t.steps) {
     contacts += static_cast<double>(step.contacts ? step.contacts->size() : t.base.contacts.size());
   }
-  return CheckPlannedSteps({"steps", "steps", "contacts", static_cast<double>(t.steps.size()), contacts, 0.0},
-                           options.cone_sides, limits);
+  return CheckPlannedSteps(
+      {"steps", "steps", "contacts", static_cast<double>(t.steps.size()), contacts, 0.0},
+      options.cone_sides, limits);
 }
 
 // The probe's numbers as the planner checks them, under the request's own
@@ -179,8 +187,9 @@ absl::Status SolvePlan(const PlanCall& call, const CallState& state, PlanBuffers
 absl::Status SolvePlan(const ValidPlanCall& call, const CallState& state, PlanBuffers* buffers,
                        v1::PlanResponse* response) {
   PlanBuffers& b = buffers != nullptr ? *buffers : ThreadPlanBuffers();
-  TF_RETURN_IF_ERROR(planner::CachedSolver(call.solver).Solve(
-      call.plan, &b.workspace, &b.result, planner::SolveControl{state.interrupt}));
+  TF_RETURN_IF_ERROR(
+      planner::CachedSolver(call.solver)
+          .Solve(call.plan, &b.workspace, &b.result, planner::SolveControl{state.interrupt}));
   return FillPlanResponse(b, response);
 }
 
@@ -210,9 +219,8 @@ absl::StatusOr<v1::TrajectoryResponse> HandleTrajectory(const v1::TrajectoryRequ
   if (!t.ok()) return t.status();
   TF_RETURN_IF_ERROR(CheckTrajectorySize(*t, call->options, limits));
   const bool warm = !request.has_warm_start() || request.warm_start();
-  absl::StatusOr<planner::TrajectoryResult> r =
-      planner::PlanTrajectory(*t, call->options, call->solver, warm,
-                              planner::SolveControl{state.interrupt});
+  absl::StatusOr<planner::TrajectoryResult> r = planner::PlanTrajectory(
+      *t, call->options, call->solver, warm, planner::SolveControl{state.interrupt});
   if (!r.ok()) return r.status();
   return FiniteAnswer<v1::TrajectoryResponse>(ToProto(*r));
 }
@@ -234,8 +242,9 @@ absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
   TF_RETURN_IF_ERROR(CheckProbe(probe));
   // The same work and size bounds as a trajectory, on the step count the
   // ramp implies (in double: it may be beyond any integer).
-  const double steps = std::floor((probe.initial_normal_force - probe.final_normal_force) / probe.ramp_rate *
-                                  probe.sample_rate) + 1;
+  const double steps = std::floor((probe.initial_normal_force - probe.final_normal_force) /
+                                  probe.ramp_rate * probe.sample_rate) +
+                       1;
   // Per step a time (8 bytes) and a probe force (3 doubles), with tags.
   constexpr double kProbeStepBytes = 40;
   if (absl::Status s = CheckPlannedSteps(
@@ -245,9 +254,8 @@ absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
       !s.ok()) {
     return s;
   }
-  absl::StatusOr<planner::ProbePlan> plan =
-      planner::PlanFrictionProbe(call->problem, probe, call->options, call->solver,
-                                 planner::SolveControl{state.interrupt});
+  absl::StatusOr<planner::ProbePlan> plan = planner::PlanFrictionProbe(
+      call->problem, probe, call->options, call->solver, planner::SolveControl{state.interrupt});
   if (!plan.ok()) return plan.status();
   v1::FrictionProbeResponse out;
   for (double t : plan->times) out.add_times(t);
@@ -268,16 +276,21 @@ absl::StatusOr<v1::EstimateResponse> HandleEstimate(const v1::EstimateRequest& r
   estimator::EstimateOptions o;
   switch (request.method()) {
     case v1::ESTIMATE_METHOD_UNSPECIFIED:
-    case v1::ESTIMATE_METHOD_PROJECTION: o.method = estimator::EstimateMethod::kProjection; break;
-    case v1::ESTIMATE_METHOD_NORMAL_LSQ: o.method = estimator::EstimateMethod::kNormalLsq; break;
+    case v1::ESTIMATE_METHOD_PROJECTION:
+      o.method = estimator::EstimateMethod::kProjection;
+      break;
+    case v1::ESTIMATE_METHOD_NORMAL_LSQ:
+      o.method = estimator::EstimateMethod::kNormalLsq;
+      break;
     default:
       return absl::InvalidArgumentError(
           absl::StrCat("method: unknown value ", static_cast<int>(request.method())));
   }
   if (request.has_origin_weight()) o.origin_weight = request.origin_weight();
   if (request.cone_sides() > planner::PlanOptions::kMaxConeSides)
-    return absl::InvalidArgumentError(absl::StrCat("cone_sides: must be in ", planner::PlanOptions::kMinConeSides,
-                                                   "..", planner::PlanOptions::kMaxConeSides));
+    return absl::InvalidArgumentError(absl::StrCat("cone_sides: must be in ",
+                                                   planner::PlanOptions::kMinConeSides, "..",
+                                                   planner::PlanOptions::kMaxConeSides));
   if (request.cone_sides() != 0) o.cone_sides = static_cast<int>(request.cone_sides());
   o.max_contacts = limits.max_contacts;
   const std::vector<double> readings(request.readings().begin(), request.readings().end());
@@ -295,8 +308,9 @@ absl::StatusOr<v1::EstimateResponse> HandleEstimate(const v1::EstimateRequest& r
   for (const auto& f : e->forces) *out.add_forces() = api::ToProto(f);
   for (double v : e->normal_forces) out.add_normal_forces(v);
   for (double v : e->residuals) out.add_residuals(v);
-  out.set_method(e->method == estimator::EstimateMethod::kProjection ? v1::ESTIMATE_METHOD_PROJECTION
-                                                                   : v1::ESTIMATE_METHOD_NORMAL_LSQ);
+  out.set_method(e->method == estimator::EstimateMethod::kProjection
+                     ? v1::ESTIMATE_METHOD_PROJECTION
+                     : v1::ESTIMATE_METHOD_NORMAL_LSQ);
   for (int j : e->negative_readings) out.add_negative_readings(j);
   out.set_solve_time_us(e->solve_time_us);
   out.set_iterations(e->iterations);
@@ -329,21 +343,28 @@ absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& r
     for (int i = 0; i < request.mesh().vertices_size(); ++i) {
       const planner::Vec3 v = FromProto(request.mesh().vertices(i));
       if (!planner::IsBounded(v, planner::kMaxLength))
-        return planner::MagnitudeError(absl::StrCat("mesh.vertices[", i, "]"), v, planner::kMaxLength, "m");
+        return planner::MagnitudeError(absl::StrCat("mesh.vertices[", i, "]"), v,
+                                       planner::kMaxLength, "m");
       mesh.vertices.push_back(v);
     }
-    for (const auto& t : request.mesh().triangles()) mesh.triangles.push_back({t.a(), t.b(), t.c()});
+    for (const auto& t : request.mesh().triangles())
+      mesh.triangles.push_back({t.a(), t.b(), t.c()});
     o.mesh = std::move(mesh);
   }
   if (request.has_slip_distance()) o.slip_distance = request.slip_distance();
-  if (request.has_window()) o.window = static_cast<int>(std::min<uint32_t>(request.window(), 1u << 20));
+  if (request.has_window())
+    o.window = static_cast<int>(std::min<uint32_t>(request.window(), 1u << 20));
   if (request.has_fit_window())
     o.fit_window = static_cast<int>(std::min<uint32_t>(request.fit_window(), 1u << 20));
   if (request.has_min_normal_force()) o.min_normal_force = request.min_normal_force();
   switch (request.pre_slip()) {
     case v1::PRE_SLIP_FORCE_UNSPECIFIED:
-    case v1::PRE_SLIP_FORCE_WINDOW_AVERAGE: o.pre_slip = estimator::PreSlipForce::kWindowAverage; break;
-    case v1::PRE_SLIP_FORCE_LINEAR_FIT: o.pre_slip = estimator::PreSlipForce::kLinearFit; break;
+    case v1::PRE_SLIP_FORCE_WINDOW_AVERAGE:
+      o.pre_slip = estimator::PreSlipForce::kWindowAverage;
+      break;
+    case v1::PRE_SLIP_FORCE_LINEAR_FIT:
+      o.pre_slip = estimator::PreSlipForce::kLinearFit;
+      break;
     default:
       return absl::InvalidArgumentError(
           absl::StrCat("pre_slip: unknown value ", static_cast<int>(request.pre_slip())));
@@ -382,19 +403,21 @@ absl::Status ReadAuditTaxels(const v1::AuditRequest& request, audit::MeasuredDat
   if (request.samples_size() == 0 || request.samples(0).taxels_size() == 0) {
     for (int k = 0; k < request.samples_size(); ++k)
       if (request.samples(k).taxels_size() != 0)
-        return absl::InvalidArgumentError(absl::StrCat("samples[", k, "].taxels: ", request.samples(k).taxels_size(),
-                                                       " values, samples[0] has none"));
+        return absl::InvalidArgumentError(
+            absl::StrCat("samples[", k, "].taxels: ", request.samples(k).taxels_size(),
+                         " values, samples[0] has none"));
     return absl::OkStatus();
   }
   const int m = request.samples(0).taxels_size();
   if (m > audit::kMaxTaxels)
-    return absl::InvalidArgumentError(absl::StrCat("samples[0].taxels: ", m, " values exceed ", audit::kMaxTaxels));
+    return absl::InvalidArgumentError(
+        absl::StrCat("samples[0].taxels: ", m, " values exceed ", audit::kMaxTaxels));
   data->taxels.assign(m, std::vector<double>(request.samples_size()));
   for (int k = 0; k < request.samples_size(); ++k) {
     const v1::AuditSample& s = request.samples(k);
     if (s.taxels_size() != m)
-      return absl::InvalidArgumentError(
-          absl::StrCat("samples[", k, "].taxels: ", s.taxels_size(), " values, samples[0] has ", m));
+      return absl::InvalidArgumentError(absl::StrCat("samples[", k, "].taxels: ", s.taxels_size(),
+                                                     " values, samples[0] has ", m));
     for (int j = 0; j < m; ++j) data->taxels[j][k] = s.taxels(j);
   }
   return absl::OkStatus();
@@ -402,12 +425,12 @@ absl::Status ReadAuditTaxels(const v1::AuditRequest& request, audit::MeasuredDat
 
 }  // namespace
 
-absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request, const CallLimits& limits,
-                                              const CallState& state) {
+absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request,
+                                              const CallLimits& limits, const CallState& state) {
   if (request.samples_size() > limits.max_audit_samples) {
-    return absl::InvalidArgumentError(absl::StrCat("samples: ", request.samples_size(),
-                                                   " samples exceed the limit of ", limits.max_audit_samples,
-                                                   " per request (the server's --max-audit-samples)"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("samples: ", request.samples_size(), " samples exceed the limit of ",
+                     limits.max_audit_samples, " per request (the server's --max-audit-samples)"));
   }
   TF_RETURN_IF_ERROR(CheckAuditResponseSize(request, limits));
   audit::MeasuredData data;
@@ -418,7 +441,8 @@ absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request, c
   for (int k = 0; k < request.samples_size(); ++k) {
     const v1::AuditSample& s = request.samples(k);
     if (any_shear && !s.has_shear())
-      return absl::InvalidArgumentError(absl::StrCat("samples[", k, "].shear: missing (other samples have it)"));
+      return absl::InvalidArgumentError(
+          absl::StrCat("samples[", k, "].shear: missing (other samples have it)"));
     data.t.push_back(s.t());
     data.reference.push_back(s.reference());
     data.reading.push_back(s.reading());
@@ -436,7 +460,8 @@ absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request, c
   if (request.has_blocks()) options.blocks = request.blocks();
   if (!request.reading_units().empty()) options.reading_units = request.reading_units();
   if (!request.model_json().empty()) {
-    absl::StatusOr<sim::SensorModel> model = sim::SensorModelFromJson(request.model_json(), "model_json");
+    absl::StatusOr<sim::SensorModel> model =
+        sim::SensorModelFromJson(request.model_json(), "model_json");
     if (!model.ok()) return model.status();
     options.model = *model;
   }

@@ -27,8 +27,7 @@ std::string ContactName(const v1::PlanRequest& request, int i) {
 
 }  // namespace
 
-std::string FormatPlanTable(const v1::PlanRequest& request,
-                            const v1::PlanResponse& response) {
+std::string FormatPlanTable(const v1::PlanRequest& request, const v1::PlanResponse& response) {
   std::string out;
   absl::StrAppendFormat(&out, "status:      %s\n", StatusName(response.status()));
   if (!response.message().empty()) {
@@ -36,18 +35,16 @@ std::string FormatPlanTable(const v1::PlanRequest& request,
   }
 
   const int rows = std::max({request.contacts_size(), response.forces_size(),
-                             response.normal_forces_size(),
-                             response.normal_force_sigma_size()});
+                             response.normal_forces_size(), response.normal_force_sigma_size()});
   if (rows > 0) {
     int name_width = 7;  // "contact"
     for (int i = 0; i < rows; ++i) {
       name_width = std::max<int>(name_width, ContactName(request, i).size());
     }
     out += "\n";
-    absl::StrAppendFormat(&out, "%-*s %*s %*s %*s %*s %*s\n", name_width, "contact",
-                          kNumberWidth, "fx [N]", kNumberWidth, "fy [N]",
-                          kNumberWidth, "fz [N]", kNumberWidth, "normal [N]",
-                          kNumberWidth, "sigma [N]");
+    absl::StrAppendFormat(&out, "%-*s %*s %*s %*s %*s %*s\n", name_width, "contact", kNumberWidth,
+                          "fx [N]", kNumberWidth, "fy [N]", kNumberWidth, "fz [N]", kNumberWidth,
+                          "normal [N]", kNumberWidth, "sigma [N]");
     for (int i = 0; i < rows; ++i) {
       const bool has_force = i < response.forces_size();
       const v1::Vec3 f = has_force ? response.forces(i) : v1::Vec3();
@@ -62,7 +59,8 @@ std::string FormatPlanTable(const v1::PlanRequest& request,
     out += "\n";
   }
 
-  if (response.status() == v1::PLAN_STATUS_OPTIMAL) {  // other answers carry no forces, so no objective
+  if (response.status() ==
+      v1::PLAN_STATUS_OPTIMAL) {  // other answers carry no forces, so no objective
     absl::StrAppendFormat(&out, "objective:   %.6g N^2\n", response.objective());
     absl::StrAppendFormat(&out, "min margin:  %.6g N\n", response.min_margin());
   }

@@ -28,19 +28,24 @@ using sim::EffectParams;
 // option, or the data's file and line.
 absl::Status ValidateAuditInputs(const MeasuredData& data, const AuditOptions& o) {
   if (!(o.heldout_fraction >= 0.1 && o.heldout_fraction <= 0.6))
-    return absl::InvalidArgumentError(absl::StrCat("heldout_fraction: must be in [0.1, 0.6], got ", o.heldout_fraction));
+    return absl::InvalidArgumentError(
+        absl::StrCat("heldout_fraction: must be in [0.1, 0.6], got ", o.heldout_fraction));
   if (!(o.min_gain >= 0 && o.min_gain < 1))
-    return absl::InvalidArgumentError(absl::StrCat("min_gain: must be in [0, 1), got ", o.min_gain));
+    return absl::InvalidArgumentError(
+        absl::StrCat("min_gain: must be in [0, 1), got ", o.min_gain));
   if (!(o.min_rms_drop >= 0 && o.min_rms_drop < 1))
-    return absl::InvalidArgumentError(absl::StrCat("min_rms_drop: must be in [0, 1), got ", o.min_rms_drop));
+    return absl::InvalidArgumentError(
+        absl::StrCat("min_rms_drop: must be in [0, 1), got ", o.min_rms_drop));
   if (o.max_causes < 0 || o.max_causes > kNumEffects)
-    return absl::InvalidArgumentError(absl::StrCat("max_causes: must be in [0, 8], got ", o.max_causes));
+    return absl::InvalidArgumentError(
+        absl::StrCat("max_causes: must be in [0, 8], got ", o.max_causes));
   if (!(o.max_delay > 0) || !(o.max_lag > 0))
     return absl::InvalidArgumentError("max_delay/max_lag: must be > 0");
   if (o.blocks < 0 || o.blocks > 10)
     return absl::InvalidArgumentError(absl::StrCat("blocks: must be in [0, 10], got ", o.blocks));
   if (!(o.silent_sigmas > 0) || !std::isfinite(o.silent_sigmas))
-    return absl::InvalidArgumentError(absl::StrCat("silent_sigmas: must be a finite number > 0, got ", o.silent_sigmas));
+    return absl::InvalidArgumentError(
+        absl::StrCat("silent_sigmas: must be a finite number > 0, got ", o.silent_sigmas));
   if (o.max_evaluations < 0 || o.max_evaluations > 100000)
     return absl::InvalidArgumentError("max_evaluations: must be in [0, 100000]");
   if (o.min_samples < kMinAuditSamples)
@@ -77,7 +82,8 @@ EffectParams BaseEffects(const AuditOptions& o, const RunStats& st) {
 // Held-out RMS of the given model as given (reading units).
 double GivenModelHeldoutRms(const sim::SensorModel& model, const MeasuredData& data, int n_train) {
   const int n = static_cast<int>(data.t.size());
-  const auto pred = sim::PredictReading(model, data.t, data.reference, data.shear, data.segment_starts);
+  const auto pred =
+      sim::PredictReading(model, data.t, data.reference, data.shear, data.segment_starts);
   double r = 0;
   for (int i = n_train; i < n; ++i) r += (data.reading[i] - pred[i]) * (data.reading[i] - pred[i]);
   return std::sqrt(r / (n - n_train));
@@ -85,10 +91,12 @@ double GivenModelHeldoutRms(const sim::SensorModel& model, const MeasuredData& d
 
 // The candidate causes: o.candidates (empty = all), without crosstalk when
 // the data have no shear column (said in the notes).
-std::vector<Effect> ChooseCandidates(const AuditOptions& o, const RunStats& st, std::vector<std::string>* notes) {
+std::vector<Effect> ChooseCandidates(const AuditOptions& o, const RunStats& st,
+                                     std::vector<std::string>* notes) {
   std::vector<Effect> candidates = o.candidates.empty() ? AllEffects() : o.candidates;
   if (!st.has_shear) {
-    candidates.erase(std::remove(candidates.begin(), candidates.end(), Effect::kCrosstalk), candidates.end());
+    candidates.erase(std::remove(candidates.begin(), candidates.end(), Effect::kCrosstalk),
+                     candidates.end());
     notes->push_back("no 'shear' column: the crosstalk candidate was not tried");
   }
   return candidates;
@@ -99,17 +107,22 @@ std::vector<Effect> ChooseCandidates(const AuditOptions& o, const RunStats& st, 
 // candidates and becomes a nuisance delay fitted into base and re-fitted with
 // every model (the refinement of the clock offset). Returns the nuisance
 // effects (none for one clock).
-std::vector<Effect> MakeDelayNuisance(const MeasuredData& data, ChannelEvaluator& eng, const RunStats& st,
-                                      const AuditOptions& o, std::vector<Effect>* candidates, EffectParams* base,
+std::vector<Effect> MakeDelayNuisance(const MeasuredData& data, ChannelEvaluator& eng,
+                                      const RunStats& st, const AuditOptions& o,
+                                      std::vector<Effect>* candidates, EffectParams* base,
                                       std::vector<std::string>* notes) {
   if (data.clock_offset_source != MeasuredData::ClockOffset::kEstimated) return {};
   if (std::find(candidates->begin(), candidates->end(), Effect::kDelay) != candidates->end())
     notes->push_back(
-        "clock offset estimated from the two streams: a constant sensor delay is indistinguishable from a clock "
-        "offset, so 'delay' is not a candidate cause; it is part of clock_offset_s (give --clock-offset to fix the "
+        "clock offset estimated from the two streams: a constant sensor delay is indistinguishable "
+        "from a clock "
+        "offset, so 'delay' is not a candidate cause; it is part of clock_offset_s (give "
+        "--clock-offset to fix the "
         "offset and audit the delay)");
-  candidates->erase(std::remove(candidates->begin(), candidates->end(), Effect::kDelay), candidates->end());
-  if (base->delay != 0) notes->push_back("the given model's delay is replaced by the clock-offset refinement");
+  candidates->erase(std::remove(candidates->begin(), candidates->end(), Effect::kDelay),
+                    candidates->end());
+  if (base->delay != 0)
+    notes->push_back("the given model's delay is replaced by the clock-offset refinement");
   base->delay = 0;
   *base = internal::FitEffect(eng, Effect::kDelay, *base, {}, st, o).p;
   return {Effect::kDelay};
@@ -135,10 +148,13 @@ sim::SensorModel MakeModel(const MeasuredData& data, const AuditOptions& o, cons
 // the extended one (the selection's, fitted on the working reading without
 // a named phantom), with the causes' uncertainties.
 void BuildModels(const MeasuredData& data, const AuditOptions& o, ChannelEvaluator& measured,
-                 ChannelEvaluator& eng, const EffectParams& base, const Selection& s, AuditReport* rep) {
+                 ChannelEvaluator& eng, const EffectParams& base, const Selection& s,
+                 AuditReport* rep) {
   const AffineFit nominal_fit = measured.Evaluate(base, true);
-  rep->nominal_model = MakeModel(data, o, base, nominal_fit, eng.n_train(), s.k, "audit nominal fit");
-  rep->extended_model = MakeModel(data, o, s.params, s.fit, eng.n_train(), s.k, "audit extended model");
+  rep->nominal_model =
+      MakeModel(data, o, base, nominal_fit, eng.n_train(), s.k, "audit nominal fit");
+  rep->extended_model =
+      MakeModel(data, o, s.params, s.fit, eng.n_train(), s.k, "audit extended model");
   for (const auto& c : rep->causes)
     for (const auto& [k, v] : c.uncertainties) rep->extended_model.uncertainty[k] = v;
 }
@@ -146,26 +162,29 @@ void BuildModels(const MeasuredData& data, const AuditOptions& o, ChannelEvaluat
 // Re-simulates the run with both models: the predicted series (the extended
 // one with a named phantom added), their diagnostics, held-out RMS
 // before/after and the percent gain.
-void Resimulate(const MeasuredData& data, const AuditOptions& o, const Selection& s, AuditReport* rep) {
+void Resimulate(const MeasuredData& data, const AuditOptions& o, const Selection& s,
+                AuditReport* rep) {
   rep->t = data.t;
   rep->reference = data.reference;
   rep->reading = data.reading;
-  rep->predicted_nominal =
-      sim::PredictReading(rep->nominal_model, data.t, data.reference, data.shear, data.segment_starts);
-  rep->predicted_extended =
-      sim::PredictReading(rep->extended_model, data.t, data.reference, data.shear, data.segment_starts);
+  rep->predicted_nominal = sim::PredictReading(rep->nominal_model, data.t, data.reference,
+                                               data.shear, data.segment_starts);
+  rep->predicted_extended = sim::PredictReading(rep->extended_model, data.t, data.reference,
+                                                data.shear, data.segment_starts);
   if (s.phantom) {
     const auto profile = internal::PhantomProfile(data, s.release_level, s.phantom_decay);
     for (size_t i = 0; i < profile.size(); ++i)
       rep->predicted_extended[i] += rep->extended_model.gain * s.phantom_force * profile[i];
   }
-  rep->nominal =
-      internal::Diagnose(data, rep->predicted_nominal, rep->nominal_model.gain, rep->n_train, o.max_delay);
-  rep->extended =
-      internal::Diagnose(data, rep->predicted_extended, rep->extended_model.gain, rep->n_train, o.max_delay);
+  rep->nominal = internal::Diagnose(data, rep->predicted_nominal, rep->nominal_model.gain,
+                                    rep->n_train, o.max_delay);
+  rep->extended = internal::Diagnose(data, rep->predicted_extended, rep->extended_model.gain,
+                                     rep->n_train, o.max_delay);
   rep->heldout_rms_before = rep->nominal.heldout_rms;
   rep->heldout_rms_after = rep->extended.heldout_rms;
-  rep->gain = rep->heldout_rms_before > 0 ? 100 * (1 - rep->heldout_rms_after / rep->heldout_rms_before) : 0;
+  rep->gain = rep->heldout_rms_before > 0
+                  ? 100 * (1 - rep->heldout_rms_after / rep->heldout_rms_before)
+                  : 0;
 }
 
 // Two streams: the clock offset used. Estimated = cross-correlation + the
@@ -192,15 +211,18 @@ void ReportClockOffset(const MeasuredData& data, double refinement, AuditReport*
 
 // The downstream gain of the report's models (a note when it fails).
 void AddDownstreamGain(const AuditOptions& o, const RunStats& st, AuditReport* rep) {
-  auto dg = internal::MeasureDownstreamGain(rep->nominal_model, rep->extended_model, o.downstream_grasps, o.seed,
-                                            st.fmax);
-  if (dg.ok()) rep->downstream = *dg;
-  else rep->notes.push_back(absl::StrCat("downstream gain not measured: ", dg.status().message()));
+  auto dg = internal::MeasureDownstreamGain(rep->nominal_model, rep->extended_model,
+                                            o.downstream_grasps, o.seed, st.fmax);
+  if (dg.ok())
+    rep->downstream = *dg;
+  else
+    rep->notes.push_back(absl::StrCat("downstream gain not measured: ", dg.status().message()));
 }
 
 // The blocked hold-out's block times, and for every channel cause the
 // blocks in which it lowers the re-simulated residual.
-void ReportBlocks(ChannelEvaluator& all, const AuditOptions& o, const Selection& s, AuditReport* rep) {
+void ReportBlocks(ChannelEvaluator& all, const AuditOptions& o, const Selection& s,
+                  AuditReport* rep) {
   const MeasuredData& d = all.data();
   if (o.blocks < 2) return;
   const std::vector<int> edges = internal::BlockEdges(static_cast<int>(d.t.size()), o.blocks);
@@ -211,7 +233,8 @@ void ReportBlocks(ChannelEvaluator& all, const AuditOptions& o, const Selection&
     if (!e.ok()) continue;
     // A cause of the blocked hold-out keeps the blocks its held-out scores showed.
     const std::vector<int> held_out_blocks = c.blocks;
-    internal::BlocksShowing(all, edges, s.params, internal::EffectOff(s.params, *e), o.min_gain, &c);
+    internal::BlocksShowing(all, edges, s.params, internal::EffectOff(s.params, *e), o.min_gain,
+                            &c);
     if (c.found_by == "blocked") c.blocks = held_out_blocks;
   }
 }
@@ -231,10 +254,12 @@ absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOption
   EffectParams base = BaseEffects(o, st);
   if (o.model) rep.given_model_heldout_rms = GivenModelHeldoutRms(*o.model, data, n_train);
   std::vector<Effect> candidates = ChooseCandidates(o, st, &rep.notes);
-  std::vector<Effect> nuisance = MakeDelayNuisance(data, eng, st, o, &candidates, &base, &rep.notes);
+  std::vector<Effect> nuisance =
+      MakeDelayNuisance(data, eng, st, o, &candidates, &base, &rep.notes);
 
   auto interrupted = [&o](const char* stage) -> absl::Status {
-    if (o.interrupt && o.interrupt()) return absl::CancelledError(absl::StrCat("interrupted ", stage));
+    if (o.interrupt && o.interrupt())
+      return absl::CancelledError(absl::StrCat("interrupted ", stage));
     return absl::OkStatus();
   };
   TF_RETURN_IF_ERROR(interrupted("before the cause selection"));
@@ -250,11 +275,13 @@ absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOption
   ChannelEvaluator& final_eng = blocked ? all : eng;
   internal::RefitJointly(final_eng, st, o, &s, &rep.causes);
   TF_RETURN_IF_ERROR(interrupted("after the joint refit"));
-  if (o.uncertainties && !s.named.empty()) internal::EstimateUncertainties(final_eng, st, o, s, &rep.causes);
+  if (o.uncertainties && !s.named.empty())
+    internal::EstimateUncertainties(final_eng, st, o, s, &rep.causes);
   TF_RETURN_IF_ERROR(interrupted("after the uncertainties"));
   s.fit = eng.Evaluate(s.params, true);
   ReportBlocks(all, o, s, &rep);
-  if (auto pa = internal::FindPartialActivation(data, o)) rep.causes.insert(rep.causes.begin(), *pa);
+  if (auto pa = internal::FindPartialActivation(data, o))
+    rep.causes.insert(rep.causes.begin(), *pa);
   rep.nominal_adequate = rep.causes.empty();
 
   ChannelEvaluator measured(data, n_train);

@@ -12,8 +12,8 @@ namespace tactforce::audit::internal {
 
 // Residual diagnostics of a prediction (reading units) against the data; the
 // first n_train samples are the training block (diagnostics.cc).
-Diagnostics Diagnose(const MeasuredData& d, const std::vector<double>& predicted, double gain, int n_train,
-                     double max_lag_seconds);
+Diagnostics Diagnose(const MeasuredData& d, const std::vector<double>& predicted, double gain,
+                     int n_train, double max_lag_seconds);
 
 // Upper regularised incomplete gamma Q(a, x); chi-square survival is Q(k/2, x/2).
 double GammaQ(double a, double x);

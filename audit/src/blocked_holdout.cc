@@ -34,20 +34,37 @@ using sim::EffectParams;
 
 std::vector<int> BlockEdges(int n, int blocks) {
   std::vector<int> edges;
-  for (int k = 0; k <= blocks; ++k) edges.push_back(static_cast<int>(std::lround(double(n) * k / blocks)));
+  for (int k = 0; k <= blocks; ++k)
+    edges.push_back(static_cast<int>(std::lround(double(n) * k / blocks)));
   return edges;
 }
 
 EffectParams EffectOff(EffectParams p, Effect e) {
   switch (e) {
-    case Effect::kDeadzone: p.threshold = 0, p.threshold_shift = 0; break;
-    case Effect::kSaturation: p.saturation = 0; break;
-    case Effect::kNonlinearity: p.curvature = 0, p.power_exponent = 0; break;
-    case Effect::kHysteresis: p.hysteresis_width = 0, p.pi_thresholds.clear(), p.pi_weights.clear(); break;
-    case Effect::kDelay: p.delay = 0; break;
-    case Effect::kLag: p.lag = 0; break;
-    case Effect::kDrift: p.drift = 0; break;
-    case Effect::kCrosstalk: p.crosstalk = 0; break;
+    case Effect::kDeadzone:
+      p.threshold = 0, p.threshold_shift = 0;
+      break;
+    case Effect::kSaturation:
+      p.saturation = 0;
+      break;
+    case Effect::kNonlinearity:
+      p.curvature = 0, p.power_exponent = 0;
+      break;
+    case Effect::kHysteresis:
+      p.hysteresis_width = 0, p.pi_thresholds.clear(), p.pi_weights.clear();
+      break;
+    case Effect::kDelay:
+      p.delay = 0;
+      break;
+    case Effect::kLag:
+      p.lag = 0;
+      break;
+    case Effect::kDrift:
+      p.drift = 0;
+      break;
+    case Effect::kCrosstalk:
+      p.crosstalk = 0;
+      break;
   }
   return p;
 }
@@ -84,7 +101,8 @@ bool AddsEnough(ChannelEvaluator& eng, const EffectParams& p, Effect e, int k, d
   const EffectParams off_params = EffectOff(p, e);
   const AffineFit off = eng.Evaluate(off_params, true);
   const int n_h = eng.n_heldout();
-  const double rms_with = std::sqrt(with.rss_heldout / n_h), rms_off = std::sqrt(off.rss_heldout / n_h);
+  const double rms_with = std::sqrt(with.rss_heldout / n_h),
+               rms_off = std::sqrt(off.rss_heldout / n_h);
   return rms_off > 0 && 1 - rms_with / rms_off >= min_gain &&
          Bic(with.rss_heldout, n_h, k) < Bic(off.rss_heldout, n_h, k - NumParams(e, p));
 }
@@ -100,7 +118,8 @@ struct BlockFinding {
 // How much effect e in p lowers the training RMS on `eng` (relative; gain and
 // offset fitted with and without it).
 double TrainGain(ChannelEvaluator& eng, const EffectParams& p, Effect e) {
-  const double rss_with = eng.Evaluate(p, false).rss_train, rss_off = eng.Evaluate(EffectOff(p, e), false).rss_train;
+  const double rss_with = eng.Evaluate(p, false).rss_train,
+               rss_off = eng.Evaluate(EffectOff(p, e), false).rss_train;
   return rss_off > 0 ? 1 - std::sqrt(rss_with / rss_off) : 0;
 }
 
@@ -113,16 +132,19 @@ enum class Reversed { kConfirms, kRefutes, kCannotTell };
 // passes; kCannotTell when the later part holds no trace of e (e lowers its
 // training RMS by less than min_gain: an intermittent effect, e.g. no force
 // above a saturation level there); else kRefutes.
-Reversed CheckReversed(const MeasuredData& d, int first, int cut, int last, Effect e, Form form, const RunStats& st,
-                       const AuditOptions& o, double min_gain, const Selection& global) {
+Reversed CheckReversed(const MeasuredData& d, int first, int cut, int last, Effect e, Form form,
+                       const RunStats& st, const AuditOptions& o, double min_gain,
+                       const Selection& global) {
   ChannelEvaluator re(d, {{cut, last}}, {{first, cut}});
   Selection rs = LocalSelection(re, global);
   const EffectParams start = StartForForm(rs.params, form);
-  FitResult fr = form == Form::kPrandtlIshlinskii ? FitPrandtlIshlinskii(re, start, rs.Refitted(), st, o)
-                                                  : FitEffect(re, e, start, rs.Refitted(), st, o, form);
+  FitResult fr = form == Form::kPrandtlIshlinskii
+                     ? FitPrandtlIshlinskii(re, start, rs.Refitted(), st, o)
+                     : FitEffect(re, e, start, rs.Refitted(), st, o, form);
   const AffineFit ev = re.Evaluate(fr.p, true);
   const int k = rs.k + NumParams(e, fr.p);
-  const double rms0 = std::sqrt(rs.fit.rss_heldout / re.n_heldout()), rms1 = std::sqrt(ev.rss_heldout / re.n_heldout());
+  const double rms0 = std::sqrt(rs.fit.rss_heldout / re.n_heldout()),
+               rms1 = std::sqrt(ev.rss_heldout / re.n_heldout());
   if (Bic(ev.rss_heldout, re.n_heldout(), k) < rs.bic && rms0 > 0 && 1 - rms1 / rms0 >= min_gain &&
       AddsEnough(re, fr.p, e, k, min_gain))
     return Reversed::kConfirms;
@@ -152,15 +174,17 @@ std::optional<BlockFinding> AuditBlock(const MeasuredData& d, int first, int las
   // the gain asked for (else the gain came from re-fitting the named ones).
   if (!AddsEnough(fe, fs.params, *e, fs.k, one.min_gain)) return std::nullopt;
   // Reversed: train on the block's later part, score on its earlier part.
-  const Reversed r = CheckReversed(d, first, first + (n - n_train), last, *e, FormFromName(c.form), st, o,
-                                   one.min_gain, global);
+  const Reversed r = CheckReversed(d, first, first + (n - n_train), last, *e, FormFromName(c.form),
+                                   st, o, one.min_gain, global);
   // A reversed split that cannot tell leaves the forward split alone: the
   // effect must then explain its own training part too, by the same gain. A
   // fit to noise lowers the training RSS by about (its parameters) / n, far
   // below that (the chance findings of a block pass only on held-out data).
-  if (r == Reversed::kRefutes || (r == Reversed::kCannotTell && TrainGain(fe, fs.params, *e) < one.min_gain))
+  if (r == Reversed::kRefutes ||
+      (r == Reversed::kCannotTell && TrainGain(fe, fs.params, *e) < one.min_gain))
     return std::nullopt;
-  return BlockFinding{block, *e, c.form, c.heldout_rms_before, c.heldout_rms_after, c.gain, c.delta_bic};
+  return BlockFinding{block,  *e,         c.form, c.heldout_rms_before, c.heldout_rms_after,
+                      c.gain, c.delta_bic};
 }
 
 // The mean held-out gain of an effect's block findings (percent).
@@ -171,7 +195,8 @@ double MeanGain(const std::vector<BlockFinding>& fs) {
 }
 
 // The effects' findings, most blocks first (ties: the larger mean gain).
-std::vector<const std::vector<BlockFinding>*> Ranked(const std::map<Effect, std::vector<BlockFinding>>& found) {
+std::vector<const std::vector<BlockFinding>*> Ranked(
+    const std::map<Effect, std::vector<BlockFinding>>& found) {
   std::vector<const std::vector<BlockFinding>*> ranked;
   for (const auto& [e, fs] : found) ranked.push_back(&fs);
   std::stable_sort(ranked.begin(), ranked.end(), [](const auto* x, const auto* y) {
@@ -186,7 +211,8 @@ std::vector<const std::vector<BlockFinding>*> Ranked(const std::map<Effect, std:
 // they cannot show it (it changes their predicted reading by less than
 // min_gain x their residual RMS, e.g. no force above a saturation level).
 // A chance fit or a transient changes the prediction there and does not help.
-bool PersistsLater(const MeasuredData& d, int first, const EffectParams& p, Effect e, double min_gain) {
+bool PersistsLater(const MeasuredData& d, int first, const EffectParams& p, Effect e,
+                   double min_gain) {
   const SampleRanges later = {{first, static_cast<int>(d.t.size())}};
   ChannelEvaluator ev(d, later, {});
   const EffectParams off_params = EffectOff(p, e);
@@ -202,15 +228,17 @@ bool PersistsLater(const MeasuredData& d, int first, const EffectParams& p, Effe
 
 }  // namespace
 
-void SelectCausesBlocked(ChannelEvaluator& eng, ChannelEvaluator& all, const std::vector<Effect>& candidates,
-                         const RunStats& st, const AuditOptions& o, Selection* s, AuditReport* rep) {
+void SelectCausesBlocked(ChannelEvaluator& eng, ChannelEvaluator& all,
+                         const std::vector<Effect>& candidates, const RunStats& st,
+                         const AuditOptions& o, Selection* s, AuditReport* rep) {
   if (o.blocks < 2 || static_cast<int>(rep->causes.size()) >= o.max_causes) return;
   const MeasuredData& d = all.data();
   const std::vector<int> edges = BlockEdges(static_cast<int>(d.t.size()), o.blocks);
   std::map<Effect, std::vector<BlockFinding>> found;
   for (int b = 0; b < o.blocks; ++b) {
     if (o.interrupt && o.interrupt()) return;
-    if (auto f = AuditBlock(d, edges[b], edges[b + 1], b, candidates, st, o, *s)) found[f->effect].push_back(*f);
+    if (auto f = AuditBlock(d, edges[b], edges[b + 1], b, candidates, st, o, *s))
+      found[f->effect].push_back(*f);
   }
   const std::vector<BlockFinding>* best = nullptr;
   FitResult fr;
@@ -222,8 +250,9 @@ void SelectCausesBlocked(ChannelEvaluator& eng, ChannelEvaluator& all, const std
     const Effect e = fs->front().effect;
     const Form form = FormFromName(fs->front().form);
     const EffectParams start = StartForForm(s->params, form);
-    fr = form == Form::kPrandtlIshlinskii ? FitPrandtlIshlinskii(on_shown, start, s->Refitted(), st, o)
-                                          : FitEffect(on_shown, e, start, s->Refitted(), st, o, form);
+    fr = form == Form::kPrandtlIshlinskii
+             ? FitPrandtlIshlinskii(on_shown, start, s->Refitted(), st, o)
+             : FitEffect(on_shown, e, start, s->Refitted(), st, o, form);
     if (EffectOff(fr.p, e) == fr.p) continue;
     // The selection above trained on the run's start: what a block shows
     // and it missed is a change of the sensor, named when it persists to

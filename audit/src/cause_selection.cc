@@ -27,7 +27,8 @@ std::vector<Effect> Selection::Refitted() const {
   return v;
 }
 
-Selection StartSelection(ChannelEvaluator& eng, const EffectParams& base, std::vector<Effect> nuisance) {
+Selection StartSelection(ChannelEvaluator& eng, const EffectParams& base,
+                         std::vector<Effect> nuisance) {
   Selection s;
   s.fit = eng.Evaluate(base, true);
   s.k = 2 + static_cast<int>(nuisance.size());
@@ -39,11 +40,13 @@ Selection StartSelection(ChannelEvaluator& eng, const EffectParams& base, std::v
 
 // Re-converges the named effects with the budget a candidate's joint
 // refinement gets; keeps the result when it lowers the training RSS.
-void ReconvergeNamed(ChannelEvaluator& eng, const RunStats& st, const AuditOptions& o, Selection* s) {
+void ReconvergeNamed(ChannelEvaluator& eng, const RunStats& st, const AuditOptions& o,
+                     Selection* s) {
   bool smooth = true;
   const std::vector<Slot> slots = SelectedSlots(s->Refitted(), s->params, st, o, &smooth);
   const int evals = o.max_evaluations * (1 + static_cast<int>(s->named.size()));
-  FitResult pol = PolishThreshold(eng, Refine(eng, s->params, slots, smooth, evals, smooth ? 0.1 : 0.02), st);
+  FitResult pol =
+      PolishThreshold(eng, Refine(eng, s->params, slots, smooth, evals, smooth ? 0.1 : 0.02), st);
   if (pol.rss_train < s->fit.rss_train) {
     s->params = pol.p;
     s->fit = eng.Evaluate(s->params, true);
@@ -51,9 +54,7 @@ void ReconvergeNamed(ChannelEvaluator& eng, const RunStats& st, const AuditOptio
   }
 }
 
-namespace {
-
-}  // namespace
+namespace {}  // namespace
 
 // The forms a candidate is fitted in: the default, plus the second form of
 // hysteresis (Prandtl-Ishlinskii) and nonlinearity (power law).
@@ -95,8 +96,9 @@ struct RoundBest {
 
 // Fits and scores every form of every candidate not yet named (each recorded
 // in rep->candidates) and returns the one with the lowest held-out BIC.
-RoundBest ScoreRound(ChannelEvaluator& eng, const std::vector<Effect>& candidates, int round, const RunStats& st,
-                     const AuditOptions& o, const Selection& s, AuditReport* rep) {
+RoundBest ScoreRound(ChannelEvaluator& eng, const std::vector<Effect>& candidates, int round,
+                     const RunStats& st, const AuditOptions& o, const Selection& s,
+                     AuditReport* rep) {
   RoundBest best;
   const std::vector<Effect> refit = s.Refitted();
   const int n_h = eng.n_heldout();
@@ -105,9 +107,11 @@ RoundBest ScoreRound(ChannelEvaluator& eng, const std::vector<Effect>& candidate
     if (std::find(s.named.begin(), s.named.end(), e) != s.named.end()) continue;
     for (Form form : FormsOf(e)) {
       const EffectParams start = StartForForm(s.params, form);
-      FitResult fr = form == Form::kPrandtlIshlinskii ? FitPrandtlIshlinskii(eng, start, refit, st, o)
-                                                      : FitEffect(eng, e, start, refit, st, o, form);
-      if (form == Form::kPrandtlIshlinskii && fr.p.pi_thresholds.empty()) continue;  // no hysteresis found
+      FitResult fr = form == Form::kPrandtlIshlinskii
+                         ? FitPrandtlIshlinskii(eng, start, refit, st, o)
+                         : FitEffect(eng, e, start, refit, st, o, form);
+      if (form == Form::kPrandtlIshlinskii && fr.p.pi_thresholds.empty())
+        continue;  // no hysteresis found
       const AffineFit ev = eng.Evaluate(fr.p, true);
       const double bic = Bic(ev.rss_heldout, n_h, s.k + NumParams(e, fr.p));
       CandidateScore cs;
@@ -135,8 +139,8 @@ RoundBest ScoreRound(ChannelEvaluator& eng, const std::vector<Effect>& candidate
 // Names the round's best a cause when it lowers the held-out BIC, gains at
 // least min_gain and lowers the held-out RMS by at least min_rms_drop x the
 // reference force range; false (nothing changed) otherwise.
-bool AcceptBest(const RoundBest& best, const std::vector<Effect>& candidates, int n_h, const RunStats& st,
-                const AuditOptions& o, Selection* s, AuditReport* rep) {
+bool AcceptBest(const RoundBest& best, const std::vector<Effect>& candidates, int n_h,
+                const RunStats& st, const AuditOptions& o, Selection* s, AuditReport* rep) {
   const double rms_before = std::sqrt(s->fit.rss_heldout / n_h);
   const double rms_after = std::sqrt(best.fit.rss_heldout / n_h);
   const double gain = rms_before > 0 ? 1 - rms_after / rms_before : 0;
@@ -172,7 +176,8 @@ bool AcceptBest(const RoundBest& best, const std::vector<Effect>& candidates, in
 // subtracted from the working reading and the model re-scored. Returns
 // whether it was named.
 bool ConsiderPhantom(ChannelEvaluator& eng, const PhantomFit& ph, const RoundBest& best, int round,
-                     const RunStats& st, const AuditOptions& o, Selection* s, AuditReport* rep, MeasuredData* work) {
+                     const RunStats& st, const AuditOptions& o, Selection* s, AuditReport* rep,
+                     MeasuredData* work) {
   CandidateScore cs;
   cs.round = round;
   cs.effect = kPhantom;

@@ -18,21 +18,22 @@ struct Selection {
   std::vector<Effect> named;     // causes, in the order named
   sim::EffectParams params;      // the current model's effects
   AffineFit fit;                 // of params, with the held-out RSS
-  int k = 2;                     // BIC's parameter count: gain, offset, nuisance and named parameters
-  double bic = 0;                // held-out BIC of the current model
+  int k = 2;       // BIC's parameter count: gain, offset, nuisance and named parameters
+  double bic = 0;  // held-out BIC of the current model
   // A named phantom (subtracted from the audit's working copy of the
   // reading, so the channel effects are fitted without it).
   bool phantom = false;
-  double phantom_force = 0;      // N
-  double phantom_decay = 0;      // s
-  double release_level = 0;      // N, reference at or below which the sensor is unloaded
+  double phantom_force = 0;  // N
+  double phantom_decay = 0;  // s
+  double release_level = 0;  // N, reference at or below which the sensor is unloaded
   // nuisance, then named: the effects re-fitted jointly with each new one.
   std::vector<Effect> Refitted() const;
 };
 
 // The selection before any cause: the nominal model `base` (its nuisance
 // effects already fitted into it), scored on the held-out block.
-Selection StartSelection(ChannelEvaluator& eng, const sim::EffectParams& base, std::vector<Effect> nuisance);
+Selection StartSelection(ChannelEvaluator& eng, const sim::EffectParams& base,
+                         std::vector<Effect> nuisance);
 
 // Forward selection (README, Method 4): each round re-converges the named
 // effects, fits every form of every remaining candidate on top of the model
@@ -42,11 +43,13 @@ Selection StartSelection(ChannelEvaluator& eng, const sim::EffectParams& base, s
 // `work` is the evaluator's data (a working copy): a named phantom is
 // subtracted from its reading. Null: no phantom candidate.
 void SelectCauses(ChannelEvaluator& eng, const std::vector<Effect>& candidates, const RunStats& st,
-                  const AuditOptions& o, Selection* s, AuditReport* rep, MeasuredData* work = nullptr);
+                  const AuditOptions& o, Selection* s, AuditReport* rep,
+                  MeasuredData* work = nullptr);
 
 // Re-converges the named effects with the budget a candidate's joint
 // refinement gets; keeps the result when it lowers the training RSS.
-void ReconvergeNamed(ChannelEvaluator& eng, const RunStats& st, const AuditOptions& o, Selection* s);
+void ReconvergeNamed(ChannelEvaluator& eng, const RunStats& st, const AuditOptions& o,
+                     Selection* s);
 
 // The effect e switched off in p (its fields at their "off" values).
 sim::EffectParams EffectOff(sim::EffectParams p, Effect e);
@@ -83,13 +86,15 @@ std::vector<int> BlockEdges(int n, int blocks);
 // the split reversed; the effect confirmed in the most blocks becomes a
 // cause (found_by "blocked", its blocks listed), re-fitted on those blocks.
 // `all` holds every sample as training; `eng` re-scores the selection.
-void SelectCausesBlocked(ChannelEvaluator& eng, ChannelEvaluator& all, const std::vector<Effect>& candidates,
-                         const RunStats& st, const AuditOptions& o, Selection* s, AuditReport* rep);
+void SelectCausesBlocked(ChannelEvaluator& eng, ChannelEvaluator& all,
+                         const std::vector<Effect>& candidates, const RunStats& st,
+                         const AuditOptions& o, Selection* s, AuditReport* rep);
 // Per block, the relative drop of the residual RMS of `with` versus
 // `without` (both re-simulated, gain/offset fitted on all samples):
 // fills c->blocks (drop >= min_gain) and c->block_gains (percent).
-void BlocksShowing(ChannelEvaluator& all, const std::vector<int>& edges, const sim::EffectParams& with,
-                   const sim::EffectParams& without, double min_gain, Cause* c);
+void BlocksShowing(ChannelEvaluator& all, const std::vector<int>& edges,
+                   const sim::EffectParams& with, const sim::EffectParams& without, double min_gain,
+                   Cause* c);
 
 // ---- partial activation (taxel_activation.cc) ----
 // The cause partial_activation from per-taxel data (README): nullopt when
@@ -104,7 +109,7 @@ void RefitJointly(ChannelEvaluator& eng, const RunStats& st, const AuditOptions&
 
 // 1-sigma uncertainty of every named parameter: the conditional
 // Delta-RSS = sigma^2 interval, sigma^2 = training RSS / (n_train - k).
-void EstimateUncertainties(ChannelEvaluator& eng, const RunStats& st, const AuditOptions& o, const Selection& s,
-                           std::vector<Cause>* causes);
+void EstimateUncertainties(ChannelEvaluator& eng, const RunStats& st, const AuditOptions& o,
+                           const Selection& s, std::vector<Cause>* causes);
 
 }  // namespace tactforce::audit::internal

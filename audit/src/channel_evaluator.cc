@@ -13,12 +13,14 @@ ChannelEvaluator::ChannelEvaluator(const MeasuredData& data, int n_train)
     : ChannelEvaluator(data, {{0, n_train}},
                        SampleRanges{{n_train, static_cast<int>(data.t.size())}}) {}
 
-ChannelEvaluator::ChannelEvaluator(const MeasuredData& data, SampleRanges train, SampleRanges heldout)
+ChannelEvaluator::ChannelEvaluator(const MeasuredData& data, SampleRanges train,
+                                   SampleRanges heldout)
     : data_(data), train_(std::move(train)), heldout_(std::move(heldout)) {
   for (const auto& [first, last] : train_) {
     n_train_ += last - first;
     train_end_ = std::max(train_end_, last);
-    train_reading_.insert(train_reading_.end(), data.reading.begin() + first, data.reading.begin() + last);
+    train_reading_.insert(train_reading_.end(), data.reading.begin() + first,
+                          data.reading.begin() + last);
   }
   end_ = train_end_;
   for (const auto& [first, last] : heldout_) {

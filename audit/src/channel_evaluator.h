@@ -13,7 +13,7 @@ namespace tactforce::audit::internal {
 
 // reading ~ a * channel(reference) + b, least squares on the training block.
 struct AffineFit {
-  double a = 0, b = 0;  // gain (reading units per N) and offset (reading units)
+  double a = 0, b = 0;     // gain (reading units per N) and offset (reading units)
   double rss_train = 0;    // reading units^2, training block
   double rss_heldout = 0;  // reading units^2, held-out block (0 unless asked for)
 };
@@ -46,7 +46,9 @@ class ChannelEvaluator {
 
   int n_train() const { return n_train_; }
   int n_heldout() const { return n_heldout_; }
-  const std::vector<double>& reading() const { return train_reading_; }  // the training samples', in order
+  const std::vector<double>& reading() const {
+    return train_reading_;
+  }  // the training samples', in order
 
  private:
   // Runs the channel over samples [0, n) into channel_.
@@ -55,7 +57,7 @@ class ChannelEvaluator {
   const MeasuredData& data_;
   SampleRanges train_, heldout_;
   int n_train_ = 0, n_heldout_ = 0;
-  int train_end_ = 0, end_ = 0;  // the channel runs up to these for training / all
+  int train_end_ = 0, end_ = 0;   // the channel runs up to these for training / all
   bool train_is_prefix_ = false;  // train_ == {{0, n_train_}}: TrainChannel needs no gather
   sim::ChannelInput input_;
   std::vector<double> train_reading_;

@@ -100,8 +100,8 @@ std::vector<int> SegmentOfSample(const MeasuredData& d) {
 // Mean residual rf (N) while loading and while unloading: the reference's
 // rate of change (central difference over +/-2 samples within a segment)
 // beyond 10 % of its 95th percentile, either sign.
-void LoadingVsUnloading(const MeasuredData& d, const std::vector<int>& seg_of, const std::vector<double>& rf,
-                        Diagnostics* out) {
+void LoadingVsUnloading(const MeasuredData& d, const std::vector<int>& seg_of,
+                        const std::vector<double>& rf, Diagnostics* out) {
   const int n = static_cast<int>(rf.size());
   std::vector<double> rate(n, 0), absrate;
   const int k = 2;
@@ -160,11 +160,12 @@ void LjungBox(const std::vector<double>& r, int n_train, Diagnostics* out) {
 // Lag (samples, within +/- max_lag_seconds) of the cross-correlation peak
 // between the reference's and the reading's first differences (reading
 // divided by g, so in the force direction; none across a segment start).
-void CrossCorrelationLag(const MeasuredData& d, const std::vector<int>& seg_of, double g, double max_lag_seconds,
-                         Diagnostics* out) {
+void CrossCorrelationLag(const MeasuredData& d, const std::vector<int>& seg_of, double g,
+                         double max_lag_seconds, Diagnostics* out) {
   const int n = static_cast<int>(d.t.size());
   const double dt = MedianStep(d.t, 1.0);
-  const int lmax = std::clamp(static_cast<int>(std::ceil(max_lag_seconds / dt)), 1, std::max(1, n / 4));
+  const int lmax =
+      std::clamp(static_cast<int>(std::ceil(max_lag_seconds / dt)), 1, std::max(1, n / 4));
   std::vector<double> dx(n, 0), dy(n, 0);
   for (int i = 1; i < n; ++i) {
     if (seg_of[i] != seg_of[i - 1]) continue;
@@ -214,8 +215,8 @@ void ResidualVsTime(const MeasuredData& d, const std::vector<double>& rf, Diagno
 
 }  // namespace
 
-Diagnostics Diagnose(const MeasuredData& d, const std::vector<double>& pred, double gain, int n_train,
-                     double max_lag_seconds) {
+Diagnostics Diagnose(const MeasuredData& d, const std::vector<double>& pred, double gain,
+                     int n_train, double max_lag_seconds) {
   Diagnostics out;
   const int n = static_cast<int>(d.t.size());
   const double g = gain != 0 ? gain : 1;

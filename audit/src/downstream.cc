@@ -26,7 +26,8 @@ absl::StatusOr<DownstreamGain> MeasureDownstreamGain(const sim::SensorModel& nom
                                                      const sim::SensorModel& extended, int grasps,
                                                      uint64_t seed, double max_force) {
   if (grasps <= 0) return absl::InvalidArgumentError("downstream_grasps: must be > 0");
-  if (nominal.gain == 0 || extended.gain == 0) return absl::InvalidArgumentError("model gain is zero");
+  if (nominal.gain == 0 || extended.gain == 0)
+    return absl::InvalidArgumentError("model gain is zero");
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> gauss(0, 1);
   planner::RandomGraspOptions go;
@@ -69,8 +70,10 @@ absl::StatusOr<DownstreamGain> MeasureDownstreamGain(const sim::SensorModel& nom
     auto e_nom = estimator::EstimateForces(g.problem, r_nom);
     auto e_ext = estimator::EstimateForces(g.problem, r_ext);
     auto e_ref = estimator::EstimateForces(g.problem, exact);
-    if (!e_nom.ok() || !e_ext.ok() || !e_ref.ok() || e_nom->status != estimator::EstimateStatus::kOk ||
-        e_ext->status != estimator::EstimateStatus::kOk || e_ref->status != estimator::EstimateStatus::kOk)
+    if (!e_nom.ok() || !e_ext.ok() || !e_ref.ok() ||
+        e_nom->status != estimator::EstimateStatus::kOk ||
+        e_ext->status != estimator::EstimateStatus::kOk ||
+        e_ref->status != estimator::EstimateStatus::kOk)
       continue;
     for (size_t c = 0; c < g.problem.contacts.size(); ++c) {
       se_nom += (e_nom->forces[c] - e_ref->forces[c]).squaredNorm();
@@ -81,8 +84,9 @@ absl::StatusOr<DownstreamGain> MeasureDownstreamGain(const sim::SensorModel& nom
     ++done;
   }
   if (done == 0)
-    return absl::InternalError(absl::StrCat("downstream gain: no simulated grasp with normal forces within the measured range (<= ",
-                                            max_force, " N) could be planned and estimated"));
+    return absl::InternalError(absl::StrCat(
+        "downstream gain: no simulated grasp with normal forces within the measured range (<= ",
+        max_force, " N) could be planned and estimated"));
   DownstreamGain dg;
   dg.grasps = done;
   dg.method = "projection (GeoDEx Problem 1) on simulated random grasps";

@@ -48,8 +48,8 @@ double RefineObjective(const std::vector<double>& x, std::vector<double>& grad, 
 
 }  // namespace
 
-FitResult Refine(ChannelEvaluator& eng, const EffectParams& start, const std::vector<Slot>& slots, bool smooth,
-                 int max_evaluations, double step) {
+FitResult Refine(ChannelEvaluator& eng, const EffectParams& start, const std::vector<Slot>& slots,
+                 bool smooth, int max_evaluations, double step) {
   FitResult best;
   best.p = start;
   best.rss_train = eng.Evaluate(start, false).rss_train;
@@ -85,7 +85,8 @@ namespace {
 
 // The distinct pre-threshold channel values within 5 % of the range of the
 // threshold in p, sorted.
-std::vector<double> BreakpointsNear(ChannelEvaluator& eng, const EffectParams& p, const RunStats& st) {
+std::vector<double> BreakpointsNear(ChannelEvaluator& eng, const EffectParams& p,
+                                    const RunStats& st) {
   EffectParams pre = p;
   pre.threshold = 0;
   pre.saturation = 0;
@@ -103,8 +104,8 @@ std::vector<double> BreakpointsNear(ChannelEvaluator& eng, const EffectParams& p
 // Of the runs of consecutive (threshold, rss) scores within tol of min_rss,
 // the one closest to th (its own plateau when th lies in one): [first, last],
 // or first = -1 when there is none.
-std::pair<long, long> ClosestMinimumRun(const std::vector<std::pair<double, double>>& scores, double min_rss,
-                                        double tol, double th) {
+std::pair<long, long> ClosestMinimumRun(const std::vector<std::pair<double, double>>& scores,
+                                        double min_rss, double tol, double th) {
   long best_first = -1, best_last = -1;
   double best_dist = std::numeric_limits<double>::infinity();
   for (size_t k = 0; k < scores.size();) {
@@ -172,7 +173,8 @@ namespace {
 // Grid start of an effect with the given slots on top of `current`: every
 // value of the first slot's grid (crossed with the second slot's grid), then
 // for a non-smooth effect 12 values between the neighbours of the best.
-FitResult GridStart(ChannelEvaluator& eng, Effect e, const EffectParams& current, const std::vector<Slot>& slots) {
+FitResult GridStart(ChannelEvaluator& eng, Effect e, const EffectParams& current,
+                    const std::vector<Slot>& slots) {
   FitResult best;
   best.p = current;
   // Evaluates p; true when it is the best so far.
@@ -213,8 +215,9 @@ FitResult GridStart(ChannelEvaluator& eng, Effect e, const EffectParams& current
 
 }  // namespace
 
-FitResult FitEffect(ChannelEvaluator& eng, Effect e, const EffectParams& current, const std::vector<Effect>& selected,
-                    const RunStats& st, const AuditOptions& o, Form form) {
+FitResult FitEffect(ChannelEvaluator& eng, Effect e, const EffectParams& current,
+                    const std::vector<Effect>& selected, const RunStats& st, const AuditOptions& o,
+                    Form form) {
   const std::vector<Slot> slots = SlotsFor(e, st, o, form);
   const FitResult best = GridStart(eng, e, current, slots);
   // Refine the new effect jointly with the effects named before it (an

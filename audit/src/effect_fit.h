@@ -20,8 +20,8 @@ struct FitResult {
 // NLopt local refinement of the slots (normalised to [0, 1]) from `start`:
 // LN_BOBYQA when smooth, else LN_SBPLX; at most max_evaluations, initial step
 // `step` (normalised).
-FitResult Refine(ChannelEvaluator& eng, const sim::EffectParams& start, const std::vector<Slot>& slots, bool smooth,
-                 int max_evaluations, double step);
+FitResult Refine(ChannelEvaluator& eng, const sim::EffectParams& start,
+                 const std::vector<Slot>& slots, bool smooth, int max_evaluations, double step);
 
 // With a threshold in `in`: scans the exact breakpoints of the RSS near it
 // and takes the middle of the best flat interval (returns `in` otherwise).
@@ -42,6 +42,7 @@ FitResult FitEffect(ChannelEvaluator& eng, Effect e, const sim::EffectParams& cu
 // `selected`. Returns `current` when no NNLS solution with hysteresis
 // improves on it.
 FitResult FitPrandtlIshlinskii(ChannelEvaluator& eng, const sim::EffectParams& current,
-                               const std::vector<Effect>& selected, const RunStats& st, const AuditOptions& o);
+                               const std::vector<Effect>& selected, const RunStats& st,
+                               const AuditOptions& o);
 
 }  // namespace tactforce::audit::internal

@@ -16,22 +16,30 @@ namespace tactforce::audit {
 
 const char* EffectName(Effect e) {
   switch (e) {
-    case Effect::kDeadzone: return "deadzone";
-    case Effect::kSaturation: return "saturation";
-    case Effect::kNonlinearity: return "nonlinearity";
-    case Effect::kHysteresis: return "hysteresis";
-    case Effect::kDelay: return "delay";
-    case Effect::kLag: return "lag";
-    case Effect::kDrift: return "drift";
-    case Effect::kCrosstalk: return "crosstalk";
+    case Effect::kDeadzone:
+      return "deadzone";
+    case Effect::kSaturation:
+      return "saturation";
+    case Effect::kNonlinearity:
+      return "nonlinearity";
+    case Effect::kHysteresis:
+      return "hysteresis";
+    case Effect::kDelay:
+      return "delay";
+    case Effect::kLag:
+      return "lag";
+    case Effect::kDrift:
+      return "drift";
+    case Effect::kCrosstalk:
+      return "crosstalk";
   }
   return "?";
 }
 
 const std::vector<Effect>& AllEffects() {
-  static const std::vector<Effect> all = {Effect::kDeadzone, Effect::kSaturation, Effect::kNonlinearity,
-                                          Effect::kHysteresis, Effect::kDelay,     Effect::kLag,
-                                          Effect::kDrift,      Effect::kCrosstalk};
+  static const std::vector<Effect> all = {
+      Effect::kDeadzone, Effect::kSaturation, Effect::kNonlinearity, Effect::kHysteresis,
+      Effect::kDelay,    Effect::kLag,        Effect::kDrift,        Effect::kCrosstalk};
   return all;
 }
 
@@ -46,9 +54,9 @@ std::vector<std::string> AllEffectNames() {
 absl::StatusOr<Effect> ParseEffect(const std::string& name) {
   for (Effect e : AllEffects())
     if (name == EffectName(e)) return e;
-  return absl::InvalidArgumentError(absl::StrCat(
-      "effect: unknown '", name,
-      "' (expected deadzone, saturation, nonlinearity, hysteresis, delay, lag, drift or crosstalk)"));
+  return absl::InvalidArgumentError(absl::StrCat("effect: unknown '", name,
+                                                 "' (expected deadzone, saturation, nonlinearity, "
+                                                 "hysteresis, delay, lag, drift or crosstalk)"));
 }
 
 std::vector<std::string> EffectFields(Effect e) {
@@ -84,20 +92,29 @@ RunStats ComputeRunStats(const MeasuredData& data) {
   return st;
 }
 
-double Get(const EffectParams& p, const Slot& s) { return s.pi_index >= 0 ? p.pi_weights[s.pi_index] : p.*(s.ptr); }
+double Get(const EffectParams& p, const Slot& s) {
+  return s.pi_index >= 0 ? p.pi_weights[s.pi_index] : p.*(s.ptr);
+}
 
 void Set(EffectParams& p, const Slot& s, double v) {
-  if (s.pi_index >= 0) p.pi_weights[s.pi_index] = v;
-  else p.*(s.ptr) = v;
+  if (s.pi_index >= 0)
+    p.pi_weights[s.pi_index] = v;
+  else
+    p.*(s.ptr) = v;
 }
 
 const char* FormName(Form f) {
   switch (f) {
-    case Form::kOnly: return "";
-    case Form::kPlay: return "play";
-    case Form::kPrandtlIshlinskii: return "prandtl_ishlinskii";
-    case Form::kQuadratic: return "quadratic";
-    case Form::kPowerLaw: return "power_law";
+    case Form::kOnly:
+      return "";
+    case Form::kPlay:
+      return "play";
+    case Form::kPrandtlIshlinskii:
+      return "prandtl_ishlinskii";
+    case Form::kQuadratic:
+      return "quadratic";
+    case Form::kPowerLaw:
+      return "power_law";
   }
   return "";
 }
@@ -109,7 +126,8 @@ Form DefaultForm(Effect e) {
 }
 
 Form FormOf(Effect e, const EffectParams& p) {
-  if (e == Effect::kHysteresis) return p.pi_thresholds.empty() ? Form::kPlay : Form::kPrandtlIshlinskii;
+  if (e == Effect::kHysteresis)
+    return p.pi_thresholds.empty() ? Form::kPlay : Form::kPrandtlIshlinskii;
   if (e == Effect::kNonlinearity) return p.power_exponent > 0 ? Form::kPowerLaw : Form::kQuadratic;
   return Form::kOnly;
 }
@@ -149,7 +167,8 @@ std::vector<Slot> DefaultSlots(Effect e, const RunStats& s, const AuditOptions& 
     case Effect::kNonlinearity:
       return {{"curvature", &EffectParams::curvature, -0.5, 0.5, LinearGrid(-0.3, 0.3, 7)}};
     case Effect::kHysteresis:
-      return {{"hysteresis_width", &EffectParams::hysteresis_width, 0, 0.3 * R, GeometricGrid(0.002 * R, 0.3 * R, 24)}};
+      return {{"hysteresis_width", &EffectParams::hysteresis_width, 0, 0.3 * R,
+               GeometricGrid(0.002 * R, 0.3 * R, 24)}};
     case Effect::kDelay: {
       std::vector<double> g;
       const double lo = std::min(0.25 * s.dt, 0.5 * o.max_delay);
@@ -177,21 +196,27 @@ std::vector<Slot> DefaultSlots(Effect e, const RunStats& s, const AuditOptions& 
 
 }  // namespace
 
-std::vector<Slot> SlotsFor(Effect e, const RunStats& s, const AuditOptions& o, Form form, const EffectParams* p) {
+std::vector<Slot> SlotsFor(Effect e, const RunStats& s, const AuditOptions& o, Form form,
+                           const EffectParams* p) {
   if (form == Form::kPowerLaw)
-    return {{"power_exponent", &EffectParams::power_exponent, 0.2, 4.0, {0.5, 0.67, 0.8, 0.9, 1.1, 1.25, 1.5, 2.0}}};
+    return {{"power_exponent",
+             &EffectParams::power_exponent,
+             0.2,
+             4.0,
+             {0.5, 0.67, 0.8, 0.9, 1.1, 1.25, 1.5, 2.0}}};
   if (form == Form::kPrandtlIshlinskii) {
     std::vector<Slot> v;
     if (p)
       for (size_t k = 0; k < p->pi_weights.size(); ++k)
-        v.push_back({absl::StrCat("pi_weights[", k, "]"), nullptr, 0.0, 1.0, {}, static_cast<int>(k)});
+        v.push_back(
+            {absl::StrCat("pi_weights[", k, "]"), nullptr, 0.0, 1.0, {}, static_cast<int>(k)});
     return v;
   }
   return DefaultSlots(e, s, o);
 }
 
-std::vector<Slot> SelectedSlots(const std::vector<Effect>& selected, const EffectParams& p, const RunStats& st,
-                                const AuditOptions& o, bool* smooth) {
+std::vector<Slot> SelectedSlots(const std::vector<Effect>& selected, const EffectParams& p,
+                                const RunStats& st, const AuditOptions& o, bool* smooth) {
   std::vector<Slot> v;
   for (Effect s : selected) {
     const Form f = FormOf(s, p);
@@ -204,7 +229,8 @@ std::vector<Slot> SelectedSlots(const std::vector<Effect>& selected, const Effec
 
 int NumParams(Effect e, const EffectParams& p) {
   if (e == Effect::kDeadzone) return 2;
-  if (e == Effect::kHysteresis && !p.pi_thresholds.empty()) return static_cast<int>(p.pi_thresholds.size());
+  if (e == Effect::kHysteresis && !p.pi_thresholds.empty())
+    return static_cast<int>(p.pi_thresholds.size());
   return 1;
 }
 
@@ -233,7 +259,8 @@ double PiLoopWidth(const EffectParams& p) {
 
 }  // namespace
 
-std::map<std::string, double> ParamsOf(Effect e, const EffectParams& p, const RunStats& st, const AuditOptions& o) {
+std::map<std::string, double> ParamsOf(Effect e, const EffectParams& p, const RunStats& st,
+                                       const AuditOptions& o) {
   std::map<std::string, double> m;
   const Form f = FormOf(e, p);
   if (f == Form::kPrandtlIshlinskii) {

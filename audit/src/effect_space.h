@@ -50,12 +50,12 @@ bool IsSmooth(Effect e);
 
 // The slots of effect e in form `form`; a Prandtl-Ishlinskii hysteresis has
 // one slot per weight in *p (none without p).
-std::vector<Slot> SlotsFor(Effect e, const RunStats& s, const AuditOptions& o, Form form = Form::kOnly,
-                           const sim::EffectParams* p = nullptr);
+std::vector<Slot> SlotsFor(Effect e, const RunStats& s, const AuditOptions& o,
+                           Form form = Form::kOnly, const sim::EffectParams* p = nullptr);
 // Slots of the effects `selected`, each in its form in p. When smooth is
 // given, *smooth stays true only while every one of them is smooth.
-std::vector<Slot> SelectedSlots(const std::vector<Effect>& selected, const sim::EffectParams& p, const RunStats& st,
-                                const AuditOptions& o, bool* smooth);
+std::vector<Slot> SelectedSlots(const std::vector<Effect>& selected, const sim::EffectParams& p,
+                                const RunStats& st, const AuditOptions& o, bool* smooth);
 
 // Parameters an effect adds to the model (BIC's k): a PI hysteresis counts
 // one per active play operator.

@@ -19,8 +19,8 @@ void RefitJointly(ChannelEvaluator& eng, const RunStats& st, const AuditOptions&
   bool all_smooth = true;
   const std::vector<Slot> all_slots = SelectedSlots(s->Refitted(), s->params, st, o, &all_smooth);
   if (s->named.size() + s->nuisance.size() > 1) {
-    FitResult fr =
-        PolishThreshold(eng, Refine(eng, s->params, all_slots, all_smooth, 2 * o.max_evaluations, 0.01), st);
+    FitResult fr = PolishThreshold(
+        eng, Refine(eng, s->params, all_slots, all_smooth, 2 * o.max_evaluations, 0.01), st);
     NormaliseWeights(&fr.p.pi_weights);
     const AffineFit ev = eng.Evaluate(fr.p, true);
     // Keep the joint refit only when it does not hurt the held-out error.
@@ -42,8 +42,8 @@ namespace {
 // Distance from p's value of slot s, in direction sign (+1 or -1), at which
 // the training RSS first rises by sigma2 over rss0; NaN when it does not
 // within the bounds.
-double DeltaRssDistance(ChannelEvaluator& eng, const EffectParams& p, const Slot& s, double rss0, double sigma2,
-                        double sign) {
+double DeltaRssDistance(ChannelEvaluator& eng, const EffectParams& p, const Slot& s, double rss0,
+                        double sigma2, double sign) {
   const double x0 = Get(p, s);
   const double limit = sign > 0 ? s.hi - x0 : x0 - s.lo;
   double lo = 0, hi = std::min(limit, 1e-4 * (s.hi - s.lo));
@@ -64,15 +64,18 @@ double DeltaRssDistance(ChannelEvaluator& eng, const EffectParams& p, const Slot
     const double mid = 0.5 * (lo + hi);
     EffectParams q = p;
     Set(q, s, x0 + sign * mid);
-    if (eng.Evaluate(q, false).rss_train - rss0 >= sigma2) hi = mid;
-    else lo = mid;
+    if (eng.Evaluate(q, false).rss_train - rss0 >= sigma2)
+      hi = mid;
+    else
+      lo = mid;
   }
   return 0.5 * (lo + hi);
 }
 
 // 1-sigma of slot s: the mean of the two sides' Delta-RSS distances, the one
 // found, or the slot's whole width when neither is within bounds.
-double Uncertainty(ChannelEvaluator& eng, const EffectParams& p, const Slot& s, double rss0, double sigma2) {
+double Uncertainty(ChannelEvaluator& eng, const EffectParams& p, const Slot& s, double rss0,
+                   double sigma2) {
   const double up = DeltaRssDistance(eng, p, s, rss0, sigma2, 1);
   const double down = DeltaRssDistance(eng, p, s, rss0, sigma2, -1);
   const int found = !std::isnan(up) + !std::isnan(down);
@@ -83,8 +86,8 @@ double Uncertainty(ChannelEvaluator& eng, const EffectParams& p, const Slot& s, 
 
 }  // namespace
 
-void EstimateUncertainties(ChannelEvaluator& eng, const RunStats& st, const AuditOptions& o, const Selection& s,
-                           std::vector<Cause>* causes) {
+void EstimateUncertainties(ChannelEvaluator& eng, const RunStats& st, const AuditOptions& o,
+                           const Selection& s, std::vector<Cause>* causes) {
   const double rss0 = eng.Evaluate(s.params, false).rss_train;
   int k_total = 2 + static_cast<int>(s.nuisance.size());
   for (Effect e : s.named) k_total += NumParams(e, s.params);

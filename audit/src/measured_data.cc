@@ -52,14 +52,16 @@ std::string Column(const MeasuredData& d, const char* col) {
 absl::Status ValidateMeasuredData(const MeasuredData& d, int min_samples) {
   const size_t n = d.t.size();
   if (d.reference.size() != n || d.reading.size() != n)
-    return absl::InvalidArgumentError(absl::StrCat(d.source, ": columns t, reference, reading differ in length"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(d.source, ": columns t, reference, reading differ in length"));
   if (!d.shear.empty() && d.shear.size() != n)
     return absl::InvalidArgumentError(absl::StrCat(Column(d, "shear"), " differs in length"));
   if (static_cast<int>(n) < min_samples) {
     return absl::InvalidArgumentError(absl::StrCat(
         d.source, ": too few samples: ", n, " valid rows",
         d.skipped_nan_rows ? absl::StrCat(" (", d.skipped_nan_rows, " NaN rows skipped)") : "",
-        ", the audit needs at least ", min_samples, " (a training block and a later held-out block)"));
+        ", the audit needs at least ", min_samples,
+        " (a training block and a later held-out block)"));
   }
   auto check_finite = [&](const std::vector<double>& v, const char* col) -> absl::Status {
     for (size_t i = 0; i < v.size(); ++i)
@@ -82,11 +84,13 @@ absl::Status ValidateMeasuredData(const MeasuredData& d, int min_samples) {
   auto check_bounded = [&](const std::vector<double>& v, const char* col, double limit,
                            const char* unit) -> absl::Status {
     for (size_t i = 0; i < v.size(); ++i)
-      if (!planner::IsBounded(v[i], limit)) return planner::MagnitudeError(Where(d, i, col), v[i], limit, unit);
+      if (!planner::IsBounded(v[i], limit))
+        return planner::MagnitudeError(Where(d, i, col), v[i], limit, unit);
     return absl::OkStatus();
   };
   for (size_t j = 0; j < d.taxels.size(); ++j)
-    if (auto st = check_bounded(d.taxels[j], absl::StrCat("taxel_", j).c_str(), kMaxReading, "sensor units");
+    if (auto st = check_bounded(d.taxels[j], absl::StrCat("taxel_", j).c_str(), kMaxReading,
+                                "sensor units");
         !st.ok())
       return st;
   for (auto st : {check_bounded(d.t, "t", planner::kMaxTime, "s"),
@@ -98,24 +102,28 @@ absl::Status ValidateMeasuredData(const MeasuredData& d, int min_samples) {
   for (size_t i = 1; i < n; ++i) {
     if (std::binary_search(starts.begin(), starts.end(), static_cast<int>(i))) continue;
     if (!(d.t[i] > d.t[i - 1]))
-      return absl::InvalidArgumentError(absl::StrCat(Where(d, i, "t"), ": time not increasing (", d.t[i],
-                                                     " after ", d.t[i - 1], "); sort the rows by time"));
+      return absl::InvalidArgumentError(absl::StrCat(Where(d, i, "t"), ": time not increasing (",
+                                                     d.t[i], " after ", d.t[i - 1],
+                                                     "); sort the rows by time"));
     // Delay, lag and drift are fitted over time: steps below the resolution are noise.
     if (d.t[i] - d.t[i - 1] < planner::kMinTimeStep)
       return planner::CheckTime(Where(d, static_cast<int>(i), "t"), d.t[i], &d.t[i - 1]);
   }
-  auto check_const = [&](const std::vector<double>& v, const char* col, const char* why) -> absl::Status {
+  auto check_const = [&](const std::vector<double>& v, const char* col,
+                         const char* why) -> absl::Status {
     auto [lo, hi] = std::minmax_element(v.begin(), v.end());
     if (*hi - *lo <= 1e-12 * std::max(1.0, std::abs(*hi)))
       return absl::InvalidArgumentError(
           absl::StrCat(Column(d, col), " is constant (", *lo, "): ", why));
     return absl::OkStatus();
   };
-  if (auto st = check_const(d.reference, "reference",
-                            "the audit needs a varying reference force (press, ramp or random profile)");
+  if (auto st =
+          check_const(d.reference, "reference",
+                      "the audit needs a varying reference force (press, ramp or random profile)");
       !st.ok())
     return st;
-  if (auto st = check_const(d.reading, "reading", "the sensor does not respond; nothing to audit"); !st.ok())
+  if (auto st = check_const(d.reading, "reading", "the sensor does not respond; nothing to audit");
+      !st.ok())
     return st;
   return absl::OkStatus();
 }
@@ -139,27 +147,31 @@ int TaxelIndex(const std::string& column) {
 // taxel columns.
 absl::Status ReadTaxelColumns(const io::CsvTable& table, int expected, MeasuredData* d) {
   if (expected < 0 || expected > kMaxTaxels)
-    return absl::InvalidArgumentError(absl::StrCat("taxels: must be in [1, ", kMaxTaxels, "], got ", expected));
+    return absl::InvalidArgumentError(
+        absl::StrCat("taxels: must be in [1, ", kMaxTaxels, "], got ", expected));
   int highest = -1;
   for (const auto& c : table.columns) highest = std::max(highest, TaxelIndex(c));
   const int n_taxels = expected > 0 ? expected : highest + 1;
   if (n_taxels == 0) return absl::OkStatus();
   if (highest >= n_taxels)
-    return absl::InvalidArgumentError(absl::StrCat(table.source, ": column 'taxel_", highest, "' beyond the ",
-                                                   n_taxels, " taxels expected (taxel_0 ... taxel_", n_taxels - 1,
-                                                   ")"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(table.source, ": column 'taxel_", highest, "' beyond the ", n_taxels,
+                     " taxels expected (taxel_0 ... taxel_", n_taxels - 1, ")"));
   std::string missing;
   for (int j = 0; j < n_taxels; ++j)
-    if (!table.Has(absl::StrCat("taxel_", j))) absl::StrAppend(&missing, missing.empty() ? "" : ", ", "taxel_", j);
+    if (!table.Has(absl::StrCat("taxel_", j)))
+      absl::StrAppend(&missing, missing.empty() ? "" : ", ", "taxel_", j);
   if (!missing.empty())
     return absl::InvalidArgumentError(absl::StrCat(table.source, ": missing column(s) ", missing,
-                                                   " (per-taxel data needs taxel_0 ... taxel_", n_taxels - 1, ")"));
+                                                   " (per-taxel data needs taxel_0 ... taxel_",
+                                                   n_taxels - 1, ")"));
   for (int j = 0; j < n_taxels; ++j) d->taxels.push_back(table.Column(absl::StrCat("taxel_", j)));
   if (!table.Has("reading")) {
     d->reading.assign(d->t.size(), 0.0);
     for (const auto& col : d->taxels)
       for (size_t i = 0; i < col.size(); ++i) d->reading[i] += col[i];
-    d->notes.push_back(absl::StrCat("reading = the sum of the ", n_taxels, " taxel columns (the fingertip force)"));
+    d->notes.push_back(absl::StrCat("reading = the sum of the ", n_taxels,
+                                    " taxel columns (the fingertip force)"));
   }
   return absl::OkStatus();
 }
@@ -189,13 +201,15 @@ absl::StatusOr<MeasuredData> MeasuredDataFromCsv(const io::CsvTable& table, int 
     std::vector<int> seen;
     for (size_t i = 0; i < n; ++i) {
       if (tr[i] != std::round(tr[i]) || std::abs(tr[i]) > std::numeric_limits<int>::max())
-        return absl::InvalidArgumentError(absl::StrCat(table.source, ":", d.line[i],
-                                                       ": column 'trial': not an integer in int's range (", tr[i], ")"));
+        return absl::InvalidArgumentError(
+            absl::StrCat(table.source, ":", d.line[i],
+                         ": column 'trial': not an integer in int's range (", tr[i], ")"));
       d.trial[i] = static_cast<int>(tr[i]);
       if (i == 0 || d.trial[i] != d.trial[i - 1]) {
         if (std::find(seen.begin(), seen.end(), d.trial[i]) != seen.end())
-          return absl::InvalidArgumentError(absl::StrCat(table.source, ":", d.line[i], ": column 'trial': trial ",
-                                                         d.trial[i], " resumes after another trial; keep each trial's rows together"));
+          return absl::InvalidArgumentError(
+              absl::StrCat(table.source, ":", d.line[i], ": column 'trial': trial ", d.trial[i],
+                           " resumes after another trial; keep each trial's rows together"));
         seen.push_back(d.trial[i]);
         d.segment_starts.push_back(static_cast<int>(i));
       }
@@ -228,12 +242,15 @@ absl::StatusOr<MeasuredData> ReadMeasuredCsv(const std::string& path, int expect
 namespace {
 
 // Times with enough digits for epoch clocks (1.7e9 s to the microsecond).
-std::string G(double v) { return std::abs(v) >= 1e5 ? absl::StrFormat("%.6f", v) : absl::StrFormat("%.7g", v); }
+std::string G(double v) {
+  return std::abs(v) >= 1e5 ? absl::StrFormat("%.6f", v) : absl::StrFormat("%.7g", v);
+}
 
 // |Pearson correlation| of the reading samples idx with the reference
 // (linearly interpolated) at t - offset.
-double OffsetCorrelation(const std::vector<double>& rt, const std::vector<double>& rv, const std::vector<double>& qt,
-                         const std::vector<double>& qv, size_t first, size_t last, double offset) {
+double OffsetCorrelation(const std::vector<double>& rt, const std::vector<double>& rv,
+                         const std::vector<double>& qt, const std::vector<double>& qv, size_t first,
+                         size_t last, double offset) {
   double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
   size_t k = 0;
   const double n = static_cast<double>(last - first);
@@ -257,9 +274,10 @@ double OffsetCorrelation(const std::vector<double>& rt, const std::vector<double
 // Checks the search arguments and that the streams overlap at the centre by
 // more than the search range.
 absl::Status CheckClockOffsetSearch(const std::vector<double>& rt, const std::vector<double>& rv,
-                                    const std::vector<double>& qt, const std::vector<double>& qv, double centre,
-                                    double max_offset) {
-  if (!std::isfinite(centre)) return absl::InvalidArgumentError("clock offset: the search centre is not a finite number");
+                                    const std::vector<double>& qt, const std::vector<double>& qv,
+                                    double centre, double max_offset) {
+  if (!std::isfinite(centre))
+    return absl::InvalidArgumentError("clock offset: the search centre is not a finite number");
   if (!(max_offset > 0) || !std::isfinite(max_offset))
     return absl::InvalidArgumentError(
         absl::StrCat("max clock offset: must be a finite number > 0 s, got ", max_offset));
@@ -271,11 +289,13 @@ absl::Status CheckClockOffsetSearch(const std::vector<double>& rt, const std::ve
   const double overlap = ov_hi - ov_lo;
   if (!(overlap > 2 * max_offset))
     return absl::InvalidArgumentError(absl::StrCat(
-        "clock offset search +/-", G(max_offset), " s around ", G(centre), " s exceeds the streams' overlap (",
-        G(std::max(0.0, overlap)), " s: reference ", G(rt.front()), "..", G(rt.back()), " s, reading ", G(qt.front()),
-        "..", G(qt.back()), " s); the overlap must be longer than the search range (", G(2 * max_offset), " s): ",
+        "clock offset search +/-", G(max_offset), " s around ", G(centre),
+        " s exceeds the streams' overlap (", G(std::max(0.0, overlap)), " s: reference ",
+        G(rt.front()), "..", G(rt.back()), " s, reading ", G(qt.front()), "..", G(qt.back()),
+        " s); the overlap must be longer than the search range (", G(2 * max_offset), " s): ",
         overlap > 0 ? "give a smaller --max-clock-offset or the offset itself with --clock-offset"
-                    : "the clocks may have different epochs: give --clock-offset-centre (about reading start minus "
+                    : "the clocks may have different epochs: give --clock-offset-centre (about "
+                      "reading start minus "
                       "reference start) or the offset itself with --clock-offset"));
   return absl::OkStatus();
 }
@@ -288,8 +308,8 @@ struct CorrelationPeak {
 
 // Maximum of corr over a grid of step `coarse` on centre +/- max_offset, then
 // over a grid of step `fine` within one coarse step of it (inside the range).
-CorrelationPeak GridPeak(const std::function<double(double)>& corr, double centre, double max_offset, double coarse,
-                         double fine) {
+CorrelationPeak GridPeak(const std::function<double(double)>& corr, double centre,
+                         double max_offset, double coarse, double fine) {
   CorrelationPeak peak{centre, -1};
   for (double off = centre - max_offset; off <= centre + max_offset + 1e-12; off += coarse) {
     const double r = corr(off);
@@ -308,9 +328,10 @@ CorrelationPeak GridPeak(const std::function<double(double)>& corr, double centr
 
 // Golden-section search of corr within `fine` of the peak (inside
 // centre +/- max_offset); the better of its result and the peak.
-CorrelationPeak GoldenSectionPeak(const std::function<double(double)>& corr, double centre, double max_offset,
-                                  double fine, CorrelationPeak peak) {
-  double a = std::max(centre - max_offset, peak.offset - fine), b = std::min(centre + max_offset, peak.offset + fine);
+CorrelationPeak GoldenSectionPeak(const std::function<double(double)>& corr, double centre,
+                                  double max_offset, double fine, CorrelationPeak peak) {
+  double a = std::max(centre - max_offset, peak.offset - fine),
+         b = std::min(centre + max_offset, peak.offset + fine);
   const double g = 0.5 * (std::sqrt(5.0) - 1);
   double x1 = b - g * (b - a), x2 = a + g * (b - a);
   double f1 = corr(x1), f2 = corr(x2);
@@ -336,8 +357,10 @@ CorrelationPeak GoldenSectionPeak(const std::function<double(double)>& corr, dou
 
 }  // namespace
 
-absl::StatusOr<ClockOffsetEstimate> EstimateClockOffset(const std::vector<double>& rt, const std::vector<double>& rv,
-                                                        const std::vector<double>& qt, const std::vector<double>& qv,
+absl::StatusOr<ClockOffsetEstimate> EstimateClockOffset(const std::vector<double>& rt,
+                                                        const std::vector<double>& rv,
+                                                        const std::vector<double>& qt,
+                                                        const std::vector<double>& qv,
                                                         double centre, double max_offset) {
   TF_RETURN_IF_ERROR(CheckClockOffsetSearch(rt, rv, qt, qv, centre, max_offset));
   // Reading samples inside the reference span for every offset searched.
@@ -346,11 +369,13 @@ absl::StatusOr<ClockOffsetEstimate> EstimateClockOffset(const std::vector<double
   const size_t last = std::upper_bound(qt.begin(), qt.end(), hi) - qt.begin();
   const int used = last > first ? static_cast<int>(last - first) : 0;
   if (used < kMinAuditSamples)
-    return absl::InvalidArgumentError(absl::StrCat(
-        "clock offset: only ", used, " reading samples lie inside the reference span for every offset in ",
-        G(centre), " +/- ", G(max_offset), " s; need at least ", kMinAuditSamples,
-        " (give a smaller --max-clock-offset or the offset with --clock-offset)"));
-  const double h = std::max(1e-9, std::min(internal::MedianStep(rt, 0.0), internal::MedianStep(qt, 0.0)));
+    return absl::InvalidArgumentError(
+        absl::StrCat("clock offset: only ", used,
+                     " reading samples lie inside the reference span for every offset in ",
+                     G(centre), " +/- ", G(max_offset), " s; need at least ", kMinAuditSamples,
+                     " (give a smaller --max-clock-offset or the offset with --clock-offset)"));
+  const double h =
+      std::max(1e-9, std::min(internal::MedianStep(rt, 0.0), internal::MedianStep(qt, 0.0)));
   // Coarse grid (at most 2001 points), then a grid of step h/2 around the
   // best, then golden section within one fine step.
   const double coarse = std::max(0.5 * h, 2 * max_offset / 2000);
@@ -358,8 +383,8 @@ absl::StatusOr<ClockOffsetEstimate> EstimateClockOffset(const std::vector<double
   const std::function<double(double)> corr = [&](double off) {
     return OffsetCorrelation(rt, rv, qt, qv, first, last, off);
   };
-  const CorrelationPeak peak =
-      GoldenSectionPeak(corr, centre, max_offset, fine, GridPeak(corr, centre, max_offset, coarse, fine));
+  const CorrelationPeak peak = GoldenSectionPeak(corr, centre, max_offset, fine,
+                                                 GridPeak(corr, centre, max_offset, coarse, fine));
   if (peak.offset - (centre - max_offset) < h || (centre + max_offset) - peak.offset < h)
     return absl::InvalidArgumentError(absl::StrCat(
         "clock offset: the correlation peak (", G(peak.offset), " s, |r| = ", peak.correlation,
@@ -367,8 +392,9 @@ absl::StatusOr<ClockOffsetEstimate> EstimateClockOffset(const std::vector<double
         " s; the true offset may lie outside: widen --max-clock-offset or give --clock-offset"));
   if (peak.correlation < 0.3)
     return absl::InvalidArgumentError(absl::StrCat(
-        "clock offset: no clear correlation between the streams (peak |r| = ", peak.correlation, " at ",
-        G(peak.offset), " s); check that the files belong together, or give --clock-offset"));
+        "clock offset: no clear correlation between the streams (peak |r| = ", peak.correlation,
+        " at ", G(peak.offset),
+        " s); check that the files belong together, or give --clock-offset"));
   ClockOffsetEstimate e;
   e.offset = peak.offset;
   e.correlation = peak.correlation;
@@ -383,9 +409,9 @@ namespace {
 absl::Status CheckTimeIncreasing(const io::CsvTable& tb, const std::vector<double>& t) {
   for (size_t i = 1; i < t.size(); ++i)
     if (!(t[i] > t[i - 1]))
-      return absl::InvalidArgumentError(absl::StrCat(tb.source, ":", tb.line_numbers[i],
-                                                     ": column 't': time not increasing (", t[i], " after ",
-                                                     t[i - 1], "); sort the rows by time"));
+      return absl::InvalidArgumentError(
+          absl::StrCat(tb.source, ":", tb.line_numbers[i], ": column 't': time not increasing (",
+                       t[i], " after ", t[i - 1], "); sort the rows by time"));
   return absl::OkStatus();
 }
 
@@ -393,8 +419,9 @@ absl::Status CheckTimeIncreasing(const io::CsvTable& tb, const std::vector<doubl
 // clock_offset lies in the reference span, with the reference (rt, rv) and
 // shear (rs, empty when absent) interpolated linearly there. Returns the
 // number of samples outside.
-int InterpolateReference(const std::vector<double>& rt, const std::vector<double>& rv, const std::vector<double>& rs,
-                         const io::CsvTable& rd, const std::vector<double>& qt, const std::vector<double>& qv,
+int InterpolateReference(const std::vector<double>& rt, const std::vector<double>& rv,
+                         const std::vector<double>& rs, const io::CsvTable& rd,
+                         const std::vector<double>& qt, const std::vector<double>& qv,
                          double clock_offset, MeasuredData* d) {
   int outside = 0;
   size_t k = 0;
@@ -438,16 +465,17 @@ absl::StatusOr<MeasuredData> AlignStreams(const io::CsvTable& ref, const io::Csv
   if (options.mode == ClockOffsetMode::kEstimate) {
     auto est = EstimateClockOffset(rt, rv, qt, qv, options.clock_offset, options.max_clock_offset);
     if (!est.ok())
-      return absl::InvalidArgumentError(absl::StrCat(ref.source, " + ", rd.source, ": ", est.status().message()));
+      return absl::InvalidArgumentError(
+          absl::StrCat(ref.source, " + ", rd.source, ": ", est.status().message()));
     clock_offset = est->offset;
     d.clock_offset_source = MeasuredData::ClockOffset::kEstimated;
     d.clock_offset_correlation = est->correlation;
     // Named apart from the header's clock offset, which adds the audit's
     // refinement to this one.
-    d.notes.push_back(absl::StrCat("cross-correlation clock offset (before the audit's refinement): ", G(est->offset),
-                                   " s (peak |r| ",
-                                   est->correlation, ", ", est->samples, " reading samples, search ",
-                                   G(options.clock_offset), " +/- ", G(options.max_clock_offset), " s)"));
+    d.notes.push_back(absl::StrCat(
+        "cross-correlation clock offset (before the audit's refinement): ", G(est->offset),
+        " s (peak |r| ", est->correlation, ", ", est->samples, " reading samples, search ",
+        G(options.clock_offset), " +/- ", G(options.max_clock_offset), " s)"));
   }
   d.clock_offset = clock_offset;
   const int outside = InterpolateReference(rt, rv, rs, rd, qt, qv, clock_offset, &d);
@@ -457,26 +485,30 @@ absl::StatusOr<MeasuredData> AlignStreams(const io::CsvTable& ref, const io::Csv
   auto rate = [](const std::vector<double>& t) {
     return t.size() > 1 ? (t.size() - 1) / (t.back() - t.front()) : 0.0;
   };
-  d.notes.push_back(absl::StrCat("two streams aligned: reference ", rt.size(), " samples at ~", rate(rt),
-                                 " Hz interpolated onto ", d.t.size(), " reading samples at ~", rate(qt), " Hz",
-                                 clock_offset == 0 ? ""
-                                 : d.clock_offset_source == MeasuredData::ClockOffset::kEstimated
-                                     ? absl::StrCat(" (shifted by the cross-correlation clock offset ", G(clock_offset), " s)")
-                                     : absl::StrCat(" (clock offset ", G(clock_offset), " s)")));
+  d.notes.push_back(absl::StrCat(
+      "two streams aligned: reference ", rt.size(), " samples at ~", rate(rt),
+      " Hz interpolated onto ", d.t.size(), " reading samples at ~", rate(qt), " Hz",
+      clock_offset == 0 ? ""
+      : d.clock_offset_source == MeasuredData::ClockOffset::kEstimated
+          ? absl::StrCat(" (shifted by the cross-correlation clock offset ", G(clock_offset), " s)")
+          : absl::StrCat(" (clock offset ", G(clock_offset), " s)")));
   if (outside > 0)
-    d.notes.push_back(absl::StrCat(outside, " reading sample(s) outside the reference time span dropped"));
+    d.notes.push_back(
+        absl::StrCat(outside, " reading sample(s) outside the reference time span dropped"));
   if (d.skipped_nan_rows > 0)
     d.notes.push_back(absl::StrCat(d.skipped_nan_rows, " row(s) with NaN/empty fields skipped"));
   if (d.t.empty())
     return absl::InvalidArgumentError(absl::StrCat(
-        d.source, ": the streams do not overlap in time (reference ", G(rt.front()), "..", G(rt.back()),
-        " s, reading ", G(qt.front()), "..", G(qt.back()), " s, clock offset ", G(clock_offset),
+        d.source, ": the streams do not overlap in time (reference ", G(rt.front()), "..",
+        G(rt.back()), " s, reading ", G(qt.front()), "..", G(qt.back()), " s, clock offset ",
+        G(clock_offset),
         " s); give the clock offset (--clock-offset) or a search centre (--clock-offset-centre)"));
   TF_RETURN_IF_ERROR(ValidateMeasuredData(d));
   return d;
 }
 
-absl::StatusOr<MeasuredData> ReadAndAlignStreams(const std::string& reference_path, const std::string& reading_path,
+absl::StatusOr<MeasuredData> ReadAndAlignStreams(const std::string& reference_path,
+                                                 const std::string& reading_path,
                                                  const AlignOptions& options) {
   io::CsvOptions opt;
   opt.skip_nan_rows = true;

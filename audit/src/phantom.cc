@@ -48,8 +48,8 @@ struct PhantomScore {
   double rss_train = std::numeric_limits<double>::infinity();
 };
 
-PhantomScore ScoreDecay(const MeasuredData& d, const std::vector<double>& g, int n_train, double release,
-                        double decay) {
+PhantomScore ScoreDecay(const MeasuredData& d, const std::vector<double>& g, int n_train,
+                        double release, double decay) {
   const std::vector<double> p = PhantomProfile(d, release, decay);
   Eigen::Matrix3d xtx = Eigen::Matrix3d::Zero();
   Eigen::Vector3d xty = Eigen::Vector3d::Zero();
@@ -96,8 +96,10 @@ PhantomFit FitPhantom(ChannelEvaluator& eng, const Selection& s) {
   const double r = 0.5 * (std::sqrt(5.0) - 1);
   double x1 = b - r * (b - a), x2 = a + r * (b - a), f1 = value(x1), f2 = value(x2);
   for (int it = 0; it < 20; ++it) {
-    if (f1 < f2) b = x2, x2 = x1, f2 = f1, x1 = b - r * (b - a), f1 = value(x1);
-    else a = x1, x1 = x2, f1 = f2, x2 = a + r * (b - a), f2 = value(x2);
+    if (f1 < f2)
+      b = x2, x2 = x1, f2 = f1, x1 = b - r * (b - a), f1 = value(x1);
+    else
+      a = x1, x1 = x2, f1 = f2, x2 = a + r * (b - a), f2 = value(x2);
   }
   fit.decay = std::exp(f1 < f2 ? x1 : x2);
   if (std::min(f1, f2) > best_v) fit.decay = std::exp(lo + step * best);

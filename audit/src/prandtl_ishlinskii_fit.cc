@@ -22,7 +22,8 @@ namespace {
 // Solution z of the unconstrained least squares on the passive set (zero
 // elsewhere), with a tiny ridge: neighbouring play operators are nearly
 // collinear.
-std::vector<double> SolvePassive(const Eigen::MatrixXd& G, const Eigen::VectorXd& h, const std::vector<bool>& passive) {
+std::vector<double> SolvePassive(const Eigen::MatrixXd& G, const Eigen::VectorXd& h,
+                                 const std::vector<bool>& passive) {
   const int m = static_cast<int>(h.size());
   std::vector<int> idx;
   for (int j = 0; j < m; ++j)
@@ -43,8 +44,8 @@ std::vector<double> SolvePassive(const Eigen::MatrixXd& G, const Eigen::VectorXd
 
 // Lawson-Hanson inner loop: moves c towards the passive-set solution until it
 // is feasible, dropping the variables that reach zero.
-void ConstrainToPassive(const Eigen::MatrixXd& G, const Eigen::VectorXd& h, std::vector<bool>* passive,
-                        std::vector<double>* c) {
+void ConstrainToPassive(const Eigen::MatrixXd& G, const Eigen::VectorXd& h,
+                        std::vector<bool>* passive, std::vector<double>* c) {
   const int m = static_cast<int>(h.size());
   for (int inner = 0; inner < 3 * m; ++inner) {
     const std::vector<double> z = SolvePassive(G, h, *passive);
@@ -96,8 +97,8 @@ std::vector<double> Nnls(const Eigen::MatrixXd& G, const Eigen::VectorXd& h) {
 // Normal equations (G = X'X, h = X'y) of the reading on the channel outputs
 // with a single play operator of each radius, columns and reading centred
 // (the intercept).
-void PlayNormalEquations(ChannelEvaluator& eng, const EffectParams& current, const std::vector<double>& radii,
-                         Eigen::MatrixXd* G, Eigen::VectorXd* h) {
+void PlayNormalEquations(ChannelEvaluator& eng, const EffectParams& current,
+                         const std::vector<double>& radii, Eigen::MatrixXd* G, Eigen::VectorXd* h) {
   const int m = static_cast<int>(radii.size());
   const int n = eng.n_train();
   const std::vector<double>& y = eng.reading();
@@ -122,8 +123,8 @@ void PlayNormalEquations(ChannelEvaluator& eng, const EffectParams& current, con
 // The PI hysteresis of the NNLS weights c on `radii` (weights above 1e-6 of
 // their sum, normalised) in place of current's hysteresis; false when only
 // the identity (or nothing) is left.
-bool PiFromWeights(const EffectParams& current, const std::vector<double>& radii, const std::vector<double>& c,
-                   EffectParams* p) {
+bool PiFromWeights(const EffectParams& current, const std::vector<double>& radii,
+                   const std::vector<double>& c, EffectParams* p) {
   double csum = 0;
   for (double v : c) csum += v;
   if (!(csum > 0)) return false;
@@ -136,15 +137,17 @@ bool PiFromWeights(const EffectParams& current, const std::vector<double>& radii
       p->pi_thresholds.push_back(radii[k]);
       p->pi_weights.push_back(c[k]);
     }
-  if (p->pi_thresholds.empty() || (p->pi_thresholds.size() == 1 && p->pi_thresholds[0] == 0)) return false;
+  if (p->pi_thresholds.empty() || (p->pi_thresholds.size() == 1 && p->pi_thresholds[0] == 0))
+    return false;
   NormaliseWeights(&p->pi_weights);
   return true;
 }
 
 }  // namespace
 
-FitResult FitPrandtlIshlinskii(ChannelEvaluator& eng, const EffectParams& current, const std::vector<Effect>& selected,
-                               const RunStats& st, const AuditOptions& o) {
+FitResult FitPrandtlIshlinskii(ChannelEvaluator& eng, const EffectParams& current,
+                               const std::vector<Effect>& selected, const RunStats& st,
+                               const AuditOptions& o) {
   std::vector<double> radii = {0.0};
   for (double r : GeometricGrid(0.002 * st.range, 0.1 * st.range, 12)) radii.push_back(r);
   Eigen::MatrixXd G;
@@ -163,10 +166,11 @@ FitResult FitPrandtlIshlinskii(ChannelEvaluator& eng, const EffectParams& curren
     }
   }
   if (best.p.pi_thresholds.empty()) return best;
-  const bool static_after = best.p.curvature != 0 || best.p.power_exponent > 0 || best.p.threshold > 0 ||
-                            best.p.saturation > 0;
+  const bool static_after = best.p.curvature != 0 || best.p.power_exponent > 0 ||
+                            best.p.threshold > 0 || best.p.saturation > 0;
   if (static_after || !selected.empty()) {
-    std::vector<Slot> joint = SlotsFor(Effect::kHysteresis, st, o, Form::kPrandtlIshlinskii, &best.p);
+    std::vector<Slot> joint =
+        SlotsFor(Effect::kHysteresis, st, o, Form::kPrandtlIshlinskii, &best.p);
     for (Slot& sl : SelectedSlots(selected, best.p, st, o, nullptr)) joint.push_back(std::move(sl));
     const int evals = o.max_evaluations * (1 + static_cast<int>(selected.size()));
     FitResult r = PolishThreshold(eng, Refine(eng, best.p, joint, false, evals, 0.05), st);

@@ -67,7 +67,8 @@ void WriteMap(io::JsonWriter& w, const std::string& key, const std::map<std::str
 
 // "parameters": {"form": ..., numbers..., arrays...} ("form" only for the
 // effects with two forms).
-void WriteParameters(io::JsonWriter& w, const std::string& form, const std::map<std::string, double>& m,
+void WriteParameters(io::JsonWriter& w, const std::string& form,
+                     const std::map<std::string, double>& m,
                      const std::map<std::string, std::vector<double>>& arrays) {
   w.Key("parameters");
   w.BeginObject();
@@ -99,8 +100,10 @@ void WriteCauses(io::JsonWriter& w, const std::vector<Cause>& causes) {
 
 void WriteClockOffset(io::JsonWriter& w, const AuditReport& r) {
   w.Key("clock_offset_s");
-  if (r.clock_offset_s) w.Number(*r.clock_offset_s);
-  else w.Null();
+  if (r.clock_offset_s)
+    w.Number(*r.clock_offset_s);
+  else
+    w.Null();
   if (r.clock_offset_s) {
     w.Key("clock_offset");
     w.BeginObject();
@@ -110,7 +113,8 @@ void WriteClockOffset(io::JsonWriter& w, const AuditReport& r) {
       w.Field("refinement_s", r.clock_offset_refinement_s);
       w.Field("peak_correlation", r.clock_offset_correlation);
       w.Field("note",
-              "reading clock minus reference clock; includes any constant sensor delay (indistinguishable from two "
+              "reading clock minus reference clock; includes any constant sensor delay "
+              "(indistinguishable from two "
               "streams)");
     }
     w.EndObject();
@@ -175,22 +179,27 @@ std::string Plot(const PlotText& text, const std::vector<Series>& series, double
       if (std::isfinite(s.x[i]) && std::isfinite(s.y[i])) x.Include(s.x[i]), y.Include(s.y[i]);
   x = x.ForAxis();
   y = y.ForAxis(0.05);
-  const io::PlotFrame frame{kLeft, kTop, kWidth - kLeft - kRight, kHeight - kTop - kBottom, x.lo, x.hi, y.lo, y.hi};
+  const io::PlotFrame frame{
+      kLeft, kTop, kWidth - kLeft - kRight, kHeight - kTop - kBottom, x.lo, x.hi, y.lo, y.hi};
   io::SvgCanvas canvas(kWidth, kHeight, 12);
   canvas.WrappedText(kLeft, 24, text.title, kWidth - kLeft - 10, {.size = 15, .bold = true}, 18, 1);
   if (!text.source.empty())
-    canvas.WrappedText(kLeft, 42, "source: " + text.source, kWidth - kLeft - 10, {.color = "#444"}, 16, 1);
+    canvas.WrappedText(kLeft, 42, "source: " + text.source, kWidth - kLeft - 10, {.color = "#444"},
+                       16, 1);
   io::DrawAxes(canvas, frame, io::AxisTicks(x.lo, x.hi), {.title = text.xlabel, .title_offset = 40},
                io::AxisTicks(y.lo, y.hi), {.title = text.ylabel, .title_offset = 62});
   io::DrawVerticalRule(canvas, frame, vline, io::Stroke{"black", 1, "5,4"}, "held-out");
   std::vector<io::LegendEntry> legend;
   for (const Series& s : series) {
-    if (s.line) io::DrawLineTrace(canvas, frame, s.x, s.y, io::Stroke{s.color, 1.5, ""});
-    else io::DrawScatter(canvas, frame, s.x, s.y, s.color, s.radius, s.opacity);
+    if (s.line)
+      io::DrawLineTrace(canvas, frame, s.x, s.y, io::Stroke{s.color, 1.5, ""});
+    else
+      io::DrawScatter(canvas, frame, s.x, s.y, s.color, s.radius, s.opacity);
     io::LegendEntry entry{.label = s.label, .line = io::Stroke{s.color, 2, ""}};
     if (!s.line)
       entry.swatch = io::LegendEntry::Swatch::kMarker,
-      entry.marker = {.shape = io::MarkerShape::kBox, .color = s.color, .size = std::max(4.0, 2.5 * s.radius)};
+      entry.marker = {
+          .shape = io::MarkerShape::kBox, .color = s.color, .size = std::max(4.0, 2.5 * s.radius)};
     legend.push_back(entry);
   }
   io::DrawFrameOutline(canvas, frame, io::Stroke{});
@@ -224,9 +233,10 @@ std::string BlocksNote(const Cause& c, const std::vector<double>& block_times) {
   if (c.blocks.empty() || block_times.size() < 2) return "";
   std::string b;
   for (int k : c.blocks)
-    absl::StrAppendFormat(&b, "%s%d (%.4g-%.4g s)", b.empty() ? "" : ", ", k, block_times[k - 1], block_times[k]);
-  return absl::StrCat(c.found_by == "blocked" ? "; found by the blocked hold-out" : "", "; shown in block(s) ", b,
-                      " of ", block_times.size() - 1);
+    absl::StrAppendFormat(&b, "%s%d (%.4g-%.4g s)", b.empty() ? "" : ", ", k, block_times[k - 1],
+                          block_times[k]);
+  return absl::StrCat(c.found_by == "blocked" ? "; found by the blocked hold-out" : "",
+                      "; shown in block(s) ", b, " of ", block_times.size() - 1);
 }
 
 }  // namespace
@@ -277,8 +287,8 @@ std::string AuditReportJson(const AuditReport& r, const std::string& extended_mo
 std::string FormatAuditSummary(const AuditReport& r) {
   std::string s;
   absl::StrAppend(&s, "Sensor model audit of ", r.source, "\n");
-  absl::StrAppendFormat(&s, "  %d samples (%d training, %d held out from t = %.4g s)", r.n_samples, r.n_train,
-                        r.n_heldout, r.split_time);
+  absl::StrAppendFormat(&s, "  %d samples (%d training, %d held out from t = %.4g s)", r.n_samples,
+                        r.n_train, r.n_heldout, r.split_time);
   if (r.skipped_nan_rows) absl::StrAppendFormat(&s, ", %d NaN rows skipped", r.skipped_nan_rows);
   s += "\n";
   if (r.clock_offset_s) {
@@ -287,66 +297,80 @@ std::string FormatAuditSummary(const AuditReport& r) {
       return std::abs(v) >= 1e5 ? absl::StrFormat("%.6f", v) : absl::StrFormat("%.7g", v);
     };
     if (r.clock_offset_mode == "estimated")
-      absl::StrAppendFormat(&s,
-                            "  two streams, clock offset (reading - reference clock) %s s, estimated: "
-                            "cross-correlation %s s (peak |r| %.3f) + audit refinement %.3g s; a constant sensor "
-                            "delay is part of it\n",
-                            sec(*r.clock_offset_s), sec(r.clock_offset_xcorr_s), r.clock_offset_correlation,
-                            r.clock_offset_refinement_s);
+      absl::StrAppendFormat(
+          &s,
+          "  two streams, clock offset (reading - reference clock) %s s, estimated: "
+          "cross-correlation %s s (peak |r| %.3f) + audit refinement %.3g s; a constant sensor "
+          "delay is part of it\n",
+          sec(*r.clock_offset_s), sec(r.clock_offset_xcorr_s), r.clock_offset_correlation,
+          r.clock_offset_refinement_s);
     else
-      absl::StrAppendFormat(&s, "  two streams, clock offset (reading - reference clock) %s s, as given\n",
-                            sec(*r.clock_offset_s));
+      absl::StrAppendFormat(
+          &s, "  two streams, clock offset (reading - reference clock) %s s, as given\n",
+          sec(*r.clock_offset_s));
   }
   const auto& nm = r.nominal_model;
-  absl::StrAppendFormat(&s, "Nominal model: reading = %.6g * force + %.6g  [%s]\n", nm.gain, nm.offset,
-                        r.reading_units);
+  absl::StrAppendFormat(&s, "Nominal model: reading = %.6g * force + %.6g  [%s]\n", nm.gain,
+                        nm.offset, r.reading_units);
   const auto& d = r.nominal;
   const double g = std::abs(nm.gain) > 0 ? std::abs(nm.gain) : 1;
-  absl::StrAppendFormat(&s, "  held-out RMS %.4g %s (%.4g N); training RMS %.4g\n", d.heldout_rms, r.reading_units,
-                        d.heldout_rms / g, d.train_rms);
+  absl::StrAppendFormat(&s, "  held-out RMS %.4g %s (%.4g N); training RMS %.4g\n", d.heldout_rms,
+                        r.reading_units, d.heldout_rms / g, d.train_rms);
   if (r.given_model_heldout_rms)
-    absl::StrAppendFormat(&s, "  the given model, as given: held-out RMS %.4g\n", *r.given_model_heldout_rms);
+    absl::StrAppendFormat(&s, "  the given model, as given: held-out RMS %.4g\n",
+                          *r.given_model_heldout_rms);
   s += "  residual bias per force bin (N):";
   for (const auto& b : d.bias_bins)
     if (b.count) absl::StrAppendFormat(&s, " [%.3g-%.3g] %+.3g", b.lo, b.hi, b.mean_residual);
   s += "\n";
-  absl::StrAppendFormat(&s, "  loading %+.4g N (%d) vs unloading %+.4g N (%d)\n", d.loading_mean, d.loading_count,
-                        d.unloading_mean, d.unloading_count);
-  absl::StrAppendFormat(&s, "  Ljung-Box Q(%d) = %.4g, p = %.3g%s\n", d.ljung_box_lags, d.ljung_box_q,
-                        d.ljung_box_p, d.ljung_box_p < 0.01 ? " (residuals autocorrelated)" : "");
-  absl::StrAppendFormat(&s, "  cross-correlation lag: %d samples (%.4g s); residual trend %.4g N/s\n",
+  absl::StrAppendFormat(&s, "  loading %+.4g N (%d) vs unloading %+.4g N (%d)\n", d.loading_mean,
+                        d.loading_count, d.unloading_mean, d.unloading_count);
+  absl::StrAppendFormat(&s, "  Ljung-Box Q(%d) = %.4g, p = %.3g%s\n", d.ljung_box_lags,
+                        d.ljung_box_q, d.ljung_box_p,
+                        d.ljung_box_p < 0.01 ? " (residuals autocorrelated)" : "");
+  absl::StrAppendFormat(&s,
+                        "  cross-correlation lag: %d samples (%.4g s); residual trend %.4g N/s\n",
                         d.xcorr_lag_samples, d.xcorr_lag_seconds, d.residual_time_slope);
   if (r.nominal_adequate) {
-    s += "Verdict: the nominal model is adequate (no candidate cause improves the held-out error enough).\n";
+    s += "Verdict: the nominal model is adequate (no candidate cause improves the held-out error "
+         "enough).\n";
   } else {
     s += "Causes (strongest first):\n";
     int i = 1;
     for (const auto& c : r.causes)
-      absl::StrAppendFormat(&s, "  %d. %-12s %s; held-out RMS %.4g -> %.4g (gain %.1f %%)%s\n", i++, c.effect,
-                            CauseLine(c), c.heldout_rms_before, c.heldout_rms_after, c.gain,
-                            BlocksNote(c, r.block_times));
-    absl::StrAppendFormat(&s, "Extended model (re-simulated): held-out RMS %.4g -> %.4g, gain %.1f %%\n",
-                          r.heldout_rms_before, r.heldout_rms_after, r.gain);
+      absl::StrAppendFormat(&s, "  %d. %-12s %s; held-out RMS %.4g -> %.4g (gain %.1f %%)%s\n", i++,
+                            c.effect, CauseLine(c), c.heldout_rms_before, c.heldout_rms_after,
+                            c.gain, BlocksNote(c, r.block_times));
+    absl::StrAppendFormat(
+        &s, "Extended model (re-simulated): held-out RMS %.4g -> %.4g, gain %.1f %%\n",
+        r.heldout_rms_before, r.heldout_rms_after, r.gain);
   }
   if (r.downstream)
-    absl::StrAppendFormat(&s,
-                          "Downstream (%s, %d grasps): force error due to readings %.4g N -> %.4g N, gain %.1f %% "
-                          "(estimator's own error with exact readings %.4g N)\n",
-                          r.downstream->method, r.downstream->grasps, r.downstream->error_nominal,
-                          r.downstream->error_extended, r.downstream->gain, r.downstream->error_exact_readings);
+    absl::StrAppendFormat(
+        &s,
+        "Downstream (%s, %d grasps): force error due to readings %.4g N -> %.4g N, gain %.1f %% "
+        "(estimator's own error with exact readings %.4g N)\n",
+        r.downstream->method, r.downstream->grasps, r.downstream->error_nominal,
+        r.downstream->error_extended, r.downstream->gain, r.downstream->error_exact_readings);
   for (const auto& n : r.notes) absl::StrAppend(&s, "Note: ", n, "\n");
   return s;
 }
 
 std::vector<std::string> AuditReportFileNames() {
-  return {"report.json", "summary.txt", "extended_model.json", "reading_vs_reference.svg",
-          "residual_vs_reference.svg", "residual_vs_time.svg"};
+  return {"report.json",
+          "summary.txt",
+          "extended_model.json",
+          "reading_vs_reference.svg",
+          "residual_vs_reference.svg",
+          "residual_vs_time.svg"};
 }
 
-absl::Status WriteAuditReport(const AuditReport& r, const std::string& dir, const std::string& source) {
+absl::Status WriteAuditReport(const AuditReport& r, const std::string& dir,
+                              const std::string& source) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
-  if (ec) return absl::InternalError(absl::StrCat(dir, ": cannot create directory: ", ec.message()));
+  if (ec)
+    return absl::InternalError(absl::StrCat(dir, ": cannot create directory: ", ec.message()));
   const std::string model_path = dir + "/extended_model.json";
   TF_RETURN_IF_ERROR(sim::SaveSensorModel(r.extended_model, model_path));
   auto write = [&](const std::string& name, const std::string& text) {
@@ -370,29 +394,32 @@ absl::Status WriteAuditReport(const AuditReport& r, const std::string& dir, cons
     std::vector<double> ys = {r.nominal_model.gain * xs[0] + r.nominal_model.offset,
                               r.nominal_model.gain * xs[1] + r.nominal_model.offset};
     // Measured dots large and pale underneath, the model's small and dark on top: both show.
-    std::vector<Series> se = {{"measured", "#888888", r.reference, r.reading, false, 2.6, 0.45},
-                              {"extended model", "#e6550d", r.reference, r.predicted_extended, false, 1.1, 0.9},
-                              {"nominal model", "#3182bd", xs, ys, true}};
+    std::vector<Series> se = {
+        {"measured", "#888888", r.reference, r.reading, false, 2.6, 0.45},
+        {"extended model", "#e6550d", r.reference, r.predicted_extended, false, 1.1, 0.9},
+        {"nominal model", "#3182bd", xs, ys, true}};
     if (auto st = write("reading_vs_reference.svg",
                         Plot({"Reading vs reference", "reference force [N]", ylab, source}, se));
         !st.ok())
       return st;
   }
   {
-    std::vector<Series> se = {{"nominal residual", "#3182bd", r.reference, res_n, false, 2.4, 0.45},
-                              {"extended residual", "#e6550d", r.reference, res_e, false, 1.2, 0.9}};
-    if (auto st = write("residual_vs_reference.svg",
-                        Plot({"Residual vs reference (force equivalent)", "reference force [N]", "residual [N]", source},
-                             se));
+    std::vector<Series> se = {
+        {"nominal residual", "#3182bd", r.reference, res_n, false, 2.4, 0.45},
+        {"extended residual", "#e6550d", r.reference, res_e, false, 1.2, 0.9}};
+    if (auto st =
+            write("residual_vs_reference.svg", Plot({"Residual vs reference (force equivalent)",
+                                                     "reference force [N]", "residual [N]", source},
+                                                    se));
         !st.ok())
       return st;
   }
   {
     std::vector<Series> se = {{"nominal residual", "#3182bd", r.t, res_n, false, 2.4, 0.45},
                               {"extended residual", "#e6550d", r.t, res_e, false, 1.2, 0.9}};
-    if (auto st = write("residual_vs_time.svg",
-                        Plot({"Residual vs time (force equivalent)", "t [s]", "residual [N]", source}, se,
-                             r.split_time));
+    if (auto st = write("residual_vs_time.svg", Plot({"Residual vs time (force equivalent)",
+                                                      "t [s]", "residual [N]", source},
+                                                     se, r.split_time));
         !st.ok())
       return st;
   }

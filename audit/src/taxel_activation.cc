@@ -54,14 +54,16 @@ std::optional<Cause> FindPartialActivation(const MeasuredData& d, const AuditOpt
     for (double v : x) scale = std::max(scale, std::abs(v));
     // A noise-free taxel: the smallest deviation that is not round-off.
     const double sigma = std::max(DifferenceNoise(x), 1e-9 * std::max(1.0, scale));
-    if (PeakDeviation(x) < o.silent_sigmas * sigma / std::sqrt(double(kWindow))) silent.push_back(double(j));
+    if (PeakDeviation(x) < o.silent_sigmas * sigma / std::sqrt(double(kWindow)))
+      silent.push_back(double(j));
   }
   if (silent.empty()) return std::nullopt;
   Cause c;
   c.effect = kPartialActivation;
   c.found_by = "taxels";
   const double n = static_cast<double>(d.taxels.size());
-  c.parameters = {{"fraction", silent.size() / n}, {"silent_taxels", double(silent.size())}, {"taxels", n}};
+  c.parameters = {
+      {"fraction", silent.size() / n}, {"silent_taxels", double(silent.size())}, {"taxels", n}};
   c.array_parameters = {{"silent_taxel_indices", silent}};
   return c;
 }

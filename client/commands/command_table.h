@@ -22,9 +22,11 @@ struct CommandEntry {
 
 // An entry for a command with arguments `Args`, `add` and `run`.
 template <class Args>
-CommandEntry MakeCommand(std::string group, CLI::App* (*add)(CLI::App&, Args&), int (*run)(const Args&)) {
+CommandEntry MakeCommand(std::string group, CLI::App* (*add)(CLI::App&, Args&),
+                         int (*run)(const Args&)) {
   auto args = std::make_shared<Args>();
-  return CommandEntry{std::move(group), [args, add](CLI::App& parent) { return add(parent, *args); },
+  return CommandEntry{std::move(group),
+                      [args, add](CLI::App& parent) { return add(parent, *args); },
                       [args, run] { return run(*args); }};
 }
 

@@ -89,15 +89,17 @@ std::string FormatTable(const std::vector<DemoRow>& rows, int repeat, double tol
     absl::StrAppendFormat(&out, "  %-12s %10s %10s %10s %10s\n", "finger", "fx [N]", "fy [N]",
                           "fz [N]", "normal [N]");
     for (int i = 0; i < r.forces_size(); ++i) {
-      const std::string name = i < row.request.contacts_size() && !row.request.contacts(i).name().empty()
-                                   ? row.request.contacts(i).name()
-                                   : absl::StrCat("#", i);
+      const std::string name =
+          i < row.request.contacts_size() && !row.request.contacts(i).name().empty()
+              ? row.request.contacts(i).name()
+              : absl::StrCat("#", i);
       const double fn = i < r.normal_forces_size() ? r.normal_forces(i) : 0.0;
       absl::StrAppendFormat(&out, "  %-12s %10.4f %10.4f %10.4f %10.4f\n", name, r.forces(i).x(),
                             r.forces(i).y(), r.forces(i).z(), fn);
     }
     if (r.status() == v1::PLAN_STATUS_OPTIMAL)
-      absl::StrAppendFormat(&out, "  objective %.6g N^2, min margin %.6g N\n", r.objective(), r.min_margin());
+      absl::StrAppendFormat(&out, "  objective %.6g N^2, min margin %.6g N\n", r.objective(),
+                            r.min_margin());
     if (r.has_cross_check()) {
       const v1::CrossCheck& cc = r.cross_check();
       absl::StrAppendFormat(&out,
@@ -118,15 +120,14 @@ std::string FormatTable(const std::vector<DemoRow>& rows, int repeat, double tol
     const v1::PlanResponse& r = row.response;
     const bool cc = r.has_cross_check();
     if (cc && r.cross_check().agree()) ++agreeing;
-    absl::StrAppendFormat(&out, "  %-14s %-11s %10d %10d %8.1fx %12s %6s\n", row.grasp.name,
-                          api::StatusName(r.status()), row.geometric_us, row.ipopt_us,
-                          row.speed_ratio,
-                          cc ? absl::StrFormat("%.2g", r.cross_check().max_force_diff())
-                             : std::string("-"),
-                          AgreeText(r));
+    absl::StrAppendFormat(
+        &out, "  %-14s %-11s %10d %10d %8.1fx %12s %6s\n", row.grasp.name,
+        api::StatusName(r.status()), row.geometric_us, row.ipopt_us, row.speed_ratio,
+        cc ? absl::StrFormat("%.2g", r.cross_check().max_force_diff()) : std::string("-"),
+        AgreeText(r));
   }
-  absl::StrAppendFormat(&out, "%d of %d grasps agree (max |df| <= %g N)\n", agreeing,
-                        rows.size(), tolerance);
+  absl::StrAppendFormat(&out, "%d of %d grasps agree (max |df| <= %g N)\n", agreeing, rows.size(),
+                        tolerance);
   return out;
 }
 
@@ -135,13 +136,12 @@ std::string FormatJson(const std::vector<DemoRow>& rows, int repeat,
   std::string out = absl::StrFormat("{\n  \"repeat\": %d,\n  \"grasps\": [", repeat);
   for (size_t i = 0; i < rows.size(); ++i) {
     const DemoRow& row = rows[i];
-    absl::StrAppendFormat(
-        &out,
-        "%s\n    {\"name\": %s, \"description\": %s, \"geometric_time_us\": %d, "
-        "\"ipopt_time_us\": %d, \"speed_ratio\": %.6g,\n     \"response\": %s}",
-        i == 0 ? "" : ",", io::JsonEscape(row.grasp.name), io::JsonEscape(row.grasp.description),
-        row.geometric_us, row.ipopt_us, row.speed_ratio,
-        api::ToJson(row.response, /*compact=*/true));
+    absl::StrAppendFormat(&out,
+                          "%s\n    {\"name\": %s, \"description\": %s, \"geometric_time_us\": %d, "
+                          "\"ipopt_time_us\": %d, \"speed_ratio\": %.6g,\n     \"response\": %s}",
+                          i == 0 ? "" : ",", io::JsonEscape(row.grasp.name),
+                          io::JsonEscape(row.grasp.description), row.geometric_us, row.ipopt_us,
+                          row.speed_ratio, api::ToJson(row.response, /*compact=*/true));
   }
   out += "\n  ]";
   if (!server_json.empty()) absl::StrAppend(&out, ",\n  \"server\": ", server_json);
@@ -155,7 +155,7 @@ std::string FormatJson(const std::vector<DemoRow>& rows, int repeat,
 // local one, and the fastest round trip of a geometric-only call.
 struct RemoteRow {
   std::string name;
-  v1::PlanResponse response;  // cross-check solve on the server
+  v1::PlanResponse response;       // cross-check solve on the server
   double max_diff_vs_local = 0.0;  // N, max abs force component difference
   bool match = false;              // same status and forces (<= kMatchTolerance)
   int64_t geometric_round_trip_us = 0;
@@ -257,8 +257,8 @@ std::string FormatRemoteTable(const RemoteResult& r, const DemoArgs& args) {
       "  the same grasps planned by the server (cross-check), compared with the local "
       "answers;\n  geometric-only round trip: fastest of %d call%s\n",
       args.repeat, args.repeat == 1 ? "" : "s");
-  absl::StrAppendFormat(&out, "  %-14s %-11s %6s %14s %6s %13s %12s\n", "grasp", "status",
-                        "agree", "|df| vs local", "match", "round trip", "server solve");
+  absl::StrAppendFormat(&out, "  %-14s %-11s %6s %14s %6s %13s %12s\n", "grasp", "status", "agree",
+                        "|df| vs local", "match", "round trip", "server solve");
   absl::StrAppendFormat(&out, "  %-14s %-11s %6s %14s %6s %13s %12s\n", "", "", "", "[N]", "",
                         "[us]", "[us]");
   int matching = 0;
@@ -356,7 +356,7 @@ int RunDemo(const DemoArgs& args) {
   }
   if (args.server.empty()) {
     std::cout << (args.output.json() ? FormatJson(rows, args.repeat, "")
-                                        : FormatTable(rows, args.repeat, tolerance));
+                                     : FormatTable(rows, args.repeat, tolerance));
     std::cout.flush();
     return std::cout ? kExitOk : kExitFailure;
   }
@@ -368,7 +368,7 @@ int RunDemo(const DemoArgs& args) {
   absl::StatusOr<RemoteResult> remote = RunRemote(args, rows);
   if (!remote.ok()) return ReportError(remote.status());
   std::cout << (args.output.json() ? FormatJson(rows, args.repeat, FormatRemoteJson(*remote))
-                                      : FormatRemoteTable(*remote, args));
+                                   : FormatRemoteTable(*remote, args));
   std::cout.flush();
   if (!std::cout) return kExitFailure;
 

@@ -12,11 +12,11 @@
 namespace tactforce::cli {
 
 struct DemoArgs {
-  OutputFormat output;           // table | json
-  int repeat = 3;                // solves per grasp; the fastest times count
-  std::string server;            // empty: local only
-  ConnectionArgs connection;     // --tls-*, --deadline-ms (server taken from `server`)
-  double load_seconds = 5.0;     // the load test against --server; 0 = skip
+  OutputFormat output;        // table | json
+  int repeat = 3;             // solves per grasp; the fastest times count
+  std::string server;         // empty: local only
+  ConnectionArgs connection;  // --tls-*, --deadline-ms (server taken from `server`)
+  double load_seconds = 5.0;  // the load test against --server; 0 = skip
   int load_concurrency = 8;
 };
 

@@ -23,7 +23,8 @@ CLI::App* AddEstimateCommand(CLI::App& app, EstimateArgs& args) {
       "Prints the force of every contact (request order, object frame, N) and the\n"
       "residual of every reading. Examples:\n"
       "  tactforce estimate --local --request client/examples/estimate_request.json\n"
-      "  tactforce estimate --server localhost:50051 --request client/examples/estimate_request.json --json\n"
+      "  tactforce estimate --server localhost:50051 --request "
+      "client/examples/estimate_request.json --json\n"
       "  cat client/examples/estimate_request.json | tactforce estimate --local --request -");
   return cmd;
 }
@@ -31,16 +32,19 @@ CLI::App* AddEstimateCommand(CLI::App& app, EstimateArgs& args) {
 namespace {
 
 // One line per contact and per reading.
-std::string FormatEstimateTable(const v1::EstimateRequest& request, const v1::EstimateResponse& response) {
-  std::string out = absl::StrFormat("status: %s%s%s  (method %s, %d us)\n", api::ShortEnumName(response.status()),
-                                    response.message().empty() ? "" : ": ", response.message(),
-                                    api::ShortEnumName(response.method()), response.solve_time_us());
-  absl::StrAppendFormat(&out, "%-4s %-12s %10s %10s %10s %12s\n", "#", "contact", "fx (N)", "fy (N)", "fz (N)",
-                        "normal (N)");
+std::string FormatEstimateTable(const v1::EstimateRequest& request,
+                                const v1::EstimateResponse& response) {
+  std::string out =
+      absl::StrFormat("status: %s%s%s  (method %s, %d us)\n", api::ShortEnumName(response.status()),
+                      response.message().empty() ? "" : ": ", response.message(),
+                      api::ShortEnumName(response.method()), response.solve_time_us());
+  absl::StrAppendFormat(&out, "%-4s %-12s %10s %10s %10s %12s\n", "#", "contact", "fx (N)",
+                        "fy (N)", "fz (N)", "normal (N)");
   for (int i = 0; i < response.forces_size(); ++i) {
     const v1::Vec3& f = response.forces(i);
     const std::string name = i < request.contacts_size() ? request.contacts(i).name() : "";
-    absl::StrAppendFormat(&out, "%-4d %-12s %10.4f %10.4f %10.4f %12.4f\n", i, name, f.x(), f.y(), f.z(),
+    absl::StrAppendFormat(&out, "%-4d %-12s %10.4f %10.4f %10.4f %12.4f\n", i, name, f.x(), f.y(),
+                          f.z(),
                           i < response.normal_forces_size() ? response.normal_forces(i) : 0.0);
   }
   for (int k = 0; k < response.residuals_size(); ++k) {
@@ -55,11 +59,13 @@ int RunEstimate(const EstimateArgs& args) {
   absl::StatusOr<std::string> text = ReadInput(args.request_path);
   if (!text.ok()) return ReportError(text.status());
   v1::EstimateRequest request;
-  if (absl::Status s = api::ParseJson(*text, &request, InputName(args.request_path)); !s.ok()) return ReportError(s);
+  if (absl::Status s = api::ParseJson(*text, &request, InputName(args.request_path)); !s.ok())
+    return ReportError(s);
   absl::StatusOr<v1::EstimateResponse> response =
       CallBackend(args.backend, &Backend::EstimateForces, request);
   if (!response.ok()) return ReportError(response.status());
-  std::cout << (args.output.json() ? api::ToJson(*response) : FormatEstimateTable(request, *response));
+  std::cout << (args.output.json() ? api::ToJson(*response)
+                                   : FormatEstimateTable(request, *response));
   return std::cout ? kExitOk : kExitFailure;
 }
 

@@ -11,8 +11,8 @@
 namespace tactforce::cli {
 
 struct EstimateArgs {
-  BackendArgs backend;        // --local | --server ADDR, TLS, --deadline-ms
-  std::string request_path;   // EstimateRequest JSON, "-" = stdin
+  BackendArgs backend;       // --local | --server ADDR, TLS, --deadline-ms
+  std::string request_path;  // EstimateRequest JSON, "-" = stdin
   OutputFormat output;
 };
 CLI::App* AddEstimateCommand(CLI::App& app, EstimateArgs& args);

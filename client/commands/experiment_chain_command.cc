@@ -24,11 +24,13 @@ absl::StatusOr<ex::ChainConfig> Config(const ChainArgs& a) {
   c.objects.clear();
   for (const std::string& name : a.objects) {
     absl::StatusOr<ex::GraspObject> o = ex::ParseGraspObject(name);
-    if (!o.ok()) return absl::InvalidArgumentError(absl::StrCat("--objects: ", o.status().message()));
+    if (!o.ok())
+      return absl::InvalidArgumentError(absl::StrCat("--objects: ", o.status().message()));
     c.objects.push_back(*o);
   }
   absl::StatusOr<inertia::InertiaMethod> m = inertia::ParseInertiaMethod(a.fit_method);
-  if (!m.ok()) return absl::InvalidArgumentError(absl::StrCat("--fit-method: ", m.status().message()));
+  if (!m.ok())
+    return absl::InvalidArgumentError(absl::StrCat("--fit-method: ", m.status().message()));
   c.fit_method = *m;
   c.trials = a.trials;
   c.seeds = a.seeds;
@@ -43,13 +45,15 @@ absl::StatusOr<ex::ChainConfig> Config(const ChainArgs& a) {
 
 std::string RowJson(const ex::ChainRow& r) {
   const bool ran = r.trials_run > 0;
-  return absl::StrCat("{\"object\":", JsonEscape(ex::ToString(r.object)), ",\"planning\":",
-                      JsonEscape(ex::ToString(r.planning)), ",\"successes\":", r.successes, ",\"trials\":", r.trials,
-                      ",\"median_squeeze_n\":", ran ? JsonNumber(r.median_squeeze_n) : "null",
-                      ",\"min_slip_margin\":", ran ? JsonNumber(r.min_slip_margin) : "null",
-                      ",\"median_trial_slip_margin\":", ran ? JsonNumber(r.median_trial_slip_margin) : "null",
-                      ",\"plan_failures\":", r.plan_failures, ",\"plan_failure\":", JsonEscape(r.plan_failure),
-                      ",\"estimates_off\":", r.estimates_off ? "true" : "false", "}");
+  return absl::StrCat(
+      "{\"object\":", JsonEscape(ex::ToString(r.object)),
+      ",\"planning\":", JsonEscape(ex::ToString(r.planning)), ",\"successes\":", r.successes,
+      ",\"trials\":", r.trials,
+      ",\"median_squeeze_n\":", ran ? JsonNumber(r.median_squeeze_n) : "null",
+      ",\"min_slip_margin\":", ran ? JsonNumber(r.min_slip_margin) : "null",
+      ",\"median_trial_slip_margin\":", ran ? JsonNumber(r.median_trial_slip_margin) : "null",
+      ",\"plan_failures\":", r.plan_failures, ",\"plan_failure\":", JsonEscape(r.plan_failure),
+      ",\"estimates_off\":", r.estimates_off ? "true" : "false", "}");
 }
 
 std::string V3Json(const Eigen::Vector3d& v) {
@@ -57,49 +61,56 @@ std::string V3Json(const Eigen::Vector3d& v) {
 }
 
 std::string EstimateJson(const ex::ChainEstimates& e) {
-  return absl::StrCat(
-      "{\"object\":", JsonEscape(ex::ToString(e.object)), ",\"seed\":", e.seed, ",\"mu_true\":", JsonNumber(e.mu_true),
-      ",\"mu\":", JsonNumber(e.mu), ",\"mu_sigma\":", JsonNumber(e.mu_sigma), ",\"probes_valid\":", e.probes_valid,
-      ",\"mass_true\":", JsonNumber(e.mass_true), ",\"mass\":", JsonNumber(e.mass), ",\"mass_se\":",
-      JsonNumber(e.mass_se), ",\"com_true\":", V3Json(e.com_true), ",\"com\":", V3Json(e.com), ",\"com_se\":",
-      V3Json(e.com_se), ",\"off_by_more_than_se\":", e.off_by_more_than_se ? "true" : "false", "}");
+  return absl::StrCat("{\"object\":", JsonEscape(ex::ToString(e.object)), ",\"seed\":", e.seed,
+                      ",\"mu_true\":", JsonNumber(e.mu_true), ",\"mu\":", JsonNumber(e.mu),
+                      ",\"mu_sigma\":", JsonNumber(e.mu_sigma),
+                      ",\"probes_valid\":", e.probes_valid,
+                      ",\"mass_true\":", JsonNumber(e.mass_true), ",\"mass\":", JsonNumber(e.mass),
+                      ",\"mass_se\":", JsonNumber(e.mass_se), ",\"com_true\":", V3Json(e.com_true),
+                      ",\"com\":", V3Json(e.com), ",\"com_se\":", V3Json(e.com_se),
+                      ",\"off_by_more_than_se\":", e.off_by_more_than_se ? "true" : "false", "}");
 }
 
 std::string ReportJson(const ex::ChainReport& r) {
   std::string s = "{\"rows\":[";
   for (size_t i = 0; i < r.rows.size(); ++i) absl::StrAppend(&s, i ? "," : "", RowJson(r.rows[i]));
   absl::StrAppend(&s, "],\"estimates\":[");
-  for (size_t i = 0; i < r.estimates.size(); ++i) absl::StrAppend(&s, i ? "," : "", EstimateJson(r.estimates[i]));
+  for (size_t i = 0; i < r.estimates.size(); ++i)
+    absl::StrAppend(&s, i ? "," : "", EstimateJson(r.estimates[i]));
   absl::StrAppend(&s, "],\"wall_seconds\":", JsonNumber(r.wall_seconds), "}");
   return s;
 }
 
 std::string ReportTable(const ChainArgs& a, const ex::ChainReport& r) {
   std::string out = absl::StrFormat(
-      "Probe -> fit -> plan -> lift (estimated-force feedback), %d seeds from %d, %d trials each\n", a.seeds, a.seed,
-      a.trials);
-  absl::StrAppend(&out, absl::StrFormat("%-9s %-10s %10s %8s %16s %16s %14s %6s\n", "object", "planning", "success",
-                                        "rate", "median squeeze N", "min slip margin", "median of min", "off"));
+      "Probe -> fit -> plan -> lift (estimated-force feedback), %d seeds from %d, %d trials each\n",
+      a.seeds, a.seed, a.trials);
+  absl::StrAppend(&out, absl::StrFormat("%-9s %-10s %10s %8s %16s %16s %14s %6s\n", "object",
+                                        "planning", "success", "rate", "median squeeze N",
+                                        "min slip margin", "median of min", "off"));
   for (const ex::ChainRow& w : r.rows) {
     const bool ran = w.trials_run > 0;
-    absl::StrAppend(&out, absl::StrFormat("%-9s %-10s %6d/%-3d %7.0f%% %16s %16s %14s %6s%s\n", ex::ToString(w.object),
-                                          ex::ToString(w.planning), w.successes, w.trials,
-                                          100.0 * w.successes / w.trials,
-                                          ran ? absl::StrFormat("%.3f", w.median_squeeze_n) : "-",
-                                          ran ? absl::StrFormat("%.3f", w.min_slip_margin) : "-",
-                                          ran ? absl::StrFormat("%.3f", w.median_trial_slip_margin) : "-",
-                                          w.estimates_off ? "yes" : "no",
-                                          w.plan_failures ? absl::StrCat("  (", w.plan_failures, " plans failed: ",
-                                                                         w.plan_failure, ")")
-                                                          : ""));
+    absl::StrAppend(
+        &out, absl::StrFormat(
+                  "%-9s %-10s %6d/%-3d %7.0f%% %16s %16s %14s %6s%s\n", ex::ToString(w.object),
+                  ex::ToString(w.planning), w.successes, w.trials, 100.0 * w.successes / w.trials,
+                  ran ? absl::StrFormat("%.3f", w.median_squeeze_n) : "-",
+                  ran ? absl::StrFormat("%.3f", w.min_slip_margin) : "-",
+                  ran ? absl::StrFormat("%.3f", w.median_trial_slip_margin) : "-",
+                  w.estimates_off ? "yes" : "no",
+                  w.plan_failures
+                      ? absl::StrCat("  (", w.plan_failures, " plans failed: ", w.plan_failure, ")")
+                      : ""));
   }
   absl::StrAppend(&out, "Estimates (probe mean +- spread; in-hand fit +- standard error):\n");
   for (const ex::ChainEstimates& e : r.estimates)
-    absl::StrAppend(&out, absl::StrFormat(
-        "  %-9s seed %d: mu %.4f +- %.4f (true %.3f, %d probes); mass %.4f +- %.4f kg (true %.4f); "
-        "CoM error %.1f mm (se %.1f mm)%s\n",
-        ex::ToString(e.object), e.seed, e.mu, e.mu_sigma, e.mu_true, e.probes_valid, e.mass, e.mass_se, e.mass_true,
-        1e3 * (e.com - e.com_true).norm(), 1e3 * e.com_se.norm(), e.off_by_more_than_se ? "  [off > se]" : ""));
+    absl::StrAppend(&out, absl::StrFormat("  %-9s seed %d: mu %.4f +- %.4f (true %.3f, %d probes); "
+                                          "mass %.4f +- %.4f kg (true %.4f); "
+                                          "CoM error %.1f mm (se %.1f mm)%s\n",
+                                          ex::ToString(e.object), e.seed, e.mu, e.mu_sigma,
+                                          e.mu_true, e.probes_valid, e.mass, e.mass_se, e.mass_true,
+                                          1e3 * (e.com - e.com_true).norm(), 1e3 * e.com_se.norm(),
+                                          e.off_by_more_than_se ? "  [off > se]" : ""));
   absl::StrAppend(&out, absl::StrFormat("%.1f s wall\n", r.wall_seconds));
   return out;
 }
@@ -107,9 +118,10 @@ std::string ReportTable(const ChainArgs& a, const ex::ChainReport& r) {
 }  // namespace
 
 CLI::App* AddChainCommand(CLI::App* experiment, ChainArgs& args) {
-  CLI::App* p = experiment->add_subcommand(
-      "chain", "Probe friction, fit inertia in hand, plan the lift with truth / point estimates / estimates with "
-               "uncertainty, run each closed loop");
+  CLI::App* p = experiment->add_subcommand("chain",
+                                           "Probe friction, fit inertia in hand, plan the lift "
+                                           "with truth / point estimates / estimates with "
+                                           "uncertainty, run each closed loop");
   p->add_option("--objects", args.objects, "Grasp objects: sphere, wrench, cylinder, cube")
       ->delimiter(',')
       ->check(CLI::IsMember({"sphere", "wrench", "cylinder", "cube"}))
@@ -117,24 +129,31 @@ CLI::App* AddChainCommand(CLI::App* experiment, ChainArgs& args) {
   p->add_option("--trials", args.trials, "Closed-loop trials per object, seed and planning")
       ->check(Between(1, 10000))
       ->capture_default_str();
-  p->add_option("--seeds", args.seeds, "Seeds per object (each: its own probe, in-hand run and fit)")
+  p->add_option("--seeds", args.seeds,
+                "Seeds per object (each: its own probe, in-hand run and fit)")
       ->check(Between(1, 1000))
       ->capture_default_str();
   p->add_option("--seed", args.seed, "First seed")->capture_default_str();
-  p->add_option("--probe-trials", args.probe_trials, "In-grasp friction probes per object and seed (>= 2: a spread)")
+  p->add_option("--probe-trials", args.probe_trials,
+                "In-grasp friction probes per object and seed (>= 2: a spread)")
       ->check(Between(2, 1000))
       ->capture_default_str();
-  p->add_option("--inhand-duration", args.inhand_duration, "Seconds of in-hand excitation per object and seed")
+  p->add_option("--inhand-duration", args.inhand_duration,
+                "Seconds of in-hand excitation per object and seed")
       ->check(Between(1, 120))
       ->capture_default_str();
-  p->add_option("--confidence", args.confidence, "kappa_b: standard deviations of the parameter ellipsoid")
+  p->add_option("--confidence", args.confidence,
+                "kappa_b: standard deviations of the parameter ellipsoid")
       ->check(Between(0, 10))
       ->capture_default_str();
-  p->add_option("--fit-method", args.fit_method, "In-hand fit: baseline-ls, factor-graph, constrained, density")
+  p->add_option("--fit-method", args.fit_method,
+                "In-hand fit: baseline-ls, factor-graph, constrained, density")
       ->check(CLI::IsMember({"baseline-ls", "factor-graph", "constrained", "density"}))
       ->capture_default_str();
-  AddOutputFlags(p, &args.output, "{\"rows\":[{\"object\",\"planning\",\"successes\",\"trials\",\"median_squeeze_n\","
-                                  "\"min_slip_margin\"}...],\"estimates\":[...]}");
+  AddOutputFlags(
+      p, &args.output,
+      "{\"rows\":[{\"object\",\"planning\",\"successes\",\"trials\",\"median_squeeze_n\","
+      "\"min_slip_margin\"}...],\"estimates\":[...]}");
   p->add_flag("--no-progress", args.no_progress, "No progress bar on stderr");
   p->footer(
       "Examples:\n"
@@ -153,8 +172,10 @@ int RunChainCommand(const ChainArgs& a) {
   });
   bar.Finish();
   if (!r.ok()) return ReportError(r.status());
-  if (a.output.json()) std::cout << io::IndentJson(ReportJson(*r)) << std::flush;
-  else std::cout << ReportTable(a, *r);
+  if (a.output.json())
+    std::cout << io::IndentJson(ReportJson(*r)) << std::flush;
+  else
+    std::cout << ReportTable(a, *r);
   return kExitOk;
 }
 

@@ -1,6 +1,7 @@
 // `tactforce experiment chain`: probe -> fit -> plan -> lift in MuJoCo
 // (tactforce::experiment::RunChain), a table or JSON
-// {"rows": [{"object", "planning", "successes", "trials", "median_squeeze_n", "min_slip_margin"}...]}.
+// {"rows": [{"object", "planning", "successes", "trials", "median_squeeze_n",
+// "min_slip_margin"}...]}.
 #pragma once
 
 #include <cstdint>
@@ -14,7 +15,7 @@ namespace tactforce::cli {
 
 struct ChainArgs {
   std::vector<std::string> objects = {"sphere", "wrench", "cylinder"};
-  int trials = 5;            // closed-loop trials per object, seed and planning
+  int trials = 5;  // closed-loop trials per object, seed and planning
   int seeds = 2;
   uint64_t seed = 1;
   int probe_trials = 3;

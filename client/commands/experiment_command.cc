@@ -68,11 +68,13 @@ absl::Status SetObjectsAndModes(const ExperimentArgs& a, GraspRun* run) {
 // --plots (the directory is created; trial 0 of each batch is traced).
 absl::Status SetBaseConfig(const ExperimentArgs& a, ex::GraspConfig* base) {
   base->seed = a.seed;
-  if (a.estimator == "projection") base->estimator = estimator::EstimateMethod::kProjection;
-  else if (a.estimator == "normal-lsq") base->estimator = estimator::EstimateMethod::kNormalLsq;
+  if (a.estimator == "projection")
+    base->estimator = estimator::EstimateMethod::kProjection;
+  else if (a.estimator == "normal-lsq")
+    base->estimator = estimator::EstimateMethod::kNormalLsq;
   else
-    return absl::InvalidArgumentError(
-        absl::StrCat("--estimator: unknown '", a.estimator, "' (expected projection or normal-lsq)"));
+    return absl::InvalidArgumentError(absl::StrCat("--estimator: unknown '", a.estimator,
+                                                   "' (expected projection or normal-lsq)"));
   auto adm = ex::ParseAdmittance(a.admittance);
   if (!adm.ok()) return absl::InvalidArgumentError(absl::StrCat("--", adm.status().message()));
   base->admittance = *adm;
@@ -81,14 +83,17 @@ absl::Status SetBaseConfig(const ExperimentArgs& a, ex::GraspConfig* base) {
   if (a.ideal) base->sensors = ex::SensorMode::kIdeal;
   if (!a.sensor_model_path.empty()) {
     auto m = sim::LoadSensorModel(a.sensor_model_path);
-    if (!m.ok()) return absl::InvalidArgumentError(absl::StrCat("--sensor-model: ", m.status().message()));
+    if (!m.ok())
+      return absl::InvalidArgumentError(absl::StrCat("--sensor-model: ", m.status().message()));
     base->sensors = ex::SensorMode::kModel;
     base->sensor_model = *m;
   }
   if (!a.plots_dir.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(a.plots_dir, ec);
-    if (ec) return absl::InvalidArgumentError(absl::StrCat("--plots: cannot create ", a.plots_dir, ": ", ec.message()));
+    if (ec)
+      return absl::InvalidArgumentError(
+          absl::StrCat("--plots: cannot create ", a.plots_dir, ": ", ec.message()));
     base->trace_trials = 1;
   }
   return absl::OkStatus();
@@ -106,11 +111,13 @@ absl::Status SetSensorsAndProtocol(const ExperimentArgs& a, ex::GraspConfig* bas
     if (*array != ex::SensorArray::kTaxel)
       return absl::InvalidArgumentError("--taxel-ranges: needs --sensors taxel");
     auto r = sim::LoadTaxelRanges(a.taxel_ranges_path);
-    if (!r.ok()) return absl::InvalidArgumentError(absl::StrCat("--taxel-ranges: ", r.status().message()));
+    if (!r.ok())
+      return absl::InvalidArgumentError(absl::StrCat("--taxel-ranges: ", r.status().message()));
     base->taxel_ranges = *r;
   }
   auto protocol = ex::ParseProtocol(a.protocol);
-  if (!protocol.ok()) return absl::InvalidArgumentError(absl::StrCat("--", protocol.status().message()));
+  if (!protocol.ok())
+    return absl::InvalidArgumentError(absl::StrCat("--", protocol.status().message()));
   base->phases = ex::ProtocolPhases(*protocol);
   return absl::OkStatus();
 }
@@ -118,7 +125,8 @@ absl::Status SetSensorsAndProtocol(const ExperimentArgs& a, ex::GraspConfig* bas
 absl::StatusOr<GraspRun> GraspRunFromFlags(const ExperimentArgs& a) {
   GraspRun run;
   TF_RETURN_IF_ERROR(SetObjectsAndModes(a, &run));
-  if (a.trials < 1) return absl::InvalidArgumentError(absl::StrFormat("--trials: must be >= 1, got %d", a.trials));
+  if (a.trials < 1)
+    return absl::InvalidArgumentError(absl::StrFormat("--trials: must be >= 1, got %d", a.trials));
   // Sensors first: a flag that does not apply to --sensors taxel is named before its file is read.
   TF_RETURN_IF_ERROR(SetSensorsAndProtocol(a, &run.base));
   TF_RETURN_IF_ERROR(SetBaseConfig(a, &run.base));
@@ -126,16 +134,19 @@ absl::StatusOr<GraspRun> GraspRunFromFlags(const ExperimentArgs& a) {
 }
 
 // Trial 0's force traces of the batch run with `c` as PLOTS/OBJECT_FEEDBACK.svg.
-absl::Status WriteTracePlot(const std::string& plots_dir, const ex::GraspConfig& c, const ex::TrialResult& t0) {
+absl::Status WriteTracePlot(const std::string& plots_dir, const ex::GraspConfig& c,
+                            const ex::TrialResult& t0) {
   auto setup = ex::GraspSetup::Create(c);
   if (!setup.ok()) return setup.status();
   const std::string title = absl::StrFormat(
-      "%s, %s feedback, trial 0 (%s): desired / estimated / raw / true normal force", ex::ToString(c.object),
-      ex::ToString(c.feedback), t0.success ? "success" : t0.failure);
+      "%s, %s feedback, trial 0 (%s): desired / estimated / raw / true normal force",
+      ex::ToString(c.object), ex::ToString(c.feedback), t0.success ? "success" : t0.failure);
   const std::string path =
-      (std::filesystem::path(plots_dir) / absl::StrCat(ex::ToString(c.object), "_", ex::ToString(c.feedback), ".svg"))
+      (std::filesystem::path(plots_dir) /
+       absl::StrCat(ex::ToString(c.object), "_", ex::ToString(c.feedback), ".svg"))
           .string();
-  if (absl::Status st = io::WriteTextFile(path, io::RenderSvg(ex::TracePlot(t0, (*setup)->finger_names(), title)));
+  if (absl::Status st = io::WriteTextFile(
+          path, io::RenderSvg(ex::TracePlot(t0, (*setup)->finger_names(), title)));
       !st.ok())
     return absl::Status(st.code(), absl::StrCat("--plots: ", st.message()));
   return absl::OkStatus();
@@ -144,17 +155,19 @@ absl::Status WriteTracePlot(const std::string& plots_dir, const ex::GraspConfig&
 // --details: one line per trial on stderr.
 void PrintTrialDetails(const ex::GraspConfig& c, const ex::BatchSummary& b) {
   for (const ex::TrialResult& t : b.results)
-    std::cerr << absl::StrFormat("%s %s trial %d: %s%s  slip %.2f mm  rotation %.2f deg  force error %.3f N\n",
-                                 ex::ToString(c.object), ex::ToString(c.feedback), t.trial,
-                                 t.success ? "success" : t.failure,
-                                 t.success ? "" : absl::StrCat(" (", ex::ToString(t.cause), ")"), t.max_slip * 1e3,
-                                 t.max_rotation_deg, t.force_error);
+    std::cerr << absl::StrFormat(
+        "%s %s trial %d: %s%s  slip %.2f mm  rotation %.2f deg  force error %.3f N\n",
+        ex::ToString(c.object), ex::ToString(c.feedback), t.trial,
+        t.success ? "success" : t.failure,
+        t.success ? "" : absl::StrCat(" (", ex::ToString(t.cause), ")"), t.max_slip * 1e3,
+        t.max_rotation_deg, t.force_error);
 }
 
 // Every object x mode batch in order, with `bar` counting trials; the
 // summaries without their per-trial results.
-absl::StatusOr<std::vector<ex::BatchSummary>> RunGraspBatches(const ExperimentArgs& a, const GraspRun& run,
-                                                             ProgressBar& bar) {
+absl::StatusOr<std::vector<ex::BatchSummary>> RunGraspBatches(const ExperimentArgs& a,
+                                                              const GraspRun& run,
+                                                              ProgressBar& bar) {
   const int total_trials = static_cast<int>(run.objects.size() * run.modes.size()) * a.trials;
   int done_before = 0;
   std::vector<ex::BatchSummary> rows;
@@ -185,46 +198,52 @@ absl::StatusOr<std::vector<ex::BatchSummary>> RunGraspBatches(const ExperimentAr
 }
 
 // {"results":[{object, feedback, trials, successes, ...}], "seed", ...}
-std::string GraspJson(const ExperimentArgs& a, const std::vector<ex::BatchSummary>& rows, double wall) {
+std::string GraspJson(const ExperimentArgs& a, const std::vector<ex::BatchSummary>& rows,
+                      double wall) {
   std::string s = "{\"results\":[";
   for (size_t i = 0; i < rows.size(); ++i) {
     const ex::BatchSummary& r = rows[i];
-    absl::StrAppend(&s, i ? "," : "", "{\"object\":\"", ex::ToString(r.object), "\",\"feedback\":\"",
-                    ex::ToString(r.feedback), "\",\"trials\":", r.trials, ",\"successes\":", r.successes,
-                    ",\"force_error_mean\":", JsonNumber(r.force_error_mean),
-                    ",\"force_error_std\":", JsonNumber(r.force_error_std), ",\"drops\":", r.drops,
-                    ",\"feedback_error_mean\":", JsonNumber(r.feedback_error_mean),
-                    ",\"converged\":", r.converged,
-                    ",\"converge_time_mean\":", r.converged ? JsonNumber(r.converge_time_mean) : "null",
-                    ",\"sim_seconds\":", JsonNumber(r.sim_seconds), ",\"wall_seconds\":", JsonNumber(r.wall_seconds),
-                    GraspSplitJsonMembers(r), "}");
+    absl::StrAppend(
+        &s, i ? "," : "", "{\"object\":\"", ex::ToString(r.object), "\",\"feedback\":\"",
+        ex::ToString(r.feedback), "\",\"trials\":", r.trials, ",\"successes\":", r.successes,
+        ",\"force_error_mean\":", JsonNumber(r.force_error_mean),
+        ",\"force_error_std\":", JsonNumber(r.force_error_std), ",\"drops\":", r.drops,
+        ",\"feedback_error_mean\":", JsonNumber(r.feedback_error_mean),
+        ",\"converged\":", r.converged,
+        ",\"converge_time_mean\":", r.converged ? JsonNumber(r.converge_time_mean) : "null",
+        ",\"sim_seconds\":", JsonNumber(r.sim_seconds),
+        ",\"wall_seconds\":", JsonNumber(r.wall_seconds), GraspSplitJsonMembers(r), "}");
   }
-  absl::StrAppend(&s, "],\"seed\":", a.seed, ",\"estimator\":\"", a.estimator, "\",\"admittance\":\"",
-                  a.admittance, "\",\"sensors\":\"", a.sensors, "\",\"protocol\":\"", a.protocol,
-                  "\",\"wall_seconds\":",
-                  JsonNumber(wall), "}");
+  absl::StrAppend(&s, "],\"seed\":", a.seed, ",\"estimator\":\"", a.estimator,
+                  "\",\"admittance\":\"", a.admittance, "\",\"sensors\":\"", a.sensors,
+                  "\",\"protocol\":\"", a.protocol, "\",\"wall_seconds\":", JsonNumber(wall), "}");
   return s;
 }
 
 // One row per batch and a line with the wall time and the settings.
-std::string GraspTable(const ExperimentArgs& a, const std::vector<ex::BatchSummary>& rows, double wall) {
-  std::string out = absl::StrFormat("%-9s %-10s %9s %6s %22s %14s %14s %10s\n", "object", "feedback", "success",
-                                    "drops", "force error (N) mean/std", "feedback err", "converge (s)",
-                                    "x realtime");
+std::string GraspTable(const ExperimentArgs& a, const std::vector<ex::BatchSummary>& rows,
+                       double wall) {
+  std::string out = absl::StrFormat("%-9s %-10s %9s %6s %22s %14s %14s %10s\n", "object",
+                                    "feedback", "success", "drops", "force error (N) mean/std",
+                                    "feedback err", "converge (s)", "x realtime");
   for (const ex::BatchSummary& r : rows) {
-    absl::StrAppend(&out, absl::StrFormat(
-        "%-9s %-10s %4d/%-4d %6d %13.3f / %-6.3f %14.3f %14s %10.1f\n", ex::ToString(r.object),
-        ex::ToString(r.feedback), r.successes, r.trials, r.drops, r.force_error_mean, r.force_error_std,
-        r.feedback_error_mean,
-        r.converged ? absl::StrFormat("%.3f (%d)", r.converge_time_mean, r.converged) : std::string("never"),
-        r.wall_seconds > 0 ? r.sim_seconds / r.wall_seconds : 0.0));
+    absl::StrAppend(
+        &out, absl::StrFormat(
+                  "%-9s %-10s %4d/%-4d %6d %13.3f / %-6.3f %14.3f %14s %10.1f\n",
+                  ex::ToString(r.object), ex::ToString(r.feedback), r.successes, r.trials, r.drops,
+                  r.force_error_mean, r.force_error_std, r.feedback_error_mean,
+                  r.converged ? absl::StrFormat("%.3f (%d)", r.converge_time_mean, r.converged)
+                              : std::string("never"),
+                  r.wall_seconds > 0 ? r.sim_seconds / r.wall_seconds : 0.0));
   }
-  absl::StrAppend(&out, absl::StrFormat("total %.1f s wall; seed %d; estimator %s; admittance %s; sensors %s\n",
-                                        wall, a.seed, a.estimator, a.admittance,
-                                        a.sensors == "taxel" ? "42-taxel arrays, GeoDEx ranges per taxel and trial"
-                                        : a.ideal            ? "ideal"
-                                        : a.sensor_model_path.empty() ? "GeoDEx error ranges per trial"
-                                                                      : a.sensor_model_path));
+  absl::StrAppend(
+      &out,
+      absl::StrFormat("total %.1f s wall; seed %d; estimator %s; admittance %s; sensors %s\n", wall,
+                      a.seed, a.estimator, a.admittance,
+                      a.sensors == "taxel" ? "42-taxel arrays, GeoDEx ranges per taxel and trial"
+                      : a.ideal            ? "ideal"
+                      : a.sensor_model_path.empty() ? "GeoDEx error ranges per trial"
+                                                    : a.sensor_model_path));
   absl::StrAppend(&out, GraspSplitTable(rows, a.protocol == "paper"));
   return out;
 }
@@ -232,12 +251,14 @@ std::string GraspTable(const ExperimentArgs& a, const std::vector<ex::BatchSumma
 int RunGrasp(const ExperimentArgs& a) {
   absl::StatusOr<GraspRun> run = GraspRunFromFlags(a);
   if (!run.ok()) return ReportError(run.status());
-  ProgressBar bar("trials", !a.no_progress && ProgressBar::StderrIsTerminal(), std::chrono::milliseconds(0));
+  ProgressBar bar("trials", !a.no_progress && ProgressBar::StderrIsTerminal(),
+                  std::chrono::milliseconds(0));
   const auto wall0 = std::chrono::steady_clock::now();
   absl::StatusOr<std::vector<ex::BatchSummary>> rows = RunGraspBatches(a, *run, bar);
   if (!rows.ok()) return ReportError(rows.status());
   bar.Finish();
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   if (a.output.json()) {
     std::cout << io::IndentJson(GraspJson(a, *rows, wall)) << std::flush;
   } else {
@@ -255,8 +276,9 @@ struct Creep {
 // --creep: creep at 50 % and 90 % of the cone with both solver settings.
 absl::StatusOr<std::vector<Creep>> MeasureCreepTable() {
   std::vector<Creep> creep;
-  for (const auto& [name, p] : {std::pair{std::string("chosen"), ex::PhysicsSettings{}},
-                                std::pair{std::string("mujoco-default"), ex::PhysicsSettings::MujocoDefaults()}}) {
+  for (const auto& [name, p] :
+       {std::pair{std::string("chosen"), ex::PhysicsSettings{}},
+        std::pair{std::string("mujoco-default"), ex::PhysicsSettings::MujocoDefaults()}}) {
     for (double ratio : {0.5, 0.9}) {
       auto v = ex::MeasureCreep(p, 0.5, ratio);
       if (!v.ok()) return v.status();
@@ -267,39 +289,45 @@ absl::StatusOr<std::vector<Creep>> MeasureCreepTable() {
 }
 
 std::string SlopeRowJson(const ex::SlopeRow& r) {
-  return absl::StrCat("{\"mu\":", JsonNumber(r.mu), ",\"slip_tilt_deg\":", JsonNumber(r.slip_tilt_deg),
-                      ",\"mu_slope\":", JsonNumber(r.mu_slope),
-                      ",\"mu_probe\":", r.probe_valid ? JsonNumber(r.mu_probe) : "null",
-                      ",\"difference\":", r.probe_valid ? JsonNumber(r.mu_probe - r.mu_slope) : "null", "}");
+  return absl::StrCat(
+      "{\"mu\":", JsonNumber(r.mu), ",\"slip_tilt_deg\":", JsonNumber(r.slip_tilt_deg),
+      ",\"mu_slope\":", JsonNumber(r.mu_slope),
+      ",\"mu_probe\":", r.probe_valid ? JsonNumber(r.mu_probe) : "null",
+      ",\"difference\":", r.probe_valid ? JsonNumber(r.mu_probe - r.mu_slope) : "null", "}");
 }
 
 // {"results":[...],"mujoco_default_results":[...],"creep":[...]}
-std::string SlopeJson(const std::vector<ex::SlopeRow>& rows, const std::vector<ex::SlopeRow>& default_rows,
+std::string SlopeJson(const std::vector<ex::SlopeRow>& rows,
+                      const std::vector<ex::SlopeRow>& default_rows,
                       const std::vector<Creep>& creep) {
   std::string s = "{\"results\":[";
   for (size_t i = 0; i < rows.size(); ++i) absl::StrAppend(&s, i ? "," : "", SlopeRowJson(rows[i]));
   absl::StrAppend(&s, "],\"mujoco_default_results\":[");
-  for (size_t i = 0; i < default_rows.size(); ++i) absl::StrAppend(&s, i ? "," : "", SlopeRowJson(default_rows[i]));
+  for (size_t i = 0; i < default_rows.size(); ++i)
+    absl::StrAppend(&s, i ? "," : "", SlopeRowJson(default_rows[i]));
   absl::StrAppend(&s, "],\"creep\":[");
   for (size_t i = 0; i < creep.size(); ++i)
-    absl::StrAppend(&s, i ? "," : "", "{\"settings\":\"", creep[i].settings, "\",\"mu\":0.5,\"load_ratio\":",
-                    JsonNumber(creep[i].ratio), ",\"velocity_m_per_s\":", JsonNumber(creep[i].velocity), "}");
+    absl::StrAppend(&s, i ? "," : "", "{\"settings\":\"", creep[i].settings,
+                    "\",\"mu\":0.5,\"load_ratio\":", JsonNumber(creep[i].ratio),
+                    ",\"velocity_m_per_s\":", JsonNumber(creep[i].velocity), "}");
   absl::StrAppend(&s, "]}");
   return s;
 }
 
 // Slope vs probe per friction coefficient.
 std::string SlopeTable(const std::vector<ex::SlopeRow>& rows) {
-  std::string out = absl::StrFormat("%6s %11s %9s %9s %9s %9s %14s\n", "mu", "slip tilt", "mu_slope", "slope-mu",
-                                    "mu_probe", "probe-mu", "probe-slope");
+  std::string out = absl::StrFormat("%6s %11s %9s %9s %9s %9s %14s\n", "mu", "slip tilt",
+                                    "mu_slope", "slope-mu", "mu_probe", "probe-mu", "probe-slope");
   for (const ex::SlopeRow& r : rows) {
     if (r.probe_valid)
-      absl::StrAppend(&out, absl::StrFormat("%6.3f %9.2f° %9.4f %+9.4f %9.4f %+9.4f %+14.4f\n", r.mu,
-                                            r.slip_tilt_deg, r.mu_slope, r.mu_slope - r.mu, r.mu_probe,
-                                            r.mu_probe - r.mu, r.mu_probe - r.mu_slope));
+      absl::StrAppend(&out,
+                      absl::StrFormat("%6.3f %9.2f° %9.4f %+9.4f %9.4f %+9.4f %+14.4f\n", r.mu,
+                                      r.slip_tilt_deg, r.mu_slope, r.mu_slope - r.mu, r.mu_probe,
+                                      r.mu_probe - r.mu, r.mu_probe - r.mu_slope));
     else
-      absl::StrAppend(&out, absl::StrFormat("%6.3f %9.2f° %9.4f %+9.4f %9s (%s)\n", r.mu, r.slip_tilt_deg,
-                                            r.mu_slope, r.mu_slope - r.mu, "no slip", r.probe_message));
+      absl::StrAppend(&out,
+                      absl::StrFormat("%6.3f %9.2f° %9.4f %+9.4f %9s (%s)\n", r.mu, r.slip_tilt_deg,
+                                      r.mu_slope, r.mu_slope - r.mu, "no slip", r.probe_message));
   }
   return out;
 }
@@ -343,8 +371,8 @@ int RunSlope(const ExperimentArgs& a) {
     std::cout << "\nSame with MuJoCo's default solver settings:\n" << SlopeTable(default_rows);
     std::cout << "\nCreep under static friction (mu 0.5, fingertip 0.05 kg on a tilted plate):\n";
     for (const Creep& k : creep)
-      std::cout << absl::StrFormat("  %-15s load %.0f %% of the cone: %.3g mm/s\n", k.settings, 100 * k.ratio,
-                                   1e3 * k.velocity);
+      std::cout << absl::StrFormat("  %-15s load %.0f %% of the cone: %.3g mm/s\n", k.settings,
+                                   100 * k.ratio, 1e3 * k.velocity);
   }
   return kExitOk;
 }
@@ -352,10 +380,13 @@ int RunSlope(const ExperimentArgs& a) {
 }  // namespace
 
 CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args) {
-  CLI::App* cmd = app.add_subcommand("experiment", "Closed-loop experiments in MuJoCo (grasp, slope, probe, inhand, ablation, chain)");
+  CLI::App* cmd = app.add_subcommand(
+      "experiment",
+      "Closed-loop experiments in MuJoCo (grasp, slope, probe, inhand, ablation, chain)");
   cmd->require_subcommand(1);
-  CLI::App* g = cmd->add_subcommand(
-      "grasp", "Grasp-and-lift trials with force feedback on raw or estimated tactile forces (GeoDEx Table III)");
+  CLI::App* g = cmd->add_subcommand("grasp",
+                                    "Grasp-and-lift trials with force feedback on raw or estimated "
+                                    "tactile forces (GeoDEx Table III)");
   g->add_option("--object", args.object, "sphere|wrench|cylinder|cube|all")
       ->check(CLI::IsMember({"sphere", "wrench", "cylinder", "cube", "all"}))
       ->capture_default_str();
@@ -365,47 +396,60 @@ CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args) {
   g->add_option("--feedback", args.feedback, "estimated|raw|both")
       ->check(CLI::IsMember({"estimated", "raw", "both"}))
       ->capture_default_str();
-  g->add_option("--seed", args.seed, "Seed of the per-trial sensor-error draws")->capture_default_str();
+  g->add_option("--seed", args.seed, "Seed of the per-trial sensor-error draws")
+      ->capture_default_str();
   AddOutputFlags(g, &args.output, "{\"results\":[...]}");
-  g->add_option("--plots", args.plots_dir, "Write an SVG force-trace plot of trial 0 per object and mode here")
+  g->add_option("--plots", args.plots_dir,
+                "Write an SVG force-trace plot of trial 0 per object and mode here")
       ->type_name("DIR");
-  g->add_option("--estimator", args.estimator, "Estimate for estimated feedback: normal-lsq (ours) | projection (GeoDEx)")
+  g->add_option("--estimator", args.estimator,
+                "Estimate for estimated feedback: normal-lsq (ours) | projection (GeoDEx)")
       ->check(CLI::IsMember({"normal-lsq", "projection"}))
       ->capture_default_str();
   g->add_option("--admittance", args.admittance,
-                "full: target += K^-1 (f_desired - f_observed), 3D (the paper's loop); normal: along the sensed "
+                "full: target += K^-1 (f_desired - f_observed), 3D (the paper's loop); normal: "
+                "along the sensed "
                 "normal only, planned tangential force fed forward")
       ->capture_default_str();
-  g->add_option("--sensor-model", args.sensor_model_path,
-                "Sensor model JSON for every fingertip (default: GeoDEx error ranges drawn per trial)")
+  g->add_option(
+       "--sensor-model", args.sensor_model_path,
+       "Sensor model JSON for every fingertip (default: GeoDEx error ranges drawn per trial)")
       ->type_name("FILE");
   g->add_flag("--ideal-sensors", args.ideal, "Readings are the true normal forces");
-  g->add_option("--sensors", args.sensors,
-                "channel: one sensor-model channel per fingertip; taxel: a 42-taxel array per fingertip fed "
-                "MuJoCo's contact point and force, contacts sensed from the taxels")
+  g->add_option(
+       "--sensors", args.sensors,
+       "channel: one sensor-model channel per fingertip; taxel: a 42-taxel array per fingertip fed "
+       "MuJoCo's contact point and force, contacts sensed from the taxels")
       ->capture_default_str();
-  g->add_option("--taxel-ranges", args.taxel_ranges_path,
-                "Taxel ranges JSON (tactforce.taxel_ranges.v1) for --sensors taxel (default: the paper's)")
+  g->add_option(
+       "--taxel-ranges", args.taxel_ranges_path,
+       "Taxel ranges JSON (tactforce.taxel_ranges.v1) for --sensors taxel (default: the paper's)")
       ->type_name("FILE");
   g->add_option("--protocol", args.protocol,
-                "short: close, settle, hold, lift 5 cm, hold 1 s, place; paper: GeoDEx Fig. 12's 50 s (lift at 27 s, "
+                "short: close, settle, hold, lift 5 cm, hold 1 s, place; paper: GeoDEx Fig. 12's "
+                "50 s (lift at 27 s, "
                 "placed at 33 s, feedback switched at 40 s)")
       ->capture_default_str();
   g->add_flag("--no-progress", args.no_progress, "No progress bar on stderr");
-  g->add_flag("--details", args.details, "Also print one line per trial (outcome, slip, rotation) on stderr");
+  g->add_flag("--details", args.details,
+              "Also print one line per trial (outcome, slip, rotation) on stderr");
   g->footer(
       "Prints success rates per object and feedback mode. Examples:\n"
       "  tactforce experiment grasp --object wrench --trials 5\n"
       "  tactforce experiment grasp --object all --trials 20 --plots /tmp/plots --json\n"
       "  tactforce experiment grasp --object all --sensors taxel --trials 50 --feedback both");
   args.grasp = g;
-  CLI::App* s = cmd->add_subcommand(
-      "slope", "Friction by the slope method vs the probing estimate, and MuJoCo's creep under static friction");
+  CLI::App* s = cmd->add_subcommand("slope",
+                                    "Friction by the slope method vs the probing estimate, and "
+                                    "MuJoCo's creep under static friction");
   s->add_option("--mu", args.mus, "MJCF friction coefficients")
       ->delimiter(',')
       ->capture_default_str();
-  s->add_option("--tilt-rate", args.tilt_rate, "Plate tilt rate (deg/s)")->check(Between(0.01, 90))->capture_default_str();
-  s->add_flag("--creep,!--no-creep", args.creep, "Also measure creep and repeat with MuJoCo's default settings");
+  s->add_option("--tilt-rate", args.tilt_rate, "Plate tilt rate (deg/s)")
+      ->check(Between(0.01, 90))
+      ->capture_default_str();
+  s->add_flag("--creep,!--no-creep", args.creep,
+              "Also measure creep and repeat with MuJoCo's default settings");
   AddOutputFlags(s, &args.output, "the slope results");
   s->footer(
       "Examples:\n"
@@ -426,7 +470,8 @@ int RunExperiment(const ExperimentArgs& args) {
   if (args.ablation.cmd && args.ablation.cmd->parsed()) return RunAblationCommand(args.ablation);
   if (args.probe.app && args.probe.app->parsed()) return RunProbe(args.probe);
   if (args.chain.app && args.chain.app->parsed()) return RunChainCommand(args.chain);
-  return ReportError(absl::InvalidArgumentError("experiment: give grasp, slope, probe, inhand, ablation or chain"));
+  return ReportError(absl::InvalidArgumentError(
+      "experiment: give grasp, slope, probe, inhand, ablation or chain"));
 }
 
 }  // namespace tactforce::cli

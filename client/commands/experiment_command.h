@@ -17,16 +17,16 @@ namespace tactforce::cli {
 
 struct ExperimentArgs {
   // grasp
-  std::string object = "all";       // sphere|wrench|cylinder|cube|all
+  std::string object = "all";  // sphere|wrench|cylinder|cube|all
   int trials = 20;
-  std::string feedback = "both";    // estimated|raw|both
+  std::string feedback = "both";  // estimated|raw|both
   uint64_t seed = 1;
-  OutputFormat output;              // --json / --format json
+  OutputFormat output;  // --json / --format json
   std::string plots_dir;
   std::string estimator = "normal-lsq";  // normal-lsq|projection
   std::string admittance = "full";       // full|normal
-  std::string sensor_model_path;    // one model JSON for every fingertip
-  bool ideal = false;               // ideal sensors
+  std::string sensor_model_path;         // one model JSON for every fingertip
+  bool ideal = false;                    // ideal sensors
   bool no_progress = false;
   bool details = false;             // one line per trial
   std::string sensors = "channel";  // channel|taxel
@@ -34,15 +34,15 @@ struct ExperimentArgs {
   std::string taxel_ranges_path;    // --taxel-ranges FILE (sim::TaxelRanges JSON)
   // slope
   std::vector<double> mus = {0.3, 0.5, 0.7, 0.9};
-  double tilt_rate = 0.5;           // deg/s
+  double tilt_rate = 0.5;  // deg/s
   bool creep = true;
 
   CLI::App* grasp = nullptr;
   CLI::App* slope = nullptr;
-  InHandArgs inhand;                // `experiment inhand`
-  AblationArgs ablation;            // `experiment ablation`
-  ProbeArgs probe;  // `experiment probe` (experiment_probe_command.h)
-  ChainArgs chain;  // `experiment chain` (experiment_chain_command.h)
+  InHandArgs inhand;      // `experiment inhand`
+  AblationArgs ablation;  // `experiment ablation`
+  ProbeArgs probe;        // `experiment probe` (experiment_probe_command.h)
+  ChainArgs chain;        // `experiment chain` (experiment_chain_command.h)
 };
 CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args);
 int RunExperiment(const ExperimentArgs& args);

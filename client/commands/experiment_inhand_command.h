@@ -14,7 +14,7 @@
 namespace tactforce::cli {
 
 struct InHandArgs {
-  std::string object = "box_0";     // built-in name or FILE.json
+  std::string object = "box_0";  // built-in name or FILE.json
   std::string tracker = "vision";
   double duration = 10, rate = 100;
   uint64_t seed = 1;
@@ -23,7 +23,7 @@ struct InHandArgs {
   double support_fraction = 0;
   std::vector<std::string> breaks;  // CONTACT:START:DURATION
   std::string out_dir = "inhand_run";
-  bool force = false;               // replace an earlier run's files in --out
+  bool force = false;  // replace an earlier run's files in --out
   bool fit = false;
   bool no_progress = false;
   OutputFormat output;

@@ -27,7 +27,8 @@ constexpr double kPaperMedianError = 0.0056;  // Sundaralingam & Hermans, Sec. V
 absl::StatusOr<ex::ProbeObject> ResolveObject(const std::string& spec) {
   if (!absl::EndsWith(spec, ".json") && !std::filesystem::is_regular_file(spec)) {
     absl::StatusOr<ex::ProbeObject> o = ex::FindProbeObject(spec);
-    if (!o.ok()) return absl::InvalidArgumentError(absl::StrCat("--object: ", o.status().message()));
+    if (!o.ok())
+      return absl::InvalidArgumentError(absl::StrCat("--object: ", o.status().message()));
     return o;
   }
   absl::StatusOr<std::string> text = ReadInput(spec, "--object");
@@ -59,31 +60,34 @@ absl::StatusOr<ex::ProbeConfig> Config(const ProbeArgs& a) {
   c.hold_scale = a.hold_scale;
   c.admittance_gain = a.admittance_gain;
   c.plan_sigma = a.plan_sigma;
-  c.slope.friction.pre_slip =
-      a.pre_slip == "fit" ? estimator::PreSlipForce::kLinearFit : estimator::PreSlipForce::kWindowAverage;
+  c.slope.friction.pre_slip = a.pre_slip == "fit" ? estimator::PreSlipForce::kLinearFit
+                                                  : estimator::PreSlipForce::kWindowAverage;
   if (absl::Status s = ex::ValidateProbeConfig(c); !s.ok()) {
     const std::string m(s.message());
-    const char* flag = absl::StartsWith(m, "force_sigma") ? "--force-sigma"
-                       : absl::StartsWith(m, "force_bias") ? "--force-bias"
-                       : absl::StartsWith(m, "hold_scale") ? "--hold-scale"
+    const char* flag = absl::StartsWith(m, "force_sigma")     ? "--force-sigma"
+                       : absl::StartsWith(m, "force_bias")    ? "--force-bias"
+                       : absl::StartsWith(m, "hold_scale")    ? "--hold-scale"
                        : absl::StartsWith(m, "contact_sigma") ? "--contact-sigma"
-                       : absl::StartsWith(m, "object")     ? "--object"
-                                                           : "experiment probe";
+                       : absl::StartsWith(m, "object")        ? "--object"
+                                                              : "experiment probe";
     return absl::InvalidArgumentError(absl::StrCat(flag, ": ", m));
   }
   return c;
 }
 
 std::string TrialJson(const ex::ProbeTrialResult& t) {
-  return absl::StrCat(
-      "{\"surface\":", JsonEscape(t.surface), ",\"trial\":", t.trial, ",\"mu_true\":", JsonNumber(t.mu_true),
-      ",\"mu_slope\":", JsonNumber(t.mu_slope), ",\"mu_estimated\":", t.valid ? JsonNumber(t.mu_estimated) : "null",
-      ",\"error\":", t.valid ? JsonNumber(t.error) : "null", ",\"valid\":", t.valid ? "true" : "false",
-      ",\"invalid_reason\":", t.valid ? "null" : JsonEscape(t.invalid_reason),
-      ",\"object_motion_mm\":", JsonNumber(t.object_motion_mm),
-      ",\"object_rotation_deg\":", JsonNumber(t.object_rotation_deg),
-      ",\"slip_detected\":", t.slip_detected ? "true" : "false", ",\"mesh_triangle\":", t.mesh_triangle,
-      ",\"wall_seconds\":", JsonNumber(t.wall_seconds), "}");
+  return absl::StrCat("{\"surface\":", JsonEscape(t.surface), ",\"trial\":", t.trial,
+                      ",\"mu_true\":", JsonNumber(t.mu_true),
+                      ",\"mu_slope\":", JsonNumber(t.mu_slope),
+                      ",\"mu_estimated\":", t.valid ? JsonNumber(t.mu_estimated) : "null",
+                      ",\"error\":", t.valid ? JsonNumber(t.error) : "null",
+                      ",\"valid\":", t.valid ? "true" : "false",
+                      ",\"invalid_reason\":", t.valid ? "null" : JsonEscape(t.invalid_reason),
+                      ",\"object_motion_mm\":", JsonNumber(t.object_motion_mm),
+                      ",\"object_rotation_deg\":", JsonNumber(t.object_rotation_deg),
+                      ",\"slip_detected\":", t.slip_detected ? "true" : "false",
+                      ",\"mesh_triangle\":", t.mesh_triangle,
+                      ",\"wall_seconds\":", JsonNumber(t.wall_seconds), "}");
 }
 
 std::string SurfaceJson(const ex::SurfaceSummary& s) {
@@ -96,12 +100,14 @@ std::string SurfaceJson(const ex::SurfaceSummary& s) {
       ",\"median_estimate\":", any ? JsonNumber(s.median_estimate) : "null",
       ",\"median_signed_error\":", any ? JsonNumber(s.median_signed_error) : "null",
       ",\"median_abs_error\":", any ? JsonNumber(s.median_abs_error) : "null",
-      ",\"in_grasp_minus_plate\":", any && s.plate_probe_valid ? JsonNumber(s.in_grasp_minus_plate) : "null", "}");
+      ",\"in_grasp_minus_plate\":",
+      any && s.plate_probe_valid ? JsonNumber(s.in_grasp_minus_plate) : "null", "}");
 }
 
 std::string ReportJson(const ProbeArgs& a, const ex::ProbeConfig& c, const ex::ProbeReport& r) {
   std::string s = "{\"trials\":[";
-  for (size_t i = 0; i < r.trials.size(); ++i) absl::StrAppend(&s, i ? "," : "", TrialJson(r.trials[i]));
+  for (size_t i = 0; i < r.trials.size(); ++i)
+    absl::StrAppend(&s, i ? "," : "", TrialJson(r.trials[i]));
   const ex::ProbeSummary& m = r.summary;
   const bool any = m.valid > 0;
   absl::StrAppend(&s, "],\"summary\":{\"trials\":", m.trials, ",\"valid\":", m.valid,
@@ -109,17 +115,21 @@ std::string ReportJson(const ProbeArgs& a, const ex::ProbeConfig& c, const ex::P
                   ",\"median_signed_error\":", any ? JsonNumber(m.median_signed_error) : "null",
                   ",\"median_abs_error\":", any ? JsonNumber(m.median_abs_error) : "null",
                   ",\"paper_median_error\":", JsonNumber(kPaperMedianError),
-                  ",\"mean_in_grasp_minus_plate\":", any ? JsonNumber(m.mean_in_grasp_minus_plate) : "null",
-                  ",\"per_surface\":[");
-  for (size_t i = 0; i < m.per_surface.size(); ++i) absl::StrAppend(&s, i ? "," : "", SurfaceJson(m.per_surface[i]));
-  absl::StrAppend(&s, "]},\"config\":{\"object\":", JsonEscape(c.object.name), ",\"on_table\":",
-                  c.on_table ? "true" : "false", ",\"force_sigma\":", JsonNumber(c.force_sigma),
-                  ",\"force_bias\":", JsonNumber(c.force_bias), ",\"hold_scale\":", JsonNumber(c.hold_scale),
-                  ",\"contact_sigma\":", JsonNumber(c.contact_sigma), ",\"plan_sigma\":", JsonNumber(c.plan_sigma),
+                  ",\"mean_in_grasp_minus_plate\":",
+                  any ? JsonNumber(m.mean_in_grasp_minus_plate) : "null", ",\"per_surface\":[");
+  for (size_t i = 0; i < m.per_surface.size(); ++i)
+    absl::StrAppend(&s, i ? "," : "", SurfaceJson(m.per_surface[i]));
+  absl::StrAppend(&s, "]},\"config\":{\"object\":", JsonEscape(c.object.name),
+                  ",\"on_table\":", c.on_table ? "true" : "false",
+                  ",\"force_sigma\":", JsonNumber(c.force_sigma),
+                  ",\"force_bias\":", JsonNumber(c.force_bias),
+                  ",\"hold_scale\":", JsonNumber(c.hold_scale),
+                  ",\"contact_sigma\":", JsonNumber(c.contact_sigma),
+                  ",\"plan_sigma\":", JsonNumber(c.plan_sigma),
                   ",\"admittance_gain\":", JsonNumber(c.admittance_gain),
                   ",\"pre_slip\":", JsonEscape(a.pre_slip), ",\"seed\":", a.seed,
-                  ",\"error_convention\":\"mu_slope - mu_estimated\"},\"wall_seconds\":", JsonNumber(r.wall_seconds),
-                  "}");
+                  ",\"error_convention\":\"mu_slope - mu_estimated\"},\"wall_seconds\":",
+                  JsonNumber(r.wall_seconds), "}");
   return s;
 }
 
@@ -131,65 +141,83 @@ std::string Optional(bool has, double v, bool sign) {
 
 std::string SurfaceRow(const ex::SurfaceSummary& s) {
   const bool any = s.valid > 0;
-  return absl::StrFormat("%-24s %7.3f %9.4f %9s %6d/%-3d %9s %10s %12s %16s\n", s.surface, s.mu_true, s.mu_slope,
-                         Optional(s.plate_probe_valid, s.mu_plate_probe, false), s.valid, s.trials,
-                         Optional(any, s.median_estimate, false), Optional(any, s.median_signed_error, true),
-                         Optional(any, s.median_abs_error, false),
-                         Optional(any && s.plate_probe_valid, s.in_grasp_minus_plate, true));
+  return absl::StrFormat(
+      "%-24s %7.3f %9.4f %9s %6d/%-3d %9s %10s %12s %16s\n", s.surface, s.mu_true, s.mu_slope,
+      Optional(s.plate_probe_valid, s.mu_plate_probe, false), s.valid, s.trials,
+      Optional(any, s.median_estimate, false), Optional(any, s.median_signed_error, true),
+      Optional(any, s.median_abs_error, false),
+      Optional(any && s.plate_probe_valid, s.in_grasp_minus_plate, true));
 }
 
 std::string ReportTable(const ProbeArgs& a, const ex::ProbeConfig& c, const ex::ProbeReport& r) {
   std::string out = absl::StrFormat(
-      "Friction probed in a grasp: %s (%.3g kg), %s, tactile sigma %g N + bias %g N per axis, hold scale %g, "
+      "Friction probed in a grasp: %s (%.3g kg), %s, tactile sigma %g N + bias %g N per axis, hold "
+      "scale %g, "
       "%d trials per surface, seed %d\n",
-      c.object.name, c.object.mass, c.on_table ? "on a table" : "in the air", c.force_sigma, c.force_bias,
-      c.hold_scale, a.trials, a.seed);
-  absl::StrAppend(&out, absl::StrFormat("%-24s %7s %9s %9s %10s %9s %10s %12s %16s\n", "surface", "mu_true", "mu_slope",
-                                        "mu_plate", "valid", "median mu", "median err", "median |err|",
-                                        "in-grasp-plate"));
+      c.object.name, c.object.mass, c.on_table ? "on a table" : "in the air", c.force_sigma,
+      c.force_bias, c.hold_scale, a.trials, a.seed);
+  absl::StrAppend(&out, absl::StrFormat("%-24s %7s %9s %9s %10s %9s %10s %12s %16s\n", "surface",
+                                        "mu_true", "mu_slope", "mu_plate", "valid", "median mu",
+                                        "median err", "median |err|", "in-grasp-plate"));
   for (const ex::SurfaceSummary& s : r.summary.per_surface) absl::StrAppend(&out, SurfaceRow(s));
   const ex::ProbeSummary& m = r.summary;
   const bool any = m.valid > 0;
-  absl::StrAppend(&out, absl::StrFormat(
-      "pooled: %d/%d valid (slip detected in %d of them); median error %s (paper: %.4f), median |error| %s; "
-      "mean in-grasp - plate %s\n",
-      m.valid, m.trials, m.slip_detected_valid, Optional(any, m.median_signed_error, true), kPaperMedianError,
-      Optional(any, m.median_abs_error, false), Optional(any, m.mean_in_grasp_minus_plate, true)));
-  // Invalid trials per surface and kind of reason (the text before its first number), with one example.
+  absl::StrAppend(&out, absl::StrFormat("pooled: %d/%d valid (slip detected in %d of them); median "
+                                        "error %s (paper: %.4f), median |error| %s; "
+                                        "mean in-grasp - plate %s\n",
+                                        m.valid, m.trials, m.slip_detected_valid,
+                                        Optional(any, m.median_signed_error, true),
+                                        kPaperMedianError, Optional(any, m.median_abs_error, false),
+                                        Optional(any, m.mean_in_grasp_minus_plate, true)));
+  // Invalid trials per surface and kind of reason (the text before its first number), with one
+  // example.
   std::map<std::string, std::pair<int, std::string>> reasons;
   for (const ex::ProbeTrialResult& t : r.trials) {
     if (t.valid) continue;
-    const std::string kind = t.invalid_reason.substr(0, t.invalid_reason.find_first_of("0123456789"));
+    const std::string kind =
+        t.invalid_reason.substr(0, t.invalid_reason.find_first_of("0123456789"));
     auto& [n, example] = reasons[absl::StrCat(t.surface, ": ", kind)];
     if (n++ == 0) example = t.invalid_reason;
   }
   for (const auto& [key, v] : reasons)
     absl::StrAppend(&out, absl::StrFormat("  invalid %3d x %s (e.g. %s)\n", v.first,
                                           key.substr(0, key.find(": ")), v.second));
-  absl::StrAppend(&out, absl::StrFormat("error = mu_slope - mu_estimated (the paper's mu_gt - mu); %.1f s wall\n",
-                                        r.wall_seconds));
+  absl::StrAppend(
+      &out,
+      absl::StrFormat("error = mu_slope - mu_estimated (the paper's mu_gt - mu); %.1f s wall\n",
+                      r.wall_seconds));
   return out;
 }
 
 }  // namespace
 
 CLI::App* AddProbeCommand(CLI::App* experiment, ProbeArgs& args) {
-  CLI::App* p = experiment->add_subcommand(
-      "probe", "Friction probed inside a grasp: 3 fingertips hold, the 4th lowers its normal force until it slips");
-  p->add_option("--mu", args.mus, "Own surfaces: friction coefficients in [0.1, 1.5] (default: the built-in pairs)")
+  CLI::App* p = experiment->add_subcommand("probe",
+                                           "Friction probed inside a grasp: 3 fingertips hold, the "
+                                           "4th lowers its normal force until it slips");
+  p->add_option("--mu", args.mus,
+                "Own surfaces: friction coefficients in [0.1, 1.5] (default: the built-in pairs)")
       ->delimiter(',');
-  p->add_option("--object", args.object, "Built-in box (box, wood-block, sugar-box, offset-box) or FILE.json "
-                                         "{\"size\":[x,y,z],\"mass\":m,\"com_offset\":[x,y,z]}")
+  p->add_option("--object", args.object,
+                "Built-in box (box, wood-block, sugar-box, offset-box) or FILE.json "
+                "{\"size\":[x,y,z],\"mass\":m,\"com_offset\":[x,y,z]}")
       ->capture_default_str();
-  p->add_flag("--on-table", args.on_table, "The box rests on a table while it is probed (the paper's Fig. 1)");
-  p->add_option("--trials", args.trials, "Seeded trials per surface")->check(Between(1, 10000))->capture_default_str();
-  p->add_option("--seed", args.seed, "Seed of the tactile noise, bias and probe position")->capture_default_str();
-  p->add_option("--force-sigma", args.force_sigma, "Tactile force noise per axis (N)")->capture_default_str();
-  p->add_option("--force-bias", args.force_bias, "Std. dev. of the per-trial tactile bias per axis (N)")
+  p->add_flag("--on-table", args.on_table,
+              "The box rests on a table while it is probed (the paper's Fig. 1)");
+  p->add_option("--trials", args.trials, "Seeded trials per surface")
+      ->check(Between(1, 10000))
+      ->capture_default_str();
+  p->add_option("--seed", args.seed, "Seed of the tactile noise, bias and probe position")
+      ->capture_default_str();
+  p->add_option("--force-sigma", args.force_sigma, "Tactile force noise per axis (N)")
+      ->capture_default_str();
+  p->add_option("--force-bias", args.force_bias,
+                "Std. dev. of the per-trial tactile bias per axis (N)")
       ->capture_default_str();
   p->add_option("--contact-sigma", args.contact_sigma, "Tactile contact-point noise per axis (m)")
       ->capture_default_str();
-  p->add_option("--hold-scale", args.hold_scale, "Scale of the planned holding forces (0.3: negative control)")
+  p->add_option("--hold-scale", args.hold_scale,
+                "Scale of the planned holding forces (0.3: negative control)")
       ->capture_default_str();
   p->add_option("--admittance-gain", args.admittance_gain,
                 "Holding fingertips' force admittance per 200 Hz tick (0: impedance only)")
@@ -199,7 +227,8 @@ CLI::App* AddProbeCommand(CLI::App* experiment, ProbeArgs& args) {
                 "Normal-force sigma (N) the holding plan is made robust to: its grip margin")
       ->check(Between(0, 10))
       ->capture_default_str();
-  p->add_option("--pre-slip", args.pre_slip, "window: mean of 5 samples before slip (the paper); fit: line fit (ours)")
+  p->add_option("--pre-slip", args.pre_slip,
+                "window: mean of 5 samples before slip (the paper); fit: line fit (ours)")
       ->check(CLI::IsMember({"window", "fit"}))
       ->capture_default_str();
   AddOutputFlags(p, &args.output, "{\"trials\":[...],\"summary\":{...}}");
@@ -219,13 +248,16 @@ int RunProbe(const ProbeArgs& a) {
   absl::StatusOr<std::vector<ex::SurfacePair>> surfaces = Surfaces(a);
   if (!surfaces.ok()) return ReportError(surfaces.status());
   ProgressBar bar("probe", !a.no_progress);
-  absl::StatusOr<ex::ProbeReport> r = ex::RunProbeExperiment(*c, *surfaces, a.trials, [&](int done, int total) {
-    bar.Update(static_cast<double>(done) / total, absl::StrCat(done, "/", total, " trials"));
-  });
+  absl::StatusOr<ex::ProbeReport> r =
+      ex::RunProbeExperiment(*c, *surfaces, a.trials, [&](int done, int total) {
+        bar.Update(static_cast<double>(done) / total, absl::StrCat(done, "/", total, " trials"));
+      });
   bar.Finish();
   if (!r.ok()) return ReportError(r.status());
-  if (a.output.json()) std::cout << io::IndentJson(ReportJson(a, *c, *r)) << std::flush;
-  else std::cout << ReportTable(a, *c, *r);
+  if (a.output.json())
+    std::cout << io::IndentJson(ReportJson(a, *c, *r)) << std::flush;
+  else
+    std::cout << ReportTable(a, *c, *r);
   return kExitOk;
 }
 

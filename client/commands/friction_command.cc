@@ -19,12 +19,14 @@ namespace tactforce::cli {
 CLI::App* AddFrictionCommand(CLI::App& app, FrictionArgs& args) {
   CLI::App* cmd = app.add_subcommand(
       "friction", "Estimate static friction from probing trials that end in slip");
-  cmd->add_option("trials", args.trial_paths, "Trial CSV files: t,fx,fy,fz,px,py,pz[,slip]; - = stdin")
+  cmd->add_option("trials", args.trial_paths,
+                  "Trial CSV files: t,fx,fy,fz,px,py,pz[,slip]; - = stdin")
       ->required()
       ->type_name("TRIAL.csv");
   auto* normal = cmd->add_option("--normal", args.normal, "Surface normal into the object, x,y,z");
-  auto* mesh = cmd->add_option("--mesh", args.mesh_path,
-                               "Object mesh (STL, OBJ or PLY; object frame, m): nearest-triangle normal");
+  auto* mesh =
+      cmd->add_option("--mesh", args.mesh_path,
+                      "Object mesh (STL, OBJ or PLY; object frame, m): nearest-triangle normal");
   normal->excludes(mesh);
   AddOutputFlags(cmd, &args.output, "the FrictionResponse");
   AddBackendFlags(cmd, &args.backend, "Estimator.EstimateFriction");
@@ -33,8 +35,11 @@ CLI::App* AddFrictionCommand(CLI::App& app, FrictionArgs& args) {
   cmd->add_option("--slip-distance", args.slip_distance, "Tangential travel that means slip (m)")
       ->check(GreaterThan(0))
       ->capture_default_str();
-  cmd->add_option("--window", args.window, "Pre-slip samples averaged")->check(Between(1, 1000))->capture_default_str();
-  cmd->add_option("--min-normal-force", args.min_normal_force, "Samples below this normal force are ignored (N)")
+  cmd->add_option("--window", args.window, "Pre-slip samples averaged")
+      ->check(Between(1, 1000))
+      ->capture_default_str();
+  cmd->add_option("--min-normal-force", args.min_normal_force,
+                  "Samples below this normal force are ignored (N)")
       ->check(AtLeast(0))
       ->capture_default_str();
   cmd->footer(
@@ -92,16 +97,19 @@ absl::StatusOr<v1::FrictionRequest> BuildFrictionRequest(const FrictionArgs& arg
   request.set_slip_distance(args.slip_distance);
   request.set_window(static_cast<uint32_t>(args.window));
   request.set_min_normal_force(args.min_normal_force);
-  request.set_pre_slip(args.linear_fit ? v1::PRE_SLIP_FORCE_LINEAR_FIT : v1::PRE_SLIP_FORCE_WINDOW_AVERAGE);
+  request.set_pre_slip(args.linear_fit ? v1::PRE_SLIP_FORCE_LINEAR_FIT
+                                       : v1::PRE_SLIP_FORCE_WINDOW_AVERAGE);
   return request;
 }
 
 // One line per trial, then the median, mean and IQR.
 std::string FormatFrictionTable(const v1::FrictionResponse& response) {
-  std::string out = absl::StrFormat("%-40s %8s %8s %10s  %s\n", "trial", "mu", "slipped", "slip t (s)", "note");
+  std::string out =
+      absl::StrFormat("%-40s %8s %8s %10s  %s\n", "trial", "mu", "slipped", "slip t (s)", "note");
   for (const auto& t : response.trials()) {
-    absl::StrAppendFormat(&out, "%-40s %8.4f %8s %10.3f  %s\n", t.name(), t.mu(), t.slipped() ? "yes" : "no",
-                          t.slip_time(), t.lower_bound() ? "lower bound" : t.message());
+    absl::StrAppendFormat(&out, "%-40s %8.4f %8s %10.3f  %s\n", t.name(), t.mu(),
+                          t.slipped() ? "yes" : "no", t.slip_time(),
+                          t.lower_bound() ? "lower bound" : t.message());
   }
   absl::StrAppendFormat(&out, "\nmu: median %.4f  mean %.4f  IQR %.4f  over %d slipped trial(s)\n",
                         response.median(), response.mean(), response.iqr(), response.count());

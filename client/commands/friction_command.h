@@ -17,7 +17,7 @@ struct FrictionArgs {
   std::string normal;                    // "x,y,z"
   std::string mesh_path;                 // STL or OBJ
   OutputFormat output;
-  BackendArgs backend;                   // --local | --server ADDR, TLS, --deadline-ms
+  BackendArgs backend;  // --local | --server ADDR, TLS, --deadline-ms
   bool linear_fit = false;
   double slip_distance = 1e-3;
   int window = 5;

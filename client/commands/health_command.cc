@@ -13,8 +13,8 @@
 
 namespace tactforce::cli {
 CLI::App* AddHealthCommand(CLI::App& app, HealthArgs& args) {
-  CLI::App* cmd = app.add_subcommand(
-      "health", "Ask tactforce-server whether it is serving (grpc.health.v1)");
+  CLI::App* cmd =
+      app.add_subcommand("health", "Ask tactforce-server whether it is serving (grpc.health.v1)");
   AddConnectionFlags(cmd, &args.connection, "--server", /*default_deadline_ms=*/5'000);
   cmd->add_option("--service", args.service,
                   "Service to ask about, e.g. tactforce.v1.Planner (default: the whole server)")
@@ -28,7 +28,8 @@ CLI::App* AddHealthCommand(CLI::App& app, HealthArgs& args) {
       "Prints SERVING, NOT_SERVING, UNKNOWN or SERVICE_UNKNOWN on stdout.\n"
       "Examples:\n"
       "  tactforce health --server localhost:50051\n"
-      "  tactforce health --server localhost:50051 --service tactforce.v1.Planner --wait 10 --json\n"
+      "  tactforce health --server localhost:50051 --service tactforce.v1.Planner --wait 10 "
+      "--json\n"
       "Exit status: 0 only when SERVING; 3 when not serving or the server cannot be\n"
       "reached; 2 for an unknown --service; 4 when it did not answer within\n"
       "--deadline-ms; 1 otherwise.");
@@ -56,8 +57,7 @@ int RunHealth(const HealthArgs& args) {
     state = CheckHealth(*server, args.service);
     const bool retry = state.ok() ? (*state != "SERVING" && *state != "SERVICE_UNKNOWN")
                                   : (state.status().code() == absl::StatusCode::kUnavailable ||
-                                     state.status().code() ==
-                                         absl::StatusCode::kDeadlineExceeded);
+                                     state.status().code() == absl::StatusCode::kDeadlineExceeded);
     if (!retry || Clock::now() >= give_up) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
   }
@@ -71,7 +71,8 @@ int RunHealth(const HealthArgs& args) {
     std::cout << *state << std::endl;
   }
   if (*state == "SERVING") return kExitOk;
-  if (*state == "SERVICE_UNKNOWN") return ReportError(UnknownServiceError(connection.server, args.service));
+  if (*state == "SERVICE_UNKNOWN")
+    return ReportError(UnknownServiceError(connection.server, args.service));
   return kExitUnavailable;
 }
 

@@ -61,7 +61,8 @@ absl::StatusOr<std::vector<Vec3>> ReadHullVertices(const std::string& path) {
   absl::StatusOr<io::CsvTable> table = io::ReadCsvFile(path);
   if (!table.ok()) return table.status();
   TF_RETURN_IF_ERROR(table->Require({"x", "y", "z"}));
-  const int ix = table->ColumnIndex("x"), iy = table->ColumnIndex("y"), iz = table->ColumnIndex("z");
+  const int ix = table->ColumnIndex("x"), iy = table->ColumnIndex("y"),
+            iz = table->ColumnIndex("z");
   std::vector<Vec3> out;
   for (const std::vector<double>& row : table->rows) out.emplace_back(row[ix], row[iy], row[iz]);
   return out;
@@ -74,7 +75,8 @@ absl::StatusOr<double> ParseNumber(const std::string& token, const std::string& 
   const double x = t.empty() ? 0.0 : std::strtod(t.c_str(), &end);
   if (t.empty() || end != t.c_str() + t.size())
     return absl::InvalidArgumentError(absl::StrCat(flag, ": '", token, "' is not a number"));
-  if (!std::isfinite(x)) return absl::InvalidArgumentError(absl::StrCat(flag, ": '", token, "' is not finite"));
+  if (!std::isfinite(x))
+    return absl::InvalidArgumentError(absl::StrCat(flag, ": '", token, "' is not finite"));
   return x;
 }
 
@@ -82,8 +84,9 @@ absl::StatusOr<double> ParseNumber(const std::string& token, const std::string& 
 absl::StatusOr<io::MeshPlacement> ParseMeshPose(const std::string& text) {
   const std::vector<std::string> tokens = absl::StrSplit(text, ',');
   if (tokens.size() != 7)
-    return absl::InvalidArgumentError(absl::StrCat("--mesh-pose: expected 7 numbers x,y,z,qw,qx,qy,qz (got ",
-                                                   tokens.size(), " in '", text, "')"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("--mesh-pose: expected 7 numbers x,y,z,qw,qx,qy,qz (got ", tokens.size(),
+                     " in '", text, "')"));
   std::array<double, 7> v{};
   for (size_t i = 0; i < 7; ++i) {
     absl::StatusOr<double> x = ParseNumber(tokens[i], "--mesh-pose");
@@ -95,7 +98,8 @@ absl::StatusOr<io::MeshPlacement> ParseMeshPose(const std::string& text) {
   pose.orientation = Eigen::Quaterniond(v[3], v[4], v[5], v[6]);
   if (!(pose.orientation.norm() >= 1e-6))
     return absl::InvalidArgumentError(absl::StrCat("--mesh-pose: quaternion qw,qx,qy,qz has norm ",
-                                                   pose.orientation.norm(), " (near zero) in '", text, "'"));
+                                                   pose.orientation.norm(), " (near zero) in '",
+                                                   text, "'"));
   return pose;
 }
 
@@ -114,7 +118,8 @@ absl::StatusOr<FlagMesh> LoadFlagMesh(const InertiaArgs& args) {
     absl::StatusOr<double> scale = ParseNumber(args.mesh_scale, "--mesh-scale");
     if (!scale.ok()) return scale.status();
     if (!(*scale > 0))
-      return absl::InvalidArgumentError(absl::StrCat("--mesh-scale: must be > 0 (got ", args.mesh_scale, ")"));
+      return absl::InvalidArgumentError(
+          absl::StrCat("--mesh-scale: must be > 0 (got ", args.mesh_scale, ")"));
     request.scale = *scale;
   }
   if (!args.mesh_pose.empty()) {
@@ -124,7 +129,8 @@ absl::StatusOr<FlagMesh> LoadFlagMesh(const InertiaArgs& args) {
   }
   std::error_code ec;
   if (!std::filesystem::exists(args.mesh_path, ec))
-    return absl::InvalidArgumentError(absl::StrCat("--mesh: '", args.mesh_path, "' does not exist"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("--mesh: '", args.mesh_path, "' does not exist"));
   absl::StatusOr<io::LoadedMesh> loaded = io::LoadMesh(request);
   if (!loaded.ok()) return loaded.status();
   absl::StatusOr<std::string> bytes = ReadInput(loaded->mesh_path, "--mesh");
@@ -134,31 +140,35 @@ absl::StatusOr<FlagMesh> LoadFlagMesh(const InertiaArgs& args) {
 
 // An optional number flag that must be >= 0: nullopt when not given, else
 // the number; the error says "FLAG: must be >= 0<rule> (got TEXT)<advice>".
-absl::StatusOr<std::optional<double>> ParseNonNegative(const std::string& text, const std::string& flag,
+absl::StatusOr<std::optional<double>> ParseNonNegative(const std::string& text,
+                                                       const std::string& flag,
                                                        const std::string& rule = "",
                                                        const std::string& advice = "") {
   if (text.empty()) return std::nullopt;
   absl::StatusOr<double> x = ParseNumber(text, flag);
   if (!x.ok()) return x.status();
   if (*x < 0)
-    return absl::InvalidArgumentError(absl::StrCat(flag, ": must be >= 0", rule, " (got ", text, ")", advice));
+    return absl::InvalidArgumentError(
+        absl::StrCat(flag, ": must be >= 0", rule, " (got ", text, ")", advice));
   return *x;
 }
 
 // The method (default: density with --mesh, else constrained), --truth,
 // --gravity, --hull and --prior.
 absl::Status SetModelOptions(const InertiaArgs& args, v1::InertiaFitOptions* o) {
-  const std::string method_name = !args.method.empty() ? args.method
+  const std::string method_name = !args.method.empty()     ? args.method
                                   : args.mesh_path.empty() ? "constrained"
                                                            : "density";
   absl::StatusOr<inertia::InertiaMethod> method = inertia::ParseInertiaMethod(method_name);
-  if (!method.ok()) return absl::InvalidArgumentError(absl::StrCat("--", method.status().message()));
+  if (!method.ok())
+    return absl::InvalidArgumentError(absl::StrCat("--", method.status().message()));
   o->set_method(api::InertiaMethodToProto(*method));
   if (!args.truth_path.empty()) {
     absl::StatusOr<inertia::InertiaTruth> truth = inertia::ReadTruthJsonFile(args.truth_path);
     if (!truth.ok()) return truth.status();
     *o->mutable_truth() = api::InertialParametersToProto(truth->params);
-    if (truth->gravity_world && args.gravity.empty()) *o->mutable_gravity() = api::ToProto(*truth->gravity_world);
+    if (truth->gravity_world && args.gravity.empty())
+      *o->mutable_gravity() = api::ToProto(*truth->gravity_world);
   }
   if (!args.gravity.empty()) {
     absl::StatusOr<Eigen::Vector3d> g = ParseVec3(args.gravity, "--gravity");
@@ -191,10 +201,13 @@ absl::Status SetSolverOptions(const InertiaArgs& args, v1::InertiaFitOptions* o)
   n->set_angular_acceleration_sigma(args.angular_acceleration_sigma);
   o->set_savitzky_golay(args.savitzky_golay);
   if (!args.fg_variant.empty()) {
-    absl::StatusOr<inertia::FactorGraphVariant> v = inertia::ParseFactorGraphVariant(args.fg_variant);
-    if (!v.ok()) return absl::InvalidArgumentError(absl::StrCat("--fg-variant: ", v.status().message()));
+    absl::StatusOr<inertia::FactorGraphVariant> v =
+        inertia::ParseFactorGraphVariant(args.fg_variant);
+    if (!v.ok())
+      return absl::InvalidArgumentError(absl::StrCat("--fg-variant: ", v.status().message()));
     if (*v == inertia::FactorGraphVariant::kConstraintPrior && args.prior_path.empty())
-      return absl::InvalidArgumentError("--fg-variant fg-c-g needs --prior FILE (its geodesic prior; truth JSON format)");
+      return absl::InvalidArgumentError(
+          "--fg-variant fg-c-g needs --prior FILE (its geodesic prior; truth JSON format)");
     o->set_fg_variant(api::FactorGraphVariantToProto(*v));
   }
   if (args.max_iterations < 0) return absl::InvalidArgumentError("--max-iterations: must be >= 0");
@@ -206,12 +219,13 @@ absl::Status SetSolverOptions(const InertiaArgs& args, v1::InertiaFitOptions* o)
 // --mesh-prior-weight and --contradiction-ratio.
 absl::Status SetDensityOptions(const InertiaArgs& args, v1::InertiaFitOptions* o) {
   absl::StatusOr<inertia::RegionScheme> scheme = inertia::ParseRegionScheme(args.regions);
-  if (!scheme.ok()) return absl::InvalidArgumentError(absl::StrCat("--regions: ", scheme.status().message()));
+  if (!scheme.ok())
+    return absl::InvalidArgumentError(absl::StrCat("--regions: ", scheme.status().message()));
   o->set_regions(api::RegionSchemeToProto(*scheme));
   if (args.target_regions < 0 || args.target_regions > inertia::kMaxTargetRegions)
-    return absl::InvalidArgumentError(
-        absl::StrCat("--target-regions: must be in 1..", inertia::kMaxTargetRegions, ", 0 = 12 (got ",
-                     args.target_regions, ")"));
+    return absl::InvalidArgumentError(absl::StrCat("--target-regions: must be in 1..",
+                                                   inertia::kMaxTargetRegions, ", 0 = 12 (got ",
+                                                   args.target_regions, ")"));
   o->set_target_regions(static_cast<uint32_t>(args.target_regions));
   absl::StatusOr<std::optional<double>> regularization =
       ParseNonNegative(args.density_regularization, "--density-regularization", "",
@@ -231,7 +245,8 @@ absl::Status SetDensityOptions(const InertiaArgs& args, v1::InertiaFitOptions* o
 
 // The FitInertia request options from the flags (and the truth/prior/mesh
 // files). `mesh` receives the loaded --mesh.
-absl::StatusOr<v1::InertiaFitOptions> BuildOptions(const InertiaArgs& args, std::optional<FlagMesh>* mesh) {
+absl::StatusOr<v1::InertiaFitOptions> BuildOptions(const InertiaArgs& args,
+                                                   std::optional<FlagMesh>* mesh) {
   v1::InertiaFitOptions o;
   TF_RETURN_IF_ERROR(SetModelOptions(args, &o));
   TF_RETURN_IF_ERROR(SetSolverOptions(args, &o));
@@ -239,8 +254,8 @@ absl::StatusOr<v1::InertiaFitOptions> BuildOptions(const InertiaArgs& args, std:
   if (!args.mesh_path.empty()) {
     absl::StatusOr<FlagMesh> loaded = LoadFlagMesh(args);
     if (!loaded.ok()) return loaded.status();
-    *o.mutable_mesh() = api::MeshInputToProto(loaded->bytes, loaded->loaded.format, loaded->loaded.name,
-                                              loaded->loaded.placement);
+    *o.mutable_mesh() = api::MeshInputToProto(loaded->bytes, loaded->loaded.format,
+                                              loaded->loaded.name, loaded->loaded.placement);
     *mesh = *std::move(loaded);
   }
   return o;
@@ -255,8 +270,10 @@ absl::Status WritePlot(const InertiaArgs& args, const FlagMesh& mesh, inertia::I
     inertia::RegionOptions regions;
     absl::StatusOr<inertia::RegionScheme> scheme = inertia::ParseRegionScheme(args.regions);
     if (scheme.ok()) regions.scheme = *scheme;
-    if (options.target_regions() != 0) regions.target_regions = static_cast<int>(options.target_regions());
-    absl::StatusOr<inertia::RegionModel> model = inertia::BuildRegions(mesh.loaded.mesh, regions, mesh.loaded.name);
+    if (options.target_regions() != 0)
+      regions.target_regions = static_cast<int>(options.target_regions());
+    absl::StatusOr<inertia::RegionModel> model =
+        inertia::BuildRegions(mesh.loaded.mesh, regions, mesh.loaded.name);
     if (model.ok() && model->regions.size() == fit.densities.size())
       fit.region_model = std::make_shared<const inertia::RegionModel>(*std::move(model));
   }
@@ -265,7 +282,8 @@ absl::Status WritePlot(const InertiaArgs& args, const FlagMesh& mesh, inertia::I
   if (options.has_truth()) plot.true_com = api::FromProto(options.truth().com());
   plot.source = absl::StrCat("--csv ", args.csv, " --mesh ", args.mesh_path);
   absl::StatusOr<std::string> svg = inertia::DensityPlotSvg(mesh.loaded.mesh, fit, plot);
-  if (!svg.ok()) return absl::Status(svg.status().code(), absl::StrCat("--plot: ", svg.status().message()));
+  if (!svg.ok())
+    return absl::Status(svg.status().code(), absl::StrCat("--plot: ", svg.status().message()));
   if (absl::Status written = io::WriteTextFile(args.plot_path, *svg); !written.ok()) {
     return absl::InvalidArgumentError(absl::StrCat("--plot: ", written.message()));
   }
@@ -276,49 +294,60 @@ std::string DescribeErrors(const v1::InertiaErrors& e) {
   return absl::StrFormat(
       "errors against the truth: paper metric |4 - Tr(P_gt^-1 P)| %.4g, Riemannian distance %.4g, "
       "mass %.3g %%, CoM %.3g mm, consistent %s\n",
-      e.paper_metric(), e.riemannian(), e.mass_percent(), e.com_mm(), e.consistent() ? "yes" : "NO");
+      e.paper_metric(), e.riemannian(), e.mass_percent(), e.com_mm(),
+      e.consistent() ? "yes" : "NO");
 }
 
 // --mesh and what refines it (scale, pose, regions, the density options, --plot).
 void AddMeshFlags(CLI::App* cmd, InertiaArgs& args) {
-  CLI::Option* mesh = cmd->add_option(
-                              "--mesh", args.mesh_path,
-                              "The object's closed mesh: STL, OBJ or PLY in the object frame (m), or a descriptor "
-                              "JSON {\"mesh\": FILE, \"scale\": S, \"object_in_mesh\": {\"position\": [x,y,z], "
-                              "\"quaternion\": [w,x,y,z]}}; needed by density, a prior for constrained")
-                          ->type_name("FILE|DESCRIPTOR.json");
-  cmd->add_option("--mesh-scale", args.mesh_scale, "Mesh units to m (> 0), replaces the descriptor's scale")
+  CLI::Option* mesh =
+      cmd->add_option(
+             "--mesh", args.mesh_path,
+             "The object's closed mesh: STL, OBJ or PLY in the object frame (m), or a descriptor "
+             "JSON {\"mesh\": FILE, \"scale\": S, \"object_in_mesh\": {\"position\": [x,y,z], "
+             "\"quaternion\": [w,x,y,z]}}; needed by density, a prior for constrained")
+          ->type_name("FILE|DESCRIPTOR.json");
+  cmd->add_option("--mesh-scale", args.mesh_scale,
+                  "Mesh units to m (> 0), replaces the descriptor's scale")
       ->type_name("S")
       ->needs(mesh);
   cmd->add_option("--mesh-pose", args.mesh_pose,
-                  "Object frame in the mesh frame (m after scaling; quaternion w first), replaces object_in_mesh")
+                  "Object frame in the mesh frame (m after scaling; quaternion w first), replaces "
+                  "object_in_mesh")
       ->type_name("x,y,z,qw,qx,qy,qz")
       ->needs(mesh);
   cmd->add_option("--regions", args.regions,
-                  "density: regions of constant density: auto (colours if they split the mesh into closed parts, "
+                  "density: regions of constant density: auto (colours if they split the mesh into "
+                  "closed parts, "
                   "else grid), grid, colors or single")
       ->check(CLI::IsMember({"auto", "grid", "colors", "single"}))
       ->capture_default_str()
       ->needs(mesh);
-  cmd->add_option("--target-regions", args.target_regions, "density, grid: about this many regions (1..100; 0 = 12)")
+  cmd->add_option("--target-regions", args.target_regions,
+                  "density, grid: about this many regions (1..100; 0 = 12)")
       ->type_name("N")
       ->needs(mesh);
   cmd->add_option("--density-regularization", args.density_regularization,
-                  "density: smoothness strength between neighbouring regions (>= 0); default: chosen by held-out "
+                  "density: smoothness strength between neighbouring regions (>= 0); default: "
+                  "chosen by held-out "
                   "time blocks")
       ->type_name("X")
       ->needs(mesh);
   cmd->add_option("--mesh-prior-weight", args.mesh_prior_weight,
-                  "constrained with --mesh: weight of the mesh's uniform-density prior (chi^2 units; default 1)")
+                  "constrained with --mesh: weight of the mesh's uniform-density prior (chi^2 "
+                  "units; default 1)")
       ->type_name("W")
       ->needs(mesh);
   cmd->add_option("--mesh-tolerance", args.mesh_tolerance,
-                  "density: the mesh is rejected when every density it can carry is farther than T (first-order "
-                  "Riemannian; default 0.03 = 3 % of the mass) from what the data allow; 0 disables the test")
+                  "density: the mesh is rejected when every density it can carry is farther than T "
+                  "(first-order "
+                  "Riemannian; default 0.03 = 3 % of the mass) from what the data allow; 0 "
+                  "disables the test")
       ->type_name("T")
       ->needs(mesh);
   cmd->add_option("--plot", args.plot_path,
-                  "Write an SVG of the fit: the mesh in the principal planes, regions coloured by density, the "
+                  "Write an SVG of the fit: the mesh in the principal planes, regions coloured by "
+                  "density, the "
                   "fitted (and with --truth the true) CoM")
       ->type_name("FILE.svg")
       ->needs(mesh);
@@ -329,50 +358,65 @@ void AddMeshFlags(CLI::App* cmd, InertiaArgs& args) {
 CLI::App* AddInertiaCommand(CLI::App& app, InertiaArgs& args) {
   CLI::App* cmd = app.add_subcommand(
       "inertia", "Fit mass, centre of mass and inertia to object poses and applied forces");
-  cmd->add_option("--csv", args.csv, "Samples: t,px..pz,qw..qz and a wrench (fx..tz) or contacts (c{i}_px..c{i}_fz)")
+  cmd->add_option("--csv", args.csv,
+                  "Samples: t,px..pz,qw..qz and a wrench (fx..tz) or contacts (c{i}_px..c{i}_fz)")
       ->type_name("FILE")
       ->required();
   cmd->add_option("--method", args.method,
-                  "baseline-ls, factor-graph, constrained or density (default: density with --mesh, else constrained)")
+                  "baseline-ls, factor-graph, constrained or density (default: density with "
+                  "--mesh, else constrained)")
       ->check(CLI::IsMember({"baseline-ls", "factor-graph", "constrained", "density"}));
-  cmd->add_option("--gravity", args.gravity, "Gravity in the world, gx,gy,gz (m/s^2); default: the truth's or 0,0,-9.81");
-  cmd->add_option("--truth", args.truth_path, "Truth JSON (mass, com, inertia_com): print the error metrics")
+  cmd->add_option("--gravity", args.gravity,
+                  "Gravity in the world, gx,gy,gz (m/s^2); default: the truth's or 0,0,-9.81");
+  cmd->add_option("--truth", args.truth_path,
+                  "Truth JSON (mass, com, inertia_com): print the error metrics")
       ->type_name("FILE");
   cmd->add_option("--hull", args.hull_path,
-                  "Object geometry for the CoM constraint: STL, OBJ, PLY (object frame, m), a mesh descriptor JSON "
+                  "Object geometry for the CoM constraint: STL, OBJ, PLY (object frame, m), a mesh "
+                  "descriptor JSON "
                   "or CSV x,y,z")
       ->type_name("FILE");
   AddMeshFlags(cmd, args);
-  cmd->add_option("--prior", args.prior_path, "Prior parameters (truth JSON format)")->type_name("FILE");
+  cmd->add_option("--prior", args.prior_path, "Prior parameters (truth JSON format)")
+      ->type_name("FILE");
   cmd->add_option("--prior-weight", args.prior_weight, "Weight of the prior (chi^2 units)")
       ->check(AtLeast(0))
       ->capture_default_str();
   AddOutputFlags(cmd, &args.output, "the FitInertiaResponse");
-  for (auto [flag, value, what] : std::initializer_list<std::tuple<const char*, double*, const char*>>{
-           {"--force-sigma", &args.force_sigma, "Force noise std. dev. per component (N); 0 = estimate"},
+  for (auto [flag, value, what] :
+       std::initializer_list<std::tuple<const char*, double*, const char*>>{
+           {"--force-sigma", &args.force_sigma,
+            "Force noise std. dev. per component (N); 0 = estimate"},
            {"--torque-sigma", &args.torque_sigma, "Torque noise std. dev. (N m)"},
            {"--position-sigma", &args.position_sigma, "Position noise std. dev. (m)"},
            {"--orientation-sigma", &args.orientation_sigma, "Orientation noise std. dev. (rad)"},
            {"--angular-velocity-sigma", &args.angular_velocity_sigma, "Measured w noise (rad/s)"},
            {"--acceleration-sigma", &args.acceleration_sigma, "Measured a noise (m/s^2)"},
-           {"--angular-acceleration-sigma", &args.angular_acceleration_sigma, "Measured dw noise (rad/s^2)"}}) {
+           {"--angular-acceleration-sigma", &args.angular_acceleration_sigma,
+            "Measured dw noise (rad/s^2)"}}) {
     cmd->add_option(flag, *value, what)->check(AtLeast(0));
   }
-  cmd->add_flag("--savitzky-golay", args.savitzky_golay, "baseline-ls: cubic Savitzky-Golay smoothing, window 51");
+  cmd->add_flag("--savitzky-golay", args.savitzky_golay,
+                "baseline-ls: cubic Savitzky-Golay smoothing, window 51");
   cmd->add_option("--fg-variant", args.fg_variant,
-                  "factor-graph ablation variant: baseline-fg, fg-no-c, fg-c (default) or fg-c-g (needs --prior)");
-  cmd->add_option("--max-iterations", args.max_iterations, "Iteration limit (0 = 100)")->check(Between(0, 100000));
-  AddBackendFlags(cmd, &args.backend, "Estimator.FitInertia, streamed", /*default_deadline_ms=*/120'000);
+                  "factor-graph ablation variant: baseline-fg, fg-no-c, fg-c (default) or fg-c-g "
+                  "(needs --prior)");
+  cmd->add_option("--max-iterations", args.max_iterations, "Iteration limit (0 = 100)")
+      ->check(Between(0, 100000));
+  AddBackendFlags(cmd, &args.backend, "Estimator.FitInertia, streamed",
+                  /*default_deadline_ms=*/120'000);
   cmd->add_option("--batch", args.batch, "Samples per streamed message")
       ->check(Between(1, 100000))
       ->capture_default_str();
-  cmd->add_flag("--progress", args.progress, "Progress lines on stderr even when it is not a terminal");
+  cmd->add_flag("--progress", args.progress,
+                "Progress lines on stderr even when it is not a terminal");
   cmd->footer(
       "Prints mass, CoM and inertia with their standard errors (and the errors\n"
       "against --truth); warnings also go to stderr. Examples:\n"
       "  tactforce simulate inertia --out /tmp/inertia\n"
       "  tactforce inertia --csv /tmp/inertia/inertia.csv --truth /tmp/inertia/truth.json\n"
-      "  tactforce inertia --csv client/examples/inertia_log.csv --hull client/examples/inertia_box.stl --json\n"
+      "  tactforce inertia --csv client/examples/inertia_log.csv --hull "
+      "client/examples/inertia_box.stl --json\n"
       "  tactforce inertia --csv /tmp/inertia/inertia.csv --server localhost:50051");
   return cmd;
 }
@@ -392,7 +436,8 @@ int RunInertia(const InertiaArgs& args) {
   absl::StatusOr<InertiaAnswer> answer = CallBackend(args.backend, &Backend::FitInertia, call);
   if (!answer.ok()) return ReportError(answer.status());
   if (!args.plot_path.empty() && mesh) {
-    if (absl::Status s = WritePlot(args, *mesh, answer->fit, call.options); !s.ok()) return ReportError(s);
+    if (absl::Status s = WritePlot(args, *mesh, answer->fit, call.options); !s.ok())
+      return ReportError(s);
   }
   const v1::FitInertiaResponse& response = answer->response;
   for (const std::string& note : response.notes()) {

@@ -49,9 +49,8 @@ class ProgressPrinter {
 
   void Update(const LoadProgress& p) {
     if (p.elapsed_s < kProgressAfterS) return;
-    const std::string line =
-        absl::StrFormat("load: %.0f s, %d calls (%d failed), %.0f calls/s", p.elapsed_s,
-                        p.completed, p.failed, p.recent_qps);
+    const std::string line = absl::StrFormat("load: %.0f s, %d calls (%d failed), %.0f calls/s",
+                                             p.elapsed_s, p.completed, p.failed, p.recent_qps);
     if (tty_) {
       std::cerr << "\r" << line << "\x1b[K" << std::flush;
       shown_ = true;
@@ -95,9 +94,8 @@ absl::Status CheckFlagsForRpc(const LoadArgs& args, LoadRpc rpc) {
     return absl::InvalidArgumentError("--request: --rpc health sends no request");
   }
   if (args.batch > 0 && rpc != LoadRpc::kFitInertia) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("--batch: for --rpc fit-inertia (a CSV log's samples per message), not ",
-                     args.rpc));
+    return absl::InvalidArgumentError(absl::StrCat(
+        "--batch: for --rpc fit-inertia (a CSV log's samples per message), not ", args.rpc));
   }
   if (args.rate > 0 && rpc == LoadRpc::kStream) {
     return absl::InvalidArgumentError(
@@ -123,8 +121,8 @@ absl::StatusOr<LoadSpec> LoadSpecFromFlags(const LoadArgs& args) {
   spec.concurrency =
       args.concurrency > 0 ? args.concurrency : (args.rate > 0 ? kOpenLoopDefaultInFlight : 1);
   spec.max_requests = args.requests;
-  spec.duration_s = args.duration_s > 0 ? args.duration_s
-                                        : (args.requests > 0 ? 0.0 : kDefaultDurationS);
+  spec.duration_s =
+      args.duration_s > 0 ? args.duration_s : (args.requests > 0 ? 0.0 : kDefaultDurationS);
   spec.deadline_ms = args.connection.deadline_ms;
   spec.health_service = args.service;
   LoadRequestSource source;
@@ -263,14 +261,15 @@ void AddRequestFlags(CLI::App* cmd, LoadArgs& args) {
 }  // namespace
 
 CLI::App* AddLoadCommand(CLI::App& app, LoadArgs& args) {
-  CLI::App* cmd = app.add_subcommand(
-      "load", "Load-test tactforce-server: throughput and latency percentiles");
+  CLI::App* cmd =
+      app.add_subcommand("load", "Load-test tactforce-server: throughput and latency percentiles");
   AddConnectionFlags(cmd, &args.connection, "--target,--server", /*default_deadline_ms=*/10'000);
   AddWorkloadFlags(cmd, args);
   AddRequestFlags(cmd, args);
-  AddOutputFlags(cmd, &args.output,
-                 "one object {rpc, concurrency, requests, duration_s, qps, latency_us: {p50, p90, p99, p999, "
-                 "max}, latency_all_us: {p50, p90, p99, max}, errors: {CODE: n}, ...}");
+  AddOutputFlags(
+      cmd, &args.output,
+      "one object {rpc, concurrency, requests, duration_s, qps, latency_us: {p50, p90, p99, p999, "
+      "max}, latency_all_us: {p50, p90, p99, max}, errors: {CODE: n}, ...}");
   cmd->add_option("--plot", args.plot_path,
                   "Also write an SVG: the latency histogram (log scale) and calls/s over "
                   "time (0.1 s intervals; 1 s for runs over 20 s); the directory must exist")
@@ -291,8 +290,10 @@ CLI::App* AddLoadCommand(CLI::App& app, LoadArgs& args) {
       "other); 2 for a bad flag (the message names it); 3 when a target cannot be\n"
       "reached before the run. Examples:\n"
       "  tactforce load --target localhost:50051 --rpc plan --mix -c 8 --duration 5\n"
-      "  tactforce load --target localhost:50051 --rpc estimate -c 4 --duration 3 --plot latency.svg --json\n"
-      "  tactforce load --target localhost:50051 --rpc fit-inertia --request client/examples/inertia_log.csv -n 20");
+      "  tactforce load --target localhost:50051 --rpc estimate -c 4 --duration 3 --plot "
+      "latency.svg --json\n"
+      "  tactforce load --target localhost:50051 --rpc fit-inertia --request "
+      "client/examples/inertia_log.csv -n 20");
   return cmd;
 }
 
@@ -320,7 +321,7 @@ int RunLoadCommand(const LoadArgs& args) {
   if (!report.ok()) return ReportError(report.status());
 
   std::cout << (args.output.json() ? FormatLoadJson(*report, args.connection.server)
-                          : FormatLoadText(*report, args.connection.server));
+                                   : FormatLoadText(*report, args.connection.server));
   std::cout.flush();
   if (!std::cout) return kExitFailure;
   if (!args.plot_path.empty()) {

@@ -31,19 +31,25 @@ namespace {
 
 // --solver and the solver options; each overrides the request's field.
 void AddSolverFlags(CLI::App* cmd, PlanArgs* args) {
-  cmd->add_option("--solver", args->solver, "Override the request's solver: geometric, ipopt or cross-check")
+  cmd->add_option("--solver", args->solver,
+                  "Override the request's solver: geometric, ipopt or cross-check")
       ->check(CLI::IsMember({"geometric", "ipopt", "cross-check"}));
-  cmd->add_option("--ipopt-tol", args->ipopt_tolerance, "Ipopt's convergence tolerance (> 0; default 1e-9)")
+  cmd->add_option("--ipopt-tol", args->ipopt_tolerance,
+                  "Ipopt's convergence tolerance (> 0; default 1e-9)")
       ->check(GreaterThan(0));
-  cmd->add_option("--max-iterations", args->max_iterations, "Ipopt iteration limit (>= 1; default 3000)")
+  cmd->add_option("--max-iterations", args->max_iterations,
+                  "Ipopt iteration limit (>= 1; default 3000)")
       ->check(Between(1, 1e6));
-  cmd->add_option("--ipopt-max-seconds", args->ipopt_max_seconds, "Ipopt CPU-time limit (s, >= 0; 0 = none)")
+  cmd->add_option("--ipopt-max-seconds", args->ipopt_max_seconds,
+                  "Ipopt CPU-time limit (s, >= 0; 0 = none)")
       ->check(AtLeast(0));
   cmd->add_option("--rank-tol", args->rank_tolerance,
-                  "Relative singular-value cut-off of the grasp matrix's null space (0 < x < 1e-2; default 1e-9)")
+                  "Relative singular-value cut-off of the grasp matrix's null space (0 < x < 1e-2; "
+                  "default 1e-9)")
       ->check(GreaterThan(0));
-  cmd->add_option("--agreement-tol", args->agreement_tolerance,
-                  "cross-check: largest force difference (N) counted as agreement (> 0; default 1e-5)")
+  cmd->add_option(
+         "--agreement-tol", args->agreement_tolerance,
+         "cross-check: largest force difference (N) counted as agreement (> 0; default 1e-5)")
       ->check(GreaterThan(0));
 }
 
@@ -64,7 +70,9 @@ void ApplySolverFlags(const PlanArgs& args, v1::PlanRequest* request) {
 absl::Status ApplyEstimateFlags(const PlanArgs& args, v1::PlanRequest* request) {
   if (!args.inertia_path.empty()) {
     absl::StatusOr<std::string> text = ReadInput(args.inertia_path);
-    if (!text.ok()) return absl::Status(text.status().code(), absl::StrCat("--inertia: ", text.status().message()));
+    if (!text.ok())
+      return absl::Status(text.status().code(),
+                          absl::StrCat("--inertia: ", text.status().message()));
     v1::FitInertiaResponse fit;
     if (absl::Status s = api::ParseJson(*text, &fit, InputName(args.inertia_path)); !s.ok()) {
       return absl::InvalidArgumentError(absl::StrCat("--inertia: ", s.message()));
@@ -73,7 +81,9 @@ absl::Status ApplyEstimateFlags(const PlanArgs& args, v1::PlanRequest* request) 
   }
   if (!args.friction_path.empty()) {
     absl::StatusOr<std::string> text = ReadInput(args.friction_path);
-    if (!text.ok()) return absl::Status(text.status().code(), absl::StrCat("--friction: ", text.status().message()));
+    if (!text.ok())
+      return absl::Status(text.status().code(),
+                          absl::StrCat("--friction: ", text.status().message()));
     v1::FrictionResponse friction;
     if (absl::Status s = api::ParseJson(*text, &friction, InputName(args.friction_path)); !s.ok()) {
       return absl::InvalidArgumentError(absl::StrCat("--friction: ", s.message()));
@@ -86,7 +96,8 @@ absl::Status ApplyEstimateFlags(const PlanArgs& args, v1::PlanRequest* request) 
 // The picture, written to a temporary name and renamed when complete
 // (io::WriteTextFile); errors name --plot.
 absl::Status WritePlot(const std::string& path, const absl::StatusOr<std::string>& svg) {
-  if (!svg.ok()) return absl::Status(svg.status().code(), absl::StrCat("--plot: ", svg.status().message()));
+  if (!svg.ok())
+    return absl::Status(svg.status().code(), absl::StrCat("--plot: ", svg.status().message()));
   if (absl::Status written = io::WriteTextFile(path, *svg); !written.ok()) {
     return absl::InvalidArgumentError(absl::StrCat("--plot: ", written.message()));
   }
@@ -114,7 +125,8 @@ std::string FormatTrajectoryTable(const v1::TrajectoryResponse& response) {
 // A request file with a `plan` (TrajectoryRequest, FrictionProbeRequest),
 // the solver flags applied to it; errors name `flag` or the file.
 template <class Request>
-absl::StatusOr<Request> ReadPlanningRequest(const PlanArgs& args, const std::string& path, const std::string& flag) {
+absl::StatusOr<Request> ReadPlanningRequest(const PlanArgs& args, const std::string& path,
+                                            const std::string& flag) {
   TF_ASSIGN_OR_RETURN(std::string text, ReadInput(path, flag));
   Request request;
   TF_RETURN_IF_ERROR(api::ParseJson(text, &request, InputName(path)));
@@ -132,7 +144,8 @@ int RunTrajectory(const PlanArgs& args) {
   if (!response.ok()) return ReportError(response.status());
   if (!args.plot_path.empty()) {
     const std::string name = InputName(args.trajectory_path);
-    if (absl::Status s = WritePlot(args.plot_path, api::TrajectorySvg(*request, *response, name)); !s.ok()) {
+    if (absl::Status s = WritePlot(args.plot_path, api::TrajectorySvg(*request, *response, name));
+        !s.ok()) {
       return ReportError(s);
     }
   }
@@ -142,21 +155,22 @@ int RunTrajectory(const PlanArgs& args) {
 
 // One line per probe sample: time, the probe's force and the holding plan.
 std::string FormatProbeTable(const v1::FrictionProbeResponse& response) {
-  std::string out = absl::StrFormat("%5s  %8s  %-26s  %-14s  %s\n", "step", "t (s)", "probe force (N)", "holding",
-                                    "holding normal forces (N)");
+  std::string out = absl::StrFormat("%5s  %8s  %-26s  %-14s  %s\n", "step", "t (s)",
+                                    "probe force (N)", "holding", "holding normal forces (N)");
   for (int k = 0; k < response.times_size(); ++k) {
     const v1::Vec3& f = response.probe_forces(k);
-    const v1::PlanResponse& step =
-        k < response.holding().steps_size() ? response.holding().steps(k) : v1::PlanResponse::default_instance();
+    const v1::PlanResponse& step = k < response.holding().steps_size()
+                                       ? response.holding().steps(k)
+                                       : v1::PlanResponse::default_instance();
     std::string normals;
     for (double fn : step.normal_forces()) absl::StrAppend(&normals, absl::StrFormat("%7.3f ", fn));
-    absl::StrAppendFormat(&out, "%5d  %8.3f  %8.3f %8.3f %8.3f  %-14s  %s\n", k, response.times(k), f.x(), f.y(),
-                          f.z(), api::StatusName(step.status()), normals);
+    absl::StrAppendFormat(&out, "%5d  %8.3f  %8.3f %8.3f %8.3f  %-14s  %s\n", k, response.times(k),
+                          f.x(), f.y(), f.z(), api::StatusName(step.status()), normals);
   }
   const v1::TrajectoryResponse& h = response.holding();
   absl::StrAppendFormat(&out, "%d samples: %d optimal, %d infeasible, %d failed; total %d us\n",
-                        response.times_size(), h.optimal_steps(), h.infeasible_steps(), h.failed_steps(),
-                        h.total_time_us());
+                        response.times_size(), h.optimal_steps(), h.infeasible_steps(),
+                        h.failed_steps(), h.total_time_us());
   return out;
 }
 
@@ -183,36 +197,43 @@ CLI::App* AddPlanCommand(CLI::App& app, PlanArgs& args) {
                       "- reads standard input")
           ->type_name("FILE");
   CLI::Option* trajectory =
-      cmd->add_option("--trajectory", args.trajectory_path,
-                      "TrajectoryRequest as JSON (plan + steps): one PlanResponse per step plus totals")
+      cmd->add_option(
+             "--trajectory", args.trajectory_path,
+             "TrajectoryRequest as JSON (plan + steps): one PlanResponse per step plus totals")
           ->type_name("FILE");
   request->excludes(trajectory);
   CLI::Option* probe =
       cmd->add_option("--friction-probe", args.probe_path,
-                      "FrictionProbeRequest as JSON (plan = the holding grasp, the probe's position, normal, "
-                      "tangent, tangential force and normal-force ramp): the probe's force and the holding plan "
+                      "FrictionProbeRequest as JSON (plan = the holding grasp, the probe's "
+                      "position, normal, "
+                      "tangent, tangential force and normal-force ramp): the probe's force and the "
+                      "holding plan "
                       "per sample (Planner.PlanFrictionProbe); - reads standard input")
           ->type_name("FILE");
   probe->excludes(request)->excludes(trajectory);
   AddOutputFlags(cmd, &args.output, "the PlanResponse (TrajectoryResponse, FrictionProbeResponse)");
   AddSolverFlags(cmd, &args);
-  cmd->add_option("--inertia", args.inertia_path,
-                  "FitInertiaResponse JSON (`tactforce inertia --json`): the object's mass, CoM and inertia and "
-                  "their covariance; the plan holds for every value within the request's confidence")
+  cmd->add_option(
+         "--inertia", args.inertia_path,
+         "FitInertiaResponse JSON (`tactforce inertia --json`): the object's mass, CoM and inertia "
+         "and "
+         "their covariance; the plan holds for every value within the request's confidence")
       ->type_name("FIT.json")
       ->excludes(trajectory)
       ->excludes(probe);
   cmd->add_option("--friction", args.friction_path,
-                  "FrictionResponse JSON (`tactforce friction --json`): every fingertip contact's friction = "
+                  "FrictionResponse JSON (`tactforce friction --json`): every fingertip contact's "
+                  "friction = "
                   "its median, friction_sigma = its mu_sigma")
       ->type_name("FRICTION.json")
       ->excludes(trajectory)
       ->excludes(probe);
-  cmd->add_option("--plot", args.plot_path,
-                  "Also draw the plan as SVG: contacts, normals, robust friction cones, forces (arrows), "
-                  "their 1-sigma spread, CoM and gravity in three orthographic views (x-y, x-z, y-z). "
-                  "With --trajectory: small multiples, one panel per step (at most " +
-                      std::to_string(api::kMaxPlotSteps) + ", evenly subsampled and named in the figure)")
+  cmd->add_option(
+         "--plot", args.plot_path,
+         "Also draw the plan as SVG: contacts, normals, robust friction cones, forces (arrows), "
+         "their 1-sigma spread, CoM and gravity in three orthographic views (x-y, x-z, y-z). "
+         "With --trajectory: small multiples, one panel per step (at most " +
+             std::to_string(api::kMaxPlotSteps) + ", evenly subsampled and named in the figure)")
       ->type_name("FILE.svg")
       ->excludes(probe);
   cmd->footer(
@@ -222,8 +243,10 @@ CLI::App* AddPlanCommand(CLI::App& app, PlanArgs& args) {
       "cannot be reached, 4 when it did not answer within --deadline-ms, 1 otherwise.\n"
       "Examples:\n"
       "  tactforce plan --local --request client/examples/sphere_pinch.json\n"
-      "  tactforce plan --local --request client/examples/sphere_pinch.json --solver cross-check --json\n"
-      "  tactforce plan --server localhost:50051 --request client/examples/sphere_pinch.json --plot plan.svg\n"
+      "  tactforce plan --local --request client/examples/sphere_pinch.json --solver cross-check "
+      "--json\n"
+      "  tactforce plan --server localhost:50051 --request client/examples/sphere_pinch.json "
+      "--plot plan.svg\n"
       "  tactforce plan --local --trajectory client/examples/wrench_lift_trajectory.json\n"
       "  tactforce plan --local --friction-probe client/examples/friction_probe.json\n"
       "  tactforce plan --local --request grasp.json --inertia fit.json --friction friction.json");
@@ -235,7 +258,8 @@ int RunPlan(const PlanArgs& args) {
   if (!args.trajectory_path.empty()) return RunTrajectory(args);
   if (!args.probe_path.empty()) return RunFrictionProbe(args);
   if (args.request_path.empty()) {
-    return ReportError(absl::InvalidArgumentError("give --request FILE, --trajectory FILE or --friction-probe FILE"));
+    return ReportError(absl::InvalidArgumentError(
+        "give --request FILE, --trajectory FILE or --friction-probe FILE"));
   }
   absl::StatusOr<std::unique_ptr<Backend>> backend = MakeBackend(args.backend);
   if (!backend.ok()) return ReportError(backend.status());
@@ -243,7 +267,8 @@ int RunPlan(const PlanArgs& args) {
   absl::StatusOr<std::string> text = ReadInput(args.request_path);
   if (!text.ok()) return ReportError(text.status());
 
-  absl::StatusOr<v1::PlanRequest> request = api::ParsePlanRequestJson(*text, InputName(args.request_path));
+  absl::StatusOr<v1::PlanRequest> request =
+      api::ParsePlanRequestJson(*text, InputName(args.request_path));
   if (!request.ok()) return ReportError(request.status());
   ApplySolverFlags(args, &*request);
   if (absl::Status s = ApplyEstimateFlags(args, &*request); !s.ok()) return ReportError(s);
@@ -251,7 +276,10 @@ int RunPlan(const PlanArgs& args) {
   absl::StatusOr<v1::PlanResponse> response = (*backend)->Plan(*request);
   if (!response.ok()) return ReportError(response.status());
   if (!args.plot_path.empty()) {
-    if (absl::Status s = WritePlot(args.plot_path, api::PlanSvg(*request, *response, InputName(args.request_path))); !s.ok()) return ReportError(s);
+    if (absl::Status s = WritePlot(args.plot_path,
+                                   api::PlanSvg(*request, *response, InputName(args.request_path)));
+        !s.ok())
+      return ReportError(s);
   }
 
   if (args.output.json()) {

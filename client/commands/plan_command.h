@@ -20,12 +20,12 @@ struct PlanArgs {
   std::string probe_path;       // FrictionProbeRequest JSON instead of --request
   OutputFormat output;          // table (default) | json
   // Solver overrides of the request (absent: the request's own values).
-  std::string solver;           // geometric | ipopt | cross-check
+  std::string solver;  // geometric | ipopt | cross-check
   std::optional<double> ipopt_tolerance, ipopt_max_seconds, rank_tolerance, agreement_tolerance;
   std::optional<int> max_iterations;
-  std::string plot_path;        // --plot: an SVG picture of the plan (or trajectory) too
-  std::string inertia_path;     // --inertia: a FitInertiaResponse JSON (`inertia --json`)
-  std::string friction_path;    // --friction: a FrictionResponse JSON (`friction --json`)
+  std::string plot_path;      // --plot: an SVG picture of the plan (or trajectory) too
+  std::string inertia_path;   // --inertia: a FitInertiaResponse JSON (`inertia --json`)
+  std::string friction_path;  // --friction: a FrictionResponse JSON (`friction --json`)
 };
 
 CLI::App* AddPlanCommand(CLI::App& app, PlanArgs& args);

@@ -16,20 +16,30 @@ namespace tactforce::cli {
 CLI::App* AddSimulateFrictionCommand(CLI::App& simulate, SimulateFrictionArgs& args) {
   CLI::App* cmd = simulate.add_subcommand(
       "friction", "Write simulated probing trials (CSV per trial) and truth.json");
-  cmd->add_option("--mu", args.mu, "True static friction coefficient")->check(Between(0.01, 10))->capture_default_str();
-  cmd->add_option("--trials", args.trials, "Number of trials")->check(Between(1, 10000))->capture_default_str();
+  cmd->add_option("--mu", args.mu, "True static friction coefficient")
+      ->check(Between(0.01, 10))
+      ->capture_default_str();
+  cmd->add_option("--trials", args.trials, "Number of trials")
+      ->check(Between(1, 10000))
+      ->capture_default_str();
   cmd->add_option("--noise", args.noise, "Force noise std. dev. per component (N)")
       ->check(AtLeast(0))
       ->capture_default_str();
-  cmd->add_option("--rate", args.rate, "Sample rate (Hz)")->check(Between(1, 1e5))->capture_default_str();
-  cmd->add_option("--ramp", args.ramp, "Normal-force ramp-down rate (N/s)")->check(GreaterThan(0))->capture_default_str();
+  cmd->add_option("--rate", args.rate, "Sample rate (Hz)")
+      ->check(Between(1, 1e5))
+      ->capture_default_str();
+  cmd->add_option("--ramp", args.ramp, "Normal-force ramp-down rate (N/s)")
+      ->check(GreaterThan(0))
+      ->capture_default_str();
   cmd->add_option("--tangential-force", args.tangential_force, "Held tangential force (N)")
       ->check(GreaterThan(0))
       ->capture_default_str();
   cmd->add_flag("--slip-flags", args.slip_flags, "Also write a slip column (0/1)");
   cmd->add_option("--seed", args.seed, "Random seed")->capture_default_str();
-  cmd->add_option("--out", args.out_dir, "Output directory (created; must be empty unless --force)")->required();
-  cmd->add_flag("--force", args.force, "Replace the trial*.csv and truth.json of an earlier run in --out");
+  cmd->add_option("--out", args.out_dir, "Output directory (created; must be empty unless --force)")
+      ->required();
+  cmd->add_flag("--force", args.force,
+                "Replace the trial*.csv and truth.json of an earlier run in --out");
   cmd->footer(
       "Writes OUT/trial<i>.csv and OUT/truth.json. Example:\n"
       "  tactforce simulate friction --mu 0.3 --trials 10 --out /tmp/friction && \\\n"
@@ -38,7 +48,8 @@ CLI::App* AddSimulateFrictionCommand(CLI::App& simulate, SimulateFrictionArgs& a
 }
 
 int RunSimulateFriction(const SimulateFrictionArgs& args) {
-  if (absl::Status s = PrepareOutputDir(args.out_dir, args.force, {"trial*.csv", "truth.json"}); !s.ok()) {
+  if (absl::Status s = PrepareOutputDir(args.out_dir, args.force, {"trial*.csv", "truth.json"});
+      !s.ok()) {
     return ReportError(s);
   }
   estimator::FrictionSimOptions sim;
@@ -54,8 +65,9 @@ int RunSimulateFriction(const SimulateFrictionArgs& args) {
   for (size_t i = 0; i < data.trials.size(); ++i) {
     std::string csv = absl::StrCat("t,fx,fy,fz,px,py,pz", args.slip_flags ? ",slip" : "", "\n");
     for (const auto& s : data.trials[i].samples) {
-      absl::StrAppendFormat(&csv, "%.6f,%.6f,%.6f,%.6f,%.8f,%.8f,%.8f", s.t, s.force.x(), s.force.y(), s.force.z(),
-                            s.contact_point.x(), s.contact_point.y(), s.contact_point.z());
+      absl::StrAppendFormat(&csv, "%.6f,%.6f,%.6f,%.6f,%.8f,%.8f,%.8f", s.t, s.force.x(),
+                            s.force.y(), s.force.z(), s.contact_point.x(), s.contact_point.y(),
+                            s.contact_point.z());
       if (args.slip_flags) absl::StrAppend(&csv, ",", s.slip.value_or(false) ? 1 : 0);
       csv += "\n";
     }
@@ -72,9 +84,11 @@ int RunSimulateFriction(const SimulateFrictionArgs& args) {
   truth.Field("ramp", args.ramp);
   truth.FieldInt("seed", static_cast<long long>(args.seed));
   truth.EndObject();
-  if (absl::Status st = io::WriteTextFile(args.out_dir + "/truth.json", truth.str() + "\n"); !st.ok())
+  if (absl::Status st = io::WriteTextFile(args.out_dir + "/truth.json", truth.str() + "\n");
+      !st.ok())
     return ReportError(st);
-  std::cerr << "wrote " << data.trials.size() << " trials and truth.json to " << args.out_dir << "\n";
+  std::cerr << "wrote " << data.trials.size() << " trials and truth.json to " << args.out_dir
+            << "\n";
   return kExitOk;
 }
 

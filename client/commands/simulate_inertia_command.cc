@@ -28,7 +28,7 @@ namespace {
 using inertia::Vec3;
 
 absl::StatusOr<std::vector<inertia::SinusoidComponent>> ParseComponents(const io::JsonValue& v,
-                                                                         const std::string& where) {
+                                                                        const std::string& where) {
   if (!v.is_array()) return absl::InvalidArgumentError(absl::StrCat(where, ": expected an array"));
   std::vector<inertia::SinusoidComponent> out;
   for (size_t i = 0; i < v.array().size(); ++i) {
@@ -47,7 +47,8 @@ absl::StatusOr<std::vector<inertia::SinusoidComponent>> ParseComponents(const io
       } else if (key == "amplitude") {
         s.amplitude = x;
       } else if (key == "frequency_hz") {
-        if (x < 0) return absl::InvalidArgumentError(absl::StrCat(at, ".frequency_hz: must be >= 0"));
+        if (x < 0)
+          return absl::InvalidArgumentError(absl::StrCat(at, ".frequency_hz: must be >= 0"));
         s.frequency_hz = x;
       } else if (key == "phase") {
         s.phase = x;
@@ -63,7 +64,8 @@ absl::StatusOr<std::vector<inertia::SinusoidComponent>> ParseComponents(const io
 
 absl::StatusOr<Vec3> ParseTriple(const io::JsonValue& v, const std::string& where) {
   if (!v.is_array() || v.array().size() != 3 ||
-      !std::all_of(v.array().begin(), v.array().end(), [](const io::JsonValue& x) { return x.is_number(); }))
+      !std::all_of(v.array().begin(), v.array().end(),
+                   [](const io::JsonValue& x) { return x.is_number(); }))
     return absl::InvalidArgumentError(absl::StrCat(where, ": expected an array of 3 numbers"));
   return Vec3(v.array()[0].number(), v.array()[1].number(), v.array()[2].number());
 }
@@ -75,7 +77,8 @@ absl::StatusOr<inertia::ExcitationTrajectory> ReadTrajectory(const std::string& 
   if (!text.ok()) return text.status();
   absl::StatusOr<io::JsonValue> root = io::ParseJson(*text, InputName(path));
   if (!root.ok()) return root.status();
-  if (!root->is_object()) return absl::InvalidArgumentError(absl::StrCat(path, ": expected a JSON object"));
+  if (!root->is_object())
+    return absl::InvalidArgumentError(absl::StrCat(path, ": expected a JSON object"));
   inertia::ExcitationTrajectory t;
   for (const auto& [key, value] : root->members()) {
     const std::string where = absl::StrCat(path, ": ", key);
@@ -90,7 +93,8 @@ absl::StatusOr<inertia::ExcitationTrajectory> ReadTrajectory(const std::string& 
       (key == "position" ? t.position : t.orientation) = *c;
     } else {
       return absl::InvalidArgumentError(absl::StrCat(
-          where, ": unknown key (expected position_offset, orientation_offset, position, orientation)"));
+          where,
+          ": unknown key (expected position_offset, orientation_offset, position, orientation)"));
     }
   }
   return t;
@@ -98,9 +102,11 @@ absl::StatusOr<inertia::ExcitationTrajectory> ReadTrajectory(const std::string& 
 
 // Binary STL (little-endian float32; normals from the winding), the format
 // `tactforce inertia --mesh` reads back.
-absl::Status WriteBinaryStl(const io::TriangleMesh& mesh, const std::string& path, const std::string& label) {
+absl::Status WriteBinaryStl(const io::TriangleMesh& mesh, const std::string& path,
+                            const std::string& label) {
   std::string bytes(80, '\0');
-  const std::string header = absl::StrCat("tactforce simulate inertia: ", label, " (object frame, m)");
+  const std::string header =
+      absl::StrCat("tactforce simulate inertia: ", label, " (object frame, m)");
   std::memcpy(bytes.data(), header.data(), std::min<size_t>(header.size(), 80));
   auto put32 = [&bytes](uint32_t v) {
     for (int i = 0; i < 4; ++i) bytes.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
@@ -137,8 +143,8 @@ absl::Status SetObject(const SimulateInertiaArgs& args, inertia::SimulationOptio
   if (args.params_path.empty()) return absl::OkStatus();
   absl::StatusOr<inertia::InertiaTruth> params = inertia::ReadTruthJsonFile(args.params_path);
   if (!params.ok()) return params.status();
-  absl::StatusOr<inertia::SimulatedObject> custom =
-      inertia::ObjectFromParameters(std::filesystem::path(args.params_path).stem().string(), params->params);
+  absl::StatusOr<inertia::SimulatedObject> custom = inertia::ObjectFromParameters(
+      std::filesystem::path(args.params_path).stem().string(), params->params);
   if (!custom.ok()) return custom.status();
   o->custom = *custom;
   if (params->gravity_world) o->gravity = *params->gravity_world;
@@ -185,10 +191,12 @@ absl::Status SetTrajectory(const SimulateInertiaArgs& args, inertia::SimulationO
 }
 
 // The simulation the flags ask for; errors name the flag or file.
-absl::StatusOr<inertia::SimulationOptions> SimulationOptionsFromFlags(const SimulateInertiaArgs& args) {
+absl::StatusOr<inertia::SimulationOptions> SimulationOptionsFromFlags(
+    const SimulateInertiaArgs& args) {
   inertia::SimulationOptions o;
   TF_RETURN_IF_ERROR(SetObject(args, &o));
-  o.mode = args.mode == "wrist" ? inertia::SimulationMode::kWristWrench : inertia::SimulationMode::kInHand;
+  o.mode = args.mode == "wrist" ? inertia::SimulationMode::kWristWrench
+                                : inertia::SimulationMode::kInHand;
   o.num_contacts = args.contacts;
   o.duration = args.seconds;
   o.rate_hz = args.rate;
@@ -200,7 +208,8 @@ absl::StatusOr<inertia::SimulationOptions> SimulationOptionsFromFlags(const Simu
 
 // OUT/inertia.csv, OUT/truth.json and, when the object has a solid,
 // OUT/mesh.stl (OUT created); one line on stderr says what was written.
-absl::Status WriteSimulationFiles(const inertia::SimulationResult& result, const std::string& out_dir) {
+absl::Status WriteSimulationFiles(const inertia::SimulationResult& result,
+                                  const std::string& out_dir) {
   const std::string csv = (std::filesystem::path(out_dir) / "inertia.csv").string();
   const std::string truth = (std::filesystem::path(out_dir) / "truth.json").string();
   TF_RETURN_IF_ERROR(inertia::WriteSimulation(result, csv, truth));
@@ -209,8 +218,8 @@ absl::Status WriteSimulationFiles(const inertia::SimulationResult& result, const
   if (has_mesh) {
     TF_RETURN_IF_ERROR(WriteBinaryStl(result.object.mesh, mesh, result.object.name));
   }
-  std::cerr << "wrote " << result.samples.samples.size() << " samples of '" << result.object.name << "' to "
-            << csv << " (+ truth.json" << (has_mesh ? ", mesh.stl" : "") << ")\n";
+  std::cerr << "wrote " << result.samples.samples.size() << " samples of '" << result.object.name
+            << "' to " << csv << " (+ truth.json" << (has_mesh ? ", mesh.stl" : "") << ")\n";
   return absl::OkStatus();
 }
 
@@ -219,53 +228,69 @@ absl::Status WriteSimulationFiles(const inertia::SimulationResult& result, const
 CLI::App* AddSimulateInertiaCommand(CLI::App& simulate, SimulateInertiaArgs& args) {
   CLI::App* cmd = simulate.add_subcommand(
       "inertia", "Simulate an object moved along an exciting trajectory: inertia.csv + truth.json");
-  auto* object = cmd->add_option("--object", args.object, "Built-in object: seed-table1 (the paper's) or box")
-                     ->check(CLI::IsMember(inertia::BuiltInObjectNames()))
-                     ->capture_default_str();
-  cmd->add_option("--params", args.params_path, "Custom object: truth JSON (mass, com, inertia_com)")
+  auto* object =
+      cmd->add_option("--object", args.object, "Built-in object: seed-table1 (the paper's) or box")
+          ->check(CLI::IsMember(inertia::BuiltInObjectNames()))
+          ->capture_default_str();
+  cmd->add_option("--params", args.params_path,
+                  "Custom object: truth JSON (mass, com, inertia_com)")
       ->type_name("FILE")
       ->excludes(object);
-  cmd->add_option("--mode", args.mode, "in-hand (fingertip contact forces) or wrist (wrench sensor)")
+  cmd->add_option("--mode", args.mode,
+                  "in-hand (fingertip contact forces) or wrist (wrench sensor)")
       ->check(CLI::IsMember({"in-hand", "wrist"}))
       ->capture_default_str();
   cmd->add_option("--contacts", args.contacts, "in-hand: number of fingertips (2-4)")
       ->check(Between(2, 4))
       ->capture_default_str();
-  cmd->add_option("--seconds", args.seconds, "Duration (s)")->check(Between(0.1, 86400))->capture_default_str();
-  cmd->add_option("--rate", args.rate, "Sample rate (Hz)")->check(Between(1, 1e5))->capture_default_str();
+  cmd->add_option("--seconds", args.seconds, "Duration (s)")
+      ->check(Between(0.1, 86400))
+      ->capture_default_str();
+  cmd->add_option("--rate", args.rate, "Sample rate (Hz)")
+      ->check(Between(1, 1e5))
+      ->capture_default_str();
   auto* variance = cmd->add_option("--force-variance", args.force_variance,
                                    "Force noise variance per component (N^2; the paper used 0-1)")
                        ->check(AtLeast(0))
                        ->capture_default_str();
-  cmd->add_option("--torque-sigma", args.torque_sigma, "wrist: torque noise std. dev. (N m)")->check(AtLeast(0));
-  cmd->add_option("--position-sigma", args.position_sigma, "Pose position noise std. dev. (m)")->check(AtLeast(0));
-  cmd->add_option("--orientation-sigma", args.orientation_sigma, "Pose orientation noise std. dev. (rad)")
+  cmd->add_option("--torque-sigma", args.torque_sigma, "wrist: torque noise std. dev. (N m)")
+      ->check(AtLeast(0));
+  cmd->add_option("--position-sigma", args.position_sigma, "Pose position noise std. dev. (m)")
+      ->check(AtLeast(0));
+  cmd->add_option("--orientation-sigma", args.orientation_sigma,
+                  "Pose orientation noise std. dev. (rad)")
       ->check(AtLeast(0));
   cmd->add_option("--noise-level", args.noise_level,
                   "Nadeau et al. 2023 level (wrist, with measured kinematics): low, moderate, high")
       ->check(CLI::IsMember({"low", "moderate", "high"}))
       ->excludes(variance);
   cmd->add_flag("--kinematics", args.kinematics, "Write measured kinematics columns (w, v, dw, a)");
-  auto* amp = cmd->add_option("--amplitude-scale", args.amplitude_scale, "Scale the default excitation amplitudes")
+  auto* amp = cmd->add_option("--amplitude-scale", args.amplitude_scale,
+                              "Scale the default excitation amplitudes")
                   ->check(Between(0.01, 100))
                   ->capture_default_str();
-  auto* freq = cmd->add_option("--frequency-scale", args.frequency_scale, "Scale the default excitation frequencies")
+  auto* freq = cmd->add_option("--frequency-scale", args.frequency_scale,
+                               "Scale the default excitation frequencies")
                    ->check(Between(0.01, 100))
                    ->capture_default_str();
-  cmd->add_option("--trajectory", args.trajectory_path, "Excitation trajectory JSON instead of the default")
+  cmd->add_option("--trajectory", args.trajectory_path,
+                  "Excitation trajectory JSON instead of the default")
       ->type_name("FILE")
       ->excludes(amp)
       ->excludes(freq);
   cmd->add_option("--seed", args.seed, "Random seed")->capture_default_str();
   cmd->add_option("--out", args.out_dir,
-                  "Output directory: inertia.csv, truth.json and mesh.stl (the object's closed solid, object frame, "
+                  "Output directory: inertia.csv, truth.json and mesh.stl (the object's closed "
+                  "solid, object frame, "
                   "m: inertia --mesh OUT/mesh.stl); must be empty unless --force")
       ->required();
-  cmd->add_flag("--force", args.force, "Replace the inertia.csv, truth.json and mesh.stl of an earlier run in --out");
+  cmd->add_flag("--force", args.force,
+                "Replace the inertia.csv, truth.json and mesh.stl of an earlier run in --out");
   cmd->footer(
       "Writes OUT/inertia.csv, OUT/truth.json and OUT/mesh.stl. Examples:\n"
       "  tactforce simulate inertia --out /tmp/inertia\n"
-      "  tactforce simulate inertia --mode wrist --noise-level moderate --kinematics --out /tmp/wrist\n"
+      "  tactforce simulate inertia --mode wrist --noise-level moderate --kinematics --out "
+      "/tmp/wrist\n"
       "  tactforce inertia --csv /tmp/inertia/inertia.csv --truth /tmp/inertia/truth.json");
   return cmd;
 }
@@ -273,7 +298,9 @@ CLI::App* AddSimulateInertiaCommand(CLI::App& simulate, SimulateInertiaArgs& arg
 int RunSimulateInertia(const SimulateInertiaArgs& args) {
   absl::StatusOr<inertia::SimulationOptions> options = SimulationOptionsFromFlags(args);
   if (!options.ok()) return ReportError(options.status());
-  if (absl::Status s = PrepareOutputDir(args.out_dir, args.force, {"inertia.csv", "truth.json", "mesh.stl"}); !s.ok()) {
+  if (absl::Status s =
+          PrepareOutputDir(args.out_dir, args.force, {"inertia.csv", "truth.json", "mesh.stl"});
+      !s.ok()) {
     return ReportError(s);
   }
   absl::StatusOr<inertia::SimulationResult> result = inertia::SimulateInertia(*options);

@@ -17,11 +17,17 @@ CLI::App* AddSimulateSensorCommand(CLI::App& simulate, SimulateSensorArgs& args)
   cmd->add_option("--profile", args.profile, "Force profile")
       ->check(CLI::IsMember({"press-release", "ramp", "random"}))
       ->capture_default_str();
-  cmd->add_option("--seconds", args.seconds, "Duration (s)")->check(Between(0.1, 86400))->capture_default_str();
-  cmd->add_option("--rate", args.rate, "Sample rate (Hz)")->check(Between(1, 1e5))->capture_default_str();
+  cmd->add_option("--seconds", args.seconds, "Duration (s)")
+      ->check(Between(0.1, 86400))
+      ->capture_default_str();
+  cmd->add_option("--rate", args.rate, "Sample rate (Hz)")
+      ->check(Between(1, 1e5))
+      ->capture_default_str();
   cmd->add_option("--seed", args.seed, "Random seed")->capture_default_str();
-  cmd->add_option("--out", args.out_dir, "Output directory (created; must be empty unless --force)")->required();
-  cmd->add_flag("--force", args.force, "Replace the run.csv, fingertip.csv and model.json of an earlier run in --out");
+  cmd->add_option("--out", args.out_dir, "Output directory (created; must be empty unless --force)")
+      ->required();
+  cmd->add_flag("--force", args.force,
+                "Replace the run.csv, fingertip.csv and model.json of an earlier run in --out");
   cmd->footer(
       "Writes OUT/run.csv (t,reference,reading), OUT/fingertip.csv and OUT/model.json. Example:\n"
       "  tactforce simulate sensor --model client/examples/sensor_model.json --out /tmp/run && \\\n"
@@ -43,7 +49,8 @@ int RunSimulateSensor(const SimulateSensorArgs& args) {
   options.seconds = args.seconds;
   options.rate = args.rate;
   options.seed = args.seed;
-  if (absl::Status s = PrepareOutputDir(args.out_dir, args.force, {"run.csv", "fingertip.csv", "model.json"});
+  if (absl::Status s =
+          PrepareOutputDir(args.out_dir, args.force, {"run.csv", "fingertip.csv", "model.json"});
       !s.ok()) {
     return ReportError(s);
   }

@@ -65,8 +65,7 @@ double LatencyHistogram::Quantile(double q) const {
   if (n == 0) return 0.0;
   const double top = static_cast<double>(max());
   if (q >= 1.0) return top;
-  const int64_t rank =
-      std::max<int64_t>(1, static_cast<int64_t>(std::ceil(std::max(q, 0.0) * n)));
+  const int64_t rank = std::max<int64_t>(1, static_cast<int64_t>(std::ceil(std::max(q, 0.0) * n)));
   int64_t seen = 0;
   const int buckets = BucketCount();
   for (int i = 0; i < buckets; ++i) {

@@ -282,8 +282,8 @@ class OpenLoop {
     for (int64_t now = NowNs(); now < scheduled; now = NowNs()) {
       const int64_t left = scheduled - now;
       if (left > 2'000'000) {
-        std::this_thread::sleep_for(std::chrono::nanoseconds(std::min<int64_t>(left, 50'000'000) -
-                                                             1'000'000));
+        std::this_thread::sleep_for(
+            std::chrono::nanoseconds(std::min<int64_t>(left, 50'000'000) - 1'000'000));
         driver_.Housekeeping();
       } else {
         std::this_thread::sleep_until(Clock::time_point(std::chrono::nanoseconds(scheduled)));
@@ -307,8 +307,8 @@ class OpenLoop {
     call->started_ns = scheduled;  // latency from the scheduled start
     in_flight_.fetch_add(1);
     run_.tickets.fetch_add(1, std::memory_order_relaxed);
-    Rpc::Start(run_, static_cast<int>(issued % channels_), &call->context, issued,
-               &call->response, [this, call](grpc::Status status) {
+    Rpc::Start(run_, static_cast<int>(issued % channels_), &call->context, issued, &call->response,
+               [this, call](grpc::Status status) {
                  run_.Record(status.error_code(), call->started_ns);
                  delete call;
                  std::lock_guard<std::mutex> lock(mu_);
@@ -366,15 +366,13 @@ bool RunStreamSlots(Run& run, int channels) {
 
 bool RunClosedLoopCallback(Run& run, int channels) {
   if (run.spec.rpc == LoadRpc::kStream) return RunStreamSlots(run, channels);
-  return VisitRpc(run.spec.rpc, [&](auto rpc) {
-    return RunUnarySlots<decltype(rpc)>(run, channels);
-  });
+  return VisitRpc(run.spec.rpc,
+                  [&](auto rpc) { return RunUnarySlots<decltype(rpc)>(run, channels); });
 }
 
 bool RunOpenLoop(Run& run, int channels) {
-  return VisitRpc(run.spec.rpc, [&](auto rpc) {
-    return OpenLoop<decltype(rpc)>(run, channels).Dispatch();
-  });
+  return VisitRpc(run.spec.rpc,
+                  [&](auto rpc) { return OpenLoop<decltype(rpc)>(run, channels).Dispatch(); });
 }
 
 }  // namespace tactforce::cli::load_engine

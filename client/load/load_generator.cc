@@ -62,8 +62,8 @@ absl::Status CheckSpec(const LoadSpec& spec, size_t channels) {
     return absl::InvalidArgumentError("--rate: open loop needs --engine callback");
   }
   if (spec.engine == LoadEngine::kSync && spec.concurrency > kMaxSyncThreads) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        "--concurrency: at most ", kMaxSyncThreads, " with --engine sync (one thread each)"));
+    return absl::InvalidArgumentError(absl::StrCat("--concurrency: at most ", kMaxSyncThreads,
+                                                   " with --engine sync (one thread each)"));
   }
   return absl::OkStatus();
 }
@@ -147,9 +147,9 @@ absl::StatusOr<std::vector<std::shared_ptr<grpc::Channel>>> ConnectLoadChannels(
   std::vector<std::shared_ptr<grpc::Channel>> channels;
   for (const std::string& target : *targets) {
     // Addresses behind one target: the entries of an ipv4:/ipv6: list.
-    const int addresses =
-        HasUriScheme(target) ? static_cast<int>(std::count(target.begin(), target.end(), ',')) + 1
-                             : 1;
+    const int addresses = HasUriScheme(target)
+                              ? static_cast<int>(std::count(target.begin(), target.end(), ',')) + 1
+                              : 1;
     for (int k = 0; k < per_target; ++k) {
       grpc::ChannelArguments args;
       // Without this, channels with equal arguments share one connection.
@@ -185,19 +185,19 @@ std::vector<v1::PlanRequest> RandomRequestMix(uint64_t seed, int count) {
 }
 
 std::string FormatLoadText(const LoadReport& r, const std::string& target) {
-  std::string out = absl::StrFormat("tactforce load: %s -> %s, %s loop, %s %d", r.rpc, target,
-                                    r.mode, r.mode == "open" ? "at most" : "concurrency",
-                                    r.concurrency);
+  std::string out =
+      absl::StrFormat("tactforce load: %s -> %s, %s loop, %s %d", r.rpc, target, r.mode,
+                      r.mode == "open" ? "at most" : "concurrency", r.concurrency);
   if (r.mode == "open") absl::StrAppendFormat(&out, " in flight, rate %g/s", r.rate);
   absl::StrAppendFormat(&out, ", %s API, %d channel%s%s\n", r.engine, r.channels,
                         r.channels == 1 ? "" : "s", r.interrupted ? " (interrupted)" : "");
-  absl::StrAppendFormat(&out, "  calls       %d (%d ok, %d failed) in %.3f s\n", r.requests,
-                        r.ok, r.requests - r.ok, r.duration_s);
+  absl::StrAppendFormat(&out, "  calls       %d (%d ok, %d failed) in %.3f s\n", r.requests, r.ok,
+                        r.requests - r.ok, r.duration_s);
   absl::StrAppendFormat(&out, "  throughput  %.1f calls/s\n", r.qps);
-  absl::StrAppendFormat(&out, "  latency [us] %9s %9s %9s %9s %9s\n", "p50", "p90", "p99",
-                        "p99.9", "max");
-  absl::StrAppendFormat(&out, "               %9.1f %9.1f %9.1f %9.1f %9.1f\n", r.p50_us,
-                        r.p90_us, r.p99_us, r.p999_us, r.max_us);
+  absl::StrAppendFormat(&out, "  latency [us] %9s %9s %9s %9s %9s\n", "p50", "p90", "p99", "p99.9",
+                        "max");
+  absl::StrAppendFormat(&out, "               %9.1f %9.1f %9.1f %9.1f %9.1f\n", r.p50_us, r.p90_us,
+                        r.p99_us, r.p999_us, r.max_us);
   if (r.ok < r.requests) {
     absl::StrAppendFormat(&out, "  all calls    %9.1f %9.1f %9.1f %9s %9.1f (failed included)\n",
                           r.all_p50_us, r.all_p90_us, r.all_p99_us, "", r.all_max_us);
@@ -229,9 +229,9 @@ std::string FormatLoadJson(const LoadReport& r, const std::string& target) {
                         "\"channels\": %d, \"requests\": %d, \"ok\": %d, \"duration_s\": %.4f, "
                         "\"qps\": %s, \"latency_us\": {\"p50\": %s, \"p90\": %s, \"p99\": %s, "
                         "\"p999\": %s, \"max\": %s}, \"errors\": %s",
-                        r.channels, r.requests, r.ok, r.duration_s, Number(r.qps),
-                        Number(r.p50_us), Number(r.p90_us), Number(r.p99_us), Number(r.p999_us),
-                        Number(r.max_us), errors);
+                        r.channels, r.requests, r.ok, r.duration_s, Number(r.qps), Number(r.p50_us),
+                        Number(r.p90_us), Number(r.p99_us), Number(r.p999_us), Number(r.max_us),
+                        errors);
   absl::StrAppendFormat(&out,
                         ", \"latency_all_us\": {\"p50\": %s, \"p90\": %s, \"p99\": %s, "
                         "\"max\": %s}",

@@ -42,7 +42,6 @@
 
 namespace tactforce::cli {
 
-
 // Runs the load on `channels` (slot i / call i uses channel i % size),
 // normally made and warmed up by ConnectLoadChannels. Errors
 // (InvalidArgument) only for an unusable spec; failed calls are counted in

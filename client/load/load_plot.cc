@@ -216,8 +216,10 @@ void DrawRatePanel(io::SvgCanvas& canvas, const LoadReport& r) {
 
 std::string LoadPlotSvg(const LoadReport& report, const std::string& target) {
   io::SvgCanvas canvas(kWidth, kHeight, 11);
-  canvas.WrappedText(kLeft, 24, Title(report), kWidth - kLeft - 10, {.size = 15, .bold = true}, 18, 1);
-  canvas.WrappedText(kLeft, 44, Subtitle(report, target), kWidth - kLeft - 10, {.size = 12, .color = "#444444"}, 14, 2);
+  canvas.WrappedText(kLeft, 24, Title(report), kWidth - kLeft - 10, {.size = 15, .bold = true}, 18,
+                     1);
+  canvas.WrappedText(kLeft, 44, Subtitle(report, target), kWidth - kLeft - 10,
+                     {.size = 12, .color = "#444444"}, 14, 2);
   DrawHistogramPanel(canvas, report);
   DrawRatePanel(canvas, report);
   return canvas.Finish();

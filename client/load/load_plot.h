@@ -28,5 +28,4 @@ std::string LoadPlotSvg(const LoadReport& report, const std::string& target);
 absl::Status WriteLoadPlot(const LoadReport& report, const std::string& target,
                            const std::string& path);
 
-
 }  // namespace tactforce::cli

@@ -54,14 +54,13 @@ void Run::Record(grpc::StatusCode code, int64_t started_ns) {
   timeline.Record(now - start_ns, code == grpc::StatusCode::OK);
   completed.fetch_add(1, std::memory_order_relaxed);
   int64_t seen = last_done_ns.load(std::memory_order_relaxed);
-  while (now > seen &&
-         !last_done_ns.compare_exchange_weak(seen, now, std::memory_order_relaxed)) {
+  while (now > seen && !last_done_ns.compare_exchange_weak(seen, now, std::memory_order_relaxed)) {
   }
 }
 
 void Run::RecordStreamResponse(int64_t sent_ns) {
-  const bool late = spec.deadline_ms > 0 &&
-                    NowNs() - sent_ns > int64_t{spec.deadline_ms} * 1'000'000;
+  const bool late =
+      spec.deadline_ms > 0 && NowNs() - sent_ns > int64_t{spec.deadline_ms} * 1'000'000;
   Record(late ? grpc::StatusCode::DEADLINE_EXCEEDED : grpc::StatusCode::OK, sent_ns);
 }
 
@@ -96,9 +95,8 @@ bool Driver::Round(std::chrono::nanoseconds wait) {
   std::vector<std::function<void()>> work;
   {
     std::unique_lock<std::mutex> lock(run_->mu);
-    run_->wake.wait_for(lock, wait, [this] {
-      return run_->active == 0 || !run_->deferred.empty() || run_->poke;
-    });
+    run_->wake.wait_for(
+        lock, wait, [this] { return run_->active == 0 || !run_->deferred.empty() || run_->poke; });
     run_->poke = false;
     work.swap(run_->deferred);
     if (run_->active == 0 && work.empty()) return false;

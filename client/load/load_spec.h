@@ -21,8 +21,8 @@
 namespace tactforce::cli {
 
 enum class LoadRpc { kPlan, kStream, kHealth, kEstimate, kFitInertia, kAudit };
-inline constexpr LoadRpc kAllLoadRpcs[] = {LoadRpc::kPlan,     LoadRpc::kStream,
-                                           LoadRpc::kHealth,   LoadRpc::kEstimate,
+inline constexpr LoadRpc kAllLoadRpcs[] = {LoadRpc::kPlan,       LoadRpc::kStream,
+                                           LoadRpc::kHealth,     LoadRpc::kEstimate,
                                            LoadRpc::kFitInertia, LoadRpc::kAudit};
 enum class LoadEngine { kCallback, kSync };
 
@@ -48,10 +48,10 @@ struct LoadSpec {
   double duration_s = 0;     // 0 = no time bound (then max_requests must be > 0)
   int deadline_ms = 10'000;  // per call, per response on streams; 0 = none
   // What the calls send; each RPC needs its own (RunLoad checks).
-  std::vector<v1::PlanRequest> requests;  // plan/stream: used round-robin
-  std::string health_service;             // health: the service asked about
-  std::vector<v1::EstimateRequest> estimate_requests;  // estimate: round-robin
-  std::vector<v1::AuditRequest> audit_requests;        // audit: round-robin
+  std::vector<v1::PlanRequest> requests;                  // plan/stream: used round-robin
+  std::string health_service;                             // health: the service asked about
+  std::vector<v1::EstimateRequest> estimate_requests;     // estimate: round-robin
+  std::vector<v1::AuditRequest> audit_requests;           // audit: round-robin
   std::vector<v1::FitInertiaRequest> fit_inertia_stream;  // fit-inertia: each call's stream
   // Called from the driving thread about once a second (may be empty).
   std::function<void(const LoadProgress&)> progress;

@@ -90,8 +90,7 @@ void SyncStreamLoop(Run* run, int channel, SyncStreamWatch* watch) {
     const bool timed_out = watch->timed_out();
     watch->Detach();
     if (broken) {
-      grpc::StatusCode code = timed_out ? grpc::StatusCode::DEADLINE_EXCEEDED
-                                        : status.error_code();
+      grpc::StatusCode code = timed_out ? grpc::StatusCode::DEADLINE_EXCEEDED : status.error_code();
       if (code == grpc::StatusCode::OK) code = grpc::StatusCode::UNKNOWN;
       run->Record(code, NowNs());
       have_ticket = run->Claim(&ticket);  // a new stream for the next request

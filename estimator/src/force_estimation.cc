@@ -73,7 +73,7 @@ void Project(const PlanProblem& p, const std::vector<double>& readings, double l
   // [(1+lambda) I, -B^T N_E; -N_E^T B, N_E^T N_E], strictly convex for lambda > 0.
   const int d = static_cast<int>(B.cols());
   const int e = static_cast<int>(ws->extrinsic.size());
-  PlaceNormals(p, ws->extrinsic, &ws->placed);  // now N_E
+  PlaceNormals(p, ws->extrinsic, &ws->placed);         // now N_E
   ws->reduced.noalias() = B.transpose() * ws->placed;  // B^T N_E
   DenseQp& qp = pw.qp;
   qp.identity_hessian = false;
@@ -114,8 +114,8 @@ void NormalLeastSquares(PlanProblem& p, const std::vector<double>& readings,
   const int k = static_cast<int>(ws->intrinsic.size());
   // M = placed^T: f -> the intrinsic normal components; W = diag(1 / sigma^2).
   PlaceNormals(p, ws->intrinsic, &ws->placed);
-  ws->reduced.noalias() = ws->placed.transpose() * B;  // M B
-  ws->measured.resize(k);                              // here: the weights
+  ws->reduced.noalias() = ws->placed.transpose() * B;             // M B
+  ws->measured.resize(k);                                         // here: the weights
   ws->values.noalias() = ws->placed.transpose() * eq.particular;  // M f0 - y
   for (int j = 0; j < k; ++j) {
     const double s = std::max(p.contacts[ws->intrinsic[j]].sigma, o.min_sigma);
@@ -166,9 +166,12 @@ void NormalLeastSquares(PlanProblem& p, const std::vector<double>& readings,
 
 const char* ToString(EstimateStatus status) {
   switch (status) {
-    case EstimateStatus::kOk: return "OK";
-    case EstimateStatus::kInfeasible: return "INFEASIBLE";
-    case EstimateStatus::kSolverFailure: return "SOLVER_FAILURE";
+    case EstimateStatus::kOk:
+      return "OK";
+    case EstimateStatus::kInfeasible:
+      return "INFEASIBLE";
+    case EstimateStatus::kSolverFailure:
+      return "SOLVER_FAILURE";
   }
   return "UNKNOWN";
 }
@@ -194,14 +197,14 @@ absl::Status CheckRequest(const PlanProblem& problem, const std::vector<double>&
   TF_RETURN_IF_ERROR(planner::ValidateProblem(problem, plan_options, &p));
   Classify(p, ws);
   if (readings.size() != ws->intrinsic.size()) {
-    return absl::InvalidArgumentError(
-        absl::StrCat("readings: expected ", ws->intrinsic.size(),
-                     " values (one per intrinsic contact, in request order), got ",
-                     readings.size()));
+    return absl::InvalidArgumentError(absl::StrCat(
+        "readings: expected ", ws->intrinsic.size(),
+        " values (one per intrinsic contact, in request order), got ", readings.size()));
   }
   for (size_t j = 0; j < readings.size(); ++j) {
     if (!planner::IsBounded(readings[j], planner::kMaxForce))
-      return planner::MagnitudeError(absl::StrCat("readings[", j, "]"), readings[j], planner::kMaxForce, "N");
+      return planner::MagnitudeError(absl::StrCat("readings[", j, "]"), readings[j],
+                                     planner::kMaxForce, "N");
     if (readings[j] < 0.0) out->negative_readings.push_back(static_cast<int>(j));
   }
   if (options.method == EstimateMethod::kProjection && !ws->extrinsic.empty() &&
@@ -234,8 +237,8 @@ absl::Status EstimateForces(const PlanProblem& problem, const std::vector<double
   TF_RETURN_IF_ERROR(CheckRequest(problem, readings, options, ws, out));
   PlanProblem& p = ws->planning.prepared.problem;
   ForceEquilibrium& eq = ws->planning.prepared.equilibrium;
-  planner::ComputeForceEquilibrium(p, options.rank_tolerance,
-                                   &ws->planning.equilibrium_scratch, &eq);
+  planner::ComputeForceEquilibrium(p, options.rank_tolerance, &ws->planning.equilibrium_scratch,
+                                   &eq);
   if (!eq.consistent) {
     out->status = EstimateStatus::kInfeasible;
     out->message = absl::StrCat("the contacts cannot resist this wrench: G has rank ", eq.rank,
@@ -259,8 +262,8 @@ absl::Status EstimateForces(const PlanProblem& problem, const std::vector<double
     }
   }
   if (!out->negative_readings.empty()) {
-    absl::StrAppend(&out->message, out->message.empty() ? "" : "; ",
-                    out->negative_readings.size(), " negative reading(s) used as given (first: readings[",
+    absl::StrAppend(&out->message, out->message.empty() ? "" : "; ", out->negative_readings.size(),
+                    " negative reading(s) used as given (first: readings[",
                     out->negative_readings.front(), "])");
   }
   out->solve_time_us = std::chrono::duration_cast<std::chrono::microseconds>(

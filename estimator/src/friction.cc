@@ -49,17 +49,22 @@ absl::Status ValidateTrial(const FrictionTrial& trial, int index, int min_sample
     if (k > 0 && !(s.t > trial.samples[k - 1].t))
       return absl::InvalidArgumentError(sp + ".t: not increasing");
     // The pre-slip line fit is over time: steps below the resolution are noise.
-    if (absl::Status st = planner::CheckTime(sp + ".t", s.t, k > 0 ? &trial.samples[k - 1].t : nullptr); !st.ok())
+    if (absl::Status st =
+            planner::CheckTime(sp + ".t", s.t, k > 0 ? &trial.samples[k - 1].t : nullptr);
+        !st.ok())
       return st;
-    if (absl::Status st = planner::CheckMagnitude(sp + ".force", s.force, planner::kMaxForce, "N"); !st.ok())
+    if (absl::Status st = planner::CheckMagnitude(sp + ".force", s.force, planner::kMaxForce, "N");
+        !st.ok())
       return st;
-    if (absl::Status st = planner::CheckMagnitude(sp + ".contact_point", s.contact_point, planner::kMaxLength, "m");
+    if (absl::Status st = planner::CheckMagnitude(sp + ".contact_point", s.contact_point,
+                                                  planner::kMaxLength, "m");
         !st.ok())
       return st;
   }
   Vec3 unit = trial.normal.value_or(Vec3::UnitZ());
   if (trial.normal && !planner::NormalizeDirection(&unit))
-    return absl::InvalidArgumentError(path + (unit.allFinite() ? ".normal: zero length" : ".normal: not finite"));
+    return absl::InvalidArgumentError(
+        path + (unit.allFinite() ? ".normal: zero length" : ".normal: not finite"));
   return absl::OkStatus();
 }
 
@@ -91,7 +96,8 @@ Vec3 PreSlipForceAt(const FrictionTrial& trial, int last_static, double t_onset,
 
 // The estimate's own error model: the standard error of |f_t| / f_n over
 // the samples the pre-slip force is taken from (0 for a single sample).
-double RatioStandardError(const FrictionTrial& trial, const Vec3& n, int last_static, const FrictionOptions& o) {
+double RatioStandardError(const FrictionTrial& trial, const Vec3& n, int last_static,
+                          const FrictionOptions& o) {
   const int span = o.pre_slip == PreSlipForce::kWindowAverage ? o.window : o.fit_window;
   const int first = std::max(0, last_static - span + 1);
   const int m = last_static - first + 1;
@@ -123,7 +129,8 @@ TrialFriction EstimateTrial(const FrictionTrial& trial, const Vec3& n, const Fri
   }
   if (detect < 0) {
     for (int k = 1; k < count; ++k) {
-      if ((tangent_projector * (s[k].contact_point - s[0].contact_point)).norm() > o.slip_distance) {
+      if ((tangent_projector * (s[k].contact_point - s[0].contact_point)).norm() >
+          o.slip_distance) {
         detect = k;
         break;
       }
@@ -156,12 +163,14 @@ TrialFriction EstimateTrial(const FrictionTrial& trial, const Vec3& n, const Fri
   for (int k = 0; k < quiet_end; ++k) rest += s[k].contact_point;
   rest /= quiet_end;
   std::vector<double> travel(count);
-  for (int k = 0; k < count; ++k) travel[k] = (tangent_projector * (s[k].contact_point - rest)).norm();
+  for (int k = 0; k < count; ++k)
+    travel[k] = (tangent_projector * (s[k].contact_point - rest)).norm();
   std::vector<double> quiet(travel.begin(), travel.begin() + quiet_end);
   const double med = Median(quiet);
   std::vector<double> dev;
   for (double v : quiet) dev.push_back(std::abs(v - med));
-  const double threshold = std::max(med + o.noise_k * 1.4826 * Median(dev), o.min_onset_fraction * o.slip_distance);
+  const double threshold =
+      std::max(med + o.noise_k * 1.4826 * Median(dev), o.min_onset_fraction * o.slip_distance);
   int onset = detect;
   while (onset - 1 >= 1 && travel[onset - 1] > threshold) --onset;
   // `onset` is now the first displaced sample, so the motion began from the
@@ -179,7 +188,8 @@ TrialFriction EstimateTrial(const FrictionTrial& trial, const Vec3& n, const Fri
   const Vec3 f = PreSlipForceAt(trial, last_static, s[onset].t, o);
   const auto [fn, ft] = ratio(f);
   if (fn < o.min_normal_force) {
-    out.message = absl::StrCat("normal force before slip ", fn, " N is below the minimum ", o.min_normal_force, " N");
+    out.message = absl::StrCat("normal force before slip ", fn, " N is below the minimum ",
+                               o.min_normal_force, " N");
     return out;
   }
   out.valid = true;
@@ -192,20 +202,25 @@ TrialFriction EstimateTrial(const FrictionTrial& trial, const Vec3& n, const Fri
 // Each option by its name (the FrictionRequest field), with its value.
 absl::Status ValidateOptions(const FrictionOptions& o) {
   auto bad = [](const char* field, const char* rule, double value) {
-    return absl::InvalidArgumentError(absl::StrCat(field, ": must be ", rule, " (got ", value, ")"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(field, ": must be ", rule, " (got ", value, ")"));
   };
   if (!(o.slip_distance > 0) || !std::isfinite(o.slip_distance))
     return bad("slip_distance", "finite and > 0 m", o.slip_distance);
-  if (absl::Status s = planner::CheckMagnitude("slip_distance", o.slip_distance, planner::kMaxLength, "m"); !s.ok())
+  if (absl::Status s =
+          planner::CheckMagnitude("slip_distance", o.slip_distance, planner::kMaxLength, "m");
+      !s.ok())
     return s;
   if (o.window < 1) return bad("window", ">= 1 sample", o.window);
   if (o.fit_window < 3) return bad("fit_window", ">= 3 samples", o.fit_window);
   if (!(o.min_normal_force >= 0) || !std::isfinite(o.min_normal_force))
     return bad("min_normal_force", "finite and >= 0 N", o.min_normal_force);
-  if (absl::Status s = planner::CheckMagnitude("min_normal_force", o.min_normal_force, planner::kMaxForce, "N");
+  if (absl::Status s =
+          planner::CheckMagnitude("min_normal_force", o.min_normal_force, planner::kMaxForce, "N");
       !s.ok())
     return s;
-  if (!(o.noise_k > 0) || !std::isfinite(o.noise_k)) return bad("noise_k", "finite and > 0", o.noise_k);
+  if (!(o.noise_k > 0) || !std::isfinite(o.noise_k))
+    return bad("noise_k", "finite and > 0", o.noise_k);
   if (!(o.min_onset_fraction >= 0 && o.min_onset_fraction < 1))
     return bad("min_onset_fraction", "in [0, 1)", o.min_onset_fraction);
   return absl::OkStatus();
@@ -223,7 +238,8 @@ absl::StatusOr<FrictionEstimate> EstimateFriction(const std::vector<FrictionTria
   FrictionEstimate out;
   for (int i = 0; i < static_cast<int>(trials.size()); ++i) {
     if (o.interrupt && o.interrupt()) {
-      return absl::CancelledError(absl::StrCat("interrupted after ", i, " of ", trials.size(), " trials"));
+      return absl::CancelledError(
+          absl::StrCat("interrupted after ", i, " of ", trials.size(), " trials"));
     }
     const FrictionTrial& trial = trials[i];
     TF_RETURN_IF_ERROR(ValidateTrial(trial, i, 3));
@@ -233,7 +249,8 @@ absl::StatusOr<FrictionEstimate> EstimateFriction(const std::vector<FrictionTria
       n = *trial.normal;
       planner::NormalizeDirection(&n);  // without overflow; ValidateTrial accepted it
     } else if (o.mesh) {
-      const io::NearestTriangle near = io::FindNearestTriangle(*o.mesh, trial.samples.front().contact_point);
+      const io::NearestTriangle near =
+          io::FindNearestTriangle(*o.mesh, trial.samples.front().contact_point);
       n = near.inward_normal;
       triangle = near.triangle;
     } else {
@@ -332,8 +349,8 @@ SimulatedFriction SimulateFriction(const FrictionSimOptions& o) {
       }
       s.force = fn * out.normal + f_t * tangent +
                 o.force_noise * Vec3(gauss(rng), gauss(rng), gauss(rng));
-      s.contact_point = start + travel * tangent +
-                        o.position_noise * Vec3(gauss(rng), gauss(rng), gauss(rng));
+      s.contact_point =
+          start + travel * tangent + o.position_noise * Vec3(gauss(rng), gauss(rng), gauss(rng));
       if (o.write_slip_flags) s.slip = t > t_slip;
       tr.samples.push_back(s);
     }

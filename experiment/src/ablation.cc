@@ -12,37 +12,52 @@ namespace tactforce::experiment {
 
 const char* ToString(AblationMethod m) {
   switch (m) {
-    case AblationMethod::kBaselineLs: return "baseline-ls";
-    case AblationMethod::kBaselineLsSg: return "baseline-ls+sg51";
-    case AblationMethod::kBaselineFg: return "baseline-fg";
-    case AblationMethod::kFgNoC: return "fg-no-c";
-    case AblationMethod::kFgC: return "fg-c";
-    case AblationMethod::kFgCG: return "fg-c-g";
-    case AblationMethod::kConstrained: return "constrained";
-    case AblationMethod::kDensity: return "density";
+    case AblationMethod::kBaselineLs:
+      return "baseline-ls";
+    case AblationMethod::kBaselineLsSg:
+      return "baseline-ls+sg51";
+    case AblationMethod::kBaselineFg:
+      return "baseline-fg";
+    case AblationMethod::kFgNoC:
+      return "fg-no-c";
+    case AblationMethod::kFgC:
+      return "fg-c";
+    case AblationMethod::kFgCG:
+      return "fg-c-g";
+    case AblationMethod::kConstrained:
+      return "constrained";
+    case AblationMethod::kDensity:
+      return "density";
   }
   return "?";
 }
 
 std::vector<AblationMethod> AllAblationMethods() {
-  return {AblationMethod::kBaselineLs, AblationMethod::kBaselineLsSg, AblationMethod::kBaselineFg,
-          AblationMethod::kFgNoC,      AblationMethod::kFgC,          AblationMethod::kFgCG,
+  return {AblationMethod::kBaselineLs,  AblationMethod::kBaselineLsSg, AblationMethod::kBaselineFg,
+          AblationMethod::kFgNoC,       AblationMethod::kFgC,          AblationMethod::kFgCG,
           AblationMethod::kConstrained, AblationMethod::kDensity};
 }
 
 std::string PaperMethodName(AblationMethod m) {
   switch (m) {
-    case AblationMethod::kBaselineLsSg: return "Baseline";
-    case AblationMethod::kBaselineFg: return "Baseline-FG";
-    case AblationMethod::kFgNoC: return "No C, No G";
-    case AblationMethod::kFgC: return "C, No G";
-    case AblationMethod::kFgCG: return "C + G";
-    default: return "";
+    case AblationMethod::kBaselineLsSg:
+      return "Baseline";
+    case AblationMethod::kBaselineFg:
+      return "Baseline-FG";
+    case AblationMethod::kFgNoC:
+      return "No C, No G";
+    case AblationMethod::kFgC:
+      return "C, No G";
+    case AblationMethod::kFgCG:
+      return "C + G";
+    default:
+      return "";
   }
 }
 
 absl::Status ValidateAblationConfig(const AblationConfig& c) {
-  if (c.seeds < 1) return absl::InvalidArgumentError(absl::StrCat("seeds: must be >= 1, got ", c.seeds));
+  if (c.seeds < 1)
+    return absl::InvalidArgumentError(absl::StrCat("seeds: must be >= 1, got ", c.seeds));
   if (!(c.duration > 0) || !std::isfinite(c.duration))
     return absl::InvalidArgumentError(absl::StrCat("duration: must be > 0, got ", c.duration));
   if (!(c.rate > 0) || !std::isfinite(c.rate))
@@ -58,24 +73,37 @@ inertia::InertiaOptions AblationOptions(AblationMethod m, const AblationData& da
   if (o.hull.empty() && o.mesh) o.hull = o.mesh->vertices;
   if (m != AblationMethod::kDensity) o.mesh = nullptr;  // only DENSITY uses the mesh itself
   switch (m) {
-    case AblationMethod::kBaselineLs: o.method = InertiaMethod::kBaselineLs; break;
+    case AblationMethod::kBaselineLs:
+      o.method = InertiaMethod::kBaselineLs;
+      break;
     case AblationMethod::kBaselineLsSg:
       o.method = InertiaMethod::kBaselineLs;
       o.baseline_ls.savitzky_golay = true;
       o.baseline_ls.savitzky_golay_window = 51;
       break;
-    case AblationMethod::kBaselineFg: o.factor_graph.variant = FactorGraphVariant::kBaselineFg; break;
-    case AblationMethod::kFgNoC: o.factor_graph.variant = FactorGraphVariant::kNoConstraint; break;
-    case AblationMethod::kFgC: o.factor_graph.variant = FactorGraphVariant::kConstraint; break;
+    case AblationMethod::kBaselineFg:
+      o.factor_graph.variant = FactorGraphVariant::kBaselineFg;
+      break;
+    case AblationMethod::kFgNoC:
+      o.factor_graph.variant = FactorGraphVariant::kNoConstraint;
+      break;
+    case AblationMethod::kFgC:
+      o.factor_graph.variant = FactorGraphVariant::kConstraint;
+      break;
     case AblationMethod::kFgCG:
       o.factor_graph.variant = FactorGraphVariant::kConstraintPrior;
-      o.prior = inertia::InertiaPrior{data.truth, 1.0};  // the paper: "the prior ... the ground truth"
+      o.prior =
+          inertia::InertiaPrior{data.truth, 1.0};  // the paper: "the prior ... the ground truth"
       break;
-    case AblationMethod::kConstrained: o.method = InertiaMethod::kConstrained; break;
-    case AblationMethod::kDensity: o.method = InertiaMethod::kDensity; break;
+    case AblationMethod::kConstrained:
+      o.method = InertiaMethod::kConstrained;
+      break;
+    case AblationMethod::kDensity:
+      o.method = InertiaMethod::kDensity;
+      break;
   }
-  if (m == AblationMethod::kBaselineFg || m == AblationMethod::kFgNoC || m == AblationMethod::kFgC ||
-      m == AblationMethod::kFgCG)
+  if (m == AblationMethod::kBaselineFg || m == AblationMethod::kFgNoC ||
+      m == AblationMethod::kFgC || m == AblationMethod::kFgCG)
     o.method = InertiaMethod::kFactorGraph;
   return o;
 }
@@ -118,9 +146,11 @@ AblationRow Summarise(const std::string& method, const std::string& source, cons
 }
 
 // Every method on one data set, into runs[method index].
-void FitAll(const AblationData& data, const std::vector<AblationMethod>& methods, std::vector<Runs>* runs) {
+void FitAll(const AblationData& data, const std::vector<AblationMethod>& methods,
+            std::vector<Runs>* runs) {
   for (size_t i = 0; i < methods.size(); ++i) {
-    absl::StatusOr<inertia::InertiaFit> fit = inertia::FitInertia(data.samples, AblationOptions(methods[i], data));
+    absl::StatusOr<inertia::InertiaFit> fit =
+        inertia::FitInertia(data.samples, AblationOptions(methods[i], data));
     if (!fit.ok()) {
       ++(*runs)[i].failed;
       continue;
@@ -143,23 +173,28 @@ absl::StatusOr<AblationTable> RunAblation(const AblationConfig& config) {
   std::vector<AblationSource> chosen;
   const std::vector<AblationSource> all = BuiltInAblationSources(config);
   for (const std::string& name : config.sources) {
-    auto it = std::find_if(all.begin(), all.end(), [&](const AblationSource& s) { return s.name == name; });
+    auto it = std::find_if(all.begin(), all.end(),
+                           [&](const AblationSource& s) { return s.name == name; });
     if (it == all.end()) {
       std::string names;
-      for (const AblationSource& s : all) absl::StrAppend(&names, names.empty() ? "" : ", ", s.name);
-      return absl::InvalidArgumentError(absl::StrCat("sources: unknown '", name, "' (expected ", names, ")"));
+      for (const AblationSource& s : all)
+        absl::StrAppend(&names, names.empty() ? "" : ", ", s.name);
+      return absl::InvalidArgumentError(
+          absl::StrCat("sources: unknown '", name, "' (expected ", names, ")"));
     }
     chosen.push_back(*it);
   }
   return RunAblation(config, config.sources.empty() ? all : chosen);
 }
 
-absl::StatusOr<AblationTable> RunAblation(const AblationConfig& config, const std::vector<AblationSource>& sources) {
+absl::StatusOr<AblationTable> RunAblation(const AblationConfig& config,
+                                          const std::vector<AblationSource>& sources) {
   TF_RETURN_IF_ERROR(ValidateAblationConfig(config));
   AblationTable table;
   table.config = config;
   table.sources = sources;
-  const std::vector<AblationMethod> methods = config.methods.empty() ? AllAblationMethods() : config.methods;
+  const std::vector<AblationMethod> methods =
+      config.methods.empty() ? AllAblationMethods() : config.methods;
   const double total = static_cast<double>(sources.size()) * config.seeds;
   int done = 0;
   for (const AblationSource& source : sources) {
@@ -168,8 +203,8 @@ absl::StatusOr<AblationTable> RunAblation(const AblationConfig& config, const st
       absl::StatusOr<AblationData> data = source.make(config.first_seed + k);
       if (!data.ok())
         return absl::Status(data.status().code(),
-                            absl::StrCat("source ", source.name, ", seed ", config.first_seed + k, ": ",
-                                         data.status().message()));
+                            absl::StrCat("source ", source.name, ", seed ", config.first_seed + k,
+                                         ": ", data.status().message()));
       FitAll(*data, methods, &runs);
       if (config.progress) config.progress(++done / total);
     }

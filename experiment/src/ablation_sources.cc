@@ -40,7 +40,8 @@ AblationData FromSimulation(inertia::SimulationResult sim, const inertia::Simula
 AblationSource Simulation(const AblationConfig& c, double variance) {
   AblationSource s;
   s.name = absl::StrCat("sim-", absl::StrFormat("%g", variance));
-  s.description = absl::StrFormat("seed-table1, 4 planner contacts, force variance %g N^2", variance);
+  s.description =
+      absl::StrFormat("seed-table1, 4 planner contacts, force variance %g N^2", variance);
   s.make = [c, variance](uint64_t seed) -> absl::StatusOr<AblationData> {
     inertia::SimulationOptions so;
     so.object = "seed-table1";
@@ -59,7 +60,8 @@ AblationSource Simulation(const AblationConfig& c, double variance) {
 AblationSource Wrist(const AblationConfig& c) {
   AblationSource s;
   s.name = "wrist-moderate";
-  s.description = "seed-table1 on a wrist F/T sensor, Nadeau et al. moderate noise, measured kinematics";
+  s.description =
+      "seed-table1 on a wrist F/T sensor, Nadeau et al. moderate noise, measured kinematics";
   s.make = [c](uint64_t seed) -> absl::StatusOr<AblationData> {
     inertia::SimulationOptions so;
     so.object = "seed-table1";
@@ -83,8 +85,8 @@ AblationSource Wrist(const AblationConfig& c) {
 AblationSource InHand(const AblationConfig& c, Tracker tracker) {
   AblationSource s;
   s.name = absl::StrCat("inhand-", ToString(tracker));
-  s.description = absl::StrCat("MuJoCo in-hand, box_(seed mod 5), biotac force model, ", ToString(tracker),
-                               " tracker");
+  s.description = absl::StrCat("MuJoCo in-hand, box_(seed mod 5), biotac force model, ",
+                               ToString(tracker), " tracker");
   s.make = [c, tracker](uint64_t seed) -> absl::StatusOr<AblationData> {
     InHandConfig ic;
     const std::vector<std::string> boxes = BuiltInInHandObjects();

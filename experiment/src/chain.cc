@@ -33,7 +33,8 @@ absl::StatusOr<Truth> ObjectTruth(const ChainConfig& config, GraspObject object)
   absl::StatusOr<std::unique_ptr<GraspSetup>> setup = GraspSetup::Create(gc);
   if (!setup.ok()) return setup.status();
   const GraspSetup::Impl& im = (*setup)->impl();
-  return Truth{im.base.object.mass, im.base.contacts.front().friction, im.base.object.com, im.inertia};
+  return Truth{im.base.object.mass, im.base.contacts.front().friction, im.base.object.com,
+               im.inertia};
 }
 
 double Median(std::vector<double> v) {
@@ -57,9 +58,9 @@ absl::Status ProbeFriction(const ChainConfig& config, uint64_t seed, ChainEstima
   }
   e->probes_valid = static_cast<int>(mus.size());
   if (mus.size() < 2)
-    return absl::FailedPreconditionError(absl::StrFormat(
-        "probe: %d of %d probes valid on %s (seed %d); need 2 for a spread", mus.size(), config.probe_trials,
-        ToString(e->object), seed));
+    return absl::FailedPreconditionError(
+        absl::StrFormat("probe: %d of %d probes valid on %s (seed %d); need 2 for a spread",
+                        mus.size(), config.probe_trials, ToString(e->object), seed));
   double sum = 0, sq = 0;
   for (double m : mus) sum += m;
   e->mu = sum / mus.size();
@@ -69,16 +70,19 @@ absl::Status ProbeFriction(const ChainConfig& config, uint64_t seed, ChainEstima
 }
 
 // The in-hand run on the object's equivalent box and the fit.
-absl::StatusOr<inertia::InertiaFit> FitInHand(const ChainConfig& config, uint64_t seed, const Truth& truth,
-                                              GraspObject object) {
+absl::StatusOr<inertia::InertiaFit> FitInHand(const ChainConfig& config, uint64_t seed,
+                                              const Truth& truth, GraspObject object) {
   InHandConfig ic = config.inhand;
   ic.custom = InHandEquivalent(ToString(object), truth.mass, truth.com, truth.inertia);
   ic.seed = seed;
   ic.duration = config.inhand_duration;
   absl::StatusOr<InHandRun> run = RunInHand(ic);
-  if (!run.ok()) return absl::Status(run.status().code(), absl::StrCat("inhand: ", run.status().message()));
-  absl::StatusOr<inertia::InertiaFit> fit = inertia::FitInertia(run->samples, InHandFitOptions(*run, config.fit_method));
-  if (!fit.ok()) return absl::Status(fit.status().code(), absl::StrCat("fit: ", fit.status().message()));
+  if (!run.ok())
+    return absl::Status(run.status().code(), absl::StrCat("inhand: ", run.status().message()));
+  absl::StatusOr<inertia::InertiaFit> fit =
+      inertia::FitInertia(run->samples, InHandFitOptions(*run, config.fit_method));
+  if (!fit.ok())
+    return absl::Status(fit.status().code(), absl::StrCat("fit: ", fit.status().message()));
   return fit;
 }
 
@@ -99,13 +103,14 @@ void FillModels(const ChainConfig& config, const inertia::InertiaFit& fit, Chain
   uncertain.uncertainty.covariance = fit.covariance;
   uncertain.uncertainty.confidence = config.confidence;
   e->uncertain = uncertain;
-  bool off = std::abs(e->mu - e->mu_true) > e->mu_sigma || std::abs(e->mass - e->mass_true) > e->mass_se;
+  bool off =
+      std::abs(e->mu - e->mu_true) > e->mu_sigma || std::abs(e->mass - e->mass_true) > e->mass_se;
   for (int k = 0; k < 3; ++k) off = off || std::abs(e->com[k] - e->com_true[k]) > e->com_se[k];
   e->off_by_more_than_se = off;
 }
 
-absl::StatusOr<ChainEstimates> Estimate(const ChainConfig& config, GraspObject object, uint64_t seed,
-                                        const Truth& truth) {
+absl::StatusOr<ChainEstimates> Estimate(const ChainConfig& config, GraspObject object,
+                                        uint64_t seed, const Truth& truth) {
   ChainEstimates e;
   e.object = object;
   e.seed = seed;
@@ -149,26 +154,33 @@ absl::Status RunPlanned(const ChainConfig& config, const ChainEstimates& e, Chai
 
 const char* ToString(Planning p) {
   switch (p) {
-    case Planning::kTruth: return "truth";
-    case Planning::kPoint: return "point";
-    case Planning::kUncertain: return "uncertain";
+    case Planning::kTruth:
+      return "truth";
+    case Planning::kPoint:
+      return "point";
+    case Planning::kUncertain:
+      return "uncertain";
   }
   return "?";
 }
 
 absl::Status ValidateChainConfig(const ChainConfig& c) {
   auto at_least = [](const char* field, double v, double lo) -> absl::Status {
-    if (!(v >= lo)) return absl::InvalidArgumentError(absl::StrFormat("%s: must be >= %g, got %g", field, lo, v));
+    if (!(v >= lo))
+      return absl::InvalidArgumentError(absl::StrFormat("%s: must be >= %g, got %g", field, lo, v));
     return absl::OkStatus();
   };
   if (c.objects.empty()) return absl::InvalidArgumentError("objects: empty");
-  for (auto [f, v, lo] : {std::tuple{"seeds", double(c.seeds), 1.0}, {"trials", double(c.trials), 1.0},
-                          {"probe_trials", double(c.probe_trials), 2.0}, {"inhand_duration", c.inhand_duration, 1.0},
+  for (auto [f, v, lo] : {std::tuple{"seeds", double(c.seeds), 1.0},
+                          {"trials", double(c.trials), 1.0},
+                          {"probe_trials", double(c.probe_trials), 2.0},
+                          {"inhand_duration", c.inhand_duration, 1.0},
                           {"confidence", c.confidence, 0.0}})
     TF_RETURN_IF_ERROR(at_least(f, v, lo));
   if (!std::isfinite(c.confidence) || c.confidence > planner::PlanOptions::kMaxConfidence)
-    return absl::InvalidArgumentError(absl::StrFormat("confidence: must be finite and <= %g, got %g",
-                                                      planner::PlanOptions::kMaxConfidence, c.confidence));
+    return absl::InvalidArgumentError(
+        absl::StrFormat("confidence: must be finite and <= %g, got %g",
+                        planner::PlanOptions::kMaxConfidence, c.confidence));
   TF_RETURN_IF_ERROR(ValidateGraspConfig(c.grasp));
   TF_RETURN_IF_ERROR(ValidateProbeConfig(c.probe));
   return absl::OkStatus();
@@ -189,7 +201,8 @@ InHandObject InHandEquivalent(const std::string& name, double mass, const Vec3& 
   return o;
 }
 
-absl::StatusOr<ChainReport> RunChain(const ChainConfig& config, const std::function<void(int, int)>& progress) {
+absl::StatusOr<ChainReport> RunChain(const ChainConfig& config,
+                                     const std::function<void(int, int)>& progress) {
   TF_RETURN_IF_ERROR(ValidateChainConfig(config));
   const auto start = std::chrono::steady_clock::now();
   ChainReport report;
@@ -200,7 +213,8 @@ absl::StatusOr<ChainReport> RunChain(const ChainConfig& config, const std::funct
     if (!truth.ok()) return truth.status();
     std::vector<ChainRow> rows(3);
     std::vector<std::vector<double>> squeezes(3), margins(3);
-    for (int p = 0; p < 3; ++p) rows[p].object = object, rows[p].planning = static_cast<Planning>(p);
+    for (int p = 0; p < 3; ++p)
+      rows[p].object = object, rows[p].planning = static_cast<Planning>(p);
     for (int s = 0; s < config.seeds; ++s) {
       absl::StatusOr<ChainEstimates> e = Estimate(config, object, config.seed + s, *truth);
       if (!e.ok()) return e.status();
@@ -217,7 +231,8 @@ absl::StatusOr<ChainReport> RunChain(const ChainConfig& config, const std::funct
       report.rows.push_back(rows[p]);
     }
   }
-  report.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  report.wall_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;
 }
 

@@ -9,17 +9,18 @@
 namespace tactforce::experiment {
 namespace {
 
-constexpr double kContactForce = 0.1;     // N: below this a fingertip is not touching
+constexpr double kContactForce = 0.1;       // N: below this a fingertip is not touching
 constexpr double kNonActivationTime = 0.1;  // s of reading < 50 % of a rising true force
-constexpr double kPhantomMargin = 0.5;    // N above the true force while not touching
-constexpr double kDetachTime = 0.05;      // s without contact after touching = detached
-constexpr double kOverReadMargin = 0.25;  // N, mean reading - truth of an over-reading fingertip
+constexpr double kPhantomMargin = 0.5;      // N above the true force while not touching
+constexpr double kDetachTime = 0.05;        // s without contact after touching = detached
+constexpr double kOverReadMargin = 0.25;    // N, mean reading - truth of an over-reading fingertip
 
 }  // namespace
 
 CauseTracker::CauseTracker(int n_fingers) : fingers_(n_fingers) {}
 
-void CauseTracker::Tick(double t, const std::vector<double>& truth, const std::vector<double>& reading) {
+void CauseTracker::Tick(double t, const std::vector<double>& truth,
+                        const std::vector<double>& reading) {
   ++ticks_;
   for (size_t i = 0; i < fingers_.size(); ++i) {
     Finger& f = fingers_[i];
@@ -49,7 +50,8 @@ FailureCause CauseTracker::Label(bool failed, bool tilted) const {
   if (non_activation_) return FailureCause::kNonActivation;
   if (phantom_) return FailureCause::kPhantomForce;
   double worst_over = -INFINITY;
-  for (const Finger& f : fingers_) worst_over = std::max(worst_over, ticks_ > 0 ? f.over_sum / ticks_ : 0.0);
+  for (const Finger& f : fingers_)
+    worst_over = std::max(worst_over, ticks_ > 0 ? f.over_sum / ticks_ : 0.0);
   if (tilted && worst_over > kOverReadMargin) return FailureCause::kOverReadingTilt;
   return FailureCause::kSlipDrop;
 }

@@ -19,12 +19,14 @@ constexpr io::EnumNameRow<GraspObject> kObjectNames[] = {{GraspObject::kSphere, 
                                                          {GraspObject::kWrench, "wrench"},
                                                          {GraspObject::kCylinder, "cylinder"},
                                                          {GraspObject::kCube, "cube"}};
-constexpr io::EnumNameRow<Feedback> kFeedbackNames[] = {{Feedback::kRaw, "raw"}, {Feedback::kEstimated, "estimated"}};
+constexpr io::EnumNameRow<Feedback> kFeedbackNames[] = {{Feedback::kRaw, "raw"},
+                                                        {Feedback::kEstimated, "estimated"}};
 constexpr io::EnumNameRow<Admittance> kAdmittanceNames[] = {{Admittance::kFull, "full"},
                                                             {Admittance::kNormal, "normal"}};
 constexpr io::EnumNameRow<SensorArray> kSensorNames[] = {{SensorArray::kTaxel, "taxel"},
                                                          {SensorArray::kChannel, "channel"}};
-constexpr io::EnumNameRow<Protocol> kProtocolNames[] = {{Protocol::kShort, "short"}, {Protocol::kPaper, "paper"}};
+constexpr io::EnumNameRow<Protocol> kProtocolNames[] = {{Protocol::kShort, "short"},
+                                                        {Protocol::kPaper, "paper"}};
 
 }  // namespace
 
@@ -80,11 +82,16 @@ PhaseDurations ProtocolPhases(Protocol p) {
 
 const char* ToString(FailureCause c) {
   switch (c) {
-    case FailureCause::kNone: return "none";
-    case FailureCause::kNonActivation: return "non_activation";
-    case FailureCause::kPhantomForce: return "phantom_force";
-    case FailureCause::kOverReadingTilt: return "over_reading_tilt";
-    case FailureCause::kSlipDrop: return "slip_drop";
+    case FailureCause::kNone:
+      return "none";
+    case FailureCause::kNonActivation:
+      return "non_activation";
+    case FailureCause::kPhantomForce:
+      return "phantom_force";
+    case FailureCause::kOverReadingTilt:
+      return "over_reading_tilt";
+    case FailureCause::kSlipDrop:
+      return "slip_drop";
   }
   return "?";
 }
@@ -96,14 +103,22 @@ std::vector<FailureCause> AllFailureCauses() {
 
 const char* ToString(Phase p) {
   switch (p) {
-    case Phase::kClose: return "close";
-    case Phase::kSettle: return "settle";
-    case Phase::kHold: return "hold";
-    case Phase::kLift: return "lift";
-    case Phase::kHoldLifted: return "hold";
-    case Phase::kPlace: return "place";
-    case Phase::kPlaced: return "placed";
-    case Phase::kSwitched: return "switched";
+    case Phase::kClose:
+      return "close";
+    case Phase::kSettle:
+      return "settle";
+    case Phase::kHold:
+      return "hold";
+    case Phase::kLift:
+      return "lift";
+    case Phase::kHoldLifted:
+      return "hold";
+    case Phase::kPlace:
+      return "place";
+    case Phase::kPlaced:
+      return "placed";
+    case Phase::kSwitched:
+      return "switched";
   }
   return "?";
 }
@@ -112,11 +127,15 @@ namespace {
 
 absl::Status ValidateFault(const SensorFault& f) {
   if (f.kind == SensorFault::Kind::kNone) return absl::OkStatus();
-  if (f.finger < 0) return absl::InvalidArgumentError(absl::StrFormat("fault.finger: must be >= 0, got %d", f.finger));
+  if (f.finger < 0)
+    return absl::InvalidArgumentError(
+        absl::StrFormat("fault.finger: must be >= 0, got %d", f.finger));
   if (!std::isfinite(f.magnitude))
-    return absl::InvalidArgumentError(absl::StrFormat("fault.magnitude: must be finite, got %g", f.magnitude));
+    return absl::InvalidArgumentError(
+        absl::StrFormat("fault.magnitude: must be finite, got %g", f.magnitude));
   if (!(f.start >= 0 && std::isfinite(f.start)))
-    return absl::InvalidArgumentError(absl::StrFormat("fault.start: must be >= 0, got %g", f.start));
+    return absl::InvalidArgumentError(
+        absl::StrFormat("fault.start: must be >= 0, got %g", f.start));
   return absl::OkStatus();
 }
 
@@ -131,11 +150,16 @@ absl::Status ValidateGraspConfig(const GraspConfig& c) {
     return absl::OkStatus();
   };
   const PhaseDurations& p = c.phases;
-  for (auto [name, v] : {std::pair{"phases.close", p.close}, {"phases.settle", p.settle}, {"phases.hold", p.hold},
-                         {"phases.lift", p.lift}, {"phases.hold_lifted", p.hold_lifted}}) {
+  for (auto [name, v] : {std::pair{"phases.close", p.close},
+                         {"phases.settle", p.settle},
+                         {"phases.hold", p.hold},
+                         {"phases.lift", p.lift},
+                         {"phases.hold_lifted", p.hold_lifted}}) {
     TF_RETURN_IF_ERROR(positive(name, v));
   }
-  for (auto [name, v] : {std::pair{"phases.place", p.place}, {"phases.placed", p.placed}, {"phases.switched", p.switched}})
+  for (auto [name, v] : {std::pair{"phases.place", p.place},
+                         {"phases.placed", p.placed},
+                         {"phases.switched", p.switched}})
     if (!(v >= 0 && std::isfinite(v))) return bad(name, absl::StrFormat("must be >= 0, got %g", v));
   if (!(c.lift_height >= 0 && c.lift_height <= 0.5))
     return bad("lift_height", absl::StrFormat("must be in [0, 0.5] m, got %g", c.lift_height));
@@ -144,26 +168,30 @@ absl::Status ValidateGraspConfig(const GraspConfig& c) {
   TF_RETURN_IF_ERROR(positive("control_rate", c.control_rate));
   TF_RETURN_IF_ERROR(ValidatePhysics(c.physics));
   if (c.control_rate * c.physics.timestep > 1.0 + 1e-9)
-    return bad("control_rate", absl::StrFormat("%g Hz is faster than the physics (timestep %g s)", c.control_rate,
-                                               c.physics.timestep));
+    return bad("control_rate", absl::StrFormat("%g Hz is faster than the physics (timestep %g s)",
+                                               c.control_rate, c.physics.timestep));
   if (!(c.admittance_gain > 0 && c.admittance_gain <= 1))
     return bad("admittance_gain", absl::StrFormat("must be in (0, 1], got %g", c.admittance_gain));
   TF_RETURN_IF_ERROR(positive("kp", c.kp));
   TF_RETURN_IF_ERROR(positive("damping_ratio", c.damping_ratio));
   TF_RETURN_IF_ERROR(positive("fingertip_mass", c.fingertip_mass));
   if (std::sqrt(c.kp / c.fingertip_mass) * c.physics.timestep > 1.0)
-    return bad("kp", absl::StrFormat("too stiff for fingertip_mass %g kg at timestep %g s (sqrt(kp/m) dt = %.2f > 1: "
-                                     "the explicit PD would be unstable)",
-                                     c.fingertip_mass, c.physics.timestep,
-                                     std::sqrt(c.kp / c.fingertip_mass) * c.physics.timestep));
+    return bad("kp",
+               absl::StrFormat(
+                   "too stiff for fingertip_mass %g kg at timestep %g s (sqrt(kp/m) dt = %.2f > 1: "
+                   "the explicit PD would be unstable)",
+                   c.fingertip_mass, c.physics.timestep,
+                   std::sqrt(c.kp / c.fingertip_mass) * c.physics.timestep));
   if (!(c.fingertip_radius >= 0.003 && c.fingertip_radius <= 0.03))
-    return bad("fingertip_radius", absl::StrFormat("must be in [0.003, 0.03] m, got %g", c.fingertip_radius));
+    return bad("fingertip_radius",
+               absl::StrFormat("must be in [0.003, 0.03] m, got %g", c.fingertip_radius));
   if (!(c.confidence >= 0 && std::isfinite(c.confidence)))
     return bad("confidence", absl::StrFormat("must be >= 0, got %g", c.confidence));
   TF_RETURN_IF_ERROR(positive("max_rotation_deg", c.max_rotation_deg));
   TF_RETURN_IF_ERROR(positive("max_slip", c.max_slip));
   if (!(c.drop_distance > c.max_slip))
-    return bad("drop_distance", absl::StrFormat("must exceed max_slip (%g m), got %g", c.max_slip, c.drop_distance));
+    return bad("drop_distance",
+               absl::StrFormat("must exceed max_slip (%g m), got %g", c.max_slip, c.drop_distance));
   if (c.sensors == SensorMode::kGeoDexRandom) {
     TF_RETURN_IF_ERROR(ValidateErrorRanges(c.error_ranges, "error_ranges."));
   }

@@ -40,22 +40,22 @@ struct HandMotion {
 
 struct GraspSetup::Impl {
   std::vector<std::string> finger_names;
-  planner::PlanProblem base;        // object frame, intrinsic contacts first
-  planner::Inertia inertia;         // about the CoM (kg m^2)
+  planner::PlanProblem base;  // object frame, intrinsic contacts first
+  planner::Inertia inertia;   // about the CoM (kg m^2)
   // What the plans and the estimator use: `base` and `inertia`, or the
   // config's PlanningModel applied to them (the simulation keeps the truth).
   planner::PlanProblem plan_base;
   planner::Inertia plan_inertia;
   int n_fingers = 0;
   planner::Vec3 rest_origin = planner::Vec3::Zero();  // object origin (world) at rest
-  bool pivot = false;               // cube: rotate about `pivot_point` around +x
+  bool pivot = false;                                 // cube: rotate about `pivot_point` around +x
   planner::Vec3 pivot_point = planner::Vec3::Zero();  // world
-  double amplitude = 0;             // m (lift) or rad (pivot)
+  double amplitude = 0;                               // m (lift) or rad (pivot)
   PhaseDurations phases;
   Timeline timeline{PhaseDurations{}};
   int ticks = 0;
-  std::vector<planner::PlanProblem> tick_problem;  // per control tick (estimation)
-  std::vector<std::vector<double>> tick_desired;   // per tick, per finger (N)
+  std::vector<planner::PlanProblem> tick_problem;      // per control tick (estimation)
+  std::vector<std::vector<double>> tick_desired;       // per tick, per finger (N)
   std::vector<std::vector<planner::Vec3>> tick_force;  // per tick, per finger, object frame (N)
   planner::PlanOptions plan_options;  // what the ticks were planned with (re-plans use them too)
 

@@ -79,7 +79,8 @@ std::vector<ObjectSpec> MakeObjectSpecs() {
                     TableContact("edge-left", Vec3(-a, -a, -a), 0.6),
                     TableContact("edge-right", Vec3(a, -a, -a), 0.6)},
        .mass = kCubeMass,
-       .inertia = [](double m) { return Isotropic(m * (2 * kCubeHalfEdge) * (2 * kCubeHalfEdge) / 6); },
+       .inertia =
+           [](double m) { return Isotropic(m * (2 * kCubeHalfEdge) * (2 * kCubeHalfEdge) / 6); },
        .rest_origin = Vec3(0, 0, a),
        .pivot_point = Vec3(0, -a, 0),
        .geoms = {{"box", {a, a, a}, {}, "0.3 0.3 0.8 1"}}},
@@ -89,7 +90,8 @@ std::vector<ObjectSpec> MakeObjectSpecs() {
 }  // namespace
 
 const ObjectSpec* FindObjectSpec(GraspObject object) {
-  static const std::vector<ObjectSpec>* const specs = new std::vector<ObjectSpec>(MakeObjectSpecs());
+  static const std::vector<ObjectSpec>* const specs =
+      new std::vector<ObjectSpec>(MakeObjectSpecs());
   for (const ObjectSpec& spec : *specs)
     if (spec.object == object) return &spec;
   return nullptr;
@@ -99,11 +101,12 @@ std::vector<std::string> GeomElements(const ObjectSpec& spec) {
   std::vector<std::string> out;
   for (size_t k = 0; k < spec.geoms.size(); ++k) {
     const GeomSpec& g = spec.geoms[k];
-    const std::string pos = g.pos ? absl::StrFormat(" pos=\"%g %g %g\"", g.pos->x(), g.pos->y(), g.pos->z()) : "";
-    const std::string size =
-        absl::StrJoin(g.size, " ", [](std::string* out, double v) { absl::StrAppendFormat(out, "%g", v); });
-    out.push_back(absl::StrFormat("<geom name=\"obj%d\" type=\"%s\"%s size=\"%s\" rgba=\"%s\"/>", k, g.type, pos,
-                                  size, g.rgba));
+    const std::string pos =
+        g.pos ? absl::StrFormat(" pos=\"%g %g %g\"", g.pos->x(), g.pos->y(), g.pos->z()) : "";
+    const std::string size = absl::StrJoin(
+        g.size, " ", [](std::string* out, double v) { absl::StrAppendFormat(out, "%g", v); });
+    out.push_back(absl::StrFormat("<geom name=\"obj%d\" type=\"%s\"%s size=\"%s\" rgba=\"%s\"/>", k,
+                                  g.type, pos, size, g.rgba));
   }
   return out;
 }

@@ -19,8 +19,8 @@ namespace tactforce::experiment {
 // One MJCF geom of the object, in the object frame (rendered as
 // <geom name="objK" type=... [pos=...] size=... rgba=.../>).
 struct GeomSpec {
-  std::string type;                  // MuJoCo geom type: "sphere", "box", "cylinder"
-  std::vector<double> size;          // MuJoCo's size: radius; half extents; radius and half height (m)
+  std::string type;          // MuJoCo geom type: "sphere", "box", "cylinder"
+  std::vector<double> size;  // MuJoCo's size: radius; half extents; radius and half height (m)
   std::optional<planner::Vec3> pos;  // m; absent: at the object origin
   std::string rgba;
 };
@@ -31,7 +31,7 @@ struct ObjectSpec {
   // grasp of this name; empty: `contacts` and `mass` with default plan options.
   std::string built_in_grasp = {};
   std::vector<planner::Contact> contacts = {};  // intrinsic (fingers) first, then extrinsic
-  double mass = 0;                               // kg
+  double mass = 0;                              // kg
   // Inertia about the CoM (kg m^2) given the object's mass.
   std::function<planner::Inertia(double mass)> inertia = {};
   planner::Vec3 rest_origin = planner::Vec3::Zero();  // object origin on the table (world, m)

@@ -8,7 +8,8 @@
 
 namespace tactforce::experiment {
 
-io::SvgPlot TracePlot(const TrialResult& trial, const std::vector<std::string>& finger_names, const std::string& title) {
+io::SvgPlot TracePlot(const TrialResult& trial, const std::vector<std::string>& finger_names,
+                      const std::string& title) {
   io::SvgPlot plot;
   plot.title = title;
   plot.x_label = "time (s)";

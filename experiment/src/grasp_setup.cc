@@ -19,8 +19,8 @@
 namespace tactforce::experiment {
 namespace {
 
-using planner::Vec3;
 using Eigen::Matrix3d;
+using planner::Vec3;
 
 std::string V3(const Vec3& v) { return absl::StrFormat("%.9g %.9g %.9g", v.x(), v.y(), v.z()); }
 
@@ -42,7 +42,8 @@ void ApplyPlanningModel(const std::optional<PlanningModel>& model, planner::Plan
 
 // The object (grasp problem, inertia, rest pose), the hand's motion (lift or
 // pivot) and the fingers, from the spec; returns the plan options.
-absl::StatusOr<planner::PlanOptions> SetUpObjectAndMotion(const GraspConfig& config, const ObjectSpec& spec,
+absl::StatusOr<planner::PlanOptions> SetUpObjectAndMotion(const GraspConfig& config,
+                                                          const ObjectSpec& spec,
                                                           GraspSetup::Impl* im) {
   absl::StatusOr<ObjectGrasp> grasp = ResolveGrasp(spec);
   if (!grasp.ok()) return grasp.status();
@@ -69,8 +70,8 @@ absl::StatusOr<planner::PlanOptions> SetUpObjectAndMotion(const GraspConfig& con
 
 // One trajectory step per control tick from `first` on: the wrench of the
 // hand's motion in the (possibly rotating) object frame, on `base`'s contacts.
-planner::TrajectoryProblem TickTrajectory(const GraspSetup::Impl& im, double dt_tick, const planner::PlanProblem& base,
-                                          int first) {
+planner::TrajectoryProblem TickTrajectory(const GraspSetup::Impl& im, double dt_tick,
+                                          const planner::PlanProblem& base, int first) {
   planner::TrajectoryProblem traj;
   traj.base = base;
   traj.inertia = im.plan_inertia;
@@ -94,21 +95,24 @@ planner::TrajectoryProblem TickTrajectory(const GraspSetup::Impl& im, double dt_
 }
 
 // Fills the per-tick desired forces and estimation problems.
-absl::Status PlanTicks(const GraspConfig& config, const planner::PlanOptions& options, GraspSetup::Impl* im) {
+absl::Status PlanTicks(const GraspConfig& config, const planner::PlanOptions& options,
+                       GraspSetup::Impl* im) {
   const double dt_tick = 1.0 / config.control_rate;
   im->ticks = static_cast<int>(std::ceil(im->timeline.t_end / dt_tick)) + 1;
   const planner::TrajectoryProblem traj = TickTrajectory(*im, dt_tick, im->plan_base, 0);
   auto planned = planner::PlanTrajectory(traj, options, planner::SolverKind::kGeometric, true);
-  if (!planned.ok()) return absl::InternalError(absl::StrCat("planner: ", planned.status().message()));
+  if (!planned.ok())
+    return absl::InternalError(absl::StrCat("planner: ", planned.status().message()));
   for (int j = 0; j < im->ticks; ++j) {
     const planner::PlanResult& r = planned->steps[j];
     if (r.status != planner::PlanStatus::kOptimal)
-      return absl::FailedPreconditionError(absl::StrFormat(
-          "planner: step %d (t = %.3f s) of the %s grasp is %s: %s", j, j * dt_tick, ToString(config.object),
-          planner::ToString(r.status), r.message));
+      return absl::FailedPreconditionError(
+          absl::StrFormat("planner: step %d (t = %.3f s) of the %s grasp is %s: %s", j, j * dt_tick,
+                          ToString(config.object), planner::ToString(r.status), r.message));
     std::vector<double> fd;
     std::vector<Vec3> ff;
-    for (int i = 0; i < im->n_fingers; ++i) fd.push_back(r.normal_forces[i]), ff.push_back(r.forces[i]);
+    for (int i = 0; i < im->n_fingers; ++i)
+      fd.push_back(r.normal_forces[i]), ff.push_back(r.forces[i]);
     im->tick_desired.push_back(fd);
     im->tick_force.push_back(ff);
     im->tick_problem.push_back(planner::StepProblem(traj, j));
@@ -119,11 +123,12 @@ absl::Status PlanTicks(const GraspConfig& config, const planner::PlanOptions& op
 // The free object body: inertial and its geoms (contacts only through pairs).
 std::string ObjectBodyMjcf(const GraspSetup::Impl& im, const std::vector<std::string>& geoms) {
   const std::string inertial = absl::StrFormat(
-      "<inertial pos=\"%s\" mass=\"%.9g\" fullinertia=\"%.9g %.9g %.9g %.9g %.9g %.9g\"/>", V3(im.base.object.com),
-      im.base.object.mass, im.inertia.ixx, im.inertia.iyy, im.inertia.izz, im.inertia.ixy, im.inertia.ixz,
-      im.inertia.iyz);
-  std::string x = absl::StrFormat("<body name=\"object\" pos=\"%s\">\n<joint name=\"object_free\" type=\"free\"/>\n%s\n",
-                                  V3(im.rest_origin), inertial);
+      "<inertial pos=\"%s\" mass=\"%.9g\" fullinertia=\"%.9g %.9g %.9g %.9g %.9g %.9g\"/>",
+      V3(im.base.object.com), im.base.object.mass, im.inertia.ixx, im.inertia.iyy, im.inertia.izz,
+      im.inertia.ixy, im.inertia.ixz, im.inertia.iyz);
+  std::string x = absl::StrFormat(
+      "<body name=\"object\" pos=\"%s\">\n<joint name=\"object_free\" type=\"free\"/>\n%s\n",
+      V3(im.rest_origin), inertial);
   for (const std::string& g : geoms) {
     std::string gg = g;
     gg.insert(gg.size() - 2, " contype=\"0\" conaffinity=\"0\" mass=\"0\"");
@@ -141,9 +146,11 @@ std::string FingertipBodyMjcf(const GraspConfig& config, const GraspSetup::Impl&
   const Vec3 open = im.rest_origin + c.position - n * (rf + 0.015);
   return absl::StrFormat(
       "<body name=\"f%d\" pos=\"%s\">\n"
-      "<joint name=\"f%dx\" type=\"slide\" axis=\"1 0 0\"/><joint name=\"f%dy\" type=\"slide\" axis=\"0 1 0\"/>"
+      "<joint name=\"f%dx\" type=\"slide\" axis=\"1 0 0\"/><joint name=\"f%dy\" type=\"slide\" "
+      "axis=\"0 1 0\"/>"
       "<joint name=\"f%dz\" type=\"slide\" axis=\"0 0 1\"/>\n"
-      "<geom name=\"f%dg\" type=\"sphere\" size=\"%.9g\" mass=\"%.9g\" contype=\"0\" conaffinity=\"0\" "
+      "<geom name=\"f%dg\" type=\"sphere\" size=\"%.9g\" mass=\"%.9g\" contype=\"0\" "
+      "conaffinity=\"0\" "
       "rgba=\"0.9 0.8 0.2 1\"/>\n</body>\n",
       i, V3(open), i, i, i, i, rf, config.fingertip_mass);
 }
@@ -158,26 +165,31 @@ std::string ContactPairsMjcf(const GraspConfig& config, const GraspSetup::Impl& 
   for (size_t g = 0; g < n_geoms; ++g) {
     for (int i = 0; i < im.n_fingers; ++i) {
       const double mu = im.base.contacts[i].friction;
-      absl::StrAppend(&x, absl::StrFormat(
-          "<pair geom1=\"f%dg\" geom2=\"obj%d\" condim=\"%d\" friction=\"%.9g %.9g %.9g 0.0001 0.0001\" %s/>\n", i, g,
-          ph.condim_fingertip, mu, mu, ph.torsional_friction, sol));
+      absl::StrAppend(
+          &x, absl::StrFormat("<pair geom1=\"f%dg\" geom2=\"obj%d\" condim=\"%d\" friction=\"%.9g "
+                              "%.9g %.9g 0.0001 0.0001\" %s/>\n",
+                              i, g, ph.condim_fingertip, mu, mu, ph.torsional_friction, sol));
     }
-    absl::StrAppend(&x, absl::StrFormat(
-        "<pair geom1=\"obj%d\" geom2=\"table\" condim=\"3\" friction=\"%.9g %.9g 0.005 0.0001 0.0001\" %s/>\n", g,
-        table_mu, table_mu, sol));
+    absl::StrAppend(&x, absl::StrFormat("<pair geom1=\"obj%d\" geom2=\"table\" condim=\"3\" "
+                                        "friction=\"%.9g %.9g 0.005 0.0001 0.0001\" %s/>\n",
+                                        g, table_mu, table_mu, sol));
   }
   absl::StrAppend(&x, "</contact>\n");
   return x;
 }
 
-std::string GraspMjcf(const GraspConfig& config, const ObjectSpec& spec, const GraspSetup::Impl& im) {
+std::string GraspMjcf(const GraspConfig& config, const ObjectSpec& spec,
+                      const GraspSetup::Impl& im) {
   const std::vector<std::string> geoms = GeomElements(spec);
   std::string x = "<mujoco model=\"tactforce_grasp\">\n";
   absl::StrAppend(&x, OptionMjcf(config.physics));
-  absl::StrAppend(&x, "<worldbody>\n<geom name=\"table\" type=\"plane\" size=\"0.5 0.5 0.01\" contype=\"0\" conaffinity=\"0\"/>\n");
+  absl::StrAppend(&x,
+                  "<worldbody>\n<geom name=\"table\" type=\"plane\" size=\"0.5 0.5 0.01\" "
+                  "contype=\"0\" conaffinity=\"0\"/>\n");
   absl::StrAppend(&x, ObjectBodyMjcf(im, geoms));
   for (int i = 0; i < im.n_fingers; ++i) absl::StrAppend(&x, FingertipBodyMjcf(config, im, i));
-  absl::StrAppend(&x, "</worldbody>\n", ContactPairsMjcf(config, im, geoms.size(), spec.table_mu), "</mujoco>\n");
+  absl::StrAppend(&x, "</worldbody>\n", ContactPairsMjcf(config, im, geoms.size(), spec.table_mu),
+                  "</mujoco>\n");
   return x;
 }
 
@@ -189,18 +201,22 @@ absl::StatusOr<TickPlans> PlanTickRange(const GraspConfig& config, const GraspSe
   base.contacts = contacts;
   planner::Inertia unused;
   ApplyPlanningModel(config.planning_model, &base, &unused);
-  const planner::TrajectoryProblem traj = TickTrajectory(im, 1.0 / config.control_rate, base, first);
-  auto planned = planner::PlanTrajectory(traj, im.plan_options, planner::SolverKind::kGeometric, true);
-  if (!planned.ok()) return absl::InternalError(absl::StrCat("planner: ", planned.status().message()));
+  const planner::TrajectoryProblem traj =
+      TickTrajectory(im, 1.0 / config.control_rate, base, first);
+  auto planned =
+      planner::PlanTrajectory(traj, im.plan_options, planner::SolverKind::kGeometric, true);
+  if (!planned.ok())
+    return absl::InternalError(absl::StrCat("planner: ", planned.status().message()));
   TickPlans out;
   for (size_t k = 0; k < traj.steps.size(); ++k) {
     const planner::PlanResult& r = planned->steps[k];
     if (r.status != planner::PlanStatus::kOptimal)
-      return absl::FailedPreconditionError(absl::StrFormat("planner: step %d is %s", first + static_cast<int>(k),
-                                                           planner::ToString(r.status)));
+      return absl::FailedPreconditionError(absl::StrFormat(
+          "planner: step %d is %s", first + static_cast<int>(k), planner::ToString(r.status)));
     std::vector<double> fd;
     std::vector<Vec3> ff;
-    for (int i = 0; i < im.n_fingers; ++i) fd.push_back(r.normal_forces[i]), ff.push_back(r.forces[i]);
+    for (int i = 0; i < im.n_fingers; ++i)
+      fd.push_back(r.normal_forces[i]), ff.push_back(r.forces[i]);
     out.desired.push_back(std::move(fd));
     out.force.push_back(std::move(ff));
     out.problem.push_back(planner::StepProblem(traj, static_cast<int>(k)));
@@ -215,17 +231,20 @@ absl::StatusOr<std::unique_ptr<GraspSetup>> GraspSetup::Create(const GraspConfig
   TF_RETURN_IF_ERROR(ValidateGraspConfig(config));
   const ObjectSpec* spec = FindObjectSpec(config.object);
   if (spec == nullptr)
-    return absl::InternalError(absl::StrCat("object: no specification for '", ToString(config.object), "'"));
+    return absl::InternalError(
+        absl::StrCat("object: no specification for '", ToString(config.object), "'"));
   std::unique_ptr<GraspSetup> setup(new GraspSetup());
   setup->config_ = config;
   setup->impl_ = std::make_unique<Impl>();
-  absl::StatusOr<planner::PlanOptions> options = SetUpObjectAndMotion(config, *spec, setup->impl_.get());
+  absl::StatusOr<planner::PlanOptions> options =
+      SetUpObjectAndMotion(config, *spec, setup->impl_.get());
   if (!options.ok()) return options.status();
   setup->impl_->plan_options = *options;
-  if (config.fault.kind != SensorFault::Kind::kNone && config.fault.finger >= setup->impl_->n_fingers)
-    return absl::InvalidArgumentError(absl::StrFormat("fault.finger: must be < %d (the %s grasp's fingers), got %d",
-                                                      setup->impl_->n_fingers, ToString(config.object),
-                                                      config.fault.finger));
+  if (config.fault.kind != SensorFault::Kind::kNone &&
+      config.fault.finger >= setup->impl_->n_fingers)
+    return absl::InvalidArgumentError(
+        absl::StrFormat("fault.finger: must be < %d (the %s grasp's fingers), got %d",
+                        setup->impl_->n_fingers, ToString(config.object), config.fault.finger));
   TF_RETURN_IF_ERROR(PlanTicks(config, *options, setup->impl_.get()));
   setup->mjcf_ = GraspMjcf(config, *spec, *setup->impl_);
   // Compile once here so model errors surface at set-up.

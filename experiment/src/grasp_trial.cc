@@ -24,8 +24,8 @@
 namespace tactforce::experiment {
 namespace {
 
-using planner::Vec3;
 using Eigen::Matrix3d;
+using planner::Vec3;
 
 constexpr double kMaxTargetStep = 0.001;  // m per tick the admittance may move a target
 constexpr double kOpenGap = 0.015;        // m between a fingertip and its contact when open
@@ -49,9 +49,12 @@ FingerContact MeasureFinger(const mjModel* m, const mjData* d, int finger_geom, 
   for (int i = 0; i < d->ncon; ++i) {
     const mjContact& c = d->contact[i];
     int other;
-    if (c.geom1 == finger_geom) other = c.geom2;
-    else if (c.geom2 == finger_geom) other = c.geom1;
-    else continue;
+    if (c.geom1 == finger_geom)
+      other = c.geom2;
+    else if (c.geom2 == finger_geom)
+      other = c.geom1;
+    else
+      continue;
     if (m->geom_bodyid[other] != object_body || c.efc_address < 0) continue;
     mjtNum f[6];
     mj_contactForce(m, d, i, f);
@@ -76,7 +79,8 @@ struct FingerWrench {
   double normal = 0;
   Vec3 force = Vec3::Zero(), point = Vec3::Zero();
 };
-FingerWrench MeasureFingerForce(const mjModel* m, const mjData* d, int finger_geom, int object_body) {
+FingerWrench MeasureFingerForce(const mjModel* m, const mjData* d, int finger_geom,
+                                int object_body) {
   FingerWrench out;
   for (int i = 0; i < d->ncon; ++i) {
     const mjContact& c = d->contact[i];
@@ -99,10 +103,12 @@ FingerWrench MeasureFingerForce(const mjModel* m, const mjData* d, int finger_ge
 // Where fingertip i lives in the scene and where its targets start.
 struct Fingertip {
   int geom = -1, dof = -1, qadr = -1;
-  Vec3 normal, center, open;  // contact normal; centre touching the contact and 15 mm back (world, at rest)
-  double delta = 0;           // normal admittance offset (m), Admittance::kNormal
-  Vec3 offset;                // target - touching centre (hand frame, m)
-  Matrix3d frame = Matrix3d::Identity();  // taxel fingertip frame -> world (z = the contact normal at rest)
+  Vec3 normal, center,
+      open;          // contact normal; centre touching the contact and 15 mm back (world, at rest)
+  double delta = 0;  // normal admittance offset (m), Admittance::kNormal
+  Vec3 offset;       // target - touching centre (hand frame, m)
+  Matrix3d frame =
+      Matrix3d::Identity();  // taxel fingertip frame -> world (z = the contact normal at rest)
 };
 
 // What the loop saw and was told at the last control tick (per fingertip).
@@ -115,8 +121,14 @@ struct Readings {
 class TrialRun {
  public:
   TrialRun(const GraspSetup& setup, int trial, Scene& scene)
-      : cfg_(setup.config()), im_(setup.impl()), sc_(scene), m_(scene.m), d_(scene.d), nf_(im_.n_fingers),
-        trial_(trial), readings_(nf_) {
+      : cfg_(setup.config()),
+        im_(setup.impl()),
+        sc_(scene),
+        m_(scene.m),
+        d_(scene.d),
+        nf_(im_.n_fingers),
+        trial_(trial),
+        readings_(nf_) {
     res_.trial = trial;
     res_.seed = SplitMix(cfg_.seed * 0x100000001b3ULL + static_cast<uint64_t>(trial));
     est_opt_.method = cfg_.estimator;
@@ -136,7 +148,8 @@ class TrialRun {
   void TrackConvergence(double t, const std::vector<double>& desired);
   void AccumulateForceError(const std::vector<double>& desired);
   void TrackObjectPose(Phase phase, const HandMotion& hm, double* slip, double* rot);
-  void RecordTrace(double t, Phase phase, const std::vector<double>& desired, double slip, double rot);
+  void RecordTrace(double t, Phase phase, const std::vector<double>& desired, double slip,
+                   double rot);
   void ApplyFingertipPd(double t, Phase phase, const HandMotion& hm);
   void ReadTaxels(double t);
   void ApplyFault(double t);
@@ -144,13 +157,16 @@ class TrialRun {
   void TrackSwitched(const std::vector<double>& desired);
   Feedback ActiveFeedback(Phase phase) const;
   const std::vector<double>& Desired(int tick) const {
-    return replanned_ && tick >= plan_first_ ? plans_.desired[tick - plan_first_] : im_.tick_desired[tick];
+    return replanned_ && tick >= plan_first_ ? plans_.desired[tick - plan_first_]
+                                             : im_.tick_desired[tick];
   }
   const std::vector<Vec3>& DesiredForce(int tick) const {
-    return replanned_ && tick >= plan_first_ ? plans_.force[tick - plan_first_] : im_.tick_force[tick];
+    return replanned_ && tick >= plan_first_ ? plans_.force[tick - plan_first_]
+                                             : im_.tick_force[tick];
   }
   const planner::PlanProblem& Problem(int tick) const {
-    return replanned_ && tick >= plan_first_ ? plans_.problem[tick - plan_first_] : im_.tick_problem[tick];
+    return replanned_ && tick >= plan_first_ ? plans_.problem[tick - plan_first_]
+                                             : im_.tick_problem[tick];
   }
 
   const GraspConfig& cfg_;
@@ -162,7 +178,7 @@ class TrialRun {
   const int trial_;
   TrialResult res_;
   std::vector<SensorChannel> channels_;
-  std::vector<sim::TaxelArray> arrays_;   // taxel sensors
+  std::vector<sim::TaxelArray> arrays_;             // taxel sensors
   std::vector<Vec3> sensed_point_, sensed_normal_;  // world, from the taxels at the last tick
   bool sensed_ = false, replanned_ = false;
   int plan_first_ = 0;
@@ -183,7 +199,8 @@ class TrialRun {
   std::vector<double> finger_err_, finger_loop_;
   long err_n_ = 0;
   double ok_since_ = -1;
-  bool pose_tracked_ = false, lift_started_ = false;  // the object's pose at the settle's and the lift's start
+  bool pose_tracked_ = false,
+       lift_started_ = false;  // the object's pose at the settle's and the lift's start
   Vec3 p_ref_ = Vec3::Zero(), p_lift_ = Vec3::Zero();
   Matrix3d R_ref_ = Matrix3d::Identity();
   bool dropped_ = false;
@@ -193,9 +210,11 @@ class TrialRun {
 absl::Status TrialRun::DrawSensors() {
   std::mt19937_64 rng(res_.seed);
   if (cfg_.sensor_array == SensorArray::kTaxel) {
-    const sim::FingertipGeometry geometry{cfg_.fingertip_radius, sim::FingertipGeometry{}.body_length};
+    const sim::FingertipGeometry geometry{cfg_.fingertip_radius,
+                                          sim::FingertipGeometry{}.body_length};
     for (int i = 0; i < nf_; ++i) {
-      auto a = sim::TaxelArray::Create(cfg_.taxel_ranges, SplitMix(res_.seed + 31 * (i + 1)), geometry);
+      auto a =
+          sim::TaxelArray::Create(cfg_.taxel_ranges, SplitMix(res_.seed + 31 * (i + 1)), geometry);
       if (!a.ok()) return a.status();
       arrays_.push_back(std::move(*a));
     }
@@ -205,8 +224,10 @@ absl::Status TrialRun::DrawSensors() {
   }
   for (int i = 0; i < nf_; ++i) {
     sim::SensorModel model;
-    if (cfg_.sensors == SensorMode::kGeoDexRandom) model = DrawGeoDexModel(cfg_.error_ranges, rng);
-    else if (cfg_.sensors == SensorMode::kModel) model = cfg_.sensor_model;
+    if (cfg_.sensors == SensorMode::kGeoDexRandom)
+      model = DrawGeoDexModel(cfg_.error_ranges, rng);
+    else if (cfg_.sensors == SensorMode::kModel)
+      model = cfg_.sensor_model;
     auto ch = SensorChannel::Create(model, SplitMix(res_.seed + 17 * (i + 1)));
     if (!ch.ok()) return ch.status();
     channels_.push_back(std::move(*ch));
@@ -241,7 +262,8 @@ void TrialRun::LocateFingertips() {
 
 absl::Status TrialRun::Simulate() {
   const double dt = m_->opt.timestep;
-  const int steps_per_tick = std::max(1, static_cast<int>(std::lround(1.0 / (cfg_.control_rate * dt))));
+  const int steps_per_tick =
+      std::max(1, static_cast<int>(std::lround(1.0 / (cfg_.control_rate * dt))));
   const int total_steps = static_cast<int>(std::ceil(im_.timeline.t_end / dt));
   for (int k = 0; k <= total_steps && !dropped_; ++k) {
     const double t = k * dt;
@@ -259,17 +281,19 @@ void TrialRun::ControlTick(double t, Phase phase, const HandMotion& hm) {
   const int j = std::min(im_.ticks - 1, static_cast<int>(std::lround(t * cfg_.control_rate)));
   ReadSensors(t);
   ApplyFault(t);
-  if (cfg_.sensor_array == SensorArray::kTaxel && phase != Phase::kClose && !sensed_) SenseContactsAndReplan(j);
+  if (cfg_.sensor_array == SensorArray::kTaxel && phase != Phase::kClose && !sensed_)
+    SenseContactsAndReplan(j);
   const std::vector<double>& desired = Desired(j);
   Observe(j, phase);
   if (phase != Phase::kClose) {
     UpdateTargets(j);
     if (phase == Phase::kSettle || phase == Phase::kHold) TrackConvergence(t, desired);
   }
-  if (phase == Phase::kHold || phase == Phase::kLift || phase == Phase::kHoldLifted) AccumulateForceError(desired);
+  if (phase == Phase::kHold || phase == Phase::kLift || phase == Phase::kHoldLifted)
+    AccumulateForceError(desired);
   // Judged from the settle to the end of the lifted hold: the causes and the object's pose.
-  const bool judged =
-      phase == Phase::kSettle || phase == Phase::kHold || phase == Phase::kLift || phase == Phase::kHoldLifted;
+  const bool judged = phase == Phase::kSettle || phase == Phase::kHold || phase == Phase::kLift ||
+                      phase == Phase::kHoldLifted;
   if (judged && !failure_seen_) causes_.Tick(t, readings_.truth, readings_.raw);
   double slip = 0, rot = 0;
   if (judged) {
@@ -307,7 +331,8 @@ void TrialRun::ReadTaxels(double t) {
     const Vec3 centre = f.open + Vec3(d_->qpos[f.qadr], d_->qpos[f.qadr + 1], d_->qpos[f.qadr + 2]);
     Vec3 point = tip_centre + cfg_.fingertip_radius * Vec3::UnitZ();
     if (w.normal > 0 && (w.point - centre).norm() > 1e-9)
-      point = tip_centre + cfg_.fingertip_radius * (f.frame.transpose() * (w.point - centre)).normalized();
+      point = tip_centre +
+              cfg_.fingertip_radius * (f.frame.transpose() * (w.point - centre)).normalized();
     const sim::TaxelArrayReading& out = arrays_[i].Step(t, point, f.frame.transpose() * w.force);
     r.truth[i] = w.normal;
     r.shear[i] = std::sqrt(std::max(0.0, w.force.squaredNorm() - w.normal * w.normal));
@@ -342,8 +367,9 @@ void TrialRun::SenseContactsAndReplan(int tick) {
     c.position = Rt * (sensed_point_[i] - p);
     c.normal = (Rt * sensed_normal_[i]).normalized();
     loc_err += (c.position - im_.base.contacts[i].position).norm();
-    ang_err += AngleDeg(Eigen::Quaterniond::FromTwoVectors(im_.base.contacts[i].normal.normalized(), c.normal)
-                            .toRotationMatrix());
+    ang_err += AngleDeg(
+        Eigen::Quaterniond::FromTwoVectors(im_.base.contacts[i].normal.normalized(), c.normal)
+            .toRotationMatrix());
     ++res_.contacts_sensed;
   }
   if (res_.contacts_sensed > 0) {
@@ -359,7 +385,8 @@ void TrialRun::SenseContactsAndReplan(int tick) {
   plan_first_ = tick;
   replanned_ = true;
   for (int i = 0; i < nf_; ++i)
-    if (contacts[i].normal != im_.base.contacts[i].normal) tips_[i].normal = (Rt.transpose() * contacts[i].normal);
+    if (contacts[i].normal != im_.base.contacts[i].normal)
+      tips_[i].normal = (Rt.transpose() * contacts[i].normal);
 }
 
 Feedback TrialRun::ActiveFeedback(Phase phase) const {
@@ -388,7 +415,8 @@ void TrialRun::Observe(int tick, Phase phase) {
   const Feedback feedback = ActiveFeedback(phase);
   r.observed = feedback == Feedback::kRaw ? r.raw : r.est;
   for (int i = 0; i < nf_; ++i)
-    r.observed_force[i] = feedback == Feedback::kRaw || !est_ok_ ? Vec3(r.raw[i] * tips_[i].normal) : e->forces[i];
+    r.observed_force[i] =
+        feedback == Feedback::kRaw || !est_ok_ ? Vec3(r.raw[i] * tips_[i].normal) : e->forces[i];
 }
 
 // The admittance law (Admittance::kFull or kNormal) on the fingertip targets.
@@ -419,8 +447,10 @@ void TrialRun::TrackConvergence(double t, const std::vector<double>& desired) {
   bool ok = true;
   for (int i = 0; i < nf_; ++i)
     ok = ok && std::abs(desired[i] - readings_.observed[i]) < std::max(0.1, 0.1 * desired[i]);
-  if (!ok) ok_since_ = -1;
-  else if (ok_since_ < 0) ok_since_ = t;
+  if (!ok)
+    ok_since_ = -1;
+  else if (ok_since_ < 0)
+    ok_since_ = t;
   if (ok && res_.converge_time < 0 && t - ok_since_ >= 0.1 - 1e-9)
     res_.converge_time = ok_since_ - im_.timeline.t_settle;
 }
@@ -436,7 +466,8 @@ void TrialRun::AccumulateForceError(const std::vector<double>& desired) {
     squeeze_sum_ += readings_.truth[i];
     const double mu = im_.base.contacts[i].friction;  // the simulated (true) mu
     if (readings_.truth[i] >= 0.05 && mu > 0)
-      res_.min_slip_margin = std::min(res_.min_slip_margin, 1 - readings_.shear[i] / (mu * readings_.truth[i]));
+      res_.min_slip_margin =
+          std::min(res_.min_slip_margin, 1 - readings_.shear[i] / (mu * readings_.truth[i]));
   }
   ++err_n_;
 }
@@ -467,7 +498,8 @@ void TrialRun::TrackObjectPose(Phase phase, const HandMotion& hm, double* slip, 
   if ((p - im_.Apply(hm, p_lift_)).norm() > cfg_.drop_distance) dropped_ = true;
 }
 
-void TrialRun::RecordTrace(double t, Phase phase, const std::vector<double>& desired, double slip, double rot) {
+void TrialRun::RecordTrace(double t, Phase phase, const std::vector<double>& desired, double slip,
+                           double rot) {
   TraceSample s;
   s.t = t;
   s.phase = phase;
@@ -499,8 +531,8 @@ void TrialRun::ApplyFingertipPd(double t, Phase phase, const HandMotion& hm) {
     for (int a = 0; a < 3; ++a) {
       const double x = f.open[a] + d_->qpos[f.qadr + a];
       const double v = d_->qvel[f.dof + a];
-      d_->qfrc_applied[f.dof + a] =
-          cfg_.kp * (target[a] - x) + kd_ * (vtarget[a] - v) + (a == 2 ? cfg_.fingertip_mass * 9.81 : 0.0);
+      d_->qfrc_applied[f.dof + a] = cfg_.kp * (target[a] - x) + kd_ * (vtarget[a] - v) +
+                                    (a == 2 ? cfg_.fingertip_mass * 9.81 : 0.0);
     }
   }
 }
@@ -517,18 +549,22 @@ TrialResult TrialRun::Finish() {
     res_.loop_error += finger_loop_[i] / (err_n_ * nf_);
   }
   if (res_.failure_time >= 0 && res_.failure_time < im_.timeline.t_lift)
-    res_.failure = absl::StrFormat("moved before the lift (slip %.1f mm, rotation %.2f deg)%s",
-                                   res_.max_slip_before_lift * 1e3, res_.max_rotation_before_lift_deg,
-                                   dropped_ ? ", then dropped" : "");
-  else if (dropped_) res_.failure = "dropped";
-  else if (res_.max_slip >= cfg_.max_slip) res_.failure = absl::StrFormat("slip %.1f mm", res_.max_slip * 1e3);
+    res_.failure =
+        absl::StrFormat("moved before the lift (slip %.1f mm, rotation %.2f deg)%s",
+                        res_.max_slip_before_lift * 1e3, res_.max_rotation_before_lift_deg,
+                        dropped_ ? ", then dropped" : "");
+  else if (dropped_)
+    res_.failure = "dropped";
+  else if (res_.max_slip >= cfg_.max_slip)
+    res_.failure = absl::StrFormat("slip %.1f mm", res_.max_slip * 1e3);
   else if (res_.max_rotation_deg >= cfg_.max_rotation_deg)
     res_.failure = absl::StrFormat("rotation %.2f deg", res_.max_rotation_deg);
   res_.success = res_.failure.empty();
   // Tilted: rotated past the threshold while still held (a slip may come with it).
   const bool tilted = !dropped_ && res_.max_rotation_deg >= cfg_.max_rotation_deg;
   res_.cause = causes_.Label(!res_.success, tilted);
-  for (double s : switched_sum_) res_.switched_force_error.push_back(switched_n_ > 0 ? s / switched_n_ : 0.0);
+  for (double s : switched_sum_)
+    res_.switched_force_error.push_back(switched_n_ > 0 ? s / switched_n_ : 0.0);
   res_.sim_seconds = d_->time;
   return std::move(res_);
 }
@@ -537,7 +573,8 @@ TrialResult TrialRun::Finish() {
 
 absl::StatusOr<TrialResult> RunGraspTrial(const GraspSetup& setup, int trial) {
   const auto wall0 = std::chrono::steady_clock::now();
-  if (trial < 0) return absl::InvalidArgumentError(absl::StrFormat("trial: must be >= 0, got %d", trial));
+  if (trial < 0)
+    return absl::InvalidArgumentError(absl::StrFormat("trial: must be >= 0, got %d", trial));
   auto scene = Scene::FromMjcf(setup.mjcf());
   if (!scene.ok()) return scene.status();
   TrialRun run(setup, trial, **scene);
@@ -545,7 +582,8 @@ absl::StatusOr<TrialResult> RunGraspTrial(const GraspSetup& setup, int trial) {
   run.LocateFingertips();
   TF_RETURN_IF_ERROR(run.Simulate());
   TrialResult res = run.Finish();
-  res.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  res.wall_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   return res;
 }
 
@@ -591,7 +629,8 @@ void SummariseSplit(BatchSummary* b) {
 
 absl::StatusOr<BatchSummary> RunGraspBatch(const GraspConfig& config, int trials,
                                            const std::function<void(int)>& progress) {
-  if (trials < 1) return absl::InvalidArgumentError(absl::StrFormat("trials: must be >= 1, got %d", trials));
+  if (trials < 1)
+    return absl::InvalidArgumentError(absl::StrFormat("trials: must be >= 1, got %d", trials));
   auto setup = GraspSetup::Create(config);
   if (!setup.ok()) return setup.status();
   BatchSummary b;
@@ -612,9 +651,11 @@ absl::StatusOr<BatchSummary> RunGraspBatch(const GraspConfig& config, int trials
     if (progress) progress(k + 1);
   }
   double s = 0, s2 = 0, fb = 0;
-  for (const TrialResult& r : b.results) s += r.force_error, s2 += r.force_error * r.force_error, fb += r.feedback_error;
+  for (const TrialResult& r : b.results)
+    s += r.force_error, s2 += r.force_error * r.force_error, fb += r.feedback_error;
   b.force_error_mean = s / trials;
-  b.force_error_std = trials > 1 ? std::sqrt(std::max(0.0, (s2 - s * s / trials) / (trials - 1))) : 0.0;
+  b.force_error_std =
+      trials > 1 ? std::sqrt(std::max(0.0, (s2 - s * s / trials) / (trials - 1))) : 0.0;
   b.feedback_error_mean = fb / trials;
   b.converge_time_mean = b.converged > 0 ? conv / b.converged : -1;
   SummariseSplit(&b);

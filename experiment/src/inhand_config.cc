@@ -39,7 +39,8 @@ const TableRow kTableII[] = {
 // minus the parallel-axis terms.
 InHandObject BoxFromTable(const TableRow& r) {
   const Vector3d c = r.com;
-  const Vector3d parallel(r.mass * (c.y() * c.y() + c.z() * c.z()), r.mass * (c.x() * c.x() + c.z() * c.z()),
+  const Vector3d parallel(r.mass * (c.y() * c.y() + c.z() * c.z()),
+                          r.mass * (c.x() * c.x() + c.z() * c.z()),
                           r.mass * (c.x() * c.x() + c.y() * c.y()));
   const Vector3d ic = r.inertia_origin_diag * 1e-5 - parallel;  // Ixx = m/12 (b^2 + c^2), ...
   const Vector3d s = 12.0 * ic / r.mass;                        // b2+c2, a2+c2, a2+b2
@@ -57,11 +58,13 @@ absl::Status FieldError(const std::string& where, const std::string& what) {
 }
 
 absl::StatusOr<Vector3d> JsonTriple(const io::JsonValue& v, const std::string& where) {
-  if (!v.is_array() || v.array().size() != 3) return FieldError(where, "expected an array of 3 numbers");
+  if (!v.is_array() || v.array().size() != 3)
+    return FieldError(where, "expected an array of 3 numbers");
   Vector3d out;
   for (int k = 0; k < 3; ++k) {
     const io::JsonValue& x = v.array()[k];
-    if (!x.is_number() || !std::isfinite(x.number())) return FieldError(where, "expected an array of 3 numbers");
+    if (!x.is_number() || !std::isfinite(x.number()))
+      return FieldError(where, "expected an array of 3 numbers");
     out(k) = x.number();
   }
   return out;
@@ -72,7 +75,8 @@ absl::StatusOr<double> JsonNumber(const io::JsonValue& v, const std::string& whe
   return v.number();
 }
 
-absl::StatusOr<std::vector<PointMass>> JsonPointMasses(const io::JsonValue& v, const std::string& where) {
+absl::StatusOr<std::vector<PointMass>> JsonPointMasses(const io::JsonValue& v,
+                                                       const std::string& where) {
   if (!v.is_array()) return FieldError(where, "expected an array of {\"mass\", \"position\"}");
   std::vector<PointMass> out;
   for (size_t i = 0; i < v.array().size(); ++i) {
@@ -95,8 +99,8 @@ absl::StatusOr<std::vector<PointMass>> JsonPointMasses(const io::JsonValue& v, c
 }
 
 // One member of the object JSON into `o`.
-absl::Status ReadObjectMember(const std::string& key, const io::JsonValue& value, const std::string& where,
-                              InHandObject* o) {
+absl::Status ReadObjectMember(const std::string& key, const io::JsonValue& value,
+                              const std::string& where, InHandObject* o) {
   if (key == "name") {
     if (!value.is_string()) return FieldError(where, "expected a string");
     o->name = value.string();
@@ -127,7 +131,8 @@ absl::StatusOr<Tracker> ParseTracker(std::string_view text) {
   const std::string s = absl::AsciiStrToLower(given);
   if (s == "vision") return Tracker::kVision;
   if (s == "kinematic") return Tracker::kKinematic;
-  return absl::InvalidArgumentError(absl::StrCat("tracker: unknown '", given, "' (expected vision or kinematic)"));
+  return absl::InvalidArgumentError(
+      absl::StrCat("tracker: unknown '", given, "' (expected vision or kinematic)"));
 }
 
 std::vector<std::string> BuiltInInHandObjects() {
@@ -140,18 +145,22 @@ absl::StatusOr<InHandObject> BuiltInInHandObject(const std::string& name) {
   for (const TableRow& r : kTableII)
     if (name == r.name) return BoxFromTable(r);
   return absl::InvalidArgumentError(absl::StrCat("object: unknown '", name, "' (expected ",
-                                                 absl::StrJoin(BuiltInInHandObjects(), ", "), " or a JSON file)"));
+                                                 absl::StrJoin(BuiltInInHandObjects(), ", "),
+                                                 " or a JSON file)"));
 }
 
 absl::Status ValidateInHandObject(const InHandObject& o, const std::string& prefix) {
   if (!(o.mass > 0) || !std::isfinite(o.mass))
     return FieldError(prefix + "mass", absl::StrFormat("must be > 0, got %g", o.mass));
-  if (o.mass > 20) return FieldError(prefix + "mass", absl::StrFormat("must be <= 20 kg, got %g", o.mass));
+  if (o.mass > 20)
+    return FieldError(prefix + "mass", absl::StrFormat("must be <= 20 kg, got %g", o.mass));
   for (int k = 0; k < 3; ++k)
     if (!(o.dimensions(k) >= 0.02 && o.dimensions(k) <= 0.5))
-      return FieldError(prefix + "dimensions", absl::StrFormat("each edge must be in [0.02, 0.5] m, got %g",
-                                                              o.dimensions(k)));
-  if (!o.center.allFinite() || o.center.norm() > 1) return FieldError(prefix + "center", "must be within 1 m");
+      return FieldError(
+          prefix + "dimensions",
+          absl::StrFormat("each edge must be in [0.02, 0.5] m, got %g", o.dimensions(k)));
+  if (!o.center.allFinite() || o.center.norm() > 1)
+    return FieldError(prefix + "center", "must be within 1 m");
   double sum = 0;
   for (size_t i = 0; i < o.point_masses.size(); ++i) {
     const PointMass& p = o.point_masses[i];
@@ -164,11 +173,13 @@ absl::Status ValidateInHandObject(const InHandObject& o, const std::string& pref
     sum += p.mass;
   }
   if (sum >= o.mass)
-    return FieldError(prefix + "point_masses", absl::StrFormat("total %g kg must be below mass %g kg", sum, o.mass));
+    return FieldError(prefix + "point_masses",
+                      absl::StrFormat("total %g kg must be below mass %g kg", sum, o.mass));
   return absl::OkStatus();
 }
 
-absl::StatusOr<InHandObject> ParseInHandObjectJson(const std::string& text, const std::string& source) {
+absl::StatusOr<InHandObject> ParseInHandObjectJson(const std::string& text,
+                                                   const std::string& source) {
   absl::StatusOr<io::JsonValue> root = io::ParseJson(text, source);
   if (!root.ok()) return root.status();
   if (!root->is_object()) return FieldError(source, "expected a JSON object");
@@ -195,7 +206,8 @@ inertia::InertialParameters InHandObjectInertia(const InHandObject& o) {
   const double mb = o.mass - point_sum;
   const Vector3d com = (moment + mb * o.center) / o.mass;
   const Vector3d d2 = o.dimensions.cwiseProduct(o.dimensions);
-  Eigen::Matrix3d I = (mb / 12.0 * Vector3d(d2.y() + d2.z(), d2.x() + d2.z(), d2.x() + d2.y())).asDiagonal();
+  Eigen::Matrix3d I =
+      (mb / 12.0 * Vector3d(d2.y() + d2.z(), d2.x() + d2.z(), d2.x() + d2.y())).asDiagonal();
   auto shift = [&com](double m, const Vector3d& x) {
     const Vector3d d = x - com;
     return Eigen::Matrix3d(m * (d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose()));
@@ -214,7 +226,8 @@ io::TriangleMesh InHandObjectMesh(const InHandObject& o) {
   const Vector3d h = 0.5 * o.dimensions;
   for (int sx : {-1, 1})
     for (int sy : {-1, 1})
-      for (int sz : {-1, 1}) mesh.vertices.push_back(o.center + Vector3d(sx * h.x(), sy * h.y(), sz * h.z()));
+      for (int sz : {-1, 1})
+        mesh.vertices.push_back(o.center + Vector3d(sx * h.x(), sy * h.y(), sz * h.z()));
   // Corner 4*(x>0) + 2*(y>0) + (z>0); counter-clockwise seen from outside.
   mesh.triangles = {{0, 1, 3}, {0, 3, 2}, {4, 6, 7}, {4, 7, 5}, {0, 4, 5}, {0, 5, 1},
                     {2, 3, 7}, {2, 7, 6}, {0, 2, 6}, {0, 6, 4}, {1, 5, 7}, {1, 7, 3}};
@@ -225,7 +238,8 @@ absl::StatusOr<TactileForceModel> NamedForceModel(const std::string& name) {
   TactileForceModel m;
   if (name == "biotac") return m;
   if (name == "ideal") return TactileForceModel{"ideal", 0, 1, 0, 0, 0};
-  return absl::InvalidArgumentError(absl::StrCat("force_model: unknown '", name, "' (expected biotac or ideal)"));
+  return absl::InvalidArgumentError(
+      absl::StrCat("force_model: unknown '", name, "' (expected biotac or ideal)"));
 }
 
 absl::Status ValidateInHandConfig(const InHandConfig& c) {
@@ -239,13 +253,16 @@ absl::Status ValidateInHandConfig(const InHandConfig& c) {
     return bad("rate", absl::StrFormat("must be in (0, 1000] Hz, got %g", c.rate));
   if (!(c.duration > 0) || !std::isfinite(c.duration) || c.duration > 600)
     return bad("duration", absl::StrFormat("must be in (0, 600] s, got %g", c.duration));
-  if (c.duration * c.rate < 10) return bad("duration", "duration * rate must give at least 10 samples");
+  if (c.duration * c.rate < 10)
+    return bad("duration", "duration * rate must give at least 10 samples");
   if (!c.custom_force_model) {
-    if (absl::StatusOr<TactileForceModel> m = NamedForceModel(c.force_model); !m.ok()) return m.status();
+    if (absl::StatusOr<TactileForceModel> m = NamedForceModel(c.force_model); !m.ok())
+      return m.status();
   } else {
     const TactileForceModel& m = *c.custom_force_model;
     for (double v : {m.bias_sigma, m.noise_floor, m.noise_slope, m.point_sigma})
-      if (!(v >= 0) || !std::isfinite(v)) return bad("force_model", "parameters must be finite and >= 0");
+      if (!(v >= 0) || !std::isfinite(v))
+        return bad("force_model", "parameters must be finite and >= 0");
     if (!(m.bias_time > 0)) return bad("force_model", "bias_time must be > 0");
   }
   const VisionTrackerModel& v = c.vision;
@@ -253,23 +270,29 @@ absl::Status ValidateInHandConfig(const InHandConfig& c) {
         v.dropout_probability < 1 && v.dropout_max_samples >= 1))
     return bad("vision", "sigmas >= 0, dropout_probability in [0, 1), dropout_max_samples >= 1");
   if (!(c.support_fraction >= 0 && c.support_fraction <= 0.9))
-    return bad("support_fraction", absl::StrFormat("must be in [0, 0.9], got %g", c.support_fraction));
+    return bad("support_fraction",
+               absl::StrFormat("must be in [0, 0.9], got %g", c.support_fraction));
   for (size_t i = 0; i < c.breaks.size(); ++i) {
     const ContactBreak& b = c.breaks[i];
-    if (b.contact < 0 || b.contact > 3 || !(b.start >= 0) || !(b.duration > 0) || !std::isfinite(b.start + b.duration))
+    if (b.contact < 0 || b.contact > 3 || !(b.start >= 0) || !(b.duration > 0) ||
+        !std::isfinite(b.start + b.duration))
       return FieldError(absl::StrCat("breaks[", i, "]"), "contact 0..3, start >= 0, duration > 0");
   }
   for (size_t i = 0; i < c.pushes.size(); ++i)
-    if (!(c.pushes[i].start >= 0) || !(c.pushes[i].duration > 0) || !c.pushes[i].force.allFinite() ||
-        c.pushes[i].force.norm() > 100)
-      return FieldError(absl::StrCat("pushes[", i, "]"), "start >= 0, duration > 0, |force| <= 100 N");
-  if (!(c.position_scale >= 0 && c.position_scale <= 2 && c.orientation_scale >= 0 && c.orientation_scale <= 1.5))
+    if (!(c.pushes[i].start >= 0) || !(c.pushes[i].duration > 0) ||
+        !c.pushes[i].force.allFinite() || c.pushes[i].force.norm() > 100)
+      return FieldError(absl::StrCat("pushes[", i, "]"),
+                        "start >= 0, duration > 0, |force| <= 100 N");
+  if (!(c.position_scale >= 0 && c.position_scale <= 2 && c.orientation_scale >= 0 &&
+        c.orientation_scale <= 1.5))
     return bad("position_scale", "position_scale in [0, 2], orientation_scale in [0, 1.5]");
-  if (!(c.friction > 0 && c.plan_friction > 0 && c.plan_friction <= c.friction && c.min_normal_force > 0))
+  if (!(c.friction > 0 && c.plan_friction > 0 && c.plan_friction <= c.friction &&
+        c.min_normal_force > 0))
     return bad("friction", "0 < plan_friction <= friction, min_normal_force > 0");
-  if (!(c.control_rate >= 50 && c.control_rate <= 1000 && c.settle >= 0.1 && c.kp > 0 && c.fingertip_mass > 0 &&
-        c.fingertip_radius > 0))
-    return bad("control_rate", "control_rate in [50, 1000] Hz, settle >= 0.1 s, kp, fingertip mass/radius > 0");
+  if (!(c.control_rate >= 50 && c.control_rate <= 1000 && c.settle >= 0.1 && c.kp > 0 &&
+        c.fingertip_mass > 0 && c.fingertip_radius > 0))
+    return bad("control_rate",
+               "control_rate in [50, 1000] Hz, settle >= 0.1 s, kp, fingertip mass/radius > 0");
   return ValidatePhysics(c.physics);
 }
 

@@ -20,9 +20,9 @@ using Eigen::Matrix3d;
 using Eigen::Vector3d;
 
 inline constexpr int kFingers = 4;
-inline constexpr double kRampSeconds = 1.0;   // the excitation fades in over this
-inline constexpr double kRetract = 0.012;     // m a broken contact's fingertip backs off
-inline constexpr double kBreakBlend = 0.05;   // s to back off / come back
+inline constexpr double kRampSeconds = 1.0;  // the excitation fades in over this
+inline constexpr double kRetract = 0.012;    // m a broken contact's fingertip backs off
+inline constexpr double kBreakBlend = 0.05;  // s to back off / come back
 // The fingertips turn with the object (as a finger's distal link turns with
 // the hand's motion): a sphere that only translates cannot stay stuck to a
 // rotating surface, it must slide by r times the rotation. Rotational PD
@@ -51,12 +51,14 @@ struct Setup {
   InHandObject object;
   inertia::InertialParameters truth;
   TactileForceModel force_model;
-  std::array<Vector3d, kFingers> contact_point, contact_normal;  // object frame; normals into the object
+  std::array<Vector3d, kFingers> contact_point,
+      contact_normal;  // object frame; normals into the object
   Matrix3d rest_R = Matrix3d::Identity();
   Vector3d rest_center = Vector3d(0, 0, 0.3);  // box centre, world (m)
-  inertia::ExcitationTrajectory excitation;     // scaled, about the box centre
+  inertia::ExcitationTrajectory excitation;    // scaled, about the box centre
   double dt_tick = 0.005;
-  std::vector<std::array<Vector3d, kFingers>> tick_force;  // planned, object frame; tick 0 at t = -settle
+  std::vector<std::array<Vector3d, kFingers>>
+      tick_force;  // planned, object frame; tick 0 at t = -settle
   std::string mjcf;
 
   // t: seconds since logging began (negative during the settle: at rest).
@@ -81,8 +83,8 @@ class Sensing {
   Vector3d ReadPoint(const Vector3d& x_true);
   // Tracked pose from the true pose and the fingertip centres (world).
   void Track(int sample, const Vector3d& p_true, const Matrix3d& R_true,
-             const std::array<Vector3d, kFingers>& tips, const std::array<bool, kFingers>& tip_usable,
-             Vector3d* p, Matrix3d* R, bool* dropout);
+             const std::array<Vector3d, kFingers>& tips,
+             const std::array<bool, kFingers>& tip_usable, Vector3d* p, Matrix3d* R, bool* dropout);
 
  private:
   const Setup& s_;
@@ -102,7 +104,8 @@ class Sensing {
 
 // Rotation taking the centred points `from` onto `to` (Kabsch), over the
 // indices with use[i].
-Matrix3d KabschRotation(const std::array<Vector3d, kFingers>& from, const std::array<Vector3d, kFingers>& to,
+Matrix3d KabschRotation(const std::array<Vector3d, kFingers>& from,
+                        const std::array<Vector3d, kFingers>& to,
                         const std::array<bool, kFingers>& use);
 
 // Statistics of a finished run (everything but wall time).

@@ -33,7 +33,8 @@ double Median(std::vector<double> v) {
 
 class InHandSim {
  public:
-  InHandSim(const Setup& s, Scene& sc) : s_(s), sc_(sc), m_(sc.m), d_(sc.d), sense_(s, s.cfg.seed * 7919 + 13) {}
+  InHandSim(const Setup& s, Scene& sc)
+      : s_(s), sc_(sc), m_(sc.m), d_(sc.d), sense_(s, s.cfg.seed * 7919 + 13) {}
   void Locate();
   absl::Status Simulate(const std::function<void(double)>& progress, InHandRun* out);
   void FinishForceStats(InHandStats* st) const;
@@ -42,7 +43,8 @@ class InHandSim {
   void ApplyForces(double t);
   void ApplyFingertipRotation(const Motion& mo);
   void Log(double t, InHandRun* out);
-  void LogContacts(double t, const Vector3d& p, const Matrix3d& R, InHandTruthRow* row, InHandRun* out);
+  void LogContacts(double t, const Vector3d& p, const Matrix3d& R, InHandTruthRow* row,
+                   InHandRun* out);
   void SenseSample(double t, const InHandTruthRow& row, const std::array<Vector3d, kFingers>& fw,
                    const std::array<Vector3d, kFingers>& pw, InHandRun* out);
   void NewtonEulerResidual(const InHandTruthRow& row, InHandStats* st);
@@ -90,11 +92,13 @@ void InHandSim::ApplyForces(double t) {
     const Vector3d x0 = s_.contact_point[i] - s_.contact_normal[i] * c.fingertip_radius;
     const double b = s_.BreakBlend(i, t);
     const Vector3d press = mo.R * plan[i] / c.kp;
-    const Vector3d target = mo.Point(x0) + (1 - b) * press - b * kRetract * (mo.R * s_.contact_normal[i]);
+    const Vector3d target =
+        mo.Point(x0) + (1 - b) * press - b * kRetract * (mo.R * s_.contact_normal[i]);
     const Vector3d vt = mo.PointVelocity(x0), at = mo.PointAcceleration(x0);
     for (int a = 0; a < 3; ++a) {
       const double x = open_[i](a) + d_->qpos[qadr_[i] + a];
-      d_->qfrc_applied[dof_[i] + a] = c.kp * (target(a) - x) + kd * (vt(a) - d_->qvel[dof_[i] + a]) +
+      d_->qfrc_applied[dof_[i] + a] = c.kp * (target(a) - x) +
+                                      kd * (vt(a) - d_->qvel[dof_[i] + a]) +
                                       c.fingertip_mass * (at(a) + (a == 2 ? 9.81 : 0.0));
     }
   }
@@ -108,7 +112,8 @@ void InHandSim::ApplyForces(double t) {
 // Each fingertip keeps its orientation relative to the commanded object
 // (world-frame torque through xfrc_applied).
 void InHandSim::ApplyFingertipRotation(const Motion& mo) {
-  const double k = kFingertipInertia * kRotationOmega * kRotationOmega, kd = 2 * kFingertipInertia * kRotationOmega;
+  const double k = kFingertipInertia * kRotationOmega * kRotationOmega,
+               kd = 2 * kFingertipInertia * kRotationOmega;
   const Matrix3d target = mo.R * s_.rest_R.transpose();
   for (int i = 0; i < kFingers; ++i) {
     const double* q = d_->qpos + qadr_[i] + 3;
@@ -153,7 +158,8 @@ void InHandSim::Log(double t, InHandRun* out) {
   ++samples_;
 }
 
-void InHandSim::LogContacts(double t, const Vector3d& p, const Matrix3d& R, InHandTruthRow* row, InHandRun* out) {
+void InHandSim::LogContacts(double t, const Vector3d& p, const Matrix3d& R, InHandTruthRow* row,
+                            InHandRun* out) {
   std::array<Vector3d, kFingers> fw, pw;
   for (int i = 0; i < kFingers; ++i) {
     double f[3], pt[3];
@@ -164,8 +170,8 @@ void InHandSim::LogContacts(double t, const Vector3d& p, const Matrix3d& R, InHa
     if (on && !slip_ref_set_[i]) slip_ref_[i] = po, slip_ref_set_[i] = true;
     if (samples_ > 0 && on != was_on_[i]) {
       const bool scheduled = s_.InBreak(i, t) || s_.InBreak(i, t - kBreakBlend);
-      out->events.push_back(
-          {t, on ? "contact_made" : "contact_lost", i, scheduled ? "scheduled break" : "unscheduled"});
+      out->events.push_back({t, on ? "contact_made" : "contact_lost", i,
+                             scheduled ? "scheduled break" : "unscheduled"});
       if (!on && !scheduled) ++out->stats.contact_losses;
     }
     was_on_[i] = on;
@@ -178,7 +184,8 @@ void InHandSim::LogContacts(double t, const Vector3d& p, const Matrix3d& R, InHa
 }
 
 // The logged sample: tracked pose, sensed forces and points in the tracked frame.
-void InHandSim::SenseSample(double t, const InHandTruthRow& row, const std::array<Vector3d, kFingers>& fw,
+void InHandSim::SenseSample(double t, const InHandTruthRow& row,
+                            const std::array<Vector3d, kFingers>& fw,
                             const std::array<Vector3d, kFingers>& pw, InHandRun* out) {
   sense_.Advance();
   std::array<Vector3d, kFingers> tips;
@@ -190,7 +197,8 @@ void InHandSim::SenseSample(double t, const InHandTruthRow& row, const std::arra
   Vector3d p;
   Matrix3d R;
   bool dropout = false;
-  sense_.Track(samples_, row.position, row.orientation.toRotationMatrix(), tips, usable, &p, &R, &dropout);
+  sense_.Track(samples_, row.position, row.orientation.toRotationMatrix(), tips, usable, &p, &R,
+               &dropout);
   if (dropout) out->events.push_back({t, "tracker_dropout", -1, ""}), ++out->stats.tracker_dropouts;
   out->tracker_error.push_back(p - row.position);
   inertia::InertiaSample x;
@@ -231,12 +239,15 @@ void InHandSim::NewtonEulerResidual(const InHandTruthRow& row, InHandStats* st) 
   planner::ObjectModel om;
   om.mass = s_.truth.mass;
   om.com = s_.truth.com;
-  const planner::Wrench need = planner::RequiredContactWrench(om, s_.truth.inertia_com.Matrix(), step);
-  const Vector3d support = R.transpose() * Vector3d(0, 0, s_.cfg.support_fraction * s_.truth.mass * 9.81);
+  const planner::Wrench need =
+      planner::RequiredContactWrench(om, s_.truth.inertia_com.Matrix(), step);
+  const Vector3d support =
+      R.transpose() * Vector3d(0, 0, s_.cfg.support_fraction * s_.truth.mass * 9.81);
   Vector3d f = support, tq = s_.truth.com.cross(support);
   for (int i = 0; i < kFingers; ++i) f += row.force[i], tq += row.point[i].cross(row.force[i]);
   bool pushed = false;
-  for (const Push& p : s_.cfg.pushes) pushed = pushed || (row.t >= p.start && row.t < p.start + p.duration);
+  for (const Push& p : s_.cfg.pushes)
+    pushed = pushed || (row.t >= p.start && row.t < p.start + p.duration);
   if (pushed) return;  // the push is an unlogged external force by design
   const double ef = (f - need.force).norm(), et = (tq - need.torque).norm();
   st->ne_residual_force_max = std::max(st->ne_residual_force_max, ef);
@@ -254,7 +265,8 @@ void InHandSim::FinishForceStats(InHandStats* st) const {
 }  // namespace
 }  // namespace inhand_internal
 
-absl::StatusOr<InHandRun> RunInHand(const InHandConfig& config, const std::function<void(double)>& progress) {
+absl::StatusOr<InHandRun> RunInHand(const InHandConfig& config,
+                                    const std::function<void(double)>& progress) {
   using namespace inhand_internal;  // NOLINT: the run's internals
   const auto wall0 = std::chrono::steady_clock::now();
   absl::StatusOr<Setup> setup = PrepareInHand(config);
@@ -279,7 +291,8 @@ absl::StatusOr<InHandRun> RunInHand(const InHandConfig& config, const std::funct
     run.tracker_orientation_sigma = config.vision.orientation_sigma_deg * M_PI / 180;
   }
   ComputeStats(*setup, &run);
-  run.stats.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  run.stats.wall_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   if (progress) progress(1.0);
   return run;
 }

@@ -12,7 +12,8 @@
 
 namespace tactforce::experiment::inhand_internal {
 
-Matrix3d KabschRotation(const std::array<Vector3d, kFingers>& from, const std::array<Vector3d, kFingers>& to,
+Matrix3d KabschRotation(const std::array<Vector3d, kFingers>& from,
+                        const std::array<Vector3d, kFingers>& to,
                         const std::array<bool, kFingers>& use) {
   Vector3d cf = Vector3d::Zero(), ct = Vector3d::Zero();
   int n = 0;
@@ -37,7 +38,8 @@ Sensing::Sensing(const Setup& setup, uint64_t seed) : s_(setup), rng_(seed) {
 void Sensing::Advance() {
   const double decay = std::exp(-1.0 / (s_.cfg.rate * s_.force_model.bias_time));
   const double kick = s_.force_model.bias_sigma * std::sqrt(1 - decay * decay);
-  for (Vector3d& b : bias_) b = decay * b + kick * Vector3d(normal_(rng_), normal_(rng_), normal_(rng_));
+  for (Vector3d& b : bias_)
+    b = decay * b + kick * Vector3d(normal_(rng_), normal_(rng_), normal_(rng_));
 }
 
 Vector3d Sensing::ReadForce(int i, const Vector3d& f_true, double* sigma) {
@@ -53,12 +55,14 @@ Vector3d Sensing::ReadForce(int i, const Vector3d& f_true, double* sigma) {
 
 Vector3d Sensing::ReadPoint(const Vector3d& x_true) {
   if (s_.cfg.ideal_forces) return x_true;
-  return x_true + s_.force_model.point_sigma * Vector3d(normal_(rng_), normal_(rng_), normal_(rng_));
+  return x_true +
+         s_.force_model.point_sigma * Vector3d(normal_(rng_), normal_(rng_), normal_(rng_));
 }
 
 void Sensing::Track(int sample, const Vector3d& p_true, const Matrix3d& R_true,
-                    const std::array<Vector3d, kFingers>& tips, const std::array<bool, kFingers>& tip_usable,
-                    Vector3d* p, Matrix3d* R, bool* dropout) {
+                    const std::array<Vector3d, kFingers>& tips,
+                    const std::array<bool, kFingers>& tip_usable, Vector3d* p, Matrix3d* R,
+                    bool* dropout) {
   *dropout = false;
   if (s_.cfg.ideal_tracking) {
     *p = p_true, *R = R_true;
@@ -77,7 +81,8 @@ void Sensing::Track(int sample, const Vector3d& p_true, const Matrix3d& R_true,
     return;
   }
   const VisionTrackerModel& v = s_.cfg.vision;
-  if (sample > 0 && dropout_left_ == 0 && std::uniform_real_distribution<double>(0, 1)(rng_) < v.dropout_probability)
+  if (sample > 0 && dropout_left_ == 0 &&
+      std::uniform_real_distribution<double>(0, 1)(rng_) < v.dropout_probability)
     dropout_left_ = std::uniform_int_distribution<int>(1, v.dropout_max_samples)(rng_);
   if (dropout_left_ > 0) {
     --dropout_left_;
@@ -87,8 +92,9 @@ void Sensing::Track(int sample, const Vector3d& p_true, const Matrix3d& R_true,
   const double so = v.orientation_sigma_deg * M_PI / 180;
   const Vector3d e = so * Vector3d(normal_(rng_), normal_(rng_), normal_(rng_));
   *p = p_true + v.position_sigma * Vector3d(normal_(rng_), normal_(rng_), normal_(rng_));
-  *R = R_true * Eigen::AngleAxisd(e.norm(), e.norm() > 0 ? Vector3d(e.normalized()) : Vector3d::UnitX())
-                    .toRotationMatrix();
+  *R = R_true *
+       Eigen::AngleAxisd(e.norm(), e.norm() > 0 ? Vector3d(e.normalized()) : Vector3d::UnitX())
+           .toRotationMatrix();
   last_p_ = *p, last_R_ = *R;
 }
 

@@ -37,12 +37,14 @@ void LayOutContacts(Setup* s) {
   }
   if (thin == lng) lng = (thin + 1) % 3;
   const int mid = 3 - thin - lng;
-  const Vector3d e_thin = Vector3d::Unit(thin), e_long = Vector3d::Unit(lng), e_mid = Vector3d::Unit(mid);
+  const Vector3d e_thin = Vector3d::Unit(thin), e_long = Vector3d::Unit(lng),
+                 e_mid = Vector3d::Unit(mid);
   const double spread = 0.35 * d(lng);
   const std::pair<int, int> pattern[kFingers] = {{+1, +1}, {-1, -1}, {-1, +1}, {+1, -1}};
   for (int i = 0; i < kFingers; ++i) {
     const auto [side, along] = pattern[i];
-    s->contact_point[i] = s->object.center + side * 0.5 * d(thin) * e_thin + along * spread * e_long;
+    s->contact_point[i] =
+        s->object.center + side * 0.5 * d(thin) * e_thin + along * spread * e_long;
     s->contact_normal[i] = -side * e_thin;
   }
   // Pinch axis along world x, long edge along world y.
@@ -126,18 +128,22 @@ absl::Status PlanTicks(Setup* s) {
   s->dt_tick = 1.0 / s->cfg.control_rate;
   const int ticks = static_cast<int>(std::ceil((s->cfg.settle + s->cfg.duration) / s->dt_tick)) + 2;
   const planner::TrajectoryProblem traj = TickProblem(*s, ticks);
-  auto planned = planner::PlanTrajectory(traj, planner::PlanOptions{}, planner::SolverKind::kGeometric, true);
-  if (!planned.ok()) return absl::InternalError(absl::StrCat("planner: ", planned.status().message()));
+  auto planned =
+      planner::PlanTrajectory(traj, planner::PlanOptions{}, planner::SolverKind::kGeometric, true);
+  if (!planned.ok())
+    return absl::InternalError(absl::StrCat("planner: ", planned.status().message()));
   for (int j = 0; j < ticks; ++j) {
     const planner::PlanResult& r = planned->steps[j];
     const double t = j * s->dt_tick - s->cfg.settle;
     if (r.status != planner::PlanStatus::kOptimal)
-      return absl::FailedPreconditionError(absl::StrFormat(
-          "planner: no holding forces at t = %.3f s (%s): lower position_scale/orientation_scale or raise "
-          "friction",
-          t, r.message));
+      return absl::FailedPreconditionError(
+          absl::StrFormat("planner: no holding forces at t = %.3f s (%s): lower "
+                          "position_scale/orientation_scale or raise "
+                          "friction",
+                          t, r.message));
     std::array<Vector3d, kFingers> f;
-    for (int i = 0, k = 0; i < kFingers; ++i) f[i] = s->InBreak(i, t) ? Vector3d::Zero() : r.forces[k++];
+    for (int i = 0, k = 0; i < kFingers; ++i)
+      f[i] = s->InBreak(i, t) ? Vector3d::Zero() : r.forces[k++];
     s->tick_force.push_back(f);
   }
   return absl::OkStatus();
@@ -148,30 +154,39 @@ std::string InHandMjcf(const Setup& s) {
   const Motion m0 = s.MotionAt(-c.settle);
   const Eigen::Quaterniond q(m0.R);
   const inertia::InertiaTensor& I = s.truth.inertia_com;
-  std::string x = absl::StrCat("<mujoco model=\"tactforce_inhand\">\n", OptionMjcf(c.physics), "<worldbody>\n");
-  absl::StrAppend(&x, absl::StrFormat(
-      "<body name=\"object\" pos=\"%s\" quat=\"%.12g %.12g %.12g %.12g\">\n<joint name=\"object_free\" "
-      "type=\"free\"/>\n<inertial pos=\"%s\" mass=\"%.12g\" fullinertia=\"%.12g %.12g %.12g %.12g %.12g %.12g\"/>\n"
-      "<geom name=\"box\" type=\"box\" pos=\"%s\" size=\"%s\" contype=\"0\" conaffinity=\"0\" mass=\"0\"/>\n"
-      "</body>\n",
-      V3(m0.p), q.w(), q.x(), q.y(), q.z(), V3(s.truth.com), s.truth.mass, I.ixx, I.iyy, I.izz, I.ixy, I.ixz, I.iyz,
-      V3(s.object.center), V3(0.5 * s.object.dimensions)));
+  std::string x =
+      absl::StrCat("<mujoco model=\"tactforce_inhand\">\n", OptionMjcf(c.physics), "<worldbody>\n");
+  absl::StrAppend(&x, absl::StrFormat("<body name=\"object\" pos=\"%s\" quat=\"%.12g %.12g %.12g "
+                                      "%.12g\">\n<joint name=\"object_free\" "
+                                      "type=\"free\"/>\n<inertial pos=\"%s\" mass=\"%.12g\" "
+                                      "fullinertia=\"%.12g %.12g %.12g %.12g %.12g %.12g\"/>\n"
+                                      "<geom name=\"box\" type=\"box\" pos=\"%s\" size=\"%s\" "
+                                      "contype=\"0\" conaffinity=\"0\" mass=\"0\"/>\n"
+                                      "</body>\n",
+                                      V3(m0.p), q.w(), q.x(), q.y(), q.z(), V3(s.truth.com),
+                                      s.truth.mass, I.ixx, I.iyy, I.izz, I.ixy, I.ixz, I.iyz,
+                                      V3(s.object.center), V3(0.5 * s.object.dimensions)));
   for (int i = 0; i < kFingers; ++i) {
     const Vector3d n = m0.R * s.contact_normal[i];
     const Vector3d center = m0.Point(s.contact_point[i]) - n * c.fingertip_radius;
-    absl::StrAppend(&x, absl::StrFormat(
-        "<body name=\"f%d\" pos=\"%s\">\n<joint name=\"f%dx\" type=\"slide\" axis=\"1 0 0\"/><joint name=\"f%dy\" "
-        "type=\"slide\" axis=\"0 1 0\"/><joint name=\"f%dz\" type=\"slide\" axis=\"0 0 1\"/><joint "
-        "name=\"f%dr\" type=\"ball\"/>\n<inertial pos=\"0 0 0\" mass=\"%.9g\" diaginertia=\"%.9g %.9g %.9g\"/>\n"
-        "<geom name=\"f%dg\" type=\"sphere\" size=\"%.9g\" contype=\"0\" conaffinity=\"0\"/>\n</body>\n",
-        i, V3(center), i, i, i, i, c.fingertip_mass, kFingertipInertia, kFingertipInertia, kFingertipInertia, i,
-        c.fingertip_radius));
+    absl::StrAppend(&x,
+                    absl::StrFormat("<body name=\"f%d\" pos=\"%s\">\n<joint name=\"f%dx\" "
+                                    "type=\"slide\" axis=\"1 0 0\"/><joint name=\"f%dy\" "
+                                    "type=\"slide\" axis=\"0 1 0\"/><joint name=\"f%dz\" "
+                                    "type=\"slide\" axis=\"0 0 1\"/><joint "
+                                    "name=\"f%dr\" type=\"ball\"/>\n<inertial pos=\"0 0 0\" "
+                                    "mass=\"%.9g\" diaginertia=\"%.9g %.9g %.9g\"/>\n"
+                                    "<geom name=\"f%dg\" type=\"sphere\" size=\"%.9g\" "
+                                    "contype=\"0\" conaffinity=\"0\"/>\n</body>\n",
+                                    i, V3(center), i, i, i, i, c.fingertip_mass, kFingertipInertia,
+                                    kFingertipInertia, kFingertipInertia, i, c.fingertip_radius));
   }
   absl::StrAppend(&x, "</worldbody>\n<contact>\n");
   for (int i = 0; i < kFingers; ++i)
-    absl::StrAppend(&x, absl::StrFormat(
-        "<pair geom1=\"f%dg\" geom2=\"box\" condim=\"%d\" friction=\"%.9g %.9g %.9g 0.0001 0.0001\" %s/>\n", i,
-        c.physics.condim_fingertip, c.friction, c.friction, c.physics.torsional_friction, SolrefAttr(c.physics)));
+    absl::StrAppend(&x, absl::StrFormat("<pair geom1=\"f%dg\" geom2=\"box\" condim=\"%d\" "
+                                        "friction=\"%.9g %.9g %.9g 0.0001 0.0001\" %s/>\n",
+                                        i, c.physics.condim_fingertip, c.friction, c.friction,
+                                        c.physics.torsional_friction, SolrefAttr(c.physics)));
   absl::StrAppend(&x, "</contact>\n</mujoco>\n");
   return x;
 }
@@ -188,7 +203,8 @@ Motion Setup::MotionAt(double t) const {
   m.v = (pp - pm) / (2 * kDiffStep);
   m.a = (pp - 2 * m.p + pm) / (kDiffStep * kDiffStep);
   m.w = Vee(Rp * Rm.transpose()) / (2 * kDiffStep);
-  m.dw = (AngularVelocity(*this, t + kDiffStep) - AngularVelocity(*this, t - kDiffStep)) / (2 * kDiffStep);
+  m.dw = (AngularVelocity(*this, t + kDiffStep) - AngularVelocity(*this, t - kDiffStep)) /
+         (2 * kDiffStep);
   return m;
 }
 

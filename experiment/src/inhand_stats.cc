@@ -36,14 +36,16 @@ double Pearson(const std::vector<double>& a, const std::vector<double>& b) {
   ma /= n, mb /= n;
   double sab = 0, saa = 0, sbb = 0;
   for (size_t i = 0; i < n; ++i)
-    sab += (a[i] - ma) * (b[i] - mb), saa += (a[i] - ma) * (a[i] - ma), sbb += (b[i] - mb) * (b[i] - mb);
+    sab += (a[i] - ma) * (b[i] - mb), saa += (a[i] - ma) * (a[i] - ma),
+        sbb += (b[i] - mb) * (b[i] - mb);
   return saa > 0 && sbb > 0 ? sab / std::sqrt(saa * sbb) : 0;
 }
 
 // The wrist F/T sensor's force (object frame) along the default arm
 // excitation: noise-free, same object, duration and rate.
 double WristForceSpread(const Setup& s) {
-  absl::StatusOr<inertia::SimulatedObject> o = inertia::ObjectFromParameters(s.object.name, s.truth);
+  absl::StatusOr<inertia::SimulatedObject> o =
+      inertia::ObjectFromParameters(s.object.name, s.truth);
   if (!o.ok()) return 0;
   inertia::SimulationOptions opt;
   opt.custom = *o;
@@ -93,7 +95,8 @@ void SlipAndTrackerStats(const Setup& s, InHandRun* run) {
     const Matrix3d Rt = run->samples.samples[k].orientation.toRotationMatrix();
     const Eigen::AngleAxisd dR(Rt * row.orientation.toRotationMatrix().transpose());
     st.tracker_position_error_max_mm = std::max(st.tracker_position_error_max_mm, 1e3 * e.norm());
-    st.tracker_rotation_error_max_deg = std::max(st.tracker_rotation_error_max_deg, dR.angle() * 180 / M_PI);
+    st.tracker_rotation_error_max_deg =
+        std::max(st.tracker_rotation_error_max_deg, dR.angle() * 180 / M_PI);
     err.push_back(1e3 * e.norm());
     slip.push_back(worst);
   }
@@ -145,17 +148,20 @@ std::string EventsCsv(const InHandRun& run) {
 std::string TruthLogCsv(const InHandRun& run) {
   std::string s = "t,px,py,pz,qw,qx,qy,qz";
   for (int i = 0; i < inhand_internal::kFingers; ++i)
-    absl::StrAppend(&s, absl::StrFormat(",c%d_px,c%d_py,c%d_pz,c%d_fx,c%d_fy,c%d_fz,c%d_slip_mm,c%d_on", i, i, i, i,
-                                        i, i, i, i));
+    absl::StrAppend(
+        &s, absl::StrFormat(",c%d_px,c%d_py,c%d_pz,c%d_fx,c%d_fy,c%d_fz,c%d_slip_mm,c%d_on", i, i,
+                            i, i, i, i, i, i));
   s += "\n";
   for (const InHandTruthRow& r : run.truth_log) {
     const Eigen::Quaterniond& q = r.orientation;
-    absl::StrAppend(&s, absl::StrFormat("%.6f,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g", r.t, r.position.x(),
-                                        r.position.y(), r.position.z(), q.w(), q.x(), q.y(), q.z()));
+    absl::StrAppend(&s,
+                    absl::StrFormat("%.6f,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g", r.t, r.position.x(),
+                                    r.position.y(), r.position.z(), q.w(), q.x(), q.y(), q.z()));
     for (size_t i = 0; i < r.force.size(); ++i)
-      absl::StrAppend(&s, absl::StrFormat(",%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%d", r.point[i].x(), r.point[i].y(),
-                                          r.point[i].z(), r.force[i].x(), r.force[i].y(), r.force[i].z(),
-                                          r.slip_mm[i], r.in_contact[i] ? 1 : 0));
+      absl::StrAppend(
+          &s, absl::StrFormat(",%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%d", r.point[i].x(),
+                              r.point[i].y(), r.point[i].z(), r.force[i].x(), r.force[i].y(),
+                              r.force[i].z(), r.slip_mm[i], r.in_contact[i] ? 1 : 0));
     s += "\n";
   }
   return s;
@@ -163,8 +169,10 @@ std::string TruthLogCsv(const InHandRun& run) {
 
 std::string MeshObj(const io::TriangleMesh& mesh, const std::string& name) {
   std::string s = absl::StrCat("# tactforce experiment inhand: ", name, " (object frame, m)\n");
-  for (const auto& v : mesh.vertices) absl::StrAppend(&s, absl::StrFormat("v %.9g %.9g %.9g\n", v.x(), v.y(), v.z()));
-  for (const auto& t : mesh.triangles) absl::StrAppend(&s, "f ", t[0] + 1, " ", t[1] + 1, " ", t[2] + 1, "\n");
+  for (const auto& v : mesh.vertices)
+    absl::StrAppend(&s, absl::StrFormat("v %.9g %.9g %.9g\n", v.x(), v.y(), v.z()));
+  for (const auto& t : mesh.triangles)
+    absl::StrAppend(&s, "f ", t[0] + 1, " ", t[1] + 1, " ", t[2] + 1, "\n");
   return s;
 }
 
@@ -173,7 +181,8 @@ std::string MeshObj(const io::TriangleMesh& mesh, const std::string& name) {
 absl::Status WriteInHandRun(const InHandRun& run, const std::string& dir) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
-  if (ec) return absl::InvalidArgumentError(absl::StrCat("out: cannot create ", dir, ": ", ec.message()));
+  if (ec)
+    return absl::InvalidArgumentError(absl::StrCat("out: cannot create ", dir, ": ", ec.message()));
   const std::filesystem::path d(dir);
   inertia::InertiaTruth truth;
   truth.params = run.truth;
@@ -182,7 +191,8 @@ absl::Status WriteInHandRun(const InHandRun& run, const std::string& dir) {
   TF_RETURN_IF_ERROR(inertia::WriteTruthJsonFile(truth, (d / "truth.json").string()));
   TF_RETURN_IF_ERROR(io::WriteTextFile((d / "events.csv").string(), EventsCsv(run)));
   TF_RETURN_IF_ERROR(io::WriteTextFile((d / "truth_log.csv").string(), TruthLogCsv(run)));
-  if (run.mesh) return io::WriteTextFile((d / "mesh.obj").string(), MeshObj(*run.mesh, run.object_name));
+  if (run.mesh)
+    return io::WriteTextFile((d / "mesh.obj").string(), MeshObj(*run.mesh, run.object_name));
   return absl::OkStatus();
 }
 

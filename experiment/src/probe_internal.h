@@ -16,8 +16,9 @@
 namespace tactforce::experiment {
 
 inline constexpr int kHoldingFingers = 3;  // thumb, middle, ring (layout: probe_setup.cc)
-inline constexpr double kCloseTime = 0.3;  // s: the holding fingertips close (object held kinematically)
-inline constexpr double kSettleTime = 0.3; // s: object released, probe force ramps in
+inline constexpr double kCloseTime =
+    0.3;  // s: the holding fingertips close (object held kinematically)
+inline constexpr double kSettleTime = 0.3;  // s: object released, probe force ramps in
 
 struct ProbeSetup {
   std::vector<planner::Contact> holding;  // object frame, the three fingertips
@@ -29,17 +30,20 @@ struct ProbeSetup {
 
 // Contacts, plan and scene for one trial; `rng` draws the probe's position
 // jitter on the top face.
-absl::StatusOr<ProbeSetup> MakeProbeSetup(const ProbeConfig& c, const SurfacePair& surface, std::mt19937_64& rng);
+absl::StatusOr<ProbeSetup> MakeProbeSetup(const ProbeConfig& c, const SurfacePair& surface,
+                                          std::mt19937_64& rng);
 
 // What the simulation hands to the estimator and the validity rule.
 struct ProbeRecording {
-  estimator::FrictionTrial trial;       // sensed force and contact point, object frame
-  std::vector<double> motion, rotation; // per sample: object travel (m) and rotation (deg) since the probe began
+  estimator::FrictionTrial trial;  // sensed force and contact point, object frame
+  std::vector<double> motion,
+      rotation;  // per sample: object travel (m) and rotation (deg) since the probe began
   bool dropped = false;
 };
 
 // Runs the scene: close, settle, then the probe schedule until the probe has
 // travelled `probe_travel_stop` on the object (plus 50 ms) or the schedule ends.
-absl::StatusOr<ProbeRecording> SimulateProbe(const ProbeConfig& c, const ProbeSetup& setup, std::mt19937_64& rng);
+absl::StatusOr<ProbeRecording> SimulateProbe(const ProbeConfig& c, const ProbeSetup& setup,
+                                             std::mt19937_64& rng);
 
 }  // namespace tactforce::experiment

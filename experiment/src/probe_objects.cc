@@ -19,7 +19,8 @@ absl::Status Bad(const std::string& field, const std::string& why) {
 
 // A JSON array of three finite numbers.
 absl::StatusOr<Vector3d> Vec3Field(const io::JsonValue& v, const std::string& where) {
-  if (!v.is_array() || v.array().size() != 3) return Bad(where, "must be an array of 3 numbers (m)");
+  if (!v.is_array() || v.array().size() != 3)
+    return Bad(where, "must be an array of 3 numbers (m)");
   Vector3d out;
   for (int k = 0; k < 3; ++k) {
     if (!v.array()[k].is_number()) return Bad(absl::StrCat(where, "[", k, "]"), "must be a number");
@@ -28,16 +29,20 @@ absl::StatusOr<Vector3d> Vec3Field(const io::JsonValue& v, const std::string& wh
   return out;
 }
 
-std::string At(const std::string& source, const io::JsonValue& v) { return absl::StrCat(source, ":", v.line(), ": "); }
+std::string At(const std::string& source, const io::JsonValue& v) {
+  return absl::StrCat(source, ":", v.line(), ": ");
+}
 
 }  // namespace
 
 const std::vector<SurfacePair>& BuiltInSurfaces() {
   static const std::vector<SurfacePair>* const s = new std::vector<SurfacePair>{
-      {"silicone/glass", 0.30},        {"silicone/acrylic", 0.36},     {"silicone/painted-metal", 0.42},
-      {"silicone/abs", 0.48},          {"silicone/pla", 0.55},         {"silicone/hardwood", 0.62},
-      {"silicone/cardboard", 0.69},    {"silicone/paper-label", 0.76}, {"silicone/matte-plastic", 0.84},
-      {"silicone/rubber", 0.92},       {"silicone/foam", 1.00},
+      {"silicone/glass", 0.30},         {"silicone/acrylic", 0.36},
+      {"silicone/painted-metal", 0.42}, {"silicone/abs", 0.48},
+      {"silicone/pla", 0.55},           {"silicone/hardwood", 0.62},
+      {"silicone/cardboard", 0.69},     {"silicone/paper-label", 0.76},
+      {"silicone/matte-plastic", 0.84}, {"silicone/rubber", 0.92},
+      {"silicone/foam", 1.00},
   };
   return *s;
 }
@@ -56,13 +61,15 @@ const std::vector<ProbeObject>& BuiltInProbeObjects() {
 absl::Status ValidateProbeObject(const ProbeObject& o) {
   for (int k = 0; k < 3; ++k)
     if (!(o.size[k] >= 0.03 && o.size[k] <= 0.3))
-      return Bad(absl::StrCat("size[", k, "]"), absl::StrFormat("must be in [0.03, 0.3] m, got %g", o.size[k]));
+      return Bad(absl::StrCat("size[", k, "]"),
+                 absl::StrFormat("must be in [0.03, 0.3] m, got %g", o.size[k]));
   if (!(o.mass >= 0.01 && o.mass <= 2))
     return Bad("mass", absl::StrFormat("must be in [0.01, 2] kg, got %g", o.mass));
   for (int k = 0; k < 3; ++k)
     if (!(std::abs(o.com_offset[k]) <= 0.4 * o.size[k]))
-      return Bad(absl::StrCat("com_offset[", k, "]"),
-                 absl::StrFormat("must be inside the box (|x| <= 0.4 size), got %g", o.com_offset[k]));
+      return Bad(
+          absl::StrCat("com_offset[", k, "]"),
+          absl::StrFormat("must be inside the box (|x| <= 0.4 size), got %g", o.com_offset[k]));
   return absl::OkStatus();
 }
 
@@ -72,14 +79,16 @@ absl::StatusOr<ProbeObject> FindProbeObject(const std::string& name) {
     if (o.name == name) return o;
     names.push_back(o.name);
   }
-  return absl::NotFoundError(absl::StrCat("unknown object '", name, "' (built-ins: ", absl::StrJoin(names, ", "),
-                                          "; or a JSON file)"));
+  return absl::NotFoundError(absl::StrCat(
+      "unknown object '", name, "' (built-ins: ", absl::StrJoin(names, ", "), "; or a JSON file)"));
 }
 
-absl::StatusOr<ProbeObject> ProbeObjectFromJson(const std::string& text, const std::string& source) {
+absl::StatusOr<ProbeObject> ProbeObjectFromJson(const std::string& text,
+                                                const std::string& source) {
   absl::StatusOr<io::JsonValue> doc = io::ParseJson(text, source);
   if (!doc.ok()) return doc.status();
-  if (!doc->is_object()) return Bad(source, "must be a JSON object {\"size\": [x, y, z], \"mass\": m}");
+  if (!doc->is_object())
+    return Bad(source, "must be a JSON object {\"size\": [x, y, z], \"mass\": m}");
   ProbeObject o;
   o.name = source;
   bool has_size = false, has_mass = false;
@@ -103,7 +112,8 @@ absl::StatusOr<ProbeObject> ProbeObjectFromJson(const std::string& text, const s
   }
   if (!has_size) return Bad(source + ": size", "missing");
   if (!has_mass) return Bad(source + ": mass", "missing");
-  if (absl::Status s = ValidateProbeObject(o); !s.ok()) return Bad(source, std::string(s.message()));
+  if (absl::Status s = ValidateProbeObject(o); !s.ok())
+    return Bad(source, std::string(s.message()));
   return o;
 }
 

@@ -56,7 +56,8 @@ void Judge(const ProbeConfig& c, const ProbeRecording& rec, const estimator::Tri
   else if (r->object_motion_mm >= 1e3 * c.max_motion)
     r->invalid_reason = absl::StrFormat("object moved %.2f mm before slip", r->object_motion_mm);
   else if (r->object_rotation_deg >= c.max_rotation_deg)
-    r->invalid_reason = absl::StrFormat("object rotated %.2f deg before slip", r->object_rotation_deg);
+    r->invalid_reason =
+        absl::StrFormat("object rotated %.2f deg before slip", r->object_rotation_deg);
   r->valid = r->invalid_reason.empty();
   if (r->valid) {
     r->mu_estimated = tr.mu;
@@ -64,7 +65,8 @@ void Judge(const ProbeConfig& c, const ProbeRecording& rec, const estimator::Tri
   }
 }
 
-SurfaceSummary Summarize(const SurfacePair& s, const SlopeRow& ref, const std::vector<ProbeTrialResult>& trials) {
+SurfaceSummary Summarize(const SurfacePair& s, const SlopeRow& ref,
+                         const std::vector<ProbeTrialResult>& trials) {
   SurfaceSummary out;
   out.surface = s.name;
   out.mu_true = s.mu;
@@ -122,28 +124,36 @@ absl::Status ValidateSurfaces(const std::vector<SurfacePair>& surfaces) {
 }
 
 absl::Status ValidateProbeConfig(const ProbeConfig& c) {
-  auto bad = [](const char* f, const std::string& why) { return absl::InvalidArgumentError(absl::StrCat(f, ": ", why)); };
-  if (absl::Status s = ValidateProbeObject(c.object); !s.ok()) return absl::InvalidArgumentError(
-      absl::StrCat("object.", s.message()));
-  if (!(c.force_sigma >= 0 && c.force_sigma <= 5)) return bad("force_sigma", absl::StrFormat("must be in [0, 5] N, got %g", c.force_sigma));
-  if (!(c.force_bias >= 0 && c.force_bias <= 5)) return bad("force_bias", absl::StrFormat("must be in [0, 5] N, got %g", c.force_bias));
+  auto bad = [](const char* f, const std::string& why) {
+    return absl::InvalidArgumentError(absl::StrCat(f, ": ", why));
+  };
+  if (absl::Status s = ValidateProbeObject(c.object); !s.ok())
+    return absl::InvalidArgumentError(absl::StrCat("object.", s.message()));
+  if (!(c.force_sigma >= 0 && c.force_sigma <= 5))
+    return bad("force_sigma", absl::StrFormat("must be in [0, 5] N, got %g", c.force_sigma));
+  if (!(c.force_bias >= 0 && c.force_bias <= 5))
+    return bad("force_bias", absl::StrFormat("must be in [0, 5] N, got %g", c.force_bias));
   if (!(c.contact_sigma >= 0 && c.contact_sigma <= 0.005))
-    return bad("contact_sigma", absl::StrFormat("must be in [0, 0.005] m, got %g", c.contact_sigma));
-  if (!(c.hold_scale > 0 && c.hold_scale <= 3)) return bad("hold_scale", absl::StrFormat("must be in (0, 3], got %g", c.hold_scale));
-  if (!(c.table_mu > 0 && c.table_mu <= 2)) return bad("table_mu", absl::StrFormat("must be in (0, 2], got %g", c.table_mu));
+    return bad("contact_sigma",
+               absl::StrFormat("must be in [0, 0.005] m, got %g", c.contact_sigma));
+  if (!(c.hold_scale > 0 && c.hold_scale <= 3))
+    return bad("hold_scale", absl::StrFormat("must be in (0, 3], got %g", c.hold_scale));
+  if (!(c.table_mu > 0 && c.table_mu <= 2))
+    return bad("table_mu", absl::StrFormat("must be in (0, 2], got %g", c.table_mu));
   if (!(c.max_motion > 0)) return bad("max_motion", "must be > 0 m");
   if (!(c.max_rotation_deg > 0)) return bad("max_rotation_deg", "must be > 0 deg");
   if (!(c.probe_travel_stop > c.slope.friction.slip_distance))
     return bad("probe_travel_stop", "must exceed the estimator's slip_distance");
   if (!(c.kp > 0)) return bad("kp", "must be > 0 N/m");
-  if (!(c.admittance_gain >= 0 && c.admittance_gain <= 1)) return bad("admittance_gain", "must be in [0, 1]");
+  if (!(c.admittance_gain >= 0 && c.admittance_gain <= 1))
+    return bad("admittance_gain", "must be in [0, 1]");
   if (!(c.confidence >= 0)) return bad("confidence", "must be >= 0");
   if (!(c.plan_sigma >= 0)) return bad("plan_sigma", "must be >= 0 N");
   return ValidateSlopeConfig(c.slope);
 }
 
-absl::StatusOr<ProbeTrialResult> RunProbeTrial(const ProbeConfig& c, const SurfacePair& surface, int trial,
-                                               double mu_slope) {
+absl::StatusOr<ProbeTrialResult> RunProbeTrial(const ProbeConfig& c, const SurfacePair& surface,
+                                               int trial, double mu_slope) {
   const auto wall0 = std::chrono::steady_clock::now();
   TF_RETURN_IF_ERROR(ValidateProbeConfig(c));
   TF_RETURN_IF_ERROR(ValidateSurfaces({surface}));
@@ -158,11 +168,13 @@ absl::StatusOr<ProbeTrialResult> RunProbeTrial(const ProbeConfig& c, const Surfa
   r.mu_true = surface.mu;
   r.mu_slope = mu_slope;
   if (rec->dropped || rec->trial.samples.size() < 3) {
-    r.invalid_reason = rec->dropped ? "object dropped (moved more than 20 mm)" : "probe never touched the object";
+    r.invalid_reason =
+        rec->dropped ? "object dropped (moved more than 20 mm)" : "probe never touched the object";
   } else {
     estimator::FrictionOptions options = c.slope.friction;
     options.mesh = BoxMesh(c.object.size);  // the normal from the nearest triangle, as in the paper
-    absl::StatusOr<estimator::FrictionEstimate> est = estimator::EstimateFriction({rec->trial}, options);
+    absl::StatusOr<estimator::FrictionEstimate> est =
+        estimator::EstimateFriction({rec->trial}, options);
     if (!est.ok()) return est.status();
     Judge(c, *rec, est->trials[0], &r);
   }
@@ -170,10 +182,12 @@ absl::StatusOr<ProbeTrialResult> RunProbeTrial(const ProbeConfig& c, const Surfa
   return r;
 }
 
-absl::StatusOr<ProbeReport> RunProbeExperiment(const ProbeConfig& c, const std::vector<SurfacePair>& surfaces,
-                                               int trials, const std::function<void(int, int)>& progress) {
+absl::StatusOr<ProbeReport> RunProbeExperiment(const ProbeConfig& c,
+                                               const std::vector<SurfacePair>& surfaces, int trials,
+                                               const std::function<void(int, int)>& progress) {
   const auto wall0 = std::chrono::steady_clock::now();
-  if (trials < 1) return absl::InvalidArgumentError(absl::StrFormat("trials: must be >= 1, got %d", trials));
+  if (trials < 1)
+    return absl::InvalidArgumentError(absl::StrFormat("trials: must be >= 1, got %d", trials));
   TF_RETURN_IF_ERROR(ValidateProbeConfig(c));
   TF_RETURN_IF_ERROR(ValidateSurfaces(surfaces));
   ProbeReport report;
@@ -192,7 +206,8 @@ absl::StatusOr<ProbeReport> RunProbeExperiment(const ProbeConfig& c, const std::
     report.summary.per_surface.push_back(Summarize(surface, *ref, rows));
   }
   Pool(&report);
-  report.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  report.wall_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   return report;
 }
 

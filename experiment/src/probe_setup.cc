@@ -19,7 +19,8 @@ using planner::Vec3;
 
 std::string V3(const Vec3& v) { return absl::StrFormat("%.9g %.9g %.9g", v.x(), v.y(), v.z()); }
 
-planner::Contact Holding(const char* name, const Vec3& p, const Vec3& n, double mu, const ProbeConfig& c) {
+planner::Contact Holding(const char* name, const Vec3& p, const Vec3& n, double mu,
+                         const ProbeConfig& c) {
   planner::Contact k;
   k.name = name;
   k.position = p;
@@ -72,21 +73,25 @@ std::string BoxBodyMjcf(const ProbeConfig& c, const Vec3& rest) {
   const Vec3 s = c.object.size, r = c.object.com_offset;
   const double m = c.object.mass;
   Eigen::Matrix3d I = Eigen::Vector3d(s.y() * s.y() + s.z() * s.z(), s.x() * s.x() + s.z() * s.z(),
-                                      s.x() * s.x() + s.y() * s.y()).asDiagonal();
+                                      s.x() * s.x() + s.y() * s.y())
+                          .asDiagonal();
   I *= m / 12;
   I -= m * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose());
   return absl::StrFormat(
       "<body name=\"object\" pos=\"%s\">\n<joint name=\"object_free\" type=\"free\"/>\n"
       "<inertial pos=\"%s\" mass=\"%.9g\" fullinertia=\"%.9g %.9g %.9g %.9g %.9g %.9g\"/>\n"
-      "<geom name=\"box\" type=\"box\" size=\"%s\" contype=\"0\" conaffinity=\"0\" mass=\"0\"/>\n</body>\n",
+      "<geom name=\"box\" type=\"box\" size=\"%s\" contype=\"0\" conaffinity=\"0\" "
+      "mass=\"0\"/>\n</body>\n",
       V3(rest), V3(r), m, I(0, 0), I(1, 1), I(2, 2), I(0, 1), I(0, 2), I(1, 2), V3(s / 2));
 }
 
 std::string TipMjcf(const std::string& name, const Vec3& center, const ProbeConfig& c) {
   return absl::StrFormat(
       "<body name=\"%s\" pos=\"%s\">\n<joint name=\"%sx\" type=\"slide\" axis=\"1 0 0\"/>"
-      "<joint name=\"%sy\" type=\"slide\" axis=\"0 1 0\"/><joint name=\"%sz\" type=\"slide\" axis=\"0 0 1\"/>\n"
-      "<geom name=\"%sg\" type=\"sphere\" size=\"%.9g\" mass=\"%.9g\" contype=\"0\" conaffinity=\"0\"/>\n</body>\n",
+      "<joint name=\"%sy\" type=\"slide\" axis=\"0 1 0\"/><joint name=\"%sz\" type=\"slide\" "
+      "axis=\"0 0 1\"/>\n"
+      "<geom name=\"%sg\" type=\"sphere\" size=\"%.9g\" mass=\"%.9g\" contype=\"0\" "
+      "conaffinity=\"0\"/>\n</body>\n",
       name, V3(center), name, name, name, name, c.fingertip_radius, c.fingertip_mass);
 }
 
@@ -96,37 +101,51 @@ std::string TipMjcf(const std::string& name, const Vec3& center, const ProbeConf
 std::string ProbeMjcf(const ProbeConfig& c, const ProbeSetup& s, double mu) {
   const PhysicsSettings& ph = c.slope.physics;
   const double rf = c.fingertip_radius;
-  std::string x = absl::StrCat("<mujoco model=\"tactforce_probe\">\n", OptionMjcf(ph), "<worldbody>\n");
+  std::string x =
+      absl::StrCat("<mujoco model=\"tactforce_probe\">\n", OptionMjcf(ph), "<worldbody>\n");
   if (c.on_table)
-    absl::StrAppend(&x, "<geom name=\"table\" type=\"plane\" size=\"0.5 0.5 0.01\" contype=\"0\" conaffinity=\"0\"/>\n");
+    absl::StrAppend(&x,
+                    "<geom name=\"table\" type=\"plane\" size=\"0.5 0.5 0.01\" contype=\"0\" "
+                    "conaffinity=\"0\"/>\n");
   absl::StrAppend(&x, BoxBodyMjcf(c, s.rest_position));
   for (int i = 0; i < kHoldingFingers; ++i) {
     const planner::Contact& k = s.holding[i];
-    absl::StrAppend(&x, TipMjcf(absl::StrCat("f", i), s.rest_position + k.position - k.normal * (rf + 0.015), c));
+    absl::StrAppend(&x, TipMjcf(absl::StrCat("f", i),
+                                s.rest_position + k.position - k.normal * (rf + 0.015), c));
   }
-  absl::StrAppend(&x, TipMjcf("p", s.rest_position + s.probe.position + Vec3(0, 0, rf), c), "</worldbody>\n<contact>\n");
+  absl::StrAppend(&x, TipMjcf("p", s.rest_position + s.probe.position + Vec3(0, 0, rf), c),
+                  "</worldbody>\n<contact>\n");
   const std::string sol = SolrefAttr(ph);
   for (int i = 0; i < kHoldingFingers; ++i)
-    absl::StrAppend(&x, absl::StrFormat("<pair geom1=\"f%dg\" geom2=\"box\" condim=\"%d\" friction=\"%.9g %.9g "
-                                        "%.9g 0.0001 0.0001\" %s/>\n",
-                                        i, ph.condim_fingertip, mu, mu, ph.torsional_friction, sol));
-  absl::StrAppend(&x, absl::StrFormat("<pair geom1=\"pg\" geom2=\"box\" condim=\"3\" friction=\"%.9g %.9g 0.005 "
-                                      "0.0001 0.0001\" %s/>\n", mu, mu, sol));
+    absl::StrAppend(
+        &x, absl::StrFormat("<pair geom1=\"f%dg\" geom2=\"box\" condim=\"%d\" friction=\"%.9g %.9g "
+                            "%.9g 0.0001 0.0001\" %s/>\n",
+                            i, ph.condim_fingertip, mu, mu, ph.torsional_friction, sol));
+  absl::StrAppend(
+      &x,
+      absl::StrFormat("<pair geom1=\"pg\" geom2=\"box\" condim=\"3\" friction=\"%.9g %.9g 0.005 "
+                      "0.0001 0.0001\" %s/>\n",
+                      mu, mu, sol));
   if (c.on_table)
-    absl::StrAppend(&x, absl::StrFormat("<pair geom1=\"box\" geom2=\"table\" condim=\"3\" friction=\"%.9g %.9g 0.005 "
-                                        "0.0001 0.0001\" %s/>\n", c.table_mu, c.table_mu, sol));
+    absl::StrAppend(
+        &x, absl::StrFormat(
+                "<pair geom1=\"box\" geom2=\"table\" condim=\"3\" friction=\"%.9g %.9g 0.005 "
+                "0.0001 0.0001\" %s/>\n",
+                c.table_mu, c.table_mu, sol));
   absl::StrAppend(&x, "</contact>\n</mujoco>\n");
   return x;
 }
 
 }  // namespace
 
-absl::StatusOr<ProbeSetup> MakeProbeSetup(const ProbeConfig& c, const SurfacePair& surface, std::mt19937_64& rng) {
+absl::StatusOr<ProbeSetup> MakeProbeSetup(const ProbeConfig& c, const SurfacePair& surface,
+                                          std::mt19937_64& rng) {
   ProbeSetup s;
   const Vec3 h = c.object.size / 2;
   std::uniform_real_distribution<double> jitter(-1, 1);
   // Start a quarter of the face behind the centre so the probe has room to slide towards +x.
-  s.probe.position = Vec3(-0.5 * h.x() + 0.2 * h.x() * jitter(rng), 0.3 * h.y() * jitter(rng), h.z());
+  s.probe.position =
+      Vec3(-0.5 * h.x() + 0.2 * h.x() * jitter(rng), 0.3 * h.y() * jitter(rng), h.z());
   s.probe.normal = -Vec3::UnitZ();
   s.probe.tangent = Vec3::UnitX();
   s.probe.tangential_force = c.slope.probe_tangential;
@@ -139,14 +158,15 @@ absl::StatusOr<ProbeSetup> MakeProbeSetup(const ProbeConfig& c, const SurfacePai
   const planner::PlanProblem holding = HoldingProblem(c, surface.mu, s.probe.position, &s.holding);
   planner::PlanOptions options;
   options.confidence = c.confidence;
-  absl::StatusOr<planner::ProbePlan> plan = planner::PlanFrictionProbe(holding, s.probe, options,
-                                                                       planner::SolverKind::kGeometric);
+  absl::StatusOr<planner::ProbePlan> plan =
+      planner::PlanFrictionProbe(holding, s.probe, options, planner::SolverKind::kGeometric);
   if (!plan.ok()) return absl::InternalError(absl::StrCat("planner: ", plan.status().message()));
   for (size_t k = 0; k < plan->holding.steps.size(); ++k)
     if (plan->holding.steps[k].status != planner::PlanStatus::kOptimal)
       return absl::FailedPreconditionError(absl::StrFormat(
-          "planner: the holding grasp of %s at mu %g is %s at t = %.2f s: %s", c.object.name, surface.mu,
-          planner::ToString(plan->holding.steps[k].status), plan->times[k], plan->holding.steps[k].message));
+          "planner: the holding grasp of %s at mu %g is %s at t = %.2f s: %s", c.object.name,
+          surface.mu, planner::ToString(plan->holding.steps[k].status), plan->times[k],
+          plan->holding.steps[k].message));
   s.plan = *std::move(plan);
   s.rest_position = Vec3(0, 0, c.on_table ? h.z() : 0.2);
   s.mjcf = ProbeMjcf(c, s, surface.mu);

@@ -20,18 +20,18 @@
 namespace tactforce::experiment {
 namespace {
 
-using planner::Vec3;
 using Eigen::Matrix3d;
+using planner::Vec3;
 
 constexpr double kMaxTargetStep = 0.001;  // m per tick, as in the grasp experiment
 constexpr double kDropDistance = 0.02;    // m
 
 struct Tip {
   int geom = -1, dof = -1, qadr = -1;
-  Vec3 start;            // world position of the body at qpos 0
-  Vec3 contact_center;   // centre touching its contact at rest (world)
-  Vec3 offset;           // target - contact_center (world, m)
-  Vec3 bias;             // tactile bias (N, fingertip = world axes)
+  Vec3 start;           // world position of the body at qpos 0
+  Vec3 contact_center;  // centre touching its contact at rest (world)
+  Vec3 offset;          // target - contact_center (world, m)
+  Vec3 bias;            // tactile bias (N, fingertip = world axes)
 };
 
 class ProbeRun {
@@ -47,7 +47,9 @@ class ProbeRun {
   absl::StatusOr<ProbeRecording> Run();
 
  private:
-  Vec3 Position() const { return Vec3(d_->qpos[obj_q_], d_->qpos[obj_q_ + 1], d_->qpos[obj_q_ + 2]); }
+  Vec3 Position() const {
+    return Vec3(d_->qpos[obj_q_], d_->qpos[obj_q_ + 1], d_->qpos[obj_q_ + 2]);
+  }
   Matrix3d Rotation() const {
     const double* q = d_->qpos + obj_q_ + 3;
     return Eigen::Quaterniond(q[0], q[1], q[2], q[3]).toRotationMatrix();
@@ -139,7 +141,8 @@ void ProbeRun::ApplyHolding(double t) {
     }
     const Vec3 x = TipPos(f);
     for (int a = 0; a < 3; ++a)
-      d_->qfrc_applied[f.dof + a] = c_.kp * (target[a] - x[a]) + kd_ * (vtarget[a] - d_->qvel[f.dof + a]) +
+      d_->qfrc_applied[f.dof + a] = c_.kp * (target[a] - x[a]) +
+                                    kd_ * (vtarget[a] - d_->qvel[f.dof + a]) +
                                     (a == 2 ? c_.fingertip_mass * 9.81 : 0.0);
   }
 }
@@ -178,7 +181,8 @@ void ProbeRun::RecordProbe(double t) {
   rec_.motion.push_back((x - x0_).norm());
   rec_.rotation.push_back(std::acos(c) * 180 / std::numbers::pi);
   const Vec3 travel = R.transpose() * (TipPos(p) - x) - probe0_;
-  if (stop_at_ < 0 && std::hypot(travel.x(), travel.y()) > c_.probe_travel_stop) stop_at_ = t + 0.05;
+  if (stop_at_ < 0 && std::hypot(travel.x(), travel.y()) > c_.probe_travel_stop)
+    stop_at_ = t + 0.05;
 }
 
 // Holding admittance (3D, as `experiment grasp --admittance full`) on the
@@ -233,7 +237,8 @@ absl::StatusOr<ProbeRecording> ProbeRun::Run() {
 
 }  // namespace
 
-absl::StatusOr<ProbeRecording> SimulateProbe(const ProbeConfig& c, const ProbeSetup& setup, std::mt19937_64& rng) {
+absl::StatusOr<ProbeRecording> SimulateProbe(const ProbeConfig& c, const ProbeSetup& setup,
+                                             std::mt19937_64& rng) {
   absl::StatusOr<std::unique_ptr<Scene>> scene = Scene::FromMjcf(setup.mjcf);
   if (!scene.ok()) return scene.status();
   ProbeRun run(c, setup, **scene, rng);

@@ -33,10 +33,11 @@ absl::Status ValidatePhysics(const PhysicsSettings& p, const std::string& prefix
   };
   if (!(p.timestep > 0 && p.timestep <= 0.01))
     return bad("timestep", absl::StrFormat("must be in (0, 0.01] s, got %g", p.timestep));
-  if (!(p.impratio >= 1)) return bad("impratio", absl::StrFormat("must be >= 1, got %g", p.impratio));
+  if (!(p.impratio >= 1))
+    return bad("impratio", absl::StrFormat("must be >= 1, got %g", p.impratio));
   if (!(p.solref_timeconst >= 2 * p.timestep))
-    return bad("solref_timeconst",
-               absl::StrFormat("must be >= 2 timesteps (%g s), got %g", 2 * p.timestep, p.solref_timeconst));
+    return bad("solref_timeconst", absl::StrFormat("must be >= 2 timesteps (%g s), got %g",
+                                                   2 * p.timestep, p.solref_timeconst));
   if (!(p.solref_dampratio > 0))
     return bad("solref_dampratio", absl::StrFormat("must be > 0, got %g", p.solref_dampratio));
   if (!(p.solimp_dmin > 0 && p.solimp_dmin <= p.solimp_dmax && p.solimp_dmax < 1))
@@ -53,7 +54,8 @@ absl::Status ValidatePhysics(const PhysicsSettings& p, const std::string& prefix
 
 std::string OptionMjcf(const PhysicsSettings& p) {
   return absl::StrFormat(
-      "<option timestep=\"%.9g\" cone=\"%s\" impratio=\"%.9g\" iterations=\"%d\" tolerance=\"%.3g\" "
+      "<option timestep=\"%.9g\" cone=\"%s\" impratio=\"%.9g\" iterations=\"%d\" "
+      "tolerance=\"%.3g\" "
       "noslip_iterations=\"%d\" gravity=\"0 0 -9.81\"/>\n",
       p.timestep, p.elliptic_cone ? "elliptic" : "pyramidal", p.impratio, p.iterations, p.tolerance,
       p.noslip_iterations);

@@ -77,7 +77,8 @@ double SensorChannel::Step(double t, double force, double shear) {
     if (wsum > 0) u = y / wsum;
   }
   if (p.power_exponent > 0 && p.power_exponent != 1 && u != 0)
-    u = (u < 0 ? -p.full_scale : p.full_scale) * std::pow(std::abs(u) / p.full_scale, p.power_exponent);
+    u = (u < 0 ? -p.full_scale : p.full_scale) *
+        std::pow(std::abs(u) / p.full_scale, p.power_exponent);
   if (p.curvature != 0) u += p.curvature / p.full_scale * u * std::abs(u);
   if (p.threshold > 0) u = (u < p.threshold) ? 0.0 : u - p.threshold_shift * p.threshold;
   if (p.saturation > 0 && u > p.saturation) u = p.saturation;
@@ -90,7 +91,8 @@ double SensorChannel::Step(double t, double force, double shear) {
 absl::Status ValidateErrorRanges(const ErrorRanges& r, const std::string& prefix) {
   auto range = [&](const char* lo_name, double lo, const char* hi_name, double hi) -> absl::Status {
     if (!(lo >= 0 && std::isfinite(lo)))
-      return absl::InvalidArgumentError(absl::StrFormat("%s%s: must be >= 0, got %g", prefix, lo_name, lo));
+      return absl::InvalidArgumentError(
+          absl::StrFormat("%s%s: must be >= 0, got %g", prefix, lo_name, lo));
     if (!(hi >= lo && std::isfinite(hi)))
       return absl::InvalidArgumentError(
           absl::StrFormat("%s%s: must be >= %s (%g), got %g", prefix, hi_name, lo_name, lo, hi));
@@ -98,7 +100,8 @@ absl::Status ValidateErrorRanges(const ErrorRanges& r, const std::string& prefix
   };
   TF_RETURN_IF_ERROR(range("threshold_min", r.threshold_min, "threshold_max", r.threshold_max));
   TF_RETURN_IF_ERROR(range("hysteresis_max", 0.0, "hysteresis_max", r.hysteresis_max));
-  if (auto s = range("force_error_min", r.force_error_min, "force_error_max", r.force_error_max); !s.ok())
+  if (auto s = range("force_error_min", r.force_error_min, "force_error_max", r.force_error_max);
+      !s.ok())
     return s;
   TF_RETURN_IF_ERROR(range("noise_min", r.noise_min, "noise_max", r.noise_max));
   return absl::OkStatus();

@@ -23,20 +23,29 @@ constexpr double kDeg = kPi / 180;
 
 // A plate (mocap body, tilted about x through the origin; its top face at
 // the body origin) and a fingertip on three world slide joints.
-std::string PlateMjcf(const PhysicsSettings& p, double mu, double mass, double radius, bool mocap_plate) {
+std::string PlateMjcf(const PhysicsSettings& p, double mu, double mass, double radius,
+                      bool mocap_plate) {
   std::string x = "<mujoco model=\"tactforce_slope\">\n";
   absl::StrAppend(&x, OptionMjcf(p), "<worldbody>\n");
-  absl::StrAppend(&x, absl::StrFormat("<body name=\"plate\" %s>\n<geom name=\"plate\" type=\"box\" pos=\"0 0 -0.01\" "
-                                      "size=\"0.3 0.3 0.01\" contype=\"0\" conaffinity=\"0\"/>\n</body>\n",
-                                      mocap_plate ? "mocap=\"true\"" : ""));
-  absl::StrAppend(&x, absl::StrFormat(
-      "<body name=\"tip\" pos=\"0 0 %.9g\">\n<joint name=\"tx\" type=\"slide\" axis=\"1 0 0\"/>"
-      "<joint name=\"ty\" type=\"slide\" axis=\"0 1 0\"/><joint name=\"tz\" type=\"slide\" axis=\"0 0 1\"/>\n"
-      "<geom name=\"tip\" type=\"sphere\" size=\"%.9g\" mass=\"%.9g\" contype=\"0\" conaffinity=\"0\"/>\n</body>\n",
-      radius, radius, mass));
-  absl::StrAppend(&x, absl::StrFormat("</worldbody>\n<contact>\n<pair geom1=\"tip\" geom2=\"plate\" condim=\"3\" "
-                                      "friction=\"%.9g %.9g 0.005 0.0001 0.0001\" %s/>\n</contact>\n</mujoco>\n",
-                                      mu, mu, SolrefAttr(p)));
+  absl::StrAppend(
+      &x, absl::StrFormat(
+              "<body name=\"plate\" %s>\n<geom name=\"plate\" type=\"box\" pos=\"0 0 -0.01\" "
+              "size=\"0.3 0.3 0.01\" contype=\"0\" conaffinity=\"0\"/>\n</body>\n",
+              mocap_plate ? "mocap=\"true\"" : ""));
+  absl::StrAppend(
+      &x,
+      absl::StrFormat(
+          "<body name=\"tip\" pos=\"0 0 %.9g\">\n<joint name=\"tx\" type=\"slide\" axis=\"1 0 0\"/>"
+          "<joint name=\"ty\" type=\"slide\" axis=\"0 1 0\"/><joint name=\"tz\" type=\"slide\" "
+          "axis=\"0 0 1\"/>\n"
+          "<geom name=\"tip\" type=\"sphere\" size=\"%.9g\" mass=\"%.9g\" contype=\"0\" "
+          "conaffinity=\"0\"/>\n</body>\n",
+          radius, radius, mass));
+  absl::StrAppend(
+      &x,
+      absl::StrFormat("</worldbody>\n<contact>\n<pair geom1=\"tip\" geom2=\"plate\" condim=\"3\" "
+                      "friction=\"%.9g %.9g 0.005 0.0001 0.0001\" %s/>\n</contact>\n</mujoco>\n",
+                      mu, mu, SolrefAttr(p)));
   return x;
 }
 
@@ -59,7 +68,8 @@ double AlongPlate(const Eigen::Vector3d& p, double theta) {
 
 // Place the tip resting on a plate at tilt theta (centre at R(theta) (0,0,r)).
 void PlaceTip(Scene& s, double theta, double radius) {
-  const Eigen::Vector3d c = Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitX()) * Eigen::Vector3d(0, 0, radius);
+  const Eigen::Vector3d c =
+      Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitX()) * Eigen::Vector3d(0, 0, radius);
   s.d->qpos[0] = c.x();
   s.d->qpos[1] = c.y();
   s.d->qpos[2] = c.z() - radius;
@@ -87,7 +97,8 @@ absl::StatusOr<double> SlipTilt(const SlopeConfig& c, double mu) {
     mj_step(s.m, s.d);
     if (AlongPlate(TipPos(s, r), theta) - start > c.slip_distance) return theta;
   }
-  return absl::InternalError(absl::StrFormat("slope: no slip up to %.1f deg at mu %g", theta_max / kDeg, mu));
+  return absl::InternalError(
+      absl::StrFormat("slope: no slip up to %.1f deg at mu %g", theta_max / kDeg, mu));
 }
 
 // Probe: the contact force and point, sampled at `sample_rate` after the
@@ -113,7 +124,8 @@ absl::StatusOr<estimator::FrictionTrial> ProbeTrial(const SlopeConfig& c, double
     const double t = k * dt;
     if (t > t_end || (slip_at >= 0 && t > slip_at + 0.3)) break;
     // Normal force: ramp in over the settle time, then down at `probe_ramp`.
-    const double fn = t < settle ? fn0 * t / settle : std::max(0.0, fn0 - c.probe_ramp * (t - settle));
+    const double fn =
+        t < settle ? fn0 * t / settle : std::max(0.0, fn0 - c.probe_ramp * (t - settle));
     const double tangential = t < settle ? ft * t / settle : ft;
     s.d->qfrc_applied[0] = tangential;
     s.d->qfrc_applied[1] = 0;
@@ -142,10 +154,13 @@ absl::Status ValidateSlopeConfig(const SlopeConfig& c) {
   if (c.mus.empty()) return bad("mus", "empty");
   for (size_t i = 0; i < c.mus.size(); ++i)
     if (!(c.mus[i] > 0.02 && c.mus[i] <= 2))
-      return bad(absl::StrCat("mus[", i, "]"), absl::StrFormat("must be in (0.02, 2], got %g", c.mus[i]));
+      return bad(absl::StrCat("mus[", i, "]"),
+                 absl::StrFormat("must be in (0.02, 2], got %g", c.mus[i]));
   if (!(c.fingertip_mass > 0)) return bad("fingertip_mass", "must be > 0");
-  if (!(c.fingertip_radius > 0.002 && c.fingertip_radius < 0.05)) return bad("fingertip_radius", "must be in (0.002, 0.05) m");
-  if (!(c.tilt_rate_deg > 0 && c.tilt_rate_deg <= 30)) return bad("tilt_rate_deg", "must be in (0, 30]");
+  if (!(c.fingertip_radius > 0.002 && c.fingertip_radius < 0.05))
+    return bad("fingertip_radius", "must be in (0.002, 0.05) m");
+  if (!(c.tilt_rate_deg > 0 && c.tilt_rate_deg <= 30))
+    return bad("tilt_rate_deg", "must be in (0, 30]");
   if (!(c.start_margin_deg >= 0)) return bad("start_margin_deg", "must be >= 0");
   if (!(c.settle >= 0)) return bad("settle", "must be >= 0");
   if (!(c.slip_distance > 0)) return bad("slip_distance", "must be > 0");
@@ -188,11 +203,12 @@ absl::StatusOr<std::vector<SlopeRow>> RunSlopeTable(const SlopeConfig& c) {
   return rows;
 }
 
-absl::StatusOr<double> MeasureCreep(const PhysicsSettings& physics, double mu, double load_ratio, double seconds,
-                                    double settle, double fingertip_mass) {
+absl::StatusOr<double> MeasureCreep(const PhysicsSettings& physics, double mu, double load_ratio,
+                                    double seconds, double settle, double fingertip_mass) {
   TF_RETURN_IF_ERROR(ValidatePhysics(physics));
   if (!(load_ratio >= 0 && load_ratio < 1))
-    return absl::InvalidArgumentError(absl::StrFormat("load_ratio: must be in [0, 1), got %g", load_ratio));
+    return absl::InvalidArgumentError(
+        absl::StrFormat("load_ratio: must be in [0, 1), got %g", load_ratio));
   if (!(mu > 0)) return absl::InvalidArgumentError("mu: must be > 0");
   const double r = 0.012;
   auto sc = Scene::FromMjcf(PlateMjcf(physics, mu, fingertip_mass, r, true));

@@ -69,7 +69,8 @@ absl::StatusOr<CsvTable> ParseCsv(const std::string& text, const std::string& so
     if (table.columns.empty()) {
       for (const auto& c : cells) {
         if (c.empty())
-          return absl::InvalidArgumentError(absl::StrCat(source, ":", line_number, ": empty column name"));
+          return absl::InvalidArgumentError(
+              absl::StrCat(source, ":", line_number, ": empty column name"));
       }
       table.columns = cells;
       continue;
@@ -110,7 +111,8 @@ absl::StatusOr<CsvTable> ParseCsv(const std::string& text, const std::string& so
     table.rows.push_back(std::move(row));
     table.line_numbers.push_back(line_number);
   }
-  if (table.columns.empty()) return absl::InvalidArgumentError(absl::StrCat(source, ": empty (no header)"));
+  if (table.columns.empty())
+    return absl::InvalidArgumentError(absl::StrCat(source, ": empty (no header)"));
   return table;
 }
 

@@ -41,8 +41,8 @@ struct ReadProgress {
   size_t last_significant = 0;  // offset of the last non-blank byte read
   int last_significant_line = 1;
   size_t last_significant_line_start = 0;  // offset of the first byte of that line
-  int line = 1;                 // line of the next byte
-  size_t line_start = 0;        // offset of the first byte of `line`
+  int line = 1;                            // line of the next byte
+  size_t line_start = 0;                   // offset of the first byte of `line`
 };
 
 // A byte iterator over the text that records each byte the lexer reads.
@@ -114,7 +114,8 @@ std::string Reason(absl::string_view what, absl::string_view token) {
     found = std::string(what);
     // Literals show their text; punctuation and "end of input" name themselves.
     if (absl::EndsWith(what, "literal") && !token.empty())
-      absl::StrAppend(&found, token.front() == '"' ? " " : " '", Shortened(token), token.front() == '"' ? "" : "'");
+      absl::StrAppend(&found, token.front() == '"' ? " " : " '", Shortened(token),
+                      token.front() == '"' ? "" : "'");
   } else if (!last_read.empty()) {
     absl::StrAppend(&found, " (read ", Shortened(last_read), ")");
   }
@@ -136,7 +137,9 @@ class JsonTreeBuilder {
   bool number_unsigned(std::uint64_t v) { return Add(JsonValue::Number(static_cast<double>(v))); }
   bool number_float(double v, const std::string& /*text*/) { return Add(JsonValue::Number(v)); }
   bool string(std::string& v) { return Add(JsonValue::String(std::move(v))); }
-  bool binary(Json::binary_t& /*bytes*/) { return Fail("binary values are not JSON", progress_->last_significant); }
+  bool binary(Json::binary_t& /*bytes*/) {
+    return Fail("binary values are not JSON", progress_->last_significant);
+  }
   bool start_object(std::size_t /*size*/) { return Open(JsonValue::Type::kObject); }
   bool start_array(std::size_t /*size*/) { return Open(JsonValue::Type::kArray); }
   bool end_object() { return Close(); }
@@ -144,7 +147,8 @@ class JsonTreeBuilder {
   bool key(std::string& k) {
     Container& object = open_.back();
     if (!object.keys.insert(k).second)
-      return Fail(absl::StrCat("duplicate key '", Shortened(k), "'"), KeyStart(progress_->last_significant));
+      return Fail(absl::StrCat("duplicate key '", Shortened(k), "'"),
+                  KeyStart(progress_->last_significant));
     object.key = std::move(k);
     // The key token ends at the last byte read, on the current line.
     object.key_line = progress_->last_significant_line;
@@ -165,9 +169,9 @@ class JsonTreeBuilder {
  private:
   struct Container {
     JsonValue value;
-    std::string key;                       // objects: the key of the next member
-    int key_line = 0, key_column = 0;      // objects: where that key starts
-    absl::flat_hash_set<std::string> keys; // objects: keys so far
+    std::string key;                        // objects: the key of the next member
+    int key_line = 0, key_column = 0;       // objects: where that key starts
+    absl::flat_hash_set<std::string> keys;  // objects: keys so far
   };
 
   // 1-based byte column of `offset`, which is on the last significant line.
@@ -201,7 +205,8 @@ class JsonTreeBuilder {
   }
   bool Open(JsonValue::Type type) {
     if (static_cast<int>(open_.size()) >= kMaxJsonDepth)
-      return Fail(absl::StrCat("nesting deeper than ", kMaxJsonDepth, " levels"), progress_->last_significant);
+      return Fail(absl::StrCat("nesting deeper than ", kMaxJsonDepth, " levels"),
+                  progress_->last_significant);
     Container c;
     c.value.type_ = type;
     c.value = At(std::move(c.value));
@@ -219,7 +224,9 @@ class JsonTreeBuilder {
   // at `end` or right before it.
   size_t ScalarStart(size_t end, bool quoted) const {
     if (quoted) return KeyStart(end);
-    auto in_token = [](char c) { return absl::ascii_isalnum(c) || c == '+' || c == '-' || c == '.'; };
+    auto in_token = [](char c) {
+      return absl::ascii_isalnum(c) || c == '+' || c == '-' || c == '.';
+    };
     size_t i = std::min(end, text_.size() - 1);
     if (i > 0 && !in_token(text_[i])) --i;
     while (i > 0 && in_token(text_[i - 1])) --i;
@@ -236,7 +243,8 @@ class JsonTreeBuilder {
   }
   absl::Status Error(absl::string_view what, size_t offset) const {
     const TextPosition p = PositionInText(text_, offset);
-    return absl::InvalidArgumentError(absl::StrCat(source_, ":", p.line, ":", p.column, ": ", what));
+    return absl::InvalidArgumentError(
+        absl::StrCat(source_, ":", p.line, ":", p.column, ": ", what));
   }
   bool Fail(absl::string_view what, size_t offset) {
     if (error_.ok()) error_ = Error(what, offset);

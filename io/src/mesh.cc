@@ -43,7 +43,6 @@ Vector3d ClosestOnTriangle(const Vector3d& p, const Vector3d& a, const Vector3d&
   return a + ab * (vb * denom) + ac * (vc * denom);
 }
 
-
 // Placement checks shared by ValidatePlacement and the descriptor reader;
 // `field` starts the message.
 absl::Status CheckScale(double scale, const std::string& field) {
@@ -57,7 +56,8 @@ absl::Status CheckPosition(const Vector3d& p, const std::string& field) {
 }
 
 absl::Status CheckQuaternion(const Eigen::Quaterniond& q, const std::string& field) {
-  if (!q.coeffs().allFinite()) return absl::InvalidArgumentError(absl::StrCat(field, ": not finite"));
+  if (!q.coeffs().allFinite())
+    return absl::InvalidArgumentError(absl::StrCat(field, ": not finite"));
   if (q.norm() >= 1e-6) return absl::OkStatus();
   return absl::InvalidArgumentError(
       absl::StrCat(field, ": quaternion norm ", q.norm(), " is near zero (must be >= 1e-6)"));
@@ -73,12 +73,15 @@ absl::Status KeyError(const std::string& path, absl::string_view what) {
 absl::StatusOr<std::vector<double>> Numbers(const Json& j, size_t n, const std::string& path,
                                             const std::string& key, const std::string& what) {
   if (!j.is_array() || j.size() != n)
-    return KeyError(path, absl::StrCat("'", key, "' must be an array of ", n, " numbers ", what, " (got ",
-                                       j.is_array() ? absl::StrCat(j.size(), " elements") : j.type_name(), ")"));
+    return KeyError(
+        path,
+        absl::StrCat("'", key, "' must be an array of ", n, " numbers ", what, " (got ",
+                     j.is_array() ? absl::StrCat(j.size(), " elements") : j.type_name(), ")"));
   std::vector<double> out;
   for (size_t i = 0; i < n; ++i) {
     if (!j[i].is_number())
-      return KeyError(path, absl::StrCat("'", key, "[", i, "]' must be a number (got ", j[i].type_name(), ")"));
+      return KeyError(
+          path, absl::StrCat("'", key, "[", i, "]' must be a number (got ", j[i].type_name(), ")"));
     out.push_back(j[i].get<double>());
     if (!std::isfinite(out.back()))
       return KeyError(path, absl::StrCat("'", key, "[", i, "]' is not finite"));
@@ -96,7 +99,8 @@ absl::StatusOr<Json> ParseDescriptorJson(const std::string& text, const std::str
     const TextPosition at = PositionInText(text, e.byte > 0 ? e.byte - 1 : 0);
     std::string what = e.what();
     if (const size_t p = what.find("syntax error"); p != std::string::npos) what = what.substr(p);
-    return absl::InvalidArgumentError(absl::StrCat(path, ":", at.line, ":", at.column, ": JSON ", what));
+    return absl::InvalidArgumentError(
+        absl::StrCat(path, ":", at.line, ":", at.column, ": JSON ", what));
   } catch (const std::exception& e) {
     return absl::InvalidArgumentError(absl::StrCat(path, ": JSON: ", e.what()));
   }
@@ -121,7 +125,8 @@ absl::Status ValidateMesh(const TriangleMesh& mesh) {
     const double area2 =
         (mesh.vertices[b] - mesh.vertices[a]).cross(mesh.vertices[c] - mesh.vertices[a]).norm();
     if (!(area2 > 1e-18))
-      return absl::InvalidArgumentError(absl::StrCat("mesh.triangles[", t, "]: degenerate (zero area)"));
+      return absl::InvalidArgumentError(
+          absl::StrCat("mesh.triangles[", t, "]: degenerate (zero area)"));
   }
   return absl::OkStatus();
 }
@@ -146,43 +151,55 @@ absl::StatusOr<MeshDescriptor> ReadMeshDescriptor(const std::string& path) {
   absl::StatusOr<Json> json = ParseDescriptorJson(*text, path);
   if (!json.ok()) return json.status();
   const Json& j = *json;
-  if (!j.is_object()) return KeyError(path, absl::StrCat("expected a JSON object (got ", j.type_name(), ")"));
+  if (!j.is_object())
+    return KeyError(path, absl::StrCat("expected a JSON object (got ", j.type_name(), ")"));
   for (const auto& [key, value] : j.items()) {
     if (key != "mesh" && key != "scale" && key != "object_in_mesh")
-      return KeyError(path, absl::StrCat("unknown key '", key, "' (expected mesh, scale, object_in_mesh)"));
+      return KeyError(
+          path, absl::StrCat("unknown key '", key, "' (expected mesh, scale, object_in_mesh)"));
   }
   MeshDescriptor d;
   const auto mesh = j.find("mesh");
-  if (mesh == j.end()) return KeyError(path, "missing key 'mesh' (the mesh file, .stl, .obj or .ply)");
+  if (mesh == j.end())
+    return KeyError(path, "missing key 'mesh' (the mesh file, .stl, .obj or .ply)");
   if (!mesh->is_string() || mesh->get_ref<const std::string&>().empty())
     return KeyError(path, absl::StrCat("'mesh' must be a non-empty string (got ",
                                        mesh->is_string() ? "\"\"" : mesh->type_name(), ")"));
   const std::filesystem::path file = mesh->get<std::string>();
-  d.mesh_path = file.is_absolute() ? file.string() : (std::filesystem::path(path).parent_path() / file).string();
+  d.mesh_path = file.is_absolute() ? file.string()
+                                   : (std::filesystem::path(path).parent_path() / file).string();
   if (const auto scale = j.find("scale"); scale != j.end()) {
     if (!scale->is_number())
-      return KeyError(path, absl::StrCat("'scale' must be a number (got ", scale->type_name(), ")"));
+      return KeyError(path,
+                      absl::StrCat("'scale' must be a number (got ", scale->type_name(), ")"));
     d.placement.scale = scale->get<double>();
-    if (absl::Status s = CheckScale(d.placement.scale, "scale"); !s.ok()) return KeyError(path, s.message());
+    if (absl::Status s = CheckScale(d.placement.scale, "scale"); !s.ok())
+      return KeyError(path, s.message());
   }
   if (const auto pose = j.find("object_in_mesh"); pose != j.end()) {
     if (!pose->is_object())
-      return KeyError(path, absl::StrCat("'object_in_mesh' must be an object with position and quaternion (got ",
-                                         pose->type_name(), ")"));
+      return KeyError(
+          path,
+          absl::StrCat("'object_in_mesh' must be an object with position and quaternion (got ",
+                       pose->type_name(), ")"));
     for (const auto& [key, value] : pose->items()) {
       if (key != "position" && key != "quaternion")
-        return KeyError(path, absl::StrCat("unknown key 'object_in_mesh.", key, "' (expected position, quaternion)"));
+        return KeyError(path, absl::StrCat("unknown key 'object_in_mesh.", key,
+                                           "' (expected position, quaternion)"));
     }
     if (const auto p = pose->find("position"); p != pose->end()) {
-      absl::StatusOr<std::vector<double>> v = Numbers(*p, 3, path, "object_in_mesh.position", "[x, y, z]");
+      absl::StatusOr<std::vector<double>> v =
+          Numbers(*p, 3, path, "object_in_mesh.position", "[x, y, z]");
       if (!v.ok()) return v.status();
       d.placement.position = Vector3d((*v)[0], (*v)[1], (*v)[2]);
     }
     if (const auto q = pose->find("quaternion"); q != pose->end()) {
-      absl::StatusOr<std::vector<double>> v = Numbers(*q, 4, path, "object_in_mesh.quaternion", "[w, x, y, z]");
+      absl::StatusOr<std::vector<double>> v =
+          Numbers(*q, 4, path, "object_in_mesh.quaternion", "[w, x, y, z]");
       if (!v.ok()) return v.status();
       d.placement.orientation = Eigen::Quaterniond((*v)[0], (*v)[1], (*v)[2], (*v)[3]);
-      if (absl::Status s = CheckQuaternion(d.placement.orientation, "object_in_mesh.quaternion"); !s.ok())
+      if (absl::Status s = CheckQuaternion(d.placement.orientation, "object_in_mesh.quaternion");
+          !s.ok())
         return KeyError(path, s.message());
     }
   }
@@ -191,7 +208,8 @@ absl::StatusOr<MeshDescriptor> ReadMeshDescriptor(const std::string& path) {
 
 absl::StatusOr<LoadedMesh> LoadMesh(const MeshRequest& request) {
   LoadedMesh out;
-  const std::string ext = absl::AsciiStrToLower(std::filesystem::path(request.path).extension().string());
+  const std::string ext =
+      absl::AsciiStrToLower(std::filesystem::path(request.path).extension().string());
   if (ext == ".json") {
     absl::StatusOr<MeshDescriptor> d = ReadMeshDescriptor(request.path);
     if (!d.ok()) return d.status();

@@ -41,7 +41,8 @@ MeshCheck CheckMesh(const TriangleMesh& mesh) {
     const Eigen::Vector3d& b = mesh.vertices[t[1]];
     const Eigen::Vector3d& d = mesh.vertices[t[2]];
     const double area = 0.5 * (b - a).cross(d - a).norm();
-    const double longest2 = std::max({(b - a).squaredNorm(), (d - b).squaredNorm(), (a - d).squaredNorm()});
+    const double longest2 =
+        std::max({(b - a).squaredNorm(), (d - b).squaredNorm(), (a - d).squaredNorm()});
     c.area += area;
     c.volume += a.dot(b.cross(d)) / 6.0;
     if (!(2.0 * area > kDegenerateRatio * longest2) || longest2 == 0.0) {
@@ -63,14 +64,20 @@ MeshCheck CheckMesh(const TriangleMesh& mesh) {
     int forward = 0;
     for (; j < edges.size() && edges[j].key == edges[i].key; ++j) forward += edges[j].forward;
     const int uses = static_cast<int>(j - i);
-    if (uses == 1) ++c.boundary_edges;
-    else if (uses == 2 && forward != 1) ++c.inconsistent_edges;
-    else if (uses > 2 && 2 * forward != uses) ++c.non_manifold_edges;
-    else if (uses > 2) ++c.junction_edges;
+    if (uses == 1)
+      ++c.boundary_edges;
+    else if (uses == 2 && forward != 1)
+      ++c.inconsistent_edges;
+    else if (uses > 2 && 2 * forward != uses)
+      ++c.non_manifold_edges;
+    else if (uses > 2)
+      ++c.junction_edges;
     i = j;
   }
-  if (c.area > 0) c.degenerate_area_fraction = degenerate_area / c.area;
-  else if (c.degenerate_faces > 0) c.degenerate_area_fraction = 1.0;
+  if (c.area > 0)
+    c.degenerate_area_fraction = degenerate_area / c.area;
+  else if (c.degenerate_faces > 0)
+    c.degenerate_area_fraction = 1.0;
   c.closed = c.boundary_edges == 0 && c.non_manifold_edges == 0;
   c.consistently_oriented = c.inconsistent_edges == 0;
   return c;
@@ -80,25 +87,28 @@ absl::Status RequireClosedSolid(const MeshCheck& c, std::string_view name_view) 
   const std::string name(name_view);
   if (c.faces == 0) return absl::InvalidArgumentError(absl::StrCat(name, ": no triangles"));
   if (c.non_manifold_edges > 0)
-    return absl::InvalidArgumentError(
-        absl::StrCat(name, ": ", c.non_manifold_edges,
-                     " non-manifold edges (shared by more than two triangles, not as many in each direction)"));
+    return absl::InvalidArgumentError(absl::StrCat(
+        name, ": ", c.non_manifold_edges,
+        " non-manifold edges (shared by more than two triangles, not as many in each direction)"));
   if (c.boundary_edges > 0)
     return absl::InvalidArgumentError(
         absl::StrCat(name, ": ", c.boundary_edges, " boundary edges: the mesh is not closed"));
   if (c.inconsistent_edges > 0)
     return absl::InvalidArgumentError(
         absl::StrCat(name, ": ", c.inconsistent_edges,
-                     " edges are traversed twice in the same direction: the triangles are not consistently oriented"));
+                     " edges are traversed twice in the same direction: the triangles are not "
+                     "consistently oriented"));
   if (c.degenerate_area_fraction > kMaxDegenerateAreaFraction)
-    return absl::InvalidArgumentError(absl::StrCat(
-        name, ": ", c.degenerate_faces, " degenerate (zero-area) faces carry ",
-        100.0 * c.degenerate_area_fraction, " % of the area (more than 1 %)"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(name, ": ", c.degenerate_faces, " degenerate (zero-area) faces carry ",
+                     100.0 * c.degenerate_area_fraction, " % of the area (more than 1 %)"));
   if (c.volume < 0)
-    return absl::InvalidArgumentError(absl::StrCat(
-        name, ": volume ", c.volume, " m^3 is negative: the mesh is inside out (flip the winding)"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(name, ": volume ", c.volume,
+                     " m^3 is negative: the mesh is inside out (flip the winding)"));
   if (!(c.volume > 0))
-    return absl::InvalidArgumentError(absl::StrCat(name, ": volume ", c.volume, " m^3 is not positive"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(name, ": volume ", c.volume, " m^3 is not positive"));
   return absl::OkStatus();
 }
 

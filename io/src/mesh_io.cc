@@ -71,7 +71,8 @@ absl::StatusOr<std::vector<int>> Weld(const aiScene& scene, const std::string& n
             [&](size_t a, size_t b) { return keys[a] != keys[b] ? keys[a] < keys[b] : a < b; });
   std::vector<size_t> first(keys.size());  // the first corner at the same position
   for (size_t i = 0; i < order.size(); ++i)
-    first[order[i]] = i > 0 && keys[order[i]] == keys[order[i - 1]] ? first[order[i - 1]] : order[i];
+    first[order[i]] =
+        i > 0 && keys[order[i]] == keys[order[i - 1]] ? first[order[i - 1]] : order[i];
   std::vector<int> vertex_of(keys.size(), -1);
   for (size_t c = 0; c < keys.size(); ++c) {
     if (vertex_of[first[c]] < 0) {  // first[c] <= c: set here when c is the first
@@ -85,7 +86,8 @@ absl::StatusOr<std::vector<int>> Weld(const aiScene& scene, const std::string& n
 
 absl::StatusOr<TriangleMesh> FromScene(const aiScene& scene, const std::string& name) {
   bool colored = scene.mNumMeshes > 0;
-  for (unsigned i = 0; i < scene.mNumMeshes; ++i) colored = colored && scene.mMeshes[i]->HasVertexColors(0);
+  for (unsigned i = 0; i < scene.mNumMeshes; ++i)
+    colored = colored && scene.mMeshes[i]->HasVertexColors(0);
   TriangleMesh mesh;
   absl::StatusOr<std::vector<int>> vertex_of = Weld(scene, name, &mesh.vertices);
   if (!vertex_of.ok()) return vertex_of.status();
@@ -100,7 +102,8 @@ absl::StatusOr<TriangleMesh> FromScene(const aiScene& scene, const std::string& 
       const aiFace& f = m.mFaces[t];
       for (unsigned k = 0; k < f.mNumIndices; ++k) {
         if (f.mIndices[k] >= m.mNumVertices)
-          return absl::InvalidArgumentError(absl::StrCat(name, ": face ", t, " refers to a missing vertex"));
+          return absl::InvalidArgumentError(
+              absl::StrCat(name, ": face ", t, " refers to a missing vertex"));
       }
       for (unsigned k = 1; k + 1 < f.mNumIndices; ++k) {
         const unsigned a = f.mIndices[0], b = f.mIndices[k], c = f.mIndices[k + 1];
@@ -109,7 +112,8 @@ absl::StatusOr<TriangleMesh> FromScene(const aiScene& scene, const std::string& 
       }
     }
   }
-  if (mesh.triangles.empty()) return absl::InvalidArgumentError(absl::StrCat(name, ": no triangles"));
+  if (mesh.triangles.empty())
+    return absl::InvalidArgumentError(absl::StrCat(name, ": no triangles"));
   return mesh;
 }
 
@@ -118,8 +122,8 @@ absl::StatusOr<TriangleMesh> FromScene(const aiScene& scene, const std::string& 
 absl::StatusOr<std::string> MeshFormatFromPath(const std::string& path) {
   const std::string ext = absl::AsciiStrToLower(std::filesystem::path(path).extension().string());
   if (ext == ".stl" || ext == ".obj" || ext == ".ply") return ext.substr(1);
-  return absl::InvalidArgumentError(absl::StrCat(path, ": unknown mesh format '", ext,
-                                                 "' (expected .stl, .obj or .ply)"));
+  return absl::InvalidArgumentError(
+      absl::StrCat(path, ": unknown mesh format '", ext, "' (expected .stl, .obj or .ply)"));
 }
 
 namespace {
@@ -136,12 +140,14 @@ class OneBufferIOSystem : public Assimp::IOSystem {
   // An OBJ statement ends at a line end, so no `mtllib` can name this file.
   static std::string NameFor(const std::string& hint) { return "request\n." + hint; }
 
-  OneBufferIOSystem(std::string name, std::string_view bytes) : name_(std::move(name)), bytes_(bytes) {}
+  OneBufferIOSystem(std::string name, std::string_view bytes)
+      : name_(std::move(name)), bytes_(bytes) {}
   bool Exists(const char* file) const override { return file != nullptr && name_ == file; }
   char getOsSeparator() const override { return '/'; }
   Assimp::IOStream* Open(const char* file, const char* mode) override {
     if (!Exists(file) || mode == nullptr || mode[0] != 'r') return nullptr;
-    return new Assimp::MemoryIOStream(reinterpret_cast<const uint8_t*>(bytes_.data()), bytes_.size());
+    return new Assimp::MemoryIOStream(reinterpret_cast<const uint8_t*>(bytes_.data()),
+                                      bytes_.size());
   }
   void Close(Assimp::IOStream* stream) override { delete stream; }
 
@@ -159,27 +165,29 @@ absl::Status CheckStl(std::string_view bytes, const std::string& name) {
   std::memcpy(&triangles, bytes.data() + 80, sizeof(triangles));  // little-endian, as the format
   const uint64_t needed = 84 + 50 * uint64_t{triangles};
   if (needed == bytes.size()) return absl::OkStatus();
-  const absl::string_view start =
-      absl::StripLeadingAsciiWhitespace(absl::string_view(bytes.data(), std::min<size_t>(bytes.size(), 512)));
+  const absl::string_view start = absl::StripLeadingAsciiWhitespace(
+      absl::string_view(bytes.data(), std::min<size_t>(bytes.size(), 512)));
   const bool wraps = static_cast<uint32_t>(needed) == bytes.size();
   if (!wraps && start.substr(0, 5) == "solid") return absl::OkStatus();  // ASCII STL
-  return absl::InvalidArgumentError(absl::StrCat(name, ": binary STL header declares ", triangles,
-                                                 " triangles (", needed, " bytes) but the file has ",
-                                                 bytes.size(), " bytes"));
+  return absl::InvalidArgumentError(
+      absl::StrCat(name, ": binary STL header declares ", triangles, " triangles (", needed,
+                   " bytes) but the file has ", bytes.size(), " bytes"));
 }
 
 absl::Status CheckLimits(const TriangleMesh& mesh, const std::string& name) {
   if (mesh.vertices.size() > static_cast<size_t>(kMaxMeshVertices))
-    return absl::InvalidArgumentError(absl::StrCat(name, ": ", mesh.vertices.size(),
-                                                   " vertices, more than the limit of ", kMaxMeshVertices));
+    return absl::InvalidArgumentError(absl::StrCat(
+        name, ": ", mesh.vertices.size(), " vertices, more than the limit of ", kMaxMeshVertices));
   if (mesh.triangles.size() > static_cast<size_t>(kMaxMeshTriangles))
     return absl::InvalidArgumentError(absl::StrCat(name, ": ", mesh.triangles.size(),
-                                                   " triangles, more than the limit of ", kMaxMeshTriangles));
+                                                   " triangles, more than the limit of ",
+                                                   kMaxMeshTriangles));
   return absl::OkStatus();
 }
 
 // ReadMeshBytes without its exception guard; `hint` is "stl", "obj" or "ply".
-absl::StatusOr<TriangleMesh> ReadMesh(std::string_view bytes, const std::string& hint, const std::string& name) {
+absl::StatusOr<TriangleMesh> ReadMesh(std::string_view bytes, const std::string& hint,
+                                      const std::string& name) {
   internal::CheckedPly ply;
   if (hint == "ply") {
     absl::StatusOr<internal::CheckedPly> checked = internal::CheckPly(bytes, name);
@@ -221,14 +229,15 @@ absl::StatusOr<TriangleMesh> ReadMeshBytes(std::string_view bytes, std::string_v
   const std::string name(name_view);
   const std::string hint = absl::AsciiStrToLower(std::string(format));
   if (hint != "stl" && hint != "obj" && hint != "ply")
-    return absl::InvalidArgumentError(
-        absl::StrCat(name, ": unknown mesh format '", std::string(format), "' (expected stl, obj or ply)"));
+    return absl::InvalidArgumentError(absl::StrCat(
+        name, ": unknown mesh format '", std::string(format), "' (expected stl, obj or ply)"));
   if (bytes.empty()) return absl::InvalidArgumentError(absl::StrCat(name, ": empty file"));
   // No exception leaves: assimp's, our containers' and the PLY check's become a Status.
   try {
     return ReadMesh(bytes, hint, name);
   } catch (const std::bad_alloc&) {
-    return absl::ResourceExhaustedError(absl::StrCat(name, ": out of memory while reading the mesh"));
+    return absl::ResourceExhaustedError(
+        absl::StrCat(name, ": out of memory while reading the mesh"));
   } catch (const std::exception& e) {
     return absl::InvalidArgumentError(absl::StrCat(name, ": cannot read the mesh: ", e.what()));
   } catch (...) {

@@ -36,10 +36,10 @@ enum class Encoding { kAscii, kLittle, kBig };
 
 struct Property {
   std::string name;
-  int size = 0;             // bytes of a scalar value (or of a list's items)
+  int size = 0;  // bytes of a scalar value (or of a list's items)
   bool is_float = false;
   bool is_signed = false;
-  int count_size = 0;       // > 0: a list, with a count of this many bytes
+  int count_size = 0;  // > 0: a list, with a count of this many bytes
   bool count_signed = false;
 };
 
@@ -60,20 +60,29 @@ struct Header {
 // Size and kind of a PLY scalar type name; size 0 when unknown.
 Property ScalarType(absl::string_view type) {
   Property p;
-  if (type == "char" || type == "int8") p.size = 1, p.is_signed = true;
-  else if (type == "uchar" || type == "uint8") p.size = 1;
-  else if (type == "short" || type == "int16") p.size = 2, p.is_signed = true;
-  else if (type == "ushort" || type == "uint16") p.size = 2;
-  else if (type == "int" || type == "int32") p.size = 4, p.is_signed = true;
-  else if (type == "uint" || type == "uint32") p.size = 4;
-  else if (type == "float" || type == "float32") p.size = 4, p.is_float = true;
-  else if (type == "double" || type == "float64") p.size = 8, p.is_float = true;
+  if (type == "char" || type == "int8")
+    p.size = 1, p.is_signed = true;
+  else if (type == "uchar" || type == "uint8")
+    p.size = 1;
+  else if (type == "short" || type == "int16")
+    p.size = 2, p.is_signed = true;
+  else if (type == "ushort" || type == "uint16")
+    p.size = 2;
+  else if (type == "int" || type == "int32")
+    p.size = 4, p.is_signed = true;
+  else if (type == "uint" || type == "uint32")
+    p.size = 4;
+  else if (type == "float" || type == "float32")
+    p.size = 4, p.is_float = true;
+  else if (type == "double" || type == "float64")
+    p.size = 8, p.is_float = true;
   return p;
 }
 
 // "property TYPE NAME" or "property list COUNT_TYPE TYPE NAME", split into
 // words; the problem when it is not understood.
-absl::StatusOr<Property> ParseProperty(const std::vector<absl::string_view>& w, absl::string_view line) {
+absl::StatusOr<Property> ParseProperty(const std::vector<absl::string_view>& w,
+                                       absl::string_view line) {
   const absl::Status unexpected =
       absl::InvalidArgumentError(absl::StrCat("unexpected '", line.substr(0, 40), "'"));
   Property p;
@@ -82,7 +91,8 @@ absl::StatusOr<Property> ParseProperty(const std::vector<absl::string_view>& w, 
     p = ScalarType(w[3]);
     if (count.size == 0 || p.size == 0) return unexpected;
     if (count.is_float)
-      return absl::InvalidArgumentError(absl::StrCat("list length type '", w[2], "' is not an integer type"));
+      return absl::InvalidArgumentError(
+          absl::StrCat("list length type '", w[2], "' is not an integer type"));
     p.count_size = count.size;
     p.count_signed = count.is_signed;
   } else if (w.size() == 3) {
@@ -106,12 +116,14 @@ absl::StatusOr<Header> ParseHeader(absl::string_view bytes, const std::string& n
   size_t pos = 0;
   while (pos < bytes.size()) {
     const size_t eol = bytes.find('\n', pos);
-    absl::string_view line = bytes.substr(pos, eol == absl::string_view::npos ? absl::string_view::npos : eol - pos);
+    absl::string_view line =
+        bytes.substr(pos, eol == absl::string_view::npos ? absl::string_view::npos : eol - pos);
     pos = eol == absl::string_view::npos ? bytes.size() : eol + 1;
     ++line_number;
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     auto bad = [&](absl::string_view what) {
-      return absl::InvalidArgumentError(absl::StrCat(name, ": PLY header line ", line_number, ": ", what));
+      return absl::InvalidArgumentError(
+          absl::StrCat(name, ": PLY header line ", line_number, ": ", what));
     };
     for (char c : line) {
       if (c != '\t' && (c < ' ' || c > '~')) return bad("binary bytes inside the header");
@@ -132,8 +144,9 @@ absl::StatusOr<Header> ParseHeader(absl::string_view bytes, const std::string& n
     if (w[0] == "format" && !format && w.size() == 3 && w[2] == "1.0" &&
         (w[1] == "ascii" || w[1] == "binary_little_endian" || w[1] == "binary_big_endian")) {
       format = true;
-      h.encoding = w[1] == "ascii" ? Encoding::kAscii
-                   : w[1] == "binary_big_endian" ? Encoding::kBig : Encoding::kLittle;
+      h.encoding = w[1] == "ascii"               ? Encoding::kAscii
+                   : w[1] == "binary_big_endian" ? Encoding::kBig
+                                                 : Encoding::kLittle;
     } else if (w[0] == "element" && w.size() == 3 && absl::SimpleAtoi(w[2], &count)) {
       h.elements.push_back({std::string(w[1]), count, line_number, {}});
     } else if (w[0] == "property" && !h.elements.empty()) {
@@ -151,7 +164,8 @@ absl::StatusOr<Header> ParseHeader(absl::string_view bytes, const std::string& n
 // values in an ASCII file (a list at least its length).
 uint64_t MinItemSize(const Element& e, bool binary) {
   uint64_t n = 0;
-  for (const Property& p : e.properties) n += !binary ? 1 : p.count_size > 0 ? p.count_size : p.size;
+  for (const Property& p : e.properties)
+    n += !binary ? 1 : p.count_size > 0 ? p.count_size : p.size;
   return n;
 }
 
@@ -176,13 +190,15 @@ absl::Status CheckCounts(const Header& h, absl::string_view body, const std::str
   uint64_t bytes_left = body.size(), lines_left = lines, values_left = values;
   for (const Element& e : h.elements) {
     auto bad = [&](absl::string_view what) {
-      return absl::InvalidArgumentError(absl::StrCat(name, ": PLY header line ", e.line, ": element '", e.name,
-                                                     "' declares ", e.count, " items", what));
+      return absl::InvalidArgumentError(absl::StrCat(name, ": PLY header line ", e.line,
+                                                     ": element '", e.name, "' declares ", e.count,
+                                                     " items", what));
     };
     if (e.count == 0) continue;
     const uint64_t min_size = MinItemSize(e, binary);
     if (min_size == 0) return bad(" but has no properties");
-    const uint64_t at_most = binary ? bytes_left / min_size : std::min(lines_left, values_left / min_size);
+    const uint64_t at_most =
+        binary ? bytes_left / min_size : std::min(lines_left, values_left / min_size);
     if (e.count > at_most) {
       return bad(absl::StrCat(" but the file holds at most ", at_most, " (",
                               binary ? absl::StrCat(body.size(), " bytes")
@@ -192,7 +208,8 @@ absl::Status CheckCounts(const Header& h, absl::string_view body, const std::str
     const bool vertex = e.name == "vertex";
     const uint64_t limit = vertex ? kMaxMeshVertices : kMaxMeshTriangles;
     if (e.count > limit)
-      return bad(absl::StrCat(", more than the limit of ", limit, vertex ? " vertices" : " items per element"));
+      return bad(absl::StrCat(", more than the limit of ", limit,
+                              vertex ? " vertices" : " items per element"));
     if (binary) {
       bytes_left -= e.count * min_size;
     } else {
@@ -236,7 +253,8 @@ class BodyReader {
       return std::bit_cast<double>(Load<uint64_t>(raw));
     }
     uint64_t u = 0;
-    std::memcpy(&u, raw, size);  // native order after the swap; little-endian hosts only matter here
+    std::memcpy(&u, raw,
+                size);  // native order after the swap; little-endian hosts only matter here
     if (is_signed && size < 8 && (u >> (8 * size - 1)) & 1) u |= ~uint64_t{0} << (8 * size);
     return is_signed ? static_cast<double>(static_cast<int64_t>(u)) : static_cast<double>(u);
   }
@@ -274,16 +292,18 @@ class BodyReader {
   std::optional<double> ReadToken() {
     while (pos_ < line_end_ && absl::ascii_isspace(static_cast<unsigned char>(body_[pos_]))) ++pos_;
     const size_t start = pos_;
-    while (pos_ < line_end_ && !absl::ascii_isspace(static_cast<unsigned char>(body_[pos_]))) ++pos_;
+    while (pos_ < line_end_ && !absl::ascii_isspace(static_cast<unsigned char>(body_[pos_])))
+      ++pos_;
     double v = 0;
-    if (start == pos_ || !absl::SimpleAtod(body_.substr(start, pos_ - start), &v)) return std::nullopt;
+    if (start == pos_ || !absl::SimpleAtod(body_.substr(start, pos_ - start), &v))
+      return std::nullopt;
     return v;
   }
 
   absl::string_view body_;
   Encoding encoding_;
-  int line_number_;     // ASCII: file line of the current item
-  size_t body_start_;   // binary: file offset of the body, for messages
+  int line_number_;    // ASCII: file line of the current item
+  size_t body_start_;  // binary: file offset of the body, for messages
   size_t pos_ = 0;
   size_t line_end_ = 0;   // ASCII: end of the current item's line
   size_t next_line_ = 0;  // ASCII: start of the line after it
@@ -333,14 +353,17 @@ std::string ReadItem(BodyReader& reader, const Element& e, const FaceLayout& lay
     if (p.count_size > 0) {
       const std::optional<double> n = reader.Read(p.count_size, false, p.count_signed);
       if (!n) return absl::StrCat("the length of list '", p.name, "' is missing or not a number");
-      if (*n < 0 || *n != std::floor(*n)) return absl::StrCat("list '", p.name, "' has length ", *n);
+      if (*n < 0 || *n != std::floor(*n))
+        return absl::StrCat("list '", p.name, "' has length ", *n);
       const uint64_t left = reader.ValuesLeft(p.size);
       if (*n > static_cast<double>(left)) {
-        return absl::StrCat("list '", p.name, "' has length ", static_cast<uint64_t>(*n), " but only ", left,
-                            reader.ascii() ? " values follow on the line" : " values fit in the rest of the file");
+        return absl::StrCat(
+            "list '", p.name, "' has length ", static_cast<uint64_t>(*n), " but only ", left,
+            reader.ascii() ? " values follow on the line" : " values fit in the rest of the file");
       }
       for (uint64_t j = 0; j < static_cast<uint64_t>(*n); ++j)
-        if (!reader.Read(p.size, p.is_float, p.is_signed)) return absl::StrCat("list '", p.name, "': not a number");
+        if (!reader.Read(p.size, p.is_float, p.is_signed))
+          return absl::StrCat("list '", p.name, "': not a number");
       if (static_cast<int>(k) == layout.indices) *corners = static_cast<uint64_t>(*n);
       continue;
     }
@@ -354,8 +377,10 @@ std::string ReadItem(BodyReader& reader, const Element& e, const FaceLayout& lay
 
 // Walks every item of every element; the face colours (one per triangle,
 // polygons fanned as ReadMeshBytes does) when the face element has them.
-absl::StatusOr<std::vector<uint32_t>> WalkBody(const Header& h, absl::string_view bytes, const std::string& name) {
-  const auto face = std::find_if(h.elements.begin(), h.elements.end(), [](const Element& e) { return e.name == "face"; });
+absl::StatusOr<std::vector<uint32_t>> WalkBody(const Header& h, absl::string_view bytes,
+                                               const std::string& name) {
+  const auto face = std::find_if(h.elements.begin(), h.elements.end(),
+                                 [](const Element& e) { return e.name == "face"; });
   const FaceLayout face_layout = face == h.elements.end() ? FaceLayout{} : FaceLayoutOf(*face);
   BodyReader reader(bytes.substr(h.body_start), h);
   std::vector<uint32_t> colors;
@@ -368,8 +393,9 @@ absl::StatusOr<std::vector<uint32_t>> WalkBody(const Header& h, absl::string_vie
       std::string problem = reader.NextItem();
       if (problem.empty()) problem = ReadItem(reader, *e, layout, rgb, &corners);
       if (!problem.empty()) {
-        return absl::InvalidArgumentError(
-            absl::StrCat(name, ": PLY ", reader.Where(), ": element '", e->name, "' item ", item, ": ", problem));
+        return absl::InvalidArgumentError(absl::StrCat(name, ": PLY ", reader.Where(),
+                                                       ": element '", e->name, "' item ", item,
+                                                       ": ", problem));
       }
       if (!colored) continue;
       const bool f = face_layout.is_float;
@@ -393,11 +419,11 @@ absl::Status RequireMeshElements(const Header& h, const std::string& name) {
     faces = faces || ((e.name == "face" || e.name == "tristrips") && e.count > 0);
   }
   if (!vertices)
-    return absl::InvalidArgumentError(
-        absl::StrCat(name, ": PLY header declares no vertices (element 'vertex' missing or empty)"));
+    return absl::InvalidArgumentError(absl::StrCat(
+        name, ": PLY header declares no vertices (element 'vertex' missing or empty)"));
   if (!faces)
-    return absl::InvalidArgumentError(
-        absl::StrCat(name, ": PLY header declares no faces (element 'face' or 'tristrips' missing or empty)"));
+    return absl::InvalidArgumentError(absl::StrCat(
+        name, ": PLY header declares no faces (element 'face' or 'tristrips' missing or empty)"));
   return absl::OkStatus();
 }
 
@@ -405,7 +431,8 @@ absl::StatusOr<CheckedPly> CheckPly(std::string_view bytes_std, const std::strin
   const absl::string_view bytes(bytes_std.data(), bytes_std.size());
   absl::StatusOr<Header> header = ParseHeader(bytes, name);
   if (!header.ok()) return header.status();
-  if (absl::Status counts = CheckCounts(*header, bytes.substr(header->body_start), name); !counts.ok())
+  if (absl::Status counts = CheckCounts(*header, bytes.substr(header->body_start), name);
+      !counts.ok())
     return counts;
   TF_RETURN_IF_ERROR(RequireMeshElements(*header, name));
   absl::StatusOr<std::vector<uint32_t>> colors = WalkBody(*header, bytes, name);
@@ -413,7 +440,8 @@ absl::StatusOr<CheckedPly> CheckPly(std::string_view bytes_std, const std::strin
   CheckedPly checked;
   checked.face_colors = *std::move(colors);
   const size_t body = header->body_start;
-  if (header->encoding != Encoding::kAscii && body < bytes.size() && bytes[body] == '\n' && bytes[body - 2] != '\r')
+  if (header->encoding != Encoding::kAscii && body < bytes.size() && bytes[body] == '\n' &&
+      bytes[body - 2] != '\r')
     checked.assimp_bytes = absl::StrCat(bytes.substr(0, body), "\n", bytes.substr(body));
   return checked;
 }

@@ -21,7 +21,8 @@ int EditDistance(std::string_view a, std::string_view b) {
     const char ai = absl::ascii_tolower(static_cast<unsigned char>(a[i - 1]));
     for (size_t j = 1; j <= m; ++j) {
       const char bj = absl::ascii_tolower(static_cast<unsigned char>(b[j - 1]));
-      int best = std::min({previous[j] + 1, current[j - 1] + 1, previous[j - 1] + (ai == bj ? 0 : 1)});
+      int best =
+          std::min({previous[j] + 1, current[j - 1] + 1, previous[j - 1] + (ai == bj ? 0 : 1)});
       if (i > 1 && j > 1 && ai == absl::ascii_tolower(static_cast<unsigned char>(b[j - 2])) &&
           absl::ascii_tolower(static_cast<unsigned char>(a[i - 2])) == bj) {
         best = std::min(best, two_back[j - 2] + 1);
@@ -34,8 +35,8 @@ int EditDistance(std::string_view a, std::string_view b) {
   return previous[m];
 }
 
-std::vector<std::string> NearestNames(std::string_view name, const std::vector<std::string>& candidates,
-                                      int limit) {
+std::vector<std::string> NearestNames(std::string_view name,
+                                      const std::vector<std::string>& candidates, int limit) {
   const int within = std::max<int>(2, static_cast<int>(name.size()) / 3);
   std::vector<std::pair<int, size_t>> near;  // (distance, candidate index)
   for (size_t k = 0; k < candidates.size(); ++k) {
@@ -47,7 +48,8 @@ std::vector<std::string> NearestNames(std::string_view name, const std::vector<s
   // Only the nearest few: with a long shared prefix ("CONE_MODEL_") a far
   // name can still be within the limit.
   std::vector<std::string> out;
-  for (size_t k = 0; k < near.size() && static_cast<int>(out.size()) < limit && near[k].first <= near[0].first + 1;
+  for (size_t k = 0; k < near.size() && static_cast<int>(out.size()) < limit &&
+                     near[k].first <= near[0].first + 1;
        ++k) {
     out.push_back(candidates[near[k].second]);
   }

@@ -15,7 +15,8 @@ namespace {
 std::string StrokeAttributes(const Stroke& stroke) {
   std::string s = absl::StrCat(" stroke=\"", SvgEscape(stroke.color), "\"");
   if (stroke.width != 1) absl::StrAppendFormat(&s, " stroke-width=\"%g\"", stroke.width);
-  if (!stroke.dash.empty()) absl::StrAppend(&s, " stroke-dasharray=\"", SvgEscape(stroke.dash), "\"");
+  if (!stroke.dash.empty())
+    absl::StrAppend(&s, " stroke-dasharray=\"", SvgEscape(stroke.dash), "\"");
   return s;
 }
 
@@ -26,12 +27,23 @@ std::string SvgEscape(std::string_view text) {
   out.reserve(text.size());
   for (char c : text) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&#39;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -53,7 +65,8 @@ Ticks TicksAt(double lo, double hi, double step) {
   if (!std::isfinite(lo) || !std::isfinite(hi) || hi < lo) return t;
   const double slack = 1e-9 * std::max(hi - lo, t.step);
   const double first = std::ceil((lo - slack) / t.step), last = std::floor((hi + slack) / t.step);
-  if (last - first > 1e4) return t;  // a step far too small for the range: no ticks rather than millions
+  if (last - first > 1e4)
+    return t;  // a step far too small for the range: no ticks rather than millions
   for (double k = first; k <= last; ++k) t.values.push_back(k == 0 ? 0.0 : k * t.step);
   return t;
 }
@@ -65,11 +78,15 @@ Ticks NiceTicks(double lo, double hi, int intervals) {
 Ticks AxisTicks(double lo, double hi, int intervals) {
   Ticks t = NiceTicks(lo, hi, intervals);
   if (!(hi > lo) || !std::isfinite(hi - lo)) return t;
-  // The next lower 1-2-5 step (5 -> 2 -> 1 -> 0.5); a step under a third of the span gives three ticks.
+  // The next lower 1-2-5 step (5 -> 2 -> 1 -> 0.5); a step under a third of the span gives three
+  // ticks.
   for (int round = 0; round < 8 && t.values.size() < 3; ++round) {
     const double magnitude = std::pow(10.0, std::floor(std::log10(t.step) + 1e-9));
     const double mantissa = std::round(t.step / magnitude);
-    t = TicksAt(lo, hi, mantissa >= 5 ? 2 * magnitude : mantissa >= 2 ? magnitude : 0.5 * magnitude);
+    t = TicksAt(lo, hi,
+                mantissa >= 5   ? 2 * magnitude
+                : mantissa >= 2 ? magnitude
+                                : 0.5 * magnitude);
   }
   return t;
 }
@@ -104,7 +121,8 @@ SvgCanvas::SvgCanvas(double width, double height, double font_size)
     : width_(width), height_(height), font_size_(font_size) {
   out_ = absl::StrFormat(
       "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%g\" height=\"%g\" viewBox=\"0 0 %g %g\" "
-      "font-family=\"sans-serif\" font-size=\"%g\">\n<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n",
+      "font-family=\"sans-serif\" font-size=\"%g\">\n<rect width=\"100%%\" height=\"100%%\" "
+      "fill=\"white\"/>\n",
       width, height, width, height, font_size);
 }
 
@@ -112,7 +130,8 @@ void SvgCanvas::Text(double x, double y, std::string_view text, const TextStyle&
   absl::StrAppendFormat(&out_, "<text x=\"%.1f\" y=\"%.1f\"", x, y);
   if (style.anchor == TextAnchor::kMiddle) out_ += " text-anchor=\"middle\"";
   if (style.anchor == TextAnchor::kEnd) out_ += " text-anchor=\"end\"";
-  if (style.size > 0 && style.size != font_size_) absl::StrAppendFormat(&out_, " font-size=\"%g\"", style.size);
+  if (style.size > 0 && style.size != font_size_)
+    absl::StrAppendFormat(&out_, " font-size=\"%g\"", style.size);
   if (style.bold) out_ += " font-weight=\"bold\"";
   if (!style.color.empty()) absl::StrAppend(&out_, " fill=\"", SvgEscape(style.color), "\"");
   if (style.vertical) absl::StrAppendFormat(&out_, " transform=\"rotate(-90 %.1f %.1f)\"", x, y);
@@ -120,36 +139,42 @@ void SvgCanvas::Text(double x, double y, std::string_view text, const TextStyle&
 }
 
 void SvgCanvas::Line(double x1, double y1, double x2, double y2, const Stroke& stroke) {
-  absl::StrAppendFormat(&out_, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\"%s/>\n", x1, y1, x2, y2,
-                        StrokeAttributes(stroke));
+  absl::StrAppendFormat(&out_, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\"%s/>\n", x1,
+                        y1, x2, y2, StrokeAttributes(stroke));
 }
 
-void SvgCanvas::Rect(double x, double y, double w, double h, std::string_view fill, const Stroke* outline,
-                     std::string_view css_class) {
+void SvgCanvas::Rect(double x, double y, double w, double h, std::string_view fill,
+                     const Stroke* outline, std::string_view css_class) {
   out_ += "<rect";
   if (!css_class.empty()) absl::StrAppend(&out_, " class=\"", SvgEscape(css_class), "\"");
-  absl::StrAppendFormat(&out_, " x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"%s\"%s/>\n", x, y, w, h,
-                        SvgEscape(fill), outline != nullptr ? StrokeAttributes(*outline) : "");
+  absl::StrAppendFormat(
+      &out_, " x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"%s\"%s/>\n", x, y, w, h,
+      SvgEscape(fill), outline != nullptr ? StrokeAttributes(*outline) : "");
 }
 
-void SvgCanvas::Circle(double cx, double cy, double r, std::string_view fill, const Stroke* outline) {
-  absl::StrAppendFormat(&out_, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"%g\" fill=\"%s\"%s/>\n", cx, cy, r,
-                        SvgEscape(fill), outline != nullptr ? StrokeAttributes(*outline) : "");
+void SvgCanvas::Circle(double cx, double cy, double r, std::string_view fill,
+                       const Stroke* outline) {
+  absl::StrAppendFormat(&out_, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"%g\" fill=\"%s\"%s/>\n", cx, cy,
+                        r, SvgEscape(fill), outline != nullptr ? StrokeAttributes(*outline) : "");
 }
 
-void SvgCanvas::Ellipse(double cx, double cy, double rx, double ry, double angle_deg, std::string_view fill,
-                        const Stroke* outline) {
+void SvgCanvas::Ellipse(double cx, double cy, double rx, double ry, double angle_deg,
+                        std::string_view fill, const Stroke* outline) {
   rx = std::abs(rx), ry = std::abs(ry);
   if (rx == 0 || ry == 0) {  // a degenerate ellipse is the segment of its longer axis
-    const double r = std::max(rx, ry), a = (rx > 0 ? angle_deg : angle_deg + 90) * std::numbers::pi / 180;
+    const double r = std::max(rx, ry),
+                 a = (rx > 0 ? angle_deg : angle_deg + 90) * std::numbers::pi / 180;
     const Stroke fallback{std::string(fill == "none" ? "black" : fill), 1, ""};
     Line(cx - r * std::cos(a), cy - r * std::sin(a), cx + r * std::cos(a), cy + r * std::sin(a),
          outline != nullptr ? *outline : fallback);
     return;
   }
-  absl::StrAppendFormat(&out_, "<ellipse cx=\"%.1f\" cy=\"%.1f\" rx=\"%.2f\" ry=\"%.2f\"", cx, cy, rx, ry);
-  if (angle_deg != 0) absl::StrAppendFormat(&out_, " transform=\"rotate(%.2f %.1f %.1f)\"", angle_deg, cx, cy);
-  absl::StrAppendFormat(&out_, " fill=\"%s\"%s/>\n", SvgEscape(fill), outline != nullptr ? StrokeAttributes(*outline) : "");
+  absl::StrAppendFormat(&out_, "<ellipse cx=\"%.1f\" cy=\"%.1f\" rx=\"%.2f\" ry=\"%.2f\"", cx, cy,
+                        rx, ry);
+  if (angle_deg != 0)
+    absl::StrAppendFormat(&out_, " transform=\"rotate(%.2f %.1f %.1f)\"", angle_deg, cx, cy);
+  absl::StrAppendFormat(&out_, " fill=\"%s\"%s/>\n", SvgEscape(fill),
+                        outline != nullptr ? StrokeAttributes(*outline) : "");
 }
 
 void SvgCanvas::Polygon(const std::vector<std::pair<double, double>>& points, const Stroke& stroke,
@@ -162,8 +187,8 @@ void SvgCanvas::Polygon(const std::vector<std::pair<double, double>>& points, co
 }
 
 void SvgCanvas::Path(std::string_view d, const Stroke& stroke, std::string_view fill) {
-  absl::StrAppend(&out_, "<path d=\"", SvgEscape(d), "\" fill=\"", SvgEscape(fill), "\"", StrokeAttributes(stroke),
-                  "/>\n");
+  absl::StrAppend(&out_, "<path d=\"", SvgEscape(d), "\" fill=\"", SvgEscape(fill), "\"",
+                  StrokeAttributes(stroke), "/>\n");
 }
 
 void SvgCanvas::OpenGroup(std::string_view attributes) {

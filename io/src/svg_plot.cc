@@ -22,16 +22,21 @@ bool Inside(double v, double lo, double hi) {
   return v >= std::min(lo, hi) - slack && v <= std::max(lo, hi) + slack;
 }
 
-double FontSize(const SvgCanvas& canvas, double size) { return size > 0 ? size : canvas.font_size(); }
+double FontSize(const SvgCanvas& canvas, double size) {
+  return size > 0 ? size : canvas.font_size();
+}
 
 // Every k-th index so that about `max_points` remain.
-size_t Stride(size_t n, size_t max_points) { return std::max<size_t>(1, n / std::max<size_t>(1, max_points)); }
+size_t Stride(size_t n, size_t max_points) {
+  return std::max<size_t>(1, n / std::max<size_t>(1, max_points));
+}
 
 }  // namespace
 
-void DrawAxes(SvgCanvas& canvas, const PlotFrame& frame, const Ticks& x_ticks, const AxisStyle& x_style,
-              const Ticks& y_ticks, const AxisStyle& y_style) {
-  const double x_font = FontSize(canvas, x_style.tick_font_size), y_font = FontSize(canvas, y_style.tick_font_size);
+void DrawAxes(SvgCanvas& canvas, const PlotFrame& frame, const Ticks& x_ticks,
+              const AxisStyle& x_style, const Ticks& y_ticks, const AxisStyle& y_style) {
+  const double x_font = FontSize(canvas, x_style.tick_font_size),
+               y_font = FontSize(canvas, y_style.tick_font_size);
   canvas.OpenGroup("class=\"x-ticks\"");
   double last_right = -std::numeric_limits<double>::infinity();
   for (double v : x_ticks.values) {
@@ -39,9 +44,12 @@ void DrawAxes(SvgCanvas& canvas, const PlotFrame& frame, const Ticks& x_ticks, c
     const double x = frame.X(v);
     if (x_style.grid) canvas.Line(x, frame.top, x, frame.bottom(), kGridStroke);
     const std::string label = TickLabel(v, x_ticks.step);
-    const TextBox box = TextBoxOf(x, frame.bottom() + x_font + 5, label, x_font, TextAnchor::kMiddle);
-    if (!x_style.tick_labels || box.left < last_right + 0.5 * x_font) continue;  // would touch its neighbour
-    canvas.Text(x, frame.bottom() + x_font + 5, label, {.size = x_font, .anchor = TextAnchor::kMiddle});
+    const TextBox box =
+        TextBoxOf(x, frame.bottom() + x_font + 5, label, x_font, TextAnchor::kMiddle);
+    if (!x_style.tick_labels || box.left < last_right + 0.5 * x_font)
+      continue;  // would touch its neighbour
+    canvas.Text(x, frame.bottom() + x_font + 5, label,
+                {.size = x_font, .anchor = TextAnchor::kMiddle});
     last_right = box.right;
   }
   canvas.CloseGroup();
@@ -53,23 +61,27 @@ void DrawAxes(SvgCanvas& canvas, const PlotFrame& frame, const Ticks& x_ticks, c
     if (y_style.grid) canvas.Line(frame.left, y, frame.right(), y, kGridStroke);
     if (!y_style.tick_labels) continue;
     const std::string label = TickLabel(v, y_ticks.step);
-    canvas.Text(frame.left - 5, y + 0.35 * y_font, label, {.size = y_font, .anchor = TextAnchor::kEnd});
+    canvas.Text(frame.left - 5, y + 0.35 * y_font, label,
+                {.size = y_font, .anchor = TextAnchor::kEnd});
     widest = std::max(widest, TextWidth(label, y_font));
   }
   canvas.CloseGroup();
   // The x title's ascent must clear the tick labels' descent by 2 px.
-  const double x_offset = std::max(x_style.title_offset, x_font + 5 + 0.25 * x_font + 2 + 0.8 * canvas.font_size());
+  const double x_offset =
+      std::max(x_style.title_offset, x_font + 5 + 0.25 * x_font + 2 + 0.8 * canvas.font_size());
   if (!x_style.title.empty())
     canvas.Text(frame.left + frame.width / 2, frame.bottom() + x_offset, x_style.title,
                 {.anchor = TextAnchor::kMiddle});
   // The rotated title's descent must clear the widest tick label by 3 px.
-  const double y_offset = std::max(y_style.title_offset, 5 + widest + 3 + 0.25 * canvas.font_size());
+  const double y_offset =
+      std::max(y_style.title_offset, 5 + widest + 3 + 0.25 * canvas.font_size());
   if (!y_style.title.empty())
     canvas.Text(frame.left - y_offset, frame.top + frame.height / 2, y_style.title,
                 {.anchor = TextAnchor::kMiddle, .vertical = true});
 }
 
-void DrawFrameOutline(SvgCanvas& canvas, const PlotFrame& frame, const Stroke& stroke, std::string_view css_class) {
+void DrawFrameOutline(SvgCanvas& canvas, const PlotFrame& frame, const Stroke& stroke,
+                      std::string_view css_class) {
   canvas.Rect(frame.left, frame.top, frame.width, frame.height, "none", &stroke, css_class);
 }
 
@@ -79,7 +91,8 @@ void DrawVerticalRule(SvgCanvas& canvas, const PlotFrame& frame, double x, const
   const double px = frame.X(x);
   canvas.Line(px, frame.top, px, frame.bottom(), stroke);
   if (!label.empty())
-    canvas.Text(px + 3, frame.top + canvas.font_size() + 2, label, {.color = std::string(label_color)});
+    canvas.Text(px + 3, frame.top + canvas.font_size() + 2, label,
+                {.color = std::string(label_color)});
 }
 
 void DrawLineTrace(SvgCanvas& canvas, const PlotFrame& frame, const std::vector<double>& x,
@@ -99,35 +112,38 @@ void DrawLineTrace(SvgCanvas& canvas, const PlotFrame& frame, const std::vector<
 }
 
 void DrawScatter(SvgCanvas& canvas, const PlotFrame& frame, const std::vector<double>& x,
-                 const std::vector<double>& y, std::string_view color, double radius, double opacity,
-                 size_t max_points) {
+                 const std::vector<double>& y, std::string_view color, double radius,
+                 double opacity, size_t max_points) {
   const size_t n = std::min(x.size(), y.size());
   canvas.OpenGroup(absl::StrFormat("fill=\"%s\" fill-opacity=\"%g\"", SvgEscape(color), opacity));
   std::string dots;
   for (size_t i = 0; i < n; i += Stride(n, max_points))
     if (std::isfinite(x[i]) && std::isfinite(y[i]))
-      absl::StrAppendFormat(&dots, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"%g\"/>\n", frame.X(x[i]), frame.Y(y[i]),
-                            radius);
+      absl::StrAppendFormat(&dots, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"%g\"/>\n", frame.X(x[i]),
+                            frame.Y(y[i]), radius);
   canvas.Raw(dots);
   canvas.CloseGroup();
 }
 
 void DrawMarker(SvgCanvas& canvas, double x, double y, const MarkerStyle& style) {
-  if (!style.css_class.empty()) canvas.OpenGroup(absl::StrCat("class=\"", SvgEscape(style.css_class), "\""));
+  if (!style.css_class.empty())
+    canvas.OpenGroup(absl::StrCat("class=\"", SvgEscape(style.css_class), "\""));
   const double half = style.size / 2;
   // The halo: the same shape in white, 2 px wider, underneath.
   auto draw = [&](bool halo) {
     const Stroke stroke{halo ? "white" : style.color, style.line_width + (halo ? 2 : 0), ""};
     switch (style.shape) {
       case MarkerShape::kCross:
-        canvas.Path(absl::StrFormat("M%.1f %.1fh%gM%.1f %.1fv%g", x - half, y, style.size, x, y - half, style.size),
+        canvas.Path(absl::StrFormat("M%.1f %.1fh%gM%.1f %.1fv%g", x - half, y, style.size, x,
+                                    y - half, style.size),
                     stroke);
         break;
       case MarkerShape::kRing:
         canvas.Circle(x, y, half, "none", &stroke);
         break;
       case MarkerShape::kBox:
-        canvas.Rect(x - half, y - half, style.size, style.size, style.color, halo ? &stroke : nullptr);
+        canvas.Rect(x - half, y - half, style.size, style.size, style.color,
+                    halo ? &stroke : nullptr);
         break;
       case MarkerShape::kDiamond:
         canvas.Polygon({{x, y - half}, {x + half, y}, {x, y + half}, {x - half, y}}, stroke);
@@ -150,14 +166,15 @@ void DrawArrow(SvgCanvas& canvas, double x1, double y1, double x2, double y2, co
   const double ux = dx / length, uy = dy / length, half = 0.45 * head;
   const double bx = x2 - head * ux, by = y2 - head * uy;  // where the head meets the shaft
   canvas.Line(x1, y1, bx, by, stroke);
-  canvas.Path(absl::StrFormat("M%.1f,%.1fL%.1f,%.1fL%.1f,%.1fZ", x2, y2, bx - half * uy, by + half * ux,
-                              bx + half * uy, by - half * ux),
+  canvas.Path(absl::StrFormat("M%.1f,%.1fL%.1f,%.1fL%.1f,%.1fZ", x2, y2, bx - half * uy,
+                              by + half * ux, bx + half * uy, by - half * ux),
               Stroke{stroke.color, 1, ""}, stroke.color);
 }
 
-double DrawLegend(SvgCanvas& canvas, double x, double y, const std::vector<LegendEntry>& entries, double row,
-                  double max_width) {
-  const double label_width = max_width > 0 ? max_width - 24 : std::numeric_limits<double>::infinity();
+double DrawLegend(SvgCanvas& canvas, double x, double y, const std::vector<LegendEntry>& entries,
+                  double row, double max_width) {
+  const double label_width =
+      max_width > 0 ? max_width - 24 : std::numeric_limits<double>::infinity();
   for (const LegendEntry& e : entries) {
     const double mid = y - 4;
     switch (e.swatch) {
@@ -180,10 +197,13 @@ double DrawLegend(SvgCanvas& canvas, double x, double y, const std::vector<Legen
   return y;
 }
 
-double LegendHeight(const std::vector<LegendEntry>& entries, double font_size, double row, double max_width) {
-  const double label_width = max_width > 0 ? max_width - 24 : std::numeric_limits<double>::infinity();
+double LegendHeight(const std::vector<LegendEntry>& entries, double font_size, double row,
+                    double max_width) {
+  const double label_width =
+      max_width > 0 ? max_width - 24 : std::numeric_limits<double>::infinity();
   double height = 0;
-  for (const LegendEntry& e : entries) height += row * WrapText(e.label, font_size, label_width, 4).size();
+  for (const LegendEntry& e : entries)
+    height += row * WrapText(e.label, font_size, label_width, 4).size();
   return height;
 }
 
@@ -192,7 +212,9 @@ ColorRamp::ColorRamp(std::vector<uint32_t> anchors) : anchors_(std::move(anchors
   if (anchors_.size() == 1) anchors_.push_back(anchors_.front());
 }
 
-ColorRamp ColorRamp::Viridis() { return ColorRamp({0x440154, 0x3b528b, 0x21918c, 0x5ec962, 0xfde725}); }
+ColorRamp ColorRamp::Viridis() {
+  return ColorRamp({0x440154, 0x3b528b, 0x21918c, 0x5ec962, 0xfde725});
+}
 
 uint32_t ColorRamp::At(double t) const {
   if (!std::isfinite(t)) t = 0;
@@ -210,11 +232,12 @@ uint32_t ColorRamp::At(double t) const {
 void DrawColorBar(SvgCanvas& canvas, const ColorBar& bar, const ColorRamp& ramp) {
   const std::string id = SvgEscape(bar.id);
   canvas.OpenGroup(absl::StrCat("id=\"", id, "\""));
-  std::string gradient = absl::StrCat("<defs><linearGradient id=\"", id, "-ramp\" x1=\"0\" y1=\"1\" x2=\"0\" y2=\"0\">");
+  std::string gradient = absl::StrCat("<defs><linearGradient id=\"", id,
+                                      "-ramp\" x1=\"0\" y1=\"1\" x2=\"0\" y2=\"0\">");
   const std::vector<uint32_t>& stops = ramp.anchors();
   for (size_t i = 0; i < stops.size(); ++i)
-    absl::StrAppendFormat(&gradient, "<stop offset=\"%g\" stop-color=\"%s\"/>", double(i) / (stops.size() - 1),
-                          HexColor(stops[i]));
+    absl::StrAppendFormat(&gradient, "<stop offset=\"%g\" stop-color=\"%s\"/>",
+                          double(i) / (stops.size() - 1), HexColor(stops[i]));
   canvas.Raw(absl::StrCat(gradient, "</linearGradient></defs>\n"));
   if (!bar.title.empty()) canvas.Text(bar.x, bar.y - 12, bar.title);
   const Stroke outline{"#444", 1, ""};
@@ -231,10 +254,11 @@ void DrawColorBar(SvgCanvas& canvas, const ColorBar& bar, const ColorRamp& ramp)
   std::string marks;
   for (const auto& [value, tooltip] : bar.marks)
     if (std::isfinite(value) && Inside(value, bar.lo, bar.hi))
-      absl::StrAppendFormat(&marks,
-                            "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"white\"><title>%s</title>"
-                            "</line>\n",
-                            bar.x + 2, scale.Y(value), bar.x + bar.width - 2, scale.Y(value), SvgEscape(tooltip));
+      absl::StrAppendFormat(
+          &marks,
+          "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"white\"><title>%s</title>"
+          "</line>\n",
+          bar.x + 2, scale.Y(value), bar.x + bar.width - 2, scale.Y(value), SvgEscape(tooltip));
   canvas.Raw(marks);
   canvas.CloseGroup();
 }

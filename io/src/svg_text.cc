@@ -39,11 +39,16 @@ bool Inside(const TextBox& box, const TextBox& bounds) {
 
 }  // namespace
 
-double TextWidth(std::string_view text, double size) { return kEmPerChar * size * CodePoints(text); }
+double TextWidth(std::string_view text, double size) {
+  return kEmPerChar * size * CodePoints(text);
+}
 
-TextBox TextBoxOf(double x, double y, std::string_view text, double size, TextAnchor anchor, bool vertical) {
+TextBox TextBoxOf(double x, double y, std::string_view text, double size, TextAnchor anchor,
+                  bool vertical) {
   const double w = TextWidth(text, size);
-  const double start = anchor == TextAnchor::kStart ? 0 : anchor == TextAnchor::kMiddle ? -w / 2 : -w;
+  const double start = anchor == TextAnchor::kStart    ? 0
+                       : anchor == TextAnchor::kMiddle ? -w / 2
+                                                       : -w;
   // Unrotated: along = x offsets start..start + w, across = -ascent..+descent.
   if (!vertical) return {x + start, y - kAscent * size, x + start + w, y + kDescent * size};
   // rotate(-90) about (x, y): (dx, dy) -> (dy, -dx).
@@ -55,7 +60,8 @@ bool Overlap(const TextBox& a, const TextBox& b, double slack) {
          std::min(a.bottom, b.bottom) - std::max(a.top, b.top) > slack;
 }
 
-std::vector<std::string> WrapText(std::string_view text, double size, double max_width, int max_lines) {
+std::vector<std::string> WrapText(std::string_view text, double size, double max_width,
+                                  int max_lines) {
   std::vector<std::string> lines;
   std::string line;
   size_t pos = 0;
@@ -84,8 +90,8 @@ std::vector<std::string> WrapText(std::string_view text, double size, double max
   return lines;
 }
 
-double SvgCanvas::WrappedText(double x, double y, std::string_view text, double max_width, const TextStyle& style,
-                              double line_height, int max_lines) {
+double SvgCanvas::WrappedText(double x, double y, std::string_view text, double max_width,
+                              const TextStyle& style, double line_height, int max_lines) {
   const double size = style.size > 0 ? style.size : font_size_;
   if (!(line_height > 0)) line_height = 1.3 * size;
   for (const std::string& line : WrapText(text, size, max_width, max_lines)) {
@@ -95,7 +101,8 @@ double SvgCanvas::WrappedText(double x, double y, std::string_view text, double 
   return y;
 }
 
-std::pair<double, double> LabelPlacer::Place(double x, double y, std::string_view text, double size) {
+std::pair<double, double> LabelPlacer::Place(double x, double y, std::string_view text,
+                                             double size) {
   const double w = TextWidth(text, size), h = (kAscent + kDescent) * size;
   // Box offsets (left, top) relative to the point: right, left, above, below, then the diagonals.
   const std::array<std::pair<double, double>, 8> directions = {
@@ -109,8 +116,8 @@ std::pair<double, double> LabelPlacer::Place(double x, double y, std::string_vie
       const TextBox box{left, top, left + w, top + h};
       const std::pair<double, double> baseline{left, top + kAscent * size};
       if (!have_first && Inside(box, bounds_)) first = baseline, have_first = true;
-      if (!Inside(box, bounds_) ||
-          std::any_of(placed_.begin(), placed_.end(), [&](const TextBox& b) { return Overlap(box, b); }))
+      if (!Inside(box, bounds_) || std::any_of(placed_.begin(), placed_.end(),
+                                               [&](const TextBox& b) { return Overlap(box, b); }))
         continue;
       chosen = baseline, found = true;
       break;

@@ -20,7 +20,9 @@ void DrawMarkerLabels(SvgCanvas& canvas, const SvgPlot& plot, const PlotFrame& f
     const double px = std::min(frame.X(x) + 3, frame.right() - TextWidth(label, size) - 2);
     for (double y = frame.top + size + 2; y < frame.bottom(); y += size + 2) {
       const TextBox box = TextBoxOf(px, y, label, size, TextAnchor::kStart);
-      if (std::any_of(drawn.begin(), drawn.end(), [&](const TextBox& b) { return Overlap(box, b); })) continue;
+      if (std::any_of(drawn.begin(), drawn.end(),
+                      [&](const TextBox& b) { return Overlap(box, b); }))
+        continue;
       canvas.Text(px, y, label, {.color = "#777"});
       drawn.push_back(box);
       break;
@@ -33,9 +35,10 @@ void DrawPanel(SvgCanvas& canvas, const SvgPlot& plot, size_t index, const PlotF
   const bool first = index == 0, last = index + 1 == plot.panels.size();
   AxisStyle x_style{.title = last ? plot.x_label : "", .title_offset = 35, .tick_labels = last};
   AxisStyle y_style{.title = panel.y_label, .title_offset = 56};
-  DrawAxes(canvas, frame, AxisTicks(frame.x_lo, frame.x_hi, 10), x_style, AxisTicks(frame.y_lo, frame.y_hi, 5),
-           y_style);
-  for (const auto& [x, label] : plot.markers) DrawVerticalRule(canvas, frame, x, Stroke{"#bbb", 1, "2,3"});
+  DrawAxes(canvas, frame, AxisTicks(frame.x_lo, frame.x_hi, 10), x_style,
+           AxisTicks(frame.y_lo, frame.y_hi, 5), y_style);
+  for (const auto& [x, label] : plot.markers)
+    DrawVerticalRule(canvas, frame, x, Stroke{"#bbb", 1, "2,3"});
   if (first) DrawMarkerLabels(canvas, plot, frame);
   std::vector<LegendEntry> legend;
   for (const SvgSeries& series : panel.series) {

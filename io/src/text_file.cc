@@ -22,7 +22,8 @@ std::string SourceName(const std::string& path) { return path == "-" ? "<stdin>"
 absl::StatusOr<std::string> ReadTextFile(const std::string& path) {
   const bool standard_input = path == "-";
   std::FILE* file = standard_input ? stdin : std::fopen(path.c_str(), "rb");
-  if (file == nullptr) return absl::InvalidArgumentError(absl::StrCat(path, ": cannot open: ", std::strerror(errno)));
+  if (file == nullptr)
+    return absl::InvalidArgumentError(absl::StrCat(path, ": cannot open: ", std::strerror(errno)));
   std::string bytes;
   char buffer[1 << 16];
   size_t n = 0;
@@ -30,14 +31,16 @@ absl::StatusOr<std::string> ReadTextFile(const std::string& path) {
   const int error = std::ferror(file) ? errno : 0;
   if (!standard_input) std::fclose(file);
   if (error != 0) {
-    return absl::InvalidArgumentError(absl::StrCat(SourceName(path), ": cannot read: ", std::strerror(error)));
+    return absl::InvalidArgumentError(
+        absl::StrCat(SourceName(path), ": cannot read: ", std::strerror(error)));
   }
   return bytes;
 }
 
 namespace {
 
-absl::Status WriteDirectly(const std::string& target, const std::string& named, std::string_view text) {
+absl::Status WriteDirectly(const std::string& target, const std::string& named,
+                           std::string_view text) {
   std::ofstream out(target, std::ios::binary);
   if (!out) return absl::InvalidArgumentError(absl::StrCat(named, ": cannot open for writing"));
   out.write(text.data(), static_cast<std::streamsize>(text.size()));
@@ -51,7 +54,8 @@ absl::Status WriteDirectly(const std::string& target, const std::string& named, 
 absl::Status WriteTextFile(const std::string& path, std::string_view text) {
   // Devices and pipes (/dev/stdout, a FIFO) cannot be replaced by a rename.
   struct stat info {};
-  if (::stat(path.c_str(), &info) == 0 && !S_ISREG(info.st_mode)) return WriteDirectly(path, path, text);
+  if (::stat(path.c_str(), &info) == 0 && !S_ISREG(info.st_mode))
+    return WriteDirectly(path, path, text);
   static std::atomic<unsigned> counter{0};
   const std::string temporary =
       absl::StrCat(path, ".tmp-", ::getpid(), "-", counter.fetch_add(1, std::memory_order_relaxed));
@@ -73,7 +77,7 @@ TextPosition PositionInText(std::string_view text, size_t offset) {
   p.line = 1 + static_cast<int>(std::count(before.begin(), before.end(), '\n'));
   const size_t line_start = before.rfind('\n');
   p.column = static_cast<int>(line_start == std::string_view::npos ? before.size() + 1
-                                                                    : before.size() - line_start);
+                                                                   : before.size() - line_start);
   return p;
 }
 

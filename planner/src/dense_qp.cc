@@ -50,8 +50,8 @@ void Givens(double a, double b, double* c, double* s, double* h) {
 // distance[r] = b'_r - a'_r . y for `count` unit rows (the 4 columns of
 // `unit`, `stride` apart: a'_x, a'_y, a'_z, b'), and their least value: the
 // innermost loop of the solver, two rows per SSE2 instruction.
-double UnitRowDistances(const double* __restrict unit, int stride, int count, double y0,
-                        double y1, double y2, double* __restrict distance) {
+double UnitRowDistances(const double* __restrict unit, int stride, int count, double y0, double y1,
+                        double y2, double* __restrict distance) {
   const double* ux = unit;
   const double* uy = unit + stride;
   const double* uz = unit + 2 * stride;
@@ -128,8 +128,12 @@ class ActiveSetSolver {
  public:
   ActiveSetSolver(const DenseQp& qp, const DenseQpSettings& settings, DenseQpWorkspace* ws,
                   Factors* factors)
-      : qp_(qp), settings_(settings), w_(*ws), f_(*factors),
-        n_(static_cast<int>(qp.gradient.size())), p_(static_cast<int>(qp.eq_matrix.rows())),
+      : qp_(qp),
+        settings_(settings),
+        w_(*ws),
+        f_(*factors),
+        n_(static_cast<int>(qp.gradient.size())),
+        p_(static_cast<int>(qp.eq_matrix.rows())),
         structured_(UsesRowStructure(qp)),
         m_(static_cast<int>(structured_ ? qp.in_directions.rows() : qp.in_matrix.rows())) {}
 
@@ -162,8 +166,7 @@ class ActiveSetSolver {
   // Rows [begin, end) of w_.distance, whose least entry is `least`: the
   // inactive row farthest outside its half-space, if it is violated and
   // farther than *worst_distance.
-  void SelectInRange(int begin, int end, double least, double* worst_distance,
-                     int* worst) const;
+  void SelectInRange(int begin, int end, double least, double* worst_distance, int* worst) const;
 
   double Slack(int k) const { return w_.rhs(k) - w_.normals.col(k).dot(f_.x); }
   double Scale(int k) const {
@@ -310,8 +313,8 @@ void ActiveSetSolver<Factors>::EnsureNormal(int k) {
   } else if (structured_) {  // its norm is already known (StructuredNorms)
     const int row = k - p_;
     const auto& first = qp_.in_block_first;
-    const int block = static_cast<int>(std::upper_bound(first.begin(), first.end(), row) -
-                                       first.begin()) - 1;
+    const int block =
+        static_cast<int>(std::upper_bound(first.begin(), first.end(), row) - first.begin()) - 1;
     const double a0 = qp_.in_directions(row, 0), a1 = qp_.in_directions(row, 1),
                  a2 = qp_.in_directions(row, 2);
     for (int j = 0; j < N(); ++j) {
@@ -355,8 +358,7 @@ void ActiveSetSolver<Factors>::StructuredNorms() {
   double* __restrict norms = w_.normal_norms.data() + p_;
   for (int b = 0; b < blocks; ++b) {
     const double* g = gram + 6 * b;
-    const double g0 = g[0], g1 = 2.0 * g[1], g2 = 2.0 * g[2], g3 = g[3], g4 = 2.0 * g[4],
-                 g5 = g[5];
+    const double g0 = g[0], g1 = 2.0 * g[1], g2 = 2.0 * g[2], g3 = g[3], g4 = 2.0 * g[4], g5 = g[5];
     const int end = qp_.in_block_first[b + 1];
     for (int i = qp_.in_block_first[b]; i < end; ++i) {  // squared norms: vectorised
       norms[i] = ax[i] * (g0 * ax[i] + g1 * ay[i] + g2 * az[i]) +
@@ -699,13 +701,13 @@ void SolveFixed(const DenseQp& qp, const DenseQpSettings& settings, DenseQpWorks
 
 }  // namespace
 
-void SolveDenseQp(const DenseQp& qp, const DenseQpSettings& settings,
-                  DenseQpWorkspace* workspace, DenseQpResult* result) {
-  using FixedSolve = void (*)(const DenseQp&, const DenseQpSettings&, DenseQpWorkspace*,
-                              DenseQpResult*);
+void SolveDenseQp(const DenseQp& qp, const DenseQpSettings& settings, DenseQpWorkspace* workspace,
+                  DenseQpResult* result) {
+  using FixedSolve =
+      void (*)(const DenseQp&, const DenseQpSettings&, DenseQpWorkspace*, DenseQpResult*);
   static constexpr FixedSolve kFixed[] = {
-      nullptr,        &SolveFixed<1>, &SolveFixed<2>, &SolveFixed<3>,  &SolveFixed<4>,
-      &SolveFixed<5>, &SolveFixed<6>, &SolveFixed<7>, &SolveFixed<8>,  &SolveFixed<9>,
+      nullptr,         &SolveFixed<1>,  &SolveFixed<2>, &SolveFixed<3>, &SolveFixed<4>,
+      &SolveFixed<5>,  &SolveFixed<6>,  &SolveFixed<7>, &SolveFixed<8>, &SolveFixed<9>,
       &SolveFixed<10>, &SolveFixed<11>, &SolveFixed<12>};
   const int n = static_cast<int>(qp.gradient.size());
   if (n >= 1 && n <= 12) {

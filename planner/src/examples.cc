@@ -9,8 +9,8 @@
 namespace tactforce::planner {
 namespace {
 
-Contact Finger(std::string name, const Vec3& position, const Vec3& normal, double mu,
-               double sigma, double min_force) {
+Contact Finger(std::string name, const Vec3& position, const Vec3& normal, double mu, double sigma,
+               double min_force) {
   Contact c;
   c.name = std::move(name);
   c.position = position;
@@ -77,7 +77,8 @@ TrajectoryProblem WrenchLiftAndRotate(int steps) {
     const double s = steps > 1 ? duration * k / (steps - 1) : 0.0;
     const double angle = amplitude * (1 - std::cos(w0 * s)) / 2;
     TrajectoryStep step;
-    const Eigen::Matrix3d world_from_object = Eigen::AngleAxisd(angle, Vec3::UnitX()).toRotationMatrix();
+    const Eigen::Matrix3d world_from_object =
+        Eigen::AngleAxisd(angle, Vec3::UnitX()).toRotationMatrix();
     step.gravity = world_from_object.transpose() * Vec3(0, 0, -9.81);
     step.linear_acceleration =
         world_from_object.transpose() * Vec3(0, 0, 0.5 * std::sin(2 * w0 * s));

@@ -304,8 +304,8 @@ void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid&
   rows.info.reserve(m);
 
   const FacetTable& facets = Facets();
-  const bool table = cone_sides >= PlanOptions::kMinConeSides &&
-                     cone_sides <= PlanOptions::kMaxConeSides;
+  const bool table =
+      cone_sides >= PlanOptions::kMinConeSides && cone_sides <= PlanOptions::kMaxConeSides;
   const double cos_half = std::cos(std::numbers::pi / cone_sides);
   int r = 0;
   auto add = [&](int contact, const Vec3& a, double d, double support, RowKind kind, int facet) {
@@ -318,8 +318,8 @@ void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid&
   for (int i = 0; i < n; ++i) {
     const Contact& c = problem.contacts[i];
     const Vec3& nrm = c.normal;
-    const Eigen::Matrix3d s = confidence > 0.0 ? ellipsoid.ContactCovariance(i)
-                                               : Eigen::Matrix3d::Zero();
+    const Eigen::Matrix3d s =
+        confidence > 0.0 ? ellipsoid.ContactCovariance(i) : Eigen::Matrix3d::Zero();
     const Vec3 sn = s * nrm;
     const double snn = nrm.dot(sn);
     if (with_friction_facets) {
@@ -349,9 +349,8 @@ void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid&
 }
 
 ConstraintRows BuildConstraintRows(const PlanProblem& problem,
-                                   const MeasurementEllipsoid& ellipsoid,
-                                   int cone_sides, double confidence,
-                                   bool with_friction_facets) {
+                                   const MeasurementEllipsoid& ellipsoid, int cone_sides,
+                                   double confidence, bool with_friction_facets) {
   ConstraintRows rows;
   BuildConstraintRows(problem, ellipsoid, cone_sides, confidence, with_friction_facets, &rows);
   return rows;
@@ -420,15 +419,13 @@ void ExactConeShift(const PlanProblem& problem, const std::vector<double>& norma
                     std::vector<double>* out) {
   out->resize(problem.contacts.size());
   for (size_t i = 0; i < out->size(); ++i) {
-    (*out)[i] =
-        confidence * (problem.contacts[i].friction * normal_sigma[i] + tangential_sigma[i]);
+    (*out)[i] = confidence * (problem.contacts[i].friction * normal_sigma[i] + tangential_sigma[i]);
   }
 }
 
 std::vector<double> ExactConeShift(const PlanProblem& problem,
                                    const std::vector<double>& normal_sigma,
-                                   const std::vector<double>& tangential_sigma,
-                                   double confidence) {
+                                   const std::vector<double>& tangential_sigma, double confidence) {
   std::vector<double> out;
   ExactConeShift(problem, normal_sigma, tangential_sigma, confidence, &out);
   return out;
@@ -439,8 +436,7 @@ double ExactConeSlack(const Vec3& normal, double mu, double shift, const Vec3& f
   return (mu * normal.dot(force) - shift) - tangential.norm();
 }
 
-void PrepareInPlace(const PlanOptions& options, EquilibriumScratch* scratch,
-                    PreparedProblem* p) {
+void PrepareInPlace(const PlanOptions& options, EquilibriumScratch* scratch, PreparedProblem* p) {
   ApplyFrictionUncertainty(options.confidence, &p->problem, &p->nominal_friction);
   ComputeForceEquilibrium(p->problem, options.rank_tolerance, scratch, &p->equilibrium);
   ComputeMeasurementEllipsoid(p->problem, p->equilibrium, &p->ellipsoid);

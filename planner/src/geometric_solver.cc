@@ -82,9 +82,8 @@ class GeometricSolver final : public ForceSolver {
     const ForceEquilibrium& eq = prepared.equilibrium;
     if (!eq.consistent) {
       result->status = PlanStatus::kInfeasible;
-      result->message = absl::StrCat(
-          "the contacts cannot resist this wrench: G has rank ", eq.rank,
-          " and the required wrench leaves a residual of ", eq.residual);
+      result->message = absl::StrCat("the contacts cannot resist this wrench: G has rank ", eq.rank,
+                                     " and the required wrench leaves a residual of ", eq.residual);
       return;
     }
     FillPlaneQp(prepared, &workspace->qp);

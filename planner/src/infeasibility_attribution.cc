@@ -28,10 +28,14 @@ PlanProblem WithoutMeasurement(PlanProblem p) {
 
 const char* SourceName(UncertaintySource s) {
   switch (s) {
-    case UncertaintySource::kParameters: return "inertial-parameter (mass, CoM, inertia) uncertainty";
-    case UncertaintySource::kFriction: return "friction uncertainty";
-    case UncertaintySource::kMeasurement: return "measurement noise";
-    default: return "uncertainty";
+    case UncertaintySource::kParameters:
+      return "inertial-parameter (mass, CoM, inertia) uncertainty";
+    case UncertaintySource::kFriction:
+      return "friction uncertainty";
+    case UncertaintySource::kMeasurement:
+      return "measurement noise";
+    default:
+      return "uncertainty";
   }
 }
 
@@ -64,7 +68,8 @@ void ForceSolver::AttributeInfeasibility(const PlanProblem& problem, const PlanO
     PlanningWorkspace workspace;
     PlanResult r;
     return ValidateProblem(q, options, &workspace.prepared.problem).ok() &&
-           SolveValidated(options, control, std::chrono::steady_clock::now(), &workspace, &r).ok() &&
+           SolveValidated(options, control, std::chrono::steady_clock::now(), &workspace, &r)
+               .ok() &&
            r.status == PlanStatus::kOptimal;
   };
   if (!feasible(WithoutMeasurement(WithoutFriction(WithoutParameters(problem))))) {
@@ -87,14 +92,17 @@ void ForceSolver::AttributeInfeasibility(const PlanProblem& problem, const PlanO
   }
   if (result->infeasible_source == UncertaintySource::kNone) {
     result->infeasible_source = UncertaintySource::kCombined;
-    absl::StrAppend(&result->message,
-                    "; infeasible because of the uncertainty sources together (removing any one alone "
-                    "does not help)");
+    absl::StrAppend(
+        &result->message,
+        "; infeasible because of the uncertainty sources together (removing any one alone "
+        "does not help)");
     return;
   }
-  const int contact = DominantContact(problem, result->row_margins, result->infeasible_source, options);
-  absl::StrAppend(&result->message, "; infeasible because of the ", SourceName(result->infeasible_source),
-                  ", largest on ", ContactLabel(problem, contact), " (feasible without it",
+  const int contact =
+      DominantContact(problem, result->row_margins, result->infeasible_source, options);
+  absl::StrAppend(&result->message, "; infeasible because of the ",
+                  SourceName(result->infeasible_source), ", largest on ",
+                  ContactLabel(problem, contact), " (feasible without it",
                   also.empty() ? "" : absl::StrCat("; also feasible without the ", also), ")");
 }
 

@@ -90,15 +90,15 @@ EquilibriumInUnknowns ReduceEquilibrium(const ForceEquilibrium& eq, const Matrix
   if (!(residual <= kEquilibriumTolerance * std::max(1.0, b.norm()))) {
     out.infeasible =
         "the contacts cannot resist this wrench with the frictionless contacts pushing only "
-        "along their normals (rank " + std::to_string(rank) +
-        " in the remaining unknowns, residual " + FormatNumber(residual) + ")";
+        "along their normals (rank " +
+        std::to_string(rank) + " in the remaining unknowns, residual " + FormatNumber(residual) +
+        ")";
   }
   return out;
 }
 
 // Appends lower <= terms . x <= upper (zero terms dropped) and widens scale.
-void AddRow(const Terms& terms, double lower, double upper, RowOrigin origin,
-            Formulation* form) {
+void AddRow(const Terms& terms, double lower, double upper, RowOrigin origin, Formulation* form) {
   const int r = static_cast<int>(form->lower.size());
   for (const auto& [col, value] : terms) {
     if (value != 0.0) form->linear.push_back({r, col, value});

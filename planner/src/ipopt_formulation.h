@@ -51,8 +51,8 @@ struct Entry {
 // x points at the NLP unknowns (at least up to s_index).
 struct ConeConstraint {
   int contact = 0;
-  int offset = 0;   // first of the contact's three force unknowns
-  int s_index = 0;  // the slack unknown s
+  int offset = 0;               // first of the contact's three force unknowns
+  int s_index = 0;              // the slack unknown s
   Vec3 normal = Vec3::UnitZ();  // unit, into the object
   double mu = 0.0;
   double shift = 0.0;  // PreparedProblem::cone_shift of the contact (N)
@@ -65,9 +65,7 @@ struct ConeConstraint {
   // s(f): the cone radius available at the forces in x (N).
   double Radius(const double* x) const { return mu * normal.dot(Force(x)) - shift; }
   // |P f| - s(f): > 0 outside the cone (N).
-  double Violation(const double* x) const {
-    return -ExactConeSlack(normal, mu, shift, Force(x));
-  }
+  double Violation(const double* x) const { return -ExactConeSlack(normal, mu, shift, Force(x)); }
   // r(f, s) with the slack s = x[s_index] > 0.
   double Value(const double* x) const {
     const double s = x[s_index];
@@ -86,10 +84,10 @@ struct RowOrigin {
 // frictionless ones (orthonormal map, so |f|^2 = |z|^2); s are the cone
 // slacks (EXACT only). Constraints: the linear rows, then one r_i per cone.
 struct Formulation {
-  int num_forces = 0;               // unknowns in z
-  std::vector<int> offset;          // per contact: its first unknown in z
-  std::vector<bool> frictionless;   // per contact
-  std::vector<Vec3> normal;         // per contact, unit
+  int num_forces = 0;              // unknowns in z
+  std::vector<int> offset;         // per contact: its first unknown in z
+  std::vector<bool> frictionless;  // per contact
+  std::vector<Vec3> normal;        // per contact, unit
   // Linear constraints lower <= L x <= upper: the equilibrium rows first
   // (lower == upper), then plan rows (lower = -kInfinity), then cone-slack
   // rows s_i - mu_i n_i . f_i = -shift_i.
@@ -100,8 +98,8 @@ struct Formulation {
   std::vector<double> upper;
   std::vector<RowOrigin> origin;
   std::vector<ConeConstraint> cones;  // constraints num_linear, ...
-  Eigen::VectorXd start;  // (z0, s0): the minimum-norm equilibrium, r <= 0
-  double scale = 1.0;     // max(1, largest finite row bound), N
+  Eigen::VectorXd start;              // (z0, s0): the minimum-norm equilibrium, r <= 0
+  double scale = 1.0;                 // max(1, largest finite row bound), N
 
   int num_vars() const { return num_forces + static_cast<int>(cones.size()); }
   int num_constraints() const { return num_linear + static_cast<int>(cones.size()); }

@@ -25,8 +25,7 @@ StopConditions::Reason StopConditions::Check() const {
   return kNone;
 }
 
-ForceNlp::ForceNlp(const Formulation& form, Phase phase, VectorXd start,
-                   const StopConditions& stop)
+ForceNlp::ForceNlp(const Formulation& form, Phase phase, VectorXd start, const StopConditions& stop)
     : form_(form),
       phase_(phase),
       start_(std::move(start)),
@@ -188,8 +187,7 @@ bool ForceNlp::eval_h(Index n, const Number* x, bool new_x, Number obj_factor, I
   }
   const double diagonal = phase_ == Phase::kFeasibility ? 0.0 : 2.0 * obj_factor;
   for (size_t e = 0; e < hess_.size(); ++e) {
-    values[e] =
-        hess_[e].row == hess_[e].col && hess_[e].row < form_.num_forces ? diagonal : 0.0;
+    values[e] = hess_[e].row == hess_[e].col && hess_[e].row < form_.num_forces ? diagonal : 0.0;
   }
   for (const ConeConstraint& c : form_.cones) {
     if (!(x[c.s_index] > 0.0)) return false;
@@ -218,8 +216,8 @@ void ForceNlp::AddConeHessian(const Number* x, const Number* lambda, Number* val
 }
 
 void ForceNlp::finalize_solution(Ipopt::SolverReturn status, Index n, const Number* x,
-                                 const Number* z_L, const Number* z_U, Index m,
-                                 const Number* g, const Number* lambda, Number obj_value,
+                                 const Number* z_L, const Number* z_U, Index m, const Number* g,
+                                 const Number* lambda, Number obj_value,
                                  const Ipopt::IpoptData* ip_data,
                                  Ipopt::IpoptCalculatedQuantities* ip_cq) {
   solution_ = Eigen::Map<const VectorXd>(x, n);
@@ -227,9 +225,8 @@ void ForceNlp::finalize_solution(Ipopt::SolverReturn status, Index n, const Numb
 
 bool ForceNlp::intermediate_callback(Ipopt::AlgorithmMode mode, Index iter, Number obj_value,
                                      Number inf_pr, Number inf_du, Number mu, Number d_norm,
-                                     Number regularization_size, Number alpha_du,
-                                     Number alpha_pr, Index ls_trials,
-                                     const Ipopt::IpoptData* ip_data,
+                                     Number regularization_size, Number alpha_du, Number alpha_pr,
+                                     Index ls_trials, const Ipopt::IpoptData* ip_data,
                                      Ipopt::IpoptCalculatedQuantities* ip_cq) {
   last_iteration_ = iter;
   last_mu_ = mu;

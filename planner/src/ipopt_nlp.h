@@ -42,7 +42,8 @@ double ThreadCpuSeconds();
 struct StopConditions {
   double limit_seconds = 0.0;  // thread CPU budget (s); <= 0: none
   double start_seconds = 0.0;  // ThreadCpuSeconds() at the start of the solve
-  const std::function<bool()>* interrupt = nullptr;  // SolveControl::interrupt; may be null or empty
+  const std::function<bool()>* interrupt =
+      nullptr;  // SolveControl::interrupt; may be null or empty
 
   enum Reason { kNone, kTimeLimit, kInterrupted };
   // The interrupt is polled first; then the budget.
@@ -70,8 +71,7 @@ class ForceNlp final : public Ipopt::TNLP {
   using Number = Ipopt::Number;
 
   // `start` has num_vars() entries (form.num_vars(), + 1 in phase one).
-  ForceNlp(const Formulation& form, Phase phase, Eigen::VectorXd start,
-           const StopConditions& stop);
+  ForceNlp(const Formulation& form, Phase phase, Eigen::VectorXd start, const StopConditions& stop);
 
   int num_vars() const { return num_vars_; }
 
@@ -80,27 +80,26 @@ class ForceNlp final : public Ipopt::TNLP {
   bool get_bounds_info(Index n, Number* x_l, Number* x_u, Index m, Number* g_l,
                        Number* g_u) override;
   bool get_constraints_linearity(Index m, LinearityType* types) override;
-  bool get_starting_point(Index n, bool init_x, Number* x, bool init_z, Number* z_L,
-                          Number* z_U, Index m, bool init_lambda, Number* lambda) override;
+  bool get_starting_point(Index n, bool init_x, Number* x, bool init_z, Number* z_L, Number* z_U,
+                          Index m, bool init_lambda, Number* lambda) override;
   bool eval_f(Index n, const Number* x, bool new_x, Number& obj) override;
   bool eval_grad_f(Index n, const Number* x, bool new_x, Number* grad) override;
   bool eval_g(Index n, const Number* x, bool new_x, Index m, Number* g) override;
-  bool eval_jac_g(Index n, const Number* x, bool new_x, Index m, Index nele_jac,
-                  Index* i_row, Index* j_col, Number* values) override;
+  bool eval_jac_g(Index n, const Number* x, bool new_x, Index m, Index nele_jac, Index* i_row,
+                  Index* j_col, Number* values) override;
   bool eval_h(Index n, const Number* x, bool new_x, Number obj_factor, Index m,
-              const Number* lambda, bool new_lambda, Index nele_hess, Index* i_row,
-              Index* j_col, Number* values) override;
-  void finalize_solution(Ipopt::SolverReturn status, Index n, const Number* x,
-                         const Number* z_L, const Number* z_U, Index m, const Number* g,
-                         const Number* lambda, Number obj_value,
-                         const Ipopt::IpoptData* ip_data,
+              const Number* lambda, bool new_lambda, Index nele_hess, Index* i_row, Index* j_col,
+              Number* values) override;
+  void finalize_solution(Ipopt::SolverReturn status, Index n, const Number* x, const Number* z_L,
+                         const Number* z_U, Index m, const Number* g, const Number* lambda,
+                         Number obj_value, const Ipopt::IpoptData* ip_data,
                          Ipopt::IpoptCalculatedQuantities* ip_cq) override;
   // Records the iteration and barrier parameter; returns false (stop) when
   // `stop` says so or the run has stalled.
-  bool intermediate_callback(Ipopt::AlgorithmMode mode, Index iter, Number obj_value,
-                             Number inf_pr, Number inf_du, Number mu, Number d_norm,
-                             Number regularization_size, Number alpha_du, Number alpha_pr,
-                             Index ls_trials, const Ipopt::IpoptData* ip_data,
+  bool intermediate_callback(Ipopt::AlgorithmMode mode, Index iter, Number obj_value, Number inf_pr,
+                             Number inf_du, Number mu, Number d_norm, Number regularization_size,
+                             Number alpha_du, Number alpha_pr, Index ls_trials,
+                             const Ipopt::IpoptData* ip_data,
                              Ipopt::IpoptCalculatedQuantities* ip_cq) override;
 
   // After the run.
@@ -121,11 +120,11 @@ class ForceNlp final : public Ipopt::TNLP {
   const StopConditions stop_;
   const int t_index_;  // the relaxation t (phase one only)
   const int num_vars_;
-  std::vector<Entry> linear_;  // L, with the t column in phase one
-  std::vector<Entry> hess_;    // structure of the Hessian
+  std::vector<Entry> linear_;           // L, with the t column in phase one
+  std::vector<Entry> hess_;             // structure of the Hessian
   std::vector<int> cone_hess_start_;    // 3x3 force block, per cone
   std::vector<int> cone_hess_s_start_;  // (s, f) row and (s, s), per cone
-  const double stall_step_;  // primal steps below this count as stalled
+  const double stall_step_;             // primal steps below this count as stalled
   Eigen::VectorXd solution_;
   StopConditions::Reason stop_reason_ = StopConditions::kNone;
   int last_iteration_ = 0;

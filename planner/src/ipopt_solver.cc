@@ -94,26 +94,44 @@ constexpr bool kExpectInfeasibleFirst = true;
 
 const char* StatusName(Ipopt::ApplicationReturnStatus status) {
   switch (status) {
-    case Ipopt::Solve_Succeeded: return "Solve_Succeeded";
-    case Ipopt::Solved_To_Acceptable_Level: return "Solved_To_Acceptable_Level";
-    case Ipopt::Infeasible_Problem_Detected: return "Infeasible_Problem_Detected";
+    case Ipopt::Solve_Succeeded:
+      return "Solve_Succeeded";
+    case Ipopt::Solved_To_Acceptable_Level:
+      return "Solved_To_Acceptable_Level";
+    case Ipopt::Infeasible_Problem_Detected:
+      return "Infeasible_Problem_Detected";
     case Ipopt::Search_Direction_Becomes_Too_Small:
       return "Search_Direction_Becomes_Too_Small";
-    case Ipopt::Diverging_Iterates: return "Diverging_Iterates";
-    case Ipopt::User_Requested_Stop: return "User_Requested_Stop";
-    case Ipopt::Feasible_Point_Found: return "Feasible_Point_Found";
-    case Ipopt::Maximum_Iterations_Exceeded: return "Maximum_Iterations_Exceeded";
-    case Ipopt::Restoration_Failed: return "Restoration_Failed";
-    case Ipopt::Error_In_Step_Computation: return "Error_In_Step_Computation";
-    case Ipopt::Maximum_CpuTime_Exceeded: return "Maximum_CpuTime_Exceeded";
-    case Ipopt::Not_Enough_Degrees_Of_Freedom: return "Not_Enough_Degrees_Of_Freedom";
-    case Ipopt::Invalid_Problem_Definition: return "Invalid_Problem_Definition";
-    case Ipopt::Invalid_Option: return "Invalid_Option";
-    case Ipopt::Invalid_Number_Detected: return "Invalid_Number_Detected";
-    case Ipopt::Unrecoverable_Exception: return "Unrecoverable_Exception";
-    case Ipopt::NonIpopt_Exception_Thrown: return "NonIpopt_Exception_Thrown";
-    case Ipopt::Insufficient_Memory: return "Insufficient_Memory";
-    case Ipopt::Internal_Error: return "Internal_Error";
+    case Ipopt::Diverging_Iterates:
+      return "Diverging_Iterates";
+    case Ipopt::User_Requested_Stop:
+      return "User_Requested_Stop";
+    case Ipopt::Feasible_Point_Found:
+      return "Feasible_Point_Found";
+    case Ipopt::Maximum_Iterations_Exceeded:
+      return "Maximum_Iterations_Exceeded";
+    case Ipopt::Restoration_Failed:
+      return "Restoration_Failed";
+    case Ipopt::Error_In_Step_Computation:
+      return "Error_In_Step_Computation";
+    case Ipopt::Maximum_CpuTime_Exceeded:
+      return "Maximum_CpuTime_Exceeded";
+    case Ipopt::Not_Enough_Degrees_Of_Freedom:
+      return "Not_Enough_Degrees_Of_Freedom";
+    case Ipopt::Invalid_Problem_Definition:
+      return "Invalid_Problem_Definition";
+    case Ipopt::Invalid_Option:
+      return "Invalid_Option";
+    case Ipopt::Invalid_Number_Detected:
+      return "Invalid_Number_Detected";
+    case Ipopt::Unrecoverable_Exception:
+      return "Unrecoverable_Exception";
+    case Ipopt::NonIpopt_Exception_Thrown:
+      return "NonIpopt_Exception_Thrown";
+    case Ipopt::Insufficient_Memory:
+      return "Insufficient_Memory";
+    case Ipopt::Internal_Error:
+      return "Internal_Error";
   }
   return "Unknown_Ipopt_Status";
 }
@@ -134,26 +152,24 @@ PlanResult Failure(std::string message) {
 
 // The equilibrium rows determine the forces completely: the unique
 // equilibrium is the answer if it meets every constraint.
-PlanResult CheckUniqueEquilibrium(const Formulation& form,
-                                  const PreparedProblem& prepared) {
+PlanResult CheckUniqueEquilibrium(const Formulation& form, const PreparedProblem& prepared) {
   const double* z = form.start.data();
   const VectorXd values = form.LinearValues(z);
   for (int r = form.num_equilibrium; r < form.num_linear; ++r) {
     if (form.origin[r].kind != RowOrigin::kPlanRow) continue;
-    if (values(r) > form.upper[r] + kFeasibilityTolerance *
-                                        std::max(1.0, std::abs(form.upper[r]))) {
-      return Infeasible(
-          "the equilibrium forces are unique and violate " +
-          prepared.rows.Describe(form.origin[r].index, prepared.problem));
+    if (values(r) >
+        form.upper[r] + kFeasibilityTolerance * std::max(1.0, std::abs(form.upper[r]))) {
+      return Infeasible("the equilibrium forces are unique and violate " +
+                        prepared.rows.Describe(form.origin[r].index, prepared.problem));
     }
   }
   for (const ConeConstraint& cone : form.cones) {
     if (cone.Tangential(z).norm() >
-        cone.Radius(z) +
-            kFeasibilityTolerance * std::max(1.0, cone.Force(z).norm())) {
-      return Infeasible("the equilibrium forces are unique and violate the "
-                        "friction cone of " +
-                        ContactLabel(prepared.problem, cone.contact));
+        cone.Radius(z) + kFeasibilityTolerance * std::max(1.0, cone.Force(z).norm())) {
+      return Infeasible(
+          "the equilibrium forces are unique and violate the "
+          "friction cone of " +
+          ContactLabel(prepared.problem, cone.contact));
     }
   }
   PlanResult result;
@@ -168,8 +184,8 @@ void NoteRejected(bool accepted, const char* name, std::string* rejected) {
 }
 
 // Sets every option explicitly; returns the names of rejected ones.
-std::string ConfigureIpopt(Ipopt::IpoptApplication& app, const PlanOptions& options,
-                           int max_iter, bool has_cones, bool expect_infeasible) {
+std::string ConfigureIpopt(Ipopt::IpoptApplication& app, const PlanOptions& options, int max_iter,
+                           bool has_cones, bool expect_infeasible) {
   Ipopt::OptionsList& o = *app.Options();
   std::string r;
   NoteRejected(o.SetIntegerValue("print_level", 0), "print_level", &r);
@@ -211,8 +227,7 @@ struct IpoptRun {
 
   bool succeeded() const {
     return setup_error.empty() && stopped == StopConditions::kNone &&
-           (status == Ipopt::Solve_Succeeded ||
-            status == Ipopt::Solved_To_Acceptable_Level) &&
+           (status == Ipopt::Solve_Succeeded || status == Ipopt::Solved_To_Acceptable_Level) &&
            solution.size() > 0 && solution.allFinite();
   }
 };
@@ -230,9 +245,9 @@ std::timed_mutex& MumpsMutex() {
 
 // One Ipopt run; the caller holds MumpsMutex(). Everything Ipopt allocated
 // is released before this returns.
-IpoptRun RunIpoptLocked(const Formulation& form, Phase phase, VectorXd start,
-                        int max_iter, bool expect_infeasible,
-                        const PlanOptions& options, const StopConditions& stop) {
+IpoptRun RunIpoptLocked(const Formulation& form, Phase phase, VectorXd start, int max_iter,
+                        bool expect_infeasible, const PlanOptions& options,
+                        const StopConditions& stop) {
   IpoptRun run;
   Ipopt::SmartPtr<ForceNlp> nlp = new ForceNlp(form, phase, std::move(start), stop);
   // No console journal: nothing is ever written to stdout.
@@ -247,14 +262,12 @@ IpoptRun RunIpoptLocked(const Formulation& form, Phase phase, VectorXd start,
   // "" = do not read an ipopt.opt file from the working directory.
   run.status = app->Initialize(std::string());
   if (run.status != Ipopt::Solve_Succeeded) {
-    run.setup_error =
-        std::string("Ipopt failed to initialise: ") + StatusName(run.status);
+    run.setup_error = std::string("Ipopt failed to initialise: ") + StatusName(run.status);
     return run;
   }
   run.status = app->OptimizeTNLP(Ipopt::GetRawPtr(nlp));
   run.iterations = nlp->last_iteration();
-  if (Ipopt::SmartPtr<Ipopt::SolveStatistics> stats = app->Statistics();
-      Ipopt::IsValid(stats)) {
+  if (Ipopt::SmartPtr<Ipopt::SolveStatistics> stats = app->Statistics(); Ipopt::IsValid(stats)) {
     run.iterations = stats->IterationCount();
   }
   run.stopped = nlp->stop_reason();
@@ -268,22 +281,19 @@ IpoptRun RunIpoptLocked(const Formulation& form, Phase phase, VectorXd start,
   return run;
 }
 
-IpoptRun RunIpopt(const Formulation& form, Phase phase, VectorXd start,
-                  int max_iter, bool expect_infeasible,
-                  const PlanOptions& options, const StopConditions& stop) {
+IpoptRun RunIpopt(const Formulation& form, Phase phase, VectorXd start, int max_iter,
+                  bool expect_infeasible, const PlanOptions& options, const StopConditions& stop) {
   // Wait for the lock, still honouring an interrupt (the CPU budget does not
   // run down while blocked).
   std::unique_lock<std::timed_mutex> lock(MumpsMutex(), std::defer_lock);
   do {
-    if (const StopConditions::Reason reason = stop.Check();
-        reason != StopConditions::kNone) {
+    if (const StopConditions::Reason reason = stop.Check(); reason != StopConditions::kNone) {
       IpoptRun run;
       run.stopped = reason;
       return run;
     }
   } while (!lock.try_lock_for(std::chrono::milliseconds(2)));
-  return RunIpoptLocked(form, phase, std::move(start), max_iter,
-                        expect_infeasible, options, stop);
+  return RunIpoptLocked(form, phase, std::move(start), max_iter, expect_infeasible, options, stop);
 }
 
 // The Ipopt runs of one solve (steps 1-3 of the file comment), counting the
@@ -295,9 +305,9 @@ class IpoptSession {
 
   // 1. The minimum-norm problem, with Ipopt's quick infeasibility heuristic.
   PlanResult Solve() {
-    const IpoptRun first = Run(Phase::kMinimumNorm, form_.start,
-                               std::min(options_.ipopt.max_iterations, kFirstRunIterations),
-                               kExpectInfeasibleFirst);
+    const IpoptRun first =
+        Run(Phase::kMinimumNorm, form_.start,
+            std::min(options_.ipopt.max_iterations, kFirstRunIterations), kExpectInfeasibleFirst);
     if (first.stopped != StopConditions::kNone) return Stopped(first.stopped);
     if (Converged(first, Phase::kMinimumNorm)) return Optimal(first);
     if (!first.setup_error.empty()) return Failed(first);
@@ -330,21 +340,22 @@ class IpoptSession {
   // 2. Decide feasibility with the phase-one problem; 3. if feasible, solve
   //    again from a feasible point with the heuristic off.
   PlanResult DecideFeasibility(const IpoptRun& first) {
-    const IpoptRun phase1 = Run(Phase::kFeasibility, PhaseOneStart(),
-                                options_.ipopt.max_iterations, /*expect_infeasible=*/false);
+    const IpoptRun phase1 = Run(Phase::kFeasibility, PhaseOneStart(), options_.ipopt.max_iterations,
+                                /*expect_infeasible=*/false);
     if (phase1.stopped != StopConditions::kNone) return Stopped(phase1.stopped);
     if (!Converged(phase1, Phase::kFeasibility)) {
       return Finish(Failure(std::string("Ipopt failed: ") + StatusName(first.status) +
                             ", and the feasibility problem ended with " +
-                            StatusName(phase1.status) + " after " +
-                            std::to_string(iterations_) + " iterations"));
+                            StatusName(phase1.status) + " after " + std::to_string(iterations_) +
+                            " iterations"));
     }
     VectorXd x1 = phase1.solution.head(form_.num_vars());
     const double violation = form_.MaxViolation(x1);
     if (violation > kInfeasibilityTolerance * form_.scale) {
       return Finish(Infeasible(std::string("Ipopt: ") + StatusName(first.status) +
                                "; no equilibrium meets the tightened constraints (the least "
-                               "violation found is " + FormatNumber(violation) + " N)"));
+                               "violation found is " +
+                               FormatNumber(violation) + " N)"));
     }
     const IpoptRun retry = Run(Phase::kMinimumNorm, RetryStart(std::move(x1)),
                                options_.ipopt.max_iterations, /*expect_infeasible=*/false);
@@ -385,8 +396,8 @@ class IpoptSession {
     }
     x1 += 0.99 * feasible * direction;
     for (const ConeConstraint& cone : form_.cones) {
-      x1(cone.s_index) = std::max(
-          {cone.Radius(x1.data()), cone.Tangential(x1.data()).norm(), 1e-6 * form_.scale});
+      x1(cone.s_index) =
+          std::max({cone.Radius(x1.data()), cone.Tangential(x1.data()).norm(), 1e-6 * form_.scale});
     }
     return x1;
   }
@@ -397,9 +408,9 @@ class IpoptSession {
   // constraint: a contact at a cone apex (feasible, optimality not certified).
   bool Converged(const IpoptRun& run, Phase phase) const {
     if (run.succeeded()) return true;
-    const bool stalled = run.status == Ipopt::Search_Direction_Becomes_Too_Small ||
-                         (run.status == Ipopt::User_Requested_Stop && run.stalled &&
-                          !run.stalled_in_restoration);
+    const bool stalled =
+        run.status == Ipopt::Search_Direction_Becomes_Too_Small ||
+        (run.status == Ipopt::User_Requested_Stop && run.stalled && !run.stalled_in_restoration);
     if (!run.setup_error.empty() || run.stopped != StopConditions::kNone || !stalled ||
         run.solution.size() == 0 || !run.solution.allFinite()) {
       return false;

@@ -88,12 +88,18 @@ bool PlainPsd(const Matrix10d& s) {
 
 const char* ToString(UncertaintySource source) {
   switch (source) {
-    case UncertaintySource::kNone: return "NONE";
-    case UncertaintySource::kNominal: return "NOMINAL";
-    case UncertaintySource::kMeasurement: return "MEASUREMENT";
-    case UncertaintySource::kParameters: return "PARAMETERS";
-    case UncertaintySource::kFriction: return "FRICTION";
-    case UncertaintySource::kCombined: return "COMBINED";
+    case UncertaintySource::kNone:
+      return "NONE";
+    case UncertaintySource::kNominal:
+      return "NOMINAL";
+    case UncertaintySource::kMeasurement:
+      return "MEASUREMENT";
+    case UncertaintySource::kParameters:
+      return "PARAMETERS";
+    case UncertaintySource::kFriction:
+      return "FRICTION";
+    case UncertaintySource::kCombined:
+      return "COMBINED";
   }
   return "UNKNOWN";
 }
@@ -111,8 +117,8 @@ WrenchRegressorMatrix WrenchRegressor(const Vec3& gravity, const Motion& motion)
 }
 
 Vector10d StandardParameters(double mass, const Vec3& com, const Eigen::Matrix3d& inertia_com) {
-  const Eigen::Matrix3d io =
-      inertia_com + mass * (com.squaredNorm() * Eigen::Matrix3d::Identity() - com * com.transpose());
+  const Eigen::Matrix3d io = inertia_com + mass * (com.squaredNorm() * Eigen::Matrix3d::Identity() -
+                                                   com * com.transpose());
   Vector10d pi;
   pi << mass, mass * com, io(0, 0), io(1, 1), io(2, 2), io(0, 1), io(0, 2), io(1, 2);
   return pi;
@@ -139,7 +145,8 @@ absl::Status CheckCovariance(absl::string_view field, const Eigen::MatrixXd& s, 
   const auto entry = [&](int i, int j) { return absl::StrCat(field, "[", i * n + j, "]"); };
   for (int i = 0; i < n; ++i) {
     for (int j = 0; j < n; ++j) {
-      if (!std::isfinite(s(i, j))) return absl::InvalidArgumentError(entry(i, j) + ": not a finite number");
+      if (!std::isfinite(s(i, j)))
+        return absl::InvalidArgumentError(entry(i, j) + ": not a finite number");
       if (std::abs(s(i, j)) > limit) {
         return absl::InvalidArgumentError(absl::StrCat(entry(i, j), ": magnitude exceeds ", limit));
       }
@@ -150,7 +157,8 @@ absl::Status CheckCovariance(absl::string_view field, const Eigen::MatrixXd& s, 
     for (int j = i + 1; j < n; ++j) {
       if (std::abs(s(i, j) - s(j, i)) > 1e-9 * scale) {
         return absl::InvalidArgumentError(absl::StrCat(entry(i, j), ": not symmetric (", s(i, j),
-                                                       " but the entry [", j * n + i, "] is ", s(j, i), ")"));
+                                                       " but the entry [", j * n + i, "] is ",
+                                                       s(j, i), ")"));
       }
     }
   }
@@ -165,9 +173,10 @@ absl::Status CheckCovariance(absl::string_view field, const Eigen::MatrixXd& s, 
   if (eig.eigenvalues()(0) < -1e-9 * scale) {
     int k = 0;
     eig.eigenvectors().col(0).cwiseAbs().maxCoeff(&k);
-    return absl::InvalidArgumentError(absl::StrCat(
-        entry(k, k), ": not positive semidefinite (eigenvalue ", eig.eigenvalues()(0),
-        ", its direction mostly along index ", k, names ? absl::StrCat(" (", names[k], ")") : "", ")"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(entry(k, k), ": not positive semidefinite (eigenvalue ", eig.eigenvalues()(0),
+                     ", its direction mostly along index ", k,
+                     names ? absl::StrCat(" (", names[k], ")") : "", ")"));
   }
   return absl::OkStatus();
 }
@@ -176,8 +185,9 @@ absl::Status ValidateParameterUncertainty(const ParameterUncertainty& u) {
   if (u.confidence.has_value()) {
     const double k = *u.confidence;
     if (!std::isfinite(k) || k < 0.0 || k > PlanOptions::kMaxConfidence) {
-      return absl::InvalidArgumentError(absl::StrCat("object.uncertainty.confidence: must be in [0, ",
-                                                     PlanOptions::kMaxConfidence, "], got ", k));
+      return absl::InvalidArgumentError(
+          absl::StrCat("object.uncertainty.confidence: must be in [0, ",
+                       PlanOptions::kMaxConfidence, "], got ", k));
     }
   }
   if (IsZeroCovariance(u.covariance)) return absl::OkStatus();
@@ -185,7 +195,8 @@ absl::Status ValidateParameterUncertainty(const ParameterUncertainty& u) {
   // fixed-size LDL^T that only accepts; anything doubtful goes to
   // CheckCovariance, which names the offending entry.
   if (PlainPsd(u.covariance)) return absl::OkStatus();
-  return CheckCovariance("object.uncertainty.covariance", u.covariance, kMaxCovarianceEntry, kParameterNames);
+  return CheckCovariance("object.uncertainty.covariance", u.covariance, kMaxCovarianceEntry,
+                         kParameterNames);
 }
 
 bool HasModelUncertainty(const PlanProblem& problem) {
@@ -204,7 +215,8 @@ void ApplyFrictionUncertainty(double confidence, PlanProblem* problem,
   if (!any) return;
   for (Contact& c : problem->contacts) {
     nominal_friction->push_back(c.friction);
-    if (c.friction_sigma > 0.0) c.friction = std::max(0.0, c.friction - confidence * c.friction_sigma);
+    if (c.friction_sigma > 0.0)
+      c.friction = std::max(0.0, c.friction - confidence * c.friction_sigma);
     c.friction_sigma = 0.0;
   }
 }
@@ -256,7 +268,8 @@ void SolveSixInPlace(RowMajor6d m, Eigen::Matrix<double, 6, kCols, Eigen::RowMaj
 // the inertia does not enter the wrench). All in fixed sizes, M's columns
 // from G's structure.
 template <int kParams>
-void ContactCovariancesFullRank(const ForceEquilibrium& eq, const Eigen::Matrix<double, 6, kParams>& y,
+void ContactCovariancesFullRank(const ForceEquilibrium& eq,
+                                const Eigen::Matrix<double, 6, kParams>& y,
                                 const Matrix10d& covariance, std::vector<Eigen::Matrix3d>* out) {
   const int n = static_cast<int>(eq.grasp_matrix.cols() / 3);
   const Eigen::Matrix<double, kParams, kParams> s = covariance.topLeftCorner<kParams, kParams>();
@@ -288,7 +301,7 @@ double ContactCovariances(const ForceEquilibrium& eq, const Eigen::Matrix<double
   const SmallMatrix m = eq.grasp_matrix * eq.independent_rows.transpose();  // 6 x r
   const SmallMatrix normal = m.transpose() * m;
   const SmallMatrix x = normal.llt().solve(m.transpose());  // r x 6
-  const SmallMatrix k = x * wrench_cov * x.transpose();      // r x r
+  const SmallMatrix k = x * wrench_cov * x.transpose();     // r x r
   out->resize(n);
   for (int i = 0; i < n; ++i) {
     const auto u = eq.independent_rows.middleCols<3>(3 * i);  // r x 3
@@ -297,13 +310,15 @@ double ContactCovariances(const ForceEquilibrium& eq, const Eigen::Matrix<double
   if (r >= 6) return 0.0;
   const Eigen::Matrix<double, 6, 6> reject = Eigen::Matrix<double, 6, 6>::Identity() - m * x;
   const Eigen::Matrix<double, 6, 6> rest = reject * wrench_cov * reject.transpose();
-  return std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>(
-                                     rest, Eigen::EigenvaluesOnly).eigenvalues()(5)));
+  return std::sqrt(std::max(
+      0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>(rest, Eigen::EigenvaluesOnly)
+               .eigenvalues()(5)));
 }
 
 // Every P_i; marks the equilibrium inconsistent when some wrench in
 // the kappa_b ellipsoid cannot be balanced by any contact force.
-void ParameterCovariances(const PlanProblem& problem, ForceEquilibrium* eq, ParameterTightening* t) {
+void ParameterCovariances(const PlanProblem& problem, ForceEquilibrium* eq,
+                          ParameterTightening* t) {
   const Matrix10d& covariance = problem.object.uncertainty.covariance;
   const Motion& motion = problem.motion;
   if (eq->independent_rows.rows() == 6 && motion.angular_velocity.isZero(0.0) &&
@@ -396,8 +411,14 @@ void FillRowMargins(const PreparedProblem& prepared, const std::vector<Vec3>& fo
     const double part = parameters ? parameters[r] : 0.0;
     const double slack =
         have_forces ? rhs[r] - rows.matrix.block<1, 3>(r, 3 * c).dot(forces[c].transpose()) : 0.0;
-    o[r] = RowMargin{c, false, r, kind == RowKind::kFrictionFacet ? info[r].facet : -1,
-                     kind == RowKind::kMaxNormal, slack, std::max(0.0, nominal[r] - rhs[r] - part), part};
+    o[r] = RowMargin{c,
+                     false,
+                     r,
+                     kind == RowKind::kFrictionFacet ? info[r].facet : -1,
+                     kind == RowKind::kMaxNormal,
+                     slack,
+                     std::max(0.0, nominal[r] - rhs[r] - part),
+                     part};
   }
   for (int i = 0; i < static_cast<int>(prepared.cone_shift.size()); ++i) {
     RowMargin& o = (*out)[m + i];
@@ -405,7 +426,8 @@ void FillRowMargins(const PreparedProblem& prepared, const std::vector<Vec3>& fo
     o.contact = i, o.cone = true, o.row = -1, o.slack = 0.0, o.facet = -1, o.upper = false;
     o.parameters = t.active ? t.cone_margin[i] : 0.0;
     o.measurement = std::max(0.0, prepared.cone_shift[i] - o.parameters);
-    if (have_forces) o.slack = ExactConeSlack(c.normal, c.friction, prepared.cone_shift[i], forces[i]);
+    if (have_forces)
+      o.slack = ExactConeSlack(c.normal, c.friction, prepared.cone_shift[i], forces[i]);
   }
 }
 

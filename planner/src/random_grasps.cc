@@ -9,7 +9,9 @@ namespace {
 
 struct Sampler {
   std::mt19937_64& rng;
-  double Uniform(double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
+  double Uniform(double lo, double hi) {
+    return std::uniform_real_distribution<double>(lo, hi)(rng);
+  }
   int Int(int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); }
   bool Chance(double p) { return Uniform(0, 1) < p; }
   Vec3 UnitVector() {
@@ -65,11 +67,12 @@ RandomGrasp MakeRandomGrasp(std::mt19937_64& rng, const RandomGraspOptions& o) {
   const Vec3 half(s.Uniform(0.02, 0.08), s.Uniform(0.02, 0.08), s.Uniform(0.02, 0.08));
   const double half_height = s.Uniform(0.02, 0.1);
   // CoM well inside the object.
-  const Vec3 extent = shape == 0   ? Vec3::Constant(size / std::sqrt(3.0))
-                      : shape == 1 ? half
-                                   : Vec3(size / std::sqrt(2.0), size / std::sqrt(2.0), half_height);
-  p.object.com = 0.5 * extent.cwiseProduct(
-                           Vec3(s.Uniform(-1, 1), s.Uniform(-1, 1), s.Uniform(-1, 1)));
+  const Vec3 extent = shape == 0 ? Vec3::Constant(size / std::sqrt(3.0))
+                      : shape == 1
+                          ? half
+                          : Vec3(size / std::sqrt(2.0), size / std::sqrt(2.0), half_height);
+  p.object.com =
+      0.5 * extent.cwiseProduct(Vec3(s.Uniform(-1, 1), s.Uniform(-1, 1), s.Uniform(-1, 1)));
 
   for (int i = 0; i < n; ++i) {
     SurfacePoint sp = shape == 0   ? OnSphere(s, size)

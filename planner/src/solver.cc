@@ -31,8 +31,8 @@ double MinMargin(const PreparedProblem& prepared, const PlanOptions& options,
   if (options.cone == ConeModel::kExact) {
     for (int i = 0; i < prepared.num_contacts(); ++i) {
       const Contact& c = prepared.problem.contacts[i];
-      margin = std::min(margin,
-                        ExactConeSlack(c.normal, c.friction, prepared.cone_shift[i], forces[i]));
+      margin =
+          std::min(margin, ExactConeSlack(c.normal, c.friction, prepared.cone_shift[i], forces[i]));
     }
   }
   return std::isfinite(margin) ? margin : 0.0;
@@ -92,8 +92,7 @@ void ClearAnswer(PlanResult* result) {
 }
 
 // Fills the quantities every backend reports the same way.
-void FinishResult(const PreparedProblem& prepared, const PlanOptions& options,
-                  PlanResult* result) {
+void FinishResult(const PreparedProblem& prepared, const PlanOptions& options, PlanResult* result) {
   const PlanProblem& problem = prepared.problem;
   const int n = prepared.num_contacts();
   result->normal_force_sigma = prepared.normal_sigma;
@@ -198,9 +197,12 @@ absl::StatusOr<PlanResult> ForceSolver::Solve(const PlanProblem& problem,
 
 std::unique_ptr<ForceSolver> MakeSolver(SolverKind kind) {
   switch (kind) {
-    case SolverKind::kGeometric: return internal::MakeGeometricSolver();
-    case SolverKind::kIpopt: return internal::MakeIpoptSolver();
-    case SolverKind::kCrossCheck: return internal::MakeCrossCheckSolver();
+    case SolverKind::kGeometric:
+      return internal::MakeGeometricSolver();
+    case SolverKind::kIpopt:
+      return internal::MakeIpoptSolver();
+    case SolverKind::kCrossCheck:
+      return internal::MakeCrossCheckSolver();
   }
   return internal::MakeGeometricSolver();
 }
@@ -210,9 +212,12 @@ const ForceSolver& CachedSolver(SolverKind kind) {
   static const auto* ipopt = MakeSolver(SolverKind::kIpopt).release();
   static const auto* cross_check = MakeSolver(SolverKind::kCrossCheck).release();
   switch (kind) {
-    case SolverKind::kGeometric: return *geometric;
-    case SolverKind::kIpopt: return *ipopt;
-    case SolverKind::kCrossCheck: return *cross_check;
+    case SolverKind::kGeometric:
+      return *geometric;
+    case SolverKind::kIpopt:
+      return *ipopt;
+    case SolverKind::kCrossCheck:
+      return *cross_check;
   }
   return *geometric;
 }

@@ -75,7 +75,8 @@ absl::StatusOr<TrajectoryResult> PlanTrajectory(const TrajectoryProblem& t,
   for (int i = 0; i < static_cast<int>(t.steps.size()); ++i) {
     // Deadlines, cancellation and shutdown end a long motion between steps.
     if (control.interrupt && control.interrupt()) {
-      return absl::CancelledError(absl::StrCat("interrupted after ", i, " of ", t.steps.size(), " steps"));
+      return absl::CancelledError(
+          absl::StrCat("interrupted after ", i, " of ", t.steps.size(), " steps"));
     }
     PlanResult& r = out.steps.emplace_back();
     if (absl::Status s = solver->Solve(StepProblem(t, i), step_options, &workspace, &r, control);
@@ -88,9 +89,15 @@ absl::StatusOr<TrajectoryResult> PlanTrajectory(const TrajectoryProblem& t,
     }
     if (warm_start && r.status == PlanStatus::kOptimal) step_options.warm_start = r.active_set;
     switch (r.status) {
-      case PlanStatus::kOptimal: ++out.optimal; break;
-      case PlanStatus::kInfeasible: ++out.infeasible; break;
-      case PlanStatus::kSolverFailure: ++out.failed; break;
+      case PlanStatus::kOptimal:
+        ++out.optimal;
+        break;
+      case PlanStatus::kInfeasible:
+        ++out.infeasible;
+        break;
+      case PlanStatus::kSolverFailure:
+        ++out.failed;
+        break;
     }
   }
   out.total_time_us = std::chrono::duration_cast<std::chrono::microseconds>(
@@ -100,16 +107,16 @@ absl::StatusOr<TrajectoryResult> PlanTrajectory(const TrajectoryProblem& t,
 }
 
 absl::StatusOr<ProbePlan> PlanFrictionProbe(const PlanProblem& holding_grasp,
-                                            const FrictionProbe& probe,
-                                            const PlanOptions& options, SolverKind kind,
-                                            const SolveControl& control) {
+                                            const FrictionProbe& probe, const PlanOptions& options,
+                                            SolverKind kind, const SolveControl& control) {
   Vec3 n, t;
   TF_RETURN_IF_ERROR(ValidateFrictionProbe(probe, &n, &t));
   const double duration = (probe.initial_normal_force - probe.final_normal_force) / probe.ramp_rate;
   // Counted in double first: the product can exceed any int (UB to cast).
   const double step_count = std::floor(duration * probe.sample_rate) + 1;
   if (!(step_count <= kMaxProbeSteps)) {
-    return absl::InvalidArgumentError("probe.sample_rate: more than 100000 steps; ramp faster or sample slower");
+    return absl::InvalidArgumentError(
+        "probe.sample_rate: more than 100000 steps; ramp faster or sample slower");
   }
   const int steps = static_cast<int>(step_count);
 
@@ -118,7 +125,8 @@ absl::StatusOr<ProbePlan> PlanFrictionProbe(const PlanProblem& holding_grasp,
   trajectory.base = holding_grasp;
   for (int k = 0; k < steps; ++k) {
     const double time = k / probe.sample_rate;
-    const double fn = std::max(probe.final_normal_force, probe.initial_normal_force - probe.ramp_rate * time);
+    const double fn =
+        std::max(probe.final_normal_force, probe.initial_normal_force - probe.ramp_rate * time);
     const Vec3 f = fn * n + probe.tangential_force * t;
     plan.times.push_back(time);
     plan.probe_forces.push_back(f);
@@ -127,7 +135,8 @@ absl::StatusOr<ProbePlan> PlanFrictionProbe(const PlanProblem& holding_grasp,
     step.external_wrench = {f, probe.position.cross(f)};
     trajectory.steps.push_back(step);
   }
-  absl::StatusOr<TrajectoryResult> holding = PlanTrajectory(trajectory, options, kind, true, control);
+  absl::StatusOr<TrajectoryResult> holding =
+      PlanTrajectory(trajectory, options, kind, true, control);
   if (!holding.ok()) return holding.status();
   plan.holding = *std::move(holding);
   return plan;

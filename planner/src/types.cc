@@ -17,7 +17,8 @@ bool PlanOptions::IsValid(std::string* error) const {
     return fail(absl::StrCat("cone_sides: must be in ", kMinConeSides, "..", kMaxConeSides));
   }
   if (!std::isfinite(confidence) || confidence < 0.0 || confidence > kMaxConfidence)
-    return fail(absl::StrCat("confidence: must be in 0..", kMaxConfidence, " (got ", confidence, ")"));
+    return fail(
+        absl::StrCat("confidence: must be in 0..", kMaxConfidence, " (got ", confidence, ")"));
   if (!std::isfinite(rank_tolerance) || rank_tolerance <= 0.0 || rank_tolerance >= 1e-2)
     return fail("rank_tolerance: must be in (0, 1e-2)");
   if (max_contacts < 1) return fail("max_contacts: must be >= 1");
@@ -33,18 +34,24 @@ bool PlanOptions::IsValid(std::string* error) const {
 
 const char* ToString(PlanStatus status) {
   switch (status) {
-    case PlanStatus::kOptimal: return "OPTIMAL";
-    case PlanStatus::kInfeasible: return "INFEASIBLE";
-    case PlanStatus::kSolverFailure: return "SOLVER_FAILURE";
+    case PlanStatus::kOptimal:
+      return "OPTIMAL";
+    case PlanStatus::kInfeasible:
+      return "INFEASIBLE";
+    case PlanStatus::kSolverFailure:
+      return "SOLVER_FAILURE";
   }
   return "UNKNOWN";
 }
 
 const char* ToString(SolverKind solver) {
   switch (solver) {
-    case SolverKind::kGeometric: return "GEOMETRIC";
-    case SolverKind::kIpopt: return "IPOPT";
-    case SolverKind::kCrossCheck: return "CROSS_CHECK";
+    case SolverKind::kGeometric:
+      return "GEOMETRIC";
+    case SolverKind::kIpopt:
+      return "IPOPT";
+    case SolverKind::kCrossCheck:
+      return "CROSS_CHECK";
   }
   return "UNKNOWN";
 }

@@ -28,7 +28,8 @@ absl::Status InvalidContact(int index, const char* field, const std::string& wha
 
 absl::Status CheckContact(int index, Contact& c) {
   if (!IsBounded(c.position, kMaxLength)) {
-    return MagnitudeError(absl::StrCat("contacts[", index, "].position"), c.position, kMaxLength, "m");
+    return MagnitudeError(absl::StrCat("contacts[", index, "].position"), c.position, kMaxLength,
+                          "m");
   }
   if (!Finite(c.normal)) return InvalidContact(index, "normal", "not a finite vector");
   if (!NormalizeDirection(&c.normal)) return InvalidContact(index, "normal", "zero length");
@@ -39,15 +40,17 @@ absl::Status CheckContact(int index, Contact& c) {
     double limit;
     const char* unit;
   };
-  const NonNegative numbers[] = {{"friction", c.friction, "must be >= 0", kMaxFriction, ""},
-                                 {"friction_sigma", c.friction_sigma, "must be >= 0", kMaxFriction, ""},
-                                 {"sigma", c.sigma, "must be >= 0", kMaxForce, " N"},
-                                 {"min_normal_force", c.min_normal_force, "must be >= 0", kMaxForce, " N"},
-                                 {"max_normal_force", c.max_normal_force, "must be >= 0 (0 = none)", kMaxForce, " N"}};
+  const NonNegative numbers[] = {
+      {"friction", c.friction, "must be >= 0", kMaxFriction, ""},
+      {"friction_sigma", c.friction_sigma, "must be >= 0", kMaxFriction, ""},
+      {"sigma", c.sigma, "must be >= 0", kMaxForce, " N"},
+      {"min_normal_force", c.min_normal_force, "must be >= 0", kMaxForce, " N"},
+      {"max_normal_force", c.max_normal_force, "must be >= 0 (0 = none)", kMaxForce, " N"}};
   for (const NonNegative& n : numbers) {
     if (!std::isfinite(n.value)) return InvalidContact(index, n.field, "not a finite number");
     if (n.value < 0.0) return InvalidContact(index, n.field, n.rule);
-    if (n.value > n.limit) return InvalidContact(index, n.field, absl::StrCat("exceeds ", n.limit, n.unit));
+    if (n.value > n.limit)
+      return InvalidContact(index, n.field, absl::StrCat("exceeds ", n.limit, n.unit));
   }
   if (c.max_normal_force > 0.0 && c.min_normal_force > c.max_normal_force)
     return InvalidContact(index, "min_normal_force",
@@ -63,27 +66,33 @@ bool IsBounded(const Vec3& value, double limit) {
   return value.allFinite() && value.cwiseAbs().maxCoeff() <= limit;
 }
 
-absl::Status MagnitudeError(absl::string_view field, double value, double limit, absl::string_view unit) {
+absl::Status MagnitudeError(absl::string_view field, double value, double limit,
+                            absl::string_view unit) {
   if (!std::isfinite(value)) return Invalid(std::string(field), "not a finite number");
   return Invalid(std::string(field), absl::StrCat("magnitude exceeds ", limit, " ", unit));
 }
-absl::Status MagnitudeError(absl::string_view field, const Vec3& value, double limit, absl::string_view unit) {
+absl::Status MagnitudeError(absl::string_view field, const Vec3& value, double limit,
+                            absl::string_view unit) {
   if (!Finite(value)) return Invalid(std::string(field), "not a finite vector");
-  return Invalid(std::string(field), absl::StrCat("component magnitude exceeds ", limit, " ", unit));
+  return Invalid(std::string(field),
+                 absl::StrCat("component magnitude exceeds ", limit, " ", unit));
 }
-absl::Status CheckMagnitude(absl::string_view field, double value, double limit, absl::string_view unit) {
+absl::Status CheckMagnitude(absl::string_view field, double value, double limit,
+                            absl::string_view unit) {
   return IsBounded(value, limit) ? absl::OkStatus() : MagnitudeError(field, value, limit, unit);
 }
-absl::Status CheckMagnitude(absl::string_view field, const Vec3& value, double limit, absl::string_view unit) {
+absl::Status CheckMagnitude(absl::string_view field, const Vec3& value, double limit,
+                            absl::string_view unit) {
   return IsBounded(value, limit) ? absl::OkStatus() : MagnitudeError(field, value, limit, unit);
 }
 
 absl::Status CheckTime(absl::string_view field, double t, const double* previous) {
   if (!IsBounded(t, kMaxTime)) return MagnitudeError(field, t, kMaxTime, "s");
   if (previous != nullptr && t > *previous && t - *previous < kMinTimeStep) {
-    return Invalid(std::string(field), absl::StrCat("step ", t - *previous,
-                                                    " s after the previous sample is below the resolution ",
-                                                    kMinTimeStep, " s"));
+    return Invalid(
+        std::string(field),
+        absl::StrCat("step ", t - *previous,
+                     " s after the previous sample is below the resolution ", kMinTimeStep, " s"));
   }
   return absl::OkStatus();
 }
@@ -91,7 +100,8 @@ absl::Status CheckTime(absl::string_view field, double t, const double* previous
 bool NormalizeDirection(Vec3* direction) {
   if (!Finite(*direction)) return false;
   const double largest = direction->cwiseAbs().maxCoeff();
-  if (!(largest * (*direction / (largest > 0 ? largest : 1.0)).norm() >= kMinDirectionLength)) return false;
+  if (!(largest * (*direction / (largest > 0 ? largest : 1.0)).norm() >= kMinDirectionLength))
+    return false;
   *direction /= largest;
   direction->normalize();
   return true;
@@ -110,24 +120,30 @@ absl::Status ValidateProblem(const PlanProblem& problem, const PlanOptions& opti
   TF_RETURN_IF_ERROR(CheckMagnitude("object.mass", out.object.mass, kMaxMass, "kg"));
   if (out.object.mass < 0.0) return Invalid("object.mass", "must be >= 0");
   TF_RETURN_IF_ERROR(CheckMagnitude("object.com", out.object.com, kMaxLength, "m"));
-  TF_RETURN_IF_ERROR(CheckMagnitude("object.gravity", out.object.gravity, kMaxAcceleration, "m/s^2"));
-  TF_RETURN_IF_ERROR(CheckMagnitude("external_wrench.force", out.external_wrench.force, kMaxForce, "N"));
-  if (auto s = CheckMagnitude("external_wrench.torque", out.external_wrench.torque, kMaxForce, "N m"); !s.ok()) {
+  TF_RETURN_IF_ERROR(
+      CheckMagnitude("object.gravity", out.object.gravity, kMaxAcceleration, "m/s^2"));
+  TF_RETURN_IF_ERROR(
+      CheckMagnitude("external_wrench.force", out.external_wrench.force, kMaxForce, "N"));
+  if (auto s =
+          CheckMagnitude("external_wrench.torque", out.external_wrench.torque, kMaxForce, "N m");
+      !s.ok()) {
     return s;
   }
 
   TF_RETURN_IF_ERROR(ValidateParameterUncertainty(out.object.uncertainty));
   const Motion& motion = out.motion;
-  if (auto s = CheckMagnitude("motion.linear_acceleration", motion.linear_acceleration, kMaxAcceleration, "m/s^2");
+  if (auto s = CheckMagnitude("motion.linear_acceleration", motion.linear_acceleration,
+                              kMaxAcceleration, "m/s^2");
       !s.ok()) {
     return s;
   }
-  if (auto s = CheckMagnitude("motion.angular_velocity", motion.angular_velocity, kMaxAngularVelocity, "rad/s");
+  if (auto s = CheckMagnitude("motion.angular_velocity", motion.angular_velocity,
+                              kMaxAngularVelocity, "rad/s");
       !s.ok()) {
     return s;
   }
-  if (auto s = CheckMagnitude("motion.angular_acceleration", motion.angular_acceleration, kMaxAngularAcceleration,
-                              "rad/s^2");
+  if (auto s = CheckMagnitude("motion.angular_acceleration", motion.angular_acceleration,
+                              kMaxAngularAcceleration, "rad/s^2");
       !s.ok()) {
     return s;
   }
@@ -146,20 +162,24 @@ absl::Status ValidateInertia(const Inertia& in) {
   for (double v : {in.ixx, in.iyy, in.izz, in.ixy, in.ixz, in.iyz}) {
     if (!std::isfinite(v)) return absl::InvalidArgumentError("object.inertia: not finite");
     if (std::abs(v) > kMaxInertia) {
-      return Invalid("object.inertia", absl::StrCat("component magnitude exceeds ", kMaxInertia, " kg m^2"));
+      return Invalid("object.inertia",
+                     absl::StrCat("component magnitude exceeds ", kMaxInertia, " kg m^2"));
     }
   }
   Eigen::Matrix3d m;
   m << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
-  const Eigen::Vector3d moments = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(m, Eigen::EigenvaluesOnly).eigenvalues();
+  const Eigen::Vector3d moments =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(m, Eigen::EigenvaluesOnly).eigenvalues();
   const double tolerance = 1e-12 * std::max(1.0, moments.cwiseAbs().maxCoeff());
   if (moments(0) < -tolerance) {
-    return absl::InvalidArgumentError(absl::StrCat("object.inertia: not positive semidefinite (smallest principal moment ",
-                                                   moments(0), " kg m^2)"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("object.inertia: not positive semidefinite (smallest principal moment ",
+                     moments(0), " kg m^2)"));
   }
   if (moments(2) > moments(0) + moments(1) + tolerance) {
-    return absl::InvalidArgumentError(absl::StrCat("object.inertia: principal moments ", moments(0), ", ", moments(1),
-                                                   ", ", moments(2), " kg m^2 break the triangle inequality"));
+    return absl::InvalidArgumentError(absl::StrCat("object.inertia: principal moments ", moments(0),
+                                                   ", ", moments(1), ", ", moments(2),
+                                                   " kg m^2 break the triangle inequality"));
   }
   return absl::OkStatus();
 }
@@ -171,24 +191,28 @@ absl::Status ValidateTrajectoryStep(const TrajectoryStep& s, int index, bool has
     double limit;
     const char* unit;
   };
-  const Bounded fields[] = {{"gravity", &s.gravity, kMaxAcceleration, "m/s^2"},
-                            {"linear_acceleration", &s.linear_acceleration, kMaxAcceleration, "m/s^2"},
-                            {"angular_velocity", &s.angular_velocity, kMaxAngularVelocity, "rad/s"},
-                            {"angular_acceleration", &s.angular_acceleration, kMaxAngularAcceleration, "rad/s^2"},
-                            {"external_wrench.force", &s.external_wrench.force, kMaxForce, "N"},
-                            {"external_wrench.torque", &s.external_wrench.torque, kMaxForce, "N m"}};
+  const Bounded fields[] = {
+      {"gravity", &s.gravity, kMaxAcceleration, "m/s^2"},
+      {"linear_acceleration", &s.linear_acceleration, kMaxAcceleration, "m/s^2"},
+      {"angular_velocity", &s.angular_velocity, kMaxAngularVelocity, "rad/s"},
+      {"angular_acceleration", &s.angular_acceleration, kMaxAngularAcceleration, "rad/s^2"},
+      {"external_wrench.force", &s.external_wrench.force, kMaxForce, "N"},
+      {"external_wrench.torque", &s.external_wrench.torque, kMaxForce, "N m"}};
   for (const Bounded& f : fields) {
     if (!IsBounded(*f.value, f.limit)) {
       return MagnitudeError(absl::StrCat("steps[", index, "].", f.name), *f.value, f.limit, f.unit);
     }
   }
-  if (!has_inertia && (s.angular_velocity.squaredNorm() > 0 || s.angular_acceleration.squaredNorm() > 0)) {
-    return Invalid("object.inertia", absl::StrCat("required because steps[", index, "] rotates the object"));
+  if (!has_inertia &&
+      (s.angular_velocity.squaredNorm() > 0 || s.angular_acceleration.squaredNorm() > 0)) {
+    return Invalid("object.inertia",
+                   absl::StrCat("required because steps[", index, "] rotates the object"));
   }
   return absl::OkStatus();
 }
 
-absl::Status ValidateFrictionProbe(const FrictionProbe& probe, Vec3* unit_normal, Vec3* unit_tangent) {
+absl::Status ValidateFrictionProbe(const FrictionProbe& probe, Vec3* unit_normal,
+                                   Vec3* unit_tangent) {
   TF_RETURN_IF_ERROR(CheckMagnitude("probe.position", probe.position, kMaxLength, "m"));
   Vec3 n = probe.normal;
   if (!NormalizeDirection(&n)) {
@@ -210,7 +234,8 @@ absl::Status ValidateFrictionProbe(const FrictionProbe& probe, Vec3* unit_normal
   }
   if (!(probe.initial_normal_force > probe.final_normal_force))
     return Invalid("probe.final_normal_force", "must be below initial_normal_force");
-  if (!std::isfinite(probe.ramp_rate) || probe.ramp_rate <= 0) return Invalid("probe.ramp_rate", "must be > 0");
+  if (!std::isfinite(probe.ramp_rate) || probe.ramp_rate <= 0)
+    return Invalid("probe.ramp_rate", "must be > 0");
   TF_RETURN_IF_ERROR(CheckMagnitude("probe.ramp_rate", probe.ramp_rate, kMaxForce, "N/s"));
   if (!std::isfinite(probe.sample_rate) || probe.sample_rate <= 0) {
     return Invalid("probe.sample_rate", "must be > 0");

@@ -29,8 +29,12 @@ class FitInertiaReactor final : public AdmittedStream<grpc::ServerReadReactor<gr
   FitInertiaReactor(grpc::CallbackServerContext* context, grpc::ByteBuffer* response,
                     WorkerPool* pool, StreamRegistry* streams, const api::CallLimits& limits,
                     int64_t max_samples)
-      : AdmittedStream(context, streams, "FitInertia"), response_(response), pool_(pool),
-        limits_(limits), stream_(max_samples), log_("FitInertia", guard()) {
+      : AdmittedStream(context, streams, "FitInertia"),
+        response_(response),
+        pool_(pool),
+        limits_(limits),
+        stream_(max_samples),
+        log_("FitInertia", guard()) {
     log_.set_pooled();  // also for a call that ends before the fit
     Start();
   }
@@ -114,16 +118,14 @@ grpc::ServerUnaryReactor* EstimatorService::EstimateFriction(grpc::CallbackServe
                                                              const v1::FrictionRequest* request,
                                                              v1::FrictionResponse* response) {
   return ServeOnPool<v1::FrictionRequest, v1::FrictionResponse>(
-      "EstimateFriction", context, request, response, pool_, limits_,
-      &api::HandleFriction);
+      "EstimateFriction", context, request, response, pool_, limits_, &api::HandleFriction);
 }
 
 grpc::ServerUnaryReactor* AuditService::AuditModel(grpc::CallbackServerContext* context,
                                                    const v1::AuditRequest* request,
                                                    v1::AuditResponse* response) {
-  return ServeOnPool<v1::AuditRequest, v1::AuditResponse>(
-      "AuditModel", context, request, response, pool_, limits_,
-      &api::HandleAudit);
+  return ServeOnPool<v1::AuditRequest, v1::AuditResponse>("AuditModel", context, request, response,
+                                                          pool_, limits_, &api::HandleAudit);
 }
 
 }  // namespace tactforce::server

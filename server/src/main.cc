@@ -43,9 +43,10 @@ spdlog::level::level_enum ParseLevel(const std::string& name) {
 // so --log-level governs them too (off: nothing on stderr). gRPC keeps its
 // verbosity (GRPC_VERBOSITY, default ERROR).
 void LogGrpcLine(gpr_log_func_args* args) {
-  const spdlog::level::level_enum level = args->severity == GPR_LOG_SEVERITY_ERROR  ? spdlog::level::err
-                                          : args->severity == GPR_LOG_SEVERITY_INFO ? spdlog::level::info
-                                                                                    : spdlog::level::debug;
+  const spdlog::level::level_enum level =
+      args->severity == GPR_LOG_SEVERITY_ERROR  ? spdlog::level::err
+      : args->severity == GPR_LOG_SEVERITY_INFO ? spdlog::level::info
+                                                : spdlog::level::debug;
   if (spdlog::should_log(level)) {
     spdlog::log(level, "source=grpc file={}:{} message={}", args->file, args->line,
                 tactforce::server::LogValue(args->message != nullptr ? args->message : ""));
@@ -73,16 +74,19 @@ bool AllInterfaces(const std::string& address) {
 // One line with every limit in force.
 void LogStart(const ServerConfig& c, const tactforce::server::ServerHost& host,
               const tactforce::server::WorkerPool& pool) {
-  spdlog::info("event=start address={} tls={} mtls={} reflection={} workers={} ipopt_workers={} queue={} "
-               "max_contacts={} solve_timeout_ms={} inline_max_contacts={} max_message_bytes={} "
-               "max_inertia_samples={} max_inflight_samples={} max_inflight_bytes={} max_fit_bytes={} max_audit_samples={} "
-               "max_streams={} stream_idle_timeout_ms={} max_streams_per_connection={} max_trajectory_work={}",
-               host.bound_address(), host.tls(), !c.tls_client_ca.empty(), c.reflection, pool.workers(),
-               c.ipopt_workers, pool.max_queued(), c.limits.max_contacts, c.solve_timeout_ms(),
-               c.inline_max_contacts, c.limits.max_response_bytes, c.max_inertia_samples,
-               c.max_inflight_samples, c.max_inflight_bytes, c.limits.max_fit_bytes,
-               c.limits.max_audit_samples, c.max_streams, c.stream_idle_timeout_ms,
-               c.max_streams_per_connection, c.limits.max_trajectory_work);
+  spdlog::info(
+      "event=start address={} tls={} mtls={} reflection={} workers={} ipopt_workers={} queue={} "
+      "max_contacts={} solve_timeout_ms={} inline_max_contacts={} max_message_bytes={} "
+      "max_inertia_samples={} max_inflight_samples={} max_inflight_bytes={} max_fit_bytes={} "
+      "max_audit_samples={} "
+      "max_streams={} stream_idle_timeout_ms={} max_streams_per_connection={} "
+      "max_trajectory_work={}",
+      host.bound_address(), host.tls(), !c.tls_client_ca.empty(), c.reflection, pool.workers(),
+      c.ipopt_workers, pool.max_queued(), c.limits.max_contacts, c.solve_timeout_ms(),
+      c.inline_max_contacts, c.limits.max_response_bytes, c.max_inertia_samples,
+      c.max_inflight_samples, c.max_inflight_bytes, c.limits.max_fit_bytes,
+      c.limits.max_audit_samples, c.max_streams, c.stream_idle_timeout_ms,
+      c.max_streams_per_connection, c.limits.max_trajectory_work);
 }
 
 }  // namespace
@@ -126,8 +130,8 @@ int main(int argc, char** argv) {
   tactforce::server::WorkerPool ipopt_lane(config.ipopt_workers, config.queue);
   tactforce::server::StreamRegistry streams(config.ToStreamLimits());
   tactforce::server::ServerHost host(config.ToServerOptions());
-  host.AddService(std::make_unique<tactforce::server::PlannerService>(
-      &pool, &ipopt_lane, &streams, config.ToPlanSettings()));
+  host.AddService(std::make_unique<tactforce::server::PlannerService>(&pool, &ipopt_lane, &streams,
+                                                                      config.ToPlanSettings()));
   host.AddService(std::make_unique<tactforce::server::EstimatorService>(
       &pool, &streams, config.limits, config.max_inertia_samples));
   host.AddService(std::make_unique<tactforce::server::AuditService>(&pool, config.limits));
@@ -141,9 +145,10 @@ int main(int argc, char** argv) {
   std::fflush(stdout);
   LogStart(config, host, pool);
   if (AllInterfaces(config.listen) && !host.tls()) {
-    spdlog::warn("event=plaintext_all_interfaces address={} note=\"listening on every "
-                 "interface without TLS\"",
-                 host.bound_address());
+    spdlog::warn(
+        "event=plaintext_all_interfaces address={} note=\"listening on every "
+        "interface without TLS\"",
+        host.bound_address());
   }
 
   int signal_number = 0;

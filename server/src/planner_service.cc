@@ -75,7 +75,8 @@ class PlanStreamReactor final
   void Complete(const absl::Status& status) {
     if (!status.ok()) return End(Indexed(status));
     if (guard().ShouldStop()) return End(Indexed(guard().StopReason("after the solve")));
-    if (absl::Status s = SerializeMessage(response_, write_buffer()); !s.ok()) return End(Indexed(s));
+    if (absl::Status s = SerializeMessage(response_, write_buffer()); !s.ok())
+      return End(Indexed(s));
     WriteNext();
   }
 
@@ -105,7 +106,9 @@ class PlanStreamReactor final
 
 PlannerService::PlannerService(WorkerPool* pool, WorkerPool* ipopt_lane, StreamRegistry* streams,
                                api::PlanSettings settings)
-    : pool_(pool), ipopt_lane_(ipopt_lane), streams_(streams),
+    : pool_(pool),
+      ipopt_lane_(ipopt_lane),
+      streams_(streams),
       plans_(pool, std::move(settings), ipopt_lane) {
   SetMessageAllocatorFor_Plan(&plan_messages_);
 }
@@ -146,8 +149,7 @@ grpc::ServerUnaryReactor* PlannerService::PlanTrajectory(grpc::CallbackServerCon
                                                          v1::TrajectoryResponse* response) {
   return ServeOnPool<v1::TrajectoryRequest, v1::TrajectoryResponse>(
       "PlanTrajectory", context, request, response, PoolFor(request->plan().solver()),
-      plans_.settings().limits,
-      &api::HandleTrajectory);
+      plans_.settings().limits, &api::HandleTrajectory);
 }
 
 grpc::ServerUnaryReactor* PlannerService::PlanFrictionProbe(grpc::CallbackServerContext* context,
@@ -155,8 +157,7 @@ grpc::ServerUnaryReactor* PlannerService::PlanFrictionProbe(grpc::CallbackServer
                                                             v1::FrictionProbeResponse* response) {
   return ServeOnPool<v1::FrictionProbeRequest, v1::FrictionProbeResponse>(
       "PlanFrictionProbe", context, request, response, PoolFor(request->plan().solver()),
-      plans_.settings().limits,
-      &api::HandleFrictionProbe);
+      plans_.settings().limits, &api::HandleFrictionProbe);
 }
 
 }  // namespace tactforce::server

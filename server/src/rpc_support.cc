@@ -34,13 +34,12 @@ std::string BoundedStatusMessage(std::string_view message) {
 
 grpc::Status ToGrpcStatus(const absl::Status& status) {
   if (status.ok()) return grpc::Status::OK;
-  return grpc::Status(static_cast<grpc::StatusCode>(status.code()),
-                      BoundedStatusMessage(std::string_view(status.message().data(),
-                                                            status.message().size())));
+  return grpc::Status(
+      static_cast<grpc::StatusCode>(status.code()),
+      BoundedStatusMessage(std::string_view(status.message().data(), status.message().size())));
 }
 
-RpcGuard::RpcGuard(const grpc::CallbackServerContext* context,
-                   const std::atomic<bool>* cancelled)
+RpcGuard::RpcGuard(const grpc::CallbackServerContext* context, const std::atomic<bool>* cancelled)
     : context_(context), cancelled_(cancelled) {
   if (context_ == nullptr) return;
   const auto wall_deadline = context_->deadline();
@@ -66,13 +65,16 @@ absl::Status RpcGuard::StopReason(std::string_view what) const {
   return absl::CancelledError("cancelled " + std::string(what));
 }
 
-std::string RpcGuard::Peer() const { return context_ != nullptr ? context_->peer() : std::string(); }
+std::string RpcGuard::Peer() const {
+  return context_ != nullptr ? context_->peer() : std::string();
+}
 
 std::function<bool()> RpcGuard::Interrupt() const {
   return [guard = *this] { return guard.ShouldStop(); };
 }
 
-api::CallDone FinishUnary(grpc::ServerUnaryReactor* reactor, std::shared_ptr<const RpcGuard> guard) {
+api::CallDone FinishUnary(grpc::ServerUnaryReactor* reactor,
+                          std::shared_ptr<const RpcGuard> guard) {
   return [reactor, guard = std::move(guard)](const absl::Status& status) {
     reactor->Finish(ToGrpcStatus(status));
   };

@@ -85,11 +85,12 @@ void RegisterFlags(CLI::App& app, ServerConfig* c) {
                  "fits and audits (0 = hardware threads); Ipopt work has its own lane "
                  "(--ipopt-workers)")
       ->check(CLI::Range(0, 1024));
-  app.add_option("--ipopt-workers", c->ipopt_workers,
-                 "Threads of the Ipopt lane: Plan, PlanStream, PlanTrajectory and PlanFrictionProbe "
-                 "requests with SOLVER_IPOPT or SOLVER_CROSS_CHECK run there, with their own queue of "
-                 "--queue, so geometric work never waits behind Ipopt (which runs one solve at a "
-                 "time per process: more than 1 only queues inside the process)")
+  app.add_option(
+         "--ipopt-workers", c->ipopt_workers,
+         "Threads of the Ipopt lane: Plan, PlanStream, PlanTrajectory and PlanFrictionProbe "
+         "requests with SOLVER_IPOPT or SOLVER_CROSS_CHECK run there, with their own queue of "
+         "--queue, so geometric work never waits behind Ipopt (which runs one solve at a "
+         "time per process: more than 1 only queues inside the process)")
       ->check(CLI::Range(1, 64));
   app.add_option("--queue", c->queue,
                  "Solves that may wait for a worker; beyond that requests fail with "
@@ -101,24 +102,27 @@ void RegisterFlags(CLI::App& app, ServerConfig* c) {
   app.add_option("--max-contacts", c->limits.max_contacts,
                  "Most contacts a request may have (INVALID_ARGUMENT 'contacts: ...' beyond)")
       ->check(CLI::Range(1, 100'000));
-  app.add_option("--max-inertia-samples", c->max_inertia_samples,
-                 "Most samples one FitInertia stream may carry (INVALID_ARGUMENT 'samples: ...' beyond)")
+  app.add_option(
+         "--max-inertia-samples", c->max_inertia_samples,
+         "Most samples one FitInertia stream may carry (INVALID_ARGUMENT 'samples: ...' beyond)")
       ->check(CLI::Range(int64_t{10}, int64_t{100'000'000}));
-  app.add_option("--max-trajectory-work", c->limits.max_trajectory_work,
-                 "Most steps x contacts x cone sides one PlanTrajectory or PlanFrictionProbe may ask "
-                 "for (INVALID_ARGUMENT 'steps: ...' beyond, before any solve)")
+  app.add_option(
+         "--max-trajectory-work", c->limits.max_trajectory_work,
+         "Most steps x contacts x cone sides one PlanTrajectory or PlanFrictionProbe may ask "
+         "for (INVALID_ARGUMENT 'steps: ...' beyond, before any solve)")
       ->check(CLI::Range(int64_t{1}, int64_t{1'000'000'000}));
   app.add_option_function<int>(
          "--solve-timeout-ms", [c](int ms) { c->SetSolveTimeoutMs(ms); },
-                 "Work limit of one call in ms (0 = none), counted from when its work starts "
-                 "(queue wait excluded): PlanTrajectory, PlanFrictionProbe, FitInertia, "
-                 "AuditModel, EstimateFriction and EstimateForces stop with RESOURCE_EXHAUSTED "
-                 "when they reach it; each Ipopt solve is capped to this much CPU time and "
-                 "then returns PLAN_STATUS_SOLVER_FAILURE")
+         "Work limit of one call in ms (0 = none), counted from when its work starts "
+         "(queue wait excluded): PlanTrajectory, PlanFrictionProbe, FitInertia, "
+         "AuditModel, EstimateFriction and EstimateForces stop with RESOURCE_EXHAUSTED "
+         "when they reach it; each Ipopt solve is capped to this much CPU time and "
+         "then returns PLAN_STATUS_SOLVER_FAILURE")
       ->default_str(std::to_string(c->solve_timeout_ms()))
       ->check(CLI::Range(0, 3'600'000));
-  app.add_option("--max-audit-samples", c->limits.max_audit_samples,
-                 "Most samples one AuditModel request may carry (INVALID_ARGUMENT 'samples: ...' beyond)")
+  app.add_option(
+         "--max-audit-samples", c->limits.max_audit_samples,
+         "Most samples one AuditModel request may carry (INVALID_ARGUMENT 'samples: ...' beyond)")
       ->check(CLI::Range(int64_t{40}, int64_t{100'000'000}));
   app.add_option("--max-streams", c->max_streams,
                  "Most PlanStream and FitInertia streams open at once on this server; a new one "
@@ -133,17 +137,19 @@ void RegisterFlags(CLI::App& app, ServerConfig* c) {
                  "each); the message that would exceed it ends its stream with RESOURCE_EXHAUSTED "
                  "(0 = no limit)")
       ->check(CLI::Range(int64_t{0}, int64_t{1'000'000'000}));
-  app.add_option("--max-inflight-bytes", c->max_inflight_bytes,
-                 "Most bytes all open FitInertia streams may hold together (converted samples with "
-                 "their contacts, and the options with the mesh); the message that would exceed it "
-                 "ends its stream with RESOURCE_EXHAUSTED (0 = no limit). The default, 256 MiB, is a "
-                 "quarter of the shipped Kubernetes memory limit")
+  app.add_option(
+         "--max-inflight-bytes", c->max_inflight_bytes,
+         "Most bytes all open FitInertia streams may hold together (converted samples with "
+         "their contacts, and the options with the mesh); the message that would exceed it "
+         "ends its stream with RESOURCE_EXHAUSTED (0 = no limit). The default, 256 MiB, is a "
+         "quarter of the shipped Kubernetes memory limit")
       ->check(CLI::Range(int64_t{0}, int64_t{1} << 40));
-  app.add_option("--max-fit-bytes", c->limits.max_fit_bytes,
-                 "Most working memory one FitInertia fit may take, estimated from its method and "
-                 "sample count before it starts (FACTOR_GRAPH ~4.5 KB per sample, the others ~2 KB); "
-                 "a bigger fit is refused with INVALID_ARGUMENT naming the most samples it may have "
-                 "(0 = no limit)")
+  app.add_option(
+         "--max-fit-bytes", c->limits.max_fit_bytes,
+         "Most working memory one FitInertia fit may take, estimated from its method and "
+         "sample count before it starts (FACTOR_GRAPH ~4.5 KB per sample, the others ~2 KB); "
+         "a bigger fit is refused with INVALID_ARGUMENT naming the most samples it may have "
+         "(0 = no limit)")
       ->check(CLI::Range(int64_t{0}, int64_t{1} << 40));
   app.add_option("--max-streams-per-connection", c->max_streams_per_connection,
                  "Calls one client connection may have in flight at once (HTTP/2 "

@@ -57,8 +57,7 @@ absl::StatusOr<std::shared_ptr<grpc::ServerCredentials>> MakeCredentials(const T
     ssl.pem_root_certs = *ca;
     // Mutual TLS: a client without a certificate signed by this CA fails the
     // handshake and never reaches a service.
-    ssl.client_certificate_request =
-        GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;
+    ssl.client_certificate_request = GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;
   }
   return grpc::SslServerCredentials(ssl);
 }
@@ -95,7 +94,8 @@ class UnparsedRequestInterceptor final : public grpc::experimental::Interceptor 
     if (methods->QueryInterceptionHookPoint(
             grpc::experimental::InterceptionHookPoints::PRE_SEND_STATUS)) {
       const grpc::Status status = methods->GetSendStatus();
-      if (status.error_code() == grpc::StatusCode::UNIMPLEMENTED && status.error_message().empty()) {
+      if (status.error_code() == grpc::StatusCode::UNIMPLEMENTED &&
+          status.error_message().empty()) {
         methods->ModifySendStatus(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, *message_));
       }
     }
@@ -217,10 +217,9 @@ void ServerHost::Shutdown(std::chrono::milliseconds grace) {
   // (never longer than `grace`).
   server_->Shutdown(std::chrono::system_clock::now() + grace);
   server_->Wait();
-  spdlog::info("event=drained elapsed_ms={}",
-               std::chrono::duration_cast<std::chrono::milliseconds>(
-                   std::chrono::steady_clock::now() - start)
-                   .count());
+  spdlog::info("event=drained elapsed_ms={}", std::chrono::duration_cast<std::chrono::milliseconds>(
+                                                  std::chrono::steady_clock::now() - start)
+                                                  .count());
 }
 
 }  // namespace tactforce::server

@@ -25,8 +25,9 @@ StreamRegistry::~StreamRegistry() {
 absl::Status StreamRegistry::Open(IdleEndable* stream, const char* rpc) {
   std::lock_guard<std::mutex> lock(mu_);
   if (limits_.max_streams > 0 && static_cast<int>(streams_.size()) >= limits_.max_streams) {
-    return absl::ResourceExhaustedError(absl::StrCat(
-        rpc, ": ", streams_.size(), " streams already open (the server's --max-streams); retry later"));
+    return absl::ResourceExhaustedError(
+        absl::StrCat(rpc, ": ", streams_.size(),
+                     " streams already open (the server's --max-streams); retry later"));
   }
   streams_.insert(stream);
   return absl::OkStatus();
@@ -73,9 +74,9 @@ int StreamRegistry::open_streams() const {
 }
 
 void StreamRegistry::ReapLoop() {
-  const absl::Status idle = absl::UnavailableError(absl::StrCat(
-      "stream idle for more than ", limits_.idle_timeout.count(),
-      " ms (the server's --stream-idle-timeout-ms); open a new stream"));
+  const absl::Status idle = absl::UnavailableError(
+      absl::StrCat("stream idle for more than ", limits_.idle_timeout.count(),
+                   " ms (the server's --stream-idle-timeout-ms); open a new stream"));
   std::unique_lock<std::mutex> lock(mu_);
   while (!stop_cv_.wait_for(lock, std::chrono::seconds(1), [this] { return stopping_; })) {
     // Referenced under the lock (a stream closes under it), ended outside

@@ -54,7 +54,8 @@ double FieldVal(const SensorModel& m, const NumField& f) {
 }
 // Every key a sensor-model JSON may have, for "did you mean" suggestions.
 std::vector<std::string> ModelKeys() {
-  std::vector<std::string> keys = {"format", "units", "source", "uncertainty", "pi_thresholds", "pi_weights"};
+  std::vector<std::string> keys = {"format",      "units",         "source",
+                                   "uncertainty", "pi_thresholds", "pi_weights"};
   for (const auto& f : NumFields()) keys.emplace_back(f.name);
   return keys;
 }
@@ -70,10 +71,13 @@ constexpr size_t kMaxPiOperators = 64;
 // Uncertainty keys: the numeric fields plus "pi_weights[k]" / "pi_thresholds[k]".
 bool IsUncertaintyKey(std::string_view name) {
   if (IsField(name)) return true;
-  for (std::string_view prefix : {std::string_view("pi_weights["), std::string_view("pi_thresholds[")}) {
-    if (name.size() > prefix.size() + 1 && name.substr(0, prefix.size()) == prefix && name.back() == ']') {
+  for (std::string_view prefix :
+       {std::string_view("pi_weights["), std::string_view("pi_thresholds[")}) {
+    if (name.size() > prefix.size() + 1 && name.substr(0, prefix.size()) == prefix &&
+        name.back() == ']') {
       std::string_view digits = name.substr(prefix.size(), name.size() - prefix.size() - 1);
-      if (!digits.empty() && std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
+      if (!digits.empty() &&
+          std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
         return true;
     }
   }
@@ -85,10 +89,13 @@ bool IsUncertaintyKey(std::string_view name) {
 absl::Status ValidateSensorModel(const SensorModel& m) {
   for (const auto& f : NumFields()) {
     if (!std::isfinite(FieldVal(m, f)))
-      return absl::InvalidArgumentError(absl::StrCat("model field '", f.name, "': not a finite number"));
+      return absl::InvalidArgumentError(
+          absl::StrCat("model field '", f.name, "': not a finite number"));
   }
   auto nonneg = [](double v, const char* name) -> absl::Status {
-    if (v < 0) return absl::InvalidArgumentError(absl::StrCat("model field '", name, "': must be >= 0, got ", v));
+    if (v < 0)
+      return absl::InvalidArgumentError(
+          absl::StrCat("model field '", name, "': must be >= 0, got ", v));
     return absl::OkStatus();
   };
   const EffectParams& e = m.effects;
@@ -101,48 +108,64 @@ absl::Status ValidateSensorModel(const SensorModel& m) {
     return absl::InvalidArgumentError(
         absl::StrCat("model field 'threshold_shift': must be in [0, 1], got ", e.threshold_shift));
   if (e.full_scale <= 0)
-    return absl::InvalidArgumentError(absl::StrCat("model field 'full_scale': must be > 0, got ", e.full_scale));
-  if (std::abs(e.delay) > 10)
-    return absl::InvalidArgumentError(absl::StrCat("model field 'delay': |delay| must be <= 10 s, got ", e.delay));
-  if (e.lag > 10) return absl::InvalidArgumentError(absl::StrCat("model field 'lag': must be <= 10 s, got ", e.lag));
-  if (e.power_exponent < 0 || e.power_exponent > 10)
     return absl::InvalidArgumentError(
-        absl::StrCat("model field 'power_exponent': must be in (0, 10] (0 = off), got ", e.power_exponent));
+        absl::StrCat("model field 'full_scale': must be > 0, got ", e.full_scale));
+  if (std::abs(e.delay) > 10)
+    return absl::InvalidArgumentError(
+        absl::StrCat("model field 'delay': |delay| must be <= 10 s, got ", e.delay));
+  if (e.lag > 10)
+    return absl::InvalidArgumentError(
+        absl::StrCat("model field 'lag': must be <= 10 s, got ", e.lag));
+  if (e.power_exponent < 0 || e.power_exponent > 10)
+    return absl::InvalidArgumentError(absl::StrCat(
+        "model field 'power_exponent': must be in (0, 10] (0 = off), got ", e.power_exponent));
   if (e.pi_thresholds.size() != e.pi_weights.size())
-    return absl::InvalidArgumentError(absl::StrCat("model fields 'pi_thresholds' and 'pi_weights': must have the same length (",
-                                                   e.pi_thresholds.size(), " vs ", e.pi_weights.size(), ")"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("model fields 'pi_thresholds' and 'pi_weights': must have the same length (",
+                     e.pi_thresholds.size(), " vs ", e.pi_weights.size(), ")"));
   if (e.pi_thresholds.size() > kMaxPiOperators)
-    return absl::InvalidArgumentError(absl::StrCat("model field 'pi_thresholds': at most ", kMaxPiOperators,
-                                                   " play operators, got ", e.pi_thresholds.size()));
+    return absl::InvalidArgumentError(absl::StrCat("model field 'pi_thresholds': at most ",
+                                                   kMaxPiOperators, " play operators, got ",
+                                                   e.pi_thresholds.size()));
   if (!e.pi_thresholds.empty()) {
     if (e.hysteresis_width > 0)
       return absl::InvalidArgumentError(
-          "model fields 'hysteresis_width' and 'pi_thresholds': the play operator and Prandtl-Ishlinskii hysteresis are "
+          "model fields 'hysteresis_width' and 'pi_thresholds': the play operator and "
+          "Prandtl-Ishlinskii hysteresis are "
           "exclusive forms; set one");
     double wsum = 0;
     for (size_t k = 0; k < e.pi_thresholds.size(); ++k) {
       const double r = e.pi_thresholds[k], w = e.pi_weights[k];
       if (!std::isfinite(r) || r < 0)
-        return absl::InvalidArgumentError(absl::StrCat("model field 'pi_thresholds[", k, "]': must be a finite number >= 0, got ", r));
+        return absl::InvalidArgumentError(absl::StrCat(
+            "model field 'pi_thresholds[", k, "]': must be a finite number >= 0, got ", r));
       if (k > 0 && !(r > e.pi_thresholds[k - 1]))
-        return absl::InvalidArgumentError(absl::StrCat("model field 'pi_thresholds[", k, "]': thresholds must increase strictly (",
-                                                       r, " after ", e.pi_thresholds[k - 1], ")"));
+        return absl::InvalidArgumentError(absl::StrCat("model field 'pi_thresholds[", k,
+                                                       "]': thresholds must increase strictly (", r,
+                                                       " after ", e.pi_thresholds[k - 1], ")"));
       if (!std::isfinite(w) || w < 0)
-        return absl::InvalidArgumentError(absl::StrCat("model field 'pi_weights[", k, "]': must be a finite number >= 0, got ", w));
+        return absl::InvalidArgumentError(absl::StrCat(
+            "model field 'pi_weights[", k, "]': must be a finite number >= 0, got ", w));
       wsum += w;
     }
-    if (!(wsum > 0)) return absl::InvalidArgumentError("model field 'pi_weights': the weights must not all be 0");
+    if (!(wsum > 0))
+      return absl::InvalidArgumentError("model field 'pi_weights': the weights must not all be 0");
   }
   for (const auto& [k, v] : m.uncertainty) {
-    if (!IsUncertaintyKey(k)) return absl::InvalidArgumentError(absl::StrCat("model field 'uncertainty.", k, "': unknown field"));
+    if (!IsUncertaintyKey(k))
+      return absl::InvalidArgumentError(
+          absl::StrCat("model field 'uncertainty.", k, "': unknown field"));
   }
   return absl::OkStatus();
 }
 
-absl::StatusOr<SensorModel> SensorModelFromJson(const std::string& text, const std::string& source) {
+absl::StatusOr<SensorModel> SensorModelFromJson(const std::string& text,
+                                                const std::string& source) {
   auto doc = io::ParseJson(text, source);
   if (!doc.ok()) return doc.status();
-  if (!doc->is_object()) return absl::InvalidArgumentError(absl::StrCat(source, ": a sensor model must be a JSON object"));
+  if (!doc->is_object())
+    return absl::InvalidArgumentError(
+        absl::StrCat(source, ": a sensor model must be a JSON object"));
   SensorModel m;
   m.source.clear();
   for (const auto& [key, v] : doc->members()) {
@@ -153,32 +176,38 @@ absl::StatusOr<SensorModel> SensorModelFromJson(const std::string& text, const s
       continue;
     }
     if (key == "units" || key == "source") {
-      if (!v.is_string()) return absl::InvalidArgumentError(absl::StrCat(where, ": expected a string"));
+      if (!v.is_string())
+        return absl::InvalidArgumentError(absl::StrCat(where, ": expected a string"));
       (key == "units" ? m.units : m.source) = v.string();
       continue;
     }
     if (key == "uncertainty") {
-      if (!v.is_object()) return absl::InvalidArgumentError(absl::StrCat(where, ": expected an object"));
+      if (!v.is_object())
+        return absl::InvalidArgumentError(absl::StrCat(where, ": expected an object"));
       for (const auto& [uk, uv] : v.members()) {
         if (!IsUncertaintyKey(uk))
-          return absl::InvalidArgumentError(absl::StrCat(source, ":", uv.line(), ": field 'uncertainty.", uk, "': unknown field"));
+          return absl::InvalidArgumentError(absl::StrCat(
+              source, ":", uv.line(), ": field 'uncertainty.", uk, "': unknown field"));
         if (uv.is_null()) continue;
         if (!uv.is_number())
-          return absl::InvalidArgumentError(absl::StrCat(source, ":", uv.line(), ": field 'uncertainty.", uk, "': expected a number"));
+          return absl::InvalidArgumentError(absl::StrCat(
+              source, ":", uv.line(), ": field 'uncertainty.", uk, "': expected a number"));
         m.uncertainty[uk] = uv.number();
       }
       continue;
     }
     if (key == "effects_named" || key == "notes") continue;  // informational (audit output)
     if (key == "pi_thresholds" || key == "pi_weights") {
-      if (!v.is_array()) return absl::InvalidArgumentError(absl::StrCat(where, ": expected an array of numbers"));
-      std::vector<double>& dst = key == "pi_thresholds" ? m.effects.pi_thresholds : m.effects.pi_weights;
+      if (!v.is_array())
+        return absl::InvalidArgumentError(absl::StrCat(where, ": expected an array of numbers"));
+      std::vector<double>& dst =
+          key == "pi_thresholds" ? m.effects.pi_thresholds : m.effects.pi_weights;
       dst.clear();
       for (size_t k = 0; k < v.array().size(); ++k) {
         const io::JsonValue& x = v.array()[k];
         if (!x.is_number())
-          return absl::InvalidArgumentError(
-              absl::StrCat(source, ":", x.line(), ": field '", key, "[", k, "]': expected a number"));
+          return absl::InvalidArgumentError(absl::StrCat(source, ":", x.line(), ": field '", key,
+                                                         "[", k, "]': expected a number"));
         dst.push_back(x.number());
       }
       continue;
@@ -187,10 +216,13 @@ absl::StatusOr<SensorModel> SensorModelFromJson(const std::string& text, const s
     for (const auto& f : NumFields()) {
       if (key != f.name) continue;
       found = true;
-      if (!v.is_number()) return absl::InvalidArgumentError(absl::StrCat(where, ": expected a number"));
+      if (!v.is_number())
+        return absl::InvalidArgumentError(absl::StrCat(where, ": expected a number"));
       FieldRef(m, f) = v.number();
     }
-    if (!found) return absl::InvalidArgumentError(absl::StrCat(where, ": unknown field", io::DidYouMean(key, ModelKeys())));
+    if (!found)
+      return absl::InvalidArgumentError(
+          absl::StrCat(where, ": unknown field", io::DidYouMean(key, ModelKeys())));
   }
   if (auto st = ValidateSensorModel(m); !st.ok())
     return absl::InvalidArgumentError(absl::StrCat(source, ": ", st.message()));
@@ -278,7 +310,8 @@ std::vector<int> SegmentBounds(const ChannelInput& in) {
 }
 
 // Pure delay of out[lo, hi) (cubic interpolation; tmp is scratch).
-void ApplyDelay(double delay, const double* t, int lo, int hi, std::vector<double>& out, std::vector<double>& tmp) {
+void ApplyDelay(double delay, const double* t, int lo, int hi, std::vector<double>& out,
+                std::vector<double>& tmp) {
   tmp.assign(out.begin() + lo, out.begin() + hi);
   Interp ip{t + lo, tmp.data(), 0, hi - lo, 0};
   for (int i = lo; i < hi; ++i) out[i] = ip(t[i] - delay);
@@ -340,7 +373,9 @@ void ApplyStaticEffects(const EffectParams& p, const ChannelInput& in, std::vect
   const bool has_pow = p.power_exponent > 0 && p.power_exponent != 1;
   for (int i = 0; i < in.n; ++i) {
     double u = out[i];
-    if (has_pow && u != 0) u = (u < 0 ? -p.full_scale : p.full_scale) * std::pow(std::abs(u) / p.full_scale, p.power_exponent);
+    if (has_pow && u != 0)
+      u = (u < 0 ? -p.full_scale : p.full_scale) *
+          std::pow(std::abs(u) / p.full_scale, p.power_exponent);
     if (has_curv) u += cscale * u * std::abs(u);
     if (p.threshold > 0) u = (u < p.threshold) ? 0.0 : u - p.threshold_shift * p.threshold;
     if (p.saturation > 0 && u > p.saturation) u = p.saturation;
@@ -355,7 +390,8 @@ void ApplyChannel(const EffectParams& p, const ChannelInput& in, std::vector<dou
   std::vector<double>& out = *out_ptr;
   const int n = in.n;
   out.resize(n);
-  for (int i = 0; i < n; ++i) out[i] = in.force[i] + (in.shear && p.crosstalk != 0 ? p.crosstalk * in.shear[i] : 0.0);
+  for (int i = 0; i < n; ++i)
+    out[i] = in.force[i] + (in.shear && p.crosstalk != 0 ? p.crosstalk * in.shear[i] : 0.0);
   const bool has_pi = !p.pi_thresholds.empty() && p.pi_thresholds.size() == p.pi_weights.size();
   const bool dynamic = p.delay != 0 || p.lag > 0 || p.hysteresis_width > 0 || has_pi;
   if (dynamic) {
@@ -367,15 +403,18 @@ void ApplyChannel(const EffectParams& p, const ChannelInput& in, std::vector<dou
       if (hi - lo < 2) continue;
       if (p.delay != 0) ApplyDelay(p.delay, in.t, lo, hi, out, tmp);
       if (p.lag > 0) ApplyLag(p.lag, in.t, lo, hi, out);
-      if (p.hysteresis_width > 0) ApplyPlay(p.hysteresis_width, lo, hi, out);
-      else if (has_pi) ApplyPrandtlIshlinskii(p, lo, hi, out);
+      if (p.hysteresis_width > 0)
+        ApplyPlay(p.hysteresis_width, lo, hi, out);
+      else if (has_pi)
+        ApplyPrandtlIshlinskii(p, lo, hi, out);
     }
   }
   ApplyStaticEffects(p, in, out);
 }
 
 std::vector<double> PredictReading(const SensorModel& model, const std::vector<double>& t,
-                                   const std::vector<double>& reference, const std::vector<double>& shear,
+                                   const std::vector<double>& reference,
+                                   const std::vector<double>& shear,
                                    const std::vector<int>& segment_starts) {
   ChannelInput in;
   in.t = t.data();
@@ -411,7 +450,8 @@ double CorrectReading(const SensorModel& m, double reading, double t_since_start
     u = v;
   }
   if (p.power_exponent > 0 && p.power_exponent != 1 && u != 0)
-    u = (u < 0 ? -p.full_scale : p.full_scale) * std::pow(std::abs(u) / p.full_scale, 1.0 / p.power_exponent);
+    u = (u < 0 ? -p.full_scale : p.full_scale) *
+        std::pow(std::abs(u) / p.full_scale, 1.0 / p.power_exponent);
   u -= p.crosstalk * shear;
   return u;
 }

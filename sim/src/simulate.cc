@@ -24,9 +24,9 @@ constexpr double kPi = 3.14159265358979323846;
 // A force profile as a continuous function of time: piecewise phases.
 struct Phase {
   double t0, t1;
-  double f0, f1;     // force at start/end
-  double r0, r1;     // shear ratio at start/end
-  bool cosine;       // raised-cosine (smooth) or linear interpolation
+  double f0, f1;  // force at start/end
+  double r0, r1;  // shear ratio at start/end
+  bool cosine;    // raised-cosine (smooth) or linear interpolation
 };
 
 class ProfileFn {
@@ -63,10 +63,12 @@ struct RandomFn {
   double mean = 0, scale = 1, max_ratio = 0.6;
   void Eval(double t, double* f, double* ratio) const {
     double v = mean;
-    for (size_t i = 0; i < amp.size(); ++i) v += amp[i] * std::sin(2 * kPi * freq[i] * t + phase[i]);
+    for (size_t i = 0; i < amp.size(); ++i)
+      v += amp[i] * std::sin(2 * kPi * freq[i] * t + phase[i]);
     *f = std::max(0.0, v * scale);
     double r = 0.5;
-    for (size_t i = 0; i < ramp.size(); ++i) r += ramp[i] * std::sin(2 * kPi * rfreq[i] * t + rphase[i]);
+    for (size_t i = 0; i < ramp.size(); ++i)
+      r += ramp[i] * std::sin(2 * kPi * rfreq[i] * t + rphase[i]);
     *ratio = max_ratio * std::clamp(r, 0.0, 1.0);
   }
 };
@@ -77,7 +79,8 @@ std::vector<Taxel> DefaultFingertip(const FingertipGeometry& g) {
   std::vector<Taxel> taxels;
   const Eigen::Vector3d centre(0, 0, g.body_length);
   auto sphere = [&](double polar, double az) {
-    Eigen::Vector3d n(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az), std::cos(polar));
+    Eigen::Vector3d n(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az),
+                      std::cos(polar));
     taxels.push_back({centre + g.radius * n, n});
   };
   sphere(0, 0);
@@ -94,7 +97,8 @@ std::vector<Taxel> DefaultFingertip(const FingertipGeometry& g) {
   return taxels;
 }
 
-FingertipReading AggregateFingertip(const std::vector<Taxel>& taxels, const std::vector<double>& readings) {
+FingertipReading AggregateFingertip(const std::vector<Taxel>& taxels,
+                                    const std::vector<double>& readings) {
   FingertipReading r;
   double wsum = 0;
   Eigen::Vector3d p = Eigen::Vector3d::Zero(), n = Eigen::Vector3d::Zero();
@@ -116,15 +120,18 @@ absl::StatusOr<Profile> ParseProfile(std::string_view name) {
   if (name == "press-release") return Profile::kPressRelease;
   if (name == "ramp") return Profile::kRamp;
   if (name == "random") return Profile::kRandom;
-  return absl::InvalidArgumentError(
-      absl::StrCat("profile: unknown '", std::string(name), "' (expected press-release, ramp or random)"));
+  return absl::InvalidArgumentError(absl::StrCat("profile: unknown '", std::string(name),
+                                                 "' (expected press-release, ramp or random)"));
 }
 
 const char* ToString(Profile p) {
   switch (p) {
-    case Profile::kPressRelease: return "press-release";
-    case Profile::kRamp: return "ramp";
-    case Profile::kRandom: return "random";
+    case Profile::kPressRelease:
+      return "press-release";
+    case Profile::kRamp:
+      return "ramp";
+    case Profile::kRandom:
+      return "random";
   }
   return "?";
 }
@@ -136,9 +143,11 @@ namespace {
 absl::Status ValidateSimOptions(const SensorModel& model, const SimOptions& o, int n_taxels) {
   TF_RETURN_IF_ERROR(ValidateSensorModel(model));
   if (!(o.seconds > 0) || o.seconds > 3600)
-    return absl::InvalidArgumentError(absl::StrCat("seconds: must be in (0, 3600], got ", o.seconds));
+    return absl::InvalidArgumentError(
+        absl::StrCat("seconds: must be in (0, 3600], got ", o.seconds));
   if (!(o.rate > 0) || o.rate > 100000)
-    return absl::InvalidArgumentError(absl::StrCat("rate: must be in (0, 100000] Hz, got ", o.rate));
+    return absl::InvalidArgumentError(
+        absl::StrCat("rate: must be in (0, 100000] Hz, got ", o.rate));
   if (o.seconds * o.rate < 2 || o.seconds * o.rate > 2e7)
     return absl::InvalidArgumentError(
         absl::StrCat("seconds * rate: between 2 and 2e7 samples, got ", o.seconds * o.rate));
@@ -164,8 +173,10 @@ struct ForceProfile {
   ProfileFn phases;  // press-release and ramp
   RandomFn sines;    // random
   void Eval(double t, double* f, double* ratio) const {
-    if (random) sines.Eval(t, f, ratio);
-    else phases.Eval(t, f, ratio);
+    if (random)
+      sines.Eval(t, f, ratio);
+    else
+      phases.Eval(t, f, ratio);
   }
 };
 
@@ -223,9 +234,12 @@ ForceProfile DrawForceProfile(const SimOptions& o, std::mt19937_64& rng) {
   ForceProfile p;
   p.random = o.profile == Profile::kRandom;
   const double total = o.seconds + 1.0;
-  if (o.profile == Profile::kPressRelease) DrawPressRelease(o, total, rng, &p.phases);
-  else if (o.profile == Profile::kRamp) DrawRamps(o, total, rng, &p.phases);
-  else DrawSines(o, rng, &p.sines);
+  if (o.profile == Profile::kPressRelease)
+    DrawPressRelease(o, total, rng, &p.phases);
+  else if (o.profile == Profile::kRamp)
+    DrawRamps(o, total, rng, &p.phases);
+  else
+    DrawSines(o, rng, &p.sines);
   return p;
 }
 
@@ -242,7 +256,8 @@ std::vector<double> ContactWeights(const std::vector<Taxel>& taxels, const SimOp
   double s = 0;
   for (size_t i = 0; i < taxels.size(); ++i) {
     const double d = (taxels[i].position - c).norm();
-    if (d <= o.contact_radius) weight[i] = std::exp(-0.5 * d * d / (0.25 * o.contact_radius * o.contact_radius));
+    if (d <= o.contact_radius)
+      weight[i] = std::exp(-0.5 * d * d / (0.25 * o.contact_radius * o.contact_radius));
     s += weight[i];
   }
   for (double& w : weight) w /= s;
@@ -282,7 +297,8 @@ FineGrid SampleFineGrid(const ForceProfile& profile, const SimOptions& o) {
 // contact error on the partially covered ones. Drift is referenced to t = 0
 // of the run (not the lead-in).
 std::vector<std::vector<double>> SimulateTaxels(const SensorModel& model, const FineGrid& g,
-                                                const std::vector<double>& weight, const std::vector<int>& active) {
+                                                const std::vector<double>& weight,
+                                                const std::vector<int>& active) {
   const int n_fine = static_cast<int>(g.t.size());
   const double wmax = *std::max_element(weight.begin(), weight.end());
   std::vector<std::vector<double>> taxel_out(active.size());
@@ -314,7 +330,8 @@ std::vector<std::vector<double>> SimulateTaxels(const SensorModel& model, const 
 // (gain, offset) and the reference (with its noise).
 void SampleOutputs(const SensorModel& model, const SimOptions& o, const std::vector<Taxel>& taxels,
                    const FineGrid& g, const std::vector<int>& active,
-                   const std::vector<std::vector<double>>& taxel_out, std::mt19937_64& rng, SimRun* run) {
+                   const std::vector<std::vector<double>>& taxel_out, std::mt19937_64& rng,
+                   SimRun* run) {
   const int n_out = g.n_out;
   run->t.resize(n_out);
   run->reference.resize(n_out);
@@ -364,22 +381,23 @@ absl::StatusOr<SimRun> SimulateSensor(const SensorModel& model, const SimOptions
 std::string SimRunCsv(const SimRun& run) {
   std::string s = "t,reference,reading,shear,trial\n";
   for (size_t i = 0; i < run.t.size(); ++i)
-    absl::StrAppendFormat(&s, "%.6f,%.9g,%.9g,%.9g,%d\n", run.t[i], run.reference[i], run.reading[i],
-                          run.shear[i], run.options.trial);
+    absl::StrAppendFormat(&s, "%.6f,%.9g,%.9g,%.9g,%d\n", run.t[i], run.reference[i],
+                          run.reading[i], run.shear[i], run.options.trial);
   return s;
 }
 
 absl::Status WriteSimRun(const SimRun& run, const std::string& dir) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
-  if (ec) return absl::InternalError(absl::StrCat(dir, ": cannot create directory: ", ec.message()));
+  if (ec)
+    return absl::InternalError(absl::StrCat(dir, ": cannot create directory: ", ec.message()));
   TF_RETURN_IF_ERROR(io::WriteTextFile(dir + "/run.csv", SimRunCsv(run)));
   std::string fingertip = "t,force,px,py,pz,nx,ny,nz\n";
   for (size_t i = 0; i < run.t.size(); ++i) {
     const auto& f = run.fingertip[i];
-    absl::StrAppendFormat(&fingertip, "%.6f,%.9g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n", run.t[i], f.force,
-                          f.location.x(), f.location.y(), f.location.z(), f.normal.x(), f.normal.y(),
-                          f.normal.z());
+    absl::StrAppendFormat(&fingertip, "%.6f,%.9g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n", run.t[i],
+                          f.force, f.location.x(), f.location.y(), f.location.z(), f.normal.x(),
+                          f.normal.y(), f.normal.z());
   }
   TF_RETURN_IF_ERROR(io::WriteTextFile(dir + "/fingertip.csv", fingertip));
   SensorModel m = run.model;

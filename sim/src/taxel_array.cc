@@ -23,7 +23,8 @@ namespace tactforce::sim {
 namespace {
 
 constexpr char kFormat[] = "tactforce.taxel_ranges.v1";
-constexpr double kReleaseFloor = 0.01;  // N: an active taxel whose hysteresis state relaxes below this deactivates
+constexpr double kReleaseFloor =
+    0.01;  // N: an active taxel whose hysteresis state relaxes below this deactivates
 
 struct RangeField {
   const char* name;
@@ -31,12 +32,18 @@ struct RangeField {
 };
 const std::vector<RangeField>& RangeFields() {
   static const std::vector<RangeField> fields = {
-      {"threshold_min", &TaxelRanges::threshold_min},     {"threshold_max", &TaxelRanges::threshold_max},
-      {"hysteresis_max", &TaxelRanges::hysteresis_max},   {"hysteresis_decay", &TaxelRanges::hysteresis_decay},
-      {"force_error_min", &TaxelRanges::force_error_min}, {"force_error_max", &TaxelRanges::force_error_max},
-      {"noise_min", &TaxelRanges::noise_min},             {"noise_max", &TaxelRanges::noise_max},
-      {"saturation", &TaxelRanges::saturation},           {"patch_radius_coeff", &TaxelRanges::patch_radius_coeff},
-      {"patch_radius_max", &TaxelRanges::patch_radius_max}, {"taxel_radius", &TaxelRanges::taxel_radius},
+      {"threshold_min", &TaxelRanges::threshold_min},
+      {"threshold_max", &TaxelRanges::threshold_max},
+      {"hysteresis_max", &TaxelRanges::hysteresis_max},
+      {"hysteresis_decay", &TaxelRanges::hysteresis_decay},
+      {"force_error_min", &TaxelRanges::force_error_min},
+      {"force_error_max", &TaxelRanges::force_error_max},
+      {"noise_min", &TaxelRanges::noise_min},
+      {"noise_max", &TaxelRanges::noise_max},
+      {"saturation", &TaxelRanges::saturation},
+      {"patch_radius_coeff", &TaxelRanges::patch_radius_coeff},
+      {"patch_radius_max", &TaxelRanges::patch_radius_max},
+      {"taxel_radius", &TaxelRanges::taxel_radius},
   };
   return fields;
 }
@@ -47,29 +54,35 @@ absl::Status ValidateTaxelRanges(const TaxelRanges& r, const std::string& prefix
   for (const RangeField& f : RangeFields()) {
     const double v = r.*f.member;
     if (!(v >= 0 && std::isfinite(v)))
-      return absl::InvalidArgumentError(absl::StrFormat("%s%s: must be >= 0 and finite, got %g", prefix, f.name, v));
+      return absl::InvalidArgumentError(
+          absl::StrFormat("%s%s: must be >= 0 and finite, got %g", prefix, f.name, v));
   }
-  auto ordered = [&](const char* lo_name, double lo, const char* hi_name, double hi) -> absl::Status {
+  auto ordered = [&](const char* lo_name, double lo, const char* hi_name,
+                     double hi) -> absl::Status {
     if (hi < lo)
       return absl::InvalidArgumentError(
           absl::StrFormat("%s%s: must be >= %s (%g), got %g", prefix, hi_name, lo_name, lo, hi));
     return absl::OkStatus();
   };
   TF_RETURN_IF_ERROR(ordered("threshold_min", r.threshold_min, "threshold_max", r.threshold_max));
-  TF_RETURN_IF_ERROR(ordered("force_error_min", r.force_error_min, "force_error_max", r.force_error_max));
+  TF_RETURN_IF_ERROR(
+      ordered("force_error_min", r.force_error_min, "force_error_max", r.force_error_max));
   TF_RETURN_IF_ERROR(ordered("noise_min", r.noise_min, "noise_max", r.noise_max));
   if (!(r.saturation > r.threshold_max))
-    return absl::InvalidArgumentError(absl::StrFormat("%ssaturation: must exceed threshold_max (%g N), got %g",
-                                                      prefix, r.threshold_max, r.saturation));
+    return absl::InvalidArgumentError(
+        absl::StrFormat("%ssaturation: must exceed threshold_max (%g N), got %g", prefix,
+                        r.threshold_max, r.saturation));
   if (!(r.patch_radius_coeff > 0))
-    return absl::InvalidArgumentError(absl::StrFormat("%spatch_radius_coeff: must be > 0, got %g", prefix,
-                                                      r.patch_radius_coeff));
+    return absl::InvalidArgumentError(
+        absl::StrFormat("%spatch_radius_coeff: must be > 0, got %g", prefix, r.patch_radius_coeff));
   if (!(r.taxel_radius > 0))
-    return absl::InvalidArgumentError(absl::StrFormat("%staxel_radius: must be > 0, got %g", prefix, r.taxel_radius));
+    return absl::InvalidArgumentError(
+        absl::StrFormat("%staxel_radius: must be > 0, got %g", prefix, r.taxel_radius));
   return absl::OkStatus();
 }
 
-absl::StatusOr<TaxelRanges> TaxelRangesFromJson(const std::string& text, const std::string& source) {
+absl::StatusOr<TaxelRanges> TaxelRangesFromJson(const std::string& text,
+                                                const std::string& source) {
   auto doc = io::ParseJson(text, source);
   if (!doc.ok()) return doc.status();
   if (!doc->is_object())
@@ -87,12 +100,15 @@ absl::StatusOr<TaxelRanges> TaxelRangesFromJson(const std::string& text, const s
     auto it = std::find_if(RangeFields().begin(), RangeFields().end(),
                            [&](const RangeField& f) { return key == f.name; });
     if (it == RangeFields().end())
-      return absl::InvalidArgumentError(absl::StrCat(where, ": unknown field", io::DidYouMean(key, keys)));
-    if (!v.is_number()) return absl::InvalidArgumentError(absl::StrCat(where, ": expected a number"));
+      return absl::InvalidArgumentError(
+          absl::StrCat(where, ": unknown field", io::DidYouMean(key, keys)));
+    if (!v.is_number())
+      return absl::InvalidArgumentError(absl::StrCat(where, ": expected a number"));
     r.*(it->member) = v.number();
     // Range errors name the line of the offending field.
     if (absl::Status s = ValidateTaxelRanges(r); !s.ok() && absl::StartsWith(s.message(), it->name))
-      return absl::InvalidArgumentError(absl::StrCat(source, ":", v.line(), ": field ", s.message()));
+      return absl::InvalidArgumentError(
+          absl::StrCat(source, ":", v.line(), ": field ", s.message()));
   }
   if (absl::Status s = ValidateTaxelRanges(r); !s.ok())
     return absl::InvalidArgumentError(absl::StrCat(source, ": field ", s.message()));
@@ -120,7 +136,8 @@ constexpr int kPatchRays = 64;  // rays of the patch integral (the radial part i
 
 // The surface normal at `contact`, blended smoothly from the taxels near it
 // (weights (1 - d / reach)^2), or the nearest taxel's if none is that close.
-Eigen::Vector3d SurfaceNormal(const std::vector<Taxel>& taxels, const Eigen::Vector3d& contact, double reach) {
+Eigen::Vector3d SurfaceNormal(const std::vector<Taxel>& taxels, const Eigen::Vector3d& contact,
+                              double reach) {
   Eigen::Vector3d n = Eigen::Vector3d::Zero();
   size_t nearest = 0;
   double best = std::numeric_limits<double>::infinity();
@@ -134,7 +151,9 @@ Eigen::Vector3d SurfaceNormal(const std::vector<Taxel>& taxels, const Eigen::Vec
 
 // Hertz pressure p(r) ~ sqrt(1 - r^2 / a^2): the fraction of the patch's force
 // within radius r of its centre (r <= a).
-double HertzFraction(double r, double a) { return 1 - std::pow(std::max(0.0, 1 - r * r / (a * a)), 1.5); }
+double HertzFraction(double r, double a) {
+  return 1 - std::pow(std::max(0.0, 1 - r * r / (a * a)), 1.5);
+}
 
 // Adds to `share` each taxel's fraction of the pressure along one ray c + r u
 // (r in [0, a]) of the patch: every point belongs to its nearest taxel, and
@@ -153,7 +172,8 @@ void IntegrateRay(const std::vector<Taxel>& taxels, const std::vector<size_t>& c
     size_t next_taxel = cur;
     for (size_t j : candidates) {
       if (j == cur) continue;
-      const double A = (taxels[j].position - c).squaredNorm() - (taxels[cur].position - c).squaredNorm();
+      const double A =
+          (taxels[j].position - c).squaredNorm() - (taxels[cur].position - c).squaredNorm();
       const double B = u.dot(taxels[cur].position - taxels[j].position);
       if (B >= 0) continue;  // taxel j never gets nearer along this ray
       const double cross = -A / (2 * B);
@@ -167,8 +187,8 @@ void IntegrateRay(const std::vector<Taxel>& taxels, const std::vector<size_t>& c
 
 }  // namespace
 
-TaxelLoads ComputeTaxelLoads(const std::vector<Taxel>& taxels, const TaxelRanges& r, const Eigen::Vector3d& contact,
-                             const Eigen::Vector3d& force) {
+TaxelLoads ComputeTaxelLoads(const std::vector<Taxel>& taxels, const TaxelRanges& r,
+                             const Eigen::Vector3d& contact, const Eigen::Vector3d& force) {
   const size_t n = taxels.size();
   TaxelLoads out;
   out.load.assign(n, 0.0);
@@ -193,7 +213,8 @@ TaxelLoads ComputeTaxelLoads(const std::vector<Taxel>& taxels, const TaxelRanges
   std::vector<double> share(n, 0.0);
   for (int k = 0; k < kPatchRays; ++k) {
     const double th = 2 * std::numbers::pi * (k + 0.5) / kPatchRays;
-    IntegrateRay(taxels, candidates, contact, std::cos(th) * e1 + std::sin(th) * e2, a, 1.0 / kPatchRays, &share);
+    IntegrateRay(taxels, candidates, contact, std::cos(th) * e1 + std::sin(th) * e2, a,
+                 1.0 / kPatchRays, &share);
   }
   for (size_t i = 0; i < n; ++i) {
     const double cosine = std::max(0.0, -force.dot(taxels[i].normal) / f);
@@ -230,11 +251,13 @@ absl::StatusOr<TaxelArray> TaxelArray::Create(const TaxelRanges& ranges, uint64_
   return TaxelArray(ranges, seed, geometry);
 }
 
-const TaxelArrayReading& TaxelArray::Step(double t, const Eigen::Vector3d& contact, const Eigen::Vector3d& force) {
+const TaxelArrayReading& TaxelArray::Step(double t, const Eigen::Vector3d& contact,
+                                          const Eigen::Vector3d& force) {
   const double dt = started_ ? std::max(0.0, t - prev_t_) : 0.0;
   started_ = true;
   prev_t_ = t;
-  const double relax = ranges_.hysteresis_decay > 0 ? 1 - std::exp(-dt / ranges_.hysteresis_decay) : 0.0;
+  const double relax =
+      ranges_.hysteresis_decay > 0 ? 1 - std::exp(-dt / ranges_.hysteresis_decay) : 0.0;
   const TaxelLoads loads = ComputeTaxelLoads(taxels_, ranges_, contact, force);
   out_.load = loads.load;
   out_.true_force = force.allFinite() ? force.norm() : 0.0;
@@ -258,7 +281,8 @@ const TaxelArrayReading& TaxelArray::Step(double t, const Eigen::Vector3d& conta
     double v = std::min(y, ranges_.saturation);
     // A piezo taxel reads a non-negative calibrated force: the error cannot
     // take a loaded taxel below zero.
-    if (u > 0) v = std::max(0.0, v + p.force_error * std::max(1 - loads.coverage[i], loads.misalignment[i]));
+    if (u > 0)
+      v = std::max(0.0, v + p.force_error * std::max(1 - loads.coverage[i], loads.misalignment[i]));
     out_.reading[i] = v + p.noise * gauss_(noise_rng_);
     ++out_.active;
   }

@@ -22,7 +22,9 @@ using ::testing::Not;
 
 class CliConventionsTest : public CliTest {};
 
-std::string Example(const std::string& name) { return SourceDir().string() + "/client/examples/" + name; }
+std::string Example(const std::string& name) {
+  return SourceDir().string() + "/client/examples/" + name;
+}
 
 TEST_F(CliConventionsTest, EveryBadNumericFlagNamesItselfAndExitsTwo) {
   const std::string out = (dir() / "out").string();
@@ -34,7 +36,8 @@ TEST_F(CliConventionsTest, EveryBadNumericFlagNamesItselfAndExitsTwo) {
       {{"friction", "t.csv", "--normal", "0,0,-1", "--window", "0"}, "--window"},
       {{"friction", "t.csv", "--normal", "0,0,-1", "--window", "-3"}, "--window"},
       {{"friction", "t.csv", "--normal", "0,0,-1", "--slip-distance", "0"}, "--slip-distance"},
-      {{"friction", "t.csv", "--normal", "0,0,-1", "--min-normal-force", "-1"}, "--min-normal-force"},
+      {{"friction", "t.csv", "--normal", "0,0,-1", "--min-normal-force", "-1"},
+       "--min-normal-force"},
       {{"simulate", "friction", "--noise", "-1", "--out", out}, "--noise"},
       {{"simulate", "friction", "--mu", "0", "--out", out}, "--mu"},
       {{"simulate", "friction", "--trials", "0", "--out", out}, "--trials"},
@@ -74,31 +77,39 @@ TEST_F(CliConventionsTest, SimulateRefusesAFolderWithFilesUnlessForced) {
   WriteFile(out + "/notes.txt", "mine");
 
   // A second run into the same folder would mix two surfaces' trials.
-  const CliRun refused = Tactforce({"simulate", "friction", "--mu", "0.3", "--trials", "2", "--out", out});
+  const CliRun refused =
+      Tactforce({"simulate", "friction", "--mu", "0.3", "--trials", "2", "--out", out});
   ExpectBadInput(refused);
   EXPECT_THAT(refused.err, HasSubstr("--out"));
   EXPECT_THAT(refused.err, HasSubstr("--force"));
   EXPECT_TRUE(fs::exists(out + "/trial2.csv")) << "a refused run changes nothing";
 
   // --force removes only the simulation's own files, then writes the new run.
-  ASSERT_EQ(Tactforce({"simulate", "friction", "--mu", "0.3", "--trials", "2", "--out", out, "--force"}).exit_code,
-            0);
+  ASSERT_EQ(
+      Tactforce({"simulate", "friction", "--mu", "0.3", "--trials", "2", "--out", out, "--force"})
+          .exit_code,
+      0);
   EXPECT_TRUE(fs::exists(out + "/trial1.csv"));
   EXPECT_FALSE(fs::exists(out + "/trial2.csv"));
   EXPECT_EQ(ReadFile(out + "/notes.txt"), "mine");
   EXPECT_THAT(ReadFile(out + "/truth.json"), HasSubstr("\"mu\": 0.3"));
   int temporaries = 0;
-  for (const auto& e : fs::directory_iterator(out)) temporaries += e.path().filename().string().find(".tmp-") != std::string::npos;
+  for (const auto& e : fs::directory_iterator(out))
+    temporaries += e.path().filename().string().find(".tmp-") != std::string::npos;
   EXPECT_EQ(temporaries, 0);
 
   // The same for the sensor and inertia simulations.
   const std::string run = (dir() / "run").string();
   ASSERT_EQ(Tactforce({"simulate", "sensor", "--seconds", "2", "--out", run}).exit_code, 0);
   ExpectBadInput(Tactforce({"simulate", "sensor", "--seconds", "2", "--out", run}));
-  EXPECT_EQ(Tactforce({"simulate", "sensor", "--seconds", "2", "--out", run, "--force"}).exit_code, 0);
+  EXPECT_EQ(Tactforce({"simulate", "sensor", "--seconds", "2", "--out", run, "--force"}).exit_code,
+            0);
   const std::string inertia = (dir() / "inr").string();
-  ASSERT_EQ(Tactforce({"simulate", "inertia", "--seconds", "1", "--rate", "20", "--out", inertia}).exit_code, 0);
-  ExpectBadInput(Tactforce({"simulate", "inertia", "--seconds", "1", "--rate", "20", "--out", inertia}));
+  ASSERT_EQ(Tactforce({"simulate", "inertia", "--seconds", "1", "--rate", "20", "--out", inertia})
+                .exit_code,
+            0);
+  ExpectBadInput(
+      Tactforce({"simulate", "inertia", "--seconds", "1", "--rate", "20", "--out", inertia}));
 
   // An output folder that cannot be created is a usage error naming --out.
   const CliRun unwritable = Tactforce({"audit", "--csv", run + "/run.csv", "--out", "/proc/nope"});
@@ -115,9 +126,11 @@ TEST_F(CliConventionsTest, TableByDefaultJsonWithEitherSpelling) {
   const CliRun json = Tactforce({"estimate", "--local", "--request", request, "--json"});
   ASSERT_EQ(json.exit_code, 0) << json.err;
   EXPECT_THAT(json.out, HasSubstr("\"forces\""));
-  const CliRun format = Tactforce({"estimate", "--local", "--request", request, "--format", "json"});
+  const CliRun format =
+      Tactforce({"estimate", "--local", "--request", request, "--format", "json"});
   EXPECT_EQ(format.out.substr(0, 20), json.out.substr(0, 20));  // solve time differs
-  ExpectBadInput(Tactforce({"estimate", "--local", "--request", request, "--json", "--format", "table"}));
+  ExpectBadInput(
+      Tactforce({"estimate", "--local", "--request", request, "--json", "--format", "table"}));
 }
 
 TEST_F(CliConventionsTest, DashReadsStandardInputForJsonAndCsv) {
@@ -128,8 +141,10 @@ TEST_F(CliConventionsTest, DashReadsStandardInputForJsonAndCsv) {
 
   const std::string out = (dir() / "fr").string();
   ASSERT_EQ(Tactforce({"simulate", "friction", "--trials", "1", "--out", out}).exit_code, 0);
-  const CliRun from_file = Tactforce({"friction", out + "/trial0.csv", "--normal", "0,0,-1", "--json"});
-  const CliRun from_stdin = Tactforce({"friction", "-", "--normal", "0,0,-1", "--json"}, ReadFile(out + "/trial0.csv"));
+  const CliRun from_file =
+      Tactforce({"friction", out + "/trial0.csv", "--normal", "0,0,-1", "--json"});
+  const CliRun from_stdin =
+      Tactforce({"friction", "-", "--normal", "0,0,-1", "--json"}, ReadFile(out + "/trial0.csv"));
   ASSERT_EQ(from_stdin.exit_code, 0) << from_stdin.err;
   const auto mu = [](const std::string& json) { return json.substr(json.find("\"median\"")); };
   EXPECT_EQ(mu(from_stdin.out), mu(from_file.out));
@@ -138,12 +153,14 @@ TEST_F(CliConventionsTest, DashReadsStandardInputForJsonAndCsv) {
 }
 
 TEST_F(CliConventionsTest, JsonErrorsPointAtFileLineColumnAndSuggest) {
-  const std::string path = Write("typo.json", "{\n  \"object\": {\"mas\": 0.082},\n  \"contacts\": []\n}\n").string();
+  const std::string path =
+      Write("typo.json", "{\n  \"object\": {\"mas\": 0.082},\n  \"contacts\": []\n}\n").string();
   const CliRun run = Tactforce({"estimate", "--local", "--request", path});
   ExpectBadInput(run);
   EXPECT_THAT(run.err, HasSubstr(path + ":2:14: object: unknown field 'mas'"));
   EXPECT_THAT(run.err, HasSubstr("did you mean 'mass'?"));
-  const CliRun syntax = Tactforce({"estimate", "--local", "--request", "-"}, "{\"object\": {\"mass\" 1}}");
+  const CliRun syntax =
+      Tactforce({"estimate", "--local", "--request", "-"}, "{\"object\": {\"mass\" 1}}");
   ExpectBadInput(syntax);
   EXPECT_THAT(syntax.err, HasSubstr("<stdin>:1:20: expected ':'"));
 }
@@ -151,7 +168,8 @@ TEST_F(CliConventionsTest, JsonErrorsPointAtFileLineColumnAndSuggest) {
 TEST_F(CliConventionsTest, HelpShowsTheCommandsOwnExamplesAndBareTactforceListsCommands) {
   const CliRun bare = Tactforce({});
   EXPECT_EQ(bare.exit_code, 0) << bare.err;
-  for (const char* command : {"plan", "estimate", "friction", "simulate", "audit", "inertia", "load", "health"}) {
+  for (const char* command :
+       {"plan", "estimate", "friction", "simulate", "audit", "inertia", "load", "health"}) {
     EXPECT_THAT(bare.out, HasSubstr(command));
   }
   const CliRun friction = Tactforce({"friction", "--help"});
@@ -159,7 +177,9 @@ TEST_F(CliConventionsTest, HelpShowsTheCommandsOwnExamplesAndBareTactforceListsC
   EXPECT_THAT(friction.out, HasSubstr("tactforce friction /tmp/friction/trial*.csv"));
   EXPECT_THAT(friction.out, Not(HasSubstr("tactforce demo")));  // not the top-level footer
   const CliRun estimate = Tactforce({"estimate", "--help"});
-  EXPECT_THAT(estimate.out, HasSubstr("tactforce estimate --local --request client/examples/estimate_request.json"));
+  EXPECT_THAT(
+      estimate.out,
+      HasSubstr("tactforce estimate --local --request client/examples/estimate_request.json"));
 }
 
 // A misspelt command or flag gets the nearest names, like a misspelt JSON
@@ -171,16 +191,25 @@ TEST_F(CliConventionsTest, MisspeltCommandsAndFlagsGetDidYouMean) {
     std::string name;                 // a real command or flag
   };
   const std::vector<Case> cases = {
-      {{}, "plan"},           {{}, "inertia"},           {{}, "experiment"},
-      {{"simulate"}, "inertia"}, {{"experiment"}, "grasp"}, {{"plan"}, "--local"},
-      {{"plan"}, "--request"}, {{"inertia"}, "--method"}, {{"experiment", "grasp"}, "--trials"},
-      {{"load"}, "--concurrency"}, {{"audit"}, "--heldout"}, {{"simulate", "inertia"}, "--contacts"},
+      {{}, "plan"},
+      {{}, "inertia"},
+      {{}, "experiment"},
+      {{"simulate"}, "inertia"},
+      {{"experiment"}, "grasp"},
+      {{"plan"}, "--local"},
+      {{"plan"}, "--request"},
+      {{"inertia"}, "--method"},
+      {{"experiment", "grasp"}, "--trials"},
+      {{"load"}, "--concurrency"},
+      {{"audit"}, "--heldout"},
+      {{"simulate", "inertia"}, "--contacts"},
   };
   std::mt19937 rng(::testing::UnitTest::GetInstance()->random_seed() + 25);
   for (const Case& c : cases) {
     std::string typo = c.name;
     const size_t first = c.name[0] == '-' ? 2 : 0;
-    const size_t at = first + std::uniform_int_distribution<size_t>(0, c.name.size() - first - 2)(rng);
+    const size_t at =
+        first + std::uniform_int_distribution<size_t>(0, c.name.size() - first - 2)(rng);
     std::swap(typo[at], typo[at + 1]);
     if (typo == c.name) typo.insert(at, "x");  // a doubled letter swaps into itself
     std::vector<std::string> args = c.before;
@@ -194,8 +223,8 @@ TEST_F(CliConventionsTest, MisspeltCommandsAndFlagsGetDidYouMean) {
     EXPECT_THAT(run.err, HasSubstr("'" + c.name + "'"));
   }
   // Values are not flags: a negative number after a numeric flag is its value.
-  const CliRun negative = Tactforce({"simulate", "inertia", "--force-variance", "-1", "--out",
-                                     (dir() / "o").string()});
+  const CliRun negative =
+      Tactforce({"simulate", "inertia", "--force-variance", "-1", "--out", (dir() / "o").string()});
   EXPECT_THAT(negative.err, Not(HasSubstr("unknown flag")));
 }
 

@@ -47,11 +47,11 @@ class CliTest : public testing::CliTest {
     EXPECT_TRUE(status.ok()) << status << "\n" << json;
     return response;
   }
-
 };
 
 TEST_F(CliTest, PlanFromFilePrintsJson) {
-  const CliRun run = Tactforce({"plan", "--json", "--local", "--request", Write("pinch.json", kPinch).string()});
+  const CliRun run =
+      Tactforce({"plan", "--json", "--local", "--request", Write("pinch.json", kPinch).string()});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_EQ(run.err, "");
   EXPECT_THAT(run.out, HasSubstr(R"("status": "PLAN_STATUS_OPTIMAL")"));
@@ -92,10 +92,14 @@ TEST_F(CliTest, ShippedExampleIsTheBuiltInSpherePinch) {
     absl::StatusOr<planner::PlanProblem> problem = api::ToProblem(*shipped);
     absl::StatusOr<planner::PlanOptions> options = api::ToOptions(*shipped);
     ASSERT_TRUE(problem.ok() && options.ok()) << problem.status() << options.status();
-    const v1::PlanRequest file = api::ToRequest(*problem, *options, planner::SolverKind::kGeometric);
-    const v1::PlanRequest builtin = api::ToRequest(g.problem, g.options, planner::SolverKind::kGeometric);
+    const v1::PlanRequest file =
+        api::ToRequest(*problem, *options, planner::SolverKind::kGeometric);
+    const v1::PlanRequest builtin =
+        api::ToRequest(g.problem, g.options, planner::SolverKind::kGeometric);
     EXPECT_TRUE(google::protobuf::util::MessageDifferencer::Equivalent(file, builtin))
-        << "shipped:\n" << file.DebugString() << "built-in:\n" << builtin.DebugString();
+        << "shipped:\n"
+        << file.DebugString() << "built-in:\n"
+        << builtin.DebugString();
     return;
   }
   FAIL() << "no built-in sphere-pinch";
@@ -140,7 +144,7 @@ TEST_F(CliTest, ZeroNormalIsBadInputNamingTheField) {
 
 TEST_F(CliTest, UnknownEnumValueIsBadInputNamingTheField) {
   const CliRun run = Tactforce({"plan", "--json", "--local", "--request", "-"},
-                            R"({"contacts": [{"normal": {"z": 1}, "kind": 7}]})");
+                               R"({"contacts": [{"normal": {"z": 1}, "kind": 7}]})");
   ExpectBadInput(run);
   EXPECT_THAT(run.err, HasSubstr("contacts[0].kind: unknown value 7"));
 }
@@ -152,7 +156,7 @@ TEST_F(CliTest, MalformedJsonIsBadInput) {
 
 TEST_F(CliTest, MisspeltFieldIsBadInputNamingIt) {
   const CliRun run = Tactforce({"plan", "--json", "--local", "--request", "-"},
-                            R"({"contacts": [{"normal": {"z": 1}, "frictoin": 0.5}]})");
+                               R"({"contacts": [{"normal": {"z": 1}, "frictoin": 0.5}]})");
   ExpectBadInput(run);
   EXPECT_THAT(run.err, HasSubstr("frictoin"));
 }

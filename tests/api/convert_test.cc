@@ -75,8 +75,8 @@ TEST(ConvertTest, PlannerToProtoToPlannerRoundTrip) {
 
   // And back: the request is reproduced exactly.
   const v1::PlanRequest again = ToRequest(call->problem, call->options, call->solver);
-  EXPECT_TRUE(MessageDifferencer::Equals(request, again))
-      << request.DebugString() << "\nvs\n" << again.DebugString();
+  EXPECT_TRUE(MessageDifferencer::Equals(request, again)) << request.DebugString() << "\nvs\n"
+                                                          << again.DebugString();
 }
 
 TEST(ConvertTest, EverySolverKindRoundTrips) {
@@ -105,7 +105,7 @@ TEST(ConvertTest, UnspecifiedValuesTakeTheDefaults) {
 
 TEST(ConvertTest, ExplicitZerosAreKept) {
   v1::PlanRequest request;
-  request.set_confidence(0.0);  // present: no robustness
+  request.set_confidence(0.0);                  // present: no robustness
   request.mutable_object()->mutable_gravity();  // present: zero gravity
   absl::StatusOr<PlanCall> call = FromProto(request);
   ASSERT_TRUE(call.ok()) << call.status();
@@ -180,11 +180,13 @@ TEST(ConvertTest, SolverOptionsReachThePlannerAndAreValidated) {
   EXPECT_EQ(options->rank_tolerance, 1e-8);
   EXPECT_EQ(options->agreement_tolerance, 1e-4);
   // Round trip through the proto keeps them; defaults are not written.
-  const v1::PlanRequest back = ToRequest(planner::PlanProblem{}, *options, planner::SolverKind::kIpopt);
+  const v1::PlanRequest back =
+      ToRequest(planner::PlanProblem{}, *options, planner::SolverKind::kIpopt);
   EXPECT_EQ(back.solver_options().ipopt_max_iterations(), 50u);
   EXPECT_EQ(back.solver_options().agreement_tolerance(), 1e-4);
-  EXPECT_FALSE(ToRequest(planner::PlanProblem{}, planner::PlanOptions{}, planner::SolverKind::kIpopt)
-                   .has_solver_options());
+  EXPECT_FALSE(
+      ToRequest(planner::PlanProblem{}, planner::PlanOptions{}, planner::SolverKind::kIpopt)
+          .has_solver_options());
 
   struct Bad {
     void (*set)(v1::SolverOptions*);
@@ -192,11 +194,15 @@ TEST(ConvertTest, SolverOptionsReachThePlannerAndAreValidated) {
   };
   const Bad bad[] = {
       {[](v1::SolverOptions* s) { s->set_ipopt_tolerance(0); }, "solver_options.ipopt_tolerance"},
-      {[](v1::SolverOptions* s) { s->set_ipopt_tolerance(std::nan("")); }, "solver_options.ipopt_tolerance"},
-      {[](v1::SolverOptions* s) { s->set_ipopt_max_iterations(0); }, "solver_options.ipopt_max_iterations"},
-      {[](v1::SolverOptions* s) { s->set_ipopt_max_cpu_seconds(-1); }, "solver_options.ipopt_max_cpu_seconds"},
+      {[](v1::SolverOptions* s) { s->set_ipopt_tolerance(std::nan("")); },
+       "solver_options.ipopt_tolerance"},
+      {[](v1::SolverOptions* s) { s->set_ipopt_max_iterations(0); },
+       "solver_options.ipopt_max_iterations"},
+      {[](v1::SolverOptions* s) { s->set_ipopt_max_cpu_seconds(-1); },
+       "solver_options.ipopt_max_cpu_seconds"},
       {[](v1::SolverOptions* s) { s->set_rank_tolerance(0.5); }, "solver_options.rank_tolerance"},
-      {[](v1::SolverOptions* s) { s->set_agreement_tolerance(-1e-3); }, "solver_options.agreement_tolerance"},
+      {[](v1::SolverOptions* s) { s->set_agreement_tolerance(-1e-3); },
+       "solver_options.agreement_tolerance"},
   };
   for (const Bad& b : bad) {
     v1::PlanRequest r;

@@ -98,7 +98,8 @@ struct Outcome {
 
 v1::PlanRequest Grasp(v1::Solver solver) {
   const planner::ExampleGrasp grasp = planner::BuiltInGrasps()[1];  // wrench-3f
-  v1::PlanRequest request = ToRequest(grasp.problem, grasp.options, planner::SolverKind::kGeometric);
+  v1::PlanRequest request =
+      ToRequest(grasp.problem, grasp.options, planner::SolverKind::kGeometric);
   request.set_solver(solver);
   return request;
 }
@@ -106,8 +107,8 @@ v1::PlanRequest Grasp(v1::Solver solver) {
 // One plan dispatched through a ManualPool of `capacity` slots.
 class ApiPlanDispatchTest : public ::testing::Test {
  protected:
-  void Dispatch(const v1::PlanRequest& request, const PlanSettings& settings = {},
-                int capacity = 4, const char* rpc = "Plan", int64_t index = -1) {
+  void Dispatch(const v1::PlanRequest& request, const PlanSettings& settings = {}, int capacity = 4,
+                const char* rpc = "Plan", int64_t index = -1) {
     pool_.emplace(capacity);
     dispatcher_.emplace(&*pool_, settings);
     dispatcher_->Dispatch(request, &response_, CallLog(rpc, caller_, index), caller_,
@@ -242,14 +243,15 @@ TEST(ApiPlanDispatchLaneTest, FullIpoptLaneRefusesIpoptButNotGeometricWork) {
   TestCaller caller;
   v1::PlanResponse response;
   Outcome ipopt, geometric;
-  dispatcher.Dispatch(Grasp(v1::SOLVER_IPOPT), &response, CallLog("Plan", caller), caller, ipopt.Done());
+  dispatcher.Dispatch(Grasp(v1::SOLVER_IPOPT), &response, CallLog("Plan", caller), caller,
+                      ipopt.Done());
   ASSERT_EQ(ipopt.calls, 1);
   EXPECT_EQ(ipopt.status->code(), absl::StatusCode::kResourceExhausted);
   PlanSettings pooled;
   pooled.inline_max_contacts = 0;
   PlanDispatcher pooled_dispatcher(&pool, pooled, &lane);
-  pooled_dispatcher.Dispatch(Grasp(v1::SOLVER_GEOMETRIC), &response, CallLog("Plan", caller), caller,
-                             geometric.Done());
+  pooled_dispatcher.Dispatch(Grasp(v1::SOLVER_GEOMETRIC), &response, CallLog("Plan", caller),
+                             caller, geometric.Done());
   EXPECT_EQ(pool.pending(), 1);
   pool.RunAll();
   ASSERT_EQ(geometric.calls, 1);
@@ -264,19 +266,21 @@ TEST(ApiRunCallTest, ExceptionsBecomeStatusesInlineAndOnThePool) {
   };
   const std::vector<Case> cases = {
       {[] { throw std::bad_alloc(); }, absl::StatusCode::kResourceExhausted, "out of memory"},
-      {[] { throw std::runtime_error("assimp said no"); }, absl::StatusCode::kInternal, "assimp said no"},
+      {[] { throw std::runtime_error("assimp said no"); }, absl::StatusCode::kInternal,
+       "assimp said no"},
       {[] { throw 42; }, absl::StatusCode::kInternal, "unknown exception"}};
   for (const Case& c : cases) {
     for (bool pooled : {false, true}) {
       ManualPool pool(1);
       TestCaller caller;
       Outcome outcome;
-      RunCall(CallLog("X", caller), pooled ? &pool : nullptr,
-              [&c](CallLog&) -> absl::Status {
-                c.thrower();
-                return absl::OkStatus();
-              },
-              outcome.Done());
+      RunCall(
+          CallLog("X", caller), pooled ? &pool : nullptr,
+          [&c](CallLog&) -> absl::Status {
+            c.thrower();
+            return absl::OkStatus();
+          },
+          outcome.Done());
       pool.RunAll();
       ASSERT_EQ(outcome.calls, 1);
       EXPECT_EQ(outcome.status->code(), c.code) << *outcome.status;
@@ -346,14 +350,16 @@ TEST(ApiWorkBudgetTest, SpentBudgetBecomesResourceExhaustedNamingTheFlag) {
   v1::PlanRequest request;
   v1::PlanResponse response;
   Outcome outcome;
-  DispatchOnPool<v1::PlanRequest, v1::PlanResponse>(request, &response, CallLog("Spin", caller), &pool,
-                                                    caller, limits, &SpinUntilInterrupted, outcome.Done());
+  DispatchOnPool<v1::PlanRequest, v1::PlanResponse>(request, &response, CallLog("Spin", caller),
+                                                    &pool, caller, limits, &SpinUntilInterrupted,
+                                                    outcome.Done());
   pool.RunAll();
   ASSERT_EQ(outcome.calls, 1);
   EXPECT_EQ(outcome.status->code(), absl::StatusCode::kResourceExhausted) << *outcome.status;
-  EXPECT_THAT(std::string(outcome.status->message()),
-              StartsWith("stopped at the server's limit of 20 ms of work per call (--solve-timeout-ms): "
-                         "interrupted after "));
+  EXPECT_THAT(
+      std::string(outcome.status->message()),
+      StartsWith("stopped at the server's limit of 20 ms of work per call (--solve-timeout-ms): "
+                 "interrupted after "));
 }
 
 TEST(ApiWorkBudgetTest, NoBudgetAndUnspentBudgetLeaveStatusesAlone) {
@@ -386,8 +392,7 @@ TEST(ApiCallLogTest, FieldsInOrderAndQuotedMessage) {
   EXPECT_THAT(capture.text(),
               StartsWith("rpc=FitInertia index=3 code=INVALID_ARGUMENT messages=2 samples=10 "
                          "where=pool total_us="));
-  EXPECT_THAT(capture.text(),
-              HasSubstr(" peer=test-peer message=\"samples[4].t: not finite\"\n"));
+  EXPECT_THAT(capture.text(), HasSubstr(" peer=test-peer message=\"samples[4].t: not finite\"\n"));
 }
 
 TEST(ApiCallLogTest, NothingBelowInfo) {

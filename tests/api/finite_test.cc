@@ -42,8 +42,9 @@ TEST(FindNonFinite, NanInARepeatedSubmessageGivesItsPath) {
   EXPECT_EQ(FindNonFinite(r), "holding.steps[1].forces[2].y");
   const absl::Status s = CheckFiniteAnswer(r);
   EXPECT_EQ(s.code(), absl::StatusCode::kInternal);
-  EXPECT_THAT(std::string(s.message()), ::testing::StartsWith("holding.steps[1].forces[2].y: nan in the answer of "
-                                                              "FrictionProbeResponse"));
+  EXPECT_THAT(std::string(s.message()),
+              ::testing::StartsWith("holding.steps[1].forces[2].y: nan in the answer of "
+                                    "FrictionProbeResponse"));
 }
 
 TEST(FindNonFinite, RepeatedScalarsAndTheFirstInFieldOrder) {
@@ -63,7 +64,9 @@ TEST(FindNonFinite, MapsAreNamedByKey) {
   EXPECT_EQ(FindNonFinite(r), "causes[1].parameters[\"gain\"]");
   (*r.mutable_causes(1)->mutable_parameters())["gain"] = 2.0;
   // Through the map each time: reflection reads a synced copy of it.
-  auto weights = [&]() -> v1::DoubleList& { return (*r.mutable_causes(0)->mutable_array_parameters())["pi_weights"]; };
+  auto weights = [&]() -> v1::DoubleList& {
+    return (*r.mutable_causes(0)->mutable_array_parameters())["pi_weights"];
+  };
   weights().add_values(0.5);
   weights().add_values(kNan);
   EXPECT_EQ(FindNonFinite(r), "causes[0].array_parameters[\"pi_weights\"].values[1]");
@@ -122,8 +125,8 @@ bool SetNthDouble(google::protobuf::Message* m, int* n, double value) {
     if (f->cpp_type() == FD::CPPTYPE_MESSAGE) {
       const int count = f->is_repeated() ? r->FieldSize(*m, f) : 1;
       for (int k = 0; k < count; ++k) {
-        google::protobuf::Message* sub = f->is_repeated() ? r->MutableRepeatedMessage(m, f, k)
-                                                          : r->MutableMessage(m, f);
+        google::protobuf::Message* sub =
+            f->is_repeated() ? r->MutableRepeatedMessage(m, f, k) : r->MutableMessage(m, f);
         if (SetNthDouble(sub, n, value)) return true;
       }
     } else if (f->cpp_type() == FD::CPPTYPE_DOUBLE) {

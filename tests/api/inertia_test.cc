@@ -34,7 +34,8 @@ inertia::SimulationResult Simulated(inertia::SimulationMode mode, bool kinematic
 
 v1::FitInertiaRequest Batch(const inertia::InertiaSamples& s, size_t begin, size_t end) {
   v1::FitInertiaRequest m;
-  for (size_t i = begin; i < end; ++i) *m.add_samples() = InertiaSampleToProto(s.samples[i], s.source);
+  for (size_t i = begin; i < end; ++i)
+    *m.add_samples() = InertiaSampleToProto(s.samples[i], s.source);
   return m;
 }
 
@@ -48,7 +49,8 @@ TEST(InertiaStream, RoundTripGivesTheDirectFit) {
       const inertia::InertiaSamples& s = sim.samples;
       InertiaStream stream;
       const size_t n = s.samples.size();
-      for (size_t b = 0; b < n; b += 37) ASSERT_TRUE(stream.Add(Batch(s, b, std::min(n, b + 37))).ok());
+      for (size_t b = 0; b < n; b += 37)
+        ASSERT_TRUE(stream.Add(Batch(s, b, std::min(n, b + 37))).ok());
       EXPECT_EQ(stream.samples_received(), static_cast<int64_t>(n));
       v1::InertiaFitOptions options;
       options.set_method(v1::INERTIA_METHOD_BASELINE_LS);
@@ -60,7 +62,7 @@ TEST(InertiaStream, RoundTripGivesTheDirectFit) {
       EXPECT_EQ(streamed->inertia().izz(), direct->inertia().izz());
       EXPECT_EQ(streamed->com().x(), direct->com().x());
       EXPECT_EQ(streamed->method(), v1::INERTIA_METHOD_CONSTRAINED);  // the default
-      EXPECT_FALSE(streamed->has_errors());  // no truth given
+      EXPECT_FALSE(streamed->has_errors());                           // no truth given
     }
   }
 }
@@ -106,7 +108,8 @@ TEST(InertiaStream, InconsistentMessagesAreNamed) {
     v1::FitInertiaRequest m;
     m.add_samples()->set_t(0.0);  // neither wrench nor contacts
     const absl::Status s = stream.Add(m);
-    EXPECT_NE(s.message().find("samples[0]: give exactly one force source"), std::string::npos) << s;
+    EXPECT_NE(s.message().find("samples[0]: give exactly one force source"), std::string::npos)
+        << s;
   }
   {
     InertiaStream stream(/*max_samples=*/5);
@@ -120,7 +123,8 @@ TEST(InertiaStream, InconsistentMessagesAreNamed) {
     ASSERT_TRUE(stream.Add(m).ok());
     const absl::StatusOr<v1::FitInertiaResponse> r = stream.Fit();
     EXPECT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument);
-    EXPECT_NE(r.status().message().find("3 sample(s), at least 4 needed"), std::string::npos) << r.status();
+    EXPECT_NE(r.status().message().find("3 sample(s), at least 4 needed"), std::string::npos)
+        << r.status();
   }
   {
     // A sample whose contact count differs from the first: the library's
@@ -138,8 +142,9 @@ TEST(InertiaStream, InconsistentMessagesAreNamed) {
 // The wire spelling comes from the proto enum (moved here from the
 // library's former inertia::ProtoName) and parses back to the method.
 TEST(InertiaMethodName, ProtoSpellingRoundTripsThroughTheLibraryParser) {
-  for (inertia::InertiaMethod m : {inertia::InertiaMethod::kBaselineLs, inertia::InertiaMethod::kFactorGraph,
-                                   inertia::InertiaMethod::kConstrained, inertia::InertiaMethod::kDensity}) {
+  for (inertia::InertiaMethod m :
+       {inertia::InertiaMethod::kBaselineLs, inertia::InertiaMethod::kFactorGraph,
+        inertia::InertiaMethod::kConstrained, inertia::InertiaMethod::kDensity}) {
     EXPECT_EQ(*inertia::ParseInertiaMethod(InertiaMethodName(m)), m);
   }
   EXPECT_EQ(InertiaMethodName(inertia::InertiaMethod::kBaselineLs), "INERTIA_METHOD_BASELINE_LS");
@@ -222,7 +227,8 @@ TEST(InertiaMeshInput, PlacedCadMeshGivesTheObjectFrameBoxAndADensityFit) {
   placement.scale = scale;
   placement.position = p;
   placement.orientation = q;
-  const v1::MeshInput input = MeshInputToProto(ObjText(box, scale, p, q), "obj", "box.obj", placement);
+  const v1::MeshInput input =
+      MeshInputToProto(ObjText(box, scale, p, q), "obj", "box.obj", placement);
   EXPECT_EQ(input.scale(), scale);
   EXPECT_EQ(input.orientation().w(), q.w());
 
@@ -233,7 +239,8 @@ TEST(InertiaMeshInput, PlacedCadMeshGivesTheObjectFrameBoxAndADensityFit) {
   ASSERT_EQ(mesh->mesh.triangles.size(), box.triangles.size());
   for (size_t i = 0; i < box.vertices.size(); ++i) {  // the reader may reorder the vertices
     double nearest = 1e9;
-    for (const Vec3& v : mesh->mesh.vertices) nearest = std::min(nearest, (v - box.vertices[i]).norm());
+    for (const Vec3& v : mesh->mesh.vertices)
+      nearest = std::min(nearest, (v - box.vertices[i]).norm());
     EXPECT_LT(nearest, 1e-7) << "vertex " << i;
   }
 
@@ -280,7 +287,8 @@ TEST(InertiaMeshInput, PlacedCadMeshGivesTheObjectFrameBoxAndADensityFit) {
   options.clear_mesh_tolerance();
 
   inertia::InertiaFit library_fit;
-  absl::StatusOr<v1::FitInertiaResponse> r = FitInertiaSamples(sim.samples, options, {}, {}, &library_fit);
+  absl::StatusOr<v1::FitInertiaResponse> r =
+      FitInertiaSamples(sim.samples, options, {}, {}, &library_fit);
   ASSERT_TRUE(r.ok()) << r.status();
   EXPECT_EQ(r->method(), v1::INERTIA_METHOD_DENSITY);
   EXPECT_TRUE(r->density_realizable());
@@ -346,7 +354,8 @@ TEST(InertiaMeshInput, BadMeshesAndPlacementsNameTheField) {
     EXPECT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument);
     return std::string(r.status().message());
   };
-  auto with_mesh = [&](const std::string& bytes, const std::string& format, const std::string& name) {
+  auto with_mesh = [&](const std::string& bytes, const std::string& format,
+                       const std::string& name) {
     v1::InertiaFitOptions o;
     o.set_method(v1::INERTIA_METHOD_DENSITY);
     o.mutable_mesh()->set_data(bytes);
@@ -358,7 +367,8 @@ TEST(InertiaMeshInput, BadMeshesAndPlacementsNameTheField) {
   {
     v1::InertiaFitOptions o;
     o.set_method(v1::INERTIA_METHOD_DENSITY);  // no mesh: the library's error
-    EXPECT_NE(error(o).find("options.mesh: the density method needs the object's closed mesh"), std::string::npos)
+    EXPECT_NE(error(o).find("options.mesh: the density method needs the object's closed mesh"),
+              std::string::npos)
         << error(o);
   }
   {
@@ -367,7 +377,8 @@ TEST(InertiaMeshInput, BadMeshesAndPlacementsNameTheField) {
     EXPECT_EQ(error(o), "options.mesh.scale: must be > 0 (got -1)");
     o.mutable_mesh()->set_scale(0.001);
     o.mutable_mesh()->mutable_orientation()->set_w(0);  // present, zero norm
-    EXPECT_NE(error(o).find("options.mesh.orientation: quaternion norm 0"), std::string::npos) << error(o);
+    EXPECT_NE(error(o).find("options.mesh.orientation: quaternion norm 0"), std::string::npos)
+        << error(o);
     o.mutable_mesh()->clear_orientation();
     o.mutable_mesh()->mutable_position()->set_y(std::nan(""));
     EXPECT_NE(error(o).find("options.mesh.position: not finite"), std::string::npos) << error(o);
@@ -394,15 +405,16 @@ TEST(InertiaMeshInput, BadMeshesAndPlacementsNameTheField) {
   }
   {
     // One triangle missing: the library's mesh check, named by the file.
-    const std::string e = error(with_mesh(ObjText(box, 1.0, Vec3::Zero(), Eigen::Quaterniond::Identity(), 5), "obj",
-                                          "open.obj"));
+    const std::string e = error(with_mesh(
+        ObjText(box, 1.0, Vec3::Zero(), Eigen::Quaterniond::Identity(), 5), "obj", "open.obj"));
     EXPECT_NE(e.find("options.mesh: open.obj: 3 boundary edges"), std::string::npos) << e;
     EXPECT_NE(e.find("not closed"), std::string::npos) << e;
   }
   {
     v1::InertiaFitOptions o = with_mesh(obj, "obj", "box.obj");
     o.set_target_regions(inertia::kMaxTargetRegions + 1);
-    EXPECT_NE(error(o).find("options.target_regions: must be in 1..100"), std::string::npos) << error(o);
+    EXPECT_NE(error(o).find("options.target_regions: must be in 1..100"), std::string::npos)
+        << error(o);
     o.set_target_regions(0);
     o.set_regions(static_cast<v1::RegionScheme>(9));
     EXPECT_NE(error(o).find("options.regions: unknown value 9"), std::string::npos) << error(o);

@@ -57,8 +57,8 @@ TEST(JsonTest, SnakeCaseAndCamelCaseGiveTheSameRequest) {
   absl::StatusOr<v1::PlanRequest> camel = ParsePlanRequestJson(kCamelCase);
   ASSERT_TRUE(snake.ok()) << snake.status();
   ASSERT_TRUE(camel.ok()) << camel.status();
-  EXPECT_TRUE(MessageDifferencer::Equals(*snake, *camel))
-      << snake->DebugString() << "\nvs\n" << camel->DebugString();
+  EXPECT_TRUE(MessageDifferencer::Equals(*snake, *camel)) << snake->DebugString() << "\nvs\n"
+                                                          << camel->DebugString();
 
   EXPECT_EQ(snake->contacts_size(), 2);
   EXPECT_EQ(snake->contacts(0).min_normal_force(), 0.1);
@@ -126,15 +126,17 @@ TEST(JsonTest, ErrorsNameFileLineColumnAndSuggestNames) {
     const char* what;
   };
   const Case cases[] = {
-      {"{\n  \"object\": {\"mas\": 0.1}\n}", "2:14: ",
-       "object: unknown field 'mas' in ObjectModel; did you mean 'mass'?"},
-      {"{\"contacts\": [{}, {\"nromal\": {\"x\": 1}}]}", "1:20: ",
-       "contacts[1]: unknown field 'nromal' in Contact; did you mean 'normal'?"},
-      {"{\"cone\": \"CONE_MODEL_PYRAMD\"}", "1:", "cone: unknown ConeModel value 'CONE_MODEL_PYRAMD'; did you mean "
-                                              "'CONE_MODEL_PYRAMID'?"},
+      {"{\n  \"object\": {\"mas\": 0.1}\n}",
+       "2:14: ", "object: unknown field 'mas' in ObjectModel; did you mean 'mass'?"},
+      {"{\"contacts\": [{}, {\"nromal\": {\"x\": 1}}]}",
+       "1:20: ", "contacts[1]: unknown field 'nromal' in Contact; did you mean 'normal'?"},
+      {"{\"cone\": \"CONE_MODEL_PYRAMD\"}", "1:",
+       "cone: unknown ConeModel value 'CONE_MODEL_PYRAMD'; did you mean "
+       "'CONE_MODEL_PYRAMID'?"},
       {"{\n\n  \"contacts\": [\n    {\"position\": {\"x\": 1,}}]}", "4:", "expected"},
       {"{\"contacts\": {\"name\": \"a\"}}", "1:14: ", "contacts: expected a JSON array"},
-      {"{\"zzzzzzzz\": 1}", "1:2: ", "unknown field 'zzzzzzzz' in PlanRequest; expected one of: object, contacts"},
+      {"{\"zzzzzzzz\": 1}",
+       "1:2: ", "unknown field 'zzzzzzzz' in PlanRequest; expected one of: object, contacts"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.text);
@@ -148,7 +150,9 @@ TEST(JsonTest, ErrorsNameFileLineColumnAndSuggestNames) {
   }
   // lowerCamelCase names are fields too, and a wrong value type still names its field.
   v1::PlanRequest request;
-  EXPECT_TRUE(ParseJson(R"({"coneSides": 8, "contacts": [{"minNormalForce": 1}]})", &request, "a.json").ok());
+  EXPECT_TRUE(
+      ParseJson(R"({"coneSides": 8, "contacts": [{"minNormalForce": 1}]})", &request, "a.json")
+          .ok());
   absl::Status wrong_type = ParseJson(R"({"cone_sides": "many"})", &request, "a.json");
   EXPECT_THAT(std::string(wrong_type.message()), HasSubstr("cone_sides"));
 }
@@ -161,18 +165,25 @@ TEST(JsonTest, WrongValueTypesNameFileLineColumn) {
     std::string field, value, path, what;
   };
   const std::vector<Case> cases = {
-      {R"("object": {"mass": )", R"("heavy"})", "object.mass", R"(expected a number (double), got the string "heavy")"},
-      {R"("cone_sides": )", "4.5", "cone_sides", "expected an integer (uint32), got the number 4.5"},
-      {R"("cone_sides": )", R"("12x")", "cone_sides", R"(expected an integer (uint32), got the string "12x")"},
-      {R"("contacts": [{"name": )", "3}]", "contacts[0].name", "expected a string, got the number 3"},
-      {R"("contacts": [{"friction": )", "true}]", "contacts[0].friction", "expected a number (double), got true"},
-      {R"("object": {"com": {"x": )", "[1]}}", "object.com.x", "expected a number (double), got an array"},
+      {R"("object": {"mass": )", R"("heavy"})", "object.mass",
+       R"(expected a number (double), got the string "heavy")"},
+      {R"("cone_sides": )", "4.5", "cone_sides",
+       "expected an integer (uint32), got the number 4.5"},
+      {R"("cone_sides": )", R"("12x")", "cone_sides",
+       R"(expected an integer (uint32), got the string "12x")"},
+      {R"("contacts": [{"name": )", "3}]", "contacts[0].name",
+       "expected a string, got the number 3"},
+      {R"("contacts": [{"friction": )", "true}]", "contacts[0].friction",
+       "expected a number (double), got true"},
+      {R"("object": {"com": {"x": )", "[1]}}", "object.com.x",
+       "expected a number (double), got an array"},
   };
   std::mt19937 rng(::testing::UnitTest::GetInstance()->random_seed() + 7);
   for (const Case& c : cases) {
     const int blank_lines = std::uniform_int_distribution<int>(0, 5)(rng);
     const int indent = std::uniform_int_distribution<int>(0, 8)(rng);
-    const std::string prefix = std::string("{") + std::string(blank_lines, '\n') + std::string(indent, ' ') + c.field;
+    const std::string prefix =
+        std::string("{") + std::string(blank_lines, '\n') + std::string(indent, ' ') + c.field;
     const std::string text = prefix + c.value + "}";
     SCOPED_TRACE(text);
     v1::PlanRequest request;
@@ -185,7 +196,9 @@ TEST(JsonTest, WrongValueTypesNameFileLineColumn) {
   }
   // Quoted numbers and the special values are proto3 JSON and stay accepted.
   v1::PlanRequest request;
-  EXPECT_TRUE(ParseJson(R"({"object": {"mass": "0.5", "com": {"x": "NaN"}}, "cone_sides": "8"})", &request).ok());
+  EXPECT_TRUE(
+      ParseJson(R"({"object": {"mass": "0.5", "com": {"x": "NaN"}}, "cone_sides": "8"})", &request)
+          .ok());
 }
 
 TEST(JsonTest, RequestJsonRoundTrip) {

@@ -38,7 +38,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // Three fingers on a wrench handle (contacts[0..2]).
 v1::PlanRequest Grasp() {
   for (const planner::ExampleGrasp& grasp : planner::BuiltInGrasps()) {
-    if (grasp.name == "wrench-3f") return ToRequest(grasp.problem, grasp.options, planner::SolverKind::kGeometric);
+    if (grasp.name == "wrench-3f")
+      return ToRequest(grasp.problem, grasp.options, planner::SolverKind::kGeometric);
   }
   ADD_FAILURE() << "no built-in grasp wrench-3f";
   return {};
@@ -159,8 +160,10 @@ std::vector<Reproducer> Reproducers() {
     };
   };
   for (double f : {1e155, 1e300}) {
-    cases.push_back({absl::StrCat("FitInertia wrenches x", f), inertia([f](v1::FitInertiaRequest& r) {
-                       for (auto& s : *r.mutable_samples()) ScaleVec(s.mutable_wrench()->mutable_force(), f);
+    cases.push_back({absl::StrCat("FitInertia wrenches x", f),
+                     inertia([f](v1::FitInertiaRequest& r) {
+                       for (auto& s : *r.mutable_samples())
+                         ScaleVec(s.mutable_wrench()->mutable_force(), f);
                      }),
                      "samples[0].wrench.force: component magnitude exceeds 1e+09 N"});
   }
@@ -213,11 +216,13 @@ std::vector<Reproducer> Reproducers() {
     };
   };
   cases.push_back({"EstimateFriction forces x1e155", friction([](v1::FrictionRequest& r) {
-                     for (auto& s : *r.mutable_trials(1)->mutable_samples()) ScaleVec(s.mutable_force(), 1e155);
+                     for (auto& s : *r.mutable_trials(1)->mutable_samples())
+                       ScaleVec(s.mutable_force(), 1e155);
                    }),
                    "trials[1].samples[0].force: component magnitude exceeds 1e+09 N"});
   cases.push_back({"EstimateFriction times x1e-300", friction([](v1::FrictionRequest& r) {
-                     for (auto& s : *r.mutable_trials(0)->mutable_samples()) s.set_t(s.t() * 1e-300);
+                     for (auto& s : *r.mutable_trials(0)->mutable_samples())
+                       s.set_t(s.t() * 1e-300);
                    }),
                    "trials[0].samples[1].t: step "});
   cases.push_back({"EstimateFriction min_normal_force 1e300",
@@ -237,8 +242,9 @@ std::vector<Reproducer> Reproducers() {
   cases.push_back({"PlanFrictionProbe tangential_force 1e155",
                    probe([](v1::FrictionProbeRequest& r) { r.set_tangential_force(1e155); }),
                    "tangential_force: magnitude exceeds 1e+09 N"});
-  cases.push_back({"PlanFrictionProbe holding friction inf",
-                   probe([](v1::FrictionProbeRequest& r) { r.mutable_plan()->mutable_contacts(0)->set_friction(kInf); }),
+  cases.push_back({"PlanFrictionProbe holding friction inf", probe([](v1::FrictionProbeRequest& r) {
+                     r.mutable_plan()->mutable_contacts(0)->set_friction(kInf);
+                   }),
                    "plan.contacts[0].friction: not a finite number"});
 
   auto motion = [](std::function<void(v1::TrajectoryRequest&)> spoil) {
@@ -248,11 +254,13 @@ std::vector<Reproducer> Reproducers() {
       return Of(HandleTrajectory(r));
     };
   };
-  cases.push_back({"PlanTrajectory acceleration 1e155",
-                   motion([](v1::TrajectoryRequest& r) { r.mutable_steps(2)->mutable_linear_acceleration()->set_z(1e155); }),
+  cases.push_back({"PlanTrajectory acceleration 1e155", motion([](v1::TrajectoryRequest& r) {
+                     r.mutable_steps(2)->mutable_linear_acceleration()->set_z(1e155);
+                   }),
                    "steps[2].linear_acceleration: component magnitude exceeds 10000 m/s^2"});
-  cases.push_back({"PlanTrajectory angular velocity 1e200",
-                   motion([](v1::TrajectoryRequest& r) { r.mutable_steps(4)->mutable_angular_velocity()->set_y(1e200); }),
+  cases.push_back({"PlanTrajectory angular velocity 1e200", motion([](v1::TrajectoryRequest& r) {
+                     r.mutable_steps(4)->mutable_angular_velocity()->set_y(1e200);
+                   }),
                    "steps[4].angular_velocity: component magnitude exceeds 1000 rad/s"});
   cases.push_back({"PlanTrajectory inertia 1e300", motion([](v1::TrajectoryRequest& r) {
                      r.mutable_plan()->mutable_object()->mutable_inertia()->set_ixx(1e300);
@@ -260,7 +268,8 @@ std::vector<Reproducer> Reproducers() {
                    "plan.object.inertia: component magnitude exceeds 1e+12 kg m^2"});
   // Every step brings its own contacts: the plan's were never looked at.
   cases.push_back({"PlanTrajectory holding friction inf", motion([](v1::TrajectoryRequest& r) {
-                     for (auto& step : *r.mutable_steps()) *step.mutable_contacts() = r.plan().contacts();
+                     for (auto& step : *r.mutable_steps())
+                       *step.mutable_contacts() = r.plan().contacts();
                      r.mutable_plan()->mutable_contacts(1)->set_friction(kInf);
                    }),
                    "plan.contacts[1].friction: not a finite number"});
@@ -280,14 +289,16 @@ std::vector<Reproducer> Reproducers() {
   cases.push_back({"EstimateForces reading 1e155",
                    estimate([](v1::EstimateRequest& r) { r.set_readings(0, 1e155); }),
                    "readings[0]: magnitude exceeds 1e+09 N"});
-  cases.push_back({"EstimateForces friction inf",
-                   estimate([](v1::EstimateRequest& r) { r.mutable_contacts(1)->set_friction(kInf); }),
+  cases.push_back({"EstimateForces friction inf", estimate([](v1::EstimateRequest& r) {
+                     r.mutable_contacts(1)->set_friction(kInf);
+                   }),
                    "contacts[1].friction: not a finite number"});
   cases.push_back({"EstimateForces wrench 1e300", estimate([](v1::EstimateRequest& r) {
                      r.mutable_external_wrench()->mutable_torque()->set_x(1e300);
                    }),
                    "external_wrench.torque: component magnitude exceeds 1e+09 N m"});
-  cases.push_back({"Plan friction inf", [] {
+  cases.push_back({"Plan friction inf",
+                   [] {
                      v1::PlanRequest r = Grasp();
                      r.mutable_contacts(2)->set_friction(kInf);
                      return Of(HandlePlan(r));
@@ -308,7 +319,7 @@ TEST(MagnitudeLimits, EveryReproducerIsRejectedByItsFieldPath) {
 // The unspoilt requests are answered, all finite (the table's cases fail
 // for their spoilt field, not for the base request).
 TEST(MagnitudeLimits, BaseRequestsAreAnsweredFinite) {
-  const Outcome outcomes[] = {Of(HandlePlan(Grasp())),       Of(HandleTrajectory(Motion())),
+  const Outcome outcomes[] = {Of(HandlePlan(Grasp())),          Of(HandleTrajectory(Motion())),
                               Of(HandleFrictionProbe(Probe())), Of(HandleEstimate(Estimate())),
                               Of(HandleFriction(Friction())),   Of(HandleAudit(Audit())),
                               Of(HandleInertia(Inertia()))};
@@ -334,7 +345,8 @@ TEST(MagnitudeLimits, HugeProbeNormalGivesTheUnitNormalsAnswer) {
     const v1::PlanResponse& b = scaled->holding().steps(k);
     ASSERT_EQ(a.status(), b.status());
     ASSERT_EQ(a.normal_forces_size(), b.normal_forces_size());
-    for (int i = 0; i < a.normal_forces_size(); ++i) EXPECT_NEAR(a.normal_forces(i), b.normal_forces(i), 1e-9);
+    for (int i = 0; i < a.normal_forces_size(); ++i)
+      EXPECT_NEAR(a.normal_forces(i), b.normal_forces(i), 1e-9);
   }
 }
 
@@ -362,7 +374,8 @@ TEST(MagnitudeLimits, HugeContactNormalGivesTheUnitNormalsPlan) {
   absl::StatusOr<v1::PlanResponse> b = HandlePlan(huge);
   ASSERT_TRUE(a.ok() && b.ok());
   ASSERT_EQ(a->normal_forces_size(), b->normal_forces_size());
-  for (int i = 0; i < a->normal_forces_size(); ++i) EXPECT_NEAR(a->normal_forces(i), b->normal_forces(i), 1e-9);
+  for (int i = 0; i < a->normal_forces_size(); ++i)
+    EXPECT_NEAR(a->normal_forces(i), b->normal_forces(i), 1e-9);
 }
 
 // ---- drawn at test time: a random limited field, a random huge value ----
@@ -382,16 +395,20 @@ std::vector<Field> LimitedFields() {
                  r.mutable_contacts(1)->mutable_position()->set_y(v);
                  return Of(HandlePlan(r));
                }});
-  f.push_back({"object.mass", [](double v) {
+  f.push_back({"object.mass",
+               [](double v) {
                  v1::PlanRequest r = Grasp();
                  r.mutable_object()->set_mass(v);
                  return Of(HandlePlan(r));
-               }, true});
-  f.push_back({"contacts[0].max_normal_force", [](double v) {
+               },
+               true});
+  f.push_back({"contacts[0].max_normal_force",
+               [](double v) {
                  v1::PlanRequest r = Grasp();
                  r.mutable_contacts(0)->set_max_normal_force(v);
                  return Of(HandlePlan(r));
-               }, true});
+               },
+               true});
   f.push_back({"external_wrench.force", [](double v) {
                  v1::PlanRequest r = Grasp();
                  r.mutable_external_wrench()->mutable_force()->set_x(v);
@@ -417,17 +434,21 @@ std::vector<Field> LimitedFields() {
                  r.mutable_position()->set_y(v);
                  return Of(HandleFrictionProbe(r));
                }});
-  f.push_back({"initial_normal_force", [](double v) {
+  f.push_back({"initial_normal_force",
+               [](double v) {
                  v1::FrictionProbeRequest r = Probe();
                  r.set_initial_normal_force(v);
                  r.set_ramp_rate(v);  // the same few steps
                  return Of(HandleFrictionProbe(r));
-               }, true});
-  f.push_back({"ramp_rate", [](double v) {
+               },
+               true});
+  f.push_back({"ramp_rate",
+               [](double v) {
                  v1::FrictionProbeRequest r = Probe();
                  r.set_ramp_rate(v);
                  return Of(HandleFrictionProbe(r));
-               }, true});
+               },
+               true});
   f.push_back({"readings[1]", [](double v) {
                  v1::EstimateRequest r = Estimate();
                  r.set_readings(1, v);
@@ -506,7 +527,7 @@ TEST(MagnitudeLimits, RandomHugeValuesAreNamedOrAnsweredFinite) {
     const Field& field = pool[std::uniform_int_distribution<size_t>(0, pool.size() - 1)(rng)];
     // Half near the limits (1e7..1e12: forces and readings up to 1e9 pass
     // and must be answered finite), half far beyond them.
-    const double exponent = time_case      ? std::uniform_real_distribution<double>(-300, -10)(rng)
+    const double exponent = time_case       ? std::uniform_real_distribution<double>(-300, -10)(rng)
                             : draw % 2 == 0 ? std::uniform_real_distribution<double>(7, 12)(rng)
                                             : std::uniform_real_distribution<double>(12, 300)(rng);
     const bool negative = !time_case && !field.positive && rng() % 2 == 1;
@@ -546,13 +567,17 @@ TEST(ResponseSize, ProbeAndAuditAreRefusedBeforeAnySolve) {
   absl::StatusOr<v1::FrictionProbeResponse> p = HandleFrictionProbe(probe, limits, state);
   limits.max_response_bytes = 1000;
   absl::StatusOr<v1::AuditResponse> a = HandleAudit(audit, limits, state);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   ASSERT_EQ(p.status().code(), absl::StatusCode::kInvalidArgument) << p.status();
-  EXPECT_THAT(std::string(p.status().message()), StartsWith("sample_rate: the response of 25001 probe steps"));
-  EXPECT_THAT(std::string(p.status().message()), HasSubstr("over the limit of 4096 (the server's --max-message-bytes)"));
+  EXPECT_THAT(std::string(p.status().message()),
+              StartsWith("sample_rate: the response of 25001 probe steps"));
+  EXPECT_THAT(std::string(p.status().message()),
+              HasSubstr("over the limit of 4096 (the server's --max-message-bytes)"));
   ASSERT_EQ(a.status().code(), absl::StatusCode::kInvalidArgument) << a.status();
-  EXPECT_THAT(std::string(a.status().message()), HasSubstr("over the limit of 1000 (the server's --max-message-bytes)"));
+  EXPECT_THAT(std::string(a.status().message()),
+              HasSubstr("over the limit of 1000 (the server's --max-message-bytes)"));
   EXPECT_EQ(polls, 0);  // no solve and no fit started: they poll
   EXPECT_LT(seconds, 0.5);
 }

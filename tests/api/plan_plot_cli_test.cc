@@ -14,8 +14,8 @@ namespace tactforce {
 namespace {
 
 namespace fs = std::filesystem;
-using ::testing::HasSubstr;
 using testing::CliRun;
+using ::testing::HasSubstr;
 using testing::ReadFile;
 
 int CountOf(const std::string& s, const std::string& what) {
@@ -37,7 +37,8 @@ class PlotCliTest : public testing::CliTest {
   // The files in plots() (the plot and nothing left over from writing it).
   std::vector<std::string> Files() const {
     std::vector<std::string> names;
-    for (const fs::directory_entry& e : fs::directory_iterator(plots())) names.push_back(e.path().filename().string());
+    for (const fs::directory_entry& e : fs::directory_iterator(plots()))
+      names.push_back(e.path().filename().string());
     std::sort(names.begin(), names.end());
     return names;
   }
@@ -67,8 +68,8 @@ TEST_F(PlotCliTest, PlanPlotsTheShippedExample) {
 
 TEST_F(PlotCliTest, TrajectoryPlotHasAPanelPerStep) {
   const std::string plot = (plots() / "trajectory.svg").string();
-  const CliRun run =
-      Tactforce({"plan", "--local", "--trajectory", Example("wrench_lift_trajectory.json"), "--plot", plot});
+  const CliRun run = Tactforce(
+      {"plan", "--local", "--trajectory", Example("wrench_lift_trajectory.json"), "--plot", plot});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const std::string svg = ReadFile(plot);
   EXPECT_EQ(CountOf(svg, "class=\"step-panel\""), 4);
@@ -78,7 +79,8 @@ TEST_F(PlotCliTest, TrajectoryPlotHasAPanelPerStep) {
 
 TEST_F(PlotCliTest, UnwritablePlotIsAUsageErrorNamingTheFlag) {
   for (const std::string& plot : {(plots() / "missing" / "plan.svg").string(), plots().string()}) {
-    const CliRun run = Tactforce({"plan", "--local", "--request", Example("sphere_pinch.json"), "--plot", plot});
+    const CliRun run =
+        Tactforce({"plan", "--local", "--request", Example("sphere_pinch.json"), "--plot", plot});
     ExpectBadInput(run);
     EXPECT_THAT(run.err, HasSubstr("--plot")) << plot;
     EXPECT_THAT(run.err, HasSubstr(plot));
@@ -93,8 +95,8 @@ TEST_F(PlotCliTest, NonSvgPlotNamesAreRefusedByEveryCommand) {
   const std::vector<std::vector<std::string>> commands = {
       {"plan", "--local", "--request", Example("sphere_pinch.json"), "--plot", png},
       {"plan", "--local", "--trajectory", Example("wrench_lift_trajectory.json"), "--plot", png},
-      {"inertia", "--csv", Example("inertia_log.csv"), "--mesh", Example("inertia_box.stl"), "--method", "density",
-       "--plot", png},
+      {"inertia", "--csv", Example("inertia_log.csv"), "--mesh", Example("inertia_box.stl"),
+       "--method", "density", "--plot", png},
       {"load", "--target", "127.0.0.1:1", "--rpc", "plan", "-n", "1", "--plot", png},
   };
   for (const std::vector<std::string>& args : commands) {

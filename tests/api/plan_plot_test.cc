@@ -71,7 +71,8 @@ std::vector<Glyph> Walk(const std::string& svg) {
   std::vector<Glyph> out;
   std::vector<std::pair<std::string, int>> stack;  // open tag, index into `out` or -1
   std::string view, panel;
-  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), tag); it != std::sregex_iterator(); ++it) {
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), tag); it != std::sregex_iterator();
+       ++it) {
     const std::string name = (*it)[2], attrs = (*it)[3];
     const bool closing = (*it)[1] == "/", empty = (*it)[4] == "/";
     if (closing) {
@@ -104,8 +105,8 @@ std::map<std::string, int> Counts(const std::vector<Glyph>& glyphs, const std::s
   return n;
 }
 
-void ExpectOnePerContactPerView(const std::vector<Glyph>& glyphs, int contacts, const std::string& step,
-                                const std::string& prefix) {
+void ExpectOnePerContactPerView(const std::vector<Glyph>& glyphs, int contacts,
+                                const std::string& step, const std::string& prefix) {
   for (const char* css : {"cone", "force-arrow", "spread-ellipse", "contact-point", "normal"}) {
     const std::map<std::string, int> n = Counts(glyphs, css);
     for (const char* view : {"view-xy", "view-xz", "view-yz"})
@@ -160,7 +161,8 @@ TEST(PlanPlot, EveryContactHasOneOfEachGlyphInEveryView) {
     EXPECT_EQ(CountOf(*svg, "id=\"legend\""), 1);
     EXPECT_THAT(*svg, HasSubstr("N per m (1 N = "));
     EXPECT_THAT(*svg, HasSubstr("positions in m"));
-    for (const char* axis : {">x (m)</text>", ">y (m)</text>", ">z (m)</text>"}) EXPECT_EQ(CountOf(*svg, axis), 2) << axis;
+    for (const char* axis : {">x (m)</text>", ">y (m)</text>", ">z (m)</text>"})
+      EXPECT_EQ(CountOf(*svg, axis), 2) << axis;
     EXPECT_THAT(*svg, HasSubstr("Plan: OPTIMAL"));
     EXPECT_EQ(*svg, *PlanSvg(request, *response)) << "deterministic";
   }
@@ -172,7 +174,8 @@ TEST(PlanPlot, ArrowsStartAtTheirContactsAndPointAlongTheForce) {
   const v1::PlanRequest request = Request(kPinch);
   const v1::PlanResponse response = *HandlePlan(request);
   const std::string svg = *PlanSvg(request, response);
-  const std::regex point(R"re(<g class="contact-point" data-contact="0">\n<circle cx="([-\d.]+)" cy="([-\d.]+)")re");
+  const std::regex point(
+      R"re(<g class="contact-point" data-contact="0">\n<circle cx="([-\d.]+)" cy="([-\d.]+)")re");
   const std::regex arrow(
       R"re(<g class="force-arrow" data-contact="0">\n<line x1="([-\d.]+)" y1="([-\d.]+)" x2="([-\d.]+)" y2="([-\d.]+)")re");
   std::smatch p, a;
@@ -189,10 +192,11 @@ TEST(PlanPlot, ArrowsStartAtTheirContactsAndPointAlongTheForce) {
 TEST(PlanPlot, ThePyramidAsDrawnLiesInsideEveryTightenedRowAndTouchesOne) {
   const v1::PlanRequest request = Request(kThreeFingers);
   const PlanCall call = *FromProto(request);
-  const absl::StatusOr<PlanScene> scene = BuildPlanScene(call.problem, call.options, v1::PlanResponse());
+  const absl::StatusOr<PlanScene> scene =
+      BuildPlanScene(call.problem, call.options, v1::PlanResponse());
   ASSERT_TRUE(scene.ok()) << scene.status();
-  const planner::PreparedProblem prepared = planner::Prepare(*planner::ValidateProblem(call.problem, call.options),
-                                                             call.options);
+  const planner::PreparedProblem prepared =
+      planner::Prepare(*planner::ValidateProblem(call.problem, call.options), call.options);
   ASSERT_EQ(scene->contacts.size(), 3u);
   for (int i = 0; i < 3; ++i) {
     const ContactGlyph& c = scene->contacts[i];
@@ -203,13 +207,16 @@ TEST(PlanPlot, ThePyramidAsDrawnLiesInsideEveryTightenedRowAndTouchesOne) {
     const planner::Vec3 apex = c.apex_shift * c.normal;
     double tightest = -1e300;
     for (size_t r = 0; r < prepared.rows.info.size(); ++r) {
-      if (prepared.rows.info[r].contact != i || prepared.rows.info[r].kind != planner::RowKind::kFrictionFacet) continue;
+      if (prepared.rows.info[r].contact != i ||
+          prepared.rows.info[r].kind != planner::RowKind::kFrictionFacet)
+        continue;
       const planner::Vec3 a = prepared.rows.matrix.block<1, 3>(r, 3 * i).transpose();
       EXPECT_LE(a.dot(apex), prepared.rows.rhs(r) + 1e-12);
       tightest = std::max(tightest, a.dot(apex) - prepared.rows.rhs(r));
       for (int m = 0; m < c.cone_sides; ++m) {  // every edge direction stays inside
         const double phi = 2 * std::numbers::pi * (m + 0.5) / c.cone_sides;
-        const planner::Vec3 edge = c.normal + c.friction * (std::cos(phi) * c.tangent1 + std::sin(phi) * c.tangent2);
+        const planner::Vec3 edge =
+            c.normal + c.friction * (std::cos(phi) * c.tangent1 + std::sin(phi) * c.tangent2);
         EXPECT_LE(a.dot(edge), 1e-12);
       }
     }
@@ -222,15 +229,16 @@ TEST(PlanPlot, TheExactConeAsDrawnIsTheTightenedCone) {
   request.set_cone(v1::CONE_MODEL_EXACT);
   const PlanCall call = *FromProto(request);
   const PlanScene scene = *BuildPlanScene(call.problem, call.options, v1::PlanResponse());
-  const planner::PreparedProblem prepared = planner::Prepare(*planner::ValidateProblem(call.problem, call.options),
-                                                             call.options);
+  const planner::PreparedProblem prepared =
+      planner::Prepare(*planner::ValidateProblem(call.problem, call.options), call.options);
   for (int i = 0; i < 3; ++i) {
     const ContactGlyph& c = scene.contacts[i];
     EXPECT_EQ(c.cone_sides, 0);
     // Apex at shift/mu along n: mu n.f - shift = mu (n.f - apex_shift).
     EXPECT_NEAR(c.apex_shift * c.friction, prepared.cone_shift[i], 1e-12);
     const planner::Vec3 apex = c.apex_shift * c.normal;
-    EXPECT_NEAR(planner::ExactConeSlack(c.normal, c.friction, prepared.cone_shift[i], apex), 0, 1e-12);
+    EXPECT_NEAR(planner::ExactConeSlack(c.normal, c.friction, prepared.cone_shift[i], apex), 0,
+                1e-12);
   }
   const std::string svg = *PlanSvg(request, v1::PlanResponse());
   ExpectOnePerContactPerView(Walk(svg), 3, "", "");

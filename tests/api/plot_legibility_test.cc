@@ -45,9 +45,11 @@ TEST(PlotLegibility, TheChecksCatchOverlapsTextOutsideAndSingleTicks) {
   auto picture = [](int defect) {
     io::SvgCanvas canvas(300, 200, 12);
     const io::PlotFrame frame{60, 40, 200, 100, 0, 1, 0, 1};
-    io::DrawAxes(canvas, frame, io::TicksAt(0, 1, 0.25), {}, io::TicksAt(0, 1, defect == 2 ? 1.5 : 0.25), {});
+    io::DrawAxes(canvas, frame, io::TicksAt(0, 1, 0.25), {},
+                 io::TicksAt(0, 1, defect == 2 ? 1.5 : 0.25), {});
     if (defect == 0) canvas.Text(100, 100, "thumb"), canvas.Text(105, 100, "index");
-    if (defect == 1) canvas.Text(10, 20, "Plan: INFEASIBLE \u2014 a title far longer than the canvas is wide");
+    if (defect == 1)
+      canvas.Text(10, 20, "Plan: INFEASIBLE \u2014 a title far longer than the canvas is wide");
     return canvas.Finish();
   };
   ExpectLegible(picture(-1), "the base");
@@ -68,7 +70,8 @@ v1::PlanRequest DrawnPlan(std::mt19937& rng, int n, double mass, double max_forc
   const double radius = r(rng);
   std::string contacts;
   for (int i = 0; i < n; ++i) {
-    Eigen::Vector3d d = i < 2 ? Eigen::Vector3d(i == 0 ? 1 : -1, 0, 0) : Eigen::Vector3d(unit(rng), unit(rng), unit(rng));
+    Eigen::Vector3d d = i < 2 ? Eigen::Vector3d(i == 0 ? 1 : -1, 0, 0)
+                              : Eigen::Vector3d(unit(rng), unit(rng), unit(rng));
     d.normalize();
     const Eigen::Vector3d p = radius * d;
     contacts += absl::StrFormat(
@@ -90,12 +93,15 @@ TEST(PlotLegibility, PlanPlotsOfDrawnGraspsIncludingInfeasibleOnes) {
   std::uniform_real_distribution<double> mass(0.02, 0.5);
   int infeasible = 0;
   for (int trial = 0; trial < 8; ++trial) {
-    // Every third cannot hold its weight within 0.05 N per contact: an infeasible plan with a long message.
-    const v1::PlanRequest request = DrawnPlan(rng, contacts(rng), mass(rng), trial % 3 == 2 ? 0.05 : 0);
+    // Every third cannot hold its weight within 0.05 N per contact: an infeasible plan with a long
+    // message.
+    const v1::PlanRequest request =
+        DrawnPlan(rng, contacts(rng), mass(rng), trial % 3 == 2 ? 0.05 : 0);
     absl::StatusOr<v1::PlanResponse> response = api::HandlePlan(request);
     ASSERT_TRUE(response.ok()) << response.status();
     infeasible += response->status() != v1::PLAN_STATUS_OPTIMAL;
-    absl::StatusOr<std::string> svg = api::PlanSvg(request, *response, "client/examples/a_drawn_request.json");
+    absl::StatusOr<std::string> svg =
+        api::PlanSvg(request, *response, "client/examples/a_drawn_request.json");
     ASSERT_TRUE(svg.ok()) << svg.status();
     ExpectLegible(*svg, absl::StrFormat("plan %d", trial));
     EXPECT_NE(svg->find("source: client/examples/a_drawn_request.json"), std::string::npos);
@@ -123,7 +129,8 @@ TEST(PlotLegibility, TrajectoryPlotsOfDrawnTilts) {
     }
     absl::StatusOr<v1::TrajectoryResponse> response = api::HandleTrajectory(request);
     ASSERT_TRUE(response.ok()) << response.status();
-    absl::StatusOr<std::string> svg = api::TrajectorySvg(request, *response, "drawn_trajectory.json");
+    absl::StatusOr<std::string> svg =
+        api::TrajectorySvg(request, *response, "drawn_trajectory.json");
     ASSERT_TRUE(svg.ok()) << svg.status();
     ExpectLegible(*svg, absl::StrFormat("trajectory %d (%d steps)", trial, n));
   }
@@ -134,7 +141,8 @@ TEST(PlotLegibility, TrajectoryPlotsOfDrawnTilts) {
 // A closed box of half-sizes h (m), outward triangles.
 io::TriangleMesh Box(const Eigen::Vector3d& h) {
   io::TriangleMesh m;
-  for (int i = 0; i < 8; ++i) m.vertices.emplace_back(i & 1 ? h.x() : -h.x(), i & 2 ? h.y() : -h.y(), i & 4 ? h.z() : -h.z());
+  for (int i = 0; i < 8; ++i)
+    m.vertices.emplace_back(i & 1 ? h.x() : -h.x(), i & 2 ? h.y() : -h.y(), i & 4 ? h.z() : -h.z());
   m.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
                  {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
   return m;
@@ -142,9 +150,11 @@ io::TriangleMesh Box(const Eigen::Vector3d& h) {
 
 TEST(PlotLegibility, DensityPlotsOfDrawnBoxesLongAndShort) {
   std::mt19937 rng(2503);
-  std::uniform_real_distribution<double> log_size(std::log(0.004), std::log(0.15)), unit(-1, 1), rho(200, 9000);
+  std::uniform_real_distribution<double> log_size(std::log(0.004), std::log(0.15)), unit(-1, 1),
+      rho(200, 9000);
   for (int trial = 0; trial < 6; ++trial) {
-    const Eigen::Vector3d h(std::exp(log_size(rng)), std::exp(log_size(rng)), std::exp(log_size(rng)));
+    const Eigen::Vector3d h(std::exp(log_size(rng)), std::exp(log_size(rng)),
+                            std::exp(log_size(rng)));
     const io::TriangleMesh mesh = Box(h);
     inertia::InertiaFit fit;
     fit.method = inertia::InertiaMethod::kDensity;
@@ -153,20 +163,23 @@ TEST(PlotLegibility, DensityPlotsOfDrawnBoxesLongAndShort) {
     absl::StatusOr<inertia::RegionModel> regions =
         inertia::BuildRegions(mesh, {.scheme = inertia::RegionScheme::kGrid, .target_regions = 4});
     ASSERT_TRUE(regions.ok()) << regions.status();
-    const bool one_density = trial % 2 == 0;  // a single-colour box: only the outlines show its regions
+    const bool one_density =
+        trial % 2 == 0;  // a single-colour box: only the outlines show its regions
     const double common = rho(rng);
     for (size_t r = 0; r < regions->regions.size(); ++r)
       fit.densities.push_back({absl::StrCat("cell ", r), one_density ? common : rho(rng), 0, 0});
     fit.region_model = std::make_shared<const inertia::RegionModel>(*std::move(regions));
-    inertia::DensityPlotOptions options{.title = "box.stl: DENSITY fit",
-                                        .true_com = Eigen::Vector3d(fit.params.com),  // coincident markers
-                                        .source = "--csv drawn.csv --mesh box.stl"};
+    inertia::DensityPlotOptions options{
+        .title = "box.stl: DENSITY fit",
+        .true_com = Eigen::Vector3d(fit.params.com),  // coincident markers
+        .source = "--csv drawn.csv --mesh box.stl"};
     absl::StatusOr<std::string> svg = inertia::DensityPlotSvg(mesh, fit, options);
     ASSERT_TRUE(svg.ok()) << svg.status();
-    const std::string what = absl::StrFormat("density %d (%.0f x %.0f x %.0f mm)", trial, 2000 * h.x(),
-                                             2000 * h.y(), 2000 * h.z());
+    const std::string what = absl::StrFormat("density %d (%.0f x %.0f x %.0f mm)", trial,
+                                             2000 * h.x(), 2000 * h.y(), 2000 * h.z());
     ExpectLegible(*svg, what);
-    if (fit.densities.size() > 1) EXPECT_NE(svg->find("class=\"region-outline\""), std::string::npos) << what;
+    if (fit.densities.size() > 1)
+      EXPECT_NE(svg->find("class=\"region-outline\""), std::string::npos) << what;
     EXPECT_NE(svg->find("class=\"true-com\""), std::string::npos);
     const Parsed p = Parse(*svg);
     EXPECT_LE(p.width / p.height, 3.0) << what << ": not a strip";
@@ -197,7 +210,8 @@ TEST(PlotLegibility, AuditPlotsOfADrawnSensorLog) {
   const tactforce::testing::TempDir temp("tactforce_plot_legibility_audit");
   const std::filesystem::path dir = temp.path();
   ASSERT_TRUE(audit::WriteAuditReport(*report, dir.string(), "drawn_run.csv").ok());
-  for (const char* name : {"reading_vs_reference.svg", "residual_vs_reference.svg", "residual_vs_time.svg"}) {
+  for (const char* name :
+       {"reading_vs_reference.svg", "residual_vs_reference.svg", "residual_vs_time.svg"}) {
     std::ifstream in(dir / name);
     std::stringstream svg;
     svg << in.rdbuf();
@@ -211,12 +225,13 @@ TEST(PlotLegibility, ExperimentTracePlotOfADrawnTrial) {
   std::mt19937 rng(2505);
   std::normal_distribution<double> noise(0, 0.05);
   experiment::TrialResult trial;
-  const experiment::Phase phases[] = {experiment::Phase::kClose, experiment::Phase::kSettle, experiment::Phase::kHold,
-                                      experiment::Phase::kLift};
+  const experiment::Phase phases[] = {experiment::Phase::kClose, experiment::Phase::kSettle,
+                                      experiment::Phase::kHold, experiment::Phase::kLift};
   for (int k = 0; k < 800; ++k) {
     experiment::TraceSample s;
     s.t = 0.005 * k;
-    s.phase = phases[std::min(3, k / 60)];  // phase changes close together: their labels must not collide
+    s.phase =
+        phases[std::min(3, k / 60)];  // phase changes close together: their labels must not collide
     for (int f = 0; f < 3; ++f) {
       const double want = 1 + f;
       s.desired.push_back(want);
@@ -228,10 +243,11 @@ TEST(PlotLegibility, ExperimentTracePlotOfADrawnTrial) {
     s.rotation_deg = k > 200 ? 0.4 * (k - 200) / 600 : 0;
     trial.trace.push_back(s);
   }
-  const io::SvgPlot plot = experiment::TracePlot(
-      trial, {"index", "middle", "thumb"},
-      "wrench, estimated feedback, trial 0 (success): desired / estimated / raw / true normal force, a title long "
-      "enough to need shortening on a 900 px canvas");
+  const io::SvgPlot plot =
+      experiment::TracePlot(trial, {"index", "middle", "thumb"},
+                            "wrench, estimated feedback, trial 0 (success): desired / estimated / "
+                            "raw / true normal force, a title long "
+                            "enough to need shortening on a 900 px canvas");
   for (const io::SvgPanel& panel : plot.panels) {
     EXPECT_EQ(panel.y_label.find(','), std::string::npos) << "one unit per axis: " << panel.y_label;
   }

@@ -97,7 +97,8 @@ namespace {
 TEST(HandlerTest, TrajectoryWorkAndResponseSizeAreBoundedUpFront) {
   const planner::ExampleGrasp grasp = planner::BuiltInGrasps().front();
   v1::TrajectoryRequest request;
-  *request.mutable_plan() = ToRequest(grasp.problem, grasp.options, planner::SolverKind::kGeometric);
+  *request.mutable_plan() =
+      ToRequest(grasp.problem, grasp.options, planner::SolverKind::kGeometric);
   for (int k = 0; k < 100; ++k) request.add_steps();
   const int contacts = static_cast<int>(grasp.problem.contacts.size());
   CallLimits limits;
@@ -120,12 +121,14 @@ TEST(HandlerTest, TrajectoryWorkAndResponseSizeAreBoundedUpFront) {
   ASSERT_TRUE(r.ok());
   EXPECT_LE(static_cast<int64_t>(r->ByteSizeLong()), 100 * 40 + 100 * contacts * 60);
 
-  const v1::FrictionProbeRequest probe = fixtures::ProbeRequest(request.plan(), 1000);  // 2,501 steps
+  const v1::FrictionProbeRequest probe =
+      fixtures::ProbeRequest(request.plan(), 1000);  // 2,501 steps
   limits = CallLimits{};
   limits.max_trajectory_work = 1000;
   absl::StatusOr<v1::FrictionProbeResponse> p = HandleFrictionProbe(probe, limits);
   ASSERT_EQ(p.status().code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_THAT(std::string(p.status().message()), ::testing::StartsWith("sample_rate: 2501 probe steps"));
+  EXPECT_THAT(std::string(p.status().message()),
+              ::testing::StartsWith("sample_rate: 2501 probe steps"));
 }
 
 // Messages follow the proto paths; options are named one by one.
@@ -161,8 +164,9 @@ TEST(HandlerTest, AuditNamesSamplesByTheirPathAndBoundsTheirNumber) {
   request = RampAudit(100);
   CallLimits limits;
   limits.max_audit_samples = 99;
-  EXPECT_EQ(HandleAudit(request, limits).status().message(),
-            "samples: 100 samples exceed the limit of 99 per request (the server's --max-audit-samples)");
+  EXPECT_EQ(
+      HandleAudit(request, limits).status().message(),
+      "samples: 100 samples exceed the limit of 99 per request (the server's --max-audit-samples)");
   for (int k = 0; k < 100; ++k) request.mutable_samples(k)->set_reading(1.0);
   EXPECT_EQ(HandleAudit(request).status().message(),
             "samples[*].reading is constant (1): the sensor does not respond; nothing to audit");
@@ -178,7 +182,8 @@ TEST(HandlerTest, AuditAndFrictionStopWhenInterrupted) {
   v1::FrictionTrial* trial = request.add_trials();
   trial->mutable_normal()->set_z(1);
   for (int k = 0; k < 5; ++k) trial->add_samples()->set_t(k);
-  EXPECT_EQ(HandleFriction(request, limits, state).status().message(), "interrupted after 0 of 1 trials");
+  EXPECT_EQ(HandleFriction(request, limits, state).status().message(),
+            "interrupted after 0 of 1 trials");
 }
 
 TEST(HandlerTest, InertiaCountsPastIntRangeAreNamedNotWrapped) {

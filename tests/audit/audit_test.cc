@@ -23,7 +23,8 @@ namespace fs = std::filesystem;
 
 std::string Message(const absl::Status& s) { return std::string(s.message()); }
 
-std::string SimCsv(const sim::SensorModel& m, uint64_t seed = 5, double seconds = 12, double rate = 200) {
+std::string SimCsv(const sim::SensorModel& m, uint64_t seed = 5, double seconds = 12,
+                   double rate = 200) {
   sim::SimOptions o;
   o.seconds = seconds;
   o.rate = rate;
@@ -47,7 +48,8 @@ TEST(BadInput, MissingColumns) {
 
 TEST(BadInput, TooFewSamplesSaysHowMany) {
   std::string csv = "t,reference,reading\n";
-  for (int i = 0; i < 12; ++i) csv += std::to_string(i * 0.01) + "," + std::to_string(i) + "," + std::to_string(2 * i) + "\n";
+  for (int i = 0; i < 12; ++i)
+    csv += std::to_string(i * 0.01) + "," + std::to_string(i) + "," + std::to_string(2 * i) + "\n";
   auto d = ParseMeasuredCsv(csv, "run.csv");
   EXPECT_THAT(Message(d.status()), HasSubstr("too few samples: 12 valid rows"));
   EXPECT_THAT(Message(d.status()), HasSubstr("needs at least 40"));
@@ -55,7 +57,8 @@ TEST(BadInput, TooFewSamplesSaysHowMany) {
 
 TEST(BadInput, ConstantReference) {
   std::string csv = "t,reference,reading\n";
-  for (int i = 0; i < 100; ++i) csv += std::to_string(i * 0.01) + ",2," + std::to_string(i % 7) + "\n";
+  for (int i = 0; i < 100; ++i)
+    csv += std::to_string(i * 0.01) + ",2," + std::to_string(i % 7) + "\n";
   auto d = ParseMeasuredCsv(csv, "run.csv");
   EXPECT_THAT(Message(d.status()), HasSubstr("column 'reference' is constant"));
 }
@@ -68,7 +71,7 @@ TEST(BadInput, NanRowsAreSkippedAndCounted) {
   int row = 0;
   while (std::getline(in, line)) {
     if (row > 0 && row % 500 == 0) csv += "0.0,nan,1,0,0\n";  // 4 NaN rows
-    if (row == 1000) csv += "5.0,,1,0,0\n";                      // empty field counts too
+    if (row == 1000) csv += "5.0,,1,0,0\n";                   // empty field counts too
     csv += line + "\n";
     ++row;
   }
@@ -97,11 +100,12 @@ TEST(BadInput, UnsortedTimeNamesTheLine) {
 TEST(BadInput, TrialOutOfIntRangeNamesTheLine) {
   std::string csv = "t,reference,reading,trial\n";
   for (int i = 0; i < 60; ++i) {
-    csv += std::to_string(i * 0.01) + "," + std::to_string(i % 7) + "," + std::to_string(i % 5) + "," +
-           (i == 3 ? "1e300" : "0") + "\n";
+    csv += std::to_string(i * 0.01) + "," + std::to_string(i % 7) + "," + std::to_string(i % 5) +
+           "," + (i == 3 ? "1e300" : "0") + "\n";
   }
   auto d = ParseMeasuredCsv(csv, "run.csv");
-  EXPECT_THAT(Message(d.status()), HasSubstr("run.csv:5: column 'trial': not an integer in int's range (1e+300)"));
+  EXPECT_THAT(Message(d.status()),
+              HasSubstr("run.csv:5: column 'trial': not an integer in int's range (1e+300)"));
 }
 
 TEST(BadInput, NotANumberNamesLineAndColumn) {
@@ -174,7 +178,8 @@ NewtonsAndCounts AuditInNewtonsAndCounts(const testing::HiddenCase& hc) {
 
 TEST(Units, CountsWithNegativeGainAuditedLikeNewtons) {
   for (Effect e : {Effect::kSaturation, Effect::kDeadzone, Effect::kHysteresis, Effect::kDelay}) {
-    const NewtonsAndCounts r = AuditInNewtonsAndCounts(testing::MakeHiddenCase({e}, 4242 + static_cast<int>(e)));
+    const NewtonsAndCounts r =
+        AuditInNewtonsAndCounts(testing::MakeHiddenCase({e}, 4242 + static_cast<int>(e)));
     ASSERT_TRUE(r.rn.ok() && r.rc.ok()) << r.rn.status() << r.rc.status();
     ASSERT_FALSE(r.rc->causes.empty() || r.rn->causes.empty()) << EffectName(e);
     EXPECT_EQ(r.rc->causes[0].effect, EffectName(e));
@@ -182,9 +187,11 @@ TEST(Units, CountsWithNegativeGainAuditedLikeNewtons) {
     // (The nominal gain is biased by the unmodelled effect; the extended one is not.)
     EXPECT_LT(r.rc->nominal_model.gain, 0);
     EXPECT_NEAR(r.rc->extended_model.gain, -45, 0.5);
-    EXPECT_TRUE(testing::CheckParameters(e, r.c_model.effects, r.rc->causes[0]).ok) << EffectName(e);
+    EXPECT_TRUE(testing::CheckParameters(e, r.c_model.effects, r.rc->causes[0]).ok)
+        << EffectName(e);
     for (const auto& [k, v] : r.rn->causes[0].parameters)
-      EXPECT_NEAR(r.rc->causes[0].parameters.at(k), v, 1e-3 * (1 + std::abs(v))) << EffectName(e) << " " << k;
+      EXPECT_NEAR(r.rc->causes[0].parameters.at(k), v, 1e-3 * (1 + std::abs(v)))
+          << EffectName(e) << " " << k;
     EXPECT_NEAR(r.rc->gain, r.rn->gain, 0.5) << EffectName(e);
   }
 }
@@ -201,8 +208,10 @@ TEST(Units, NewFormsInCountsWithNegativeGain) {
     EXPECT_EQ(r.rc->causes[0].effect, EffectName(e));
     EXPECT_EQ(r.rc->causes[0].form, r.rn->causes[0].form);
     EXPECT_NEAR(r.rc->extended_model.gain, -45, 0.5);
-    EXPECT_TRUE(testing::CheckParameters(e, r.c_model.effects, r.rc->causes[0]).ok) << EffectName(e);
-    EXPECT_TRUE(testing::CheckParameters(e, r.n_model.effects, r.rn->causes[0]).ok) << EffectName(e);
+    EXPECT_TRUE(testing::CheckParameters(e, r.c_model.effects, r.rc->causes[0]).ok)
+        << EffectName(e);
+    EXPECT_TRUE(testing::CheckParameters(e, r.n_model.effects, r.rn->causes[0]).ok)
+        << EffectName(e);
     EXPECT_NEAR(r.rc->gain, r.rn->gain, 0.5) << EffectName(e);
   }
 }
@@ -242,7 +251,8 @@ TEST(TwoStreams, AlignedByInterpolatingTheReference) {
   EXPECT_EQ(rep->causes[0].effect, "delay");
   EXPECT_NEAR(rep->causes[0].parameters.at("delay"), 0.03, 0.004);
   auto missing = io::ParseCsv("t,v\n0,1\n", "ref.csv");
-  EXPECT_THAT(Message(AlignStreams(*missing, *qt).status()), HasSubstr("ref.csv: missing column(s) value"));
+  EXPECT_THAT(Message(AlignStreams(*missing, *qt).status()),
+              HasSubstr("ref.csv: missing column(s) value"));
 }
 
 // ---- report, extended model, given model -----------------------------------------
@@ -255,9 +265,10 @@ TEST(Report, FormsAndPrandtlIshlinskiiArraysRoundTrip) {
     testing::HiddenForm form;
     const char* name;
   };
-  for (const Case& k : {Case{Effect::kHysteresis, testing::HiddenForm::kPrandtlIshlinskii, "prandtl_ishlinskii"},
-                        Case{Effect::kNonlinearity, testing::HiddenForm::kPowerLaw, "power_law"},
-                        Case{Effect::kHysteresis, testing::HiddenForm::kDefault, "play"}}) {
+  for (const Case& k :
+       {Case{Effect::kHysteresis, testing::HiddenForm::kPrandtlIshlinskii, "prandtl_ishlinskii"},
+        Case{Effect::kNonlinearity, testing::HiddenForm::kPowerLaw, "power_law"},
+        Case{Effect::kHysteresis, testing::HiddenForm::kDefault, "play"}}) {
     testing::HiddenCase hc = testing::MakeHiddenCase({k.e}, 1100003, k.form);
     AuditOptions o = Quick();
     o.reading_units = hc.model.units;
@@ -294,13 +305,16 @@ TEST(Report, FormsAndPrandtlIshlinskiiArraysRoundTrip) {
       EXPECT_NEAR(sum, 1, 1e-9);
       EXPECT_EQ(model->effects.pi_weights.size(), w->array().size());
       EXPECT_EQ(model->effects.hysteresis_width, 0);
-      EXPECT_NEAR(rep->causes[0].parameters.at("loop_width"), testing::PiLoopWidth(hc.model.effects),
+      EXPECT_NEAR(rep->causes[0].parameters.at("loop_width"),
+                  testing::PiLoopWidth(hc.model.effects),
                   0.03 + 0.2 * testing::PiLoopWidth(hc.model.effects));
     }
     if (k.form == testing::HiddenForm::kPowerLaw)
       EXPECT_NEAR(model->effects.power_exponent, hc.model.effects.power_exponent, 0.01);
-    auto pred = sim::PredictReading(*model, hc.data.t, hc.data.reference, hc.data.shear, hc.data.segment_starts);
-    for (size_t i = 0; i < pred.size(); ++i) ASSERT_NEAR(pred[i], rep->predicted_extended[i], 1e-6) << k.name;
+    auto pred = sim::PredictReading(*model, hc.data.t, hc.data.reference, hc.data.shear,
+                                    hc.data.segment_starts);
+    for (size_t i = 0; i < pred.size(); ++i)
+      ASSERT_NEAR(pred[i], rep->predicted_extended[i], 1e-6) << k.name;
     EXPECT_THAT(FormatAuditSummary(*rep), HasSubstr(k.name));
   }
 }
@@ -315,8 +329,9 @@ TEST(Report, FilesAndExtendedModelRoundTrip) {
   const tactforce::testing::TempDir temp("tactforce_audit_report_test");
   const fs::path dir = temp.path();
   ASSERT_TRUE(WriteAuditReport(*rep, dir.string()).ok());
-  for (const char* f : {"report.json", "summary.txt", "extended_model.json", "reading_vs_reference.svg",
-                        "residual_vs_reference.svg", "residual_vs_time.svg"})
+  for (const char* f :
+       {"report.json", "summary.txt", "extended_model.json", "reading_vs_reference.svg",
+        "residual_vs_reference.svg", "residual_vs_time.svg"})
     EXPECT_TRUE(fs::exists(dir / f)) << f;
 
   std::ifstream in(dir / "report.json");
@@ -330,7 +345,8 @@ TEST(Report, FilesAndExtendedModelRoundTrip) {
   ASSERT_NE(causes, nullptr);
   ASSERT_EQ(causes->array().size(), rep->causes.size());
   for (const auto& c : causes->array())
-    for (const char* k : {"effect", "parameters", "heldout_rms_before", "heldout_rms_after", "gain"})
+    for (const char* k :
+         {"effect", "parameters", "heldout_rms_before", "heldout_rms_after", "gain"})
       EXPECT_NE(c.Find(k), nullptr) << k;
   const auto* path = j->Find("extended_model");
   ASSERT_NE(path, nullptr);
@@ -343,7 +359,8 @@ TEST(Report, FilesAndExtendedModelRoundTrip) {
   EXPECT_GT(model->effects.hysteresis_width, 0);
   EXPECT_GT(model->effects.delay, 0);
   EXPECT_GT(model->uncertainty.at("delay"), 0);
-  auto pred = sim::PredictReading(*model, hc.data.t, hc.data.reference, hc.data.shear, hc.data.segment_starts);
+  auto pred = sim::PredictReading(*model, hc.data.t, hc.data.reference, hc.data.shear,
+                                  hc.data.segment_starts);
   for (size_t i = 0; i < pred.size(); ++i) ASSERT_NEAR(pred[i], rep->predicted_extended[i], 1e-6);
   sim::SimOptions so = hc.sim;
   so.seconds = 3;
@@ -400,8 +417,9 @@ TEST(GainFloor, RoundOffResidualNamesNoFurtherCause) {
     auto rep = RunAudit(*d, Quick());
     ASSERT_TRUE(rep.ok()) << rep.status();
     ASSERT_EQ(rep->causes.size(), deadzone ? 1u : 0u)
-        << "run " << run << " (gain " << m.gain << "): last named " << rep->causes.back().effect << " with gain "
-        << rep->causes.back().gain << " % on a held-out RMS of " << rep->causes.back().heldout_rms_before;
+        << "run " << run << " (gain " << m.gain << "): last named " << rep->causes.back().effect
+        << " with gain " << rep->causes.back().gain << " % on a held-out RMS of "
+        << rep->causes.back().heldout_rms_before;
     if (deadzone) {
       EXPECT_EQ(rep->causes[0].effect, "deadzone") << "run " << run;
     }
@@ -418,7 +436,8 @@ TEST(GainFloor, RoundOffResidualNamesNoFurtherCause) {
       }
     }
   }
-  std::cerr << "[ floor ] " << kRuns << " noise-free runs: a cause on the round-off residual in 0 with the floor, in "
+  std::cerr << "[ floor ] " << kRuns
+            << " noise-free runs: a cause on the round-off residual in 0 with the floor, in "
             << extra_without_floor << " without it (largest gain " << largest_gain_without_floor
             << " % on a held-out RMS of " << its_rms << " N)\n";
 }
@@ -436,7 +455,8 @@ TEST(GainFloor, OptionIsChecked) {
 TEST(RealData, PiezoresistiveTaxelCalibration) {
   const char* src = std::getenv("TACTFORCE_SOURCE_DIR");
   const fs::path dir = fs::path(src ? src : ".") / ".." / "shared" / "data" / "tactile";
-  if (!fs::exists(dir)) GTEST_SKIP() << "real tactile data not present at " << dir << " (../shared is optional)";
+  if (!fs::exists(dir))
+    GTEST_SKIP() << "real tactile data not present at " << dir << " (../shared is optional)";
   int files = 0;
   for (const auto& entry : fs::directory_iterator(dir)) {
     if (entry.path().extension() != ".csv") continue;

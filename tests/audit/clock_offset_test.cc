@@ -25,8 +25,8 @@ struct Streams {
 // Simulates at the reference rate; the reading stream keeps every `decimate`-th
 // sample (a lower rate, starting at sample `phase`) stamped on a clock that is
 // `offset` s ahead of the reference clock.
-Streams MakeStreams(const sim::SensorModel& m, uint64_t seed, double ref_rate, int decimate, int phase,
-                    double offset, double seconds = 12) {
+Streams MakeStreams(const sim::SensorModel& m, uint64_t seed, double ref_rate, int decimate,
+                    int phase, double offset, double seconds = 12) {
   sim::SimOptions o;
   o.seconds = seconds;
   o.rate = ref_rate;
@@ -35,7 +35,8 @@ Streams MakeStreams(const sim::SensorModel& m, uint64_t seed, double ref_rate, i
   EXPECT_TRUE(run.ok()) << run.status();
   std::string ref = "t,value,shear\n", rd = "t,value\n";
   for (size_t i = 0; i < run->t.size(); ++i) {
-    absl::StrAppend(&ref, absl::StrFormat("%.9g,%.9g,%.9g\n", run->t[i], run->reference[i], run->shear[i]));
+    absl::StrAppend(
+        &ref, absl::StrFormat("%.9g,%.9g,%.9g\n", run->t[i], run->reference[i], run->shear[i]));
     if (static_cast<int>(i) % decimate == phase)
       absl::StrAppend(&rd, absl::StrFormat("%.17g,%.9g\n", run->t[i] + offset, run->reading[i]));
   }
@@ -65,14 +66,17 @@ AuditOptions Quick() {
 // non-delay effect. The final offset must be within one reading sample period
 // and 'delay' must never be named.
 TEST(ClockOffset, RecoveredWithinOneReadingSamplePeriod) {
-  const std::vector<Effect> effects = {Effect::kDeadzone, Effect::kSaturation, Effect::kHysteresis, Effect::kLag,
+  const std::vector<Effect> effects = {Effect::kDeadzone,     Effect::kSaturation,
+                                       Effect::kHysteresis,   Effect::kLag,
                                        Effect::kNonlinearity, Effect::kDrift};
   int ok = 0, xcorr_ok = 0;
   double worst = 0, worst_xcorr = 0;
   for (int i = 0; i < 40; ++i) {
     const uint64_t seed = 3000 + i;
     std::mt19937_64 rng(seed);
-    auto uni = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
+    auto uni = [&](double a, double b) {
+      return std::uniform_real_distribution<double>(a, b)(rng);
+    };
     sim::SensorModel m;
     m.noise = uni(0.01, 0.03);
     m.gain = uni(0, 1) < 0.5 ? -40 : 1;
@@ -100,16 +104,19 @@ TEST(ClockOffset, RecoveredWithinOneReadingSamplePeriod) {
     worst_xcorr = std::max(worst_xcorr, err_x / s.reading_period);
     if (err <= s.reading_period) ++ok;
     if (err_x <= s.reading_period) ++xcorr_ok;
-    EXPECT_LE(err, s.reading_period) << "seed " << seed << " hidden " << hidden << " offset " << offset << " got "
-                                     << *rep->clock_offset_s << " (cross-correlation " << d->clock_offset << ")";
-    for (const auto& c : rep->causes) EXPECT_NE(c.effect, "delay") << "seed " << seed << " hidden " << hidden;
-    if (hidden != "none" && !rep->causes.empty()) EXPECT_EQ(rep->causes[0].effect, hidden) << "seed " << seed;
+    EXPECT_LE(err, s.reading_period)
+        << "seed " << seed << " hidden " << hidden << " offset " << offset << " got "
+        << *rep->clock_offset_s << " (cross-correlation " << d->clock_offset << ")";
+    for (const auto& c : rep->causes)
+      EXPECT_NE(c.effect, "delay") << "seed " << seed << " hidden " << hidden;
+    if (hidden != "none" && !rep->causes.empty())
+      EXPECT_EQ(rep->causes[0].effect, hidden) << "seed " << seed;
     // The written model carries no clock offset.
     EXPECT_EQ(rep->extended_model.effects.delay, 0);
   }
   std::cout << "[clock offset] final within one reading period " << ok << "/40 (worst " << worst
-            << " periods); cross-correlation stage alone " << xcorr_ok << "/40 (worst " << worst_xcorr
-            << " periods)\n";
+            << " periods); cross-correlation stage alone " << xcorr_ok << "/40 (worst "
+            << worst_xcorr << " periods)\n";
 }
 
 // The documented ambiguity: a sensor delay plus a clock offset. Estimated:
@@ -129,7 +136,8 @@ TEST(ClockOffset, SensorDelayIsPartOfTheEstimatedOffsetUnlessTheOffsetIsGiven) {
   for (const auto& c : rep->causes) EXPECT_NE(c.effect, "delay");
   EXPECT_TRUE(rep->nominal_adequate);
   bool noted = false;
-  for (const auto& n : rep->notes) noted = noted || n.find("indistinguishable") != std::string::npos;
+  for (const auto& n : rep->notes)
+    noted = noted || n.find("indistinguishable") != std::string::npos;
   EXPECT_TRUE(noted);
   const std::string json = AuditReportJson(*rep);
   EXPECT_THAT(json, HasSubstr("\"clock_offset_s\": 0.5"));
@@ -205,12 +213,15 @@ TEST(ClockOffset, BadSearchRangesGiveClearErrors) {
   EXPECT_THAT(Message(AlignStreams(s.reference, s.reading, Estimate(0.2)).status()),
               HasSubstr("edge of the search range"));
   // Non-positive range.
-  EXPECT_THAT(Message(AlignStreams(s.reference, s.reading, Estimate(0)).status()), HasSubstr("max clock offset"));
-  EXPECT_THAT(Message(AlignStreams(s.reference, s.reading, Estimate(NAN)).status()), HasSubstr("max clock offset"));
+  EXPECT_THAT(Message(AlignStreams(s.reference, s.reading, Estimate(0)).status()),
+              HasSubstr("max clock offset"));
+  EXPECT_THAT(Message(AlignStreams(s.reference, s.reading, Estimate(NAN)).status()),
+              HasSubstr("max clock offset"));
   // Streams that do not overlap at all with the search centre.
   AlignOptions far = Estimate(1);
   far.clock_offset = 100;
-  EXPECT_THAT(Message(AlignStreams(s.reference, s.reading, far).status()), HasSubstr("exceeds the streams' overlap"));
+  EXPECT_THAT(Message(AlignStreams(s.reference, s.reading, far).status()),
+              HasSubstr("exceeds the streams' overlap"));
   // A reading unrelated to the reference: no clear correlation peak.
   std::string rd = "t,value\n";
   std::mt19937_64 rng(1);
@@ -220,7 +231,8 @@ TEST(ClockOffset, BadSearchRangesGiveClearErrors) {
   ASSERT_TRUE(noise.ok());
   auto r = AlignStreams(s.reference, *noise, Estimate(0.5));
   ASSERT_FALSE(r.ok());
-  EXPECT_THAT(Message(r.status()), ::testing::AnyOf(HasSubstr("no clear correlation"), HasSubstr("edge")));
+  EXPECT_THAT(Message(r.status()),
+              ::testing::AnyOf(HasSubstr("no clear correlation"), HasSubstr("edge")));
   EXPECT_THAT(Message(r.status()), HasSubstr("ref.csv + noise.csv"));
 }
 

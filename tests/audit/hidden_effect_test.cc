@@ -16,9 +16,9 @@ namespace tactforce::audit {
 namespace {
 
 using testing::CheckParameters;
+using testing::ForSeeds;
 using testing::HiddenCase;
 using testing::MakeHiddenCase;
-using testing::ForSeeds;
 
 constexpr int kSeeds = 200;
 
@@ -69,12 +69,14 @@ TEST_P(SingleEffect, NamedRecoveredWithPositiveGain) {
       if (rep->causes.size() > 1) {
         ++extra;
         std::lock_guard<std::mutex> lock(mu);
-        extras.push_back("seed " + std::to_string(seed) + ": also named " + rep->causes[1].effect + " (gain " +
-                         std::to_string(rep->causes[1].gain) + " %)");
+        extras.push_back("seed " + std::to_string(seed) + ": also named " + rep->causes[1].effect +
+                         " (gain " + std::to_string(rep->causes[1].gain) + " %)");
       }
       auto r = CheckParameters(e, hc.model.effects, rep->causes[0]);
-      if (!r.ok) why = r.what;
-      else if (!(rep->causes[0].gain > 0 && rep->gain > 0)) why = "gain not positive";
+      if (!r.ok)
+        why = r.what;
+      else if (!(rep->causes[0].gain > 0 && rep->gain > 0))
+        why = "gain not positive";
     }
     if (why.empty()) {
       ++correct;
@@ -84,9 +86,9 @@ TEST_P(SingleEffect, NamedRecoveredWithPositiveGain) {
     }
   });
   const double rate = double(correct) / kSeeds;
-  std::cout << "[hidden " << EffectName(e) << "] correct (named first + parameters + gain) " << correct << "/"
-            << kSeeds << " = " << 100 * rate << " %; named first " << named << "; with an extra cause " << extra
-            << (forms.empty() ? "" : "; forms:");
+  std::cout << "[hidden " << EffectName(e) << "] correct (named first + parameters + gain) "
+            << correct << "/" << kSeeds << " = " << 100 * rate << " %; named first " << named
+            << "; with an extra cause " << extra << (forms.empty() ? "" : "; forms:");
   for (const auto& [f, k] : forms) std::cout << " " << f << "=" << k;
   std::cout << "\n";
   for (const auto& f : failures) std::cout << "  " << f << "\n";
@@ -96,7 +98,9 @@ TEST_P(SingleEffect, NamedRecoveredWithPositiveGain) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllEffects, SingleEffect, ::testing::ValuesIn(AllEffects()),
-                         [](const ::testing::TestParamInfo<Effect>& info) { return EffectName(info.param); });
+                         [](const ::testing::TestParamInfo<Effect>& info) {
+                           return EffectName(info.param);
+                         });
 
 TEST(NullCase, NominalAdequate) {
   std::atomic<int> adequate{0};
@@ -110,12 +114,14 @@ TEST(NullCase, NominalAdequate) {
       ++adequate;
     } else {
       std::lock_guard<std::mutex> lock(mu);
-      failures.push_back("seed " + std::to_string(seed) + ": " +
-                         (rep.ok() ? "invented " + rep->causes[0].effect : std::string(rep.status().message())));
+      failures.push_back(
+          "seed " + std::to_string(seed) + ": " +
+          (rep.ok() ? "invented " + rep->causes[0].effect : std::string(rep.status().message())));
     }
   });
   const double rate = double(adequate) / kSeeds;
-  std::cout << "[null] nominal adequate " << adequate << "/" << kSeeds << " = " << 100 * rate << " %\n";
+  std::cout << "[null] nominal adequate " << adequate << "/" << kSeeds << " = " << 100 * rate
+            << " %\n";
   for (const auto& f : failures) std::cout << "  " << f << "\n";
   EXPECT_GE(rate, 0.95);
 }
@@ -124,7 +130,8 @@ TEST(TwoEffects, BothNamed) {
   // Every unordered pair of effect types, cycled over the seeds.
   std::vector<std::pair<Effect, Effect>> pairs;
   for (size_t a = 0; a < AllEffects().size(); ++a)
-    for (size_t b = a + 1; b < AllEffects().size(); ++b) pairs.emplace_back(AllEffects()[a], AllEffects()[b]);
+    for (size_t b = a + 1; b < AllEffects().size(); ++b)
+      pairs.emplace_back(AllEffects()[a], AllEffects()[b]);
   std::atomic<int> both{0};
   std::mutex mu;
   std::vector<std::string> failures;
@@ -147,12 +154,13 @@ TEST(TwoEffects, BothNamed) {
     } else {
       std::lock_guard<std::mutex> lock(mu);
       per_pair_fail[(FirstSeed() + i) % pairs.size()]++;
-      failures.push_back("seed " + std::to_string(seed) + " " + EffectName(e1) + "+" + EffectName(e2) +
-                         ": named " + (got.empty() ? "nothing" : got));
+      failures.push_back("seed " + std::to_string(seed) + " " + EffectName(e1) + "+" +
+                         EffectName(e2) + ": named " + (got.empty() ? "nothing" : got));
     }
   });
   const double rate = double(both) / kSeeds;
-  std::cout << "[two effects] both named " << both << "/" << kSeeds << " = " << 100 * rate << " %\n";
+  std::cout << "[two effects] both named " << both << "/" << kSeeds << " = " << 100 * rate
+            << " %\n";
   for (const auto& f : failures) std::cout << "  " << f << "\n";
   EXPECT_GE(rate, 0.90);
 }

@@ -21,8 +21,8 @@
 namespace tactforce::audit::testing {
 
 struct HiddenCase {
-  std::vector<Effect> effects;   // empty = null case
-  sim::SensorModel model;        // the truth
+  std::vector<Effect> effects;  // empty = null case
+  sim::SensorModel model;       // the truth
   sim::SimOptions sim;
   MeasuredData data;
 };
@@ -111,7 +111,8 @@ inline void DrawEffect(Effect e, std::mt19937_64& rng, double seconds, sim::Effe
                        HiddenForm form = HiddenForm::kDefault) {
   auto uni = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
   auto sign = [&]() { return uni(0, 1) < 0.5 ? -1.0 : 1.0; };
-  if (e == Effect::kHysteresis && form == HiddenForm::kPrandtlIshlinskii) return DrawPrandtlIshlinskii(rng, p);
+  if (e == Effect::kHysteresis && form == HiddenForm::kPrandtlIshlinskii)
+    return DrawPrandtlIshlinskii(rng, p);
   if (e == Effect::kNonlinearity && form == HiddenForm::kPowerLaw) {
     // Power law reading = a F^p + b: p in [0.7, 0.95] or [1.05, 1.4].
     p->power_exponent = uni(0, 1) < 0.5 ? uni(0.7, 0.95) : uni(1.05, 1.4);
@@ -123,17 +124,28 @@ inline void DrawEffect(Effect e, std::mt19937_64& rng, double seconds, sim::Effe
       p->threshold = uni(0.1, 0.5);
       p->threshold_shift = uni(0, 1) < 0.5 ? 0.0 : 1.0;  // activation jump or continuous dead-zone
       break;
-    case Effect::kSaturation: p->saturation = uni(0.4, 0.8);  // x the run's peak force (see MakeHiddenCase)
+    case Effect::kSaturation:
+      p->saturation = uni(0.4, 0.8);  // x the run's peak force (see MakeHiddenCase)
       break;
     case Effect::kNonlinearity:
       p->curvature = sign() * uni(0.02, 0.08);
       p->full_scale = kMaxPeak;
       break;
-    case Effect::kHysteresis: p->hysteresis_width = uni(0.05, 0.3); break;
-    case Effect::kDelay: p->delay = uni(0.010, 0.100); break;
-    case Effect::kLag: p->lag = uni(0.010, 0.100); break;
-    case Effect::kDrift: p->drift = sign() * uni(0.1, 0.5) / seconds; break;
-    case Effect::kCrosstalk: p->crosstalk = sign() * uni(0.05, 0.3); break;
+    case Effect::kHysteresis:
+      p->hysteresis_width = uni(0.05, 0.3);
+      break;
+    case Effect::kDelay:
+      p->delay = uni(0.010, 0.100);
+      break;
+    case Effect::kLag:
+      p->lag = uni(0.010, 0.100);
+      break;
+    case Effect::kDrift:
+      p->drift = sign() * uni(0.1, 0.5) / seconds;
+      break;
+    case Effect::kCrosstalk:
+      p->crosstalk = sign() * uni(0.05, 0.3);
+      break;
   }
 }
 
@@ -194,11 +206,15 @@ inline Recovery CheckParameters(Effect e, const sim::EffectParams& truth, const 
   const char* name = "";
   switch (e) {
     case Effect::kDeadzone:
-      name = "threshold"; got = get(name); want = truth.threshold;
+      name = "threshold";
+      got = get(name);
+      want = truth.threshold;
       r.ok = within(got, want, 0.03, 0.15);
       break;
     case Effect::kSaturation:
-      name = "saturation"; got = get(name); want = truth.saturation;
+      name = "saturation";
+      got = get(name);
+      want = truth.saturation;
       r.ok = within(got, want, 0.05, 0.03);
       break;
     case Effect::kNonlinearity: {
@@ -234,19 +250,27 @@ inline Recovery CheckParameters(Effect e, const sim::EffectParams& truth, const 
       r.ok = within(got, want, 0.02, 0.15);
       break;
     case Effect::kDelay:
-      name = "delay"; got = get(name); want = truth.delay;
+      name = "delay";
+      got = get(name);
+      want = truth.delay;
       r.ok = within(got, want, 0.002, 0.1);
       break;
     case Effect::kLag:
-      name = "lag"; got = get(name); want = truth.lag;
+      name = "lag";
+      got = get(name);
+      want = truth.lag;
       r.ok = within(got, want, 0.003, 0.15);
       break;
     case Effect::kDrift:
-      name = "drift"; got = get(name); want = truth.drift;
+      name = "drift";
+      got = get(name);
+      want = truth.drift;
       r.ok = within(got, want, 0.002, 0.2);
       break;
     case Effect::kCrosstalk:
-      name = "crosstalk"; got = get(name); want = truth.crosstalk;
+      name = "crosstalk";
+      got = get(name);
+      want = truth.crosstalk;
       r.ok = within(got, want, 0.01, 0.1);
       break;
   }
@@ -270,7 +294,8 @@ inline HiddenCase MakeLateCase(Effect e, uint64_t seed) {
   const double t0 = without->t.front(), t_switch = t0 + (without->t.back() - t0) * 2.0 / 3.0;
   for (size_t i = 0; i < without->t.size(); ++i)
     if (without->t[i] >= t_switch)
-      without->reading[i] = with->reading[i] - hc.model.gain * hc.model.effects.drift * (t_switch - t0);
+      without->reading[i] =
+          with->reading[i] - hc.model.gain * hc.model.effects.drift * (t_switch - t0);
   auto data = ParseMeasuredCsv(sim::SimRunCsv(*without), "late.csv");
   if (data.ok()) hc.data = *data;
   return hc;
@@ -279,8 +304,8 @@ inline HiddenCase MakeLateCase(Effect e, uint64_t seed) {
 // The phantom the audit names (audit.h): exp(-(t - t_r)/decay) at every
 // sample whose reference is <= release after a loaded sample, t_r the first
 // such sample; written here independently of the audit's code.
-inline std::vector<double> PhantomShape(const std::vector<double>& t, const std::vector<double>& f, double release,
-                                        double decay) {
+inline std::vector<double> PhantomShape(const std::vector<double>& t, const std::vector<double>& f,
+                                        double release, double decay) {
   std::vector<double> out(t.size(), 0.0);
   bool loaded = false;
   double t_release = -1;
@@ -313,7 +338,8 @@ inline PhantomCase MakePhantomCase(uint64_t seed) {
   if (!run.ok()) return pc;
   auto [lo, hi] = std::minmax_element(run->reference.begin(), run->reference.end());
   const auto shape = PhantomShape(run->t, run->reference, *lo + 0.05 * (*hi - *lo), pc.decay);
-  for (size_t i = 0; i < shape.size(); ++i) run->reading[i] += pc.hc.model.gain * pc.force * shape[i];
+  for (size_t i = 0; i < shape.size(); ++i)
+    run->reading[i] += pc.hc.model.gain * pc.force * shape[i];
   auto data = ParseMeasuredCsv(sim::SimRunCsv(*run), "phantom.csv");
   if (data.ok()) pc.hc.data = *data;
   return pc;
@@ -333,7 +359,7 @@ struct TaxelCase {
   MeasuredData data;
   std::vector<int> dead;  // taxel indices that never activate
   int taxels = 0;
-  std::string csv;        // the CSV text (t,reference,taxel_0..)
+  std::string csv;  // the CSV text (t,reference,taxel_0..)
 };
 
 inline TaxelCase MakeTaxelCase(uint64_t seed, int dead_count) {
@@ -359,7 +385,10 @@ inline TaxelCase MakeTaxelCase(uint64_t seed, int dead_count) {
     const int c = order[k];
     for (int q = 0; q < per_press; ++q) {
       const double tau = q / rate;
-      const double f = tau < 0.25 ? peak * tau / 0.25 : tau < 0.35 ? peak : tau < 0.6 ? peak * (0.6 - tau) / 0.25 : 0;
+      const double f = tau < 0.25   ? peak * tau / 0.25
+                       : tau < 0.35 ? peak
+                       : tau < 0.6  ? peak * (0.6 - tau) / 0.25
+                                    : 0;
       const int i = k * per_press + q + static_cast<int>(0.15 * rate);
       force[i] = f;
       if (f <= 0) continue;

@@ -47,8 +47,9 @@ void One(const Args& a) {
   std::vector<Effect> effects;
   if (!a.effect.empty()) effects.push_back(*ParseEffect(a.effect));
   if (!a.effect2.empty()) effects.push_back(*ParseEffect(a.effect2));
-  auto hc = a.late && effects.size() == 1 ? testing::MakeLateCase(effects[0], static_cast<uint64_t>(a.seed))
-                                          : testing::MakeHiddenCase(effects, static_cast<uint64_t>(a.seed));
+  auto hc = a.late && effects.size() == 1
+                ? testing::MakeLateCase(effects[0], static_cast<uint64_t>(a.seed))
+                : testing::MakeHiddenCase(effects, static_cast<uint64_t>(a.seed));
   AuditOptions o = FastOptions(hc);
   o.blocks = a.blocks;
   auto rep = RunAudit(hc.data, o);
@@ -58,7 +59,9 @@ void One(const Args& a) {
   }
   std::cout << FormatAuditSummary(*rep);
   for (const auto& c : rep->candidates)
-    if (c.accepted) std::cout << "accepted round " << c.round << " " << c.effect << " rms " << c.heldout_rms << "\n";
+    if (c.accepted)
+      std::cout << "accepted round " << c.round << " " << c.effect << " rms " << c.heldout_rms
+                << "\n";
 }
 
 void Report(const std::string& what, int good, int n, const std::vector<std::string>& failures) {
@@ -87,8 +90,10 @@ void PartialActivation(const Args& a) {
     } else {
       ++named_first;
       const double got = rep->causes[0].parameters.at("silent_taxels");
-      if (std::abs(got - dead) <= 1) ++fraction_ok;
-      else why = "silent " + std::to_string(got) + " want " + std::to_string(dead);
+      if (std::abs(got - dead) <= 1)
+        ++fraction_ok;
+      else
+        why = "silent " + std::to_string(got) + " want " + std::to_string(dead);
     }
     if (!why.empty()) {
       std::lock_guard<std::mutex> lock(mu);
@@ -110,8 +115,10 @@ void PartialActivation(const Args& a) {
     }
   });
   Report("[partial_activation] named first", named_first, a.seeds, {});
-  Report("[partial_activation] named first + silent taxels within one", fraction_ok, a.seeds, fails);
-  Report("[partial_activation] without dead taxels: not named", clean_not_named, a.seeds, false_named);
+  Report("[partial_activation] named first + silent taxels within one", fraction_ok, a.seeds,
+         fails);
+  Report("[partial_activation] without dead taxels: not named", clean_not_named, a.seeds,
+         false_named);
 }
 
 void Phantom(const Args& a) {
@@ -134,15 +141,18 @@ void Phantom(const Args& a) {
         ++named;
         if (k == 0) ++first;
         const double f = c.parameters.at("phantom_force");
-        if (k == 0 && std::abs(f - pc.force) <= 0.05 + 0.2 * pc.force) why.clear();
-        else why = "force " + std::to_string(f) + " want " + std::to_string(pc.force) + " (rank " +
-                   std::to_string(k + 1) + ")";
+        if (k == 0 && std::abs(f - pc.force) <= 0.05 + 0.2 * pc.force)
+          why.clear();
+        else
+          why = "force " + std::to_string(f) + " want " + std::to_string(pc.force) + " (rank " +
+                std::to_string(k + 1) + ")";
       }
     if (why.empty()) {
       ++correct;
     } else {
       std::lock_guard<std::mutex> lock(mu);
-      fails.push_back("seed " + std::to_string(seed) + ": " + why + "; named " + (got.empty() ? "nothing" : got));
+      fails.push_back("seed " + std::to_string(seed) + ": " + why + "; named " +
+                      (got.empty() ? "nothing" : got));
     }
   });
   Report("[phantom] named (any rank)", named, a.seeds, {});
@@ -203,12 +213,13 @@ void LateEffects(const Args& a) {
         }
       if (!found) {
         std::lock_guard<std::mutex> lock(mu);
-        fails.push_back("seed " + std::to_string(seed) + ": named " + (got.empty() ? "nothing" : got) +
-                        LateSaturationNote(hc));
+        fails.push_back("seed " + std::to_string(seed) + ": named " +
+                        (got.empty() ? "nothing" : got) + LateSaturationNote(hc));
       }
     });
-    std::cout << "[late " << EffectName(e) << "] named " << named << "/" << a.seeds << ", first " << first
-              << ", parameter within tolerance " << param << ", last block shows it " << last_block << "\n";
+    std::cout << "[late " << EffectName(e) << "] named " << named << "/" << a.seeds << ", first "
+              << first << ", parameter within tolerance " << param << ", last block shows it "
+              << last_block << "\n";
     for (const auto& f : fails) std::cout << "    " << f << "\n";
     all_named += named;
     total += a.seeds;
@@ -229,13 +240,20 @@ int main(int argc, char** argv) {
   tactforce::audit::Args a;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
-    if (k == "--seeds") a.seeds = std::atoi(v.c_str());
-    else if (k == "--first-seed") a.first_seed = std::atoi(v.c_str());
-    else if (k == "--blocks") a.blocks = std::atoi(v.c_str());
-    else if (k == "--suite") a.suite = v;
-    else if (k == "--seed") a.seed = std::atoll(v.c_str());
-    else if (k == "--effect" && ParseEffectOk(v)) a.effect = v;
-    else if (k == "--effect2" && ParseEffectOk(v)) a.effect2 = v;
+    if (k == "--seeds")
+      a.seeds = std::atoi(v.c_str());
+    else if (k == "--first-seed")
+      a.first_seed = std::atoi(v.c_str());
+    else if (k == "--blocks")
+      a.blocks = std::atoi(v.c_str());
+    else if (k == "--suite")
+      a.suite = v;
+    else if (k == "--seed")
+      a.seed = std::atoll(v.c_str());
+    else if (k == "--effect" && ParseEffectOk(v))
+      a.effect = v;
+    else if (k == "--effect2" && ParseEffectOk(v))
+      a.effect2 = v;
     else {
       std::cerr << "unknown flag " << k << "\n";
       return 2;

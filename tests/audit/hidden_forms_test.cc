@@ -17,11 +17,11 @@ namespace tactforce::audit {
 namespace {
 
 using testing::CheckParameters;
+using testing::FastOptions;
+using testing::ForSeeds;
 using testing::HiddenCase;
 using testing::HiddenForm;
 using testing::MakeHiddenCase;
-using testing::FastOptions;
-using testing::ForSeeds;
 
 constexpr int kSeeds = 200;
 
@@ -72,9 +72,12 @@ void RunForm(Effect e, HiddenForm form, uint64_t seed_base, Tally* t) {
       }
       if (rep->causes.size() > 1) {
         t->extra++;
-        t->extras.push_back("seed " + std::to_string(seed) + ": also named " + rep->causes[1].effect);
+        t->extras.push_back("seed " + std::to_string(seed) + ": also named " +
+                            rep->causes[1].effect);
       }
-      if (!r.ok) t->failures.push_back("seed " + std::to_string(seed) + " (parameter, form " + c.form + "): " + r.what);
+      if (!r.ok)
+        t->failures.push_back("seed " + std::to_string(seed) + " (parameter, form " + c.form +
+                              "): " + r.what);
       if (!(c.gain > 0 && rep->gain > 0)) why = "gain not positive";
     }
     if (named) t->named++;
@@ -88,16 +91,17 @@ void RunForm(Effect e, HiddenForm form, uint64_t seed_base, Tally* t) {
 }
 
 void Print(const char* label, const Tally& t) {
-  std::cout << "[hidden " << label << "] named first with positive gain " << t.correct << "/" << kSeeds << " = "
-            << 100.0 * t.correct / kSeeds << " %; parameter within tolerance " << t.recovered << "/" << kSeeds
-            << "; with an extra cause " << t.extra << "; forms named:";
+  std::cout << "[hidden " << label << "] named first with positive gain " << t.correct << "/"
+            << kSeeds << " = " << 100.0 * t.correct / kSeeds << " %; parameter within tolerance "
+            << t.recovered << "/" << kSeeds << "; with an extra cause " << t.extra
+            << "; forms named:";
   for (const auto& [f, n] : t.forms) std::cout << " " << (f.empty() ? "-" : f) << "=" << n;
   std::cout << "\n";
   auto stats = [](std::vector<double> v, const char* what) {
     if (v.empty()) return;
     std::sort(v.begin(), v.end());
-    std::cout << "  " << what << ": median " << v[v.size() / 2] << ", 95th percentile " << v[v.size() * 95 / 100]
-              << ", max " << v.back() << "\n";
+    std::cout << "  " << what << ": median " << v[v.size() / 2] << ", 95th percentile "
+              << v[v.size() * 95 / 100] << ", max " << v.back() << "\n";
   };
   stats(t.errors, "abs error");
   stats(t.rel_errors, "rel error");
@@ -127,8 +131,9 @@ TEST(HiddenForms, PowerLawNamedNonlinearityExponentRecovered) {
 // type, power law + each other effect type (14 pairs, 8 seeds each): both
 // named in >= 90 % (the two-effect criterion).
 TEST(HiddenForms, NewFormsWithASecondEffectBothNamed) {
-  std::vector<std::pair<Effect, HiddenForm>> pairs_first = {{Effect::kHysteresis, HiddenForm::kPrandtlIshlinskii},
-                                                            {Effect::kNonlinearity, HiddenForm::kPowerLaw}};
+  std::vector<std::pair<Effect, HiddenForm>> pairs_first = {
+      {Effect::kHysteresis, HiddenForm::kPrandtlIshlinskii},
+      {Effect::kNonlinearity, HiddenForm::kPowerLaw}};
   struct Pair {
     Effect a, b;
     HiddenForm form;
@@ -159,11 +164,12 @@ TEST(HiddenForms, NewFormsWithASecondEffectBothNamed) {
     } else {
       std::lock_guard<std::mutex> lock(mu);
       failures.push_back("seed " + std::to_string(seed) + " " + EffectName(p.a) +
-                         (p.form == HiddenForm::kPowerLaw ? "/power_law" : "/prandtl_ishlinskii") + "+" +
-                         EffectName(p.b) + ": named " + (got.empty() ? "nothing" : got));
+                         (p.form == HiddenForm::kPowerLaw ? "/power_law" : "/prandtl_ishlinskii") +
+                         "+" + EffectName(p.b) + ": named " + (got.empty() ? "nothing" : got));
     }
   });
-  std::cout << "[two effects, new forms] both named " << both << "/" << n << " = " << 100.0 * both / n << " %\n";
+  std::cout << "[two effects, new forms] both named " << both << "/" << n << " = "
+            << 100.0 * both / n << " %\n";
   for (const auto& f : failures) std::cout << "  " << f << "\n";
   EXPECT_GE(both, 0.90 * n);
 }

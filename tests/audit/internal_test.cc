@@ -85,7 +85,8 @@ TEST(ChannelEvaluator, RangesCarryTheChannelStateFromTheRunStart) {
   ChannelEvaluator whole(d, 600);
   const std::vector<double> g = whole.FullChannel(p);
   for (int i = 0; i < 600; ++i) d.reading[i] = 2 * g[i] - 1;
-  const int first = 230 + static_cast<int>(rng() % 40), cut = first + 120, last = cut + 100;  // mid-press
+  const int first = 230 + static_cast<int>(rng() % 40), cut = first + 120,
+            last = cut + 100;  // mid-press
   ChannelEvaluator forward(d, {{first, cut}}, {{cut, last}});
   ChannelEvaluator reversed(d, {{cut, last}}, {{first, cut}});
   for (ChannelEvaluator* eng : {&forward, &reversed}) {
@@ -156,7 +157,8 @@ TEST(Diagnostics, PlayHysteresisReadsLowWhileLoadingHighWhileUnloading) {
 TEST(Diagnostics, CrossCorrelationFindsTheReadingsDelay) {
   MeasuredData d = Smooth(600);
   const int shift = 7;
-  for (int i = 0; i < 600; ++i) d.reading[i] = -5 * d.reference[std::max(0, i - shift)];  // negative gain
+  for (int i = 0; i < 600; ++i)
+    d.reading[i] = -5 * d.reference[std::max(0, i - shift)];  // negative gain
   const Diagnostics dg = Diagnose(d, d.reading, -5.0, 400, 0.2);
   EXPECT_EQ(dg.xcorr_lag_samples, shift);
   EXPECT_NEAR(dg.xcorr_lag_seconds, shift * 0.01, 1e-12);

@@ -28,7 +28,8 @@ TEST(Fingertip, FortyTwoTaxelsWithUnitNormals) {
   FingertipGeometry g;
   auto taxels = DefaultFingertip(g);
   ASSERT_EQ(taxels.size(), 42u);
-  EXPECT_NEAR((taxels[0].position - Eigen::Vector3d(0, 0, g.body_length + g.radius)).norm(), 0, 1e-12);
+  EXPECT_NEAR((taxels[0].position - Eigen::Vector3d(0, 0, g.body_length + g.radius)).norm(), 0,
+              1e-12);
   for (const auto& t : taxels) {
     EXPECT_NEAR(t.normal.norm(), 1, 1e-12);
     // On the surface: tip hemisphere or cylinder.
@@ -96,20 +97,24 @@ TEST(Simulate, GainOffsetAndEffects) {
   auto ideal = SimulateSensor(SensorModel{}, Short());
   auto run = SimulateSensor(m, Short());
   ASSERT_TRUE(run.ok());
-  for (size_t i = 0; i < run->t.size(); ++i) EXPECT_NEAR(run->reading[i], 1000 - 40 * ideal->reading[i], 1e-9);
+  for (size_t i = 0; i < run->t.size(); ++i)
+    EXPECT_NEAR(run->reading[i], 1000 - 40 * ideal->reading[i], 1e-9);
 
   SensorModel th;
   th.effects.threshold = 0.4;  // activation: jumps to the force at the threshold
   auto r = SimulateSensor(th, Short());
   for (size_t i = 0; i < r->t.size(); ++i) {
-    if (r->reference[i] < 0.4) EXPECT_EQ(r->reading[i], 0);
-    else EXPECT_NEAR(r->reading[i], r->reference[i], 1e-9);
+    if (r->reference[i] < 0.4)
+      EXPECT_EQ(r->reading[i], 0);
+    else
+      EXPECT_NEAR(r->reading[i], r->reference[i], 1e-9);
   }
 
   SensorModel sat;
   sat.effects.saturation = 2.5;
   r = SimulateSensor(sat, Short());
-  for (size_t i = 0; i < r->t.size(); ++i) EXPECT_NEAR(r->reading[i], std::min(2.5, r->reference[i]), 1e-9);
+  for (size_t i = 0; i < r->t.size(); ++i)
+    EXPECT_NEAR(r->reading[i], std::min(2.5, r->reference[i]), 1e-9);
 
   SensorModel hy;
   hy.effects.hysteresis_width = 0.2;
@@ -192,7 +197,8 @@ TEST(Simulate, BadOptionsNameTheField) {
   EXPECT_THAT(std::string(SimulateSensor(SensorModel{}, o).status().message()), HasSubstr("rate"));
   o = Short();
   o.contact_taxel = 42;
-  EXPECT_THAT(std::string(SimulateSensor(SensorModel{}, o).status().message()), HasSubstr("contact_taxel"));
+  EXPECT_THAT(std::string(SimulateSensor(SensorModel{}, o).status().message()),
+              HasSubstr("contact_taxel"));
   SensorModel m;
   m.effects.threshold = -1;
   EXPECT_THAT(std::string(SimulateSensor(m, Short()).status().message()), HasSubstr("threshold"));
@@ -219,7 +225,8 @@ TEST(ModelJson, RoundTripAndErrors) {
   EXPECT_EQ(back->uncertainty, m.uncertainty);
 
   auto unknown = SensorModelFromJson("{\n  \"gain\": 1,\n  \"treshold\": 0.2\n}", "m.json");
-  EXPECT_THAT(std::string(unknown.status().message()), HasSubstr("m.json:3: field 'treshold': unknown field; did you mean 'threshold'?"));
+  EXPECT_THAT(std::string(unknown.status().message()),
+              HasSubstr("m.json:3: field 'treshold': unknown field; did you mean 'threshold'?"));
   auto bad = SensorModelFromJson("{\"lag\": \"fast\"}", "m.json");
   EXPECT_THAT(std::string(bad.status().message()), HasSubstr("field 'lag': expected a number"));
   auto range = SensorModelFromJson("{\"threshold_shift\": 2}", "m.json");
@@ -251,13 +258,17 @@ TEST(ModelJson, PrandtlIshlinskiiAndPowerLawRoundTripAndErrors) {
     return std::string(SensorModelFromJson(json, "m.json").status().message());
   };
   EXPECT_THAT(msg("{\"pi_thresholds\": [0, 0.1], \"pi_weights\": [1]}"), HasSubstr("same length"));
-  EXPECT_THAT(msg("{\"pi_thresholds\": [0.1, 0.1], \"pi_weights\": [1, 1]}"), HasSubstr("'pi_thresholds[1]'"));
-  EXPECT_THAT(msg("{\"pi_thresholds\": [0, 0.1], \"pi_weights\": [1, -1]}"), HasSubstr("'pi_weights[1]'"));
-  EXPECT_THAT(msg("{\"pi_thresholds\": [0.1], \"pi_weights\": [0]}"), HasSubstr("must not all be 0"));
+  EXPECT_THAT(msg("{\"pi_thresholds\": [0.1, 0.1], \"pi_weights\": [1, 1]}"),
+              HasSubstr("'pi_thresholds[1]'"));
+  EXPECT_THAT(msg("{\"pi_thresholds\": [0, 0.1], \"pi_weights\": [1, -1]}"),
+              HasSubstr("'pi_weights[1]'"));
+  EXPECT_THAT(msg("{\"pi_thresholds\": [0.1], \"pi_weights\": [0]}"),
+              HasSubstr("must not all be 0"));
   EXPECT_THAT(msg("{\"pi_thresholds\": [0.1], \"pi_weights\": [1], \"hysteresis_width\": 0.1}"),
               HasSubstr("exclusive"));
   EXPECT_THAT(msg("{\"pi_thresholds\": 0.1, \"pi_weights\": [1]}"), HasSubstr("expected an array"));
-  EXPECT_THAT(msg("{\"pi_thresholds\": [\"a\"], \"pi_weights\": [1]}"), HasSubstr("'pi_thresholds[0]': expected a number"));
+  EXPECT_THAT(msg("{\"pi_thresholds\": [\"a\"], \"pi_weights\": [1]}"),
+              HasSubstr("'pi_thresholds[0]': expected a number"));
   EXPECT_THAT(msg("{\"power_exponent\": -1}"), HasSubstr("power_exponent"));
   EXPECT_THAT(msg("{\"uncertainty\": {\"pi_weights[x]\": 1}}"), HasSubstr("unknown field"));
 }
@@ -285,7 +296,8 @@ TEST(Channel, PrandtlIshlinskiiIsAWeightedSumOfPlayOperators) {
   EffectParams b;
   b.hysteresis_width = 0.6;
   ApplyChannel(b, in, &play2);
-  for (size_t i = 0; i < t.size(); ++i) EXPECT_NEAR(pi[i], 0.5 * f[i] + 0.25 * play1[i] + 0.25 * play2[i], 1e-12);
+  for (size_t i = 0; i < t.size(); ++i)
+    EXPECT_NEAR(pi[i], 0.5 * f[i] + 0.25 * play1[i] + 0.25 * play2[i], 1e-12);
   // Residual after release = sum w r = 0.25 * 0.1 + 0.25 * 0.3.
   EXPECT_NEAR(pi[200], 0.1, 1e-9);
   // A single operator of radius r is the play operator of width 2r.
@@ -331,7 +343,8 @@ TEST(Channel, PowerLawAndItsInverse) {
   ASSERT_TRUE(run.ok()) << run.status();
   const auto pred = PredictReading(sm, run->t, run->reference, run->shear);
   double worst = 0;
-  for (size_t i = 0; i < pred.size(); ++i) worst = std::max(worst, std::abs(pred[i] - run->reading[i]));
+  for (size_t i = 0; i < pred.size(); ++i)
+    worst = std::max(worst, std::abs(pred[i] - run->reading[i]));
   EXPECT_LT(worst, 1e-3);  // play operators on the 4x finer simulation grid
 }
 

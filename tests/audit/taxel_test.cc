@@ -36,7 +36,8 @@ std::string TaxelCsv(const std::vector<std::string>& taxel_columns, int rows) {
   for (int i = 0; i < rows; ++i) {
     const double f = 4 * std::sin(0.1 * i) * std::sin(0.1 * i);
     csv += std::to_string(0.01 * i) + "," + std::to_string(f);
-    for (size_t j = 0; j < taxel_columns.size(); ++j) csv += "," + std::to_string(f * (j + 1) / 10.0);
+    for (size_t j = 0; j < taxel_columns.size(); ++j)
+      csv += "," + std::to_string(f * (j + 1) / 10.0);
     csv += "\n";
   }
   return csv;
@@ -62,7 +63,8 @@ TEST(TaxelCsv, MissingColumnsAreNamed) {
   EXPECT_THAT(Message(short_of.status()), HasSubstr("missing column(s) taxel_41"));
   auto beyond = ParseMeasuredCsv(TaxelCsv(cols, 60), "beyond.csv", 8);
   ASSERT_FALSE(beyond.ok());
-  EXPECT_THAT(Message(beyond.status()), HasSubstr("column 'taxel_40' beyond the 8 taxels expected"));
+  EXPECT_THAT(Message(beyond.status()),
+              HasSubstr("column 'taxel_40' beyond the 8 taxels expected"));
   auto none = ParseMeasuredCsv("t,reference,taxel\n0,1,2\n", "none.csv");
   ASSERT_FALSE(none.ok());
   EXPECT_THAT(Message(none.status()), HasSubstr("missing column(s) reading"));
@@ -124,7 +126,8 @@ TEST(Phantom, NamedFirstWithItsForce) {
     ASSERT_TRUE(rep.ok()) << rep.status();
     ASSERT_FALSE(rep->causes.empty()) << "seed " << seed;
     EXPECT_EQ(rep->causes[0].effect, kPhantom) << "seed " << seed;
-    EXPECT_NEAR(rep->causes[0].parameters.at("phantom_force"), pc.force, 0.05 + 0.2 * pc.force) << "seed " << seed;
+    EXPECT_NEAR(rep->causes[0].parameters.at("phantom_force"), pc.force, 0.05 + 0.2 * pc.force)
+        << "seed " << seed;
   }
 }
 
@@ -150,7 +153,8 @@ TEST(BlockedHoldout, LateEffectIsNamedAndItsBlockShown) {
   int named = 0;
   for (int k = 0; k < 4; ++k) {
     const uint64_t seed = rng() % 1000000;
-    const std::vector<Effect> late = {Effect::kHysteresis, Effect::kLag, Effect::kNonlinearity, Effect::kDelay};
+    const std::vector<Effect> late = {Effect::kHysteresis, Effect::kLag, Effect::kNonlinearity,
+                                      Effect::kDelay};
     const Effect e = late[(seed + k) % late.size()];
     auto hc = testing::MakeLateCase(e, seed);
     auto rep = RunAudit(hc.data, testing::FastOptions(hc));
@@ -160,12 +164,14 @@ TEST(BlockedHoldout, LateEffectIsNamedAndItsBlockShown) {
       if (c.effect == EffectName(e)) found = &c;
     ASSERT_EQ(rep->block_times.size(), 5u);
     if (found == nullptr) {
-      std::cout << "not named: " << EffectName(e) << " seed " << seed << ":\n" << FormatAuditSummary(*rep);
+      std::cout << "not named: " << EffectName(e) << " seed " << seed << ":\n"
+                << FormatAuditSummary(*rep);
       continue;
     }
     ++named;
     EXPECT_THAT(found->blocks, ::testing::Contains(4)) << EffectName(e) << " seed " << seed;
-    EXPECT_THAT(found->blocks, ::testing::Not(::testing::Contains(1))) << EffectName(e) << " seed " << seed;
+    EXPECT_THAT(found->blocks, ::testing::Not(::testing::Contains(1)))
+        << EffectName(e) << " seed " << seed;
   }
   EXPECT_GE(named, 3);
 }

@@ -65,9 +65,8 @@ int ErrorKinds(const google::protobuf::Struct& json) {
 class LoadTest : public RemoteCliTest {};
 
 TEST_F(LoadTest, PlanMixJsonHasNoErrors) {
-  const ProcessResult run = Tactforce({"load", "--target", address(), "--rpc", "plan",
-                                       "--requests", "2000", "--concurrency", "8", "--mix",
-                                       "--json"});
+  const ProcessResult run = Tactforce({"load", "--target", address(), "--rpc", "plan", "--requests",
+                                       "2000", "--concurrency", "8", "--mix", "--json"});
   ASSERT_EQ(run.exit_code, 0) << Describe(run);
   const google::protobuf::Struct json = ParseReport(run);
   EXPECT_EQ(json.fields().at("rpc").string_value(), "plan");
@@ -100,8 +99,8 @@ TEST_F(LoadTest, HealthAndSyncPlan) {
   EXPECT_EQ(json.fields().at("rpc").string_value(), "health");
   EXPECT_EQ(Number(json, "requests"), 1000);
 
-  run = Tactforce({"load", "--target", address(), "--rpc", "plan", "--engine", "sync",
-                   "--requests", "500", "-c", "3", "--json"});
+  run = Tactforce({"load", "--target", address(), "--rpc", "plan", "--engine", "sync", "--requests",
+                   "500", "-c", "3", "--json"});
   ASSERT_EQ(run.exit_code, 0) << Describe(run);
   json = ParseReport(run);
   EXPECT_EQ(Number(json, "requests"), 500);
@@ -110,8 +109,8 @@ TEST_F(LoadTest, HealthAndSyncPlan) {
 
 TEST_F(LoadTest, OpenLoopKeepsTheRate) {
   // 300 calls at 1000/s: ~0.3 s on schedule.
-  const ProcessResult run = Tactforce({"load", "--target", address(), "--rate", "1000",
-                                       "--requests", "300", "--json"});
+  const ProcessResult run =
+      Tactforce({"load", "--target", address(), "--rate", "1000", "--requests", "300", "--json"});
   ASSERT_EQ(run.exit_code, 0) << Describe(run);
   const google::protobuf::Struct json = ParseReport(run);
   EXPECT_EQ(json.fields().at("mode").string_value(), "open");
@@ -120,8 +119,8 @@ TEST_F(LoadTest, OpenLoopKeepsTheRate) {
 }
 
 TEST_F(LoadTest, DurationBoundAndTextReport) {
-  const ProcessResult run = Tactforce(
-      {"load", "--target", address(), "--duration", "0.5", "-c", "2", "--progress"});
+  const ProcessResult run =
+      Tactforce({"load", "--target", address(), "--duration", "0.5", "-c", "2", "--progress"});
   ASSERT_EQ(run.exit_code, 0) << Describe(run);
   EXPECT_THAT(run.out, HasSubstr("throughput"));
   EXPECT_THAT(run.out, HasSubstr("p99.9"));
@@ -131,8 +130,8 @@ TEST_F(LoadTest, DurationBoundAndTextReport) {
 
 TEST_F(LoadTest, RequestFileAndItsErrors) {
   const std::string good = dir_.Write("pinch.json", ExampleRequestJson());
-  ProcessResult run = Tactforce(
-      {"load", "--target", address(), "--request", good, "--requests", "200", "--json"});
+  ProcessResult run =
+      Tactforce({"load", "--target", address(), "--request", good, "--requests", "200", "--json"});
   ASSERT_EQ(run.exit_code, 0) << Describe(run);
   EXPECT_EQ(Number(ParseReport(run), "requests"), 200);
 
@@ -143,8 +142,8 @@ TEST_F(LoadTest, RequestFileAndItsErrors) {
   EXPECT_EQ(run.exit_code, 2) << Describe(run);
   EXPECT_THAT(run.err, HasSubstr("contacts[2].friction"));
 
-  run = Tactforce({"load", "--target", address(), "--rpc", "stream", "--rate", "10",
-                   "--requests", "10"});
+  run = Tactforce(
+      {"load", "--target", address(), "--rpc", "stream", "--rate", "10", "--requests", "10"});
   EXPECT_EQ(run.exit_code, 2) << Describe(run);
 }
 
@@ -153,8 +152,8 @@ TEST_F(LoadTest, RequestFileAndItsErrors) {
 TEST_F(LoadTest, NewRpcsWithBuiltInRequestsHaveNoErrors) {
   for (const char* rpc : {"estimate", "fit-inertia", "audit"}) {
     SCOPED_TRACE(rpc);
-    const ProcessResult run = Tactforce({"load", "--target", address(), "--rpc", rpc,
-                                         "--duration", "0.5", "-c", "2", "--json"});
+    const ProcessResult run = Tactforce(
+        {"load", "--target", address(), "--rpc", rpc, "--duration", "0.5", "-c", "2", "--json"});
     ASSERT_EQ(run.exit_code, 0) << Describe(run);
     const google::protobuf::Struct json = ParseReport(run);
     EXPECT_EQ(json.fields().at("rpc").string_value(), rpc);
@@ -219,8 +218,8 @@ TEST_F(LoadTest, NewRpcsWithRequestFiles) {
   const std::string estimates =
       dir_.Write("estimates.json", absl::StrCat("[", kEstimateJson, ",", kEstimateJson, "]"));
   const std::string stream = dir_.Write("stream.json", FitInertiaStreamJson());
-  const ProcessResult sim = Tactforce({"simulate", "inertia", "--seconds", "2", "--out",
-                                       dir_.Path("sim")});
+  const ProcessResult sim =
+      Tactforce({"simulate", "inertia", "--seconds", "2", "--out", dir_.Path("sim")});
   ASSERT_EQ(sim.exit_code, 0) << Describe(sim);
   const std::vector<std::vector<std::string>> cases = {
       {"--rpc", "estimate", "--request", estimate},
@@ -229,8 +228,8 @@ TEST_F(LoadTest, NewRpcsWithRequestFiles) {
       {"--rpc", "fit-inertia", "--request", dir_.Path("sim") + "/inertia.csv", "--batch", "64"}};
   for (const std::vector<std::string>& flags : cases) {
     SCOPED_TRACE(flags[1] + " " + flags[3]);
-    std::vector<std::string> args = {"load", "--target", address(), "--requests", "8", "-c", "2",
-                                     "--json"};
+    std::vector<std::string> args = {"load", "--target", address(), "--requests",
+                                     "8",    "-c",       "2",       "--json"};
     args.insert(args.end(), flags.begin(), flags.end());
     const ProcessResult run = Tactforce(args);
     ASSERT_EQ(run.exit_code, 0) << Describe(run);
@@ -525,8 +524,8 @@ TEST(LoadReplicasTest, TargetListSpreadsOverBothReplicas) {
   for (const std::string& target : targets) {
     SCOPED_TRACE(target);
     const int before_a = PlanLines(*a), before_b = PlanLines(*b);
-    const ProcessResult run = Tactforce(
-        {"load", "--target", target, "--requests", "1000", "-c", "4", "--json"});
+    const ProcessResult run =
+        Tactforce({"load", "--target", target, "--requests", "1000", "-c", "4", "--json"});
     ASSERT_EQ(run.exit_code, 0) << Describe(run);
     EXPECT_EQ(Number(ParseReport(run), "requests"), 1000);
     // Logging is synchronous per call, so the lines are there.

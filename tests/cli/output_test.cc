@@ -43,7 +43,8 @@ std::vector<std::string> IndentationErrors(const std::string& text) {
     if (spaces == std::string::npos) continue;
     const int expected = depth - ((line[spaces] == '}' || line[spaces] == ']') ? 1 : 0);
     if (static_cast<int>(spaces) != 2 * expected) {
-      errors.push_back(absl::StrFormat("line %d: %d spaces, expected %d: %s", number, spaces, 2 * expected, line));
+      errors.push_back(absl::StrFormat("line %d: %d spaces, expected %d: %s", number, spaces,
+                                       2 * expected, line));
     }
     io::JsonStringTracker strings;
     for (size_t i = spaces; i < line.size(); ++i) {
@@ -60,7 +61,9 @@ std::vector<std::string> IndentationErrors(const std::string& text) {
   return errors;
 }
 
-std::string Example(const std::string& name) { return (testing::SourceDir() / "client" / "examples" / name).string(); }
+std::string Example(const std::string& name) {
+  return (testing::SourceDir() / "client" / "examples" / name).string();
+}
 
 class OutputTest : public RemoteCliTest {};
 
@@ -72,36 +75,41 @@ TEST(IndentationCheckTest, FlagsOneSpaceAndOneLineJson) {
 
 // Every command that prints JSON, in the one layout.
 TEST_F(OutputTest, EveryJsonCommandIndentsByTwoSpaces) {
-  const ProcessResult sim = Tactforce({"simulate", "friction", "--mu", "0.6", "--trials", "3", "--noise", "0.05",
-                                       "--seed", "7", "--out", dir_.Path("fr")});
+  const ProcessResult sim = Tactforce({"simulate", "friction", "--mu", "0.6", "--trials", "3",
+                                       "--noise", "0.05", "--seed", "7", "--out", dir_.Path("fr")});
   ASSERT_EQ(sim.exit_code, 0) << Describe(sim);
   const std::vector<std::vector<std::string>> commands = {
       {"plan", "--local", "--request", Example("sphere_pinch.json"), "--json"},
-      {"plan", "--server", address(), "--request", Example("sphere_pinch.json"), "--format", "json"},
+      {"plan", "--server", address(), "--request", Example("sphere_pinch.json"), "--format",
+       "json"},
       {"plan", "--local", "--trajectory", Example("wrench_lift_trajectory.json"), "--json"},
       {"plan", "--local", "--friction-probe", Example("friction_probe.json"), "--json"},
       {"plan", "--server", address(), "--friction-probe", Example("friction_probe.json"), "--json"},
       {"estimate", "--local", "--request", Example("estimate_request.json"), "--json"},
-      {"friction", dir_.Path("fr/trial0.csv"), dir_.Path("fr/trial1.csv"), dir_.Path("fr/trial2.csv"), "--normal",
-       "0,0,-1", "--json"},
-      {"inertia", "--csv", Example("inertia_log.csv"), "--hull", Example("inertia_box.stl"), "--json"},
-      {"audit", "--reference", Example("reference.csv"), "--reading", Example("reading.csv"), "--out",
-       dir_.Path("audit"), "--json"},
+      {"friction", dir_.Path("fr/trial0.csv"), dir_.Path("fr/trial1.csv"),
+       dir_.Path("fr/trial2.csv"), "--normal", "0,0,-1", "--json"},
+      {"inertia", "--csv", Example("inertia_log.csv"), "--hull", Example("inertia_box.stl"),
+       "--json"},
+      {"audit", "--reference", Example("reference.csv"), "--reading", Example("reading.csv"),
+       "--out", dir_.Path("audit"), "--json"},
       {"health", "--server", address(), "--json"},
-      {"load", "--target", address(), "--rpc", "health", "--requests", "20", "--concurrency", "2", "--json"},
+      {"load", "--target", address(), "--rpc", "health", "--requests", "20", "--concurrency", "2",
+       "--json"},
       {"demo", "--repeat", "1", "--json"},
       {"experiment", "slope", "--mu", "0.6", "--no-creep", "--json"},
       {"experiment", "probe", "--mu", "0.6", "--trials", "1", "--no-progress", "--json"},
-      {"experiment", "inhand", "--duration", "1", "--no-progress", "--out", dir_.Path("inhand"), "--json"},
-      {"experiment", "ablation", "--seeds", "1", "--sources", "sim-0.25", "--methods", "constrained", "--duration",
-       "1.5", "--no-progress", "--json"},
+      {"experiment", "inhand", "--duration", "1", "--no-progress", "--out", dir_.Path("inhand"),
+       "--json"},
+      {"experiment", "ablation", "--seeds", "1", "--sources", "sim-0.25", "--methods",
+       "constrained", "--duration", "1.5", "--no-progress", "--json"},
   };
   for (const std::vector<std::string>& args : commands) {
     const std::string name = absl::StrCat(args[0], " ", args[1], " ", args[2]);
     const ProcessResult run = Tactforce(args, std::chrono::seconds(120));
     ASSERT_EQ(run.exit_code, 0) << name << ": " << Describe(run);
     EXPECT_TRUE(ParseJsonObject(run.out).ok()) << name << ":\n" << run.out;
-    EXPECT_THAT(IndentationErrors(run.out), ::testing::IsEmpty()) << name << ":\n" << run.out.substr(0, 600);
+    EXPECT_THAT(IndentationErrors(run.out), ::testing::IsEmpty()) << name << ":\n"
+                                                                  << run.out.substr(0, 600);
     EXPECT_EQ(run.out.substr(0, 4), "{\n  ") << name;  // never one line
   }
 }
@@ -113,16 +121,18 @@ TEST_F(OutputTest, FrictionProbeLocalAndRemoteAgreeOnADrawnRamp) {
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   for (int trial = 0; trial < 3; ++trial) {
     const double initial = 1.5 + 1.5 * unit(rng), final = 0.5 + (initial - 0.7) * unit(rng);
-    const double ramp = 0.5 + 1.5 * unit(rng), rate = 5 + 15 * unit(rng), tangential = 0.1 + 0.5 * unit(rng);
+    const double ramp = 0.5 + 1.5 * unit(rng), rate = 5 + 15 * unit(rng),
+                 tangential = 0.1 + 0.5 * unit(rng);
     const std::string request = absl::StrFormat(
         R"({"plan": %s, "position": {"z": 0.012}, "normal": {"z": -1}, "tangent": {"x": 1},
             "tangential_force": %.17g, "initial_normal_force": %.17g, "final_normal_force": %.17g,
             "ramp_rate": %.17g, "sample_rate": %.17g})",
-        api::ToJson(RandomRequest(trial, 3, v1::SOLVER_GEOMETRIC)),
-        tangential, initial, final, ramp, rate);
+        api::ToJson(RandomRequest(trial, 3, v1::SOLVER_GEOMETRIC)), tangential, initial, final,
+        ramp, rate);
     const std::string path = dir_.Write("probe.json", request);
     const ProcessResult local = Tactforce({"plan", "--local", "--friction-probe", path, "--json"});
-    const ProcessResult remote = Tactforce({"plan", "--server", address(), "--friction-probe", path, "--json"});
+    const ProcessResult remote =
+        Tactforce({"plan", "--server", address(), "--friction-probe", path, "--json"});
     ASSERT_EQ(local.exit_code, 0) << Describe(local);
     ASSERT_EQ(remote.exit_code, 0) << Describe(remote);
     v1::FrictionProbeResponse a, b;
@@ -145,7 +155,8 @@ TEST_F(OutputTest, FrictionProbeLocalAndRemoteAgreeOnADrawnRamp) {
 }
 
 TEST_F(OutputTest, FrictionProbeTableAndBadInput) {
-  const ProcessResult table = Tactforce({"plan", "--local", "--friction-probe", Example("friction_probe.json")});
+  const ProcessResult table =
+      Tactforce({"plan", "--local", "--friction-probe", Example("friction_probe.json")});
   ASSERT_EQ(table.exit_code, 0) << Describe(table);
   EXPECT_THAT(table.out, HasSubstr("probe force (N)"));
   EXPECT_THAT(table.out, HasSubstr("samples: "));
@@ -155,7 +166,8 @@ TEST_F(OutputTest, FrictionProbeTableAndBadInput) {
         {"plan", "--local", "--friction-probe", dir_.Path("missing.json")},
         {"plan", "--local", "--friction-probe", Example("friction_probe.json"), "--request",
          Example("sphere_pinch.json")},
-        {"plan", "--local", "--friction-probe", Example("friction_probe.json"), "--plot", dir_.Path("p.svg")}}) {
+        {"plan", "--local", "--friction-probe", Example("friction_probe.json"), "--plot",
+         dir_.Path("p.svg")}}) {
     const ProcessResult run = Tactforce(args);
     EXPECT_EQ(run.exit_code, 2) << Describe(run);
     EXPECT_EQ(run.out, "") << Describe(run);
@@ -165,10 +177,19 @@ TEST_F(OutputTest, FrictionProbeTableAndBadInput) {
 
 // Every client/examples/ path that a command's --help names is shipped.
 TEST_F(OutputTest, HelpExamplesNameShippedFiles) {
-  const std::vector<std::vector<std::string>> commands = {
-      {"plan"}, {"estimate"}, {"friction"}, {"inertia"}, {"audit"}, {"simulate", "sensor"},
-      {"simulate", "friction"}, {"simulate", "inertia"}, {"load"}, {"health"}, {"demo"},
-      {"experiment", "grasp"}, {"experiment", "slope"}};
+  const std::vector<std::vector<std::string>> commands = {{"plan"},
+                                                          {"estimate"},
+                                                          {"friction"},
+                                                          {"inertia"},
+                                                          {"audit"},
+                                                          {"simulate", "sensor"},
+                                                          {"simulate", "friction"},
+                                                          {"simulate", "inertia"},
+                                                          {"load"},
+                                                          {"health"},
+                                                          {"demo"},
+                                                          {"experiment", "grasp"},
+                                                          {"experiment", "slope"}};
   const std::regex example(R"(client/examples/[A-Za-z0-9_.\-]+)");
   int named = 0;
   for (std::vector<std::string> args : commands) {
@@ -177,7 +198,8 @@ TEST_F(OutputTest, HelpExamplesNameShippedFiles) {
     ASSERT_EQ(run.exit_code, 0) << Describe(run);
     for (std::sregex_iterator it(run.out.begin(), run.out.end(), example), end; it != end; ++it) {
       ++named;
-      EXPECT_TRUE(fs::exists(testing::SourceDir() / it->str())) << args[0] << " --help names " << it->str();
+      EXPECT_TRUE(fs::exists(testing::SourceDir() / it->str()))
+          << args[0] << " --help names " << it->str();
     }
   }
   EXPECT_GT(named, 5);

@@ -128,7 +128,8 @@ TEST_F(RemoteCallTest, StoppedServerIsUnavailable) {
   absl::StatusOr<v1::PlanResponse> response =
       CallUnary(Args(5'000), &v1::Planner::Stub::Plan, Request(1, v1::SOLVER_GEOMETRIC));
   EXPECT_EQ(response.status().code(), absl::StatusCode::kUnavailable);
-  EXPECT_THAT(std::string(response.status().message()), StartsWith("cannot reach " + address_ + ": "));
+  EXPECT_THAT(std::string(response.status().message()),
+              StartsWith("cannot reach " + address_ + ": "));
 }
 
 TEST_F(RemoteCallTest, UnreadableTlsFileFailsBeforeAnyCall) {

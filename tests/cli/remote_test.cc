@@ -53,7 +53,8 @@ TEST_F(RemotePlanTest, NetworkPlanEqualsLocalPlan) {
   for (size_t i = 0; i < requests.size(); ++i) {
     SCOPED_TRACE("request " + std::to_string(i));
     const std::string path = dir_.Write("request" + std::to_string(i) + ".json", requests[i]);
-    const ProcessResult remote = Tactforce({"plan", "--json", "--server", address(), "--request", path});
+    const ProcessResult remote =
+        Tactforce({"plan", "--json", "--server", address(), "--request", path});
     const ProcessResult local = Tactforce({"plan", "--json", "--local", "--request", path});
     ASSERT_EQ(remote.exit_code, 0) << Describe(remote);
     ASSERT_EQ(local.exit_code, 0) << Describe(local);
@@ -93,8 +94,8 @@ TEST_F(RemotePlanTest, DeadlineExceededIsExit4) {
   // ~900 rows take well over 20 ms; connecting to a loopback server does not.
   const std::string path =
       dir_.Write("slow.json", RequestJson(RandomRequest(31, 64, v1::SOLVER_IPOPT)));
-  const ProcessResult run =
-      Tactforce({"plan", "--json", "--server", address(), "--request", path, "--deadline-ms", "20"});
+  const ProcessResult run = Tactforce(
+      {"plan", "--json", "--server", address(), "--request", path, "--deadline-ms", "20"});
   EXPECT_EQ(run.exit_code, kExitDeadline) << Describe(run);
   EXPECT_THAT(run.err, HasSubstr("no answer within 20 ms"));
   ExpectOneLineError(run);
@@ -118,8 +119,8 @@ TEST_F(RemotePlanTest, HealthOfAnUnknownServiceIsExit2) {
 }
 
 TEST_F(RemotePlanTest, DemoThroughTheServer) {
-  const ProcessResult run = Tactforce(
-      {"demo", "--server", address(), "--repeat", "1", "--load-seconds", "1"});
+  const ProcessResult run =
+      Tactforce({"demo", "--server", address(), "--repeat", "1", "--load-seconds", "1"});
   ASSERT_EQ(run.exit_code, 0) << Describe(run);
   EXPECT_THAT(run.out, HasSubstr("3 of 3 grasps agree"));  // the local table is kept
   EXPECT_THAT(run.out, HasSubstr("health: SERVING"));
@@ -157,8 +158,8 @@ class UnreachableTest : public ::testing::Test {
 TEST_F(UnreachableTest, PlanIsExit3Quickly) {
   const std::string path = dir_.Write("pinch.json", ExampleRequestJson());
   const auto start = std::chrono::steady_clock::now();
-  const ProcessResult run =
-      Tactforce({"plan", "--json", "--server", address_, "--request", path, "--deadline-ms", "2000"});
+  const ProcessResult run = Tactforce(
+      {"plan", "--json", "--server", address_, "--request", path, "--deadline-ms", "2000"});
   const auto elapsed = std::chrono::steady_clock::now() - start;
   EXPECT_EQ(run.exit_code, kExitUnavailable) << Describe(run);
   EXPECT_THAT(run.err, StartsWith("error: cannot reach " + address_ + ": "));
@@ -188,7 +189,8 @@ TEST_F(UnreachableTest, EveryCommandIsLocalByDefault) {
   ASSERT_EQ(plan.exit_code, 0) << Describe(plan);
   EXPECT_TRUE(ParsePlanResponse(plan.out).ok()) << plan.out;
   EXPECT_THAT(plan.err, Not(HasSubstr("localhost:50051")));
-  const std::string example = (testing::SourceDir() / "client/examples/estimate_request.json").string();
+  const std::string example =
+      (testing::SourceDir() / "client/examples/estimate_request.json").string();
   const ProcessResult estimate = Tactforce({"estimate", "--request", example});
   EXPECT_EQ(estimate.exit_code, 0) << Describe(estimate);
 }
@@ -197,8 +199,10 @@ TEST_F(UnreachableTest, EveryRpcCommandTakesServer) {
   // The same --server flag in every command that makes an RPC: an
   // unreachable address is exit 3 naming it.
   const std::string examples = (testing::SourceDir() / "client/examples").string();
-  ASSERT_EQ(Tactforce({"simulate", "friction", "--trials", "2", "--out", dir_.Path("fr")}).exit_code, 0);
-  ASSERT_EQ(Tactforce({"simulate", "sensor", "--seconds", "5", "--out", dir_.Path("run")}).exit_code, 0);
+  ASSERT_EQ(
+      Tactforce({"simulate", "friction", "--trials", "2", "--out", dir_.Path("fr")}).exit_code, 0);
+  ASSERT_EQ(
+      Tactforce({"simulate", "sensor", "--seconds", "5", "--out", dir_.Path("run")}).exit_code, 0);
   const std::vector<std::vector<std::string>> commands = {
       {"plan", "--request", examples + "/sphere_pinch.json"},
       {"estimate", "--request", examples + "/estimate_request.json"},
@@ -220,7 +224,8 @@ TEST_F(UnreachableTest, EveryRpcCommandTakesServer) {
 
 TEST_F(UnreachableTest, BadConnectionFlagsAreExit2) {
   const std::string path = dir_.Write("pinch.json", ExampleRequestJson());
-  ProcessResult run = Tactforce({"plan", "--json", "--local", "--server", address_, "--request", path});
+  ProcessResult run =
+      Tactforce({"plan", "--json", "--local", "--server", address_, "--request", path});
   EXPECT_EQ(run.exit_code, kExitBadInput) << Describe(run);
   run = Tactforce({"plan", "--json", "--server", address_, "--request", path, "--tls-cert", path});
   EXPECT_EQ(run.exit_code, kExitBadInput) << Describe(run);  // needs --tls-key
@@ -261,8 +266,9 @@ TEST(RemoteTlsTest, MutualTls) {
       StartServer({"--tls-cert", dir.Path("server.crt"), "--tls-key", dir.Path("server.key"),
                    "--tls-client-ca", dir.Path("ca.crt")});
   ASSERT_NE(server, nullptr);
-  const std::vector<std::string> tls = {"--tls-ca",  dir.Path("ca.crt"),     "--tls-cert",
-                                        dir.Path("client.crt"), "--tls-key", dir.Path("client.key")};
+  const std::vector<std::string> tls = {"--tls-ca",   dir.Path("ca.crt"),
+                                        "--tls-cert", dir.Path("client.crt"),
+                                        "--tls-key",  dir.Path("client.key")};
   auto with_tls = [&](std::vector<std::string> args) {
     args.insert(args.end(), tls.begin(), tls.end());
     return args;
@@ -271,7 +277,8 @@ TEST(RemoteTlsTest, MutualTls) {
 
   ProcessResult run = Tactforce(with_tls({"health", "--server", server->address()}));
   EXPECT_EQ(run.exit_code, 0) << Describe(run);
-  run = Tactforce(with_tls({"plan", "--json", "--server", server->address(), "--request", request}));
+  run =
+      Tactforce(with_tls({"plan", "--json", "--server", server->address(), "--request", request}));
   EXPECT_EQ(run.exit_code, 0) << Describe(run);
   run = Tactforce(
       with_tls({"load", "--target", server->address(), "--requests", "200", "-c", "2", "--json"}));
@@ -292,10 +299,16 @@ class BackendConventionTest : public RemoteCliTest {};
 // friction and audit, which had no --server before, give the server's
 // answer as they give the local one.
 TEST_F(BackendConventionTest, FrictionAndAuditOnTheServerEqualLocal) {
-  ASSERT_EQ(Tactforce({"simulate", "friction", "--trials", "3", "--seed", "4", "--out", dir_.Path("fr")}).exit_code,
-            0);
-  const std::vector<std::string> friction = {"friction", dir_.Path("fr/trial0.csv"), dir_.Path("fr/trial1.csv"),
-                                             dir_.Path("fr/trial2.csv"), "--normal", "0,0,-1"};
+  ASSERT_EQ(
+      Tactforce({"simulate", "friction", "--trials", "3", "--seed", "4", "--out", dir_.Path("fr")})
+          .exit_code,
+      0);
+  const std::vector<std::string> friction = {"friction",
+                                             dir_.Path("fr/trial0.csv"),
+                                             dir_.Path("fr/trial1.csv"),
+                                             dir_.Path("fr/trial2.csv"),
+                                             "--normal",
+                                             "0,0,-1"};
   const ProcessResult local = Tactforce(friction);
   std::vector<std::string> remote_args = friction;
   remote_args.insert(remote_args.end(), {"--server", address()});
@@ -304,12 +317,13 @@ TEST_F(BackendConventionTest, FrictionAndAuditOnTheServerEqualLocal) {
   ASSERT_EQ(remote.exit_code, 0) << Describe(remote);
   EXPECT_EQ(local.out, remote.out);
 
-  ASSERT_EQ(Tactforce({"simulate", "sensor", "--model", (testing::SourceDir() / "client/examples/sensor_model.json").string(),
+  ASSERT_EQ(Tactforce({"simulate", "sensor", "--model",
+                       (testing::SourceDir() / "client/examples/sensor_model.json").string(),
                        "--seconds", "10", "--out", dir_.Path("run")})
                 .exit_code,
             0);
-  const std::vector<std::string> audit = {"audit", "--csv", dir_.Path("run/run.csv"), "--max-causes", "1",
-                                          "--blocks", "0"};
+  const std::vector<std::string> audit = {
+      "audit", "--csv", dir_.Path("run/run.csv"), "--max-causes", "1", "--blocks", "0"};
   std::vector<std::string> audit_local = audit, audit_remote = audit;
   audit_local.insert(audit_local.end(), {"--out", dir_.Path("local")});
   audit_remote.insert(audit_remote.end(), {"--out", dir_.Path("remote"), "--server", address()});
@@ -323,9 +337,9 @@ TEST_F(BackendConventionTest, FrictionAndAuditOnTheServerEqualLocal) {
   }
   // Two streams carry a clock offset AuditRequest cannot: refused, naming --server.
   const std::string examples = (testing::SourceDir() / "client/examples").string();
-  const ProcessResult streams = Tactforce({"audit", "--reference", examples + "/reference.csv", "--reading",
-                                           examples + "/reading.csv", "--out", dir_.Path("streams"), "--server",
-                                           address()});
+  const ProcessResult streams =
+      Tactforce({"audit", "--reference", examples + "/reference.csv", "--reading",
+                 examples + "/reading.csv", "--out", dir_.Path("streams"), "--server", address()});
   EXPECT_EQ(streams.exit_code, kExitBadInput) << Describe(streams);
   EXPECT_THAT(streams.err, HasSubstr("--server"));
   ExpectOneLineError(streams);
@@ -337,9 +351,13 @@ class RemoteInertiaTest : public RemoteCliTest {};
 // batches and prints the same answer as the local fit.
 TEST_F(RemoteInertiaTest, StreamedFitEqualsLocalFit) {
   const std::string sim = dir_.Path("sim");
-  ASSERT_EQ(Tactforce({"simulate", "inertia", "--out", sim, "--seconds", "3", "--force-variance", "0.25"}).exit_code, 0);
-  const std::vector<std::string> fit = {"inertia", "--csv", sim + "/inertia.csv", "--truth", sim + "/truth.json",
-                                        "--json", "--method", "factor-graph"};
+  ASSERT_EQ(
+      Tactforce({"simulate", "inertia", "--out", sim, "--seconds", "3", "--force-variance", "0.25"})
+          .exit_code,
+      0);
+  const std::vector<std::string> fit = {
+      "inertia",           "--csv",  sim + "/inertia.csv", "--truth",
+      sim + "/truth.json", "--json", "--method",           "factor-graph"};
   const ProcessResult local = Tactforce(fit);
   ASSERT_EQ(local.exit_code, 0) << Describe(local);
   std::vector<std::string> remote_args = fit;

@@ -16,9 +16,9 @@ namespace {
 
 TEST(LatencyHistogramTest, BucketsTileTheRange) {
   int previous = -1;
-  for (int64_t v : {int64_t{0}, int64_t{1}, int64_t{2047}, int64_t{2048}, int64_t{2049},
-                    int64_t{4095}, int64_t{4096}, int64_t{90'000}, int64_t{1'000'000'007},
-                    (int64_t{1} << 40) - 1}) {
+  for (int64_t v :
+       {int64_t{0}, int64_t{1}, int64_t{2047}, int64_t{2048}, int64_t{2049}, int64_t{4095},
+        int64_t{4096}, int64_t{90'000}, int64_t{1'000'000'007}, (int64_t{1} << 40) - 1}) {
     const int index = LatencyHistogram::BucketIndex(v);
     EXPECT_LE(LatencyHistogram::BucketLow(index), v);
     EXPECT_GT(LatencyHistogram::BucketHigh(index), v);
@@ -92,8 +92,8 @@ TEST(RpcErrorTest, MapsCodesToTheDocumentedErrors) {
   absl::Status s = RpcError(grpc::Status(grpc::StatusCode::UNAVAILABLE, "refused"), "h:1", 100);
   EXPECT_EQ(s.code(), absl::StatusCode::kUnavailable);
   EXPECT_EQ(s.message(), "cannot reach h:1: refused");
-  s = RpcError(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, "contacts[0].friction: < 0"),
-               "h:1", 100);
+  s = RpcError(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, "contacts[0].friction: < 0"), "h:1",
+               100);
   EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
   EXPECT_EQ(s.message(), "contacts[0].friction: < 0");
   s = RpcError(grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, "Deadline Exceeded"), "h:1", 100);

@@ -13,12 +13,13 @@ TEST_F(CliTest, AuditFindsAHiddenDelayInSimulatedData) {
   "units": "counts", "gain": -40, "offset": 1000, "noise": 0.02, "delay": 0.05
 })");
   const std::string sim = (dir() / "sim").string();
-  const CliRun run = Tactforce({"simulate", "sensor", "--model", model.string(), "--profile",
-                                "press-release", "--seconds", "20", "--rate", "200", "--seed", "4",
-                                "--out", sim});
+  const CliRun run =
+      Tactforce({"simulate", "sensor", "--model", model.string(), "--profile", "press-release",
+                 "--seconds", "20", "--rate", "200", "--seed", "4", "--out", sim});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const std::string out = (dir() / "report").string();
-  const CliRun audit = Tactforce({"audit", "--csv", sim + "/run.csv", "--out", out, "--units", "counts"});
+  const CliRun audit =
+      Tactforce({"audit", "--csv", sim + "/run.csv", "--out", out, "--units", "counts"});
   ASSERT_EQ(audit.exit_code, 0) << audit.err;
   const std::string report = ReadFile(out + "/report.json");
   EXPECT_NE(report.find("\"nominal_adequate\": false"), std::string::npos) << report.substr(0, 400);
@@ -46,7 +47,8 @@ TEST_F(CliTest, AuditBadInputNamesTheProblem) {
 // nothing written; with --taxels the expected count is enforced.
 TEST_F(CliTest, AuditPerTaxelCsvNamesAMissingColumn) {
   std::string csv = "t,reference,taxel_0,taxel_2\n";
-  for (int i = 0; i < 60; ++i) csv += std::to_string(0.01 * i) + "," + std::to_string(i % 7) + ",1,2\n";
+  for (int i = 0; i < 60; ++i)
+    csv += std::to_string(0.01 * i) + "," + std::to_string(i % 7) + ",1,2\n";
   const auto gap = Write("gap.csv", csv);
   const std::string out = (dir() / "taxel_report").string();
   const CliRun run = Tactforce({"audit", "--csv", gap.string(), "--out", out});
@@ -63,8 +65,9 @@ TEST_F(CliTest, AuditPerTaxelCsvNamesAMissingColumn) {
 // the report's own files.
 TEST_F(CliTest, AuditOutRefusesAFolderWithFilesUnlessForce) {
   const std::string examples = SourceDir().string() + "/client/examples/";
-  const std::vector<std::string> audit = {"audit", "--reference", examples + "reference.csv", "--reading",
-                                          examples + "reading.csv", "--quiet", "--out"};
+  const std::vector<std::string> audit = {
+      "audit",   "--reference", examples + "reference.csv", "--reading", examples + "reading.csv",
+      "--quiet", "--out"};
   const std::string out = (dir() / "report").string();
   auto with = [&](std::vector<std::string> extra) {
     std::vector<std::string> args = audit;
@@ -79,14 +82,16 @@ TEST_F(CliTest, AuditOutRefusesAFolderWithFilesUnlessForce) {
   const CliRun again = with({out});
   ExpectBadInput(again);
   EXPECT_NE(again.err.find("--out: '" + out + "' is not empty"), std::string::npos) << again.err;
-  EXPECT_NE(again.err.find("or --force to replace this audit's files"), std::string::npos) << again.err;
+  EXPECT_NE(again.err.find("or --force to replace this audit's files"), std::string::npos)
+      << again.err;
   EXPECT_EQ(ReadFile(out + "/summary.txt"), "an earlier report");  // nothing written
 
   // The same wording as simulate's refusal, but for its own files.
   const CliRun sim = Tactforce({"simulate", "sensor", "--seconds", "2", "--out", out});
   ExpectBadInput(sim);
   EXPECT_NE(sim.err.find("--out: '" + out + "' is not empty"), std::string::npos) << sim.err;
-  EXPECT_NE(sim.err.find("or --force to replace this simulation's files"), std::string::npos) << sim.err;
+  EXPECT_NE(sim.err.find("or --force to replace this simulation's files"), std::string::npos)
+      << sim.err;
 
   const CliRun forced = with({out, "--force"});
   ASSERT_EQ(forced.exit_code, 0) << forced.err;

@@ -19,7 +19,8 @@ constexpr char kEstimate[] = R"({
 })";
 
 TEST_F(CliTest, EstimateLocalPrintsForcesInRequestOrder) {
-  const CliRun run = Tactforce({"estimate", "--local", "--json", "--request", Write("e.json", kEstimate).string()});
+  const CliRun run = Tactforce(
+      {"estimate", "--local", "--json", "--request", Write("e.json", kEstimate).string()});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   v1::EstimateResponse r;
   ASSERT_TRUE(api::ParseJson(run.out, &r).ok()) << run.out;
@@ -42,12 +43,13 @@ TEST_F(CliTest, EstimateBadReadingsNameTheField) {
 
 TEST_F(CliTest, SimulateThenEstimateFriction) {
   const std::string out = (dir() / "sim").string();
-  const CliRun sim = Tactforce({"simulate", "friction", "--mu", "0.35", "--trials", "4",
-                                "--noise", "0.05", "--seed", "3", "--out", out});
+  const CliRun sim = Tactforce({"simulate", "friction", "--mu", "0.35", "--trials", "4", "--noise",
+                                "0.05", "--seed", "3", "--out", out});
   ASSERT_EQ(sim.exit_code, 0) << sim.err;
   ASSERT_TRUE(std::filesystem::exists(out + "/truth.json"));
-  const CliRun run = Tactforce({"friction", out + "/trial0.csv", out + "/trial1.csv",
-                                out + "/trial2.csv", out + "/trial3.csv", "--normal", "0,0,-1", "--json"});
+  const CliRun run =
+      Tactforce({"friction", out + "/trial0.csv", out + "/trial1.csv", out + "/trial2.csv",
+                 out + "/trial3.csv", "--normal", "0,0,-1", "--json"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   v1::FrictionResponse r;
   ASSERT_TRUE(api::ParseJson(run.out, &r).ok()) << run.out;
@@ -64,11 +66,14 @@ TEST_F(CliTest, SimulateThenEstimateFriction) {
 
 TEST_F(CliTest, FrictionUsesAMeshFile) {
   const std::string out = (dir() / "sim").string();
-  ASSERT_EQ(Tactforce({"simulate", "friction", "--mu", "0.6", "--trials", "1", "--out", out}).exit_code, 0);
+  ASSERT_EQ(
+      Tactforce({"simulate", "friction", "--mu", "0.6", "--trials", "1", "--out", out}).exit_code,
+      0);
   // A box top face at z = 0.02 as OBJ (counter-clockwise from outside: +z).
-  const auto obj = Write("box.obj",
-                         "v -0.05 -0.05 0.02\nv 0.05 -0.05 0.02\nv 0.05 0.05 0.02\nv -0.05 0.05 0.02\n"
-                         "v 0 0 -0.05\nf 1 2 3 4\nf 1 5 2\nf 2 5 3\nf 3 5 4\nf 4 5 1\n");
+  const auto obj =
+      Write("box.obj",
+            "v -0.05 -0.05 0.02\nv 0.05 -0.05 0.02\nv 0.05 0.05 0.02\nv -0.05 0.05 0.02\n"
+            "v 0 0 -0.05\nf 1 2 3 4\nf 1 5 2\nf 2 5 3\nf 3 5 4\nf 4 5 1\n");
   const CliRun run = Tactforce({"friction", out + "/trial0.csv", "--mesh", obj.string(), "--json"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   v1::FrictionResponse r;
@@ -115,8 +120,12 @@ TEST_F(CliTest, PlanTrajectoryLocal) {
   EXPECT_NE(table.out.find("4 steps: 4 optimal"), std::string::npos) << table.out;
   // A rotating step without inertia names the field.
   std::string text = ReadFile(example);
-  text.replace(text.find("\"inertia\""), std::string("\"inertia\": {\"ixx\": 0.0004, \"iyy\": 0.0025, \"izz\": 0.0027}").size(), "\"mass\": 0.3");
-  const CliRun bad = Tactforce({"plan", "--json", "--local", "--trajectory", Write("t.json", text).string()});
+  text.replace(
+      text.find("\"inertia\""),
+      std::string("\"inertia\": {\"ixx\": 0.0004, \"iyy\": 0.0025, \"izz\": 0.0027}").size(),
+      "\"mass\": 0.3");
+  const CliRun bad =
+      Tactforce({"plan", "--json", "--local", "--trajectory", Write("t.json", text).string()});
   EXPECT_EQ(bad.exit_code, 2) << bad.err;
 }
 

@@ -92,7 +92,8 @@ TEST(EstimationWorkspace, ReusedWorkspaceAnswersAsFreshEstimates) {
   for (size_t k = 0; k < cases.size(); ++k) {
     EstimateOptions options;
     options.method = k % 2 ? EstimateMethod::kNormalLsq : EstimateMethod::kProjection;
-    absl::StatusOr<ForceEstimate> fresh = EstimateForces(cases[k].problem, cases[k].readings, options);
+    absl::StatusOr<ForceEstimate> fresh =
+        EstimateForces(cases[k].problem, cases[k].readings, options);
     const absl::Status s =
         EstimateForces(cases[k].problem, cases[k].readings, options, &workspace, &reused);
     ASSERT_EQ(s.ok(), fresh.ok()) << k;

@@ -109,11 +109,11 @@ TEST(Projection, ProblemTwoSatisfiesItsOptimalityConditions) {
     const double finger_reading = e->normal_forces[4] - e->residuals[0];
     fm.segment<3>(12) = finger_reading * p.contacts[4].normal;
     for (int k = 0; k < 4; ++k) {
-      const double wk = std::max(0.0, p.contacts[k].normal.dot(f.segment<3>(3 * k) - fm.segment<3>(3 * k)));
+      const double wk =
+          std::max(0.0, p.contacts[k].normal.dot(f.segment<3>(3 * k) - fm.segment<3>(3 * k)));
       nw.segment<3>(3 * k) = wk * p.contacts[k].normal;
     }
-    const Eigen::VectorXd grad_x =
-        eq.null_basis.transpose() * (2 * (f - fm - nw) + 2 * lambda * f);
+    const Eigen::VectorXd grad_x = eq.null_basis.transpose() * (2 * (f - fm - nw) + 2 * lambda * f);
     EXPECT_LE(grad_x.cwiseAbs().maxCoeff(), 1e-8) << "trial " << trial;
   }
 }
@@ -173,7 +173,8 @@ TEST(EstimateForces, BadInputNamesTheField) {
   EXPECT_NE(status({1, 2, 3}, bad).message().find("origin_weight"), std::string::npos);
   PlanProblem broken = p;
   broken.contacts[1].normal.setZero();
-  EXPECT_EQ(EstimateForces(broken, {1, 2, 3}).status().message().rfind("contacts[1].normal", 0), 0u);
+  EXPECT_EQ(EstimateForces(broken, {1, 2, 3}).status().message().rfind("contacts[1].normal", 0),
+            0u);
   // Negative readings are allowed but flagged.
   absl::StatusOr<ForceEstimate> e = EstimateForces(p, {1.0, -0.2, 2.0});
   ASSERT_TRUE(e.ok());

@@ -50,9 +50,10 @@ TEST(Friction, NoSlipGivesALowerBound) {
   SimulatedFriction data = SimulateFriction(sim);
   // Keep only the samples before slip.
   auto& s = data.trials[0].samples;
-  s.erase(std::remove_if(s.begin(), s.end(),
-                         [&](const FrictionSample& x) { return x.t > data.true_slip_time[0] - 0.1; }),
-          s.end());
+  s.erase(
+      std::remove_if(s.begin(), s.end(),
+                     [&](const FrictionSample& x) { return x.t > data.true_slip_time[0] - 0.1; }),
+      s.end());
   absl::StatusOr<FrictionEstimate> e = EstimateFriction(data.trials);
   ASSERT_TRUE(e.ok());
   EXPECT_FALSE(e->trials[0].slipped);
@@ -99,7 +100,9 @@ TEST(Friction, SubMicrometrePreSlipDriftIsNotTheOnset) {
       travel = (travel - n * n.dot(travel)).normalized();
       const double creep = creep_um(rng) * 1e-6, t_slip = data.true_slip_time[i];
       for (FrictionSample& x : samples) {
-        if (x.t < t_slip) x.contact_point += travel * creep * (x.t - samples.front().t) / (t_slip - samples.front().t);
+        if (x.t < t_slip)
+          x.contact_point +=
+              travel * creep * (x.t - samples.front().t) / (t_slip - samples.front().t);
       }
     }
     SCOPED_TRACE(sim.mu);
@@ -114,7 +117,8 @@ TEST(Friction, SubMicrometrePreSlipDriftIsNotTheOnset) {
       early = std::max(early, data.true_slip_time[i] - unfloored->trials[i].slip_time);
     }
     EXPECT_NEAR(floored->median, sim.mu, 0.03);
-    EXPECT_GT(early, 10.0 / sim.rate) << "the control: without the floor the drift is read as the onset";
+    EXPECT_GT(early, 10.0 / sim.rate)
+        << "the control: without the floor the drift is read as the onset";
   }
 }
 
@@ -149,8 +153,8 @@ TEST(Friction, UsesTheNearestMeshTriangleNormal) {
   const double h = 0.02;
   for (int k = 0; k < 8; ++k)
     box.vertices.emplace_back(k & 1 ? h : -h, k & 2 ? h : -h, k & 4 ? h : -h);
-  box.triangles = {{4, 5, 7}, {4, 7, 6},   // top (+z)
-                   {0, 2, 3}, {0, 3, 1},   // bottom
+  box.triangles = {{4, 5, 7}, {4, 7, 6},  // top (+z)
+                   {0, 2, 3}, {0, 3, 1},  // bottom
                    {0, 1, 5}, {0, 5, 4}, {2, 6, 7}, {2, 7, 3},
                    {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
   FrictionOptions o;
@@ -180,16 +184,17 @@ TEST(Friction, BadInputNamesTheField) {
   FrictionOptions o;
   o.mesh = io::TriangleMesh{{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(2, 0, 0)}, {{0, 1, 2}}, {}};
   data = SimulateFriction(sim);
-  EXPECT_NE(EstimateFriction(data.trials, o).status().message().find("mesh.triangles[0]: degenerate"),
-            std::string::npos);
+  EXPECT_NE(
+      EstimateFriction(data.trials, o).status().message().find("mesh.triangles[0]: degenerate"),
+      std::string::npos);
   o.mesh = io::TriangleMesh{{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}, {{0, 1, 5}}, {}};
   EXPECT_NE(EstimateFriction(data.trials, o).status().message().find("out of range"),
             std::string::npos);
 }
 
 TEST(Friction, CsvRoundTripAndErrors) {
-  absl::StatusOr<io::CsvTable> t = io::ParseCsv("t,fx,fy,fz,px,py,pz,slip\n0,1,0,-2,0,0,0,0\n0.01,1,0,-2,0,0,0,1\n",
-                                        "a.csv");
+  absl::StatusOr<io::CsvTable> t =
+      io::ParseCsv("t,fx,fy,fz,px,py,pz,slip\n0,1,0,-2,0,0,0,0\n0.01,1,0,-2,0,0,0,1\n", "a.csv");
   ASSERT_TRUE(t.ok());
   absl::StatusOr<FrictionTrial> trial = FrictionTrialFromCsv(*t);
   ASSERT_TRUE(trial.ok());
@@ -198,10 +203,12 @@ TEST(Friction, CsvRoundTripAndErrors) {
   EXPECT_EQ(io::ParseCsv("t,fx\n0,abc\n", "b.csv").status().message(),
             "b.csv:2: column 'fx': not a number ('abc')");
   t = io::ParseCsv("t,fx\n0,1\n", "c.csv");
-  EXPECT_EQ(FrictionTrialFromCsv(*t).status().message(), "c.csv: missing column(s) fy, fz, px, py, pz");
+  EXPECT_EQ(FrictionTrialFromCsv(*t).status().message(),
+            "c.csv: missing column(s) fy, fz, px, py, pz");
   t = io::ParseCsv("t,fx,fy,fz,px,py,pz\n0,1,0,-2,0,0,0\n0,1,0,-2,0,0,0\n", "d.csv");
   EXPECT_EQ(FrictionTrialFromCsv(*t).status().message(), "d.csv:3: column 't': not increasing");
-  EXPECT_EQ(io::ParseCsv("t,fx\n0,1,2\n", "e.csv").status().message(), "e.csv:2: 3 fields, header has 2");
+  EXPECT_EQ(io::ParseCsv("t,fx\n0,1,2\n", "e.csv").status().message(),
+            "e.csv:2: 3 fields, header has 2");
 }
 
 }  // namespace

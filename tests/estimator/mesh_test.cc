@@ -33,10 +33,12 @@ namespace {
 namespace fs = std::filesystem;
 using Eigen::Vector3d;
 
-bool Has(const std::string& s, const std::string& what) { return s.find(what) != std::string::npos; }
+bool Has(const std::string& s, const std::string& what) {
+  return s.find(what) != std::string::npos;
+}
 
 io::MeshRequest Request(const std::string& path, std::optional<double> scale = std::nullopt,
-                    std::optional<io::MeshPlacement> pose = std::nullopt) {
+                        std::optional<io::MeshPlacement> pose = std::nullopt) {
   io::MeshRequest r;
   r.path = path;
   r.scale = scale;
@@ -47,10 +49,13 @@ io::MeshRequest Request(const std::string& path, std::optional<double> scale = s
 // ------------------------------------------------------------ the unit cube
 
 // Corner i of [0, 1]^3: x = bit 0, y = bit 1, z = bit 2.
-Vector3d Corner(int i) { return Vector3d(double(i & 1), double((i >> 1) & 1), double((i >> 2) & 1)); }
+Vector3d Corner(int i) {
+  return Vector3d(double(i & 1), double((i >> 1) & 1), double((i >> 2) & 1));
+}
 
 // The six faces as quads (corner numbers), counter-clockwise seen from outside.
-constexpr int kQuads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+constexpr int kQuads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                              {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
 constexpr uint32_t kFaceColors[6] = {0xff0000, 0x00ff00, 0x0000ff, 0xffff00, 0x00ffff, 0x808080};
 
 // The 12 triangles (corner numbers), two per quad, quad order.
@@ -73,9 +78,11 @@ io::TriangleMesh Cube() {
 std::string AsciiStl() {
   std::string s = "solid cube\n";
   for (const auto& t : CubeTriangles()) {
-    const Vector3d n = (Corner(t[1]) - Corner(t[0])).cross(Corner(t[2]) - Corner(t[0])).normalized();
+    const Vector3d n =
+        (Corner(t[1]) - Corner(t[0])).cross(Corner(t[2]) - Corner(t[0])).normalized();
     s += absl::StrFormat(" facet normal %g %g %g\n  outer loop\n", n.x(), n.y(), n.z());
-    for (int i : t) s += absl::StrFormat("   vertex %g %g %g\n", Corner(i).x(), Corner(i).y(), Corner(i).z());
+    for (int i : t)
+      s += absl::StrFormat("   vertex %g %g %g\n", Corner(i).x(), Corner(i).y(), Corner(i).z());
     s += "  endloop\n endfacet\n";
   }
   return s + "endsolid cube\n";
@@ -93,7 +100,8 @@ std::string BinaryStl() {
   s.replace(0, 11, "binary cube");  // must not start with "solid"
   AppendBinary<uint32_t>(&s, 12);
   for (const auto& t : CubeTriangles()) {
-    const Vector3d n = (Corner(t[1]) - Corner(t[0])).cross(Corner(t[2]) - Corner(t[0])).normalized();
+    const Vector3d n =
+        (Corner(t[1]) - Corner(t[0])).cross(Corner(t[2]) - Corner(t[0])).normalized();
     for (int k = 0; k < 3; ++k) AppendBinary<float>(&s, static_cast<float>(n(k)));
     for (int i : t)
       for (int k = 0; k < 3; ++k) AppendBinary<float>(&s, static_cast<float>(Corner(i)(k)));
@@ -105,22 +113,28 @@ std::string BinaryStl() {
 // Quads, 1-based indices.
 std::string ObjWithQuads() {
   std::string s = "# unit cube\no cube\n";
-  for (int i = 0; i < 8; ++i) s += absl::StrFormat("v %g %g %g\n", Corner(i).x(), Corner(i).y(), Corner(i).z());
-  for (const auto& q : kQuads) s += absl::StrFormat("f %d %d %d %d\n", q[0] + 1, q[1] + 1, q[2] + 1, q[3] + 1);
+  for (int i = 0; i < 8; ++i)
+    s += absl::StrFormat("v %g %g %g\n", Corner(i).x(), Corner(i).y(), Corner(i).z());
+  for (const auto& q : kQuads)
+    s += absl::StrFormat("f %d %d %d %d\n", q[0] + 1, q[1] + 1, q[2] + 1, q[3] + 1);
   return s;
 }
 
 // Quads with a colour per face.
 std::string AsciiPlyWithFaceColors() {
   std::string s =
-      "ply\nformat ascii 1.0\ncomment unit cube\nelement vertex 8\nproperty float x\nproperty float y\n"
-      "property float z\nelement face 6\nproperty list uchar int vertex_indices\nproperty uchar red\n"
+      "ply\nformat ascii 1.0\ncomment unit cube\nelement vertex 8\nproperty float x\nproperty "
+      "float y\n"
+      "property float z\nelement face 6\nproperty list uchar int vertex_indices\nproperty uchar "
+      "red\n"
       "property uchar green\nproperty uchar blue\nend_header\n";
-  for (int i = 0; i < 8; ++i) s += absl::StrFormat("%g %g %g\n", Corner(i).x(), Corner(i).y(), Corner(i).z());
+  for (int i = 0; i < 8; ++i)
+    s += absl::StrFormat("%g %g %g\n", Corner(i).x(), Corner(i).y(), Corner(i).z());
   for (int f = 0; f < 6; ++f) {
     const auto& q = kQuads[f];
     const uint32_t c = kFaceColors[f];
-    s += absl::StrFormat("4 %d %d %d %d %d %d %d\n", q[0], q[1], q[2], q[3], c >> 16, (c >> 8) & 0xff, c & 0xff);
+    s += absl::StrFormat("4 %d %d %d %d %d %d %d\n", q[0], q[1], q[2], q[3], c >> 16,
+                         (c >> 8) & 0xff, c & 0xff);
   }
   return s;
 }
@@ -129,7 +143,8 @@ std::string AsciiPlyWithFaceColors() {
 std::string BinaryPlyWithVertexColors() {
   std::string s =
       "ply\nformat binary_little_endian 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
-      "property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nelement face 12\n"
+      "property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nelement "
+      "face 12\n"
       "property list uchar int vertex_indices\nend_header\n";
   for (int i = 0; i < 8; ++i) {
     for (int k = 0; k < 3; ++k) AppendBinary<float>(&s, static_cast<float>(Corner(i)(k)));
@@ -221,7 +236,8 @@ TEST_F(MeshFiles, EveryFormatGivesTheWeldedUnitCube) {
 }
 
 TEST_F(MeshFiles, ColoursArePerFaceOrAveragedFromTheVertices) {
-  absl::StatusOr<io::TriangleMesh> ascii = io::ReadMeshFile(Write("c.ply", AsciiPlyWithFaceColors()));
+  absl::StatusOr<io::TriangleMesh> ascii =
+      io::ReadMeshFile(Write("c.ply", AsciiPlyWithFaceColors()));
   ASSERT_TRUE(ascii.ok()) << ascii.status();
   ASSERT_EQ(ascii->face_colors.size(), 12u);
   // Each triangle has its quad's colour; the two triangles of a quad are its
@@ -241,7 +257,8 @@ TEST_F(MeshFiles, ColoursArePerFaceOrAveragedFromTheVertices) {
     ASSERT_GE(quad, 0);
     EXPECT_EQ(ascii->face_colors[t], kFaceColors[quad]) << "triangle " << t;
   }
-  absl::StatusOr<io::TriangleMesh> binary = io::ReadMeshFile(Write("c_bin.ply", BinaryPlyWithVertexColors()));
+  absl::StatusOr<io::TriangleMesh> binary =
+      io::ReadMeshFile(Write("c_bin.ply", BinaryPlyWithVertexColors()));
   ASSERT_TRUE(binary.ok()) << binary.status();
   EXPECT_EQ(binary->face_colors, std::vector<uint32_t>(12, 0x336699));
   // No colours in the file: none in the mesh.
@@ -264,10 +281,12 @@ TEST(SharedMeshes, LoadClosedWithPlausibleDensities) {
     EXPECT_EQ(fs::path(m->mesh_path), fs::path(*dir) / (std::string(tool) + ".ply"));
     EXPECT_EQ(m->placement.scale, 0.001);  // the CAD files are in millimetres
     const io::MeshCheck c = io::CheckMesh(m->mesh);
-    EXPECT_TRUE(c.closed) << c.boundary_edges << " boundary, " << c.non_manifold_edges << " non-manifold";
+    EXPECT_TRUE(c.closed) << c.boundary_edges << " boundary, " << c.non_manifold_edges
+                          << " non-manifold";
     EXPECT_TRUE(c.consistently_oriented) << c.inconsistent_edges;
     EXPECT_TRUE(io::RequireClosedSolid(c, m->name).ok()) << io::RequireClosedSolid(c, m->name);
-    absl::StatusOr<inertia::InertiaTruth> truth = inertia::ReadTruthJsonFile(*dir + "/" + tool + ".truth.json");
+    absl::StatusOr<inertia::InertiaTruth> truth =
+        inertia::ReadTruthJsonFile(*dir + "/" + tool + ".truth.json");
     ASSERT_TRUE(truth.ok()) << truth.status();
     const double density = truth->params.mass / c.volume;  // kg/m^3
     EXPECT_GT(density, 500);
@@ -308,7 +327,6 @@ class Descriptors : public MeshFiles {
   }
 };
 
-
 TEST_F(Descriptors, ReadsAllKeysAndDefaults) {
   const std::string p = Write("cube.mesh.json",
                               R"({"mesh": "cube.obj", "scale": 0.001,
@@ -325,7 +343,8 @@ TEST_F(Descriptors, ReadsAllKeysAndDefaults) {
   ASSERT_TRUE(plain.ok()) << plain.status();
   EXPECT_EQ(plain->placement.scale, 1.0);
   EXPECT_EQ(plain->placement.position, Vector3d::Zero());
-  EXPECT_TRUE(plain->placement.orientation.coeffs().isApprox(Eigen::Quaterniond::Identity().coeffs()));
+  EXPECT_TRUE(
+      plain->placement.orientation.coeffs().isApprox(Eigen::Quaterniond::Identity().coeffs()));
 }
 
 TEST_F(Descriptors, ErrorsNameTheFileAndTheKey) {
@@ -365,9 +384,11 @@ TEST_F(Descriptors, ErrorsNameTheFileAndTheKey) {
   EXPECT_LE(column, 15) << e;  // nlohmann reports the end of the token (15)
 
   // A descriptor that does not exist.
-  absl::StatusOr<io::MeshDescriptor> missing = io::ReadMeshDescriptor((dir_ / "none.mesh.json").string());
+  absl::StatusOr<io::MeshDescriptor> missing =
+      io::ReadMeshDescriptor((dir_ / "none.mesh.json").string());
   ASSERT_FALSE(missing.ok());
-  EXPECT_TRUE(Has(std::string(missing.status().message()), (dir_ / "none.mesh.json").string() + ": cannot open"))
+  EXPECT_TRUE(Has(std::string(missing.status().message()),
+                  (dir_ / "none.mesh.json").string() + ": cannot open"))
       << missing.status();
 }
 
@@ -385,7 +406,8 @@ TEST_F(Descriptors, LoadMeshOverridesReplaceTheDescriptorsValues) {
     for (size_t i = 0; i < l.mesh.vertices.size(); ++i) {
       // The loaded mesh keeps the file's vertex order; find the corner by the inverse map.
       const Vector3d back =
-          (l.placement.orientation.toRotationMatrix() * l.mesh.vertices[i] + l.placement.position) / l.placement.scale;
+          (l.placement.orientation.toRotationMatrix() * l.mesh.vertices[i] + l.placement.position) /
+          l.placement.scale;
       if ((back - corner).norm() < 1e-9) return l.mesh.vertices[i];
     }
     return Vector3d(Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
@@ -413,19 +435,22 @@ TEST_F(Descriptors, LoadMeshOverridesReplaceTheDescriptorsValues) {
   EXPECT_LT((image(*posed, Vector3d(1, 0, 0)) - Vector3d(0.001 - 0.01, 0, 0)).norm(), 1e-15);
 
   // Without a descriptor the file is in the object frame, metres; overrides apply.
-  absl::StatusOr<io::LoadedMesh> bare = io::LoadMesh(Request((dir_ / "cube.obj").string(), 0.5, std::nullopt));
+  absl::StatusOr<io::LoadedMesh> bare =
+      io::LoadMesh(Request((dir_ / "cube.obj").string(), 0.5, std::nullopt));
   ASSERT_TRUE(bare.ok()) << bare.status();
   EXPECT_NEAR(io::CheckMesh(bare->mesh).volume, 0.125, 1e-15);
 
   // Bad overrides are errors naming the field.
   absl::StatusOr<io::LoadedMesh> zero = io::LoadMesh(Request(p, 0.0, std::nullopt));
   ASSERT_FALSE(zero.ok());
-  EXPECT_TRUE(Has(std::string(zero.status().message()), "mesh.scale: must be > 0")) << zero.status();
+  EXPECT_TRUE(Has(std::string(zero.status().message()), "mesh.scale: must be > 0"))
+      << zero.status();
   io::MeshPlacement no_rotation;
   no_rotation.orientation = Eigen::Quaterniond(0, 0, 0, 0);
   absl::StatusOr<io::LoadedMesh> bad_pose = io::LoadMesh(Request(p, std::nullopt, no_rotation));
   ASSERT_FALSE(bad_pose.ok());
-  EXPECT_TRUE(Has(std::string(bad_pose.status().message()), "mesh.orientation")) << bad_pose.status();
+  EXPECT_TRUE(Has(std::string(bad_pose.status().message()), "mesh.orientation"))
+      << bad_pose.status();
 }
 
 // ---------------------------------------------------------------- placement
@@ -448,9 +473,11 @@ TEST(Placement, TransformMapsAVertexAsRTransposeOfScaledMinusPosition) {
   pl.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Vector3d(1, 2, 3).normalized()));
   pl.orientation.coeffs() *= 3.0;
   const io::TriangleMesh general = io::TransformToObjectFrame(m, pl);
-  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(0.7, Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   for (size_t i = 0; i < m.vertices.size(); ++i)
-    EXPECT_LT((general.vertices[i] - R.transpose() * (0.001 * m.vertices[i] - pl.position)).norm(), 1e-15);
+    EXPECT_LT((general.vertices[i] - R.transpose() * (0.001 * m.vertices[i] - pl.position)).norm(),
+              1e-15);
   EXPECT_EQ(general.triangles, m.triangles);
   EXPECT_EQ(general.face_colors, m.face_colors);
   EXPECT_NEAR(io::CheckMesh(general).volume, 1.0, 1e-12);
@@ -465,7 +492,8 @@ TEST(Placement, ValidationNamesTheField) {
   EXPECT_EQ(io::ValidatePlacement(pl, "m").message(), "m.position: not finite");
   pl.position.setZero();
   pl.orientation = Eigen::Quaterniond(1e-7, 0, 0, 0);
-  EXPECT_TRUE(Has(std::string(io::ValidatePlacement(pl).message()), "mesh.orientation: quaternion norm"));
+  EXPECT_TRUE(
+      Has(std::string(io::ValidatePlacement(pl).message()), "mesh.orientation: quaternion norm"));
 }
 
 // ----------------------------------------------------------------- checking
@@ -476,7 +504,8 @@ TEST(CheckMesh, OpenBoxCountsItsBoundaryEdges) {
   io::MeshCheck c = io::CheckMesh(one);
   EXPECT_EQ(c.boundary_edges, 3);
   EXPECT_FALSE(c.closed);
-  EXPECT_EQ(io::RequireClosedSolid(c, "box.stl").message(), "box.stl: 3 boundary edges: the mesh is not closed");
+  EXPECT_EQ(io::RequireClosedSolid(c, "box.stl").message(),
+            "box.stl: 3 boundary edges: the mesh is not closed");
 
   io::TriangleMesh face = Cube();
   face.triangles.resize(10);  // a whole face missing: its four sides (the diagonal goes with it)
@@ -484,7 +513,8 @@ TEST(CheckMesh, OpenBoxCountsItsBoundaryEdges) {
   EXPECT_EQ(c.boundary_edges, 4);
   EXPECT_FALSE(c.closed);
   EXPECT_TRUE(c.consistently_oriented);
-  EXPECT_EQ(io::RequireClosedSolid(c, "box.stl").message(), "box.stl: 4 boundary edges: the mesh is not closed");
+  EXPECT_EQ(io::RequireClosedSolid(c, "box.stl").message(),
+            "box.stl: 4 boundary edges: the mesh is not closed");
 }
 
 TEST(CheckMesh, InvertedBoxMustBeFlipped) {
@@ -520,7 +550,8 @@ TEST(CheckMesh, OneFlippedTriangleIsInconsistent) {
   EXPECT_FALSE(c.consistently_oriented);
   EXPECT_EQ(c.inconsistent_edges, 3);
   EXPECT_EQ(io::RequireClosedSolid(c, "part.obj").message(),
-            "part.obj: 3 edges are traversed twice in the same direction: the triangles are not consistently "
+            "part.obj: 3 edges are traversed twice in the same direction: the triangles are not "
+            "consistently "
             "oriented");
 }
 
@@ -542,7 +573,8 @@ TEST_F(MeshFiles, ReadingErrorsNameTheFile) {
   const std::string dae = Write("cube.dae", ObjWithQuads());
   absl::StatusOr<io::TriangleMesh> r = io::ReadMeshFile(dae);
   ASSERT_FALSE(r.ok());
-  EXPECT_EQ(r.status().message(), dae + ": unknown mesh format '.dae' (expected .stl, .obj or .ply)");
+  EXPECT_EQ(r.status().message(),
+            dae + ": unknown mesh format '.dae' (expected .stl, .obj or .ply)");
   absl::StatusOr<io::LoadedMesh> l = io::LoadMesh(Request(dae));
   ASSERT_FALSE(l.ok());
   EXPECT_TRUE(Has(std::string(l.status().message()), "unknown mesh format")) << l.status();
@@ -556,12 +588,14 @@ TEST_F(MeshFiles, ReadingErrorsNameTheFile) {
   r = io::ReadMeshBytes("ply\nformat ascii 1.0\nelement vertex 3\n", "ply", "short.ply");
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.status().message(), "short.ply: not a PLY file: no 'end_header' line");
-  r = io::ReadMeshBytes("ply\nformat ascii 1.0\nelement vertex 1\nproperty floa0 z\nend_header\n0\n", "ply", "t.ply");
+  r = io::ReadMeshBytes(
+      "ply\nformat ascii 1.0\nelement vertex 1\nproperty floa0 z\nend_header\n0\n", "ply", "t.ply");
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.status().message(), "t.ply: PLY header line 4: unexpected 'property floa0 z'");
   r = io::ReadMeshBytes("ply\nformat binary_middle_endian 1.0\nend_header\n", "ply", "odd.ply");
   ASSERT_FALSE(r.ok());
-  EXPECT_EQ(r.status().message(), "odd.ply: PLY header line 2: unexpected 'format binary_middle_endian 1.0'");
+  EXPECT_EQ(r.status().message(),
+            "odd.ply: PLY header line 2: unexpected 'format binary_middle_endian 1.0'");
 
   const std::string missing = (dir_ / "missing.ply").string();
   r = io::ReadMeshFile(missing);
@@ -575,7 +609,8 @@ TEST_F(MeshFiles, ReadingErrorsNameTheFile) {
   const std::string desc = Write("gone.mesh.json", R"({"mesh": "gone.stl"})");
   l = io::LoadMesh(Request(desc));
   ASSERT_FALSE(l.ok());
-  EXPECT_EQ(l.status().message().rfind((dir_ / "gone.stl").string() + ": cannot open", 0), 0u) << l.status();
+  EXPECT_EQ(l.status().message().rfind((dir_ / "gone.stl").string() + ": cannot open", 0), 0u)
+      << l.status();
 
   std::string garbage = "\x01\x02\x03 not a mesh at all \xff\xfe";
   for (const char* ext : {"stl", "obj", "ply"}) {
@@ -671,19 +706,23 @@ TEST(ConvexHull, DegenerateSetsAreNamed) {
   std::vector<Vector3d> plane;
   const Vector3d u = Vector3d(1, 1, 0).normalized(), v = Vector3d(0, 0, 1);
   for (int i = 0; i < 5; ++i)
-    for (int j = 0; j < 5; ++j) plane.push_back(0.1 * i * u + 0.05 * j * v + Vector3d(0.3, -0.2, 0.1));
-  EXPECT_EQ(message(plane), "hull: degenerate: all vertices are coplanar (a flat object has no volume)");
+    for (int j = 0; j < 5; ++j)
+      plane.push_back(0.1 * i * u + 0.05 * j * v + Vector3d(0.3, -0.2, 0.1));
+  EXPECT_EQ(message(plane),
+            "hull: degenerate: all vertices are coplanar (a flat object has no volume)");
   std::vector<Vector3d> line;
   for (int i = 0; i < 6; ++i) line.push_back(Vector3d(1, 2, 3) * (0.01 * i) + Vector3d(0.1, 0, 0));
   EXPECT_EQ(message(line), "hull: degenerate: all vertices are collinear");
   EXPECT_EQ(message(std::vector<Vector3d>(5, Vector3d(1, 2, 3))), "hull: all vertices coincide");
   EXPECT_EQ(message({Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0)}),
             "hull: 3 vertices; at least 4 non-coplanar vertices are needed");
-  std::vector<Vector3d> nan = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0), Vector3d(0, 0, 1)};
+  std::vector<Vector3d> nan = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0),
+                               Vector3d(0, 0, 1)};
   nan[2].y() = std::numeric_limits<double>::infinity();
   EXPECT_EQ(message(nan), "hull[2]: not finite");
   // A slab 1e-12 thick is flat for the hull (thickness below 1e-9 of its size).
-  std::vector<Vector3d> slab = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0), Vector3d(1, 1, 1e-12)};
+  std::vector<Vector3d> slab = {Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0),
+                                Vector3d(1, 1, 1e-12)};
   EXPECT_TRUE(Has(message(slab), "coplanar"));
 }
 

@@ -20,8 +20,8 @@ TEST(Trajectory, EveryStepSatisfiesNewtonEuler) {
     ASSERT_EQ(r->optimal, 50) << ToString(kind);
     const ObjectModel& o = t.base.object;
     const Eigen::Matrix3d ic = t.inertia->Matrix();
-    const Eigen::Matrix3d io =
-        ic + o.mass * (o.com.squaredNorm() * Eigen::Matrix3d::Identity() - o.com * o.com.transpose());
+    const Eigen::Matrix3d io = ic + o.mass * (o.com.squaredNorm() * Eigen::Matrix3d::Identity() -
+                                              o.com * o.com.transpose());
     for (size_t k = 0; k < t.steps.size(); ++k) {
       const TrajectoryStep& s = t.steps[k];
       Vec3 force = Vec3::Zero(), torque = Vec3::Zero();
@@ -43,8 +43,10 @@ TEST(Trajectory, EveryStepSatisfiesNewtonEuler) {
 
 TEST(Trajectory, WarmStartChangesNothingButWork) {
   const TrajectoryProblem t = LiftAndRotate(100);
-  absl::StatusOr<TrajectoryResult> warm = PlanTrajectory(t, PlanOptions{}, SolverKind::kGeometric, true);
-  absl::StatusOr<TrajectoryResult> cold = PlanTrajectory(t, PlanOptions{}, SolverKind::kGeometric, false);
+  absl::StatusOr<TrajectoryResult> warm =
+      PlanTrajectory(t, PlanOptions{}, SolverKind::kGeometric, true);
+  absl::StatusOr<TrajectoryResult> cold =
+      PlanTrajectory(t, PlanOptions{}, SolverKind::kGeometric, false);
   ASSERT_TRUE(warm.ok() && cold.ok());
   int warm_iters = 0, cold_iters = 0;
   for (int k = 0; k < 100; ++k) {
@@ -65,7 +67,9 @@ TEST(Trajectory, ErrorsNameTheStep) {
   TrajectoryProblem no_inertia = t;
   no_inertia.inertia.reset();
   EXPECT_NE(PlanTrajectory(no_inertia, PlanOptions{}, SolverKind::kGeometric)
-                .status().message().find("object.inertia: required because steps[0]"),
+                .status()
+                .message()
+                .find("object.inertia: required because steps[0]"),
             std::string::npos);
   t.steps[3].angular_velocity.x() = NAN;
   EXPECT_EQ(PlanTrajectory(t, PlanOptions{}, SolverKind::kGeometric).status().message(),
@@ -93,13 +97,14 @@ TEST(FrictionProbe, HoldingFingersBalanceTheProbe) {
   FrictionProbe probe;
   probe.position = Vec3(0, 0, 0.06);  // on the top face
   probe.normal = Vec3(0, 0, -1);
-  probe.tangent = Vec3(1, 0, 0.3);    // projected onto the face
+  probe.tangent = Vec3(1, 0, 0.3);  // projected onto the face
   probe.tangential_force = 1.0;
   probe.initial_normal_force = 3.0;
   probe.final_normal_force = 0.5;
   probe.ramp_rate = 1.0;
   probe.sample_rate = 20.0;
-  absl::StatusOr<ProbePlan> plan = PlanFrictionProbe(hold, probe, PlanOptions{}, SolverKind::kGeometric);
+  absl::StatusOr<ProbePlan> plan =
+      PlanFrictionProbe(hold, probe, PlanOptions{}, SolverKind::kGeometric);
   ASSERT_TRUE(plan.ok()) << plan.status();
   ASSERT_EQ(plan->times.size(), 51u);
   EXPECT_EQ(plan->holding.optimal, 51);
@@ -118,15 +123,17 @@ TEST(FrictionProbe, HoldingFingersBalanceTheProbe) {
     EXPECT_LE(torque.norm(), 1e-8);
   }
   probe.tangent = probe.normal;
-  EXPECT_EQ(PlanFrictionProbe(hold, probe, PlanOptions{}, SolverKind::kGeometric).status().message(),
-            "probe.tangent: zero length after projection onto the tangent plane");
+  EXPECT_EQ(
+      PlanFrictionProbe(hold, probe, PlanOptions{}, SolverKind::kGeometric).status().message(),
+      "probe.tangent: zero length after projection onto the tangent plane");
   // Issue 16: 2.5e18 steps were cast to int (undefined behaviour) and
   // answered "at least one step is required".
   probe.tangent = Vec3(1, 0, 0);
   probe.ramp_rate = 1e-9;
   probe.sample_rate = 1e9;
-  EXPECT_EQ(PlanFrictionProbe(hold, probe, PlanOptions{}, SolverKind::kGeometric).status().message(),
-            "probe.sample_rate: more than 100000 steps; ramp faster or sample slower");
+  EXPECT_EQ(
+      PlanFrictionProbe(hold, probe, PlanOptions{}, SolverKind::kGeometric).status().message(),
+      "probe.sample_rate: more than 100000 steps; ramp faster or sample slower");
 }
 
 // Issue 16: deadlines, cancellation and shutdown reach a long motion between
@@ -142,8 +149,9 @@ TEST(Trajectory, InterruptEndsTheMotionBetweenSteps) {
   EXPECT_EQ(r.status().message(), "interrupted after 3 of 200 steps");
   TrajectoryProblem bad = t;
   bad.inertia->ixx = -1e-4;
-  EXPECT_EQ(PlanTrajectory(bad, PlanOptions{}, SolverKind::kGeometric).status().message().substr(0, 16),
-            "object.inertia: ");
+  EXPECT_EQ(
+      PlanTrajectory(bad, PlanOptions{}, SolverKind::kGeometric).status().message().substr(0, 16),
+      "object.inertia: ");
 }
 
 }  // namespace

@@ -32,9 +32,10 @@ AblationSource DrawnSource() {
     p.mass = 0.3 + 1.2 * u(rng);
     p.com = inertia::Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5) * 0.06;
     const inertia::Vec3 e(0.06 + 0.1 * u(rng), 0.06 + 0.1 * u(rng), 0.06 + 0.1 * u(rng));
-    p.inertia_com = inertia::InertiaTensor::FromArray({p.mass / 12 * (e.y() * e.y() + e.z() * e.z()),
-                                                      p.mass / 12 * (e.x() * e.x() + e.z() * e.z()),
-                                                      p.mass / 12 * (e.x() * e.x() + e.y() * e.y()), 0, 0, 0});
+    p.inertia_com =
+        inertia::InertiaTensor::FromArray({p.mass / 12 * (e.y() * e.y() + e.z() * e.z()),
+                                           p.mass / 12 * (e.x() * e.x() + e.z() * e.z()),
+                                           p.mass / 12 * (e.x() * e.x() + e.y() * e.y()), 0, 0, 0});
     absl::StatusOr<inertia::SimulatedObject> object = inertia::ObjectFromParameters("drawn", p);
     if (!object.ok()) return object.status();
     inertia::SimulationOptions so;
@@ -94,7 +95,8 @@ TEST(Ablation, OptionsMatchTheMethodNames) {
     EXPECT_FALSE(o.hull.empty());  // the mesh's vertices
     EXPECT_EQ(o.baseline_ls.savitzky_golay, m == AblationMethod::kBaselineLsSg);
     if (o.method == inertia::InertiaMethod::kFactorGraph)
-      EXPECT_EQ(std::string(ToString(o.factor_graph.variant)), ToString(m));  // the variants' own names
+      EXPECT_EQ(std::string(ToString(o.factor_graph.variant)),
+                ToString(m));  // the variants' own names
   }
 }
 
@@ -133,12 +135,19 @@ TEST(Ablation, JsonHasExactlyTheDocumentedFields) {
   c.methods = {AblationMethod::kFgC, AblationMethod::kConstrained};
   absl::StatusOr<AblationTable> t = RunAblation(c, {DrawnSource()});
   ASSERT_TRUE(t.ok()) << t.status();
-  t->rows[0].median_riemannian = std::numeric_limits<double>::infinity();  // as for an inconsistent estimate
+  t->rows[0].median_riemannian =
+      std::numeric_limits<double>::infinity();  // as for an inconsistent estimate
   const nlohmann::json j = nlohmann::json::parse(AblationJson(*t));
   ASSERT_EQ(j.size(), 1u);
   ASSERT_EQ(j["rows"].size(), 2u);
-  const std::set<std::string> want = {"method", "source", "median_eq38", "median_riemannian",
-                                      "median_mass_error_percent", "median_com_error_mm", "consistent", "runs"};
+  const std::set<std::string> want = {"method",
+                                      "source",
+                                      "median_eq38",
+                                      "median_riemannian",
+                                      "median_mass_error_percent",
+                                      "median_com_error_mm",
+                                      "consistent",
+                                      "runs"};
   for (const auto& row : j["rows"]) {
     std::set<std::string> keys;
     for (auto it = row.begin(); it != row.end(); ++it) keys.insert(it.key());
@@ -171,15 +180,17 @@ TEST(Ablation, BadInputNamesTheField) {
   c.rate = 100;
   t = RunAblation(c, {broken});
   ASSERT_FALSE(t.ok());
-  EXPECT_NE(t.status().message().find("source broken, seed 1: no data"), std::string::npos) << t.status();
+  EXPECT_NE(t.status().message().find("source broken, seed 1: no data"), std::string::npos)
+      << t.status();
 }
 
 TEST(Ablation, BuiltInSourcesIncludingInHand) {
   AblationConfig c;
   std::vector<std::string> names;
   for (const AblationSource& s : BuiltInAblationSources(c)) names.push_back(s.name);
-  EXPECT_EQ(names, (std::vector<std::string>{"sim-0", "sim-0.1", "sim-0.25", "sim-0.5", "sim-1", "wrist-moderate",
-                                             "inhand-vision", "inhand-kinematic"}));
+  EXPECT_EQ(names,
+            (std::vector<std::string>{"sim-0", "sim-0.1", "sim-0.25", "sim-0.5", "sim-1",
+                                      "wrist-moderate", "inhand-vision", "inhand-kinematic"}));
   // A short in-hand run through the source: box_(seed mod 5), one method.
   c.seeds = 1;
   c.first_seed = 3;
@@ -202,15 +213,16 @@ namespace {
 using AblationCliTest = CliTest;
 
 TEST_F(AblationCliTest, JsonAndTable) {
-  CliRun r = Tactforce({"experiment", "ablation", "--seeds", "1", "--sources", "sim-0.25", "--duration", "1.5",
-                        "--methods", "baseline-ls+sg51,fg-c", "--json", "--no-progress"});
+  CliRun r =
+      Tactforce({"experiment", "ablation", "--seeds", "1", "--sources", "sim-0.25", "--duration",
+                 "1.5", "--methods", "baseline-ls+sg51,fg-c", "--json", "--no-progress"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);
   ASSERT_EQ(j["rows"].size(), 2u);
   EXPECT_EQ(j["rows"][1]["method"], "fg-c");
   EXPECT_EQ(j["rows"][1]["source"], "sim-0.25");
-  r = Tactforce({"experiment", "ablation", "--seeds", "1", "--sources", "sim-0.25", "--duration", "1.5", "--methods",
-                 "fg-c", "--no-progress"});
+  r = Tactforce({"experiment", "ablation", "--seeds", "1", "--sources", "sim-0.25", "--duration",
+                 "1.5", "--methods", "fg-c", "--no-progress"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("| sim-0.25 | fg-c | C, No G |"), std::string::npos) << r.out;
 }

@@ -44,7 +44,8 @@ TEST(ChainData, EquivalentBoxHasTheBoxesMoments) {
   std::uniform_real_distribution<double> edge(0.05, 0.25), mass(0.05, 1.0);
   for (int k = 0; k < 20; ++k) {
     const double m = mass(rng), x = edge(rng), y = edge(rng), z = edge(rng);
-    const planner::Inertia I{m * (y * y + z * z) / 12, m * (x * x + z * z) / 12, m * (x * x + y * y) / 12, 0, 0, 0};
+    const planner::Inertia I{
+        m * (y * y + z * z) / 12, m * (x * x + z * z) / 12, m * (x * x + y * y) / 12, 0, 0, 0};
     const planner::Vec3 com(0.01, -0.005, 0.002);
     const InHandObject o = InHandEquivalent("box", m, com, I);
     EXPECT_NEAR(o.dimensions.x(), x, 1e-9);
@@ -80,7 +81,8 @@ TEST(ChainData, ConfigErrorsNameTheField) {
 TEST(Chain, DrawnObjectRowsAndEstimates) {
   const uint64_t seed = TestSeed();
   // Not the sphere: its 2-finger pinch has no plan for a CoM estimate off the pinch axis (README).
-  const std::vector<GraspObject> objects = {GraspObject::kWrench, GraspObject::kCylinder, GraspObject::kCube};
+  const std::vector<GraspObject> objects = {GraspObject::kWrench, GraspObject::kCylinder,
+                                            GraspObject::kCube};
   const GraspObject object = objects[seed % objects.size()];
   absl::StatusOr<ChainReport> r = RunChain(SmallChain(object, seed));
   ASSERT_TRUE(r.ok()) << r.status();
@@ -109,8 +111,8 @@ TEST(Chain, DrawnObjectRowsAndEstimates) {
 using ChainCliTest = testing::CliTest;
 
 TEST_F(ChainCliTest, JsonHasTheContractFields) {
-  auto r = Tactforce({"experiment", "chain", "--objects", "wrench", "--trials", "2", "--seeds", "1", "--probe-trials",
-                      "2", "--inhand-duration", "2", "--json", "--no-progress"});
+  auto r = Tactforce({"experiment", "chain", "--objects", "wrench", "--trials", "2", "--seeds", "1",
+                      "--probe-trials", "2", "--inhand-duration", "2", "--json", "--no-progress"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   auto doc = io::ParseJson(r.out, "stdout");
   ASSERT_TRUE(doc.ok()) << doc.status() << r.out;
@@ -119,13 +121,15 @@ TEST_F(ChainCliTest, JsonHasTheContractFields) {
   const char* planning[] = {"truth", "point", "uncertain"};
   for (size_t i = 0; i < 3; ++i) {
     const io::JsonValue& row = rows->array()[i];
-    for (const char* f : {"object", "planning", "successes", "trials", "median_squeeze_n", "min_slip_margin"})
+    for (const char* f :
+         {"object", "planning", "successes", "trials", "median_squeeze_n", "min_slip_margin"})
       ASSERT_NE(row.Find(f), nullptr) << f;
     EXPECT_EQ(row.Find("object")->string(), "wrench");
     EXPECT_EQ(row.Find("planning")->string(), planning[i]);
     EXPECT_EQ(row.Find("trials")->number(), 2);
   }
-  EXPECT_GE(rows->array()[2].Find("median_squeeze_n")->number(), rows->array()[1].Find("median_squeeze_n")->number());
+  EXPECT_GE(rows->array()[2].Find("median_squeeze_n")->number(),
+            rows->array()[1].Find("median_squeeze_n")->number());
 }
 
 TEST_F(ChainCliTest, BadInputExits2NamingTheFlag) {

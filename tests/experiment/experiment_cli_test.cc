@@ -9,11 +9,12 @@ namespace {
 using ExperimentCliTest = CliTest;
 
 TEST_F(ExperimentCliTest, GraspJson) {
-  CliRun r = Tactforce({"experiment", "grasp", "--object", "sphere", "--trials", "1", "--feedback", "estimated",
-                        "--json", "--plots", (dir() / "plots").string()});
+  CliRun r = Tactforce({"experiment", "grasp", "--object", "sphere", "--trials", "1", "--feedback",
+                        "estimated", "--json", "--plots", (dir() / "plots").string()});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   // The JSON layout of every command (io::IndentJson).
-  EXPECT_EQ(r.out.rfind("{\n  \"results\": [\n    {\n      \"object\": \"sphere\",\n      \"feedback\": \"estimated\",\n"
+  EXPECT_EQ(r.out.rfind("{\n  \"results\": [\n    {\n      \"object\": \"sphere\",\n      "
+                        "\"feedback\": \"estimated\",\n"
                         "      \"trials\": 1,",
                         0),
             0u)
@@ -26,7 +27,8 @@ TEST_F(ExperimentCliTest, GraspJson) {
 }
 
 TEST_F(ExperimentCliTest, GraspBothModesTable) {
-  CliRun r = Tactforce({"experiment", "grasp", "--object", "cube", "--trials", "1", "--feedback", "both"});
+  CliRun r =
+      Tactforce({"experiment", "grasp", "--object", "cube", "--trials", "1", "--feedback", "both"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto lines = Lines(r.out);
   ASSERT_GE(lines.size(), 4u) << r.out;
@@ -46,7 +48,8 @@ TEST_F(ExperimentCliTest, BadInput) {
   ExpectBadInput(Tactforce({"experiment", "grasp", "--feedback", "psychic"}));
   ExpectBadInput(Tactforce({"experiment", "grasp", "--trials", "0"}));
   ExpectBadInput(Tactforce({"experiment", "grasp", "--estimator", "guess"}));
-  ExpectBadInput(Tactforce({"experiment", "grasp", "--sensor-model", (dir() / "missing.json").string()}));
+  ExpectBadInput(
+      Tactforce({"experiment", "grasp", "--sensor-model", (dir() / "missing.json").string()}));
   ExpectBadInput(Tactforce({"experiment", "slope", "--mu", "0.5,-2"}));
   ExpectBadInput(Tactforce({"experiment", "grasp", "--admittance", "sideways"}));
   ExpectBadInput(Tactforce({"experiment", "grasp", "--ideal-sensors", "--sensor-model", "m.json"}));

@@ -40,7 +40,8 @@ TEST_P(IdealSensorTrial, Succeeds) {
     auto r = RunGraspTrial(**setup, 0);
     ASSERT_TRUE(r.ok()) << r.status();
     EXPECT_TRUE(r->success) << ToString(GetParam()) << " " << ToString(f) << ": " << r->failure
-                            << " slip " << r->max_slip * 1e3 << " mm rot " << r->max_rotation_deg << " deg";
+                            << " slip " << r->max_slip * 1e3 << " mm rot " << r->max_rotation_deg
+                            << " deg";
     EXPECT_LT(r->force_error, 0.15) << ToString(GetParam()) << " " << ToString(f);
     EXPECT_GE(r->converge_time, 0.0) << ToString(GetParam()) << " " << ToString(f);
     EXPECT_EQ(r->estimate_failures, 0);
@@ -48,8 +49,8 @@ TEST_P(IdealSensorTrial, Succeeds) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Objects, IdealSensorTrial,
-                         ::testing::Values(GraspObject::kSphere, GraspObject::kWrench, GraspObject::kCylinder,
-                                           GraspObject::kCube),
+                         ::testing::Values(GraspObject::kSphere, GraspObject::kWrench,
+                                           GraspObject::kCylinder, GraspObject::kCube),
                          [](const auto& info) { return std::string(ToString(info.param)); });
 
 // The object table: each object's fingers, where it rests on the table, its
@@ -62,10 +63,11 @@ TEST(GraspSetup, EveryObjectBuildsItsFingersGeomsAndPairs) {
     std::string rest;  // object origin at rest (m)
     int geoms;
   };
-  const Expected expected[] = {{GraspObject::kSphere, {"thumb", "index"}, "0 0 0.035", 1},
-                               {GraspObject::kWrench, {"index", "middle", "thumb"}, "0 0 0.008", 2},
-                               {GraspObject::kCylinder, {"thumb", "index", "middle", "ring"}, "0 0 0.06", 1},
-                               {GraspObject::kCube, {"thumb", "index"}, "0 0 0.04", 1}};
+  const Expected expected[] = {
+      {GraspObject::kSphere, {"thumb", "index"}, "0 0 0.035", 1},
+      {GraspObject::kWrench, {"index", "middle", "thumb"}, "0 0 0.008", 2},
+      {GraspObject::kCylinder, {"thumb", "index", "middle", "ring"}, "0 0 0.06", 1},
+      {GraspObject::kCube, {"thumb", "index"}, "0 0 0.04", 1}};
   auto count = [](const std::string& text, const std::string& what) {
     int n = 0;
     for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
@@ -77,10 +79,13 @@ TEST(GraspSetup, EveryObjectBuildsItsFingersGeomsAndPairs) {
     ASSERT_TRUE(setup.ok()) << ToString(e.object) << ": " << setup.status();
     EXPECT_EQ((*setup)->finger_names(), e.fingers) << ToString(e.object);
     const std::string& mjcf = (*setup)->mjcf();
-    EXPECT_NE(mjcf.find("<body name=\"object\" pos=\"" + e.rest + "\">"), std::string::npos) << mjcf;
+    EXPECT_NE(mjcf.find("<body name=\"object\" pos=\"" + e.rest + "\">"), std::string::npos)
+        << mjcf;
     EXPECT_EQ(count(mjcf, "<geom name=\"obj"), e.geoms) << ToString(e.object);
-    EXPECT_EQ(count(mjcf, "<pair "), e.geoms * (static_cast<int>(e.fingers.size()) + 1)) << ToString(e.object);
-    EXPECT_EQ(count(mjcf, "<body name=\"f"), static_cast<int>(e.fingers.size())) << ToString(e.object);
+    EXPECT_EQ(count(mjcf, "<pair "), e.geoms * (static_cast<int>(e.fingers.size()) + 1))
+        << ToString(e.object);
+    EXPECT_EQ(count(mjcf, "<body name=\"f"), static_cast<int>(e.fingers.size()))
+        << ToString(e.object);
   }
 }
 
@@ -97,11 +102,12 @@ TEST(GraspExperiment, EstimatedBeatsRawWithDefaultErrors) {
       ASSERT_TRUE(b.ok()) << b.status();
       (f == Feedback::kRaw ? raw : estimated) += b->successes;
       if (f == Feedback::kRaw) n += b->trials;
-      std::printf("%s %s: %d/%d, force error %.3f +- %.3f N\n", ToString(o), ToString(f), b->successes, b->trials,
-                  b->force_error_mean, b->force_error_std);
+      std::printf("%s %s: %d/%d, force error %.3f +- %.3f N\n", ToString(o), ToString(f),
+                  b->successes, b->trials, b->force_error_mean, b->force_error_std);
     }
   }
-  EXPECT_GT(estimated, raw) << "estimated " << estimated << "/" << n << " vs raw " << raw << "/" << n;
+  EXPECT_GT(estimated, raw) << "estimated " << estimated << "/" << n << " vs raw " << raw << "/"
+                            << n;
 }
 
 TEST(GraspExperiment, DeterministicForASeed) {
@@ -194,7 +200,8 @@ TEST(SensorChannel, MatchesApplyChannel) {
   auto ch = SensorChannel::Create(m, 1);
   ASSERT_TRUE(ch.ok());
   double worst = 0;
-  for (size_t i = 0; i < t.size(); ++i) worst = std::max(worst, std::abs(ch->Step(t[i], f[i], s[i]) - batch[i]));
+  for (size_t i = 0; i < t.size(); ++i)
+    worst = std::max(worst, std::abs(ch->Step(t[i], f[i], s[i]) - batch[i]));
   EXPECT_LT(worst, 1e-9);
   // The other hysteresis form and the power law.
   m.effects.hysteresis_width = 0;
@@ -205,7 +212,8 @@ TEST(SensorChannel, MatchesApplyChannel) {
   auto ch2 = SensorChannel::Create(m, 1);
   ASSERT_TRUE(ch2.ok()) << ch2.status();
   worst = 0;
-  for (size_t i = 0; i < t.size(); ++i) worst = std::max(worst, std::abs(ch2->Step(t[i], f[i], s[i]) - batch2[i]));
+  for (size_t i = 0; i < t.size(); ++i)
+    worst = std::max(worst, std::abs(ch2->Step(t[i], f[i], s[i]) - batch2[i]));
   EXPECT_LT(worst, 1e-9);
   sim::SensorModel bad;
   bad.noise = -1;
@@ -231,8 +239,8 @@ TEST(Slope, RecoversMjcfFriction) {
   for (double mu : {0.4, 0.8}) {
     auto r = RunSlopeAndProbe(c, mu);
     ASSERT_TRUE(r.ok()) << r.status();
-    std::printf("mu %.2f: slope %.4f (tilt %.2f deg), probe %.4f%s\n", mu, r->mu_slope, r->slip_tilt_deg,
-                r->mu_probe, r->probe_valid ? "" : " (invalid)");
+    std::printf("mu %.2f: slope %.4f (tilt %.2f deg), probe %.4f%s\n", mu, r->mu_slope,
+                r->slip_tilt_deg, r->mu_probe, r->probe_valid ? "" : " (invalid)");
     EXPECT_NEAR(r->mu_slope, mu, 0.02);
     EXPECT_TRUE(r->probe_valid) << r->probe_message;
     EXPECT_NEAR(r->mu_probe, mu, 0.05);

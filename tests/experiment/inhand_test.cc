@@ -49,11 +49,13 @@ TEST(InHandTest, IdealDataSourceOnADrawnObject) {
   EXPECT_EQ(st.contact_losses, 0);
   EXPECT_GT(st.min_normal_force, 0.5);
   EXPECT_EQ(run->samples.samples.size(), 601u);
-  auto fit = inertia::FitInertia(run->samples, InHandFitOptions(*run, inertia::InertiaMethod::kConstrained));
+  auto fit = inertia::FitInertia(run->samples,
+                                 InHandFitOptions(*run, inertia::InertiaMethod::kConstrained));
   ASSERT_TRUE(fit.ok()) << fit.status();
   const inertia::InertiaErrors e = inertia::CompareInertia(run->truth, fit->params);
   EXPECT_LE(e.mass_percent, 2.0);
-  EXPECT_LE(e.riemannian, 0.05) << "mass " << run->truth.mass << " point mass " << c.custom->point_masses[0].mass;
+  EXPECT_LE(e.riemannian, 0.05) << "mass " << run->truth.mass << " point mass "
+                                << c.custom->point_masses[0].mass;
 }
 
 TEST(InHandTest, KinematicTrackerDriftsWithInjectedSlip) {
@@ -68,7 +70,8 @@ TEST(InHandTest, KinematicTrackerDriftsWithInjectedSlip) {
   push.start = 1.5;
   push.duration = 0.02;
   std::mt19937_64 rng(TestSeed());
-  push.force = Eigen::Vector3d(0, std::uniform_real_distribution<double>(9, 11)(rng), 0);  // along the long edge
+  push.force = Eigen::Vector3d(0, std::uniform_real_distribution<double>(9, 11)(rng),
+                               0);  // along the long edge
   c.pushes = {push};
   auto run = RunInHand(c);
   ASSERT_TRUE(run.ok()) << run.status();
@@ -161,7 +164,8 @@ TEST(InHandTest, ConfigErrorsNameTheField) {
   ASSERT_FALSE(o.ok());
   EXPECT_NE(o.status().message().find("mass"), std::string::npos) << o.status();
   o = ParseInHandObjectJson(R"({"dimensions": [0.1, 0.05, 0.06], "mass": 0.2,
-      "point_masses": [{"mass": 0.05, "position": [0.2, 0, 0]}]})", "out.json");
+      "point_masses": [{"mass": 0.05, "position": [0.2, 0, 0]}]})",
+                            "out.json");
   ASSERT_FALSE(o.ok());
   EXPECT_NE(o.status().message().find("point_masses[0].position"), std::string::npos) << o.status();
 }
@@ -189,13 +193,14 @@ TEST_F(InHandCliTest, BadInputExitsTwoNamingTheFlagAndWritesNothing) {
 
 TEST_F(InHandCliTest, WritesTheLogThatInertiaReads) {
   const std::string out = (dir() / "run").string();
-  testing::CliRun r = Tactforce({"experiment", "inhand", "--duration", "2", "--tracker", "kinematic", "--out", out,
-                                 "--json", "--no-progress"});
+  testing::CliRun r = Tactforce({"experiment", "inhand", "--duration", "2", "--tracker",
+                                 "kinematic", "--out", out, "--json", "--no-progress"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.out.rfind("{\n  \"object\": \"box_0\",\n  \"samples\": 201,", 0), 0u) << r.out;
   for (const char* f : {"inertia.csv", "truth.json", "events.csv", "truth_log.csv", "mesh.obj"})
     EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(out) / f)) << f;
-  const std::string header = testing::Lines(testing::ReadFile(std::filesystem::path(out) / "inertia.csv"))[0];
+  const std::string header =
+      testing::Lines(testing::ReadFile(std::filesystem::path(out) / "inertia.csv"))[0];
   EXPECT_NE(header.find("c3_sigma"), std::string::npos) << header;
   r = Tactforce({"inertia", "--csv", out + "/inertia.csv", "--truth", out + "/truth.json", "--mesh",
                  out + "/mesh.obj", "--method", "density"});

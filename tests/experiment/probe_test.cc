@@ -18,7 +18,8 @@ namespace tactforce::experiment {
 namespace {
 
 // $PROBE_SEED draws other surfaces and objects (a robustness check by hand).
-const uint64_t kTestSeed = std::getenv("PROBE_SEED") ? std::strtoull(std::getenv("PROBE_SEED"), nullptr, 10) : 20261127;
+const uint64_t kTestSeed =
+    std::getenv("PROBE_SEED") ? std::strtoull(std::getenv("PROBE_SEED"), nullptr, 10) : 20261127;
 
 // A box drawn at test time: edges 5-10 cm, 0.08-0.3 kg, CoM up to 5 mm off-centre.
 ProbeObject DrawObject(std::mt19937_64& rng) {
@@ -38,7 +39,8 @@ TEST(ProbeData, BuiltInSurfacesAndObjectsAreValid) {
     EXPECT_LE(s.mu, 1.0) << s.name;
   }
   EXPECT_TRUE(ValidateSurfaces(BuiltInSurfaces()).ok());
-  for (const ProbeObject& o : BuiltInProbeObjects()) EXPECT_TRUE(ValidateProbeObject(o).ok()) << o.name;
+  for (const ProbeObject& o : BuiltInProbeObjects())
+    EXPECT_TRUE(ValidateProbeObject(o).ok()) << o.name;
   EXPECT_EQ(FindProbeObject("nope").status().code(), absl::StatusCode::kNotFound);
 }
 
@@ -49,13 +51,15 @@ TEST(ProbeData, BoxMeshIsAClosedSolidOfTheBoxVolume) {
   EXPECT_TRUE(check.consistently_oriented);
   EXPECT_NEAR(check.volume, size.prod(), 1e-12);
   // The top face's inward normal is -z.
-  const io::NearestTriangle top = io::FindNearestTriangle(BoxMesh(size), Eigen::Vector3d(0.01, 0, 0.015));
+  const io::NearestTriangle top =
+      io::FindNearestTriangle(BoxMesh(size), Eigen::Vector3d(0.01, 0, 0.015));
   EXPECT_NEAR(top.inward_normal.z(), -1, 1e-12);
 }
 
 TEST(ProbeData, JsonObjectErrorsNameTheField) {
-  auto ok = ProbeObjectFromJson(R"({"name": "b", "size": [0.06, 0.05, 0.04], "mass": 0.1, "com_offset": [0, 0.001, 0]})",
-                                "b.json");
+  auto ok = ProbeObjectFromJson(
+      R"({"name": "b", "size": [0.06, 0.05, 0.04], "mass": 0.1, "com_offset": [0, 0.001, 0]})",
+      "b.json");
   ASSERT_TRUE(ok.ok()) << ok.status();
   EXPECT_DOUBLE_EQ(ok->com_offset.y(), 0.001);
   auto expect_error = [](const std::string& text, const std::string& field) {
@@ -69,7 +73,8 @@ TEST(ProbeData, JsonObjectErrorsNameTheField) {
   expect_error(R"({"size": [0.06, 0.05, 1.0], "mass": 0.1})", "size[2]");
   expect_error(R"({"size": [0.06, 0.05, 0.04]})", "mass");
   expect_error(R"({"size": [0.06, 0.05, 0.04], "mass": 0.1, "colour": 1})", "colour");
-  expect_error(R"({"size": [0.06, 0.05, 0.04], "mass": 0.1, "com_offset": [0.05, 0, 0]})", "com_offset[0]");
+  expect_error(R"({"size": [0.06, 0.05, 0.04], "mass": 0.1, "com_offset": [0.05, 0, 0]})",
+               "com_offset[0]");
   expect_error(R"({"size": [0.06, 0.05, 0.04], "mass": 0.1,})", "b.json:1");
 }
 
@@ -80,7 +85,8 @@ TEST(ProbeData, ConfigErrorsNameTheField) {
   c = ProbeConfig();
   c.force_sigma = -1;
   EXPECT_NE(ValidateProbeConfig(c).message().find("force_sigma"), std::string::npos);
-  EXPECT_NE(ValidateSurfaces({{"x", 0.5}, {"y", 3}}).message().find("surfaces[1].mu"), std::string::npos);
+  EXPECT_NE(ValidateSurfaces({{"x", 0.5}, {"y", 3}}).message().find("surfaces[1].mu"),
+            std::string::npos);
   EXPECT_FALSE(RunProbeExperiment(ProbeConfig(), {{"x", 0.5}}, 0).ok());
 }
 
@@ -102,10 +108,12 @@ TEST(ProbeExperiment, DrawnSurfacesAndObject) {
     auto report = RunProbeExperiment(c, surfaces, 2);
     ASSERT_TRUE(report.ok()) << report.status();
     for (const ProbeTrialResult& t : report->trials) {
-      SCOPED_TRACE(::testing::Message() << t.surface << " mu " << t.mu_true << " table " << on_table);
+      SCOPED_TRACE(::testing::Message()
+                   << t.surface << " mu " << t.mu_true << " table " << on_table);
       EXPECT_TRUE(t.valid) << t.invalid_reason;
       EXPECT_TRUE(t.slip_detected);
-      EXPECT_TRUE(t.mesh_triangle == 2 || t.mesh_triangle == 3) << t.mesh_triangle;  // BoxMesh's top face
+      EXPECT_TRUE(t.mesh_triangle == 2 || t.mesh_triangle == 3)
+          << t.mesh_triangle;  // BoxMesh's top face
       EXPECT_LT(t.object_motion_mm, 1.0);
       EXPECT_NEAR(t.mu_estimated, t.mu_slope, 0.03);
       EXPECT_NEAR(t.mu_slope, t.mu_true, 0.02);
@@ -125,7 +133,8 @@ TEST(ProbeExperiment, NoisySensingStaysWithinItsPredictedSpread) {
   c.seed = rng();
   const SurfacePair s{"drawn", mu(rng)};
   const double fn_slip = c.slope.probe_tangential / s.mu;
-  const double sd = std::sqrt(c.force_sigma * c.force_sigma / c.slope.friction.window + c.force_bias * c.force_bias) *
+  const double sd = std::sqrt(c.force_sigma * c.force_sigma / c.slope.friction.window +
+                              c.force_bias * c.force_bias) *
                     std::sqrt(1 + s.mu * s.mu) / fn_slip;
   auto report = RunProbeExperiment(c, {s}, 4);
   ASSERT_TRUE(report.ok()) << report.status();
@@ -170,18 +179,21 @@ TEST(ProbeExperiment, Deterministic) {
 using ProbeCliTest = testing::CliTest;
 
 TEST_F(ProbeCliTest, JsonHasTheIssueFields) {
-  auto r = Tactforce({"experiment", "probe", "--mu", "0.65", "--trials", "2", "--json", "--no-progress"});
+  auto r = Tactforce(
+      {"experiment", "probe", "--mu", "0.65", "--trials", "2", "--json", "--no-progress"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   auto doc = io::ParseJson(r.out, "stdout");
   ASSERT_TRUE(doc.ok()) << doc.status() << r.out;
   const io::JsonValue* trials = doc->Find("trials");
   ASSERT_TRUE(trials && trials->is_array() && trials->array().size() == 2u) << r.out;
-  for (const char* f : {"surface", "mu_true", "mu_slope", "mu_estimated", "error", "valid", "invalid_reason",
-                        "object_motion_mm", "object_rotation_deg", "slip_detected"})
+  for (const char* f :
+       {"surface", "mu_true", "mu_slope", "mu_estimated", "error", "valid", "invalid_reason",
+        "object_motion_mm", "object_rotation_deg", "slip_detected"})
     EXPECT_NE(trials->array()[0].Find(f), nullptr) << f;
   const io::JsonValue* summary = doc->Find("summary");
   ASSERT_NE(summary, nullptr);
-  for (const char* f : {"trials", "valid", "median_signed_error", "median_abs_error", "per_surface"})
+  for (const char* f :
+       {"trials", "valid", "median_signed_error", "median_abs_error", "per_surface"})
     EXPECT_NE(summary->Find(f), nullptr) << f;
   EXPECT_EQ(summary->Find("trials")->number(), 2);
   EXPECT_EQ(trials->array()[0].Find("mu_true")->number(), 0.65);
@@ -189,7 +201,8 @@ TEST_F(ProbeCliTest, JsonHasTheIssueFields) {
 
 TEST_F(ProbeCliTest, TableShowsThePapersMedian) {
   const auto obj = Write("o.json", R"({"size": [0.07, 0.05, 0.05], "mass": 0.12})");
-  auto r = Tactforce({"experiment", "probe", "--mu", "0.9", "--trials", "1", "--object", obj.string(), "--on-table"});
+  auto r = Tactforce({"experiment", "probe", "--mu", "0.9", "--trials", "1", "--object",
+                      obj.string(), "--on-table"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("paper: 0.0056"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("on a table"), std::string::npos) << r.out;

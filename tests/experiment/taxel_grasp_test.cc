@@ -83,7 +83,8 @@ TEST(TaxelGrasp, ShiftedRangesEstimatedBeatsRaw) {
       for (const auto& [cause, n] : b->failure_causes) labelled += n;
       EXPECT_EQ(labelled, b->trials - b->successes);
     }
-    EXPECT_GT(wins[1], wins[0]) << ToString(o) << ": raw " << wins[0] << " vs estimated " << wins[1];
+    EXPECT_GT(wins[1], wins[0]) << ToString(o) << ": raw " << wins[0] << " vs estimated "
+                                << wins[1];
   }
 }
 
@@ -176,7 +177,8 @@ TEST(TaxelGrasp, BadConfigNamesTheField) {
   c.taxel_ranges.threshold_min = -0.1;
   auto s = GraspSetup::Create(c);
   ASSERT_FALSE(s.ok());
-  EXPECT_NE(s.status().message().find("taxel_ranges.threshold_min"), std::string::npos) << s.status();
+  EXPECT_NE(s.status().message().find("taxel_ranges.threshold_min"), std::string::npos)
+      << s.status();
   c = TaxelConfig(GraspObject::kWrench, Feedback::kRaw);
   c.fault = {SensorFault::Kind::kDead, 7, 0, 0};
   s = GraspSetup::Create(c);
@@ -198,13 +200,13 @@ namespace {
 using TaxelCliTest = CliTest;
 
 TEST_F(TaxelCliTest, JsonAddsTheSplitAndCauses) {
-  CliRun r = Tactforce({"experiment", "grasp", "--object", "sphere", "--trials", "1", "--feedback", "raw",
-                        "--sensors", "taxel", "--json"});
+  CliRun r = Tactforce({"experiment", "grasp", "--object", "sphere", "--trials", "1", "--feedback",
+                        "raw", "--sensors", "taxel", "--json"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  for (const char* key : {"\"successes\": ", "\"trials\": ", "\"force_error_success\": ", "\"force_error_failure\": ",
-                          "\"failure_causes\": {", "\"non_activation\": ", "\"phantom_force\": ",
-                          "\"over_reading_tilt\": ", "\"slip_drop\": ", "\"force_error_mean\": ",
-                          "\"sensors\": \"taxel\""})
+  for (const char* key : {"\"successes\": ", "\"trials\": ", "\"force_error_success\": ",
+                          "\"force_error_failure\": ", "\"failure_causes\": {",
+                          "\"non_activation\": ", "\"phantom_force\": ", "\"over_reading_tilt\": ",
+                          "\"slip_drop\": ", "\"force_error_mean\": ", "\"sensors\": \"taxel\""})
     EXPECT_NE(r.out.find(key), std::string::npos) << key << "\n" << r.out;
 }
 
@@ -218,11 +220,14 @@ TEST_F(TaxelCliTest, BadInputNamesTheFlag) {
   r = Tactforce({"experiment", "grasp", "--sensors", "taxel", "--ideal-sensors"});
   ExpectBadInput(r);
   EXPECT_NE(r.err.find("--ideal-sensors"), std::string::npos) << r.err;
-  r = Tactforce({"experiment", "grasp", "--sensors", "taxel", "--sensor-model", (dir() / "missing.json").string()});
+  r = Tactforce({"experiment", "grasp", "--sensors", "taxel", "--sensor-model",
+                 (dir() / "missing.json").string()});
   ExpectBadInput(r);
-  EXPECT_NE(r.err.find("--sensor-model: applies to --sensors channel only"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--sensor-model: applies to --sensors channel only"), std::string::npos)
+      << r.err;
   const std::string ranges = (dir() / "ranges.json").string();
-  WriteFile(ranges, "{\n  \"format\": \"tactforce.taxel_ranges.v1\",\n  \"threshold_min\": -0.3\n}\n");
+  WriteFile(ranges,
+            "{\n  \"format\": \"tactforce.taxel_ranges.v1\",\n  \"threshold_min\": -0.3\n}\n");
   r = Tactforce({"experiment", "grasp", "--sensors", "taxel", "--taxel-ranges", ranges});
   ExpectBadInput(r);
   EXPECT_NE(r.err.find("--taxel-ranges"), std::string::npos) << r.err;

@@ -17,12 +17,13 @@ void CheckReadMesh(const tactforce::io::TriangleMesh& mesh) {
   const int n = static_cast<int>(mesh.vertices.size());
   for (const auto& t : mesh.triangles) {
     for (int i : t) {
-      if (i < 0 || i >= n) tactforce::fuzz::Fail("mesh", absl::StrCat("index ", i, " of ", n, " vertices"));
+      if (i < 0 || i >= n)
+        tactforce::fuzz::Fail("mesh", absl::StrCat("index ", i, " of ", n, " vertices"));
     }
   }
   if (!mesh.face_colors.empty() && mesh.face_colors.size() != mesh.triangles.size()) {
-    tactforce::fuzz::Fail("mesh", absl::StrCat(mesh.face_colors.size(), " colours for ", mesh.triangles.size(),
-                                               " triangles"));
+    tactforce::fuzz::Fail("mesh", absl::StrCat(mesh.face_colors.size(), " colours for ",
+                                               mesh.triangles.size(), " triangles"));
   }
 }
 

@@ -16,7 +16,8 @@ namespace {
 void FuzzEstimate(std::string_view json) {
   tactforce::v1::EstimateRequest request;
   if (!tactforce::api::ParseJson(json, &request).ok()) return;
-  absl::StatusOr<tactforce::v1::EstimateResponse> response = tactforce::api::HandleEstimate(request);
+  absl::StatusOr<tactforce::v1::EstimateResponse> response =
+      tactforce::api::HandleEstimate(request);
   if (!response.ok()) return;
   (void)tactforce::api::ToJson(*response, /*compact=*/true);
 }

@@ -20,7 +20,8 @@ const bool kProtobufQuiet = [] {
 void CheckResponse(const v1::PlanRequest& request, const v1::PlanResponse& response) {
   if (response.status() != v1::PLAN_STATUS_OPTIMAL) return;
   if (response.forces_size() != request.contacts_size()) {
-    Fail("plan", absl::StrCat(response.forces_size(), " forces for ", request.contacts_size(), " contacts"));
+    Fail("plan", absl::StrCat(response.forces_size(), " forces for ", request.contacts_size(),
+                              " contacts"));
   }
   for (const v1::Vec3& f : response.forces()) {
     if (!AllFinite({f.x(), f.y(), f.z()})) Fail("plan", "OPTIMAL with a non-finite force");

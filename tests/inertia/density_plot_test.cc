@@ -28,9 +28,11 @@ using io::TriangleMesh;
 void AddBox(TriangleMesh* m, const Vec3& lo, const Vec3& hi, uint32_t color = 0) {
   const int b = static_cast<int>(m->vertices.size());
   for (int i = 0; i < 8; ++i)
-    m->vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
+    m->vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(),
+                             i & 4 ? hi.z() : lo.z());
   // Each face as a quad whose corners turn counter-clockwise about the outward normal.
-  const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   for (const auto& f : faces) {
     m->triangles.push_back({b + f[0], b + f[1], b + f[2]});
     m->triangles.push_back({b + f[0], b + f[2], b + f[3]});
@@ -52,11 +54,13 @@ std::string View(const std::string& svg, int n) {
 std::vector<std::string> PathFills(const std::string& svg, const std::string& part) {
   std::map<std::string, std::string> fill;
   static const std::regex rule("\\.(c[0-9]+)\\{fill:(#[0-9a-f]{6});");
-  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), rule); it != std::sregex_iterator(); ++it)
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), rule); it != std::sregex_iterator();
+       ++it)
     fill[(*it)[1]] = (*it)[2];
   std::vector<std::string> out;
   static const std::regex path("<path class=\"(c[0-9]+)\"");
-  for (auto it = std::sregex_iterator(part.begin(), part.end(), path); it != std::sregex_iterator(); ++it) {
+  for (auto it = std::sregex_iterator(part.begin(), part.end(), path); it != std::sregex_iterator();
+       ++it) {
     const auto f = fill.find((*it)[1]);
     out.push_back(f == fill.end() ? "undefined class " + std::string((*it)[1]) : f->second);
   }
@@ -74,9 +78,11 @@ int Count(const std::string& s, const std::string& what) {
 int DrawnTriangles(const std::string& part) {
   int n = 0;
   static const std::regex re(" d=\"(M[^\"]*)\"/>");
-  for (auto it = std::sregex_iterator(part.begin(), part.end(), re); it != std::sregex_iterator(); ++it) {
+  for (auto it = std::sregex_iterator(part.begin(), part.end(), re); it != std::sregex_iterator();
+       ++it) {
     const std::string d = (*it)[1];
-    if (d.find('z') != std::string::npos) n += static_cast<int>(std::count(d.begin(), d.end(), 'M'));
+    if (d.find('z') != std::string::npos)
+      n += static_cast<int>(std::count(d.begin(), d.end(), 'M'));
   }
   return n;
 }
@@ -100,11 +106,14 @@ TwoMaterial TwoMaterialBox() {
   TriangleMesh steel, plastic;
   AddBox(&steel, Vec3(-0.15, -0.04, -0.025), Vec3(0, 0.04, 0.025), 0xaa0000);
   AddBox(&plastic, Vec3(0, -0.04, -0.025), Vec3(0.15, 0.04, 0.025), 0x00aa00);
-  b.params = InertialParameters::FromStandard(MeshMoments(steel).Standard(7800) + MeshMoments(plastic).Standard(1200));
+  b.params = InertialParameters::FromStandard(MeshMoments(steel).Standard(7800) +
+                                              MeshMoments(plastic).Standard(1200));
   b.mesh = steel;
-  for (const auto& t : plastic.triangles) b.mesh.triangles.push_back({t[0] + 8, t[1] + 8, t[2] + 8});
+  for (const auto& t : plastic.triangles)
+    b.mesh.triangles.push_back({t[0] + 8, t[1] + 8, t[2] + 8});
   b.mesh.vertices.insert(b.mesh.vertices.end(), plastic.vertices.begin(), plastic.vertices.end());
-  b.mesh.face_colors.insert(b.mesh.face_colors.end(), plastic.face_colors.begin(), plastic.face_colors.end());
+  b.mesh.face_colors.insert(b.mesh.face_colors.end(), plastic.face_colors.begin(),
+                            plastic.face_colors.end());
   return b;
 }
 
@@ -233,11 +242,14 @@ TEST(DensityPlot, RampEndsAtZeroAndTheRoundedMaximumAndNoRegionIsGrey) {
 TEST(DensityPlot, ZeroDensitiesAndAnUnknownCoMStillDraw) {
   HandMade h = HandMadeFit(0.0, 0.0);
   h.fit.params.com = Vec3(std::nan(""), 0, 0);
-  absl::StatusOr<std::string> svg = DensityPlotSvg(h.mesh, h.fit, {.title = "", .true_com = Vec3(0.01, 0, 0)});
+  absl::StatusOr<std::string> svg =
+      DensityPlotSvg(h.mesh, h.fit, {.title = "", .true_com = Vec3(0.01, 0, 0)});
   ASSERT_TRUE(svg.ok()) << svg.status();
   const std::vector<std::string> fills = PathFills(*svg);
-  EXPECT_EQ(std::set<std::string>(fills.begin(), fills.end()), (std::set<std::string>{"#440154", "#d0d0d0"}));
-  EXPECT_NE(svg->find(">1000<"), std::string::npos) << "the bar runs 0 .. 1000 when all densities are 0";
+  EXPECT_EQ(std::set<std::string>(fills.begin(), fills.end()),
+            (std::set<std::string>{"#440154", "#d0d0d0"}));
+  EXPECT_NE(svg->find(">1000<"), std::string::npos)
+      << "the bar runs 0 .. 1000 when all densities are 0";
   EXPECT_EQ(svg->find("fitted-com"), std::string::npos) << "no marker for a CoM that is not finite";
   EXPECT_EQ(Count(*svg, "class=\"true-com\""), 3);
 }
@@ -267,8 +279,11 @@ TEST(DensityPlot, NearSideIsDrawnLast) {
 // The frames of the three views: (width, height) in px.
 std::vector<std::pair<double, double>> Frames(const std::string& svg) {
   std::vector<std::pair<double, double>> out;
-  static const std::regex re("<rect class=\"frame\" x=\"[-0-9.]+\" y=\"[-0-9.]+\" width=\"([0-9.]+)\" height=\"([0-9.]+)\"");
-  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), re); it != std::sregex_iterator(); ++it)
+  static const std::regex re(
+      "<rect class=\"frame\" x=\"[-0-9.]+\" y=\"[-0-9.]+\" width=\"([0-9.]+)\" "
+      "height=\"([0-9.]+)\"");
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), re); it != std::sregex_iterator();
+       ++it)
     out.emplace_back(std::stod((*it)[1]), std::stod((*it)[2]));
   return out;
 }
@@ -295,7 +310,8 @@ TEST(DensityPlot, OneScaleInAllViews) {
 TEST(DensityPlot, ContradictedMeshIsSaidUnderTheTitle) {
   HandMade h = HandMadeFit(1000.0, 2000.0);
   h.fit.mesh_contradicted = true;
-  absl::StatusOr<std::string> svg = DensityPlotSvg(h.mesh, h.fit, {.title = "Hammer", .true_com = std::nullopt});
+  absl::StatusOr<std::string> svg =
+      DensityPlotSvg(h.mesh, h.fit, {.title = "Hammer", .true_com = std::nullopt});
   ASSERT_TRUE(svg.ok()) << svg.status();
   const size_t title = svg->find(">Hammer<");
   const size_t warning = svg->find("mesh contradicted by the data: densities of the rejected fit");
@@ -312,7 +328,8 @@ TEST(DensityPlot, ClosedMeshShowsOnlyItsFrontFaces) {
   // Looking along each axis, each of the three boxes shows one face (two
   // triangles): the face towards the viewer; the one behind it is culled and
   // the four side faces are edge-on.
-  for (int view = 1; view <= 3; ++view) EXPECT_EQ(DrawnTriangles(View(*svg, view)), 6) << "view " << view;
+  for (int view = 1; view <= 3; ++view)
+    EXPECT_EQ(DrawnTriangles(View(*svg, view)), 6) << "view " << view;
 }
 
 TEST(DensityPlot, OpenMeshKeepsItsBackFaces) {
@@ -321,7 +338,8 @@ TEST(DensityPlot, OpenMeshKeepsItsBackFaces) {
   // culled and view 1 shows that box's bottom face through the hole.
   h.mesh.triangles.erase(h.mesh.triangles.begin() + 14, h.mesh.triangles.begin() + 16);
   auto model = std::make_shared<RegionModel>(*h.fit.region_model);
-  model->triangle_region.erase(model->triangle_region.begin() + 14, model->triangle_region.begin() + 16);
+  model->triangle_region.erase(model->triangle_region.begin() + 14,
+                               model->triangle_region.begin() + 16);
   h.fit.region_model = model;
   absl::StatusOr<std::string> svg = DensityPlotSvg(h.mesh, h.fit);
   ASSERT_TRUE(svg.ok()) << svg.status();

@@ -23,13 +23,17 @@ namespace {
 using io::TriangleMesh;
 
 // Axis-aligned box [lo, hi] (outward winding, or inward when `flip`).
-void AppendBox(TriangleMesh* m, const Vec3& lo, const Vec3& hi, bool flip = false, uint32_t color = 0) {
+void AppendBox(TriangleMesh* m, const Vec3& lo, const Vec3& hi, bool flip = false,
+               uint32_t color = 0) {
   const int base = static_cast<int>(m->vertices.size());
   for (int i = 0; i < 8; ++i)
-    m->vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
-  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    m->vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(),
+                             i & 4 ? hi.z() : lo.z());
+  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   for (const auto& q : quads) {
-    std::array<int, 3> t1 = {base + q[0], base + q[1], base + q[2]}, t2 = {base + q[0], base + q[2], base + q[3]};
+    std::array<int, 3> t1 = {base + q[0], base + q[1], base + q[2]},
+                       t2 = {base + q[0], base + q[2], base + q[3]};
     if (flip) std::swap(t1[1], t1[2]), std::swap(t2[1], t2[2]);
     m->triangles.push_back(t1);
     m->triangles.push_back(t2);
@@ -173,7 +177,8 @@ TEST(BuildRegions, ColoursNameClosedPartsAndAutoPrefersThem) {
   ASSERT_TRUE(r.ok()) << r.status();
   EXPECT_EQ(r->scheme, RegionScheme::kColors);
   ASSERT_EQ(r->regions.size(), 2u);
-  EXPECT_NEAR(r->regions[0].moments.volume + r->regions[1].moments.volume, 0.3 * 0.05 * 0.05, 1e-15);
+  EXPECT_NEAR(r->regions[0].moments.volume + r->regions[1].moments.volume, 0.3 * 0.05 * 0.05,
+              1e-15);
 
   // One colour that is not a closed part: colours are refused, auto falls back to the grid.
   TriangleMesh open = Box(Vec3(0, 0, 0), Vec3(0.2, 0.1, 0.05));
@@ -195,18 +200,21 @@ struct TwoMaterialBox {
   TriangleMesh mesh;
   InertialParameters params;
 };
-TwoMaterialBox MakeTwoMaterialBox(double rho_a, double rho_b, bool colours, const Vec3& offset = Vec3(0.02, -0.01, 0.03)) {
+TwoMaterialBox MakeTwoMaterialBox(double rho_a, double rho_b, bool colours,
+                                  const Vec3& offset = Vec3(0.02, -0.01, 0.03)) {
   TwoMaterialBox b;
   const Vec3 lo = Vec3(-0.15, -0.04, -0.025) + offset, mid = Vec3(0.0, 0.04, 0.025) + offset,
              hi = Vec3(0.15, 0.04, 0.025) + offset;
   AppendBox(&b.mesh, lo, mid, false, colours ? 0xaa0000 : 0);
   AppendBox(&b.mesh, Vec3(mid.x(), lo.y(), lo.z()), hi, false, colours ? 0x00aa00 : 0);
-  const Vector10d pi = BoxMoments(lo, mid).Standard(rho_a) + BoxMoments(Vec3(mid.x(), lo.y(), lo.z()), hi).Standard(rho_b);
+  const Vector10d pi = BoxMoments(lo, mid).Standard(rho_a) +
+                       BoxMoments(Vec3(mid.x(), lo.y(), lo.z()), hi).Standard(rho_b);
   b.params = InertialParameters::FromStandard(pi);
   return b;
 }
 
-absl::StatusOr<SimulationResult> WristData(const InertialParameters& params, const std::string& level, uint64_t seed,
+absl::StatusOr<SimulationResult> WristData(const InertialParameters& params,
+                                           const std::string& level, uint64_t seed,
                                            double duration = 5.0) {
   absl::StatusOr<SimulatedObject> object = ObjectFromParameters("two-material box", params);
   if (!object.ok()) return object.status();
@@ -225,7 +233,8 @@ absl::StatusOr<SimulationResult> WristData(const InertialParameters& params, con
   return SimulateInertia(o);
 }
 
-InertiaOptions DensityOptions(const TriangleMesh& mesh, const SimulationOptions* noise_from = nullptr) {
+InertiaOptions DensityOptions(const TriangleMesh& mesh,
+                              const SimulationOptions* noise_from = nullptr) {
   InertiaOptions o;
   o.method = InertiaMethod::kDensity;
   o.mesh = std::make_shared<const TriangleMesh>(mesh);
@@ -358,7 +367,10 @@ TEST(DensityFit, DetectsMeshesTheDataContradict) {
   const int seeds = 4;
   for (int seed = 1; seed <= seeds; ++seed) {
     const std::pair<const InertialParameters*, const TriangleMesh*> cases[4] = {
-        {&truth.params, &truth.mesh}, {&truth.params, &scaled}, {&truth.params, &moved}, {&payload, &truth.mesh}};
+        {&truth.params, &truth.mesh},
+        {&truth.params, &scaled},
+        {&truth.params, &moved},
+        {&payload, &truth.mesh}};
     for (int c = 0; c < 4; ++c) {
       absl::StatusOr<SimulationResult> sim = WristData(*cases[c].first, "moderate", 100 + seed);
       ASSERT_TRUE(sim.ok()) << sim.status();
@@ -400,7 +412,8 @@ TEST(DensityFit, ConstrainedUsesTheMeshAsPrior) {
   absl::StatusOr<InertiaFit> fit = FitInertia(sim->samples, o);
   ASSERT_TRUE(fit.ok()) << fit.status();
   bool noted = false;
-  for (const std::string& n : fit->notes) noted |= n.find("prior: box.stl at uniform density") != std::string::npos;
+  for (const std::string& n : fit->notes)
+    noted |= n.find("prior: box.stl at uniform density") != std::string::npos;
   EXPECT_TRUE(noted);
   EXPECT_FALSE(fit->density_realizable);  // CONSTRAINED does not claim it
 }
@@ -420,7 +433,8 @@ TEST(DensityFit, BadInputIsNamed) {
 
   TriangleMesh open = box.mesh;
   open.triangles.pop_back();
-  EXPECT_NE(message(DensityOptions(open)).find("box.stl: 3 boundary edges: the mesh is not closed"), std::string::npos)
+  EXPECT_NE(message(DensityOptions(open)).find("box.stl: 3 boundary edges: the mesh is not closed"),
+            std::string::npos)
       << message(DensityOptions(open));
 
   TriangleMesh inverted = box.mesh;
@@ -429,7 +443,8 @@ TEST(DensityFit, BadInputIsNamed) {
 
   TriangleMesh tiny = box.mesh;  // millimetres read as metres the other way round
   for (Vec3& v : tiny.vertices) v *= 0.001;
-  EXPECT_NE(message(DensityOptions(tiny)).find("outside the mesh's bounding box"), std::string::npos)
+  EXPECT_NE(message(DensityOptions(tiny)).find("outside the mesh's bounding box"),
+            std::string::npos)
       << message(DensityOptions(tiny));
 
   InertiaOptions regions = DensityOptions(box.mesh);
@@ -487,10 +502,13 @@ TEST(RegressorNoise, EstimatedWithin30PercentOfADrawnSigma) {
     given.noise.angular_acceleration_sigma = sdw;
     absl::StatusOr<InertiaFit> told = FitInertia(sim->samples, given);
     ASSERT_TRUE(told.ok()) << told.status();
-    EXPECT_LT(EstimatedSigma(*told, "measured acceleration"), 0) << "a given sigma is not estimated";
+    EXPECT_LT(EstimatedSigma(*told, "measured acceleration"), 0)
+        << "a given sigma is not estimated";
     const double d_est = RiemannianDistance(PseudoInertia(box.params), PseudoInertia(fit->params));
-    const double d_told = RiemannianDistance(PseudoInertia(box.params), PseudoInertia(told->params));
-    EXPECT_LT(d_est, 1.5 * d_told + 0.02) << "draw " << draw << ": estimated " << d_est << ", told " << d_told;
+    const double d_told =
+        RiemannianDistance(PseudoInertia(box.params), PseudoInertia(told->params));
+    EXPECT_LT(d_est, 1.5 * d_told + 0.02)
+        << "draw " << draw << ": estimated " << d_est << ", told " << d_told;
   }
 }
 
@@ -502,7 +520,8 @@ TEST(ContradictionFloor, RightMeshAtDrawnNoiseIsNotContradicted) {
   const char* levels[] = {"low", "moderate", "high"};
   for (int draw = 0; draw < 3; ++draw) {
     const std::string level = levels[std::uniform_int_distribution<int>(0, 2)(rng)];
-    const TwoMaterialBox box = MakeTwoMaterialBox(7800, 2700, std::uniform_int_distribution<int>(0, 1)(rng) == 1);
+    const TwoMaterialBox box =
+        MakeTwoMaterialBox(7800, 2700, std::uniform_int_distribution<int>(0, 1)(rng) == 1);
     absl::StatusOr<SimulationResult> sim = WristData(box.params, level, 300 + draw);
     ASSERT_TRUE(sim.ok()) << sim.status();
     absl::StatusOr<InertiaFit> fit = FitInertia(sim->samples, DensityOptions(box.mesh));
@@ -541,7 +560,8 @@ TEST(ContradictionFloor, WrongMeshAboveTheFloorIsFlagged) {
       const double f = std::uniform_real_distribution<double>(1.2, 1.3)(rng);
       for (Vec3& v : mesh.vertices) v *= f;
     } else {
-      const double extra = std::uniform_real_distribution<double>(0.15, 0.25)(rng) * truth.params.mass;
+      const double extra =
+          std::uniform_real_distribution<double>(0.15, 0.25)(rng) * truth.params.mass;
       const Vec3 p(0.05, -0.01, 0.055 + std::uniform_real_distribution<double>(0.06, 0.10)(rng));
       SolidMoments point;
       point.volume = 1.0, point.first = p, point.second = p * p.transpose();
@@ -566,16 +586,20 @@ TEST(MeshTest, MovedTwoPartMeshIsFlagged) {
   for (int draw = 0; draw < 3; ++draw) {
     const std::string level = levels[std::uniform_int_distribution<int>(0, 1)(rng)];
     Vec3 move = Vec3::Zero();
-    move(std::uniform_int_distribution<int>(0, 2)(rng)) = std::uniform_real_distribution<double>(0.01, 0.02)(rng);
+    move(std::uniform_int_distribution<int>(0, 2)(rng)) =
+        std::uniform_real_distribution<double>(0.01, 0.02)(rng);
     TriangleMesh moved = truth.mesh;
     for (Vec3& v : moved.vertices) v += move;
     absl::StatusOr<SimulationResult> sim = WristData(truth.params, level, 700 + draw);
     ASSERT_TRUE(sim.ok()) << sim.status();
     absl::StatusOr<InertiaFit> fit = FitInertia(sim->samples, DensityOptions(moved));
     ASSERT_TRUE(fit.ok()) << fit.status();
-    EXPECT_TRUE(fit->mesh_contradicted) << level << ", moved by " << move.transpose() << "\n" << DescribeFit(*fit);
+    EXPECT_TRUE(fit->mesh_contradicted) << level << ", moved by " << move.transpose() << "\n"
+                                        << DescribeFit(*fit);
     bool stated = false;
-    for (const std::string& n : fit->notes) stated |= n.find("tolerance 0.03") != std::string::npos && n.find(" mm along") != std::string::npos;
+    for (const std::string& n : fit->notes)
+      stated |=
+          n.find("tolerance 0.03") != std::string::npos && n.find(" mm along") != std::string::npos;
     EXPECT_TRUE(stated) << DescribeFit(*fit);
     // The answer is CONSTRAINED's: consistent, close in mass.
     EXPECT_TRUE(fit->physically_consistent);

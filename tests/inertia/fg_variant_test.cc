@@ -14,8 +14,9 @@
 namespace tactforce::inertia {
 namespace {
 
-constexpr FactorGraphVariant kAll[] = {FactorGraphVariant::kBaselineFg, FactorGraphVariant::kNoConstraint,
-                                       FactorGraphVariant::kConstraint, FactorGraphVariant::kConstraintPrior};
+constexpr FactorGraphVariant kAll[] = {
+    FactorGraphVariant::kBaselineFg, FactorGraphVariant::kNoConstraint,
+    FactorGraphVariant::kConstraint, FactorGraphVariant::kConstraintPrior};
 
 // A consistent object drawn from `seed`: mass 0.2-2 kg, CoM within 5 cm of
 // the origin, principal moments of a box with edges 5-20 cm, random axes.
@@ -26,9 +27,11 @@ InertialParameters DrawObject(uint64_t seed) {
   p.mass = 0.2 + 1.8 * u(rng);
   p.com = Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5) * 0.1;
   const Vec3 e(0.05 + 0.15 * u(rng), 0.05 + 0.15 * u(rng), 0.05 + 0.15 * u(rng));
-  const Vec3 d(e.y() * e.y() + e.z() * e.z(), e.x() * e.x() + e.z() * e.z(), e.x() * e.x() + e.y() * e.y());
+  const Vec3 d(e.y() * e.y() + e.z() * e.z(), e.x() * e.x() + e.z() * e.z(),
+               e.x() * e.x() + e.y() * e.y());
   const Eigen::Matrix3d R =
-      Eigen::Quaterniond(Eigen::Vector4d(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized())
+      Eigen::Quaterniond(
+          Eigen::Vector4d(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized())
           .toRotationMatrix();
   p.inertia_com = InertiaTensor::FromMatrix(R * (p.mass / 12.0 * d).asDiagonal() * R.transpose());
   return p;
@@ -62,19 +65,24 @@ TEST(FactorGraphVariant, SpellingsRoundTrip) {
     ASSERT_TRUE(back.ok()) << back.status();
     EXPECT_EQ(*back, v);
   }
-  EXPECT_EQ(*ParseFactorGraphVariant("FACTOR_GRAPH_VARIANT_BASELINE_FG"), FactorGraphVariant::kBaselineFg);
-  EXPECT_EQ(*ParseFactorGraphVariant("FACTOR_GRAPH_VARIANT_NO_C"), FactorGraphVariant::kNoConstraint);
-  EXPECT_EQ(*ParseFactorGraphVariant("factor_graph_variant_c_g"), FactorGraphVariant::kConstraintPrior);
+  EXPECT_EQ(*ParseFactorGraphVariant("FACTOR_GRAPH_VARIANT_BASELINE_FG"),
+            FactorGraphVariant::kBaselineFg);
+  EXPECT_EQ(*ParseFactorGraphVariant("FACTOR_GRAPH_VARIANT_NO_C"),
+            FactorGraphVariant::kNoConstraint);
+  EXPECT_EQ(*ParseFactorGraphVariant("factor_graph_variant_c_g"),
+            FactorGraphVariant::kConstraintPrior);
   EXPECT_EQ(*ParseFactorGraphVariant("FG_C"), FactorGraphVariant::kConstraint);
   absl::StatusOr<FactorGraphVariant> bad = ParseFactorGraphVariant("fg-x");
   ASSERT_FALSE(bad.ok());
   EXPECT_NE(bad.status().message().find("fg_variant"), std::string::npos) << bad.status();
-  EXPECT_EQ(InertiaOptions().factor_graph.variant, FactorGraphVariant::kConstraint);  // today's factor-graph
+  EXPECT_EQ(InertiaOptions().factor_graph.variant,
+            FactorGraphVariant::kConstraint);  // today's factor-graph
 }
 
 TEST(FactorGraphVariant, PriorVariantWithoutPriorIsAnErrorNamingTheField) {
   const SimulationResult sim = Simulate(11);
-  absl::StatusOr<InertiaFit> fit = FitInertia(sim.samples, Options(FactorGraphVariant::kConstraintPrior));
+  absl::StatusOr<InertiaFit> fit =
+      FitInertia(sim.samples, Options(FactorGraphVariant::kConstraintPrior));
   ASSERT_FALSE(fit.ok());
   EXPECT_EQ(fit.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_EQ(fit.status().message().rfind("prior:", 0), 0u) << fit.status();
@@ -128,10 +136,12 @@ TEST(FactorGraphVariant, NoConstraintIgnoresTheHull) {
   const Vec3 c = sim.truth.params.com;
   std::vector<Vec3> hull;  // a 2 cm cube 3 cm beside the CoM along x
   for (int i = 0; i < 8; ++i)
-    hull.push_back(c + Vec3(0.03 + 0.02 * (i & 1), 0.02 * ((i >> 1) & 1) - 0.01, 0.02 * ((i >> 2) & 1) - 0.01));
+    hull.push_back(c + Vec3(0.03 + 0.02 * (i & 1), 0.02 * ((i >> 1) & 1) - 0.01,
+                            0.02 * ((i >> 2) & 1) - 0.01));
   double distance[2];
   int k = 0;
-  for (FactorGraphVariant v : {FactorGraphVariant::kNoConstraint, FactorGraphVariant::kConstraint}) {
+  for (FactorGraphVariant v :
+       {FactorGraphVariant::kNoConstraint, FactorGraphVariant::kConstraint}) {
     InertiaOptions o = Options(v);
     o.hull = hull;
     absl::StatusOr<InertiaFit> fit = FitInertia(sim.samples, o);
@@ -162,10 +172,12 @@ TEST(FactorGraphVariant, EveryVariantFitsDrawnObjects) {
     absl::StatusOr<InertiaFit> fit = FitInertia(sim.samples, o);
     ASSERT_TRUE(fit.ok()) << fit.status();
     ASSERT_FALSE(fit->notes.empty());
-    EXPECT_EQ(fit->notes[0].rfind(std::string("factor-graph variant ") + ToString(v), 0), 0u) << fit->notes[0];
+    EXPECT_EQ(fit->notes[0].rfind(std::string("factor-graph variant ") + ToString(v), 0), 0u)
+        << fit->notes[0];
     const bool raw = fit->notes[0].find("H_xx..H_yz") != std::string::npos;
     EXPECT_EQ(raw, v == FactorGraphVariant::kBaselineFg);
-    EXPECT_EQ(fit->notes[0].find(" L, ") == std::string::npos, v == FactorGraphVariant::kBaselineFg);
+    EXPECT_EQ(fit->notes[0].find(" L, ") == std::string::npos,
+              v == FactorGraphVariant::kBaselineFg);
     const InertiaErrors e = CompareInertia(sim.truth.params, fit->params);
     EXPECT_LT(e.mass_percent, 5.0);
     eq38[i] = e.paper_metric;

@@ -19,7 +19,8 @@ using testing::ShortSimulation;
 void ExpectNear(const InertialParameters& truth, const InertialParameters& est, double rel) {
   EXPECT_NEAR(est.mass, truth.mass, rel * truth.mass);
   const double scale = std::max(truth.com.norm(), 0.01);
-  EXPECT_LT((est.com - truth.com).norm(), rel * scale) << est.com.transpose() << " vs " << truth.com.transpose();
+  EXPECT_LT((est.com - truth.com).norm(), rel * scale)
+      << est.com.transpose() << " vs " << truth.com.transpose();
   const Eigen::Matrix3d d = est.inertia_com.Matrix() - truth.inertia_com.Matrix();
   EXPECT_LT(d.norm(), rel * truth.inertia_com.Matrix().norm()) << "\n" << est.inertia_com.Matrix();
 }
@@ -75,8 +76,10 @@ TEST(FitInertia, AllMethodsRecoverNoiseFreeSimulation) {
     ASSERT_TRUE(sim.ok()) << sim.status();
     const InertialParameters& truth = sim->truth.params;
     const double size = EquivalentBoxSize(truth);
-    for (InertiaMethod m : {InertiaMethod::kBaselineLs, InertiaMethod::kFactorGraph, InertiaMethod::kConstrained}) {
-      SCOPED_TRACE(std::string(ToString(m)) + (mode == SimulationMode::kInHand ? " in-hand" : " wrist"));
+    for (InertiaMethod m :
+         {InertiaMethod::kBaselineLs, InertiaMethod::kFactorGraph, InertiaMethod::kConstrained}) {
+      SCOPED_TRACE(std::string(ToString(m)) +
+                   (mode == SimulationMode::kInHand ? " in-hand" : " wrist"));
       InertiaOptions o;
       o.method = m;
       absl::StatusOr<InertiaFit> fit = FitInertia(sim->samples, o);
@@ -84,8 +87,12 @@ TEST(FitInertia, AllMethodsRecoverNoiseFreeSimulation) {
       const InertiaErrors e = CompareInertia(truth, fit->params);
       // FACTOR_GRAPH carries the paper's O(dt) bias (forces of the first of
       // three samples): at 200 Hz about 0.4 in Riemannian distance.
-      const double tol = m == InertiaMethod::kConstrained ? 1e-4 : m == InertiaMethod::kBaselineLs ? 1e-2 : 1e-2;
-      const double riem = m == InertiaMethod::kConstrained ? 1e-4 : m == InertiaMethod::kBaselineLs ? 1e-2 : 0.5;
+      const double tol = m == InertiaMethod::kConstrained  ? 1e-4
+                         : m == InertiaMethod::kBaselineLs ? 1e-2
+                                                           : 1e-2;
+      const double riem = m == InertiaMethod::kConstrained  ? 1e-4
+                          : m == InertiaMethod::kBaselineLs ? 1e-2
+                                                            : 0.5;
       EXPECT_LT(e.mass_percent, 100 * tol);
       EXPECT_LT(e.com_mm / 1000.0, tol * size);
       EXPECT_LT(e.riemannian, riem);
@@ -119,7 +126,8 @@ TEST(FitInertia, FactorGraphBiasIsFirstOrderInTheSamplePeriod) {
 }
 
 TEST(FitInertia, ConstrainedRecoversExactlyWithMeasuredKinematics) {
-  absl::StatusOr<SimulationResult> sim = SimulateInertia(ShortSimulation("box", SimulationMode::kInHand, true));
+  absl::StatusOr<SimulationResult> sim =
+      SimulateInertia(ShortSimulation("box", SimulationMode::kInHand, true));
   ASSERT_TRUE(sim.ok()) << sim.status();
   absl::StatusOr<InertiaFit> fit = FitInertia(sim->samples, InertiaOptions{});
   ASSERT_TRUE(fit.ok()) << fit.status();
@@ -187,7 +195,8 @@ TEST(FitInertia, UnexcitedDirectionsAreNamedNotAnError) {
 }
 
 TEST(FitInertia, HullConstrainsTheCom) {
-  absl::StatusOr<SimulationResult> sim = SimulateInertia(ShortSimulation("box", SimulationMode::kInHand, false));
+  absl::StatusOr<SimulationResult> sim =
+      SimulateInertia(ShortSimulation("box", SimulationMode::kInHand, false));
   ASSERT_TRUE(sim.ok()) << sim.status();
   // A hull that stops 3 mm short of the true CoM in x.
   const Vec3 c = sim->truth.params.com;
@@ -217,7 +226,8 @@ TEST(FitInertia, HullConstrainsTheCom) {
 // the weak entropic regulariser (no prior), the SLSQP hull step when the
 // unconstrained optimum leaves the hull; with a prior, no regulariser.
 TEST(FitInertia, ConstrainedStepsNoteOncePerFit) {
-  absl::StatusOr<SimulationResult> sim = SimulateInertia(ShortSimulation("box", SimulationMode::kInHand, false));
+  absl::StatusOr<SimulationResult> sim =
+      SimulateInertia(ShortSimulation("box", SimulationMode::kInHand, false));
   ASSERT_TRUE(sim.ok()) << sim.status();
   const Vec3 c = sim->truth.params.com;
   InertiaOptions o;
@@ -249,7 +259,8 @@ TEST(FitInertia, ConstrainedStepsNoteOncePerFit) {
 // A hull that does not contain the object's CoM contradicts the data: the
 // fit says so with the distance; a CoM just outside (noise) does not warn.
 TEST(FitInertia, WarnsWhenTheDataPutTheComOutsideTheHull) {
-  absl::StatusOr<SimulationResult> sim = SimulateInertia(ShortSimulation("box", SimulationMode::kInHand, false));
+  absl::StatusOr<SimulationResult> sim =
+      SimulateInertia(ShortSimulation("box", SimulationMode::kInHand, false));
   ASSERT_TRUE(sim.ok()) << sim.status();
   const Vec3 c = sim->truth.params.com;
   auto warnings = [&](double short_by, std::string* text) {
@@ -278,25 +289,30 @@ TEST(FitInertia, WarnsWhenTheDataPutTheComOutsideTheHull) {
 }
 
 TEST(FitInertia, OptionErrorsNameTheField) {
-  absl::StatusOr<SimulationResult> sim = SimulateInertia(ShortSimulation("box", SimulationMode::kInHand, false));
+  absl::StatusOr<SimulationResult> sim =
+      SimulateInertia(ShortSimulation("box", SimulationMode::kInHand, false));
   ASSERT_TRUE(sim.ok());
   InertiaOptions o;
   o.hull = {Vec3(0, 0, 0), Vec3(0.1, 0, 0), Vec3(0, 0.1, 0), Vec3(0, 0, 0.1)};
   o.prior = InertiaPrior{sim->truth.params, 1.0};  // CoM (0.02, -0.01, 0.03) is outside
   absl::StatusOr<InertiaFit> f = FitInertia(sim->samples, o);
   ASSERT_FALSE(f.ok());
-  EXPECT_NE(f.status().message().find("prior.com (0.02, -0.01, 0.03) is outside the hull"), std::string::npos)
+  EXPECT_NE(f.status().message().find("prior.com (0.02, -0.01, 0.03) is outside the hull"),
+            std::string::npos)
       << f.status();
   InertiaOptions bad;
   bad.noise.force_sigma = -1;
-  EXPECT_NE(FitInertia(sim->samples, bad).status().message().find("noise.force_sigma"), std::string::npos);
+  EXPECT_NE(FitInertia(sim->samples, bad).status().message().find("noise.force_sigma"),
+            std::string::npos);
   InertiaOptions flat;
   flat.hull = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0)};
-  EXPECT_NE(FitInertia(sim->samples, flat).status().message().find("hull: degenerate"), std::string::npos);
+  EXPECT_NE(FitInertia(sim->samples, flat).status().message().find("hull: degenerate"),
+            std::string::npos);
 }
 
 TEST(FitInertia, PriorPullsFactorGraphAndConstrained) {
-  absl::StatusOr<SimulationResult> sim = SimulateInertia(ShortSimulation("seed-table1", SimulationMode::kInHand, false));
+  absl::StatusOr<SimulationResult> sim =
+      SimulateInertia(ShortSimulation("seed-table1", SimulationMode::kInHand, false));
   ASSERT_TRUE(sim.ok());
   for (InertiaMethod m : {InertiaMethod::kConstrained, InertiaMethod::kFactorGraph}) {
     InertiaOptions o;
@@ -309,9 +325,11 @@ TEST(FitInertia, PriorPullsFactorGraphAndConstrained) {
 }
 
 TEST(FitInertia, ProgressInterruptAndMethodNames) {
-  absl::StatusOr<SimulationResult> sim = SimulateInertia(ShortSimulation("box", SimulationMode::kInHand, false));
+  absl::StatusOr<SimulationResult> sim =
+      SimulateInertia(ShortSimulation("box", SimulationMode::kInHand, false));
   ASSERT_TRUE(sim.ok());
-  for (InertiaMethod m : {InertiaMethod::kBaselineLs, InertiaMethod::kFactorGraph, InertiaMethod::kConstrained}) {
+  for (InertiaMethod m :
+       {InertiaMethod::kBaselineLs, InertiaMethod::kFactorGraph, InertiaMethod::kConstrained}) {
     InertiaOptions o;
     o.method = m;
     double last = -1;

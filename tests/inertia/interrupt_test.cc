@@ -52,9 +52,11 @@ struct StopRun {
 };
 
 // Runs FitInertia with an interrupt that turns true `after_ms` after the start.
-StopRun FitInterruptedAfter(const InertiaSamples& samples, InertiaOptions options, double after_ms) {
+StopRun FitInterruptedAfter(const InertiaSamples& samples, InertiaOptions options,
+                            double after_ms) {
   const Clock::time_point deadline =
-      Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double, std::milli>(after_ms));
+      Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                         std::chrono::duration<double, std::milli>(after_ms));
   options.interrupt = [deadline] { return Clock::now() >= deadline; };
   StopRun run;
   run.status = FitInertia(samples, options).status();
@@ -115,7 +117,8 @@ TEST(Interrupt, RegionBuildingStopsWhenInterrupted) {
   o.scheme = RegionScheme::kGrid;
   o.target_regions = kMaxTargetRegions;
   int polls = 0;
-  absl::StatusOr<RegionModel> r = BuildRegions(data.object.mesh, o, "box", [&polls] { return ++polls > 0; });
+  absl::StatusOr<RegionModel> r =
+      BuildRegions(data.object.mesh, o, "box", [&polls] { return ++polls > 0; });
   EXPECT_EQ(r.status().code(), absl::StatusCode::kCancelled) << r.status();
   EXPECT_EQ(r.status().message(), "interrupted");
   EXPECT_EQ(polls, 1);

@@ -38,7 +38,8 @@ TEST(InertiaMetrics, PseudoInertiaHandComputed) {
 }
 
 TEST(InertiaMetrics, StandardParametersRoundTrip) {
-  const InertialParameters p = Make(1.3, Vec3(0.2, 0.5, 0.1), {0.4015, 0.1292, 0.4799, -0.1297, -0.0259, -0.0649});
+  const InertialParameters p =
+      Make(1.3, Vec3(0.2, 0.5, 0.1), {0.4015, 0.1292, 0.4799, -0.1297, -0.0259, -0.0649});
   const Vector10d pi = p.ToStandard();
   EXPECT_NEAR(pi(0), 1.3, 1e-15);
   EXPECT_NEAR(pi(2), 0.65, 1e-15);
@@ -106,7 +107,8 @@ TEST(InertiaMetrics, InconsistentEstimate) {
 TEST(InertiaMetrics, PrincipalAxesAndBoxSize) {
   // Uniform box 0.3 x 0.2 x 0.1 m, 1.2 kg, rotated.
   const double m = 1.2;
-  const Vec3 d = m / 12.0 * Vec3(0.2 * 0.2 + 0.1 * 0.1, 0.3 * 0.3 + 0.1 * 0.1, 0.3 * 0.3 + 0.2 * 0.2);
+  const Vec3 d =
+      m / 12.0 * Vec3(0.2 * 0.2 + 0.1 * 0.1, 0.3 * 0.3 + 0.1 * 0.1, 0.3 * 0.3 + 0.2 * 0.2);
   const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Vec3(1, -1, 2).normalized()).toRotationMatrix();
   InertialParameters p;
   p.mass = m;
@@ -144,11 +146,16 @@ TEST(InertiaTruth, ParsesTheSharedFormat) {
 }
 
 TEST(InertiaTruth, ErrorsNameTheKey) {
-  auto err = [](const std::string& text) { return std::string(ParseTruthJson(text, "t.json").status().message()); };
-  EXPECT_NE(err(R"({"mass": 1, "inertia_com": [1,1,1,0,0,0]})").find("missing key 'com'"), std::string::npos);
-  EXPECT_NE(err(R"({"mass": 1, "com": [0,0], "inertia_com": [1,1,1,0,0,0]})").find("key 'com': expected an array of 3"),
+  auto err = [](const std::string& text) {
+    return std::string(ParseTruthJson(text, "t.json").status().message());
+  };
+  EXPECT_NE(err(R"({"mass": 1, "inertia_com": [1,1,1,0,0,0]})").find("missing key 'com'"),
             std::string::npos);
-  EXPECT_NE(err(R"({"mass": -1, "com": [0,0,0], "inertia_com": [1,1,1,0,0,0]})").find("key 'mass': must be > 0"),
+  EXPECT_NE(err(R"({"mass": 1, "com": [0,0], "inertia_com": [1,1,1,0,0,0]})")
+                .find("key 'com': expected an array of 3"),
+            std::string::npos);
+  EXPECT_NE(err(R"({"mass": -1, "com": [0,0,0], "inertia_com": [1,1,1,0,0,0]})")
+                .find("key 'mass': must be > 0"),
             std::string::npos);
   // Syntax errors name the file and line (the shared JSON reader of io/json.h).
   EXPECT_EQ(err("{\n\"mass\": 1,\n\"com\": [0,0,0] \"inertia_com\": []}").rfind("t.json:3:", 0), 0u)

@@ -19,14 +19,18 @@ namespace {
 
 // A consistent body: second moment about the CoM R diag(s) R^T, s > 0.
 InertialParameters RandomBody(std::mt19937_64* rng) {
-  std::uniform_real_distribution<double> mass(0.05, 5.0), pos(-0.2, 0.2), moment(1e-6, 1e-2), unit(-1, 1);
+  std::uniform_real_distribution<double> mass(0.05, 5.0), pos(-0.2, 0.2), moment(1e-6, 1e-2),
+      unit(-1, 1);
   InertialParameters p;
   p.mass = mass(*rng);
   p.com = Vec3(pos(*rng), pos(*rng), pos(*rng));
-  const Eigen::Matrix3d R =
-      Eigen::Quaterniond(unit(*rng), unit(*rng), unit(*rng), unit(*rng)).normalized().toRotationMatrix();
-  const Eigen::Matrix3d sigma_c = p.mass * R * Vec3(moment(*rng), moment(*rng), moment(*rng)).asDiagonal() * R.transpose();
-  p.inertia_com = InertiaTensor::FromMatrix(sigma_c.trace() * Eigen::Matrix3d::Identity() - sigma_c);
+  const Eigen::Matrix3d R = Eigen::Quaterniond(unit(*rng), unit(*rng), unit(*rng), unit(*rng))
+                                .normalized()
+                                .toRotationMatrix();
+  const Eigen::Matrix3d sigma_c =
+      p.mass * R * Vec3(moment(*rng), moment(*rng), moment(*rng)).asDiagonal() * R.transpose();
+  p.inertia_com =
+      InertiaTensor::FromMatrix(sigma_c.trace() * Eigen::Matrix3d::Identity() - sigma_c);
   return p;
 }
 
@@ -83,7 +87,8 @@ TEST_P(PseudoInertiaTypes, LogCholeskyRoundTrips) {
     const Eigen::Matrix4d U = lc.U();
     EXPECT_TRUE(U.isUpperTriangular(0.0));
     EXPECT_TRUE((U.diagonal().array() > 0).all());
-    EXPECT_LT(RelativeDifference(lc.ToPseudoInertia().Matrix(), j.Matrix()), 1e-12) << "trial " << trial;
+    EXPECT_LT(RelativeDifference(lc.ToPseudoInertia().Matrix(), j.Matrix()), 1e-12)
+        << "trial " << trial;
     EXPECT_LT(RelativeDifference(lc.ToPseudoInertia().Standard(), p.ToStandard()), 1e-12);
     // Every theta is a consistent body, and theta -> J -> theta is the identity.
     LogCholeskyParameters any;
@@ -92,7 +97,8 @@ TEST_P(PseudoInertiaTypes, LogCholeskyRoundTrips) {
     EXPECT_TRUE(IsPhysicallyConsistent(jt.Parameters(), 0.0));
     // theta -> J -> theta loses digits with the condition number of J.
     const LogCholeskyParameters back = LogCholeskyParameters::FromPseudoInertia(jt);
-    const Eigen::Vector4d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d>(jt.Matrix()).eigenvalues();
+    const Eigen::Vector4d ev =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d>(jt.Matrix()).eigenvalues();
     EXPECT_LT((back.theta - any.theta).norm(), 1e-14 * ev(3) / ev(0) * any.theta.norm());
     EXPECT_LT(RelativeDifference(back.ToPseudoInertia().Matrix(), jt.Matrix()), 1e-12);
   }

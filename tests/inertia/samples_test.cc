@@ -45,19 +45,23 @@ TEST(InertiaCsv, ParsesAWrenchFile) {
 }
 
 TEST(InertiaCsv, MissingColumnsAreNamed) {
-  EXPECT_NE(Message("t,px,py,pz,qw,qx,qy,fx,fy,fz,tx,ty,tz\n0,0,0,0,1,0,0,0,0,0,0,0,0\n").find("missing column(s) qz"),
+  EXPECT_NE(Message("t,px,py,pz,qw,qx,qy,fx,fy,fz,tx,ty,tz\n0,0,0,0,1,0,0,0,0,0,0,0,0\n")
+                .find("missing column(s) qz"),
             std::string::npos);
   const std::string m = Message("t,px,py,pz,qw,qx,qy,qz,fx,fy,fz,tx\n0,0,0,0,1,0,0,0,0,0,0,0\n");
   EXPECT_NE(m.find("run.csv: missing column(s) ty, tz"), std::string::npos) << m;
-  EXPECT_NE(Message("t,px,py,pz,qw,qx,qy,qz\n0,0,0,0,1,0,0,0\n").find("missing force columns"), std::string::npos);
+  EXPECT_NE(Message("t,px,py,pz,qw,qx,qy,qz\n0,0,0,0,1,0,0,0\n").find("missing force columns"),
+            std::string::npos);
   // Incomplete measured kinematics.
   std::string k = "t,px,py,pz,qw,qx,qy,qz,fx,fy,fz,tx,ty,tz,wx,wy,wz,dwx,dwy,dwz,ax,ay\n";
   const std::string km = Message(k + "0,0,0,0,1,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0\n");
-  EXPECT_NE(km.find("incomplete measured kinematics: missing column(s) az"), std::string::npos) << km;
+  EXPECT_NE(km.find("incomplete measured kinematics: missing column(s) az"), std::string::npos)
+      << km;
 }
 
 TEST(InertiaCsv, NonMonotonicAndDuplicateTimeNameTheLine) {
-  std::string csv = std::string(kHeader) + Row(0.0) + Row(0.01) + Row(0.005) + Row(0.02) + Row(0.03);
+  std::string csv =
+      std::string(kHeader) + Row(0.0) + Row(0.01) + Row(0.005) + Row(0.02) + Row(0.03);
   const std::string m = Message(csv);
   EXPECT_NE(m.find("run.csv:4: column 't'"), std::string::npos) << m;
   EXPECT_NE(m.find("before"), std::string::npos) << m;
@@ -77,18 +81,21 @@ TEST(InertiaCsv, TooFewSamplesSaysHowManyAreNeeded) {
   ASSERT_TRUE(s.ok()) << s.status();
   absl::StatusOr<InertiaFit> f = FitInertia(*s, InertiaOptions{});
   ASSERT_FALSE(f.ok());
-  EXPECT_NE(f.status().message().find("4 sample(s), at least 5 needed by constrained"), std::string::npos)
+  EXPECT_NE(f.status().message().find("4 sample(s), at least 5 needed by constrained"),
+            std::string::npos)
       << f.status();
 }
 
 TEST(InertiaCsv, NanIsRejectedWithLineAndColumn) {
-  std::string csv = std::string(kHeader) + Row(0.0) + Row(0.01) + Row(0.02, 1, "nan") + Row(0.03) + Row(0.04);
+  std::string csv =
+      std::string(kHeader) + Row(0.0) + Row(0.01) + Row(0.02, 1, "nan") + Row(0.03) + Row(0.04);
   const std::string m = Message(csv);
   EXPECT_NE(m.find("run.csv:4: column 'fy'"), std::string::npos) << m;
 }
 
 TEST(InertiaCsv, NearZeroQuaternionIsRejected) {
-  std::string csv = std::string(kHeader) + Row(0.0) + Row(0.01) + Row(0.02) + Row(0.03, 1e-9) + Row(0.04);
+  std::string csv =
+      std::string(kHeader) + Row(0.0) + Row(0.01) + Row(0.02) + Row(0.03, 1e-9) + Row(0.04);
   const std::string m = Message(csv);
   EXPECT_NE(m.find("run.csv:5: columns 'qw,qx,qy,qz'"), std::string::npos) << m;
   EXPECT_NE(m.find("near zero"), std::string::npos) << m;
@@ -98,8 +105,11 @@ TEST(InertiaCsv, ContactColumnSets) {
   const std::string pose = "t,px,py,pz,qw,qx,qy,qz";
   const std::string c0 = ",c0_px,c0_py,c0_pz,c0_fx,c0_fy,c0_fz";
   std::string m = Message(pose + c0 + ",c1_px\n0,0,0,0,1,0,0,0,0,0,0,0,0,0,0\n");
-  EXPECT_NE(m.find("contact 1: missing column(s) c1_py, c1_pz, c1_fx, c1_fy, c1_fz"), std::string::npos) << m;
-  m = Message(pose + c0 + ",c2_px,c2_py,c2_pz,c2_fx,c2_fy,c2_fz\n0,0,0,0,1,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0\n");
+  EXPECT_NE(m.find("contact 1: missing column(s) c1_py, c1_pz, c1_fx, c1_fy, c1_fz"),
+            std::string::npos)
+      << m;
+  m = Message(pose + c0 +
+              ",c2_px,c2_py,c2_pz,c2_fx,c2_fy,c2_fz\n0,0,0,0,1,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0\n");
   EXPECT_NE(m.find("contact 1 has no columns"), std::string::npos) << m;
   m = Message(pose + c0 + ",fx,fy,fz,tx,ty,tz\n0,0,0,0,1,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0\n");
   EXPECT_NE(m.find("both wrench columns"), std::string::npos) << m;
@@ -117,13 +127,16 @@ TEST(InertiaSamples, ValidationNamesFields) {
   }
   EXPECT_TRUE(ValidateInertiaSamples(s).ok());
   s.samples[2].orientation.coeffs().setZero();
-  EXPECT_NE(ValidateInertiaSamples(s).message().find("samples[2].orientation: quaternion norm 0"), std::string::npos);
+  EXPECT_NE(ValidateInertiaSamples(s).message().find("samples[2].orientation: quaternion norm 0"),
+            std::string::npos);
   s.samples[2].orientation.setIdentity();
   s.samples[3].contacts[1].force.x() = std::nan("");
-  EXPECT_NE(ValidateInertiaSamples(s).message().find("samples[3].contacts[1].force: not finite"), std::string::npos);
+  EXPECT_NE(ValidateInertiaSamples(s).message().find("samples[3].contacts[1].force: not finite"),
+            std::string::npos);
   s.samples[3].contacts[1].force.setZero();
   s.samples[4].contacts.pop_back();
-  EXPECT_NE(ValidateInertiaSamples(s).message().find("samples[4]: 1 contacts, expected 2"), std::string::npos);
+  EXPECT_NE(ValidateInertiaSamples(s).message().find("samples[4]: 1 contacts, expected 2"),
+            std::string::npos);
 }
 
 TEST(InertiaCsv, SimulatedRoundTrip) {

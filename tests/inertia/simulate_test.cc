@@ -107,7 +107,8 @@ TEST(InertiaSimulate, NoiseHasTheRequestedSpread) {
   for (int i = 0; i < n; ++i) {
     sf += (b.samples[i].force - a.samples[i].force).squaredNorm();
     st += (b.samples[i].torque - a.samples[i].torque).squaredNorm();
-    sa += (b.samples[i].kinematics->angular_acceleration - a.samples[i].kinematics->angular_acceleration)
+    sa += (b.samples[i].kinematics->angular_acceleration -
+           a.samples[i].kinematics->angular_acceleration)
               .squaredNorm();
     EXPECT_EQ(a.samples[i].position, b.samples[i].position);
   }
@@ -124,7 +125,8 @@ TEST(InertiaSimulate, NoiseHasTheRequestedSpread) {
 }
 
 TEST(InertiaSimulate, WritesCsvAndTruth) {
-  absl::StatusOr<SimulationResult> sim = SimulateInertia(ShortSimulation("box", SimulationMode::kWristWrench, true));
+  absl::StatusOr<SimulationResult> sim =
+      SimulateInertia(ShortSimulation("box", SimulationMode::kWristWrench, true));
   ASSERT_TRUE(sim.ok());
   const std::string dir = ::testing::TempDir();
   const std::string csv = dir + "/inertia_sim.csv", truth = dir + "/inertia_sim.truth.json";

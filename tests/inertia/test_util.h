@@ -22,7 +22,8 @@ inline std::optional<std::string> SharedInertiaDir() {
 }
 
 // A short, fast simulation (3 s at 100 Hz) of a built-in object.
-inline SimulationOptions ShortSimulation(const std::string& object, SimulationMode mode, bool kinematics) {
+inline SimulationOptions ShortSimulation(const std::string& object, SimulationMode mode,
+                                         bool kinematics) {
   SimulationOptions o;
   o.object = object;
   o.mode = mode;

@@ -43,15 +43,17 @@ TEST(EnumNames, CaseAndSeparatorsDrawnFromASeedAreOneName) {
 TEST(EnumNames, WireSpellingNeedsThePrefix) {
   EXPECT_EQ(*ParseEnumName(kShades, "SHADE_GREY", "shade", "shade_"), Shade::kDarkGrey);
   EXPECT_EQ(*ParseEnumName(kShades, "SHADE_LIGHT", "shade", "shade-"), Shade::kLight);
-  EXPECT_FALSE(ParseEnumName(kShades, "grey", "shade", "shade_").ok());  // the wire name alone is not a name
-  EXPECT_FALSE(ParseEnumName(kShades, "SHADE_GREY", "shade").ok());      // no prefix given
+  EXPECT_FALSE(
+      ParseEnumName(kShades, "grey", "shade", "shade_").ok());  // the wire name alone is not a name
+  EXPECT_FALSE(ParseEnumName(kShades, "SHADE_GREY", "shade").ok());  // no prefix given
 }
 
 TEST(EnumNames, ErrorNamesTheFieldAndListsTheListedNames) {
   const absl::StatusOr<Shade> s = ParseEnumName(kShades, "Dim", "options.shade");
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.status().code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_EQ(s.status().message(), "options.shade: unknown 'Dim' (expected light, dark-grey or none)");
+  EXPECT_EQ(s.status().message(),
+            "options.shade: unknown 'Dim' (expected light, dark-grey or none)");
   EXPECT_EQ(UnknownEnumName("f", "x", {"a", "b"}).message(), "f: unknown 'x' (expected a or b)");
   EXPECT_EQ(UnknownEnumName("f", "x", {"a"}).message(), "f: unknown 'x' (expected a)");
 }

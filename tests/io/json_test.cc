@@ -122,28 +122,29 @@ TEST(JsonErrors, NestingIsLimited) {
 // ---------------------------------------------------------------- values
 
 TEST(Json, UnicodeEscapesBecomeUtf8) {
-  absl::StatusOr<JsonValue> v = ParseJson(R"(["\u00e9", "\u20AC", "\ud83d\ude00", "\u0000x", "é"])", "in.json");
+  absl::StatusOr<JsonValue> v =
+      ParseJson(R"(["\u00e9", "\u20AC", "\ud83d\ude00", "\u0000x", "é"])", "in.json");
   ASSERT_TRUE(v.ok()) << v.status();
   const auto& a = v->array();
-  EXPECT_EQ(a[0].string(), "\xc3\xa9");              // U+00E9, two bytes
-  EXPECT_EQ(a[1].string(), "\xe2\x82\xac");          // U+20AC, three bytes
-  EXPECT_EQ(a[2].string(), "\xf0\x9f\x98\x80");      // a surrogate pair, four bytes
+  EXPECT_EQ(a[0].string(), "\xc3\xa9");             // U+00E9, two bytes
+  EXPECT_EQ(a[1].string(), "\xe2\x82\xac");         // U+20AC, three bytes
+  EXPECT_EQ(a[2].string(), "\xf0\x9f\x98\x80");     // a surrogate pair, four bytes
   EXPECT_EQ(a[3].string(), std::string("\0x", 2));  // NUL kept
-  EXPECT_EQ(a[4].string(), "\xc3\xa9");              // raw UTF-8 as is
+  EXPECT_EQ(a[4].string(), "\xc3\xa9");             // raw UTF-8 as is
   EXPECT_NE(ErrorOf(R"(["\ud83d"])").what.find("surrogate"), std::string::npos);
   EXPECT_NE(ErrorOf(R"(["\u00g0"])").what.find("\\u"), std::string::npos);
 }
 
 TEST(Json, ValuesKnowTheLineTheyStartOn) {
   const std::string text =
-      "{\n"                      // 1
-      "  \"z\": [1,\n"           // 2
-      "     2\n"                 // 3
-      "     , \"three\"],\n"     // 4
-      "  \"a\":\n"               // 5
-      "    {\"inner\": null,\n"  // 6
+      "{\n"                        // 1
+      "  \"z\": [1,\n"             // 2
+      "     2\n"                   // 3
+      "     , \"three\"],\n"       // 4
+      "  \"a\":\n"                 // 5
+      "    {\"inner\": null,\n"    // 6
       "     \"deep\": [true]},\n"  // 7
-      "  \"m\": -1.5e-3\n"       // 8
+      "  \"m\": -1.5e-3\n"         // 8
       "}\n";
   absl::StatusOr<JsonValue> v = ParseJson(text, "in.json");
   ASSERT_TRUE(v.ok()) << v.status();
@@ -171,7 +172,8 @@ TEST(Json, ValuesKnowTheLineTheyStartOn) {
 }
 
 TEST(Json, NumbersAreDoubles) {
-  absl::StatusOr<JsonValue> v = ParseJson("[9007199254740993, -0, 18446744073709551615, 2.5e-320]", "in.json");
+  absl::StatusOr<JsonValue> v =
+      ParseJson("[9007199254740993, -0, 18446744073709551615, 2.5e-320]", "in.json");
   ASSERT_TRUE(v.ok()) << v.status();
   EXPECT_EQ(v->array()[0].number(), 9007199254740992.0);  // nearest double
   EXPECT_TRUE(v->array()[0].is_number());
@@ -224,12 +226,17 @@ TEST(JsonWriter, PrettyLayoutIsStable) {
 std::string RandomCompactJson(std::mt19937_64& rng, int depth) {
   std::uniform_int_distribution<int> kind(0, depth > 3 ? 3 : 5), count(0, 3), pad(0, 2);
   const std::string space(static_cast<size_t>(pad(rng)), ' ');
-  const std::vector<std::string> strings = {R"("a{b")", R"("[,]:")", R"("q\"x\\")", R"("")", R"("t\n")"};
+  const std::vector<std::string> strings = {R"("a{b")", R"("[,]:")", R"("q\"x\\")", R"("")",
+                                            R"("t\n")"};
   switch (kind(rng)) {
-    case 0: return JsonNumber(std::uniform_real_distribution<double>(-1e3, 1e3)(rng));
-    case 1: return strings[static_cast<size_t>(count(rng)) % strings.size()];
-    case 2: return "true";
-    case 3: return "null";
+    case 0:
+      return JsonNumber(std::uniform_real_distribution<double>(-1e3, 1e3)(rng));
+    case 1:
+      return strings[static_cast<size_t>(count(rng)) % strings.size()];
+    case 2:
+      return "true";
+    case 3:
+      return "null";
     case 4: {
       std::string out = "[" + space;
       const int n = count(rng);
@@ -240,7 +247,8 @@ std::string RandomCompactJson(std::mt19937_64& rng, int depth) {
       std::string out = "{";
       const int n = count(rng);
       for (int i = 0; i < n; ++i) {
-        out += (i ? "," : "") + space + "\"k" + std::to_string(i) + "\"" + space + ":" + RandomCompactJson(rng, depth + 1);
+        out += (i ? "," : "") + space + "\"k" + std::to_string(i) + "\"" + space + ":" +
+               RandomCompactJson(rng, depth + 1);
       }
       return out + "}";
     }
@@ -269,9 +277,10 @@ TEST(JsonStringTracker, MarksQuotesEscapesAndContentsAsInString) {
 }
 
 TEST(IndentJson, KeepsTheValueInTheWritersLayout) {
-  EXPECT_EQ(IndentJson(R"({"name":"x\"y","list":[1.5,null,{},[ ]],"ok":true})"),
-            "{\n  \"name\": \"x\\\"y\",\n  \"list\": [\n    1.5,\n    null,\n    {},\n    []\n  ],\n"
-            "  \"ok\": true\n}\n");
+  EXPECT_EQ(
+      IndentJson(R"({"name":"x\"y","list":[1.5,null,{},[ ]],"ok":true})"),
+      "{\n  \"name\": \"x\\\"y\",\n  \"list\": [\n    1.5,\n    null,\n    {},\n    []\n  ],\n"
+      "  \"ok\": true\n}\n");
   std::mt19937_64 rng(25);
   for (int trial = 0; trial < 200; ++trial) {
     const std::string compact = "{\"v\": " + RandomCompactJson(rng, 0) + "}";
@@ -305,7 +314,8 @@ TEST(JsonWriter, RoundTripsThroughTheReader) {
   ASSERT_TRUE(v.ok()) << v.status() << "\n" << w.str();
   EXPECT_EQ(v->Find("text")->string(), text);
   ASSERT_EQ(v->Find("numbers")->array().size(), numbers.size());
-  for (size_t i = 0; i < numbers.size(); ++i) EXPECT_EQ(v->Find("numbers")->array()[i].number(), numbers[i]) << i;
+  for (size_t i = 0; i < numbers.size(); ++i)
+    EXPECT_EQ(v->Find("numbers")->array()[i].number(), numbers[i]) << i;
   const JsonValue& inner = v->Find("nested")->array()[0];
   EXPECT_TRUE(inner.Find("flag")->is_bool());
   EXPECT_FALSE(inner.Find("flag")->boolean());
@@ -316,8 +326,12 @@ TEST(JsonWriter, RoundTripsThroughTheReader) {
 TEST(Json, EscapeWritesValidJsonForAnyBytes) {
   EXPECT_EQ(JsonEscape("\b\f\x1f"), "\"\\b\\f\\u001f\"");
   // Invalid UTF-8 is replaced (U+FFFD), so the output always parses.
-  const std::string escaped = JsonEscape("a\xff" "b");
-  EXPECT_EQ(escaped, "\"a\xef\xbf\xbd" "b\"");
+  const std::string escaped = JsonEscape(
+      "a\xff"
+      "b");
+  EXPECT_EQ(escaped,
+            "\"a\xef\xbf\xbd"
+            "b\"");
   EXPECT_TRUE(ParseJson(escaped, "escaped").ok());
 }
 

@@ -39,7 +39,8 @@ using Clock = std::chrono::steady_clock;
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 constexpr bool kSanitized = true;  // their allocators reserve terabytes: no RLIMIT_AS
 #elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || __has_feature(memory_sanitizer)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || \
+    __has_feature(memory_sanitizer)
 constexpr bool kSanitized = true;
 #else
 constexpr bool kSanitized = false;
@@ -71,8 +72,10 @@ Solid RandomBox(std::mt19937& rng, bool integral) {
   }
   Solid s;
   for (int i = 0; i < 8; ++i)
-    s.vertices.push_back({lo[0] + (i & 1) * size[0], lo[1] + (i >> 1 & 1) * size[1], lo[2] + (i >> 2 & 1) * size[2]});
-  const int quads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+    s.vertices.push_back({lo[0] + (i & 1) * size[0], lo[1] + (i >> 1 & 1) * size[1],
+                          lo[2] + (i >> 2 & 1) * size[2]});
+  const int quads[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
   for (const auto& q : quads) {
     s.triangles.push_back({q[0], q[1], q[2]});
     s.triangles.push_back({q[0], q[2], q[3]});
@@ -84,7 +87,9 @@ Solid RandomTetrahedron(std::mt19937& rng, bool integral) {
   Solid s;
   for (;;) {
     s.vertices.clear();
-    for (int i = 0; i < 4; ++i) s.vertices.push_back({Coordinate(rng, integral), Coordinate(rng, integral), Coordinate(rng, integral)});
+    for (int i = 0; i < 4; ++i)
+      s.vertices.push_back(
+          {Coordinate(rng, integral), Coordinate(rng, integral), Coordinate(rng, integral)});
     auto d = [&](int i, int k) { return double(s.vertices[i][k]) - s.vertices[0][k]; };
     const double volume = d(1, 0) * (d(2, 1) * d(3, 2) - d(2, 2) * d(3, 1)) -
                           d(1, 1) * (d(2, 0) * d(3, 2) - d(2, 2) * d(3, 0)) +
@@ -123,14 +128,17 @@ void EndItem(std::string* out, Encoding e) {
 // A PLY of `s` (face colours when it has them), followed by an element
 // "extra" with `extra_items` items of a scalar and a list of random length.
 std::string WritePly(const Solid& s, Encoding e, std::mt19937& rng, int extra_items = 0) {
-  const char* format = e == Encoding::kAscii ? "ascii" : e == Encoding::kLittle ? "binary_little_endian"
-                                                                                : "binary_big_endian";
-  std::string out = absl::StrCat("ply\nformat ", format, " 1.0\ncomment drawn by mesh_read_test\nelement vertex ",
-                                 s.vertices.size(), "\nproperty float x\nproperty float y\nproperty float z\n",
-                                 "element face ", s.triangles.size(), "\nproperty list uchar int vertex_indices\n");
+  const char* format = e == Encoding::kAscii    ? "ascii"
+                       : e == Encoding::kLittle ? "binary_little_endian"
+                                                : "binary_big_endian";
+  std::string out = absl::StrCat(
+      "ply\nformat ", format, " 1.0\ncomment drawn by mesh_read_test\nelement vertex ",
+      s.vertices.size(), "\nproperty float x\nproperty float y\nproperty float z\n",
+      "element face ", s.triangles.size(), "\nproperty list uchar int vertex_indices\n");
   if (!s.colors.empty()) out += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
   if (extra_items > 0)
-    absl::StrAppend(&out, "element extra ", extra_items, "\nproperty short id\nproperty list ushort double w\n");
+    absl::StrAppend(&out, "element extra ", extra_items,
+                    "\nproperty short id\nproperty list ushort double w\n");
   out += "end_header\n";
   for (const auto& v : s.vertices) {
     for (float c : v) Put<float>(&out, c, e);
@@ -161,7 +169,8 @@ void ExpectSameSolid(const TriangleMesh& mesh, const Solid& s) {
     for (int k = 0; k < 3; ++k) {
       const auto& want = s.vertices[s.triangles[t][k]];
       const Eigen::Vector3d& got = mesh.vertices[mesh.triangles[t][k]];
-      EXPECT_EQ(got, Eigen::Vector3d(want[0], want[1], want[2])) << "triangle " << t << " corner " << k;
+      EXPECT_EQ(got, Eigen::Vector3d(want[0], want[1], want[2]))
+          << "triangle " << t << " corner " << k;
     }
   }
   EXPECT_EQ(mesh.face_colors, s.colors);
@@ -169,8 +178,10 @@ void ExpectSameSolid(const TriangleMesh& mesh, const Solid& s) {
 
 std::string ObjOf(const Solid& s, const std::string& preamble) {
   std::string out = preamble;
-  for (const auto& v : s.vertices) absl::StrAppend(&out, absl::StrFormat("v %.9g %.9g %.9g\n", v[0], v[1], v[2]));
-  for (const auto& t : s.triangles) absl::StrAppend(&out, "f ", t[0] + 1, " ", t[1] + 1, " ", t[2] + 1, "\n");
+  for (const auto& v : s.vertices)
+    absl::StrAppend(&out, absl::StrFormat("v %.9g %.9g %.9g\n", v[0], v[1], v[2]));
+  for (const auto& t : s.triangles)
+    absl::StrAppend(&out, "f ", t[0] + 1, " ", t[1] + 1, " ", t[2] + 1, "\n");
   return out;
 }
 
@@ -196,7 +207,8 @@ TEST_F(MeshRead, DrawnBoxesAndTetrahedraReadExactlyInEveryPlyEncoding) {
   std::mt19937 rng(2323);
   for (int trial = 0; trial < 24; ++trial) {
     const Encoding e = static_cast<Encoding>(trial % 3);
-    Solid s = trial % 2 ? RandomBox(rng, e == Encoding::kAscii) : RandomTetrahedron(rng, e == Encoding::kAscii);
+    Solid s = trial % 2 ? RandomBox(rng, e == Encoding::kAscii)
+                        : RandomTetrahedron(rng, e == Encoding::kAscii);
     if (trial % 4 < 2)
       for (size_t t = 0; t < s.triangles.size(); ++t) s.colors.push_back(rng() & 0xffffff);
     const int extra = trial % 5;
@@ -215,7 +227,8 @@ TEST_F(MeshRead, BinaryPlyWhoseDataStartsWithANewlineByteReadsExactly) {
   std::mt19937 rng(10);
   for (const char* end_of_header : {"end_header\n", "end_header \n", "end_header\r\n"}) {
     for (Encoding e : {Encoding::kLittle, Encoding::kBig}) {
-      SCOPED_TRACE(absl::StrCat(end_of_header, e == Encoding::kBig ? " big-endian" : " little-endian"));
+      SCOPED_TRACE(
+          absl::StrCat(end_of_header, e == Encoding::kBig ? " big-endian" : " little-endian"));
       Solid s = RandomTetrahedron(rng, false);
       uint32_t bits = 0;
       std::memcpy(&bits, &s.vertices[0][0], 4);
@@ -246,18 +259,23 @@ TEST_F(MeshRead, PlyCountsBeyondTheDataAreRefusedFromTheHeader) {
   };
   const std::vector<Case> cases = {
       {WithCount(ascii, "vertex", 100000000),
-       "box.ply: PLY header line 4: element 'vertex' declares 100000000 items but the file holds at most 20 "
+       "box.ply: PLY header line 4: element 'vertex' declares 100000000 items but the file holds "
+       "at most 20 "
        "(20 lines, 72 values after the header)"},
       {WithCount(binary, "face", 100000000),
-       absl::StrCat("box.ply: PLY header line 8: element 'face' declares 100000000 items but the file holds at most ",
+       absl::StrCat("box.ply: PLY header line 8: element 'face' declares 100000000 items but the "
+                    "file holds at most ",
                     (binary_body - 8 * 12) / 1, " (", binary_body, " bytes after the header)")},
       {WithCount(binary, "vertex", 2000000000),
-       absl::StrCat("box.ply: PLY header line 4: element 'vertex' declares 2000000000 items but the file holds at "
-                    "most ", binary_body / 12, " (", binary_body, " bytes after the header)")},
+       absl::StrCat("box.ply: PLY header line 4: element 'vertex' declares 2000000000 items but "
+                    "the file holds at "
+                    "most ",
+                    binary_body / 12, " (", binary_body, " bytes after the header)")},
       {WithCount(WritePly(box, Encoding::kBig, rng, 2), "extra", 5000000000000),
        "element 'extra' declares 5000000000000 items but the file holds at most"},
       {WithCount(binary, "vertex", 22),
-       absl::StrCat("element 'vertex' declares 22 items but the file holds at most 21 (", binary_body, " bytes")},
+       absl::StrCat("element 'vertex' declares 22 items but the file holds at most 21 (",
+                    binary_body, " bytes")},
   };
   for (const Case& c : cases) {
     const auto start = Clock::now();
@@ -265,7 +283,8 @@ TEST_F(MeshRead, PlyCountsBeyondTheDataAreRefusedFromTheHeader) {
     EXPECT_LT(Clock::now() - start, std::chrono::seconds(1));
     ASSERT_FALSE(mesh.ok()) << c.expected;
     EXPECT_EQ(mesh.status().code(), absl::StatusCode::kInvalidArgument);
-    EXPECT_NE(std::string(mesh.status().message()).find(c.expected), std::string::npos) << mesh.status();
+    EXPECT_NE(std::string(mesh.status().message()).find(c.expected), std::string::npos)
+        << mesh.status();
   }
 }
 
@@ -275,16 +294,22 @@ TEST_F(MeshRead, DrawnPlyCountsAreRefusedQuicklyNamingElementAndCount) {
   const auto start = Clock::now();
   for (int trial = 0; trial < 60; ++trial) {
     const Encoding e = static_cast<Encoding>(trial % 3);
-    const Solid s = trial % 2 ? RandomBox(shapes, e == Encoding::kAscii) : RandomTetrahedron(shapes, e == Encoding::kAscii);
+    const Solid s = trial % 2 ? RandomBox(shapes, e == Encoding::kAscii)
+                              : RandomTetrahedron(shapes, e == Encoding::kAscii);
     const std::string ply = WritePly(s, e, shapes, 3);
     const std::string element = trial % 3 == 0 ? "vertex" : trial % 3 == 1 ? "face" : "extra";
-    const uint64_t present = element == "vertex" ? s.vertices.size() : element == "face" ? s.triangles.size() : 3;
-    const uint64_t count = std::uniform_int_distribution<uint64_t>(present + 1, 1000000000000ull)(rng);
+    const uint64_t present = element == "vertex" ? s.vertices.size()
+                             : element == "face" ? s.triangles.size()
+                                                 : 3;
+    const uint64_t count =
+        std::uniform_int_distribution<uint64_t>(present + 1, 1000000000000ull)(rng);
     SCOPED_TRACE(absl::StrCat("trial ", trial, ": element ", element, " count ", count));
-    absl::StatusOr<TriangleMesh> mesh = ReadMeshBytes(WithCount(ply, element, count), "ply", "drawn.ply");
+    absl::StatusOr<TriangleMesh> mesh =
+        ReadMeshBytes(WithCount(ply, element, count), "ply", "drawn.ply");
     ASSERT_FALSE(mesh.ok());
     EXPECT_EQ(mesh.status().code(), absl::StatusCode::kInvalidArgument);
-    EXPECT_NE(std::string(mesh.status().message()).find(absl::StrCat("element '", element, "' declares ", count, " items")),
+    EXPECT_NE(std::string(mesh.status().message())
+                  .find(absl::StrCat("element '", element, "' declares ", count, " items")),
               std::string::npos)
         << mesh.status();
     absl::StatusOr<TriangleMesh> as_written = ReadMeshBytes(ply, "ply", "drawn.ply");
@@ -304,40 +329,47 @@ TEST_F(MeshRead, PlyListLengthsBeyondTheDataAreRefused) {
   absl::StatusOr<TriangleMesh> mesh = ReadMeshBytes(head + body, "ply", "list.ply");
   ASSERT_FALSE(mesh.ok());
   EXPECT_EQ(mesh.status().message(),
-            absl::StrCat("list.ply: PLY byte ", head.size() + 40, ": element 'face' item 0: list 'vertex_indices' "
+            absl::StrCat("list.ply: PLY byte ", head.size() + 40,
+                         ": element 'face' item 0: list 'vertex_indices' "
                          "has length 4000000000 but only 3 values fit in the rest of the file"));
 
   const std::string ascii =
-      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float "
+      "z\n"
       "element face 1\nproperty list char int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
   mesh = ReadMeshBytes(ascii + "4000000000 0 1 2\n", "ply", "list.ply");
   ASSERT_FALSE(mesh.ok());
   EXPECT_EQ(mesh.status().message(),
-            "list.ply: PLY line 13: element 'face' item 0: list 'vertex_indices' has length 4000000000 but only 3 "
+            "list.ply: PLY line 13: element 'face' item 0: list 'vertex_indices' has length "
+            "4000000000 but only 3 "
             "values follow on the line");
   mesh = ReadMeshBytes(ascii + "-1 0 1 2\n", "ply", "list.ply");
   ASSERT_FALSE(mesh.ok());
-  EXPECT_EQ(mesh.status().message(), "list.ply: PLY line 13: element 'face' item 0: list 'vertex_indices' has length -1");
+  EXPECT_EQ(mesh.status().message(),
+            "list.ply: PLY line 13: element 'face' item 0: list 'vertex_indices' has length -1");
   mesh = ReadMeshBytes(ascii + "3 0 1 2\n", "ply", "list.ply");
   EXPECT_TRUE(mesh.ok()) << mesh.status();
 }
 
 TEST_F(MeshRead, PlyElementsWithoutDataOrOverTheLimitAreRefused) {
   absl::StatusOr<TriangleMesh> mesh = ReadMeshBytes(
-      "ply\nformat binary_little_endian 1.0\nelement nothing 1000000000\nend_header\n", "ply", "empty.ply");
+      "ply\nformat binary_little_endian 1.0\nelement nothing 1000000000\nend_header\n", "ply",
+      "empty.ply");
   ASSERT_FALSE(mesh.ok());
   EXPECT_EQ(mesh.status().message(),
-            "empty.ply: PLY header line 3: element 'nothing' declares 1000000000 items but has no properties");
+            "empty.ply: PLY header line 3: element 'nothing' declares 1000000000 items but has no "
+            "properties");
   // More vertices than the limit, each backed by data (a list of 0 bytes
   // is the smallest item, so a small file can back many).
-  const std::string many = absl::StrCat("ply\nformat binary_little_endian 1.0\nelement vertex ", kMaxMeshVertices + 1,
-                                        "\nproperty list uchar float xyz\nend_header\n",
-                                        std::string(kMaxMeshVertices + 1, '\0'));
+  const std::string many = absl::StrCat(
+      "ply\nformat binary_little_endian 1.0\nelement vertex ", kMaxMeshVertices + 1,
+      "\nproperty list uchar float xyz\nend_header\n", std::string(kMaxMeshVertices + 1, '\0'));
   mesh = ReadMeshBytes(many, "ply", "many.ply");
   ASSERT_FALSE(mesh.ok());
-  EXPECT_EQ(mesh.status().message(), absl::StrCat("many.ply: PLY header line 3: element 'vertex' declares ",
-                                                  kMaxMeshVertices + 1, " items, more than the limit of ",
-                                                  kMaxMeshVertices, " vertices"));
+  EXPECT_EQ(
+      mesh.status().message(),
+      absl::StrCat("many.ply: PLY header line 3: element 'vertex' declares ", kMaxMeshVertices + 1,
+                   " items, more than the limit of ", kMaxMeshVertices, " vertices"));
 }
 
 // Without a vertex element (or without faces) assimp read other elements'
@@ -347,20 +379,23 @@ TEST_F(MeshRead, PlyWithoutVerticesOrFacesIsRefusedFromTheHeader) {
   std::string body(48, '\0');
   body += std::string("\0\0\0\0\0\0\x80\x3f\0\x28\x6b\xee", 12);
   const std::string found = absl::StrCat(
-      "ply\nformat binary_little_endian 1.0\nelement verstptex 4\nproperty float x\nproperty float y\n"
+      "ply\nformat binary_little_endian 1.0\nelement verstptex 4\nproperty float x\nproperty float "
+      "y\n"
       "property float z\nelement face 1\nproperty list uint int vertex_indices\nend_header\n",
       body);
   absl::StatusOr<TriangleMesh> mesh = ReadMeshBytes(found, "ply", "found.ply");
   ASSERT_FALSE(mesh.ok());
   EXPECT_EQ(mesh.status().message(),
             "found.ply: PLY header declares no vertices (element 'vertex' missing or empty)");
-  mesh = ReadMeshBytes("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                       "property float z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n"
-                       "0 0 0\n1 0 0\n0 1 0\n",
-                       "ply", "points.ply");
+  mesh = ReadMeshBytes(
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0\n1 0 0\n0 1 0\n",
+      "ply", "points.ply");
   ASSERT_FALSE(mesh.ok());
-  EXPECT_EQ(mesh.status().message(),
-            "points.ply: PLY header declares no faces (element 'face' or 'tristrips' missing or empty)");
+  EXPECT_EQ(
+      mesh.status().message(),
+      "points.ply: PLY header declares no faces (element 'face' or 'tristrips' missing or empty)");
 }
 
 // ---------------------------------------------------------------- STL
@@ -378,7 +413,8 @@ TEST_F(MeshRead, BinaryStlTriangleCountMustMatchTheFileSize) {
   absl::StatusOr<TriangleMesh> mesh = ReadMeshBytes(with_count(2147483649u), "stl", "wrap.stl");
   ASSERT_FALSE(mesh.ok());
   EXPECT_EQ(mesh.status().message(),
-            "wrap.stl: binary STL header declares 2147483649 triangles (107374182534 bytes) but the file has 134 bytes");
+            "wrap.stl: binary STL header declares 2147483649 triangles (107374182534 bytes) but "
+            "the file has 134 bytes");
   std::string solid = with_count(2147483649u);
   solid.replace(0, 5, "solid");  // ASCII-looking, still read as binary by assimp
   mesh = ReadMeshBytes(solid, "stl", "wrap.stl");
@@ -387,7 +423,8 @@ TEST_F(MeshRead, BinaryStlTriangleCountMustMatchTheFileSize) {
   mesh = ReadMeshBytes(with_count(1000), "stl", "short.stl");
   ASSERT_FALSE(mesh.ok());
   EXPECT_EQ(mesh.status().message(),
-            "short.stl: binary STL header declares 1000 triangles (50084 bytes) but the file has 134 bytes");
+            "short.stl: binary STL header declares 1000 triangles (50084 bytes) but the file has "
+            "134 bytes");
 }
 
 // ---------------------------------------------------------------- OBJ files
@@ -398,7 +435,8 @@ TEST_F(MeshRead, ObjMtllibNamingAFifoReturnsPromptly) {
   const fs::path fifo = dir_ / "blocking.mtl";
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0) << std::strerror(errno);
   std::mt19937 rng(5);
-  const std::string obj = ObjOf(RandomBox(rng, true), absl::StrCat("mtllib ", fifo.string(), "\nusemtl red\n"));
+  const std::string obj =
+      ObjOf(RandomBox(rng, true), absl::StrCat("mtllib ", fifo.string(), "\nusemtl red\n"));
   std::future<absl::StatusOr<TriangleMesh>> read =
       std::async(std::launch::async, [&] { return ReadMeshBytes(obj, "obj", "fifo.obj"); });
   if (read.wait_for(std::chrono::seconds(5)) != std::future_status::ready) {
@@ -427,8 +465,8 @@ TEST_F(MeshRead, ObjMtllibNamingAnExistingFileIsNeverOpened) {
   ASSERT_TRUE(plain.ok()) << plain.status();
   for (const std::string& path : {secret.string(), fs::relative(secret).string()}) {
     SCOPED_TRACE(path);
-    absl::StatusOr<TriangleMesh> mesh =
-        ReadMeshBytes(ObjOf(box, absl::StrCat("mtllib ", path, "\nusemtl SECRET_7f3a9\n")), "obj", "box.obj");
+    absl::StatusOr<TriangleMesh> mesh = ReadMeshBytes(
+        ObjOf(box, absl::StrCat("mtllib ", path, "\nusemtl SECRET_7f3a9\n")), "obj", "box.obj");
     ASSERT_TRUE(mesh.ok()) << mesh.status();
     EXPECT_EQ(mesh->vertices, plain->vertices);
     EXPECT_EQ(mesh->triangles, plain->triangles);
@@ -453,8 +491,9 @@ TEST_F(MeshRead, ObjIsNeverReadAgainAsItsOwnMaterialLibrary) {
   const Solid box = RandomBox(rng, true);
   absl::StatusOr<TriangleMesh> plain = ReadMeshBytes(ObjOf(box, ""), "obj", "box.obj");
   ASSERT_TRUE(plain.ok()) << plain.status();
-  for (const char* statement : {"map_Pm x.png", "map_Kd x.png", "map_Pr x", "bump x", "Ns 10", "Kd 1 0 0",
-                                "map_Ks x", "disp x", "refl -type sphere x", "Pm 0.5", "Ke 1 1 1"}) {
+  for (const char* statement :
+       {"map_Pm x.png", "map_Kd x.png", "map_Pr x", "bump x", "Ns 10", "Kd 1 0 0", "map_Ks x",
+        "disp x", "refl -type sphere x", "Pm 0.5", "Ke 1 1 1"}) {
     SCOPED_TRACE(statement);
     const std::string obj = ObjOf(box, absl::StrCat("mtllib missing.mtl\n", statement, "\n"));
     const pid_t pid = ::fork();
@@ -464,8 +503,10 @@ TEST_F(MeshRead, ObjIsNeverReadAgainAsItsOwnMaterialLibrary) {
     }
     int status = 0;
     ::waitpid(pid, &status, 0);
-    ASSERT_TRUE(WIFEXITED(status)) << "the read crashed with signal " << (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
-    EXPECT_EQ(WEXITSTATUS(status), 0) << "the OBJ with an MTL statement did not read as the plain OBJ";
+    ASSERT_TRUE(WIFEXITED(status))
+        << "the read crashed with signal " << (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+    EXPECT_EQ(WEXITSTATUS(status), 0)
+        << "the OBJ with an MTL statement did not read as the plain OBJ";
   }
 }
 
@@ -487,7 +528,8 @@ bool ExitsCleanlyUnderMemoryCap(size_t extra_bytes, const std::function<bool()>&
   }
   int status = 0;
   ::waitpid(pid, &status, 0);
-  EXPECT_TRUE(WIFEXITED(status)) << "child killed by signal " << (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+  EXPECT_TRUE(WIFEXITED(status)) << "child killed by signal "
+                                 << (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
   return WIFEXITED(status) && WEXITSTATUS(status) == 0;
 }
 

@@ -7,9 +7,9 @@ namespace {
 
 TEST(Suggest, EditDistanceCountsEditsAndSwapsIgnoringCase) {
   EXPECT_EQ(EditDistance("mass", "mass"), 0);
-  EXPECT_EQ(EditDistance("mas", "mass"), 1);        // insertion
-  EXPECT_EQ(EditDistance("nromal", "normal"), 1);   // swap of neighbours
-  EXPECT_EQ(EditDistance("Mass", "mAss"), 0);       // case
+  EXPECT_EQ(EditDistance("mas", "mass"), 1);       // insertion
+  EXPECT_EQ(EditDistance("nromal", "normal"), 1);  // swap of neighbours
+  EXPECT_EQ(EditDistance("Mass", "mAss"), 0);      // case
   EXPECT_EQ(EditDistance("", "abc"), 3);
   EXPECT_EQ(EditDistance("kitten", "sitting"), 3);
 }

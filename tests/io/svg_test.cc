@@ -62,7 +62,8 @@ TEST(SvgTicks, NiceTicksCoverTheRangeEvenlyAtNiceValues) {
       EXPECT_LT(t.values.front() - lo, t.step + slack);
       EXPECT_LT(hi - t.values.back(), t.step + slack);
       for (size_t i = 0; i < t.values.size(); ++i) {
-        EXPECT_NEAR(t.values[i] / t.step, std::round(t.values[i] / t.step), 1e-9);  // multiples of the step
+        EXPECT_NEAR(t.values[i] / t.step, std::round(t.values[i] / t.step),
+                    1e-9);  // multiples of the step
         if (i > 0) {
           EXPECT_NEAR(t.values[i] - t.values[i - 1], t.step, 1e-9 * t.step);
         }
@@ -134,7 +135,8 @@ TEST(SvgColor, RampEndsAndMiddle) {
 std::vector<std::string> NumberTexts(const std::string& svg) {
   std::vector<std::string> out;
   static const std::regex re(">(-?[0-9.]+(e[-+][0-9]+)?)</text>");
-  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), re); it != std::sregex_iterator(); ++it)
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), re); it != std::sregex_iterator();
+       ++it)
     out.push_back((*it)[1]);
   return out;
 }
@@ -142,9 +144,11 @@ std::vector<std::string> NumberTexts(const std::string& svg) {
 TEST(SvgPlot, AxesLabelTheTicksInsideTheFrameOnly) {
   SvgCanvas canvas(400, 300);
   const PlotFrame frame{60, 20, 300, 200, 0, 10, -1, 1};
-  DrawAxes(canvas, frame, TicksAt(-5, 15, 5), {.title = "time [s]"}, NiceTicks(-1, 1, 4), {.title = "force <N>"});
+  DrawAxes(canvas, frame, TicksAt(-5, 15, 5), {.title = "time [s]"}, NiceTicks(-1, 1, 4),
+           {.title = "force <N>"});
   const std::string svg = canvas.Finish();
-  EXPECT_EQ(NumberTexts(svg), (std::vector<std::string>{"0", "5", "10", "-1", "-0.5", "0", "0.5", "1"}));
+  EXPECT_EQ(NumberTexts(svg),
+            (std::vector<std::string>{"0", "5", "10", "-1", "-0.5", "0", "0.5", "1"}));
   EXPECT_NE(svg.find(">time [s]</text>"), std::string::npos);
   EXPECT_NE(svg.find("rotate(-90"), std::string::npos) << "the y title is vertical";
   EXPECT_NE(svg.find(">force &lt;N&gt;</text>"), std::string::npos);
@@ -164,10 +168,20 @@ TEST(SvgPlot, TracesBreakAtMissingPointsAndLegendsNameThem) {
 TEST(SvgPlot, MarkersColourBarAndGroups) {
   SvgCanvas canvas(300, 300);
   canvas.OpenGroup("id=\"outer\"");
-  DrawMarker(canvas, 50, 50, {.shape = MarkerShape::kRing, .color = "#e4007c", .size = 12, .halo = true,
-                              .css_class = "ring"});
-  ColorBar bar{.x = 200, .y = 40, .height = 200, .lo = 0, .hi = 8000, .ticks = TicksAt(0, 8000, 2000),
-               .title = "density (kg/m\xc2\xb3)", .marks = {{7800, "steel <x>"}, {9000, "off the bar"}}};
+  DrawMarker(canvas, 50, 50,
+             {.shape = MarkerShape::kRing,
+              .color = "#e4007c",
+              .size = 12,
+              .halo = true,
+              .css_class = "ring"});
+  ColorBar bar{.x = 200,
+               .y = 40,
+               .height = 200,
+               .lo = 0,
+               .hi = 8000,
+               .ticks = TicksAt(0, 8000, 2000),
+               .title = "density (kg/m\xc2\xb3)",
+               .marks = {{7800, "steel <x>"}, {9000, "off the bar"}}};
   DrawColorBar(canvas, bar, ColorRamp::Viridis());
   const std::string svg = canvas.Finish();  // closes "outer"
   EXPECT_EQ(Count(svg, "<g"), Count(svg, "</g>"));
@@ -187,13 +201,16 @@ TEST(SvgShapes, EllipseTurnsAboutItsCentreAndDegeneratesToALine) {
   canvas.Ellipse(100, 100, 10, 4, 0, "#ccc");
   canvas.Ellipse(100, 100, 10, 0, 90, "none", &blue);  // a vertical segment of length 20
   const std::string svg = canvas.Finish();
-  EXPECT_NE(svg.find("<ellipse cx=\"50.0\" cy=\"60.0\" rx=\"20.00\" ry=\"5.00\" transform=\"rotate(30.00 50.0 60.0)\" "
+  EXPECT_NE(svg.find("<ellipse cx=\"50.0\" cy=\"60.0\" rx=\"20.00\" ry=\"5.00\" "
+                     "transform=\"rotate(30.00 50.0 60.0)\" "
                      "fill=\"none\" stroke=\"#00f\" stroke-width=\"1.5\"/>"),
             std::string::npos)
       << svg;
-  EXPECT_NE(svg.find("<ellipse cx=\"100.0\" cy=\"100.0\" rx=\"10.00\" ry=\"4.00\" fill=\"#ccc\"/>"), std::string::npos);
+  EXPECT_NE(svg.find("<ellipse cx=\"100.0\" cy=\"100.0\" rx=\"10.00\" ry=\"4.00\" fill=\"#ccc\"/>"),
+            std::string::npos);
   EXPECT_EQ(Count(svg, "<ellipse"), 2);
-  EXPECT_NE(svg.find("<line x1=\"100.0\" y1=\"90.0\" x2=\"100.0\" y2=\"110.0\""), std::string::npos) << svg;
+  EXPECT_NE(svg.find("<line x1=\"100.0\" y1=\"90.0\" x2=\"100.0\" y2=\"110.0\""), std::string::npos)
+      << svg;
 }
 
 TEST(SvgShapes, PolygonIsOneClosedPath) {
@@ -202,7 +219,8 @@ TEST(SvgShapes, PolygonIsOneClosedPath) {
   canvas.Polygon({}, {"red", 1, ""});
   const std::string svg = canvas.Finish();
   EXPECT_EQ(Count(svg, "<path"), 1);
-  EXPECT_NE(svg.find("<path d=\"M0.0,0.0L10.0,0.0L10.0,10.0Z\" fill=\"#fee\" stroke=\"red\"/>"), std::string::npos)
+  EXPECT_NE(svg.find("<path d=\"M0.0,0.0L10.0,0.0L10.0,10.0Z\" fill=\"#fee\" stroke=\"red\"/>"),
+            std::string::npos)
       << svg;
 }
 
@@ -211,11 +229,13 @@ TEST(SvgShapes, ArrowHasAShaftAndAHeadAtItsTip) {
   DrawArrow(canvas, 10, 50, 110, 50, {"#c00", 2, ""}, 10);
   const std::string svg = canvas.Finish();
   // Shaft up to the head's base, head tip at the arrow's end.
-  EXPECT_NE(svg.find("<line x1=\"10.0\" y1=\"50.0\" x2=\"100.0\" y2=\"50.0\" stroke=\"#c00\" stroke-width=\"2\"/>"),
+  EXPECT_NE(svg.find("<line x1=\"10.0\" y1=\"50.0\" x2=\"100.0\" y2=\"50.0\" stroke=\"#c00\" "
+                     "stroke-width=\"2\"/>"),
             std::string::npos)
       << svg;
-  EXPECT_NE(svg.find("<path d=\"M110.0,50.0L100.0,54.5L100.0,45.5Z\" fill=\"#c00\" stroke=\"#c00\"/>"),
-            std::string::npos)
+  EXPECT_NE(
+      svg.find("<path d=\"M110.0,50.0L100.0,54.5L100.0,45.5Z\" fill=\"#c00\" stroke=\"#c00\"/>"),
+      std::string::npos)
       << svg;
   // A short arrow gets a proportionally short head; a zero arrow is a dot.
   SvgCanvas small(100, 100);
@@ -232,7 +252,8 @@ TEST(SvgPlot, RenderSvgStacksPanelsOverOneTimeAxis) {
   plot.x_label = "t [s]";
   for (int i = 0; i <= 40; ++i) plot.x.push_back(0.1 * i);
   SvgPanel forces{.title = "forces", .y_label = "N"};
-  forces.series.push_back({.name = "desired", .color = "#000", .dashed = true, .y = std::vector<double>(41, 2.0)});
+  forces.series.push_back(
+      {.name = "desired", .color = "#000", .dashed = true, .y = std::vector<double>(41, 2.0)});
   SvgPanel slip{.title = "slip", .y_label = "mm"};
   slip.series.push_back({.name = "slip", .color = "#c00", .y = plot.x});
   slip.series.back().y[20] = NAN;
@@ -246,7 +267,8 @@ TEST(SvgPlot, RenderSvgStacksPanelsOverOneTimeAxis) {
   EXPECT_EQ(Count(svg, ">lift</text>"), 1) << "the marker's label on the first panel only";
   EXPECT_EQ(svg.find("outside"), std::string::npos);
   EXPECT_EQ(Count(svg, ">t [s]</text>"), 1) << "x title under the last panel only";
-  for (const char* tick : {">0.5</text>", ">4</text>"}) EXPECT_NE(svg.find(tick), std::string::npos) << tick;
+  for (const char* tick : {">0.5</text>", ">4</text>"})
+    EXPECT_NE(svg.find(tick), std::string::npos) << tick;
   // The slip trace breaks at its missing point: two pieces.
   const std::regex slip_path("<path d=\"(M[^\"]*)\" fill=\"none\" stroke=\"#c00\"");
   std::smatch m;
@@ -267,7 +289,8 @@ TEST(SvgText, AxisTicksGiveAtLeastThreeTicksOnAnyRange) {
     for (int intervals : {2, 4, 5, 10}) {
       const Ticks t = AxisTicks(lo, hi, intervals);
       ASSERT_GE(t.values.size(), 3u) << lo << " " << hi << " " << intervals;
-      ASSERT_LE(t.values.size(), static_cast<size_t>(std::max(intervals, 5)) + 2) << lo << " " << hi;
+      ASSERT_LE(t.values.size(), static_cast<size_t>(std::max(intervals, 5)) + 2)
+          << lo << " " << hi;
       ASSERT_TRUE(IsNice(t.step)) << t.step;
     }
   }
@@ -288,7 +311,8 @@ TEST(SvgText, WrapTextKeepsEveryLineWithinTheWidth) {
     ASSERT_GE(lines.size(), 1u);
     ASSERT_LE(lines.size(), 3u);
     for (const std::string& line : lines) EXPECT_LE(TextWidth(line, 12), max_width + 1e-9) << line;
-    if (TextWidth(text, 12) <= max_width) EXPECT_EQ(lines, std::vector<std::string>{text}) << "fits: one line";
+    if (TextWidth(text, 12) <= max_width)
+      EXPECT_EQ(lines, std::vector<std::string>{text}) << "fits: one line";
   }
 }
 
@@ -299,13 +323,15 @@ TEST(SvgText, LabelPlacerSeparatesLabelsAtOnePoint) {
     LabelPlacer placer({0, 0, 300, 300});
     const double x = where(rng), y = where(rng);
     std::vector<TextBox> boxes;
-    for (const char* name : {"thumb", "index", "middle"}) {  // all at the same point, as a pinch seen along its axis
+    for (const char* name :
+         {"thumb", "index", "middle"}) {  // all at the same point, as a pinch seen along its axis
       const auto [lx, ly] = placer.Place(x, y, name, 11);
       boxes.push_back(TextBoxOf(lx, ly, name, 11, TextAnchor::kStart));
       EXPECT_LT(std::hypot(boxes.back().left - x, ly - y), 80) << "near its point";
     }
     for (size_t i = 0; i < boxes.size(); ++i)
-      for (size_t j = i + 1; j < boxes.size(); ++j) EXPECT_FALSE(Overlap(boxes[i], boxes[j])) << i << " " << j;
+      for (size_t j = i + 1; j < boxes.size(); ++j)
+        EXPECT_FALSE(Overlap(boxes[i], boxes[j])) << i << " " << j;
   }
 }
 
@@ -316,7 +342,8 @@ TEST(SvgText, TextBoxesFollowAnchorAndRotation) {
   const TextBox end = TextBoxOf(100, 50, "abcde", 10, TextAnchor::kEnd);
   EXPECT_DOUBLE_EQ(end.right, 100);
   const TextBox vertical = TextBoxOf(100, 50, "abcde", 10, TextAnchor::kMiddle, true);
-  EXPECT_DOUBLE_EQ(vertical.bottom - vertical.top, 30) << "read bottom to top: as tall as the text is long";
+  EXPECT_DOUBLE_EQ(vertical.bottom - vertical.top, 30)
+      << "read bottom to top: as tall as the text is long";
   EXPECT_DOUBLE_EQ(TextWidth("\xc2\xb5s", 10), 12) << "code points, not bytes";
 }
 

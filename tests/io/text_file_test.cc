@@ -73,7 +73,8 @@ TEST_F(IoTextFile, CsvAndMeshReadersShareTheWording) {
   const std::string csv = Path("run.csv");
   EXPECT_EQ(ReadCsvFile(csv).status().message(), csv + ": cannot open: No such file or directory");
   const std::string mesh = Path("part.stl");
-  EXPECT_EQ(ReadMeshFile(mesh).status().message(), mesh + ": cannot open: No such file or directory");
+  EXPECT_EQ(ReadMeshFile(mesh).status().message(),
+            mesh + ": cannot open: No such file or directory");
   const std::string descriptor = Path("part.mesh.json");
   EXPECT_EQ(ReadMeshDescriptor(descriptor).status().message(),
             descriptor + ": cannot open: No such file or directory");

@@ -6,8 +6,8 @@
 // so this test reduces every answer to a 64-bit FNV-1a digest and compares it
 // with kRecordedDigest, the digest this very file printed when run against
 // the code before the restructuring (main at 1c94f37, where this file was
-// first committed; two runs there gave the same digest). The inputs are fully deterministic: seeded std::mt19937_64 grasps
-// (planner::MakeRandomGrasp), fixed option sets, no time-dependent field in
+// first committed; two runs there gave the same digest). The inputs are fully deterministic: seeded
+// std::mt19937_64 grasps (planner::MakeRandomGrasp), fixed option sets, no time-dependent field in
 // the digest. A numerical change (a different QP, different tolerances)
 // legitimately changes the digest: then re-record it with the reason in the
 // commit message; a plumbing change must never need to. The digest covers
@@ -129,11 +129,13 @@ std::vector<OptionSet> AllOptionSets() {
 void AddUncertainty(Uncertainty u, std::mt19937_64& rng, PlanProblem* problem) {
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   switch (u) {
-    case Uncertainty::kNone: return;
+    case Uncertainty::kNone:
+      return;
     case Uncertainty::kMassAndCom: {
       const Eigen::Matrix3d com_cov = Eigen::Vector3d(1e-6, 2e-6, 4e-6).asDiagonal();
-      problem->object.uncertainty.covariance = CovarianceFromMassAndCom(
-          problem->object.mass, problem->object.com, 0.05 * problem->object.mass * unit(rng), com_cov);
+      problem->object.uncertainty.covariance =
+          CovarianceFromMassAndCom(problem->object.mass, problem->object.com,
+                                   0.05 * problem->object.mass * unit(rng), com_cov);
       return;
     }
     case Uncertainty::kFull: {
@@ -213,7 +215,8 @@ TEST(PlannerAnswerDigest, CrossCheckIsItsTwoBackendsBitForBit) {
   int compared = 0, optimal = 0;
   for (const OptionSet& set : AllOptionSets()) {
     if (set.solver != SolverKind::kCrossCheck || set.cone != ConeModel::kPyramid) continue;
-    std::mt19937_64 rng(static_cast<uint64_t>(set.confidence * 7 + static_cast<int>(set.uncertainty)));
+    std::mt19937_64 rng(
+        static_cast<uint64_t>(set.confidence * 7 + static_cast<int>(set.uncertainty)));
     for (int g = 0; g < kGrasps / kIpoptStride; ++g) {
       RandomGrasp grasp = MakeRandomGrasp(rng);
       AddUncertainty(set.uncertainty, rng, &grasp.problem);
@@ -225,7 +228,8 @@ TEST(PlannerAnswerDigest, CrossCheckIsItsTwoBackendsBitForBit) {
       absl::StatusOr<PlanResult> ipopt = Plan(grasp.problem, options, SolverKind::kIpopt);
       ASSERT_TRUE(cross.ok() && geometric.ok() && ipopt.ok()) << cross.status();
       ASSERT_TRUE(cross->cross_check.has_value());
-      SCOPED_TRACE(testing::Message() << "grasp " << g << " uncertainty " << static_cast<int>(set.uncertainty));
+      SCOPED_TRACE(testing::Message()
+                   << "grasp " << g << " uncertainty " << static_cast<int>(set.uncertainty));
       EXPECT_EQ(cross->status, geometric->status);
       EXPECT_EQ(cross->forces, geometric->forces);
       EXPECT_EQ(cross->active_set, geometric->active_set);
@@ -238,7 +242,8 @@ TEST(PlannerAnswerDigest, CrossCheckIsItsTwoBackendsBitForBit) {
         EXPECT_EQ(cross->objective, geometric->objective);
         EXPECT_EQ(cross->min_margin, geometric->min_margin);
         for (size_t i = 0; i < geometric->forces.size(); ++i) {
-          max_diff = std::max(max_diff, (geometric->forces[i] - ipopt->forces[i]).cwiseAbs().maxCoeff());
+          max_diff =
+              std::max(max_diff, (geometric->forces[i] - ipopt->forces[i]).cwiseAbs().maxCoeff());
         }
       }
       EXPECT_EQ(cross->cross_check->max_force_diff, max_diff);

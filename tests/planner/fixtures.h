@@ -14,8 +14,8 @@
 
 namespace tactforce::planner::fixtures {
 
-inline Contact Finger(const Vec3& position, const Vec3& normal, double mu,
-                      double min_force = 0.0, double sigma = 0.0) {
+inline Contact Finger(const Vec3& position, const Vec3& normal, double mu, double min_force = 0.0,
+                      double sigma = 0.0) {
   Contact c;
   c.position = position;
   c.normal = normal;

@@ -37,8 +37,9 @@ TEST(ForceEquilibrium, NullBasisIsOrthonormalAndSpansTheKernel) {
   EXPECT_EQ(eq.rank, 6);
   ASSERT_EQ(eq.null_basis.cols(), 3);
   EXPECT_LE((eq.grasp_matrix * eq.null_basis).cwiseAbs().maxCoeff(), 1e-14);
-  EXPECT_LE((eq.null_basis.transpose() * eq.null_basis - MatrixXd::Identity(3, 3))
-                .cwiseAbs().maxCoeff(), 1e-14);
+  EXPECT_LE(
+      (eq.null_basis.transpose() * eq.null_basis - MatrixXd::Identity(3, 3)).cwiseAbs().maxCoeff(),
+      1e-14);
   // f0 = G^+ b, compared with an independent pseudo-inverse.
   const MatrixXd pinv = eq.grasp_matrix.completeOrthogonalDecomposition().pseudoInverse();
   EXPECT_LE((eq.particular - pinv * eq.wrench).cwiseAbs().maxCoeff(), 1e-12);
@@ -174,11 +175,10 @@ TEST(ExactCone, ShiftAndSlackOfTheRobustCone) {
     const double fn = 3.0;
     const Vec3 on_surface = fn * c.normal + (c.friction * fn - shift) * (0.6 * t1 + 0.8 * t2);
     EXPECT_NEAR(ExactConeSlack(c.normal, c.friction, shift, on_surface), 0.0, 1e-14);
-    EXPECT_NEAR(ExactConeSlack(c.normal, c.friction, shift, fn * c.normal),
-                c.friction * fn - shift, 1e-14);
-    EXPECT_NEAR(ExactConeSlack(c.normal, c.friction, shift, on_surface + 0.5 * t2),
-                -(on_surface + 0.5 * t2 - fn * c.normal).norm() + (c.friction * fn - shift),
+    EXPECT_NEAR(ExactConeSlack(c.normal, c.friction, shift, fn * c.normal), c.friction * fn - shift,
                 1e-14);
+    EXPECT_NEAR(ExactConeSlack(c.normal, c.friction, shift, on_surface + 0.5 * t2),
+                -(on_surface + 0.5 * t2 - fn * c.normal).norm() + (c.friction * fn - shift), 1e-14);
   }
   o.confidence = 0.0;
   const std::vector<double> untightened = Prepare(ThreeFingerProblem(), o).cone_shift;

@@ -206,14 +206,13 @@ TEST(IpoptFormulation, ViolationsAreMeasuredInNewtons) {
     VectorXd x(form.num_vars());
     for (int j = 0; j < x.size(); ++j) x(j) = value(rng);
     const std::vector<Vec3> forces = form.Forces(x.head(form.num_forces));
-    double expected = std::max(
-        0.0, (prepared.rows.matrix * Stack(forces) - prepared.rows.rhs).maxCoeff());
+    double expected =
+        std::max(0.0, (prepared.rows.matrix * Stack(forces) - prepared.rows.rhs).maxCoeff());
     for (int i = 0; i < 4; ++i) {
       const Contact& c = prepared.problem.contacts[i];
       const Vec3 tangential = forces[i] - c.normal.dot(forces[i]) * c.normal;
-      expected = std::max(expected, tangential.norm() -
-                                        (c.friction * c.normal.dot(forces[i]) -
-                                         prepared.cone_shift[i]));
+      expected = std::max(expected, tangential.norm() - (c.friction * c.normal.dot(forces[i]) -
+                                                         prepared.cone_shift[i]));
     }
     EXPECT_NEAR(form.MaxViolation(x), expected, 1e-12);
   }

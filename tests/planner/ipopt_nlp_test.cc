@@ -61,9 +61,7 @@ std::vector<Case> Cases() {
   return cases;
 }
 
-int NumVars(const Case& c) {
-  return c.form.num_vars() + (c.phase == Phase::kFeasibility ? 1 : 0);
-}
+int NumVars(const Case& c) { return c.form.num_vars() + (c.phase == Phase::kFeasibility ? 1 : 0); }
 
 // The run's start: the formulation's, plus t = 1 in phase one.
 VectorXd Start(const Case& c) {
@@ -98,10 +96,10 @@ std::vector<std::pair<Index, Index>> Structure(ForceNlp& nlp, bool hessian) {
   const Index nnz = hessian ? s.nnz_hess : s.nnz_jac;
   std::vector<Index> rows(nnz), cols(nnz);
   const VectorXd x = VectorXd::Ones(s.n);
-  EXPECT_TRUE(hessian ? nlp.eval_h(s.n, x.data(), true, 1.0, s.m, nullptr, true, nnz,
-                                   rows.data(), cols.data(), nullptr)
-                      : nlp.eval_jac_g(s.n, x.data(), true, s.m, nnz, rows.data(),
-                                       cols.data(), nullptr));
+  EXPECT_TRUE(
+      hessian ? nlp.eval_h(s.n, x.data(), true, 1.0, s.m, nullptr, true, nnz, rows.data(),
+                           cols.data(), nullptr)
+              : nlp.eval_jac_g(s.n, x.data(), true, s.m, nnz, rows.data(), cols.data(), nullptr));
   std::vector<std::pair<Index, Index>> out;
   for (Index e = 0; e < nnz; ++e) out.emplace_back(rows[e], cols[e]);
   return out;
@@ -130,8 +128,7 @@ MatrixXd Jacobian(ForceNlp& nlp, const VectorXd& x) {
   const Sizes s = GetSizes(nlp);
   const auto structure = Structure(nlp, /*hessian=*/false);
   VectorXd values(s.nnz_jac);
-  EXPECT_TRUE(
-      nlp.eval_jac_g(s.n, x.data(), true, s.m, s.nnz_jac, nullptr, nullptr, values.data()));
+  EXPECT_TRUE(nlp.eval_jac_g(s.n, x.data(), true, s.m, s.nnz_jac, nullptr, nullptr, values.data()));
   MatrixXd j = MatrixXd::Zero(s.m, s.n);
   for (Index e = 0; e < s.nnz_jac; ++e) j(structure[e].first, structure[e].second) += values(e);
   return j;
@@ -142,8 +139,8 @@ MatrixXd Hessian(ForceNlp& nlp, const VectorXd& x, double obj_factor, const Vect
   const Sizes s = GetSizes(nlp);
   const auto structure = Structure(nlp, /*hessian=*/true);
   VectorXd values(s.nnz_hess);
-  EXPECT_TRUE(nlp.eval_h(s.n, x.data(), true, obj_factor, s.m, lambda.data(), true,
-                         s.nnz_hess, nullptr, nullptr, values.data()));
+  EXPECT_TRUE(nlp.eval_h(s.n, x.data(), true, obj_factor, s.m, lambda.data(), true, s.nnz_hess,
+                         nullptr, nullptr, values.data()));
   MatrixXd h = MatrixXd::Zero(s.n, s.n);
   for (Index e = 0; e < s.nnz_hess; ++e) {
     const auto [r, c] = structure[e];
@@ -154,8 +151,7 @@ MatrixXd Hessian(ForceNlp& nlp, const VectorXd& x, double obj_factor, const Vect
 }
 
 // Central differences of a vector function, one column per unknown.
-MatrixXd FiniteDifferences(const std::function<VectorXd(const VectorXd&)>& fn,
-                           const VectorXd& x) {
+MatrixXd FiniteDifferences(const std::function<VectorXd(const VectorXd&)>& fn, const VectorXd& x) {
   const VectorXd f0 = fn(x);
   MatrixXd d(f0.size(), x.size());
   for (int j = 0; j < x.size(); ++j) {
@@ -183,9 +179,8 @@ TEST(IpoptNlp, SizesFollowTheFormulation) {
     EXPECT_EQ(nlp.num_vars(), s.n);
     EXPECT_EQ(s.m, c.form.num_linear + cones);
     // Phase one adds -t to every row but the equilibrium rows.
-    const int relaxed = c.phase == Phase::kFeasibility
-                            ? c.form.num_linear - c.form.num_equilibrium
-                            : 0;
+    const int relaxed =
+        c.phase == Phase::kFeasibility ? c.form.num_linear - c.form.num_equilibrium : 0;
     EXPECT_EQ(s.nnz_jac, static_cast<Index>(c.form.linear.size()) + 4 * cones + relaxed);
     // Hessian: one diagonal entry per force unknown outside a cone; per cone
     // the 3x3 lower triangle (6), the (s, f) row (3) and (s, s).
@@ -309,8 +304,8 @@ TEST(IpoptNlp, EvaluationsOutsideTheConeDomainFail) {
   VectorXd g(s.m), jac(s.nnz_jac), hess(s.nnz_hess), lambda = VectorXd::Ones(s.m);
   EXPECT_FALSE(nlp.eval_g(s.n, x.data(), true, s.m, g.data()));
   EXPECT_FALSE(nlp.eval_jac_g(s.n, x.data(), true, s.m, s.nnz_jac, nullptr, nullptr, jac.data()));
-  EXPECT_FALSE(nlp.eval_h(s.n, x.data(), true, 1.0, s.m, lambda.data(), true, s.nnz_hess,
-                          nullptr, nullptr, hess.data()));
+  EXPECT_FALSE(nlp.eval_h(s.n, x.data(), true, 1.0, s.m, lambda.data(), true, s.nnz_hess, nullptr,
+                          nullptr, hess.data()));
   // The objective does not depend on the slacks and is still defined.
   double f = 0.0;
   EXPECT_TRUE(nlp.eval_f(s.n, x.data(), true, f));
@@ -322,11 +317,11 @@ TEST(IpoptNlp, StartsAtTheGivenPointWithoutAWarmStart) {
   ForceNlp nlp(c.form, c.phase, start, StopConditions{});
   const Sizes s = GetSizes(nlp);
   VectorXd x = VectorXd::Zero(s.n), z(s.n), lambda(s.m);
-  ASSERT_TRUE(nlp.get_starting_point(s.n, true, x.data(), false, nullptr, nullptr, s.m, false,
-                                     nullptr));
+  ASSERT_TRUE(
+      nlp.get_starting_point(s.n, true, x.data(), false, nullptr, nullptr, s.m, false, nullptr));
   EXPECT_EQ(x, start);
-  EXPECT_FALSE(nlp.get_starting_point(s.n, true, x.data(), true, z.data(), z.data(), s.m, false,
-                                      nullptr));
+  EXPECT_FALSE(
+      nlp.get_starting_point(s.n, true, x.data(), true, z.data(), z.data(), s.m, false, nullptr));
   EXPECT_FALSE(nlp.get_starting_point(s.n, true, x.data(), false, nullptr, nullptr, s.m, true,
                                       lambda.data()));
   const VectorXd solution = VectorXd::LinSpaced(s.n, -1.0, 1.0);
@@ -338,8 +333,8 @@ TEST(IpoptNlp, StartsAtTheGivenPointWithoutAWarmStart) {
 // What Ipopt's intermediate_callback passes that matters here.
 bool Iterate(ForceNlp& nlp, Index iter, double mu, double d_norm,
              Ipopt::AlgorithmMode mode = Ipopt::RegularMode) {
-  return nlp.intermediate_callback(mode, iter, 0.0, 0.0, 0.0, mu, d_norm, 0.0, 1.0, 1.0, 0,
-                                   nullptr, nullptr);
+  return nlp.intermediate_callback(mode, iter, 0.0, 0.0, 0.0, mu, d_norm, 0.0, 1.0, 1.0, 0, nullptr,
+                                   nullptr);
 }
 
 TEST(IpoptNlp, StopsAfterStalledIterations) {

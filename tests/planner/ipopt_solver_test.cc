@@ -52,8 +52,7 @@ TEST(IpoptSolver, PinchPyramidMatchesTheClosedForm) {
     ASSERT_EQ(r.status, PlanStatus::kOptimal) << r.message;
     EXPECT_EQ(r.solver, SolverKind::kIpopt);
     EXPECT_GT(r.iterations, 0);
-    const double squeeze =
-        std::max(min_force, m * kG / (2 * mu * std::cos(std::numbers::pi / 12)));
+    const double squeeze = std::max(min_force, m * kG / (2 * mu * std::cos(std::numbers::pi / 12)));
     ASSERT_EQ(r.forces.size(), 2u);
     EXPECT_NEAR(r.forces[0].x(), -squeeze, 1e-6);
     EXPECT_NEAR(r.forces[1].x(), squeeze, 1e-6);

@@ -32,7 +32,8 @@ Matrix10d RandomCovariance(std::mt19937_64& rng, double mass) {
   std::normal_distribution<double> normal;
   const double r = 0.05;
   Vector10d scale;
-  scale << 0.05 * mass, Eigen::Vector3d::Constant(mass * 0.003), Eigen::Matrix<double, 6, 1>::Constant(0.1 * mass * r * r);
+  scale << 0.05 * mass, Eigen::Vector3d::Constant(mass * 0.003),
+      Eigen::Matrix<double, 6, 1>::Constant(0.1 * mass * r * r);
   Matrix10d a;
   for (int i = 0; i < 10; ++i)
     for (int j = 0; j < 10; ++j) a(i, j) = normal(rng);
@@ -49,7 +50,8 @@ Eigen::VectorXd BallPoint(std::mt19937_64& rng, int dim, bool edge) {
   std::normal_distribution<double> normal;
   Eigen::VectorXd z(dim);
   for (int i = 0; i < dim; ++i) z(i) = normal(rng);
-  const double radius = edge ? 1.0 : std::pow(std::uniform_real_distribution<double>(0, 1)(rng), 1.0 / dim);
+  const double radius =
+      edge ? 1.0 : std::pow(std::uniform_real_distribution<double>(0, 1)(rng), 1.0 / dim);
   return dim == 0 ? z : (radius / z.norm()) * z;
 }
 
@@ -88,14 +90,15 @@ Eigen::MatrixXd PseudoInverse(const PreparedProblem& prepared) {
 
 // Largest violation (N, > 0 violated) of the UNTIGHTENED rows with a friction
 // mu' drawn in [mu - kappa sigma, mu + kappa sigma] (>= the planning mu).
-double WorstViolation(const PreparedProblem& prep, const PlanProblem& request, const PlanOptions& options,
-                      const Eigen::VectorXd& f, std::mt19937_64& rng) {
+double WorstViolation(const PreparedProblem& prep, const PlanProblem& request,
+                      const PlanOptions& options, const Eigen::VectorXd& f, std::mt19937_64& rng) {
   double worst = -1e300;
   const int k = options.cone_sides;
   for (int i = 0; i < prep.num_contacts(); ++i) {
     const Contact& c = prep.problem.contacts[i];
     const double sigma = request.contacts[i].friction_sigma * options.confidence;
-    const double mu = std::uniform_real_distribution<double>(c.friction, request.contacts[i].friction + sigma)(rng);
+    const double mu = std::uniform_real_distribution<double>(
+        c.friction, request.contacts[i].friction + sigma)(rng);
     const Vec3 fi = f.segment<3>(3 * i);
     const double fn = c.normal.dot(fi);
     worst = std::max(worst, c.min_normal_force - fn);
@@ -107,7 +110,8 @@ double WorstViolation(const PreparedProblem& prep, const PlanProblem& request, c
     const auto [t1, t2] = TangentBasis(c.normal);
     for (int j = 0; j < k; ++j) {
       const double th = 2.0 * std::numbers::pi * j / k;
-      const Vec3 a = std::cos(th) * t1 + std::sin(th) * t2 - mu * std::cos(std::numbers::pi / k) * c.normal;
+      const Vec3 a =
+          std::cos(th) * t1 + std::sin(th) * t2 - mu * std::cos(std::numbers::pi / k) * c.normal;
       worst = std::max(worst, a.dot(fi));
     }
   }
@@ -119,7 +123,8 @@ struct Tally {
   double worst = -1e300, support_error = 0.0, tight_error = 0.0;
 };
 
-void CheckExactness(SolverKind kind, ConeModel cone, uint64_t seed, int grasps, int per_grasp, Tally* t) {
+void CheckExactness(SolverKind kind, ConeModel cone, uint64_t seed, int grasps, int per_grasp,
+                    Tally* t) {
   std::mt19937_64 rng(seed);
   for (int g = 0; g < grasps; ++g) {
     const Case c = RandomCase(rng, cone);
@@ -140,7 +145,8 @@ void CheckExactness(SolverKind kind, ConeModel cone, uint64_t seed, int grasps, 
       if (m.cone) continue;
       const Eigen::VectorXd a = prep.rows.matrix.row(m.row).transpose();
       const double support = kappa_b * (param_factor.transpose() * a).norm();
-      t->support_error = std::max(t->support_error, std::abs(support - m.parameters) / std::max(1.0, support));
+      t->support_error =
+          std::max(t->support_error, std::abs(support - m.parameters) / std::max(1.0, support));
     }
     const Eigen::MatrixXd& meas = prep.ellipsoid.factor;
     // Each row's own worst case (both ellipsoids' maximisers): its value
@@ -153,12 +159,14 @@ void CheckExactness(SolverKind kind, ConeModel cone, uint64_t seed, int grasps, 
       if (zp.norm() > 0) df += kappa_b * param_factor * zp.normalized();
       if (meas.cols() > 0 && zm.norm() > 0) df += c.options.confidence * meas * zm.normalized();
       const double value = a.dot(f + df) - prep.rows.nominal_rhs(m.row);
-      t->tight_error = std::max(t->tight_error, std::abs(value + m.slack) / std::max(1.0, f.lpNorm<Eigen::Infinity>()));
+      t->tight_error = std::max(
+          t->tight_error, std::abs(value + m.slack) / std::max(1.0, f.lpNorm<Eigen::Infinity>()));
     }
     for (int s = 0; s < per_grasp; ++s) {
       const bool edge = s % 2 == 0;
       Eigen::VectorXd df = kappa_b * param_factor * BallPoint(rng, 10, edge);
-      if (meas.cols() > 0) df += c.options.confidence * meas * BallPoint(rng, int(meas.cols()), edge);
+      if (meas.cols() > 0)
+        df += c.options.confidence * meas * BallPoint(rng, int(meas.cols()), edge);
       const double v = WorstViolation(prep, c.problem, c.options, f + df, rng);
       t->worst = std::max(t->worst, v);
       ++t->samples;
@@ -170,25 +178,30 @@ void CheckExactness(SolverKind kind, ConeModel cone, uint64_t seed, int grasps, 
 TEST(ParameterUncertainty, SampledParametersSatisfyUntightenedRowsGeometric) {
   Tally t;
   CheckExactness(SolverKind::kGeometric, ConeModel::kPyramid, 2801, 200, 100, &t);
-  SCOPED_TRACE(testing::Message() << "optimal " << t.optimal << " samples " << t.samples << " worst " << t.worst);
+  SCOPED_TRACE(testing::Message() << "optimal " << t.optimal << " samples " << t.samples
+                                  << " worst " << t.worst);
   EXPECT_GE(t.optimal, 100);
   EXPECT_EQ(t.violations, 0);
   EXPECT_GE(t.samples, 10000);
   EXPECT_LE(t.support_error, 1e-9);
   EXPECT_LE(t.tight_error, 1e-9);
-  std::printf("GEOMETRIC pyramid: %d optimal of 200 grasps, %d samples, %d violations, worst %.3g N, "
-              "support error %.2g, row worst-case error %.2g\n", t.optimal, t.samples, t.violations, t.worst,
-              t.support_error, t.tight_error);
+  std::printf(
+      "GEOMETRIC pyramid: %d optimal of 200 grasps, %d samples, %d violations, worst %.3g N, "
+      "support error %.2g, row worst-case error %.2g\n",
+      t.optimal, t.samples, t.violations, t.worst, t.support_error, t.tight_error);
 }
 
 TEST(ParameterUncertainty, SampledParametersSatisfyUntightenedRowsIpopt) {
   for (ConeModel cone : {ConeModel::kPyramid, ConeModel::kExact}) {
     Tally t;
     CheckExactness(SolverKind::kIpopt, cone, 28 + static_cast<int>(cone), 30, 50, &t);
-    SCOPED_TRACE(testing::Message() << "cone " << int(cone) << " optimal " << t.optimal << " worst " << t.worst);
+    SCOPED_TRACE(testing::Message()
+                 << "cone " << int(cone) << " optimal " << t.optimal << " worst " << t.worst);
     EXPECT_GE(t.optimal, 10);
-    std::printf("IPOPT %s: %d optimal of 30 grasps, %d samples, %d violations (1e-9 N), worst %.3g N\n",
-                cone == ConeModel::kExact ? "exact" : "pyramid", t.optimal, t.samples, t.violations, t.worst);
+    std::printf(
+        "IPOPT %s: %d optimal of 30 grasps, %d samples, %d violations (1e-9 N), worst %.3g N\n",
+        cone == ConeModel::kExact ? "exact" : "pyramid", t.optimal, t.samples, t.violations,
+        t.worst);
     // Ipopt stops within its tolerance of the tightened boundary.
     EXPECT_LE(t.worst, 1e-6);
   }
@@ -236,9 +249,11 @@ TEST(ParameterUncertainty, ZeroCovarianceIsBitIdentical) {
     EXPECT_TRUE(SameBits(*a, *b)) << g;
     // The prepared rows are those of the measurement-only construction.
     const PreparedProblem prep = fixtures::Prepared(zero, o);
-    const ConstraintRows rows = BuildConstraintRows(prep.problem, prep.ellipsoid, o.cone_sides, o.confidence, true);
+    const ConstraintRows rows =
+        BuildConstraintRows(prep.problem, prep.ellipsoid, o.cone_sides, o.confidence, true);
     ASSERT_EQ(rows.rhs.size(), prep.rows.rhs.size());
-    EXPECT_EQ(std::memcmp(rows.rhs.data(), prep.rows.rhs.data(), sizeof(double) * rows.rhs.size()), 0);
+    EXPECT_EQ(std::memcmp(rows.rhs.data(), prep.rows.rhs.data(), sizeof(double) * rows.rhs.size()),
+              0);
     EXPECT_FALSE(prep.parameters.active);
   }
 }
@@ -262,7 +277,8 @@ TEST(ParameterUncertainty, InfeasibilityNamesTheSource) {
   // Nominal need: fn = m g / (2 mu cos(pi/12)) ~ 2.03 N per finger.
   for (SolverKind kind : {SolverKind::kGeometric, SolverKind::kIpopt}) {
     PlanProblem mass = BoundedPinch(2.6);
-    mass.object.uncertainty.covariance = CovarianceFromMassAndCom(0.2, Vec3::Zero(), 0.05, Eigen::Matrix3d::Zero());
+    mass.object.uncertainty.covariance =
+        CovarianceFromMassAndCom(0.2, Vec3::Zero(), 0.05, Eigen::Matrix3d::Zero());
     EXPECT_EQ(SourceOf(mass, kind), UncertaintySource::kParameters);
     absl::StatusOr<PlanResult> r = Plan(mass, Options(ConeModel::kPyramid, 2.0), kind);
     EXPECT_NE(r->message.find("inertial-parameter"), std::string::npos) << r->message;
@@ -285,13 +301,15 @@ TEST(ParameterUncertainty, InfeasibilityNamesTheSource) {
 TEST(ParameterUncertainty, FeasibleWithSmallUncertaintyReportsBothParts) {
   PlanProblem p = BoundedPinch(0.0);
   for (Contact& c : p.contacts) c.sigma = 0.2;
-  p.object.uncertainty.covariance = CovarianceFromMassAndCom(0.2, Vec3::Zero(), 0.01, Eigen::Matrix3d::Zero());
+  p.object.uncertainty.covariance =
+      CovarianceFromMassAndCom(0.2, Vec3::Zero(), 0.01, Eigen::Matrix3d::Zero());
   absl::StatusOr<PlanResult> r = Plan(p, Options(ConeModel::kPyramid, 1.0), SolverKind::kGeometric);
   ASSERT_TRUE(r.ok());
   ASSERT_EQ(r->status, PlanStatus::kOptimal) << r->message;
   ASSERT_FALSE(r->row_margins.empty());
   double meas = 0, param = 0;
-  for (const RowMargin& m : r->row_margins) meas = std::max(meas, m.measurement), param = std::max(param, m.parameters);
+  for (const RowMargin& m : r->row_margins)
+    meas = std::max(meas, m.measurement), param = std::max(param, m.parameters);
   EXPECT_GT(meas, 0.0);
   // Mass error 0.01 kg moves the weight by 0.0981 N shared by two fingers.
   EXPECT_GT(param, 0.0);
@@ -315,22 +333,30 @@ TEST(ParameterUncertainty, BadCovarianceNamesFieldAndIndex) {
   asym(std::min(i, j), std::max(i, j)) += 1.0;
   absl::Status s = Validate(asym);
   EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_NE(s.message().find(absl::StrCat("object.uncertainty.covariance[", std::min(i, j) * 10 + std::max(i, j), "]")),
-            std::string::npos) << s;
+  EXPECT_NE(s.message().find(absl::StrCat("object.uncertainty.covariance[",
+                                          std::min(i, j) * 10 + std::max(i, j), "]")),
+            std::string::npos)
+      << s;
   Matrix10d nan = good;
   nan(i, j) = std::nan("");
   s = Validate(nan);
-  EXPECT_NE(s.message().find(absl::StrCat("object.uncertainty.covariance[", i * 10 + j, "]: not a finite")),
-            std::string::npos) << s;
+  EXPECT_NE(s.message().find(
+                absl::StrCat("object.uncertainty.covariance[", i * 10 + j, "]: not a finite")),
+            std::string::npos)
+      << s;
   // Not PSD: a negative eigenvalue along parameter i.
-  Matrix10d indefinite = good - 2.0 * good.diagonal().maxCoeff() * Vector10d::Unit(i) * Vector10d::Unit(i).transpose();
+  Matrix10d indefinite =
+      good - 2.0 * good.diagonal().maxCoeff() * Vector10d::Unit(i) * Vector10d::Unit(i).transpose();
   s = Validate(indefinite);
   EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument);
-  EXPECT_NE(s.message().find(absl::StrCat("object.uncertainty.covariance[", i * 11, "]")), std::string::npos) << s;
+  EXPECT_NE(s.message().find(absl::StrCat("object.uncertainty.covariance[", i * 11, "]")),
+            std::string::npos)
+      << s;
   PlanProblem p = fixtures::Pinch(0.2, 0.5);
   p.object.uncertainty.confidence = -1;
-  EXPECT_NE(ValidateProblem(p, PlanOptions{}).status().message().find("object.uncertainty.confidence"),
-            std::string::npos);
+  EXPECT_NE(
+      ValidateProblem(p, PlanOptions{}).status().message().find("object.uncertainty.confidence"),
+      std::string::npos);
   p = fixtures::Pinch(0.2, 0.5);
   p.contacts[1].friction_sigma = -0.1;
   EXPECT_NE(ValidateProblem(p, PlanOptions{}).status().message().find("contacts[1].friction_sigma"),
@@ -346,7 +372,8 @@ TEST(ParameterUncertainty, TrajectoryUsesTheStepRegressor) {
   for (int k = 4; k < 10; ++k) t.base.object.uncertainty.covariance(k, k) = 1e-8;
   t.steps.resize(2);
   t.steps[1].angular_acceleration = Vec3(0, 0, 20.0);
-  absl::StatusOr<TrajectoryResult> r = PlanTrajectory(t, Options(ConeModel::kPyramid, 1.0), SolverKind::kGeometric);
+  absl::StatusOr<TrajectoryResult> r =
+      PlanTrajectory(t, Options(ConeModel::kPyramid, 1.0), SolverKind::kGeometric);
   ASSERT_TRUE(r.ok()) << r.status();
   ASSERT_EQ(r->optimal, 2);
   double at_rest = 0, turning = 0;
@@ -364,14 +391,16 @@ TEST(ParameterUncertainty, RegressorMatchesNewtonEuler) {
     const Vec3 c = 0.05 * Vec3(u(rng), u(rng), u(rng));
     Eigen::Matrix3d a = Eigen::Matrix3d::Random();
     const Eigen::Matrix3d ic = 1e-3 * (a * a.transpose() + Eigen::Matrix3d::Identity());
-    const Motion motion{Vec3(u(rng), u(rng), u(rng)), 3 * Vec3(u(rng), u(rng), u(rng)), 5 * Vec3(u(rng), u(rng), u(rng))};
+    const Motion motion{Vec3(u(rng), u(rng), u(rng)), 3 * Vec3(u(rng), u(rng), u(rng)),
+                        5 * Vec3(u(rng), u(rng), u(rng))};
     const Vec3 g(0, 0, -9.81);
     const Eigen::Matrix<double, 6, 1> b = WrenchRegressor(g, motion) * StandardParameters(m, c, ic);
     // Newton-Euler directly about the CoM, then moved to the origin.
     const Vec3 acc_com = motion.linear_acceleration + motion.angular_acceleration.cross(c) +
                          motion.angular_velocity.cross(motion.angular_velocity.cross(c));
     const Vec3 force = m * (acc_com - g);
-    const Vec3 torque = ic * motion.angular_acceleration + motion.angular_velocity.cross(ic * motion.angular_velocity) +
+    const Vec3 torque = ic * motion.angular_acceleration +
+                        motion.angular_velocity.cross(ic * motion.angular_velocity) +
                         c.cross(force);
     EXPECT_LE((b.head<3>() - force).norm(), 1e-12 * std::max(1.0, force.norm()));
     EXPECT_LE((b.tail<3>() - torque).norm(), 1e-12 * std::max(1.0, torque.norm()));

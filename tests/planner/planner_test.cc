@@ -200,7 +200,8 @@ TEST(PlannerProperty, GeometricAndIpoptAgreeAndPlansAreRobust) {
       Eigen::VectorXd y(dim);
       for (int k = 0; k < dim; ++k) y(k) = gauss(sample_rng);
       // Uniform in the ball; every tenth sample on its boundary (the worst case).
-      const double radius = options.confidence * (s % 10 == 0 ? 1.0 : std::pow(unit(sample_rng), 1.0 / dim));
+      const double radius =
+          options.confidence * (s % 10 == 0 ? 1.0 : std::pow(unit(sample_rng), 1.0 / dim));
       const Eigen::VectorXd sample = f + L * (radius * y.normalized());
       const Eigen::VectorXd nominal_slack = prep.rows.nominal_rhs - prep.rows.matrix * sample;
       ASSERT_GE(nominal_slack.minCoeff(), -1e-8) << "sample " << s;

@@ -52,7 +52,8 @@ TEST(Validation, EveryBadInputNamesItsField) {
        "external_wrench.torque:"},
       {"zero normal", [](PlanProblem& p, PlanOptions&) { p.contacts[2].normal.setZero(); },
        "contacts[2].normal: zero length"},
-      {"tiny normal", [](PlanProblem& p, PlanOptions&) { p.contacts[1].normal = Vec3(1e-12, 0, 0); },
+      {"tiny normal",
+       [](PlanProblem& p, PlanOptions&) { p.contacts[1].normal = Vec3(1e-12, 0, 0); },
        "contacts[1].normal: zero length"},
       {"nan normal", [&](PlanProblem& p, PlanOptions&) { p.contacts[0].normal.x() = nan; },
        "contacts[0].normal:"},
@@ -62,10 +63,12 @@ TEST(Validation, EveryBadInputNamesItsField) {
        "contacts[1].friction:"},
       {"negative sigma", [](PlanProblem& p, PlanOptions&) { p.contacts[0].sigma = -0.1; },
        "contacts[0].sigma:"},
-      {"min > max", [](PlanProblem& p, PlanOptions&) {
+      {"min > max",
+       [](PlanProblem& p, PlanOptions&) {
          p.contacts[2].min_normal_force = 3;
          p.contacts[2].max_normal_force = 2;
-       }, "contacts[2].min_normal_force:"},
+       },
+       "contacts[2].min_normal_force:"},
       {"negative min", [](PlanProblem& p, PlanOptions&) { p.contacts[0].min_normal_force = -1; },
        "contacts[0].min_normal_force:"},
       {"negative max", [](PlanProblem& p, PlanOptions&) { p.contacts[0].max_normal_force = -1; },
@@ -74,23 +77,29 @@ TEST(Validation, EveryBadInputNamesItsField) {
       {"cone sides 65", [](PlanProblem&, PlanOptions& o) { o.cone_sides = 65; }, "cone_sides:"},
       {"negative confidence", [](PlanProblem&, PlanOptions& o) { o.confidence = -1; },
        "confidence:"},
-      {"too many contacts", [](PlanProblem& p, PlanOptions&) {
+      {"too many contacts",
+       [](PlanProblem& p, PlanOptions&) {
          while (p.contacts.size() <= 64) p.contacts.push_back(p.contacts[0]);
-       }, "contacts:"},
+       },
+       "contacts:"},
       // Issue 16: finite magnitudes no grasp has (mass 1e308 gave OK with
       // "residual of nan").
       {"huge mass", [](PlanProblem& x, PlanOptions&) { x.object.mass = 1e308; }, "object.mass:"},
       {"huge com", [](PlanProblem& x, PlanOptions&) { x.object.com.x() = 1e200; }, "object.com:"},
-      {"huge gravity", [](PlanProblem& x, PlanOptions&) { x.object.gravity.z() = -1e300; }, "object.gravity:"},
+      {"huge gravity", [](PlanProblem& x, PlanOptions&) { x.object.gravity.z() = -1e300; },
+       "object.gravity:"},
       {"huge wrench", [](PlanProblem& x, PlanOptions&) { x.external_wrench.force.y() = 1e160; },
        "external_wrench.force:"},
       {"huge torque", [](PlanProblem& x, PlanOptions&) { x.external_wrench.torque.y() = -1e160; },
        "external_wrench.torque:"},
       {"huge position", [](PlanProblem& x, PlanOptions&) { x.contacts[1].position.z() = 1e155; },
        "contacts[1].position:"},
-      {"huge friction", [](PlanProblem& x, PlanOptions&) { x.contacts[2].friction = 1e300; }, "contacts[2].friction:"},
-      {"huge sigma", [](PlanProblem& x, PlanOptions&) { x.contacts[0].sigma = 1e200; }, "contacts[0].sigma:"},
-      {"huge max force", [](PlanProblem& x, PlanOptions&) { x.contacts[0].max_normal_force = 1e300; },
+      {"huge friction", [](PlanProblem& x, PlanOptions&) { x.contacts[2].friction = 1e300; },
+       "contacts[2].friction:"},
+      {"huge sigma", [](PlanProblem& x, PlanOptions&) { x.contacts[0].sigma = 1e200; },
+       "contacts[0].sigma:"},
+      {"huge max force",
+       [](PlanProblem& x, PlanOptions&) { x.contacts[0].max_normal_force = 1e300; },
        "contacts[0].max_normal_force:"},
   };
   for (const BadCase& c : cases) {
@@ -100,8 +109,7 @@ TEST(Validation, EveryBadInputNamesItsField) {
     absl::StatusOr<PlanProblem> v = ValidateProblem(p, o);
     ASSERT_FALSE(v.ok()) << c.name;
     EXPECT_EQ(v.status().code(), absl::StatusCode::kInvalidArgument) << c.name;
-    EXPECT_EQ(v.status().message().rfind(c.field, 0), 0u)
-        << c.name << ": " << v.status().message();
+    EXPECT_EQ(v.status().message().rfind(c.field, 0), 0u) << c.name << ": " << v.status().message();
     // Every backend returns the same error, never a crash or a result.
     for (SolverKind kind : {SolverKind::kGeometric, SolverKind::kIpopt, SolverKind::kCrossCheck}) {
       absl::StatusOr<PlanResult> r = MakeSolver(kind)->Solve(p, o);
@@ -123,26 +131,31 @@ TEST(Validation, HugeFiniteInputsAreNamedNotSilentlyWrong) {
   absl::StatusOr<PlanProblem> v = ValidateProblem(p, PlanOptions{});
   ASSERT_TRUE(v.ok()) << v.status();
   EXPECT_EQ(v->contacts[0].normal, Vec3(-1, 0, 0));
-  const absl::StatusOr<PlanResult> huge = MakeSolver(SolverKind::kGeometric)->Solve(p, PlanOptions{});
-  const absl::StatusOr<PlanResult> unit = MakeSolver(SolverKind::kGeometric)->Solve(q, PlanOptions{});
+  const absl::StatusOr<PlanResult> huge =
+      MakeSolver(SolverKind::kGeometric)->Solve(p, PlanOptions{});
+  const absl::StatusOr<PlanResult> unit =
+      MakeSolver(SolverKind::kGeometric)->Solve(q, PlanOptions{});
   ASSERT_TRUE(huge.ok() && unit.ok()) << huge.status() << unit.status();
   EXPECT_EQ(huge->status, PlanStatus::kOptimal);
   ASSERT_EQ(huge->forces.size(), unit->forces.size());
   for (size_t i = 0; i < huge->forces.size(); ++i) EXPECT_EQ(huge->forces[i], unit->forces[i]);
   // The largest finite components normalise too; a tiny one is still zero.
-  p.contacts[0].normal = Vec3(std::numeric_limits<double>::max(), std::numeric_limits<double>::max(), 0);
+  p.contacts[0].normal =
+      Vec3(std::numeric_limits<double>::max(), std::numeric_limits<double>::max(), 0);
   v = ValidateProblem(p, PlanOptions{});
   ASSERT_TRUE(v.ok()) << v.status();
   EXPECT_NEAR(v->contacts[0].normal.norm(), 1.0, 1e-15);
   p.contacts[0].normal = Vec3(1e-200, 0, 0);
-  EXPECT_EQ(ValidateProblem(p, PlanOptions{}).status().message(), "contacts[0].normal: zero length");
+  EXPECT_EQ(ValidateProblem(p, PlanOptions{}).status().message(),
+            "contacts[0].normal: zero length");
 }
 
 TEST(Validation, InertiaMustBePhysical) {
   EXPECT_TRUE(ValidateInertia({1e-3, 2e-3, 2.5e-3, 0, 0, 0}).ok());
   EXPECT_TRUE(ValidateInertia({0, 0, 0, 0, 0, 0}).ok());  // a point mass
-  for (const Inertia& bad : {Inertia{-1e-3, 2e-3, 2e-3, 0, 0, 0}, Inertia{1e-3, 1e-3, 5e-3, 0, 0, 0},
-                             Inertia{std::nan(""), 1e-3, 1e-3, 0, 0, 0}, Inertia{1e-3, 1e-3, 1e-3, 1e-2, 0, 0}}) {
+  for (const Inertia& bad :
+       {Inertia{-1e-3, 2e-3, 2e-3, 0, 0, 0}, Inertia{1e-3, 1e-3, 5e-3, 0, 0, 0},
+        Inertia{std::nan(""), 1e-3, 1e-3, 0, 0, 0}, Inertia{1e-3, 1e-3, 1e-3, 1e-2, 0, 0}}) {
     const absl::Status s = ValidateInertia(bad);
     EXPECT_EQ(s.code(), absl::StatusCode::kInvalidArgument) << bad.ixx << " " << bad.izz;
     EXPECT_EQ(std::string(s.message()).rfind("object.inertia: ", 0), 0u) << s;
@@ -160,8 +173,10 @@ TEST(Validation, MagnitudeChecksNameTheFieldAndTheLimit) {
   EXPECT_EQ(CheckMagnitude("f", std::nan(""), kMaxForce, "N").message(), "f: not a finite number");
   EXPECT_EQ(CheckMagnitude("p", Vec3(0, -1e300, 0), kMaxLength, "m").message(),
             "p: component magnitude exceeds 1000 m");
-  EXPECT_EQ(CheckMagnitude("p", Vec3(0, std::numeric_limits<double>::infinity(), 0), kMaxLength, "m").message(),
-            "p: not a finite vector");
+  EXPECT_EQ(
+      CheckMagnitude("p", Vec3(0, std::numeric_limits<double>::infinity(), 0), kMaxLength, "m")
+          .message(),
+      "p: not a finite vector");
   EXPECT_FALSE(IsBounded(std::nan(""), 1.0));
 }
 
@@ -172,8 +187,9 @@ TEST(Validation, TimesAreBoundedAndStepsResolved) {
   EXPECT_EQ(CheckTime("t", 1e13).message(), "t: magnitude exceeds 1e+12 s");
   EXPECT_EQ(CheckTime("t", 1.0 + 1e-12, &previous).message().substr(0, 8), "t: step ");
   const double tiny = 1e-302;
-  EXPECT_EQ(CheckTime("samples[1].t", 2e-302, &tiny).message(),
-            "samples[1].t: step 1e-302 s after the previous sample is below the resolution 1e-09 s");
+  EXPECT_EQ(
+      CheckTime("samples[1].t", 2e-302, &tiny).message(),
+      "samples[1].t: step 1e-302 s after the previous sample is below the resolution 1e-09 s");
 }
 
 TEST(Validation, DirectionsOfAnyFiniteLengthAreNormalisedWithoutOverflow) {
@@ -207,7 +223,8 @@ TEST(Validation, TrajectoryStepsAndProbesNameTheirFields) {
   EXPECT_NEAR((n - Vec3(0, 0, -1)).norm(), 0.0, 1e-15);
   EXPECT_NEAR((t - Vec3(1, 0, 0)).norm(), 0.0, 1e-15);
   probe.tangential_force = 1e155;
-  EXPECT_EQ(ValidateFrictionProbe(probe, &n, &t).message(), "probe.tangential_force: magnitude exceeds 1e+09 N");
+  EXPECT_EQ(ValidateFrictionProbe(probe, &n, &t).message(),
+            "probe.tangential_force: magnitude exceeds 1e+09 N");
 }
 
 TEST(Validation, GeometricBackendRejectsExactCone) {

@@ -83,7 +83,8 @@ TEST(PlanningWorkspace, WarmGeometricSolvesAllocateNothing) {
       previous.assign(result.active_set.begin(), result.active_set.end());
     }
     tactforce::testing::ArmAllocationTrap(false);
-    EXPECT_EQ(tactforce::testing::AllocationCount() - warm_before, 0) << n << " contacts, warm-started";
+    EXPECT_EQ(tactforce::testing::AllocationCount() - warm_before, 0)
+        << n << " contacts, warm-started";
   }
 }
 
@@ -140,7 +141,8 @@ TEST(PlanningWorkspace, EightThreadsAnswerAsTheSerialRun) {
   {
     PlanningWorkspace workspace;
     for (int k = 0; k < kSolves; ++k) {
-      ASSERT_TRUE(solver->Solve(grasps[k % grasps.size()], PlanOptions{}, &workspace, &serial[k]).ok());
+      ASSERT_TRUE(
+          solver->Solve(grasps[k % grasps.size()], PlanOptions{}, &workspace, &serial[k]).ok());
     }
   }
   std::vector<PlanResult> parallel(kSolves);
@@ -149,7 +151,8 @@ TEST(PlanningWorkspace, EightThreadsAnswerAsTheSerialRun) {
     threads.emplace_back([&, t] {
       PlanningWorkspace workspace;
       for (int k = t; k < kSolves; k += kThreads) {
-        if (!solver->Solve(grasps[k % grasps.size()], PlanOptions{}, &workspace, &parallel[k]).ok()) {
+        if (!solver->Solve(grasps[k % grasps.size()], PlanOptions{}, &workspace, &parallel[k])
+                 .ok()) {
           parallel[k].status = PlanStatus::kSolverFailure;
         }
       }

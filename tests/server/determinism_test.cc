@@ -42,9 +42,11 @@ int ClearTimings(google::protobuf::Message* m) {
     if (IsTiming(f)) {
       r->ClearField(m, f);
       ++cleared;
-    } else if (f->cpp_type() == google::protobuf::FieldDescriptor::CPPTYPE_MESSAGE && !f->is_map()) {
+    } else if (f->cpp_type() == google::protobuf::FieldDescriptor::CPPTYPE_MESSAGE &&
+               !f->is_map()) {
       if (f->is_repeated()) {
-        for (int i = 0; i < r->FieldSize(*m, f); ++i) cleared += ClearTimings(r->MutableRepeatedMessage(m, f, i));
+        for (int i = 0; i < r->FieldSize(*m, f); ++i)
+          cleared += ClearTimings(r->MutableRepeatedMessage(m, f, i));
       } else {
         cleared += ClearTimings(r->MutableMessage(m, f));
       }
@@ -84,10 +86,9 @@ void ExpectRepeatable(const char* rpc, const std::function<grpc::Status(Response
 }
 
 template <class Stub, class Request, class Response>
-std::function<grpc::Status(Response*)> Unary(Stub* stub,
-                                             grpc::Status (Stub::*method)(grpc::ClientContext*, const Request&,
-                                                                          Response*),
-                                             Request request) {
+std::function<grpc::Status(Response*)> Unary(
+    Stub* stub, grpc::Status (Stub::*method)(grpc::ClientContext*, const Request&, Response*),
+    Request request) {
   return [stub, method, request](Response* response) {
     grpc::ClientContext context;
     context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
@@ -135,7 +136,8 @@ TEST_F(DeterminismTest, TrajectoryProbeAndEstimates) {
   ExpectRepeatable<v1::TrajectoryResponse>(
       "PlanTrajectory", Unary(stub_.get(), &v1::Planner::Stub::PlanTrajectory, LiftRequest(30)));
   ExpectRepeatable<v1::FrictionProbeResponse>(
-      "PlanFrictionProbe", Unary(stub_.get(), &v1::Planner::Stub::PlanFrictionProbe, ProbeRequest()));
+      "PlanFrictionProbe",
+      Unary(stub_.get(), &v1::Planner::Stub::PlanFrictionProbe, ProbeRequest()));
 
   auto estimator = v1::Estimator::NewStub(channel_);
   v1::EstimateRequest estimate = WrenchEstimateRequest();
@@ -145,8 +147,8 @@ TEST_F(DeterminismTest, TrajectoryProbeAndEstimates) {
         "EstimateForces", Unary(estimator.get(), &v1::Estimator::Stub::EstimateForces, estimate));
   }
   ExpectRepeatable<v1::FrictionResponse>(
-      "EstimateFriction",
-      Unary(estimator.get(), &v1::Estimator::Stub::EstimateFriction, SimulatedFrictionRequest(0.45, 4)));
+      "EstimateFriction", Unary(estimator.get(), &v1::Estimator::Stub::EstimateFriction,
+                                SimulatedFrictionRequest(0.45, 4)));
   auto info = v1::Info::NewStub(channel_);
   ExpectRepeatable<v1::ServerInfoResponse>(
       "GetServerInfo", Unary(info.get(), &v1::Info::Stub::GetServerInfo, v1::ServerInfoRequest()));
@@ -160,7 +162,8 @@ TEST_F(DeterminismTest, FitInertiaAndAudit) {
   absl::StatusOr<inertia::SimulationResult> sim = inertia::SimulateInertia(o);
   ASSERT_TRUE(sim.ok()) << sim.status();
   auto estimator = v1::Estimator::NewStub(channel_);
-  for (v1::InertiaMethod method : {v1::INERTIA_METHOD_BASELINE_LS, v1::INERTIA_METHOD_CONSTRAINED}) {
+  for (v1::InertiaMethod method :
+       {v1::INERTIA_METHOD_BASELINE_LS, v1::INERTIA_METHOD_CONSTRAINED}) {
     SCOPED_TRACE(v1::InertiaMethod_Name(method));
     v1::InertiaFitOptions options;
     options.set_method(method);
@@ -173,7 +176,8 @@ TEST_F(DeterminismTest, FitInertiaAndAudit) {
   model.effects.threshold = 0.3;
   v1::AuditRequest audit = SimulatedAuditRequest(model, 6, 5);
   auto auditor = v1::Audit::NewStub(channel_);
-  ExpectRepeatable<v1::AuditResponse>("AuditModel", Unary(auditor.get(), &v1::Audit::Stub::AuditModel, audit));
+  ExpectRepeatable<v1::AuditResponse>("AuditModel",
+                                      Unary(auditor.get(), &v1::Audit::Stub::AuditModel, audit));
 }
 
 }  // namespace

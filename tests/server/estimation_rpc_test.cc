@@ -97,7 +97,8 @@ namespace tactforce::testing {
 namespace {
 
 // AuditModel with a 60 s deadline.
-grpc::Status CallAudit(v1::Audit::Stub& stub, const v1::AuditRequest& request, v1::AuditResponse* response) {
+grpc::Status CallAudit(v1::Audit::Stub& stub, const v1::AuditRequest& request,
+                       v1::AuditResponse* response) {
   grpc::ClientContext context;
   context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
   return stub.AuditModel(&context, request, response);

@@ -68,7 +68,8 @@ grpc::Status RawUnary(const std::shared_ptr<grpc::Channel>& channel, const std::
   SetDeadline(&context, std::chrono::seconds(30));
   grpc::ByteBuffer response;
   return grpc::internal::BlockingUnaryCall<grpc::ByteBuffer, grpc::ByteBuffer>(
-      channel.get(), RpcMethod(method.c_str(), RpcMethod::NORMAL_RPC), &context, request, &response);
+      channel.get(), RpcMethod(method.c_str(), RpcMethod::NORMAL_RPC), &context, request,
+      &response);
 }
 
 class HardeningTest : public ServerTest {};
@@ -87,12 +88,14 @@ TEST_F(HardeningTest, UnaryRequestsThatCannotBeParsedAreInvalidArgumentNamingThe
   const std::string good = WrenchRequest().SerializeAsString();
   for (const auto& [method, type] : methods) {
     const grpc::Status status = RawUnary(channel_, method, Bytes(Corrupt()));
-    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << method << ": " << Describe(status);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT)
+        << method << ": " << Describe(status);
     EXPECT_EQ(status.error_message(), "request cannot be parsed as " + type) << method;
   }
   for (const auto& [method, type] : methods) {
     const grpc::Status status = RawUnary(channel_, method, Bytes(good + Corrupt(&rng)));
-    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << method << ": " << Describe(status);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT)
+        << method << ": " << Describe(status);
     EXPECT_EQ(status.error_message(), "request cannot be parsed as " + type) << method;
   }
   // A method that does not exist is still UNIMPLEMENTED.
@@ -122,7 +125,8 @@ TEST_F(HardeningTest, PlanStreamWithACorruptRequestEndsNamingItsIndex) {
     std::vector<grpc::Slice> slices;
     ASSERT_TRUE(response.Dump(&slices).ok());
     std::string bytes;
-    for (const grpc::Slice& s : slices) bytes.append(reinterpret_cast<const char*>(s.begin()), s.size());
+    for (const grpc::Slice& s : slices)
+      bytes.append(reinterpret_cast<const char*>(s.begin()), s.size());
     ASSERT_TRUE(parsed.ParseFromString(bytes));
     EXPECT_EQ(parsed.status(), v1::PLAN_STATUS_OPTIMAL);
     ++responses;
@@ -131,8 +135,8 @@ TEST_F(HardeningTest, PlanStreamWithACorruptRequestEndsNamingItsIndex) {
   const grpc::Status status = stream->Finish();
   EXPECT_EQ(responses, corrupt);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << Describe(status);
-  EXPECT_EQ(status.error_message(),
-            "request " + std::to_string(corrupt) + ": cannot be parsed as tactforce.v1.PlanRequest");
+  EXPECT_EQ(status.error_message(), "request " + std::to_string(corrupt) +
+                                        ": cannot be parsed as tactforce.v1.PlanRequest");
 }
 
 // FitInertia messages of `per_message` samples from a seeded simulation
@@ -148,7 +152,8 @@ std::vector<v1::FitInertiaRequest> InertiaMessages(int messages, int per_message
   if (!result.ok()) return out;
   const std::vector<inertia::InertiaSample>& samples = result->samples.samples;
   for (int i = 0; i < messages * per_message && i < static_cast<int>(samples.size()); ++i) {
-    *out[i / per_message].add_samples() = api::InertiaSampleToProto(samples[i], result->samples.source);
+    *out[i / per_message].add_samples() =
+        api::InertiaSampleToProto(samples[i], result->samples.source);
   }
   return out;
 }
@@ -160,8 +165,9 @@ grpc::Status StreamRaw(const std::shared_ptr<grpc::Channel>& channel,
   grpc::ByteBuffer response;
   std::unique_ptr<grpc::ClientWriter<grpc::ByteBuffer>> writer(
       grpc::internal::ClientWriterFactory<grpc::ByteBuffer>::Create(
-          channel.get(), RpcMethod("/tactforce.v1.Estimator/FitInertia", RpcMethod::CLIENT_STREAMING),
-          &context, &response));
+          channel.get(),
+          RpcMethod("/tactforce.v1.Estimator/FitInertia", RpcMethod::CLIENT_STREAMING), &context,
+          &response));
   for (const grpc::ByteBuffer& m : messages) {
     if (!writer->Write(m)) break;
   }
@@ -194,7 +200,8 @@ TEST_F(HardeningTest, LongEchoedInputKeepsItsCodeWithABoundedMessage) {
   mesh->set_format("stl");
   mesh->set_data("");
   const grpc::Status status = StreamRaw(channel_, {Bytes(messages[0])});
-  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message().size();
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT)
+      << status.error_message().size();
   EXPECT_LE(status.error_message().size(), 2048u);
   EXPECT_THAT(status.error_message(), HasSubstr("bytes cut]"));
 }
@@ -202,8 +209,8 @@ TEST_F(HardeningTest, LongEchoedInputKeepsItsCodeWithABoundedMessage) {
 class StreamBoundsTest : public ServerTest {
  protected:
   std::vector<std::string> server_flags() const override {
-    return {"--max-streams", "1", "--stream-idle-timeout-ms", "500", "--max-inflight-bytes", "2000000",
-            "--max-fit-bytes", "1000000"};
+    return {"--max-streams",        "1",       "--stream-idle-timeout-ms", "500",
+            "--max-inflight-bytes", "2000000", "--max-fit-bytes",          "1000000"};
   }
 };
 
@@ -277,7 +284,8 @@ TEST_F(StreamBoundsTest, FitsBeyondTheWorkingMemoryLimitAreRefusedBeforeTheyStar
   EXPECT_TRUE(constrained.ok()) << Describe(constrained);
   messages[0].mutable_options()->set_method(v1::INERTIA_METHOD_FACTOR_GRAPH);
   const grpc::Status factor_graph = StreamRaw(channel_, {Bytes(messages[0])});
-  EXPECT_EQ(factor_graph.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << Describe(factor_graph);
+  EXPECT_EQ(factor_graph.error_code(), grpc::StatusCode::INVALID_ARGUMENT)
+      << Describe(factor_graph);
   EXPECT_THAT(factor_graph.error_message(), HasSubstr("--max-fit-bytes"));
   EXPECT_THAT(factor_graph.error_message(), HasSubstr("send at most 217 samples"));
 }
@@ -285,7 +293,8 @@ TEST_F(StreamBoundsTest, FitsBeyondTheWorkingMemoryLimitAreRefusedBeforeTheyStar
 class IpoptLaneTest : public ServerTest {
  protected:
   std::vector<std::string> server_flags() const override {
-    return {"--workers", "1", "--ipopt-workers", "1", "--queue", "4", "--solve-timeout-ms", "120000"};
+    return {"--workers", "1", "--ipopt-workers",    "1",
+            "--queue",   "4", "--solve-timeout-ms", "120000"};
   }
 };
 
@@ -307,15 +316,16 @@ TEST_F(IpoptLaneTest, GeometricWorkIsServedWhileIpoptIsBusy) {
   do {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
     v1::PlanResponse response;
-    queued = CallPlan(*stub_, WrenchRequest(v1::SOLVER_IPOPT), &response, std::chrono::milliseconds(300));
+    queued = CallPlan(*stub_, WrenchRequest(v1::SOLVER_IPOPT), &response,
+                      std::chrono::milliseconds(300));
   } while (queued.ok() && Clock::now() - start < std::chrono::seconds(20));
   ASSERT_EQ(queued.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED) << Describe(queued);
   // Geometric work on the pool, drawn per run, while Ipopt is still busy.
   std::mt19937_64 rng(::testing::UnitTest::GetInstance()->random_seed());
   for (int i = 0; i < 5; ++i) {
     v1::PlanResponse response;
-    const grpc::Status s =
-        CallPlan(*stub_, RandomRequest(rng(), 16, v1::SOLVER_GEOMETRIC), &response, std::chrono::seconds(2));
+    const grpc::Status s = CallPlan(*stub_, RandomRequest(rng(), 16, v1::SOLVER_GEOMETRIC),
+                                    &response, std::chrono::seconds(2));
     EXPECT_TRUE(s.ok()) << Describe(s);
   }
   ASSERT_EQ(trajectory.wait_for(std::chrono::seconds(0)), std::future_status::timeout)

@@ -68,7 +68,8 @@ TEST_F(InertiaRpcTest, BadSampleInALaterMessageIsNamed) {
   const inertia::SimulationResult sim = Simulated(0.0);
   auto stub = v1::Estimator::NewStub(channel_);
   v1::FitInertiaResponse response;
-  const grpc::Status status = StreamInertia(*stub, sim.samples, v1::InertiaFitOptions(), 50, &response, 137);
+  const grpc::Status status =
+      StreamInertia(*stub, sim.samples, v1::InertiaFitOptions(), 50, &response, 137);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("samples[137].orientation"), std::string::npos)
       << status.error_message();
@@ -78,8 +79,8 @@ TEST_F(InertiaRpcTest, OptionsOnlyInTheFirstMessage) {
   const inertia::SimulationResult sim = Simulated(0.0);
   auto stub = v1::Estimator::NewStub(channel_);
   v1::FitInertiaResponse response;
-  const grpc::Status status =
-      StreamInertia(*stub, sim.samples, v1::InertiaFitOptions(), 100, &response, -1, /*options_twice=*/true);
+  const grpc::Status status = StreamInertia(*stub, sim.samples, v1::InertiaFitOptions(), 100,
+                                            &response, -1, /*options_twice=*/true);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_NE(status.error_message().find("options: only the first message"), std::string::npos)
       << status.error_message();
@@ -94,7 +95,8 @@ TEST_F(InertiaRpcTest, EmptyStreamAndBadOptionsAreInvalidArgument) {
     writer->WritesDone();
     const grpc::Status status = writer->Finish();
     EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
-    EXPECT_NE(status.error_message().find("no samples"), std::string::npos) << status.error_message();
+    EXPECT_NE(status.error_message().find("no samples"), std::string::npos)
+        << status.error_message();
   }
   const inertia::SimulationResult sim = Simulated(0.0);
   v1::InertiaFitOptions options;
@@ -115,9 +117,11 @@ TEST_F(InertiaRpcLimitTest, StreamBeyondTheServersSampleLimitIsRejected) {
   const inertia::SimulationResult sim = Simulated(0.0);
   auto stub = v1::Estimator::NewStub(channel_);
   v1::FitInertiaResponse response;
-  const grpc::Status status = StreamInertia(*stub, sim.samples, v1::InertiaFitOptions(), 20, &response);
+  const grpc::Status status =
+      StreamInertia(*stub, sim.samples, v1::InertiaFitOptions(), 20, &response);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
-  EXPECT_NE(status.error_message().find("more than 50 samples"), std::string::npos) << status.error_message();
+  EXPECT_NE(status.error_message().find("more than 50 samples"), std::string::npos)
+      << status.error_message();
 }
 
 // ------------------------------------------------------------ meshes
@@ -128,9 +132,12 @@ namespace fs = std::filesystem;
 // with comment lines to at least `min_bytes`.
 std::string ObjText(const io::TriangleMesh& mesh, size_t min_bytes = 0) {
   std::string out = "# tactforce test mesh\n";
-  for (const inertia::Vec3& v : mesh.vertices) out += absl::StrFormat("v %.17g %.17g %.17g\n", v.x(), v.y(), v.z());
-  for (const auto& t : mesh.triangles) out += absl::StrFormat("f %d %d %d\n", t[0] + 1, t[1] + 1, t[2] + 1);
-  while (out.size() < min_bytes) out += "# padding padding padding padding padding padding padding padding\n";
+  for (const inertia::Vec3& v : mesh.vertices)
+    out += absl::StrFormat("v %.17g %.17g %.17g\n", v.x(), v.y(), v.z());
+  for (const auto& t : mesh.triangles)
+    out += absl::StrFormat("f %d %d %d\n", t[0] + 1, t[1] + 1, t[2] + 1);
+  while (out.size() < min_bytes)
+    out += "# padding padding padding padding padding padding padding padding\n";
   return out;
 }
 
@@ -161,7 +168,8 @@ v1::InertiaFitOptions DensityOptions(const inertia::SimulationResult& sim, size_
 
 void ExpectSameFit(const v1::FitInertiaResponse& a, const v1::FitInertiaResponse& b, double rel) {
   auto near = [rel](double x, double y, const char* what) {
-    EXPECT_LE(std::abs(x - y), rel * std::max({std::abs(x), std::abs(y), 1e-300})) << what << ": " << x << " vs " << y;
+    EXPECT_LE(std::abs(x - y), rel * std::max({std::abs(x), std::abs(y), 1e-300}))
+        << what << ": " << x << " vs " << y;
   };
   EXPECT_EQ(a.method(), b.method());
   near(a.mass(), b.mass(), "mass");
@@ -225,8 +233,9 @@ TEST_F(InertiaRpcTest, DensityFitWithTheMeshInTheFirstMessageEqualsTheLocalFit) 
 TEST_F(InertiaRpcTest, CliSendsTheSameMeshAsItFitsLocally) {
   const auto shared = inertia::testing::SharedInertiaDir();
   if (!shared) GTEST_SKIP() << "../shared/data/inertia is absent";
-  const std::vector<std::string> fit = {BinaryPath("tactforce").string(), "inertia", "--csv", *shared + "/Pliers.csv",
-                                        "--mesh", *shared + "/Pliers.mesh.json", "--json"};
+  const std::vector<std::string> fit = {
+      BinaryPath("tactforce").string(), "inertia", "--csv", *shared + "/Pliers.csv", "--mesh",
+      *shared + "/Pliers.mesh.json",    "--json"};
   const ProcessResult local = RunProcess(fit, {}, std::chrono::seconds(120));
   ASSERT_EQ(local.exit_code, 0) << local.err;
   std::vector<std::string> remote_args = fit;
@@ -244,7 +253,9 @@ TEST_F(InertiaRpcTest, CliSendsTheSameMeshAsItFitsLocally) {
 
 class InertiaRpcMessageLimitTest : public ServerTest {
  protected:
-  std::vector<std::string> server_flags() const override { return {"--max-message-bytes", "65536"}; }
+  std::vector<std::string> server_flags() const override {
+    return {"--max-message-bytes", "65536"};
+  }
 };
 
 // A first message over --max-message-bytes (the mesh makes it big) ends
@@ -254,7 +265,8 @@ TEST_F(InertiaRpcMessageLimitTest, OversizeMeshIsRefusedAndTheServerKeepsServing
   const inertia::SimulationResult sim = SimulatedBox();
   auto stub = v1::Estimator::NewStub(channel_);
   v1::FitInertiaResponse response;
-  const grpc::Status refused = StreamInertia(*stub, sim.samples, DensityOptions(sim, 100'000), 20, &response);
+  const grpc::Status refused =
+      StreamInertia(*stub, sim.samples, DensityOptions(sim, 100'000), 20, &response);
   EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << refused.error_message();
   EXPECT_NE(refused.error_message().find("65536"), std::string::npos) << refused.error_message();
 
@@ -268,8 +280,9 @@ TEST_F(InertiaRpcMessageLimitTest, OversizeMeshIsRefusedAndTheServerKeepsServing
   ASSERT_FALSE(pattern.empty());
   ASSERT_TRUE(inertia::WriteSimulation(sim, pattern + "/log.csv", pattern + "/truth.json").ok());
   std::ofstream(pattern + "/big.obj") << ObjText(sim.object.mesh, 100'000);
-  const ProcessResult cli = RunProcess({BinaryPath("tactforce").string(), "inertia", "--csv", pattern + "/log.csv",
-                                        "--mesh", pattern + "/big.obj", "--server", server_->address()});
+  const ProcessResult cli =
+      RunProcess({BinaryPath("tactforce").string(), "inertia", "--csv", pattern + "/log.csv",
+                  "--mesh", pattern + "/big.obj", "--server", server_->address()});
   EXPECT_EQ(cli.exit_code, 1) << cli.err;
   EXPECT_NE(cli.err.find("RESOURCE_EXHAUSTED"), std::string::npos) << cli.err;
   EXPECT_NE(cli.err.find("65536"), std::string::npos) << cli.err;

@@ -33,8 +33,8 @@ TEST(ServerCliTest, HelpDocumentsEveryFlag) {
   ASSERT_EQ(run.exit_code, 0) << run.err;
   for (const char* flag :
        {"--listen", "--workers", "--queue", "--max-message-bytes", "--max-contacts",
-        "--solve-timeout-ms", "--inline-max-contacts", "--tls-cert", "--tls-key",
-        "--tls-client-ca", "--log-level", "--grace-ms", "--version"}) {
+        "--solve-timeout-ms", "--inline-max-contacts", "--tls-cert", "--tls-key", "--tls-client-ca",
+        "--log-level", "--grace-ms", "--version"}) {
     EXPECT_THAT(run.out, HasSubstr(flag));
   }
   // Loopback unless asked otherwise; documented defaults.
@@ -66,8 +66,8 @@ TEST(ServerCliTest, BadFlagsAreRejected) {
 
 TEST(ServerCliTest, StartupErrorsExitOne) {
   // Not PEM.
-  ProcessResult run = RunProcess({Server(), "--listen", "127.0.0.1:0", "--tls-cert", "/etc/hostname",
-                        "--tls-key", "/etc/hostname"});
+  ProcessResult run = RunProcess({Server(), "--listen", "127.0.0.1:0", "--tls-cert",
+                                  "/etc/hostname", "--tls-key", "/etc/hostname"});
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_THAT(run.err, HasSubstr("--tls-cert: /etc/hostname is not PEM"));
   // Not an address this machine has.
@@ -83,20 +83,23 @@ TEST(ServerCliTest, SecondServerOnAPortInUseExitsOne) {
   std::string error;
   auto first = ServerProcess::Start({}, &error);
   ASSERT_NE(first, nullptr) << error;
-  ProcessResult run = RunProcess({Server(), "--listen", first->address()}, {}, std::chrono::seconds(10));
+  ProcessResult run =
+      RunProcess({Server(), "--listen", first->address()}, {}, std::chrono::seconds(10));
   EXPECT_EQ(run.exit_code, 1) << run.out;
   EXPECT_THAT(run.err, HasSubstr("cannot listen on " + first->address()));
   EXPECT_TRUE(run.out.empty()) << run.out;
 
   // --reuse-port on the second alone is not enough: the first did not share.
-  run = RunProcess({Server(), "--listen", first->address(), "--reuse-port"}, {}, std::chrono::seconds(10));
+  run = RunProcess({Server(), "--listen", first->address(), "--reuse-port"}, {},
+                   std::chrono::seconds(10));
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_THAT(run.err, HasSubstr("cannot listen on " + first->address()));
 
   // Both asking: the second starts and listens (stopped by the timeout).
   auto sharing = ServerProcess::Start({"--reuse-port"}, &error);
   ASSERT_NE(sharing, nullptr) << error;
-  run = RunProcess({Server(), "--listen", sharing->address(), "--reuse-port"}, {}, std::chrono::seconds(2));
+  run = RunProcess({Server(), "--listen", sharing->address(), "--reuse-port"}, {},
+                   std::chrono::seconds(2));
   EXPECT_THAT(run.out, HasSubstr("listening on " + sharing->address()));
   EXPECT_EQ(sharing->Stop(), 0);
   EXPECT_EQ(first->Stop(), 0);

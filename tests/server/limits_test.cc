@@ -31,8 +31,9 @@ using ReaderWriter = grpc::ClientReaderWriter<v1::PlanRequest, v1::PlanResponse>
 class ResourceLimitsTest : public ServerTest {
  protected:
   std::vector<std::string> server_flags() const override {
-    return {"--max-streams", "2", "--stream-idle-timeout-ms", "600", "--max-inflight-samples", "300",
-            "--solve-timeout-ms", "100", "--max-audit-samples", "500", "--reflection=false"};
+    return {"--max-streams",          "2",   "--stream-idle-timeout-ms", "600",
+            "--max-inflight-samples", "300", "--solve-timeout-ms",       "100",
+            "--max-audit-samples",    "500", "--reflection=false"};
   }
 };
 
@@ -108,14 +109,16 @@ TEST_F(ResourceLimitsTest, FitInertiaSamplesShareOneBudgetAndAreReleased) {
   v1::InertiaFitOptions least_squares;  // fast: well within the work limit
   least_squares.set_method(v1::INERTIA_METHOD_BASELINE_LS);
   *message.mutable_options() = least_squares;
-  for (const auto& s : two_hundred.samples) *message.add_samples() = api::InertiaSampleToProto(s, two_hundred.source);
+  for (const auto& s : two_hundred.samples)
+    *message.add_samples() = api::InertiaSampleToProto(s, two_hundred.source);
   ASSERT_TRUE(holder->Write(message));
   // Let the server take them in before the second stream arrives.
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
 
   // Stream B's 150 samples would pass the budget of 300.
   v1::FitInertiaResponse response;
-  const grpc::Status over = StreamInertia(*estimator, FewSamples(150), least_squares, 150, &response);
+  const grpc::Status over =
+      StreamInertia(*estimator, FewSamples(150), least_squares, 150, &response);
   EXPECT_EQ(over.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << Describe(over);
   EXPECT_THAT(over.error_message(), HasSubstr("hold 200 samples and this message brings 150"));
   EXPECT_THAT(over.error_message(), HasSubstr("--max-inflight-samples"));
@@ -124,7 +127,8 @@ TEST_F(ResourceLimitsTest, FitInertiaSamplesShareOneBudgetAndAreReleased) {
   holder->WritesDone();
   const grpc::Status held = holder->Finish();
   EXPECT_TRUE(held.ok()) << Describe(held);
-  const grpc::Status after = StreamInertia(*estimator, FewSamples(150), least_squares, 150, &response);
+  const grpc::Status after =
+      StreamInertia(*estimator, FewSamples(150), least_squares, 150, &response);
   EXPECT_TRUE(after.ok()) << Describe(after);
   EXPECT_EQ(response.samples_received(), 150);
 }
@@ -139,7 +143,8 @@ TEST_F(ResourceLimitsTest, LongTrajectoryStopsAtTheWorkLimit) {
   const auto start = Clock::now();
   const grpc::Status status = stub_->PlanTrajectory(&context, request, &response);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << Describe(status);
-  EXPECT_THAT(status.error_message(), HasSubstr("limit of 100 ms of work per call (--solve-timeout-ms)"));
+  EXPECT_THAT(status.error_message(),
+              HasSubstr("limit of 100 ms of work per call (--solve-timeout-ms)"));
   EXPECT_THAT(status.error_message(), HasSubstr(" of 100 steps"));
   EXPECT_LT(Clock::now() - start, std::chrono::seconds(5));
   // A short one still fits in the limit.
@@ -157,7 +162,8 @@ TEST_F(ResourceLimitsTest, AuditSamplesAreLimitedAndReflectionIsOff) {
   const grpc::Status status = audit->AuditModel(&context, request, &response);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << Describe(status);
   EXPECT_THAT(status.error_message(), HasSubstr("samples: "));
-  EXPECT_THAT(status.error_message(), HasSubstr("limit of 500 per request (the server's --max-audit-samples)"));
+  EXPECT_THAT(status.error_message(),
+              HasSubstr("limit of 500 per request (the server's --max-audit-samples)"));
 
   // No reflection service, and Info does not list one.
   EXPECT_FALSE(ReflectionListServices(channel_).ok());
@@ -165,7 +171,8 @@ TEST_F(ResourceLimitsTest, AuditSamplesAreLimitedAndReflectionIsOff) {
   grpc::ClientContext info_context;
   v1::ServerInfoResponse served;
   ASSERT_TRUE(info->GetServerInfo(&info_context, v1::ServerInfoRequest(), &served).ok());
-  EXPECT_THAT(served.services(), ::testing::Not(::testing::Contains("grpc.reflection.v1alpha.ServerReflection")));
+  EXPECT_THAT(served.services(),
+              ::testing::Not(::testing::Contains("grpc.reflection.v1alpha.ServerReflection")));
   EXPECT_THAT(served.services(), ::testing::Contains("tactforce.v1.Audit"));
 }
 

@@ -92,9 +92,10 @@ TEST(LoadTest, EightClientsTwoThousandPlansEachWithoutErrors) {
   EXPECT_EQ(errors.load(), 0) << first_error;
   EXPECT_EQ(mismatches.load(), 0);
   const int total = kClients * kPlansPerClient;
-  std::printf("[ load     ] %d plans from %d clients in %.2f s: %.0f plans/s, %.0f us/plan "
-              "per client\n",
-              total, kClients, seconds, total / seconds, seconds * 1e6 / kPlansPerClient);
+  std::printf(
+      "[ load     ] %d plans from %d clients in %.2f s: %.0f plans/s, %.0f us/plan "
+      "per client\n",
+      total, kClients, seconds, total / seconds, seconds * 1e6 / kPlansPerClient);
   ::testing::Test::RecordProperty("plans_per_second", static_cast<int>(total / seconds));
   EXPECT_EQ(server->Stop(), 0) << server->StderrText();
 }

@@ -103,8 +103,7 @@ std::vector<BadRequest> BadRequests() {
        "contacts[2].normal: zero length"},
       {"NaN normal", [](auto& r) { r.mutable_contacts(0)->mutable_normal()->set_x(kNaN); },
        "contacts[0].normal: not a finite vector"},
-      {"infinite position",
-       [](auto& r) { r.mutable_contacts(1)->mutable_position()->set_z(kInf); },
+      {"infinite position", [](auto& r) { r.mutable_contacts(1)->mutable_position()->set_z(kInf); },
        "contacts[1].position: not a finite vector"},
       {"negative friction", [](auto& r) { r.mutable_contacts(1)->set_friction(-0.1); },
        "contacts[1].friction: must be >= 0"},
@@ -236,7 +235,8 @@ TEST_F(PlannerRpcTest, OversizeMessageIsResourceExhausted) {
 TEST_F(PlannerRpcTest, HealthIsServing) {
   EXPECT_EQ(HealthCheck(channel_, "").value_or(-1), 1);  // SERVING
   EXPECT_EQ(HealthCheck(channel_, "tactforce.v1.Planner").value_or(-1), 1);
-  EXPECT_EQ(HealthCheck(channel_, "tactforce.v1.Nope").status().code(), absl::StatusCode::kNotFound);
+  EXPECT_EQ(HealthCheck(channel_, "tactforce.v1.Nope").status().code(),
+            absl::StatusCode::kNotFound);
 }
 
 TEST_F(PlannerRpcTest, ReflectionListsThePlanner) {

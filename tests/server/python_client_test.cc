@@ -26,7 +26,8 @@ using ::testing::HasSubstr;
 
 class PythonClientTest : public ServerTest {
  protected:
-  ProcessResult Python(std::vector<std::string> args, const char* script = "client/python/plan_client.py") {
+  ProcessResult Python(std::vector<std::string> args,
+                       const char* script = "client/python/plan_client.py") {
     std::vector<std::string> argv = {TACTFORCE_PYTHON3, (SourceDir() / script).string()};
     argv.insert(argv.end(), args.begin(), args.end());
     return RunProcess(argv, {std::string("PYTHONPATH=") + TACTFORCE_PYTHON_STUB_DIR});
@@ -55,8 +56,8 @@ TEST_F(PythonClientTest, PlansTheWrenchGraspLikeTheCppClient) {
 
 TEST_F(PythonClientTest, PlansAJsonFileOverAStreamAndPrintsATable) {
   const fs::path example = SourceDir() / "client/examples/sphere_pinch.json";
-  ProcessResult run = Python({"--server", server_->address(), "--request", example.string(), "--solver",
-                    "ipopt", "--stream"});
+  ProcessResult run = Python({"--server", server_->address(), "--request", example.string(),
+                              "--solver", "ipopt", "--stream"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_THAT(run.out, HasSubstr("status: OPTIMAL"));
   EXPECT_THAT(run.out, HasSubstr("solver: IPOPT"));
@@ -96,7 +97,8 @@ TEST_F(PythonClientTest, HealthStubsImportBesideTheRealGrpc) {
       "import sys, grpc\n"
       "from tactforce.health.v1 import health_pb2, health_pb2_grpc\n"
       "channel = grpc.insecure_channel(sys.argv[1])\n"
-      "reply = health_pb2_grpc.HealthStub(channel).Check(health_pb2.HealthCheckRequest(), timeout=10)\n"
+      "reply = health_pb2_grpc.HealthStub(channel).Check(health_pb2.HealthCheckRequest(), "
+      "timeout=10)\n"
       "print(health_pb2.HealthCheckResponse.ServingStatus.Name(reply.status), grpc.__file__)\n";
   ProcessResult run = RunProcess({TACTFORCE_PYTHON3, "-c", script, server_->address()},
                                  {std::string("PYTHONPATH=") + TACTFORCE_PYTHON_STUB_DIR});
@@ -121,8 +123,8 @@ TEST_F(PythonClientTest, StreamsAnInertiaCsvLikeTheCppFit) {
   const std::string csv = pattern + "/log.csv", truth = pattern + "/truth.json";
   ASSERT_TRUE(inertia::WriteSimulation(*sim, csv, truth).ok());
 
-  ProcessResult run = Python({"--server", server_->address(), "--csv", csv, "--truth", truth, "--method",
-                              "factor-graph", "--batch", "64", "--json"},
+  ProcessResult run = Python({"--server", server_->address(), "--csv", csv, "--truth", truth,
+                              "--method", "factor-graph", "--batch", "64", "--json"},
                              "client/python/inertia_client.py");
   ASSERT_EQ(run.exit_code, 0) << run.err;
   v1::FitInertiaResponse from_python;
@@ -142,9 +144,11 @@ TEST_F(PythonClientTest, StreamsAnInertiaCsvLikeTheCppFit) {
   EXPECT_DOUBLE_EQ(from_python.inertia().ixy(), local->inertia().ixy());
   EXPECT_DOUBLE_EQ(from_python.errors().riemannian(), local->errors().riemannian());
 
-  std::ofstream(pattern + "/bad.csv") << "t,px,py,pz,qw,qx,qy,qz,fx,fy,fz,tx,ty,tz\n0,0,0,0,1,0,0,0,0,0,1,0,0,0\n"
-                                         "0.1,0,zero,0,1,0,0,0,0,0,1,0,0,0\n";
-  run = Python({"--server", server_->address(), "--csv", pattern + "/bad.csv"}, "client/python/inertia_client.py");
+  std::ofstream(pattern + "/bad.csv")
+      << "t,px,py,pz,qw,qx,qy,qz,fx,fy,fz,tx,ty,tz\n0,0,0,0,1,0,0,0,0,0,1,0,0,0\n"
+         "0.1,0,zero,0,1,0,0,0,0,0,1,0,0,0\n";
+  run = Python({"--server", server_->address(), "--csv", pattern + "/bad.csv"},
+               "client/python/inertia_client.py");
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_THAT(run.err, HasSubstr("bad.csv:3: column 'py': not a number"));
 }
@@ -171,13 +175,15 @@ TEST_F(PythonClientTest, SendsAMeshForADensityFit) {
   std::string obj;
   for (const inertia::Vec3& v : sim->object.mesh.vertices)
     obj += absl::StrFormat("v %.17g %.17g %.17g\n", 1000 * v.x(), 1000 * v.y(), 1000 * v.z());
-  for (const auto& t : sim->object.mesh.triangles) obj += absl::StrFormat("f %d %d %d\n", t[0] + 1, t[1] + 1, t[2] + 1);
+  for (const auto& t : sim->object.mesh.triangles)
+    obj += absl::StrFormat("f %d %d %d\n", t[0] + 1, t[1] + 1, t[2] + 1);
   std::ofstream(pattern + "/box_mm.obj") << obj;
   std::ofstream(pattern + "/box.mesh.json") << R"({"mesh": "box_mm.obj", "scale": 0.001})";
 
-  ProcessResult run = Python({"--server", server_->address(), "--csv", csv, "--truth", truth, "--mesh",
-                              pattern + "/box_mm.obj", "--mesh-scale", "0.001", "--regions", "grid", "--json"},
-                             "client/python/inertia_client.py");
+  ProcessResult run =
+      Python({"--server", server_->address(), "--csv", csv, "--truth", truth, "--mesh",
+              pattern + "/box_mm.obj", "--mesh-scale", "0.001", "--regions", "grid", "--json"},
+             "client/python/inertia_client.py");
   ASSERT_EQ(run.exit_code, 0) << run.err;
   v1::FitInertiaResponse from_python;
   absl::Status parsed = api::ParseJson(run.out, &from_python);
@@ -207,15 +213,15 @@ TEST_F(PythonClientTest, SendsAMeshForADensityFit) {
   EXPECT_DOUBLE_EQ(from_python.densities(0).density(), local->densities(0).density());
 
   // The descriptor: same mesh, same placement, same answer; text output.
-  run = Python({"--server", server_->address(), "--csv", csv, "--mesh", pattern + "/box.mesh.json", "--regions",
-                "grid"},
+  run = Python({"--server", server_->address(), "--csv", csv, "--mesh", pattern + "/box.mesh.json",
+                "--regions", "grid"},
                "client/python/inertia_client.py");
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_THAT(run.out, HasSubstr("density-realizable: yes"));
   EXPECT_THAT(run.out, HasSubstr("kg/m^3"));
 
-  run = Python({"--server", server_->address(), "--csv", csv, "--mesh", pattern + "/box_mm.obj", "--mesh-scale",
-                "0"},
+  run = Python({"--server", server_->address(), "--csv", csv, "--mesh", pattern + "/box_mm.obj",
+                "--mesh-scale", "0"},
                "client/python/inertia_client.py");
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_THAT(run.err, HasSubstr("--mesh-scale: must be > 0"));
@@ -235,7 +241,9 @@ TEST_F(PythonClientTest, SendsAMeshForADensityFit) {
 
 class PythonClientMessageLimitTest : public PythonClientTest {
  protected:
-  std::vector<std::string> server_flags() const override { return {"--max-message-bytes", "65536"}; }
+  std::vector<std::string> server_flags() const override {
+    return {"--max-message-bytes", "65536"};
+  }
 };
 
 // A mesh over the server's message limit: RESOURCE_EXHAUSTED (exit 1) with
@@ -251,20 +259,24 @@ TEST_F(PythonClientMessageLimitTest, OversizeMeshNamesTheServersLimit) {
   ASSERT_TRUE(sim.ok()) << sim.status();
   ASSERT_TRUE(inertia::WriteSimulation(*sim, pattern + "/log.csv", pattern + "/truth.json").ok());
   std::string obj;
-  for (const inertia::Vec3& v : sim->object.mesh.vertices) obj += absl::StrFormat("v %.17g %.17g %.17g\n", v.x(), v.y(), v.z());
-  for (const auto& t : sim->object.mesh.triangles) obj += absl::StrFormat("f %d %d %d\n", t[0] + 1, t[1] + 1, t[2] + 1);
+  for (const inertia::Vec3& v : sim->object.mesh.vertices)
+    obj += absl::StrFormat("v %.17g %.17g %.17g\n", v.x(), v.y(), v.z());
+  for (const auto& t : sim->object.mesh.triangles)
+    obj += absl::StrFormat("f %d %d %d\n", t[0] + 1, t[1] + 1, t[2] + 1);
   std::ofstream(pattern + "/box.obj") << obj;
-  while (obj.size() < 100'000) obj += "# padding padding padding padding padding padding padding padding\n";
+  while (obj.size() < 100'000)
+    obj += "# padding padding padding padding padding padding padding padding\n";
   std::ofstream(pattern + "/big.obj") << obj;
-  ProcessResult run = Python({"--server", server_->address(), "--csv", pattern + "/log.csv", "--mesh",
-                              pattern + "/big.obj"},
+  ProcessResult run = Python({"--server", server_->address(), "--csv", pattern + "/log.csv",
+                              "--mesh", pattern + "/big.obj"},
                              "client/python/inertia_client.py");
   EXPECT_EQ(run.exit_code, 1) << run.err;
   EXPECT_THAT(run.err, HasSubstr("RESOURCE_EXHAUSTED"));
   EXPECT_THAT(run.err, HasSubstr("65536"));
   EXPECT_THAT(run.err, HasSubstr("--max-message-bytes"));
   // The server still serves: the small mesh fits.
-  run = Python({"--server", server_->address(), "--csv", pattern + "/log.csv", "--mesh", pattern + "/box.obj"},
+  run = Python({"--server", server_->address(), "--csv", pattern + "/log.csv", "--mesh",
+                pattern + "/box.obj"},
                "client/python/inertia_client.py");
   EXPECT_EQ(run.exit_code, 0) << run.err;
   EXPECT_THAT(run.out, HasSubstr("density-realizable: yes"));

@@ -18,7 +18,8 @@ namespace tactforce::testing {
 v1::TrajectoryRequest LiftRequest(int steps) {
   const planner::TrajectoryProblem t = planner::WrenchLiftAndRotate(steps);
   v1::TrajectoryRequest r;
-  *r.mutable_plan() = api::ToRequest(t.base, planner::PlanOptions{}, planner::SolverKind::kGeometric);
+  *r.mutable_plan() =
+      api::ToRequest(t.base, planner::PlanOptions{}, planner::SolverKind::kGeometric);
   v1::Inertia* in = r.mutable_plan()->mutable_object()->mutable_inertia();
   in->set_ixx(t.inertia->ixx);
   in->set_iyy(t.inertia->iyy);
@@ -38,7 +39,8 @@ v1::TrajectoryRequest LiftRequest(int steps) {
 
 // Readings of `model` against a simulated press-release reference, as an
 // AuditRequest.
-v1::AuditRequest SimulatedAuditRequest(const sim::SensorModel& model, double seconds, uint64_t seed) {
+v1::AuditRequest SimulatedAuditRequest(const sim::SensorModel& model, double seconds,
+                                       uint64_t seed) {
   sim::SimOptions options;
   options.seconds = seconds;
   options.seed = seed;
@@ -85,8 +87,8 @@ v1::FrictionRequest SimulatedFrictionRequest(double mu, int trials) {
 
 v1::FrictionProbeRequest ProbeRequest() {
   v1::FrictionProbeRequest probe;
-  *probe.mutable_plan() = api::ToRequest(planner::BuiltInGrasps()[2].problem, planner::PlanOptions{},
-                                         planner::SolverKind::kGeometric);
+  *probe.mutable_plan() = api::ToRequest(planner::BuiltInGrasps()[2].problem,
+                                         planner::PlanOptions{}, planner::SolverKind::kGeometric);
   probe.mutable_position()->set_z(0.06);
   probe.mutable_normal()->set_z(-1);
   probe.mutable_tangent()->set_x(1);
@@ -99,11 +101,13 @@ v1::FrictionProbeRequest ProbeRequest() {
 }
 
 grpc::Status StreamInertia(v1::Estimator::Stub& stub, const inertia::InertiaSamples& samples,
-                    const v1::InertiaFitOptions& options, int batch, v1::FitInertiaResponse* response,
-                    int corrupt_index, bool options_twice) {
+                           const v1::InertiaFitOptions& options, int batch,
+                           v1::FitInertiaResponse* response, int corrupt_index,
+                           bool options_twice) {
   grpc::ClientContext context;
   context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
-  std::unique_ptr<grpc::ClientWriter<v1::FitInertiaRequest>> writer = stub.FitInertia(&context, response);
+  std::unique_ptr<grpc::ClientWriter<v1::FitInertiaRequest>> writer =
+      stub.FitInertia(&context, response);
   v1::FitInertiaRequest message;
   *message.mutable_options() = options;
   for (size_t i = 0; i < samples.samples.size(); ++i) {

@@ -23,7 +23,8 @@ v1::EstimateRequest WrenchEstimateRequest();
 
 // Readings of `model` against a simulated press-release reference of
 // `seconds`, as an AuditRequest.
-v1::AuditRequest SimulatedAuditRequest(const sim::SensorModel& model, double seconds, uint64_t seed);
+v1::AuditRequest SimulatedAuditRequest(const sim::SensorModel& model, double seconds,
+                                       uint64_t seed);
 
 // EstimateFriction: `trials` simulated slip trials at friction `mu`, each
 // with its normal.
@@ -37,7 +38,8 @@ v1::FrictionProbeRequest ProbeRequest();
 // first message (and every message with `options_twice`); sample
 // `corrupt_index` gets a zero quaternion. 60 s deadline.
 grpc::Status StreamInertia(v1::Estimator::Stub& stub, const inertia::InertiaSamples& samples,
-                           const v1::InertiaFitOptions& options, int batch, v1::FitInertiaResponse* response,
-                           int corrupt_index = -1, bool options_twice = false);
+                           const v1::InertiaFitOptions& options, int batch,
+                           v1::FitInertiaResponse* response, int corrupt_index = -1,
+                           bool options_twice = false);
 
 }  // namespace tactforce::testing

@@ -43,11 +43,12 @@ TEST(ServerConfigTest, FlagsFillTheOneCallLimits) {
     const int64_t work = std::uniform_int_distribution<int64_t>(1, 1'000'000'000)(rng);
     const int64_t audit = std::uniform_int_distribution<int64_t>(40, 100'000'000)(rng);
     const int64_t fit = std::uniform_int_distribution<int64_t>(0, int64_t{1} << 40)(rng);
-    const ServerConfig config = Parse(
-        {"--max-contacts", std::to_string(contacts), "--solve-timeout-ms", std::to_string(timeout_ms),
-         "--max-message-bytes", std::to_string(message_bytes), "--max-trajectory-work",
-         std::to_string(work), "--max-audit-samples", std::to_string(audit), "--max-fit-bytes",
-         std::to_string(fit), "--inline-max-contacts", "3"});
+    const ServerConfig config =
+        Parse({"--max-contacts", std::to_string(contacts), "--solve-timeout-ms",
+               std::to_string(timeout_ms), "--max-message-bytes", std::to_string(message_bytes),
+               "--max-trajectory-work", std::to_string(work), "--max-audit-samples",
+               std::to_string(audit), "--max-fit-bytes", std::to_string(fit),
+               "--inline-max-contacts", "3"});
     const api::CallLimits& limits = config.limits;
     EXPECT_EQ(limits.max_contacts, contacts);
     EXPECT_EQ(config.solve_timeout_ms(), timeout_ms);
@@ -68,9 +69,7 @@ TEST(ServerConfigTest, FlagsFillTheOneCallLimits) {
 
 TEST(ServerConfigTest, OutOfRangeLimitIsRefusedByName) {
   for (const std::vector<std::string>& args : std::vector<std::vector<std::string>>{
-           {"--solve-timeout-ms", "-1"},
-           {"--max-message-bytes", "10"},
-           {"--max-contacts", "0"}}) {
+           {"--solve-timeout-ms", "-1"}, {"--max-message-bytes", "10"}, {"--max-contacts", "0"}}) {
     ServerConfig config;
     CLI::App app;
     RegisterFlags(app, &config);

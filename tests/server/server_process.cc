@@ -83,8 +83,9 @@ fs::path SourceDir() {
   return dir != nullptr && *dir != '\0' ? dir : TACTFORCE_DEFAULT_SOURCE_DIR;
 }
 
-ProcessResult RunProcess(const std::vector<std::string>& argv_in, const std::vector<std::string>& env_extra,
-               std::chrono::milliseconds timeout, const std::string& stdin_path) {
+ProcessResult RunProcess(const std::vector<std::string>& argv_in,
+                         const std::vector<std::string>& env_extra,
+                         std::chrono::milliseconds timeout, const std::string& stdin_path) {
   ProcessResult run;
   const TempDir temp("tactforce_run");
   const fs::path dir = temp.path();
@@ -136,8 +137,8 @@ std::unique_ptr<ServerProcess> ServerProcess::Start(const std::vector<std::strin
   posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
   posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], 1);
   const std::string err_path = (server->dir_ / "stderr").string();
-  posix_spawn_file_actions_addopen(&actions, 2, err_path.c_str(),
-                                   O_WRONLY | O_CREAT | O_TRUNC, 0600);
+  posix_spawn_file_actions_addopen(&actions, 2, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                   0600);
   std::vector<std::string> args = {binary.string(), "--listen", "127.0.0.1:0"};
   args.insert(args.end(), flags.begin(), flags.end());
   std::vector<char*> c_args = CStrings(args);
@@ -156,9 +157,8 @@ std::unique_ptr<ServerProcess> ServerProcess::Start(const std::vector<std::strin
   std::string line;
   const auto end = Clock::now() + std::chrono::seconds(15);
   while (line.find('\n') == std::string::npos) {
-    const int left =
-        static_cast<int>(std::chrono::duration_cast<std::chrono::milliseconds>(end - Clock::now())
-                             .count());
+    const int left = static_cast<int>(
+        std::chrono::duration_cast<std::chrono::milliseconds>(end - Clock::now()).count());
     pollfd p{server->stdout_fd_, POLLIN, 0};
     if (left <= 0 || poll(&p, 1, left) <= 0) {
       *error = "no 'listening on' line within 15 s; stderr: " + server->StderrText();

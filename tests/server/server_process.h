@@ -31,9 +31,10 @@ std::filesystem::path SourceDir();
 // Runs `argv` to completion (stdin from `stdin_path`), capturing output;
 // `env` entries ("K=V") are added to the environment. Kills it after
 // `timeout`.
-ProcessResult RunProcess(const std::vector<std::string>& argv, const std::vector<std::string>& env = {},
-               std::chrono::milliseconds timeout = std::chrono::seconds(30),
-               const std::string& stdin_path = "/dev/null");
+ProcessResult RunProcess(const std::vector<std::string>& argv,
+                         const std::vector<std::string>& env = {},
+                         std::chrono::milliseconds timeout = std::chrono::seconds(30),
+                         const std::string& stdin_path = "/dev/null");
 
 class ServerProcess {
  public:

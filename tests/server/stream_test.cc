@@ -129,8 +129,8 @@ TEST_F(StreamTest, ClientCancellationStopsTheWork) {
 
   // The server ends the stream as cancelled, having solved only the few
   // requests before the cancellation (plus at most the one in progress).
-  ASSERT_TRUE(server_->WaitForStderr("rpc=PlanStream event=end code=CANCELLED",
-                                     std::chrono::seconds(10)))
+  ASSERT_TRUE(
+      server_->WaitForStderr("rpc=PlanStream event=end code=CANCELLED", std::chrono::seconds(10)))
       << server_->StderrText().substr(0, 3000);
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   const std::string log = server_->StderrText();
@@ -152,8 +152,8 @@ TEST_F(StreamTest, CancellingDuringASlowSolve) {
   context.TryCancel();
   EXPECT_FALSE(stream->Read(&response));
   EXPECT_EQ(stream->Finish().error_code(), grpc::StatusCode::CANCELLED);
-  EXPECT_TRUE(server_->WaitForStderr("rpc=PlanStream index=1 code=CANCELLED",
-                                     std::chrono::seconds(10)))
+  EXPECT_TRUE(
+      server_->WaitForStderr("rpc=PlanStream index=1 code=CANCELLED", std::chrono::seconds(10)))
       << server_->StderrText();
 }
 

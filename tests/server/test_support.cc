@@ -20,9 +20,12 @@ namespace {
 
 planner::SolverKind ToKind(v1::Solver solver) {
   switch (solver) {
-    case v1::SOLVER_IPOPT: return planner::SolverKind::kIpopt;
-    case v1::SOLVER_CROSS_CHECK: return planner::SolverKind::kCrossCheck;
-    default: return planner::SolverKind::kGeometric;
+    case v1::SOLVER_IPOPT:
+      return planner::SolverKind::kIpopt;
+    case v1::SOLVER_CROSS_CHECK:
+      return planner::SolverKind::kCrossCheck;
+    default:
+      return planner::SolverKind::kGeometric;
   }
 }
 
@@ -68,7 +71,9 @@ class ReflectionProtocol {
         &context, "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo", &cq);
     void* tag = nullptr;
     bool ok = false;
-    auto step = [&](int expected) { return cq.Next(&tag, &ok) && tag == reinterpret_cast<void*>(expected) && ok; };
+    auto step = [&](int expected) {
+      return cq.Next(&tag, &ok) && tag == reinterpret_cast<void*>(expected) && ok;
+    };
     call->StartCall(reinterpret_cast<void*>(1));
     if (!step(1)) return absl::UnavailableError("reflection: call did not start");
     call->Write(send, reinterpret_cast<void*>(2));
@@ -89,7 +94,8 @@ class ReflectionProtocol {
     std::vector<grpc::Slice> slices;
     (void)received.Dump(&slices);
     std::string data;
-    for (const grpc::Slice& s : slices) data.append(reinterpret_cast<const char*>(s.begin()), s.size());
+    for (const grpc::Slice& s : slices)
+      data.append(reinterpret_cast<const char*>(s.begin()), s.size());
     std::unique_ptr<Message> response(factory_.GetPrototype(response_)->New());
     if (!response->ParseFromString(data)) return absl::DataLossError("reflection: bad response");
     return response;
@@ -143,13 +149,26 @@ grpc::Status CallPlan(v1::Planner::Stub& stub, const v1::PlanRequest& request,
 std::string Describe(const grpc::Status& status) {
   std::string code;
   switch (status.error_code()) {
-    case grpc::StatusCode::OK: code = "OK"; break;
-    case grpc::StatusCode::CANCELLED: code = "CANCELLED"; break;
-    case grpc::StatusCode::INVALID_ARGUMENT: code = "INVALID_ARGUMENT"; break;
-    case grpc::StatusCode::DEADLINE_EXCEEDED: code = "DEADLINE_EXCEEDED"; break;
-    case grpc::StatusCode::RESOURCE_EXHAUSTED: code = "RESOURCE_EXHAUSTED"; break;
-    case grpc::StatusCode::UNAVAILABLE: code = "UNAVAILABLE"; break;
-    default: code = absl::StrCat("code ", static_cast<int>(status.error_code()));
+    case grpc::StatusCode::OK:
+      code = "OK";
+      break;
+    case grpc::StatusCode::CANCELLED:
+      code = "CANCELLED";
+      break;
+    case grpc::StatusCode::INVALID_ARGUMENT:
+      code = "INVALID_ARGUMENT";
+      break;
+    case grpc::StatusCode::DEADLINE_EXCEEDED:
+      code = "DEADLINE_EXCEEDED";
+      break;
+    case grpc::StatusCode::RESOURCE_EXHAUSTED:
+      code = "RESOURCE_EXHAUSTED";
+      break;
+    case grpc::StatusCode::UNAVAILABLE:
+      code = "UNAVAILABLE";
+      break;
+    default:
+      code = absl::StrCat("code ", static_cast<int>(status.error_code()));
   }
   return code + ": " + status.error_message();
 }
@@ -177,7 +196,8 @@ absl::StatusOr<std::vector<std::string>> ReflectionListServices(
   if (!response.ok()) return response.status();
   const google::protobuf::Message& m = **response;
   const auto* field = m.GetDescriptor()->FindFieldByName("list_services_response");
-  if (!m.GetReflection()->HasField(m, field)) return absl::NotFoundError("no list_services_response");
+  if (!m.GetReflection()->HasField(m, field))
+    return absl::NotFoundError("no list_services_response");
   const google::protobuf::Message& list = m.GetReflection()->GetMessage(m, field);
   const auto* service = list.GetDescriptor()->FindFieldByName("service");
   std::vector<std::string> names;
@@ -196,7 +216,8 @@ absl::StatusOr<std::vector<std::string>> ReflectionFilesContainingSymbol(
   if (!response.ok()) return response.status();
   const google::protobuf::Message& m = **response;
   const auto* field = m.GetDescriptor()->FindFieldByName("file_descriptor_response");
-  if (!m.GetReflection()->HasField(m, field)) return absl::NotFoundError("no file_descriptor_response");
+  if (!m.GetReflection()->HasField(m, field))
+    return absl::NotFoundError("no file_descriptor_response");
   const google::protobuf::Message& files = m.GetReflection()->GetMessage(m, field);
   const auto* bytes = files.GetDescriptor()->FindFieldByName("file_descriptor_proto");
   std::vector<std::string> names;
@@ -220,7 +241,8 @@ void ServerTest::Restart(const std::vector<std::string>& flags) {
   server_ = ServerProcess::Start(flags, &error);
   ASSERT_NE(server_, nullptr) << error;
   channel_ = Connect(server_->address());
-  ASSERT_TRUE(channel_->WaitForConnected(std::chrono::system_clock::now() + std::chrono::seconds(10)))
+  ASSERT_TRUE(
+      channel_->WaitForConnected(std::chrono::system_clock::now() + std::chrono::seconds(10)))
       << "cannot connect to " << server_->address();
   stub_ = v1::Planner::NewStub(channel_);
 }

@@ -37,13 +37,12 @@ class Certificates {
         << "subjectAltName=DNS:localhost,IP:127.0.0.1\nextendedKeyUsage=serverAuth\n";
     std::ofstream(dir_ / "client.ext") << "extendedKeyUsage=clientAuth\n";
     for (const char* ca : {"ca", "rogue-ca"}) {
-      if (std::string e = Openssl({"req", "-x509", "-newkey", "ec", "-pkeyopt",
-                                   "ec_paramgen_curve:prime256v1", "-nodes", "-days", "2",
-                                   "-keyout", Path(std::string(ca) + ".key"), "-out",
-                                   Path(std::string(ca) + ".crt"), "-subj",
-                                   std::string("/CN=tactforce-test-") + ca, "-addext",
-                                   "basicConstraints=critical,CA:TRUE", "-addext",
-                                   "keyUsage=critical,keyCertSign,cRLSign"});
+      if (std::string e = Openssl(
+              {"req", "-x509", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1",
+               "-nodes", "-days", "2", "-keyout", Path(std::string(ca) + ".key"), "-out",
+               Path(std::string(ca) + ".crt"), "-subj", std::string("/CN=tactforce-test-") + ca,
+               "-addext", "basicConstraints=critical,CA:TRUE", "-addext",
+               "keyUsage=critical,keyCertSign,cRLSign"});
           !e.empty())
         return e;
     }
@@ -79,15 +78,14 @@ class Certificates {
 
   std::string Leaf(const std::string& name, const std::string& cn, const std::string& ca,
                    const std::string& ext) {
-    if (std::string e = Openssl({"req", "-newkey", "ec", "-pkeyopt",
-                                 "ec_paramgen_curve:prime256v1", "-nodes", "-keyout",
-                                 Path(name + ".key"), "-out", Path(name + ".csr"), "-subj",
-                                 "/CN=" + cn});
+    if (std::string e = Openssl({"req", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1",
+                                 "-nodes", "-keyout", Path(name + ".key"), "-out",
+                                 Path(name + ".csr"), "-subj", "/CN=" + cn});
         !e.empty())
       return e;
-    return Openssl({"x509", "-req", "-in", Path(name + ".csr"), "-CA", Path(ca + ".crt"),
-                    "-CAkey", Path(ca + ".key"), "-CAcreateserial", "-days", "2", "-out",
-                    Path(name + ".crt"), "-extfile", Path(ext)});
+    return Openssl({"x509", "-req", "-in", Path(name + ".csr"), "-CA", Path(ca + ".crt"), "-CAkey",
+                    Path(ca + ".key"), "-CAcreateserial", "-days", "2", "-out", Path(name + ".crt"),
+                    "-extfile", Path(ext)});
   }
 
   TempDir temp_{"tactforce_tls"};
@@ -107,10 +105,10 @@ TEST(TlsTest, MutualTlsAcceptsOnlyClientsSignedByTheCa) {
   Certificates certs;
   ASSERT_EQ(certs.Make(), "");
   std::string error;
-  auto server = ServerProcess::Start({"--tls-cert", certs.Path("server.crt"), "--tls-key",
-                                      certs.Path("server.key"), "--tls-client-ca",
-                                      certs.Path("ca.crt")},
-                                     &error);
+  auto server =
+      ServerProcess::Start({"--tls-cert", certs.Path("server.crt"), "--tls-key",
+                            certs.Path("server.key"), "--tls-client-ca", certs.Path("ca.crt")},
+                           &error);
   ASSERT_NE(server, nullptr) << error;
 
   grpc::Status status = PlanOnce(certs.Channel(server->address(), "client"));
@@ -126,14 +124,14 @@ TEST(TlsTest, MutualTlsAcceptsOnlyClientsSignedByTheCa) {
   EXPECT_EQ(status.error_code(), grpc::StatusCode::UNAVAILABLE) << Describe(status);
   // gRPC's own lines about the failed handshakes go through the server's
   // logger (the counterpart of GrpcLinesFollowLogLevelOff below).
-  EXPECT_TRUE(server->WaitForStderr("source=grpc", std::chrono::seconds(5))) << server->StderrText();
+  EXPECT_TRUE(server->WaitForStderr("source=grpc", std::chrono::seconds(5)))
+      << server->StderrText();
 
   // The Python client speaks mutual TLS too.
   ProcessResult python = RunProcess(
-      {TACTFORCE_PYTHON3, (SourceDir() / "client/python/plan_client.py").string(),
-       "--server", server->address(), "--tls-ca", certs.Path("ca.crt"), "--tls-cert",
-       certs.Path("client.crt"), "--tls-key", certs.Path("client.key"), "--tls-server-name",
-       "localhost", "--timeout", "10"},
+      {TACTFORCE_PYTHON3, (SourceDir() / "client/python/plan_client.py").string(), "--server",
+       server->address(), "--tls-ca", certs.Path("ca.crt"), "--tls-cert", certs.Path("client.crt"),
+       "--tls-key", certs.Path("client.key"), "--tls-server-name", "localhost", "--timeout", "10"},
       {std::string("PYTHONPATH=") + TACTFORCE_PYTHON_STUB_DIR});
   EXPECT_EQ(python.exit_code, 0) << python.err;
   EXPECT_THAT(python.out, HasSubstr("status: OPTIMAL"));
@@ -161,12 +159,13 @@ TEST(TlsTest, GrpcLinesFollowLogLevelOff) {
   Certificates certs;
   ASSERT_EQ(certs.Make(), "");
   std::string error;
-  auto server = ServerProcess::Start({"--tls-cert", certs.Path("server.crt"), "--tls-key",
-                                      certs.Path("server.key"), "--tls-client-ca",
-                                      certs.Path("ca.crt"), "--log-level", "off"},
-                                     &error);
+  auto server = ServerProcess::Start(
+      {"--tls-cert", certs.Path("server.crt"), "--tls-key", certs.Path("server.key"),
+       "--tls-client-ca", certs.Path("ca.crt"), "--log-level", "off"},
+      &error);
   ASSERT_NE(server, nullptr) << error;
-  EXPECT_EQ(PlanOnce(certs.Channel(server->address(), "")).error_code(), grpc::StatusCode::UNAVAILABLE);
+  EXPECT_EQ(PlanOnce(certs.Channel(server->address(), "")).error_code(),
+            grpc::StatusCode::UNAVAILABLE);
   EXPECT_EQ(PlanOnce(Connect(server->address())).error_code(), grpc::StatusCode::UNAVAILABLE);
   EXPECT_TRUE(PlanOnce(certs.Channel(server->address(), "client")).ok());
   EXPECT_EQ(server->Stop(), 0);

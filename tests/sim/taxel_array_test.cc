@@ -56,7 +56,8 @@ TEST(TaxelArray, LoadsArePressureShareTimesCosine) {
   EXPECT_LT(sum, force.norm());
   EXPECT_GT(sum, 0.8 * force.norm());
   // The patch grows with the force.
-  EXPECT_GT(ComputeTaxelLoads(taxels, TaxelRanges{}, kApex, 8 * force).patch_radius, l.patch_radius);
+  EXPECT_GT(ComputeTaxelLoads(taxels, TaxelRanges{}, kApex, 8 * force).patch_radius,
+            l.patch_radius);
 }
 
 // Each taxel senses the pressure on its own part of the surface, so at a fixed
@@ -70,7 +71,8 @@ TEST(TaxelArray, NoTaxelLoadFallsAsTheForceGrows) {
   std::uniform_real_distribution<double> u(0, 1);
   for (int rep = 0; rep < 20; ++rep) {
     const double polar = 1.0 * u(rng), az = 2 * M_PI * u(rng);
-    const Eigen::Vector3d n_out(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az), std::cos(polar));
+    const Eigen::Vector3d n_out(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az),
+                                std::cos(polar));
     const Eigen::Vector3d contact = Eigen::Vector3d(0, 0, g.body_length) + g.radius * n_out;
     std::vector<double> prev(taxels.size(), 0.0);
     for (int k = 1; k <= 80; ++k) {
@@ -78,12 +80,14 @@ TEST(TaxelArray, NoTaxelLoadFallsAsTheForceGrows) {
       const TaxelLoads l = ComputeTaxelLoads(taxels, TaxelRanges{}, contact, -f * n_out);
       double sum = 0;
       for (size_t i = 0; i < taxels.size(); ++i) {
-        EXPECT_GE(l.load[i], prev[i] - 1e-9) << "rep " << rep << " taxel " << i << " at " << f << " N";
+        EXPECT_GE(l.load[i], prev[i] - 1e-9)
+            << "rep " << rep << " taxel " << i << " at " << f << " N";
         prev[i] = l.load[i];
         sum += l.load[i];
       }
       EXPECT_LE(sum, f + 1e-9);
-      EXPECT_GT(sum, 0.85 * f) << "rep " << rep << " at " << f << " N: the patch's force is on the taxels";
+      EXPECT_GT(sum, 0.85 * f) << "rep " << rep << " at " << f
+                               << " N: the patch's force is on the taxels";
     }
   }
 }
@@ -145,7 +149,8 @@ TEST(TaxelArray, ReleaseResidualIsAtMostTheHysteresis) {
   }
   EXPECT_GT(residual, 0) << "hysteresis leaves a phantom reading after release";
   double later = 0;
-  for (int k = 1; k <= 2000; ++k) later = a->Step(0.402 + k * 0.01, kApex, Eigen::Vector3d::Zero()).fingertip.force;
+  for (int k = 1; k <= 2000; ++k)
+    later = a->Step(0.402 + k * 0.01, kApex, Eigen::Vector3d::Zero()).fingertip.force;
   EXPECT_EQ(later, 0);
 }
 
@@ -162,14 +167,16 @@ TEST(TaxelArray, PartialContactErrorWithinPaperRange) {
     auto a = TaxelArray::Create(TaxelRanges{}, rng());
     ASSERT_TRUE(a.ok());
     const double polar = 0.2 + 0.8 * u(rng), az = 2 * M_PI * u(rng);
-    const Eigen::Vector3d n_out(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az), std::cos(polar));
+    const Eigen::Vector3d n_out(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az),
+                                std::cos(polar));
     const Eigen::Vector3d contact = Eigen::Vector3d(0, 0, g.body_length) + g.radius * n_out;
     const double f = 1 + 4 * u(rng);
     Eigen::Vector3d t = n_out.cross(Eigen::Vector3d::UnitZ());
     if (t.norm() < 1e-9) t = Eigen::Vector3d::UnitX();
     const Eigen::Vector3d force = f * (-n_out + 0.3 * u(rng) * t.normalized()).normalized();
     TaxelArrayReading out;
-    for (int s = 0; s <= 100; ++s) out = a->Step(s * 0.005, contact, force * std::min(1.0, s / 50.0));
+    for (int s = 0; s <= 100; ++s)
+      out = a->Step(s * 0.005, contact, force * std::min(1.0, s / 50.0));
     err_sum += std::abs(out.fingertip.force - f);
     if (out.fingertip.force > 0.5) {
       EXPECT_LT((out.fingertip.location - contact).norm(), 0.006);
@@ -185,7 +192,8 @@ TEST(TaxelArray, PartialContactErrorWithinPaperRange) {
 TEST(TaxelRanges, BadValuesNameTheField) {
   TaxelRanges r;
   r.threshold_min = -0.1;
-  EXPECT_NE(ValidateTaxelRanges(r, "taxels.").message().find("taxels.threshold_min"), std::string::npos);
+  EXPECT_NE(ValidateTaxelRanges(r, "taxels.").message().find("taxels.threshold_min"),
+            std::string::npos);
   r = {};
   r.noise_max = 0.001;
   EXPECT_NE(ValidateTaxelRanges(r).message().find("noise_max"), std::string::npos);
@@ -194,7 +202,8 @@ TEST(TaxelRanges, BadValuesNameTheField) {
   EXPECT_NE(ValidateTaxelRanges(r).message().find("saturation"), std::string::npos);
   EXPECT_FALSE(TaxelArray::Create(r, 1).ok());
 
-  auto j = TaxelRangesFromJson("{\n \"format\": \"tactforce.taxel_ranges.v1\",\n \"threshold_min\": -0.2\n}", "m.json");
+  auto j = TaxelRangesFromJson(
+      "{\n \"format\": \"tactforce.taxel_ranges.v1\",\n \"threshold_min\": -0.2\n}", "m.json");
   ASSERT_FALSE(j.ok());
   EXPECT_NE(j.status().message().find("m.json:3"), std::string::npos) << j.status();
   EXPECT_NE(j.status().message().find("threshold_min"), std::string::npos);

@@ -13,8 +13,9 @@ std::atomic<bool> g_trap{false};
 void* Count(std::size_t size, std::size_t alignment) {
   g_allocations.fetch_add(1, std::memory_order_relaxed);
   if (g_trap.load(std::memory_order_relaxed)) __builtin_trap();
-  void* p = alignment == 0 ? std::malloc(size == 0 ? 1 : size)
-                           : std::aligned_alloc(alignment, (size + alignment - 1) / alignment * alignment);
+  void* p = alignment == 0
+                ? std::malloc(size == 0 ? 1 : size)
+                : std::aligned_alloc(alignment, (size + alignment - 1) / alignment * alignment);
   if (p == nullptr) throw std::bad_alloc();
   return p;
 }

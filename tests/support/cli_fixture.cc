@@ -35,7 +35,9 @@ std::string ReadFile(const fs::path& path) {
   return s.str();
 }
 
-void WriteFile(const fs::path& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
+void WriteFile(const fs::path& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
 
 std::vector<std::string> Lines(const std::string& text) {
   std::vector<std::string> lines;
@@ -73,13 +75,16 @@ void CliTest::SetUp() {
   ASSERT_FALSE(dir_.empty()) << "no temporary directory";
 }
 
-fs::path CliTest::Write(const std::string& name, const std::string& text) { return temp_.Write(name, text); }
+fs::path CliTest::Write(const std::string& name, const std::string& text) {
+  return temp_.Write(name, text);
+}
 
 CliRun CliTest::Tactforce(const std::vector<std::string>& args, const std::string& stdin_text) {
   return RunTactforce(args, stdin_text);
 }
 
-void CliTest::ExpectBadFlags(const std::vector<std::string>& command, const std::vector<BadFlagCase>& cases) {
+void CliTest::ExpectBadFlags(const std::vector<std::string>& command,
+                             const std::vector<BadFlagCase>& cases) {
   for (const auto& [flags, name] : cases) {
     std::vector<std::string> args = command;
     args.insert(args.end(), flags.begin(), flags.end());
@@ -118,7 +123,9 @@ int ClosedPort() {
   return port;
 }
 
-std::string ExampleRequestJson() { return ReadFile(SourceDir() / "client/examples/sphere_pinch.json"); }
+std::string ExampleRequestJson() {
+  return ReadFile(SourceDir() / "client/examples/sphere_pinch.json");
+}
 
 std::string RequestJson(const v1::PlanRequest& request) { return api::ToJson(request); }
 
@@ -129,7 +136,8 @@ v1::PlanRequest RandomRequest(uint64_t seed, int contacts, v1::Solver solver) {
   options.max_contacts = contacts;
   options.infeasible_fraction = 0.0;
   const planner::RandomGrasp grasp = planner::MakeRandomGrasp(rng, options);
-  v1::PlanRequest request = api::ToRequest(grasp.problem, planner::PlanOptions(), planner::SolverKind::kGeometric);
+  v1::PlanRequest request =
+      api::ToRequest(grasp.problem, planner::PlanOptions(), planner::SolverKind::kGeometric);
   request.set_solver(solver);
   return request;
 }

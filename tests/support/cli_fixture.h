@@ -59,7 +59,8 @@ class CliTest : public ::testing::Test {
   static void ExpectBadInput(const CliRun& run) { testing::ExpectBadInput(run); }
   // Runs `command` + each case's flags: ExpectBadInput, and the error
   // names the case's text.
-  void ExpectBadFlags(const std::vector<std::string>& command, const std::vector<BadFlagCase>& cases);
+  void ExpectBadFlags(const std::vector<std::string>& command,
+                      const std::vector<BadFlagCase>& cases);
 
   const std::filesystem::path& dir() const { return dir_; }
 

@@ -36,7 +36,7 @@ Vector10d EntriesOfFactor(const Eigen::Matrix4d& U) {
 struct Model {
   Matrix10d A;
   Vector10d b;
-  double w = 0;                 // prior weight
+  double w = 0;  // prior weight
   Vector10d q = Vector10d::Zero();
   double scale = 1.0;           // objective divisor (conditioning)
   std::vector<Vector10d> rows;  // hull rows a^T p <= 0
@@ -66,8 +66,10 @@ struct Model {
       // Gamma: tr(Gamma P) = gp . p.
       Eigen::Matrix4d Gm = Eigen::Matrix4d::Zero();
       for (int k = 0; k < 10; ++k) {
-        if (kUr[k] == kUc[k]) Gm(kUr[k], kUr[k]) = gp(k);
-        else Gm(kUr[k], kUc[k]) = Gm(kUc[k], kUr[k]) = 0.5 * gp(k);
+        if (kUr[k] == kUc[k])
+          Gm(kUr[k], kUr[k]) = gp(k);
+        else
+          Gm(kUr[k], kUc[k]) = Gm(kUc[k], kUr[k]) = 0.5 * gp(k);
       }
       const Eigen::Matrix4d GU = Gm * U;
       Matrix10d Hs = J.transpose() * A * J;
@@ -107,7 +109,9 @@ Vector10d ThetaFromP(const Eigen::Matrix4d& Pin) {
   const double top = std::max(l(3), 1e-12);
   for (int i = 0; i < 4; ++i) l(i) = std::max(l(i), 1e-3 * top);
   const Eigen::Matrix4d P = es.eigenvectors() * l.asDiagonal() * es.eigenvectors().transpose();
-  return LC::FromPseudoInertia(PseudoInertiaD::FromMatrix(Eigen::Matrix4d(0.5 * (P + P.transpose())))).theta;
+  return LC::FromPseudoInertia(
+             PseudoInertiaD::FromMatrix(Eigen::Matrix4d(0.5 * (P + P.transpose()))))
+      .theta;
 }
 
 // Lower bound on the log-diagonal of U: keeps P strictly positive definite
@@ -181,7 +185,8 @@ double SlsqpObjective(unsigned n, const double* x, double* grad, void* data) {
   return f;
 }
 
-void SlsqpConstraints(unsigned m, double* result, unsigned n, const double* x, double* grad, void* data) {
+void SlsqpConstraints(unsigned m, double* result, unsigned n, const double* x, double* grad,
+                      void* data) {
   auto* d = static_cast<SlsqpData*>(data);
   const Vector10d th = Eigen::Map<const Vector10d>(x);
   const Eigen::Matrix4d U = UFromTheta(th);
@@ -220,7 +225,8 @@ Vector10d MinimumNormSolve(const Eigen::MatrixBase<Derived>& M, const Vector10d&
 Vector10d BarrierWeights(const Eigen::Vector4d& D, const Eigen::Matrix4d& P0) {
   const Eigen::Matrix4d G = (D.asDiagonal() * P0 * D.asDiagonal()).inverse();
   Vector10d q;
-  for (int k = 0; k < 10; ++k) q(k) = kUr[k] == kUc[k] ? G(kUr[k], kUr[k]) : 2.0 * G(kUr[k], kUc[k]);
+  for (int k = 0; k < 10; ++k)
+    q(k) = kUr[k] == kUc[k] ? G(kUr[k], kUr[k]) : 2.0 * G(kUr[k], kUc[k]);
   return q;
 }
 
@@ -280,7 +286,8 @@ ScaledCoordinates MakeScaledCoordinates(double m0, double len) {
 
 // The parts of the model that do not change between rounds: the prior's
 // barrier and the CoM-in-hull rows a^T p <= 0.
-Model FixedModelTerms(const ScaledCoordinates& sc, double len, const InertiaOptions& o, const ConvexHull* hull) {
+Model FixedModelTerms(const ScaledCoordinates& sc, double len, const InertiaOptions& o,
+                      const ConvexHull* hull) {
   Model model;
   if (o.prior && o.prior->weight > 0) {
     model.q = BarrierWeights(sc.D, PseudoInertiaD::FromParameters(o.prior->params).Matrix());
@@ -302,9 +309,9 @@ Model FixedModelTerms(const ScaledCoordinates& sc, double len, const InertiaOpti
 
 // Without a prior: a weak entropic regulariser towards an isotropic guess
 // (scaled units) built from the projected GLS estimate Pt (scaled).
-void AddEntropicRegulariser(const Eigen::Matrix4d& Pt, const ScaledCoordinates& sc, const Scales& scales,
-                            const InertiaOptions& o, const ConvexHull* hull, Model* model,
-                            std::vector<std::string>* notes) {
+void AddEntropicRegulariser(const Eigen::Matrix4d& Pt, const ScaledCoordinates& sc,
+                            const Scales& scales, const InertiaOptions& o, const ConvexHull* hull,
+                            Model* model, std::vector<std::string>* notes) {
   const double len = scales.len;
   const Eigen::Matrix4d Pu = sc.D.asDiagonal().inverse() * Pt * sc.D.asDiagonal().inverse();
   double mg = Pu(3, 3) > 0 && std::isfinite(Pu(3, 3)) ? Pu(3, 3) : scales.m0;
@@ -315,17 +322,19 @@ void AddEntropicRegulariser(const Eigen::Matrix4d& Pt, const ScaledCoordinates& 
     for (const Vec3& v : hull->vertices) cg += v / static_cast<double>(hull->vertices.size());
   }
   double t = (Pu.topLeftCorner<3, 3>().trace() - mg * cg.squaredNorm()) / (3.0 * mg);
-  if (!(t > 1e-6 * len * len) || !std::isfinite(t)) t = hull ? std::pow(0.25 * hull->size, 2) : len * len / 3.0;
+  if (!(t > 1e-6 * len * len) || !std::isfinite(t))
+    t = hull ? std::pow(0.25 * hull->size, 2) : len * len / 3.0;
   PseudoInertiaD guess;
   guess.mass = mg;
   guess.h = mg * cg;
   guess.sigma = mg * (cg * cg.transpose() + t * Eigen::Matrix3d::Identity());
   model->q = BarrierWeights(sc.D, guess.Matrix());
   model->w = o.constrained.regularization;
-  notes->push_back(absl::StrFormat(
-      "weak entropic regularisation (weight %g) towards m %.4g, c (%.4g, %.4g, %.4g), isotropic second "
-      "moment %.3g m^2 per axis",
-      o.constrained.regularization, mg, cg.x(), cg.y(), cg.z(), t));
+  notes->push_back(
+      absl::StrFormat("weak entropic regularisation (weight %g) towards m %.4g, c (%.4g, %.4g, "
+                      "%.4g), isotropic second "
+                      "moment %.3g m^2 per axis",
+                      o.constrained.regularization, mg, cg.x(), cg.y(), cg.z(), t));
 }
 
 // The start of the first Newton solve: the unconstrained GLS estimate of
@@ -339,7 +348,8 @@ Vector10d InitialTheta(const ScaledCoordinates& sc, const Scales& scales, const 
     const Eigen::Matrix4d prior = PseudoInertiaD::FromParameters(o.prior->params).Matrix();
     Pt = 0.5 * Pt + 0.5 * sc.D.asDiagonal() * prior * sc.D.asDiagonal();
   }
-  if (!o.prior && o.constrained.regularization > 0) AddEntropicRegulariser(Pt, sc, scales, o, hull, model, notes);
+  if (!o.prior && o.constrained.regularization > 0)
+    AddEntropicRegulariser(Pt, sc, scales, o, hull, model, notes);
   Vector10d theta = ThetaFromP(Pt);
   for (int i = 0; i < 4; ++i) theta(i) = std::max(theta(i), kMinLogDiag);
   return theta;
@@ -352,8 +362,8 @@ constexpr double kHullContradiction = 0.02;
 // The CoM-in-hull rows by SLSQP (NLopt) from `theta`, when the
 // unconstrained optimum violates them. Returns the constrained optimum, or
 // `theta` (noted) when SLSQP fails.
-Vector10d EnforceHullRows(const Model& model, const Vector10d& theta, const InertiaOptions& o, bool last_round,
-                          MethodOutput* out) {
+Vector10d EnforceHullRows(const Model& model, const Vector10d& theta, const InertiaOptions& o,
+                          bool last_round, MethodOutput* out) {
   const Eigen::Matrix4d U = UFromTheta(theta);
   const Vector10d p = EntriesOfFactor(U);
   double worst = -1;
@@ -365,7 +375,8 @@ Vector10d EnforceHullRows(const Model& model, const Vector10d& theta, const Iner
   const double outside = worst * model.row_length;
   if (last_round && outside > kHullContradiction * model.hull_size) {
     out->notes.push_back(absl::StrFormat(
-        "warning: the data put the CoM %.1f mm outside the given hull (%.0f%% of its size); the fit is held on "
+        "warning: the data put the CoM %.1f mm outside the given hull (%.0f%% of its size); the "
+        "fit is held on "
         "the hull's boundary, so mass, CoM and inertia are biased if the hull is wrong: check it",
         1e3 * outside, 100 * outside / model.hull_size));
   }
@@ -376,8 +387,8 @@ Vector10d EnforceHullRows(const Model& model, const Vector10d& theta, const Iner
   for (int i = 0; i < 10; ++i) lb[i] = i < 4 ? kMinLogDiag : -HUGE_VAL;
   nlopt_set_lower_bounds(opt, lb);
   std::vector<double> tol(model.rows.size(), 1e-12);
-  nlopt_add_inequality_mconstraint(opt, static_cast<unsigned>(model.rows.size()), SlsqpConstraints, &data,
-                                   tol.data());
+  nlopt_add_inequality_mconstraint(opt, static_cast<unsigned>(model.rows.size()), SlsqpConstraints,
+                                   &data, tol.data());
   nlopt_set_ftol_rel(opt, 1e-15);
   nlopt_set_xtol_rel(opt, 1e-12);
   nlopt_set_maxeval(opt, 20 * o.max_iterations);
@@ -391,8 +402,8 @@ Vector10d EnforceHullRows(const Model& model, const Vector10d& theta, const Iner
     if (last_round) out->notes.push_back("CoM-in-hull constraint active (SLSQP)");
     return th2;
   }
-  out->notes.push_back(absl::StrCat("SLSQP for the hull rows failed (nlopt code ", static_cast<int>(res),
-                                    "); CoM may lie outside the hull"));
+  out->notes.push_back(absl::StrCat("SLSQP for the hull rows failed (nlopt code ",
+                                    static_cast<int>(res), "); CoM may lie outside the hull"));
   return theta;
 }
 

@@ -27,8 +27,8 @@ void AddTetrahedron(const Vec3& o, const Vec3& a, const Vec3& b, const Vec3& c, 
   m->volume += v;
   m->first += v * 0.25 * s;
   // integral of x x^T over a tetrahedron = V/20 (sum_k p_k p_k^T + s s^T).
-  m->second.noalias() +=
-      (v / 20.0) * (o * o.transpose() + a * a.transpose() + b * b.transpose() + c * c.transpose() + s * s.transpose());
+  m->second.noalias() += (v / 20.0) * (o * o.transpose() + a * a.transpose() + b * b.transpose() +
+                                       c * c.transpose() + s * s.transpose());
 }
 
 // Sutherland-Hodgman clip of a convex polygon to {p(axis) <= limit}.
@@ -50,8 +50,10 @@ int ClipPolygon(const Vec3* in, int n, int axis, double limit, Vec3* out) {
 }
 
 // Octant integrals in frame coordinates (vertices already in the frame).
-SolidMoments OctantMomentsInFrame(const std::vector<Vec3>& v, const std::vector<std::array<int, 3>>& tris,
-                                  const std::vector<Eigen::AlignedBox3d>& boxes, const Vec3& corner) {
+SolidMoments OctantMomentsInFrame(const std::vector<Vec3>& v,
+                                  const std::vector<std::array<int, 3>>& tris,
+                                  const std::vector<Eigen::AlignedBox3d>& boxes,
+                                  const Vec3& corner) {
   SolidMoments m;
   Vec3 buf_a[9], buf_b[9];
   for (size_t t = 0; t < tris.size(); ++t) {
@@ -92,9 +94,12 @@ std::string ColorName(uint32_t c) { return absl::StrFormat("colour #%06x", c & 0
 int BoundaryEdges(const io::TriangleMesh& mesh, const std::vector<int>& tris) {
   std::unordered_map<uint64_t, int> directed;
   directed.reserve(tris.size() * 3);
-  auto key = [](int a, int b) { return (static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b); };
+  auto key = [](int a, int b) {
+    return (static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b);
+  };
   for (int t : tris)
-    for (int k = 0; k < 3; ++k) ++directed[key(mesh.triangles[t][k], mesh.triangles[t][(k + 1) % 3])];
+    for (int k = 0; k < 3; ++k)
+      ++directed[key(mesh.triangles[t][k], mesh.triangles[t][(k + 1) % 3])];
   int boundary = 0;
   for (const auto& [e, count] : directed) {
     const int a = static_cast<int>(e >> 32), b = static_cast<int>(e & 0xffffffffu);
@@ -106,17 +111,20 @@ int BoundaryEdges(const io::TriangleMesh& mesh, const std::vector<int>& tris) {
 
 absl::StatusOr<RegionModel> ColorRegions(const io::TriangleMesh& mesh, std::string_view name) {
   if (mesh.face_colors.size() != mesh.triangles.size())
-    return absl::InvalidArgumentError(absl::StrCat(std::string(name), ": the mesh has no face colours (use --regions grid)"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(std::string(name), ": the mesh has no face colours (use --regions grid)"));
   std::map<uint32_t, std::vector<int>> groups;
-  for (size_t t = 0; t < mesh.triangles.size(); ++t) groups[mesh.face_colors[t] & 0xffffff].push_back(static_cast<int>(t));
+  for (size_t t = 0; t < mesh.triangles.size(); ++t)
+    groups[mesh.face_colors[t] & 0xffffff].push_back(static_cast<int>(t));
   RegionModel model;
   model.scheme = RegionScheme::kColors;
   model.triangle_region.assign(mesh.triangles.size(), -1);
   for (const auto& [color, tris] : groups) {
     const int boundary = BoundaryEdges(mesh, tris);
     if (boundary > 0)
-      return absl::InvalidArgumentError(absl::StrCat(std::string(name), ": ", ColorName(color), " does not bound a closed part (",
-                                                     boundary, " boundary edges); use --regions grid"));
+      return absl::InvalidArgumentError(absl::StrCat(std::string(name), ": ", ColorName(color),
+                                                     " does not bound a closed part (", boundary,
+                                                     " boundary edges); use --regions grid"));
     io::TriangleMesh part;
     part.vertices = mesh.vertices;
     for (int t : tris) part.triangles.push_back(mesh.triangles[t]);
@@ -125,8 +133,9 @@ absl::StatusOr<RegionModel> ColorRegions(const io::TriangleMesh& mesh, std::stri
     r.color = color;
     r.moments = MeshMoments(part);
     if (!(r.moments.volume > 0))
-      return absl::InvalidArgumentError(absl::StrCat(std::string(name), ": ", ColorName(color), " encloses volume ",
-                                                     r.moments.volume, " m^3 (must be > 0)"));
+      return absl::InvalidArgumentError(absl::StrCat(std::string(name), ": ", ColorName(color),
+                                                     " encloses volume ", r.moments.volume,
+                                                     " m^3 (must be > 0)"));
     for (int t : tris) model.triangle_region[t] = static_cast<int>(model.regions.size());
     model.regions.push_back(r);
   }
@@ -136,7 +145,8 @@ absl::StatusOr<RegionModel> ColorRegions(const io::TriangleMesh& mesh, std::stri
       model.neighbours.push_back({static_cast<int>(i), static_cast<int>(j)});
       model.neighbour_weights.push_back(1.0);
     }
-  model.notes.push_back(absl::StrCat(model.regions.size(), " regions: one per face colour (closed parts)"));
+  model.notes.push_back(
+      absl::StrCat(model.regions.size(), " regions: one per face colour (closed parts)"));
   return model;
 }
 
@@ -172,9 +182,10 @@ std::array<int, 3> CellCounts(const Vec3& extent, double h) {
 }
 
 // Incomplete when `poll` fires (the caller checks poll->stopped()).
-RegionModel GridRegions(const io::TriangleMesh& mesh, const SolidMoments& total, const std::array<int, 3>& n,
-                        const Eigen::Matrix3d& axes, const Vec3& lo, const Vec3& hi,
-                        const std::vector<Vec3>& v, const std::vector<Eigen::AlignedBox3d>& boxes,
+RegionModel GridRegions(const io::TriangleMesh& mesh, const SolidMoments& total,
+                        const std::array<int, 3>& n, const Eigen::Matrix3d& axes, const Vec3& lo,
+                        const Vec3& hi, const std::vector<Vec3>& v,
+                        const std::vector<Eigen::AlignedBox3d>& boxes,
                         internal::InterruptPoll* poll) {
   RegionModel model;
   model.scheme = RegionScheme::kGrid;
@@ -193,7 +204,8 @@ RegionModel GridRegions(const io::TriangleMesh& mesh, const SolidMoments& total,
     for (int j = 1; j <= n[1]; ++j)
       for (int k = 1; k <= n[2]; ++k) {
         if (poll->Tick(1 + static_cast<int64_t>(mesh.triangles.size()) / 16)) return model;
-        const Vec3 corner(model.grid_planes[0][i], model.grid_planes[1][j], model.grid_planes[2][k]);
+        const Vec3 corner(model.grid_planes[0][i], model.grid_planes[1][j],
+                          model.grid_planes[2][k]);
         octant[idx(i, j, k)] = OctantMomentsInFrame(v, mesh.triangles, boxes, corner);
       }
   // Cells by inclusion-exclusion; empty cells are dropped.
@@ -206,14 +218,18 @@ RegionModel GridRegions(const io::TriangleMesh& mesh, const SolidMoments& total,
         for (int d = 0; d < 8; ++d) {
           const int di = d & 1, dj = (d >> 1) & 1, dk = (d >> 2) & 1;
           const SolidMoments& o = octant[idx(i - di, j - dj, k - dk)];
-          if ((di + dj + dk) % 2 == 0) cell += o; else cell -= o;
+          if ((di + dj + dk) % 2 == 0)
+            cell += o;
+          else
+            cell -= o;
         }
         if (!(cell.volume > min_volume)) continue;
         DensityRegion r;
         r.cell = {i - 1, j - 1, k - 1};
         r.label = absl::StrFormat("cell (%d,%d,%d)", i - 1, j - 1, k - 1);
         r.moments = Rotated(cell, axes);
-        region_of[((i - 1) * n[1] + (j - 1)) * n[2] + (k - 1)] = static_cast<int>(model.regions.size());
+        region_of[((i - 1) * n[1] + (j - 1)) * n[2] + (k - 1)] =
+            static_cast<int>(model.regions.size());
         model.regions.push_back(r);
       }
   auto region_at = [&](int i, int j, int k) {
@@ -234,16 +250,20 @@ RegionModel GridRegions(const io::TriangleMesh& mesh, const SolidMoments& total,
   // Region of each triangle: the cell of its centroid.
   model.triangle_region.resize(mesh.triangles.size());
   for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-    const Vec3 c = (v[mesh.triangles[t][0]] + v[mesh.triangles[t][1]] + v[mesh.triangles[t][2]]) / 3.0;
+    const Vec3 c =
+        (v[mesh.triangles[t][0]] + v[mesh.triangles[t][1]] + v[mesh.triangles[t][2]]) / 3.0;
     std::array<int, 3> cell;
     for (int a = 0; a < 3; ++a) {
       const auto& p = model.grid_planes[a];
-      cell[a] = std::clamp(static_cast<int>(std::upper_bound(p.begin(), p.end(), c(a)) - p.begin()) - 1, 0, n[a] - 1);
+      cell[a] =
+          std::clamp(static_cast<int>(std::upper_bound(p.begin(), p.end(), c(a)) - p.begin()) - 1,
+                     0, n[a] - 1);
     }
     model.triangle_region[t] = region_at(cell[0], cell[1], cell[2]);
   }
-  model.notes.push_back(absl::StrFormat("%d regions: non-empty cells of a %dx%dx%d grid on the principal axes",
-                                        static_cast<int>(model.regions.size()), n[0], n[1], n[2]));
+  model.notes.push_back(
+      absl::StrFormat("%d regions: non-empty cells of a %dx%dx%d grid on the principal axes",
+                      static_cast<int>(model.regions.size()), n[0], n[1], n[2]));
   return model;
 }
 
@@ -280,7 +300,8 @@ SolidMoments MeshMoments(const io::TriangleMesh& mesh) {
   return m;
 }
 
-SolidMoments OctantMoments(const io::TriangleMesh& mesh, const Eigen::Matrix3d& frame, const Vec3& corner) {
+SolidMoments OctantMoments(const io::TriangleMesh& mesh, const Eigen::Matrix3d& frame,
+                           const Vec3& corner) {
   std::vector<Vec3> v(mesh.vertices.size());
   for (size_t i = 0; i < v.size(); ++i) v[i] = frame.transpose() * mesh.vertices[i];
   std::vector<Eigen::AlignedBox3d> boxes(mesh.triangles.size());
@@ -295,10 +316,14 @@ namespace {
 
 // Enum names (io/enum_names.h); "", "unspecified", "colours" and "uniform" are aliases.
 constexpr io::EnumNameRow<RegionScheme> kSchemeNames[] = {
-    {RegionScheme::kAuto, "auto"},          {RegionScheme::kGrid, "grid"},
-    {RegionScheme::kColors, "colors"},      {RegionScheme::kSingle, "single"},
-    {RegionScheme::kAuto, "", "", false},   {RegionScheme::kAuto, "unspecified", "", false},
-    {RegionScheme::kColors, "colours", "", false}, {RegionScheme::kSingle, "uniform", "", false}};
+    {RegionScheme::kAuto, "auto"},
+    {RegionScheme::kGrid, "grid"},
+    {RegionScheme::kColors, "colors"},
+    {RegionScheme::kSingle, "single"},
+    {RegionScheme::kAuto, "", "", false},
+    {RegionScheme::kAuto, "unspecified", "", false},
+    {RegionScheme::kColors, "colours", "", false},
+    {RegionScheme::kSingle, "uniform", "", false}};
 
 }  // namespace
 
@@ -309,15 +334,19 @@ absl::StatusOr<RegionScheme> ParseRegionScheme(std::string_view text) {
 }
 
 absl::StatusOr<RegionModel> BuildRegions(const io::TriangleMesh& mesh, const RegionOptions& options,
-                                         std::string_view name, const std::function<bool()>& interrupt) {
+                                         std::string_view name,
+                                         const std::function<bool()>& interrupt) {
   if (options.target_regions < 1 || options.target_regions > kMaxTargetRegions)
-    return absl::InvalidArgumentError(absl::StrCat("target_regions: must be in 1..", kMaxTargetRegions, " (got ",
+    return absl::InvalidArgumentError(absl::StrCat("target_regions: must be in 1..",
+                                                   kMaxTargetRegions, " (got ",
                                                    options.target_regions, ")"));
-  if (mesh.triangles.empty()) return absl::InvalidArgumentError(absl::StrCat(std::string(name), ": no triangles"));
+  if (mesh.triangles.empty())
+    return absl::InvalidArgumentError(absl::StrCat(std::string(name), ": no triangles"));
   const SolidMoments total = MeshMoments(mesh);
   if (!(total.volume > 0))
-    return absl::InvalidArgumentError(absl::StrCat(std::string(name), ": volume ", total.volume,
-                                                   " m^3 is not positive: the mesh is inside out (flip the winding)"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(std::string(name), ": volume ", total.volume,
+                     " m^3 is not positive: the mesh is inside out (flip the winding)"));
   RegionScheme scheme = options.scheme;
   absl::StatusOr<RegionModel> colors = absl::UnknownError("");
   if (scheme == RegionScheme::kAuto || scheme == RegionScheme::kColors) {
@@ -374,7 +403,8 @@ absl::StatusOr<RegionModel> BuildRegions(const io::TriangleMesh& mesh, const Reg
     if (poll.stopped()) return internal::Interrupted();
     if (static_cast<int>(model.regions.size()) * 10 >= 7 * options.target_regions) break;
     // Too many empty cells: refine so the non-empty count approaches the target.
-    const double ratio = static_cast<double>(options.target_regions) / std::max<size_t>(model.regions.size(), 1);
+    const double ratio =
+        static_cast<double>(options.target_regions) / std::max<size_t>(model.regions.size(), 1);
     h /= std::min(2.0, std::max(1.15, std::cbrt(ratio)));
   }
   model.total = total;

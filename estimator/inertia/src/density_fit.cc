@@ -59,7 +59,8 @@ VectorXd NonNegativeQp(const MatrixXd& Q, const VectorXd& g, int* iterations, In
     free[j] = true;
     for (int inner = 0; inner <= K; ++inner) {
       const int64_t m = std::count(free.begin(), free.end(), true);
-      if (poll->Tick(1 + m * m * m / 1000)) return u.cwiseMax(0.0);  // ~1 unit per microsecond of LDLT
+      if (poll->Tick(1 + m * m * m / 1000))
+        return u.cwiseMax(0.0);  // ~1 unit per microsecond of LDLT
       VectorXd z;
       solve_free(&z);
       bool positive = true;
@@ -74,7 +75,8 @@ VectorXd NonNegativeQp(const MatrixXd& Q, const VectorXd& g, int* iterations, In
         if (free[i] && !(z(i) > 0)) alpha = std::min(alpha, u(i) / (u(i) - z(i)));
       u += alpha * (z - u);
       for (int i = 0; i < K; ++i)
-        if (free[i] && u(i) <= 1e-14 * std::max(1.0, u.cwiseAbs().maxCoeff())) free[i] = false, u(i) = 0;
+        if (free[i] && u(i) <= 1e-14 * std::max(1.0, u.cwiseAbs().maxCoeff()))
+          free[i] = false, u(i) = 0;
     }
   }
   return u.cwiseMax(0.0);
@@ -103,7 +105,8 @@ Vector10d FreeGls(const Matrix10d& A, const Vector10d& b, const Vector10d& scale
 
 // The CoM the data imply (free GLS fit) must lie in the mesh's bounding box,
 // up to 1 % of its diagonal plus 5 standard errors of that CoM.
-absl::Status CheckComInBoundingBox(const GlsSums& sums, const Vector10d& scale, const InertiaOptions& o) {
+absl::Status CheckComInBoundingBox(const GlsSums& sums, const Vector10d& scale,
+                                   const InertiaOptions& o) {
   if (!o.mesh) return absl::OkStatus();
   Eigen::AlignedBox3d box;
   for (const Vec3& v : o.mesh->vertices) box.extend(v);
@@ -114,15 +117,17 @@ absl::Status CheckComInBoundingBox(const GlsSums& sums, const Vector10d& scale, 
   const Vec3 com = free.segment<3>(1) / m;
   double se = 0;  // largest standard error of a CoM component (first order)
   for (int i = 0; i < 3; ++i) {
-    const double var = (cov(1 + i, 1 + i) - 2 * com(i) * cov(1 + i, 0) + com(i) * com(i) * cov(0, 0)) / (m * m);
+    const double var =
+        (cov(1 + i, 1 + i) - 2 * com(i) * cov(1 + i, 0) + com(i) * com(i) * cov(0, 0)) / (m * m);
     se = std::max(se, std::sqrt(std::max(var, 0.0)));
   }
   const double outside = box.exteriorDistance(com);
   if (outside > 0.01 * box.diagonal().norm() + 5 * se) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "%s: the CoM of the data (%.4g, %.4g, %.4g) m is outside the mesh's bounding box by %.3g m (standard error "
-        "%.2g m): check the mesh's scale and object_in_mesh",
-        o.mesh_name, com.x(), com.y(), com.z(), outside, se));
+    return absl::InvalidArgumentError(
+        absl::StrFormat("%s: the CoM of the data (%.4g, %.4g, %.4g) m is outside the mesh's "
+                        "bounding box by %.3g m (standard error "
+                        "%.2g m): check the mesh's scale and object_in_mesh",
+                        o.mesh_name, com.x(), com.y(), com.z(), outside, se));
   }
   return absl::OkStatus();
 }
@@ -133,10 +138,10 @@ absl::Status CheckComInBoundingBox(const GlsSums& sums, const Vector10d& scale, 
 struct DensityBasis {
   int K = 0;
   double rho_ref = 0;
-  MatrixXd Phi_u;                // 10 x K
-  Vector10d pi_uniform;          // the uniform solid at rho_ref
-  MatrixXd L;                    // K x K
-  double l_scale = 1;            // mean diagonal of L (1 without neighbours)
+  MatrixXd Phi_u;        // 10 x K
+  Vector10d pi_uniform;  // the uniform solid at rho_ref
+  MatrixXd L;            // K x K
+  double l_scale = 1;    // mean diagonal of L (1 without neighbours)
   Vector10d parameter_scale;
   const std::vector<Vec3>* mesh_vertices = nullptr;  // for the object's size
 };
@@ -186,7 +191,7 @@ struct DensityState {
   std::vector<Matrix6d> whiteners;  // per sample (last round)
   Quadratic full;
   std::vector<Quadratic> train, held;  // per fold: the other blocks, the block
-  MatrixXd Hreg;                        // full.H + penalty + ridge
+  MatrixXd Hreg;                       // full.H + penalty + ridge
 };
 
 // Per fold: the data term of the other blocks (bias-corrected) and of the
@@ -199,7 +204,8 @@ void FoldQuadratics(const DensityBasis& b, int folds, DensityState* st) {
     GlsSums rest = st->total;
     rest.A -= blk.A, rest.b -= blk.b, rest.c -= blk.c, rest.bias -= blk.bias;
     bool fold_corrected = false;
-    st->train[f] = Project(BiasCorrected(rest, b.parameter_scale, &fold_corrected), rest.b, rest.c, b.Phi_u);
+    st->train[f] =
+        Project(BiasCorrected(rest, b.parameter_scale, &fold_corrected), rest.b, rest.c, b.Phi_u);
     st->held[f] = Project(blk.A, blk.b, blk.c, b.Phi_u);
   }
 }
@@ -207,7 +213,8 @@ void FoldQuadratics(const DensityBasis& b, int folds, DensityState* st) {
 // Held-out weighted residual over a log grid of strengths (relative to the
 // data's mean curvature per region); the smallest wins, ties go to the
 // smoother fit.
-double ChooseStrength(const DensityBasis& b, const MatrixXd& ridge, DensityState* st, InterruptPoll* poll) {
+double ChooseStrength(const DensityBasis& b, const MatrixXd& ridge, DensityState* st,
+                      InterruptPoll* poll) {
   const int K = b.K, folds = static_cast<int>(st->train.size());
   double best = std::numeric_limits<double>::infinity();
   double chosen = st->lambda_rel;
@@ -216,8 +223,8 @@ double ChooseStrength(const DensityBasis& b, const MatrixXd& ridge, DensityState
     double cv = 0;
     for (int f = 0; f < folds; ++f) {
       const double tr_scale = std::max(st->train[f].H.trace() / K, 1e-300);
-      const VectorXd uf = NonNegativeQp(st->train[f].H + rel * tr_scale / b.l_scale * b.L + ridge, st->train[f].g,
-                                        &st->qp_iterations, poll);
+      const VectorXd uf = NonNegativeQp(st->train[f].H + rel * tr_scale / b.l_scale * b.L + ridge,
+                                        st->train[f].g, &st->qp_iterations, poll);
       if (poll->stopped()) return chosen;
       cv += st->held[f].Value(uf);
     }
@@ -229,8 +236,8 @@ double ChooseStrength(const DensityBasis& b, const MatrixXd& ridge, DensityState
 // One re-weighting round: GLS sums at the current pi, the data term, the
 // strength (when chosen), and the non-negative solve.
 absl::Status DensityRound(const GlsData& gls, const DensityBasis& b, const RegionModel& regions,
-                          const InertiaOptions& o, int round, int folds, bool choose, DensityState* st,
-                          MethodOutput* out, InterruptPoll* poll) {
+                          const InertiaOptions& o, int round, int folds, bool choose,
+                          DensityState* st, MethodOutput* out, InterruptPoll* poll) {
   const int K = b.K;
   const bool last = round == o.reweighting_rounds - 1;
   AccumulateGls(gls, st->pi, poll, &st->total, folds, &st->blocks, last ? &st->whiteners : nullptr);
@@ -248,7 +255,8 @@ absl::Status DensityRound(const GlsData& gls, const DensityBasis& b, const Regio
   const double h_scale = std::max(st->full.H.trace() / K, 1e-300);
   const MatrixXd ridge = 1e-10 * h_scale * MatrixXd::Identity(K, K);
   FoldQuadratics(b, folds, st);
-  if (choose && K > 1 && !regions.neighbours.empty()) st->lambda_rel = ChooseStrength(b, ridge, st, poll);
+  if (choose && K > 1 && !regions.neighbours.empty())
+    st->lambda_rel = ChooseStrength(b, ridge, st, poll);
   st->Hreg = st->full.H + st->lambda_rel * h_scale / b.l_scale * b.L + ridge;
   st->u = NonNegativeQp(st->Hreg, st->full.g, &st->qp_iterations, poll);
   st->pi = b.Phi_u * st->u;
@@ -264,7 +272,8 @@ void DensityCovariance(const DensityBasis& b, const DensityState& st, MethodOutp
   const int m = static_cast<int>(idx.size());
   MatrixXd Qf(m, m), Hf(m, m);
   for (int a = 0; a < m; ++a)
-    for (int c = 0; c < m; ++c) Qf(a, c) = st.Hreg(idx[a], idx[c]), Hf(a, c) = st.full.H(idx[a], idx[c]);
+    for (int c = 0; c < m; ++c)
+      Qf(a, c) = st.Hreg(idx[a], idx[c]), Hf(a, c) = st.full.H(idx[a], idx[c]);
   out->density_se.assign(b.K, 0.0);
   if (m == 0) return;
   const MatrixXd Qi = Qf.ldlt().solve(MatrixXd::Identity(m, m));
@@ -291,11 +300,12 @@ void HeldOutContradiction(const GlsData& gls, const DensityBasis& b, int folds, 
                                           1e-10 * h_scale * MatrixXd::Identity(K, K),
                                       st->train[f].g, &st->qp_iterations, poll);
     pi_density[f] = b.Phi_u * uf;
-    pi_free[f] = FreeGls(st->total.A - st->blocks[f].A, st->total.b - st->blocks[f].b, b.parameter_scale);
+    pi_free[f] =
+        FreeGls(st->total.A - st->blocks[f].A, st->total.b - st->blocks[f].b, b.parameter_scale);
   }
   double sum_d = 0, sum_d2 = 0, res_density = 0, res_free = 0;
   double diff_f = 0, diff_t = 0;  // prediction differences, per kind
-  double accel2 = 0;  // |a - g|^2 in the object frame
+  double accel2 = 0;              // |a - g|^2 in the object frame
   for (int k = 0; k < n; ++k) {
     if (poll->Tick()) return;
     const int f = BlockOf(k, n, folds);
@@ -351,7 +361,8 @@ Matrix10d SymmetricPseudoInverse(const Matrix10d& M) {
   Eigen::SelfAdjointEigenSolver<Matrix10d> es(0.5 * (M + M.transpose()));
   const double top = std::max(es.eigenvalues()(9), 1e-300);
   Vector10d inv;
-  for (int i = 0; i < 10; ++i) inv(i) = es.eigenvalues()(i) > 1e-14 * top ? 1 / es.eigenvalues()(i) : 0.0;
+  for (int i = 0; i < 10; ++i)
+    inv(i) = es.eigenvalues()(i) > 1e-14 * top ? 1 / es.eigenvalues()(i) : 0.0;
   return es.eigenvectors() * inv.asDiagonal() * es.eigenvectors().transpose();
 }
 
@@ -368,8 +379,8 @@ struct FreeFit {
   Vector10d x;
   Matrix10d A;
 };
-FreeFit FreeFitOwnWeights(const GlsData& gls, const DensityBasis& b, const Matrix10d& G, const Vector10d& pi0,
-                          InterruptPoll* poll) {
+FreeFit FreeFitOwnWeights(const GlsData& gls, const DensityBasis& b, const Matrix10d& G,
+                          const Vector10d& pi0, InterruptPoll* poll) {
   FreeFit f;
   Vector10d pi = pi0;
   const int n = static_cast<int>(gls.kin.size());
@@ -407,8 +418,8 @@ FreeFit FreeFitOwnWeights(const GlsData& gls, const DensityBasis& b, const Matri
 struct MeshDistance {
   double distance = 0, t0 = 0;
 };
-MeshDistance DistanceToRealizable(const MatrixXd& C, const Vector10d& xf, const Matrix10d& Az, double threshold,
-                                  DensityState* st, InterruptPoll* poll) {
+MeshDistance DistanceToRealizable(const MatrixXd& C, const Vector10d& xf, const Matrix10d& Az,
+                                  double threshold, DensityState* st, InterruptPoll* poll) {
   const int K = static_cast<int>(C.cols());
   Eigen::SelfAdjointEigenSolver<Matrix10d> es(0.5 * (Az + Az.transpose()));
   const Vector10d a = es.eigenvalues().cwiseMax(0.0);
@@ -419,8 +430,8 @@ MeshDistance DistanceToRealizable(const MatrixXd& C, const Vector10d& xf, const 
   auto solve = [&](const Vector10d& weight, VectorXd* u) {
     const MatrixXd H = Cv.transpose() * weight.asDiagonal() * Cv;
     const double scale = std::max(H.trace() / K, 1e-300);
-    *u = NonNegativeQp(H + 1e-12 * scale * MatrixXd::Identity(K, K), Cv.transpose() * weight.asDiagonal() * xv,
-                       &st->qp_iterations, poll);
+    *u = NonNegativeQp(H + 1e-12 * scale * MatrixXd::Identity(K, K),
+                       Cv.transpose() * weight.asDiagonal() * xv, &st->qp_iterations, poll);
     return Vector10d(Cv * *u - xv);
   };
   MeshDistance out;
@@ -486,7 +497,8 @@ void MeshConsistency(const GlsData& gls, const DensityBasis& b, DensityState* st
 
 }  // namespace
 
-absl::StatusOr<MethodOutput> FitDensity(const InertiaSamples& s, const InertiaOptions& o, const RegionModel& regions) {
+absl::StatusOr<MethodOutput> FitDensity(const InertiaSamples& s, const InertiaOptions& o,
+                                        const RegionModel& regions) {
   InterruptPoll poll(o.interrupt);
   MethodOutput out;
   for (const std::string& n : regions.notes) out.notes.push_back(n);
@@ -505,7 +517,9 @@ absl::StatusOr<MethodOutput> FitDensity(const InertiaSamples& s, const InertiaOp
   st.lambda_rel = choose ? 0.0 : o.density.regularization;
   for (int round = 0; round < o.reweighting_rounds; ++round) {
     if (poll.Check()) return Interrupted();
-    if (absl::Status r = DensityRound(gls, *basis, regions, o, round, folds, choose, &st, &out, &poll); !r.ok())
+    if (absl::Status r =
+            DensityRound(gls, *basis, regions, o, round, folds, choose, &st, &out, &poll);
+        !r.ok())
       return r;
     if (o.progress) o.progress(0.9 * (round + 1) / o.reweighting_rounds);
   }
@@ -513,7 +527,8 @@ absl::StatusOr<MethodOutput> FitDensity(const InertiaSamples& s, const InertiaOp
   out.iterations = st.qp_iterations;  // the fit's own solves (not the contradiction test's)
   out.samples_used = n;
   out.regularization = st.lambda_rel;
-  out.regularization_rule = choose ? absl::StrCat("held-out time blocks (", folds, " folds)") : "given";
+  out.regularization_rule =
+      choose ? absl::StrCat("held-out time blocks (", folds, " folds)") : "given";
   out.densities.resize(basis->K);
   for (int r = 0; r < basis->K; ++r) out.densities[r] = basis->rho_ref * st.u(r);
   if (poll.Check()) return Interrupted();

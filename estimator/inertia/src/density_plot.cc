@@ -35,22 +35,24 @@ namespace {
 
 using io::TriangleMesh;
 
-constexpr uint32_t kGrey = 0xd0d0d0;       // no region / no region model
-constexpr double kMaxPanelsWidth = 960;    // px, the three panels together (in a row), or the widest (in a column)
-constexpr double kMaxPanelHeight = 420;    // px, the tallest (in a row)
-constexpr double kMaxColumnHeight = 640;   // px, the three panels' drawings together (in a column)
-constexpr double kMinPanelSize = 90;       // px, so that ticks and labels fit
-constexpr double kPad = 10;                // px between the mesh and a panel's frame
-constexpr double kGrid = 0.5;              // px: vertices snap to this grid (integer path coordinates)
-constexpr double kSeamStroke = 0.5;        // px, same colour as the fill: hides anti-aliasing seams
-constexpr double kBarHeight = 180;         // px, the colour bar
-constexpr double kLeft = 64, kGap = 64, kRowGap = 84, kBottom = 56, kColumn = 240;  // px, page layout
+constexpr uint32_t kGrey = 0xd0d0d0;  // no region / no region model
+constexpr double kMaxPanelsWidth =
+    960;  // px, the three panels together (in a row), or the widest (in a column)
+constexpr double kMaxPanelHeight = 420;   // px, the tallest (in a row)
+constexpr double kMaxColumnHeight = 640;  // px, the three panels' drawings together (in a column)
+constexpr double kMinPanelSize = 90;      // px, so that ticks and labels fit
+constexpr double kPad = 10;               // px between the mesh and a panel's frame
+constexpr double kGrid = 0.5;        // px: vertices snap to this grid (integer path coordinates)
+constexpr double kSeamStroke = 0.5;  // px, same colour as the fill: hides anti-aliasing seams
+constexpr double kBarHeight = 180;   // px, the colour bar
+constexpr double kLeft = 64, kGap = 64, kRowGap = 84, kBottom = 56,
+                 kColumn = 240;  // px, page layout
 
 // One view: the plane of principal axes `h` (right) and `v` (up), seen from
 // the side of h x v.
 struct View {
-  int h, v, k;       // k: the axis looked along
-  double depth_sign; // depth = depth_sign * coordinate k (larger: nearer)
+  int h, v, k;        // k: the axis looked along
+  double depth_sign;  // depth = depth_sign * coordinate k (larger: nearer)
 };
 constexpr std::array<View, 3> kViews = {{{0, 1, 2, +1.0}, {0, 2, 1, -1.0}, {1, 2, 0, +1.0}}};
 const char* const kMomentName[3] = {"smallest", "middle", "largest"};
@@ -62,10 +64,17 @@ struct Marker {
 
 // Two shapes of two sizes, so that coincident markers both show: a small
 // cross inside a large diamond.
-const io::MarkerStyle kFittedCom{.shape = io::MarkerShape::kCross, .color = "black", .size = 12, .halo = true,
+const io::MarkerStyle kFittedCom{.shape = io::MarkerShape::kCross,
+                                 .color = "black",
+                                 .size = 12,
+                                 .halo = true,
                                  .css_class = "fitted-com"};
-const io::MarkerStyle kTrueCom{.shape = io::MarkerShape::kDiamond, .color = "#e4007c", .size = 22, .line_width = 2,
-                               .halo = true, .css_class = "true-com"};
+const io::MarkerStyle kTrueCom{.shape = io::MarkerShape::kDiamond,
+                               .color = "#e4007c",
+                               .size = 22,
+                               .line_width = 2,
+                               .halo = true,
+                               .css_class = "true-com"};
 
 absl::Status CheckInputs(const TriangleMesh& mesh, const InertiaFit& fit) {
   if (mesh.vertices.empty() || mesh.triangles.empty())
@@ -74,20 +83,24 @@ absl::Status CheckInputs(const TriangleMesh& mesh, const InertiaFit& fit) {
   for (size_t t = 0; t < mesh.triangles.size(); ++t)
     for (int i : mesh.triangles[t])
       if (i < 0 || i >= nv)
-        return absl::InvalidArgumentError(absl::StrCat("density plot: mesh.triangles[", t, "]: vertex index ", i,
-                                                       " out of range (", nv, " vertices)"));
+        return absl::InvalidArgumentError(absl::StrCat("density plot: mesh.triangles[", t,
+                                                       "]: vertex index ", i, " out of range (", nv,
+                                                       " vertices)"));
   for (int i = 0; i < nv; ++i)
     if (!mesh.vertices[i].allFinite())
-      return absl::InvalidArgumentError(absl::StrCat("density plot: mesh.vertices[", i, "]: not finite"));
+      return absl::InvalidArgumentError(
+          absl::StrCat("density plot: mesh.vertices[", i, "]: not finite"));
   const RegionModel* model = fit.region_model.get();
   if (model == nullptr) return absl::OkStatus();
   if (model->triangle_region.size() != mesh.triangles.size())
-    return absl::InvalidArgumentError(absl::StrCat(
-        "density plot: the mesh has ", mesh.triangles.size(), " triangles but the fit's region model has ",
-        model->triangle_region.size(), " (not the mesh that was fitted)"));
+    return absl::InvalidArgumentError(
+        absl::StrCat("density plot: the mesh has ", mesh.triangles.size(),
+                     " triangles but the fit's region model has ", model->triangle_region.size(),
+                     " (not the mesh that was fitted)"));
   if (fit.densities.size() != model->regions.size())
-    return absl::InvalidArgumentError(absl::StrCat("density plot: the fit has ", fit.densities.size(),
-                                                   " densities for ", model->regions.size(), " regions"));
+    return absl::InvalidArgumentError(absl::StrCat("density plot: the fit has ",
+                                                   fit.densities.size(), " densities for ",
+                                                   model->regions.size(), " regions"));
   return absl::OkStatus();
 }
 
@@ -95,7 +108,7 @@ absl::Status CheckInputs(const TriangleMesh& mesh, const InertiaFit& fit) {
 struct PrincipalGeometry {
   std::vector<Vec3> p;  // vertices, m
   std::vector<Marker> markers;
-  Vec3 lo, hi;          // bounding box of both (no axis flatter than 1e-6 of the largest)
+  Vec3 lo, hi;  // bounding box of both (no axis flatter than 1e-6 of the largest)
 };
 
 PrincipalGeometry InPrincipalFrame(const TriangleMesh& mesh, const InertiaFit& fit,
@@ -116,7 +129,8 @@ PrincipalGeometry InPrincipalFrame(const TriangleMesh& mesh, const InertiaFit& f
   for (const Marker& m : g.markers) g.lo = g.lo.cwiseMin(m.p), g.hi = g.hi.cwiseMax(m.p);
   const double size = std::max((g.hi - g.lo).maxCoeff(), 1e-9);
   for (int a = 0; a < 3; ++a)
-    if (g.hi(a) - g.lo(a) < 1e-6 * size) g.lo(a) -= 0.5e-6 * size, g.hi(a) += 0.5e-6 * size;  // a flat mesh
+    if (g.hi(a) - g.lo(a) < 1e-6 * size)
+      g.lo(a) -= 0.5e-6 * size, g.hi(a) += 0.5e-6 * size;  // a flat mesh
   return g;
 }
 
@@ -126,16 +140,17 @@ PrincipalGeometry InPrincipalFrame(const TriangleMesh& mesh, const InertiaFit& f
 // draws the mesh larger. Frames start at y = 0; DensityPlotSvg moves them
 // under the header.
 struct Layout {
-  double scale = 1;                     // px per m
+  double scale = 1;  // px per m
   bool column = false;
   std::array<io::PlotFrame, 3> frames;  // data in mm
   std::array<std::string, 3> titles;
-  double column_x = 0;                  // legend and colour bar
-  double width = 0, bottom = 0;         // px; bottom: below the last frame's axis titles
+  double column_x = 0;           // legend and colour bar
+  double width = 0, bottom = 0;  // px; bottom: below the last frame's axis titles
 };
 
 double ChooseScale(const Vec3& extent, bool column) {
-  double along = 0, across = 0;  // m: the sum of the views' sizes along the layout, and the largest across it
+  double along = 0,
+         across = 0;  // m: the sum of the views' sizes along the layout, and the largest across it
   for (const View& v : kViews) {
     along += column ? extent(v.v) : extent(v.h);
     across = std::max(across, column ? extent(v.h) : extent(v.v));
@@ -148,10 +163,13 @@ Layout PlaceViews(const PrincipalGeometry& g) {
   const Vec3 extent = g.hi - g.lo;
   Layout l;
   const double row_scale = ChooseScale(extent, false), column_scale = ChooseScale(extent, true);
-  l.column = column_scale > 1.2 * row_scale;  // a column only when clearly larger (a row reads more easily)
+  l.column = column_scale >
+             1.2 * row_scale;  // a column only when clearly larger (a row reads more easily)
   l.scale = l.column ? column_scale : row_scale;
   // Half-sizes in m: at least kMinPanelSize px, plus kPad px around the mesh.
-  auto half = [&](int a) { return 0.5 * std::max(extent(a), (kMinPanelSize - 2 * kPad) / l.scale) + kPad / l.scale; };
+  auto half = [&](int a) {
+    return 0.5 * std::max(extent(a), (kMinPanelSize - 2 * kPad) / l.scale) + kPad / l.scale;
+  };
   double half_height = 0;
   for (const View& v : kViews) half_height = std::max(half_height, half(v.v));
   double x = kLeft, y = 0, right = 0;
@@ -167,8 +185,10 @@ Layout PlaceViews(const PrincipalGeometry& g) {
     // A narrow panel still leaves room for its title (bold 12 px).
     const double w = std::max(f.width, io::TextWidth(l.titles[i], 12) * 1.1);
     right = std::max(right, x + w);
-    if (l.column) y += f.height + kRowGap;
-    else x += w + kGap;
+    if (l.column)
+      y += f.height + kRowGap;
+    else
+      x += w + kGap;
   }
   l.column_x = right + 40;
   l.width = std::ceil(l.column_x + kColumn);
@@ -185,7 +205,8 @@ struct DensityColors {
   double bar_top = 1000;
 };
 
-DensityColors ColorByDensity(const TriangleMesh& mesh, const InertiaFit& fit, const io::ColorRamp& ramp) {
+DensityColors ColorByDensity(const TriangleMesh& mesh, const InertiaFit& fit,
+                             const io::ColorRamp& ramp) {
   DensityColors c;
   c.triangle.assign(mesh.triangles.size(), kGrey);
   const RegionModel* model = fit.region_model.get();
@@ -215,10 +236,13 @@ std::string ColorClasses(const std::vector<uint32_t>& color, std::vector<int>* c
   palette.erase(std::unique(palette.begin(), palette.end()), palette.end());
   color_class->resize(color.size());
   for (size_t t = 0; t < color.size(); ++t)
-    (*color_class)[t] = static_cast<int>(std::lower_bound(palette.begin(), palette.end(), color[t]) - palette.begin());
-  std::string style = absl::StrFormat("<style>.mesh path{stroke-width:%gpx;stroke-linejoin:round}", kSeamStroke / kGrid);
+    (*color_class)[t] = static_cast<int>(
+        std::lower_bound(palette.begin(), palette.end(), color[t]) - palette.begin());
+  std::string style = absl::StrFormat("<style>.mesh path{stroke-width:%gpx;stroke-linejoin:round}",
+                                      kSeamStroke / kGrid);
   for (size_t i = 0; i < palette.size(); ++i)
-    absl::StrAppend(&style, ".c", i, "{fill:", io::HexColor(palette[i]), ";stroke:", io::HexColor(palette[i]), "}");
+    absl::StrAppend(&style, ".c", i, "{fill:", io::HexColor(palette[i]),
+                    ";stroke:", io::HexColor(palette[i]), "}");
   return absl::StrCat(style, "</style>\n");
 }
 
@@ -234,7 +258,7 @@ struct MeshPaint {
   const TriangleMesh& mesh;
   const std::vector<Vec3>& p;  // principal frame, m
   const std::vector<int>& color_class;
-  bool cull = false;           // hide back faces
+  bool cull = false;  // hide back faces
 };
 
 // A mesh edge (vertex indices a, b) and its triangles t1 and t2 (-1: an
@@ -249,14 +273,17 @@ struct RegionEdge {
 std::vector<int> WeldedIndices(const TriangleMesh& mesh) {
   struct Hash {
     size_t operator()(const std::array<double, 3>& p) const {
-      return std::hash<double>()(p[0]) ^ (std::hash<double>()(p[1]) * 31) ^ (std::hash<double>()(p[2]) * 961);
+      return std::hash<double>()(p[0]) ^ (std::hash<double>()(p[1]) * 31) ^
+             (std::hash<double>()(p[2]) * 961);
     }
   };
   std::unordered_map<std::array<double, 3>, int, Hash> seen;
   std::vector<int> welded(mesh.vertices.size());
   for (size_t i = 0; i < mesh.vertices.size(); ++i)
-    welded[i] = seen.emplace(std::array<double, 3>{mesh.vertices[i].x(), mesh.vertices[i].y(), mesh.vertices[i].z()},
-                             static_cast<int>(i)).first->second;
+    welded[i] = seen.emplace(std::array<double, 3>{mesh.vertices[i].x(), mesh.vertices[i].y(),
+                                                   mesh.vertices[i].z()},
+                             static_cast<int>(i))
+                    .first->second;
   return welded;
 }
 
@@ -299,8 +326,8 @@ double FacingArea(const MeshPaint& paint, const View& view, const io::PlotFrame&
 // changes (on a culled mesh, those with a triangle facing us), contours
 // (one triangle facing us, the other not: the outline of each part, also of
 // parts that are separate shells) and open edges.
-std::string RegionOutlines(const MeshPaint& paint, const std::vector<RegionEdge>& edges, const View& view,
-                           const io::PlotFrame& frame) {
+std::string RegionOutlines(const MeshPaint& paint, const std::vector<RegionEdge>& edges,
+                           const View& view, const io::PlotFrame& frame) {
   std::string d;
   for (const RegionEdge& e : edges) {
     const bool front1 = FacingArea(paint, view, frame, e.t1) > 0;
@@ -309,8 +336,10 @@ std::string RegionOutlines(const MeshPaint& paint, const std::vector<RegionEdge>
     if (!(e.region_change || contour) || (paint.cull && !front1 && !front2)) continue;
     const Vec3 &p = paint.p[e.a], &q = paint.p[e.b];
     // Snapped to kGrid like the mesh; a segment of no length there is seen end on.
-    const long x1 = std::lround(frame.X(1000 * p(view.h)) / kGrid), y1 = std::lround(frame.Y(1000 * p(view.v)) / kGrid);
-    const long x2 = std::lround(frame.X(1000 * q(view.h)) / kGrid), y2 = std::lround(frame.Y(1000 * q(view.v)) / kGrid);
+    const long x1 = std::lround(frame.X(1000 * p(view.h)) / kGrid),
+               y1 = std::lround(frame.Y(1000 * p(view.v)) / kGrid);
+    const long x2 = std::lround(frame.X(1000 * q(view.h)) / kGrid),
+               y2 = std::lround(frame.Y(1000 * q(view.v)) / kGrid);
     if (x1 == x2 && y1 == y2) continue;
     d.push_back('M');
     AppendCoordinate(&d, x1, true);
@@ -321,7 +350,8 @@ std::string RegionOutlines(const MeshPaint& paint, const std::vector<RegionEdge>
   }
   if (d.empty()) return "";
   return absl::StrFormat(
-      "<path class=\"region-outline\" transform=\"scale(%g)\" d=\"%s\" fill=\"none\" stroke=\"#202020\" "
+      "<path class=\"region-outline\" transform=\"scale(%g)\" d=\"%s\" fill=\"none\" "
+      "stroke=\"#202020\" "
       "stroke-width=\"%g\" stroke-opacity=\"0.8\"/>\n",
       kGrid, d, 0.8 / kGrid);
 }
@@ -330,7 +360,8 @@ std::string RegionOutlines(const MeshPaint& paint, const std::vector<RegionEdge>
 // positive when counter-clockwise on the page (y down), i.e. facing us.
 template <typename Corners>
 double FacingArea2(const Corners& q) {
-  return -(static_cast<double>(q[2] - q[0]) * (q[5] - q[1]) - static_cast<double>(q[4] - q[0]) * (q[3] - q[1]));
+  return -(static_cast<double>(q[2] - q[0]) * (q[5] - q[1]) -
+           static_cast<double>(q[4] - q[0]) * (q[3] - q[1]));
 }
 
 // The mesh in view `view` through `frame`, far to near, snapped to kGrid px,
@@ -340,7 +371,8 @@ std::string MeshPaths(const MeshPaint& paint, const View& view, const io::PlotFr
   std::vector<double> depth(n);
   for (size_t t = 0; t < n; ++t) {
     const auto& tri = paint.mesh.triangles[t];
-    depth[t] = view.depth_sign * (paint.p[tri[0]](view.k) + paint.p[tri[1]](view.k) + paint.p[tri[2]](view.k));
+    depth[t] = view.depth_sign *
+               (paint.p[tri[0]](view.k) + paint.p[tri[1]](view.k) + paint.p[tri[2]](view.k));
   }
   std::vector<int> order(n);
   std::iota(order.begin(), order.end(), 0);
@@ -389,16 +421,22 @@ void DrawView(io::SvgCanvas& canvas, int i, const Layout& layout, const MeshPain
   canvas.OpenGroup(absl::StrCat("id=\"view-", i + 1, "\""));
   canvas.Text(f.left, f.top - 8, layout.titles[i], {.bold = true});
   // Ticks about every 80 px, but at least three on an axis (finer on short ones).
-  auto ticks = [&](double lo, double hi, double px) { return io::AxisTicks(lo, hi, std::max(2, int(px / 80))); };
-  const io::AxisStyle x_axis{.title = absl::StrFormat("axis %d (mm)", v.h + 1), .tick_font_size = 11};
-  const io::AxisStyle y_axis{.title = absl::StrFormat("axis %d (mm)", v.v + 1), .title_offset = 40, .tick_font_size = 11};
-  io::DrawAxes(canvas, f, ticks(f.x_lo, f.x_hi, f.width), x_axis, ticks(f.y_lo, f.y_hi, f.height), y_axis);
+  auto ticks = [&](double lo, double hi, double px) {
+    return io::AxisTicks(lo, hi, std::max(2, int(px / 80)));
+  };
+  const io::AxisStyle x_axis{.title = absl::StrFormat("axis %d (mm)", v.h + 1),
+                             .tick_font_size = 11};
+  const io::AxisStyle y_axis{
+      .title = absl::StrFormat("axis %d (mm)", v.v + 1), .title_offset = 40, .tick_font_size = 11};
+  io::DrawAxes(canvas, f, ticks(f.x_lo, f.x_hi, f.width), x_axis, ticks(f.y_lo, f.y_hi, f.height),
+               y_axis);
   canvas.Raw(MeshPaths(paint, v, f));
   canvas.Raw(RegionOutlines(paint, edges, v, f));
   io::DrawFrameOutline(canvas, f, io::Stroke{"#888", 1, ""}, "frame");
   // CoM markers on top: the true one first, so that the fitted cross stays visible.
   for (auto it = markers.rbegin(); it != markers.rend(); ++it)
-    io::DrawMarker(canvas, f.X(1000 * it->p(v.h)), f.Y(1000 * it->p(v.v)), it->fitted ? kFittedCom : kTrueCom);
+    io::DrawMarker(canvas, f.X(1000 * it->p(v.h)), f.Y(1000 * it->p(v.v)),
+                   it->fitted ? kFittedCom : kTrueCom);
   canvas.CloseGroup();
 }
 
@@ -415,20 +453,29 @@ struct HeaderLine {
 std::vector<HeaderLine> HeaderLines(const InertiaFit& fit, const DensityPlotOptions& options) {
   const RegionModel* model = fit.region_model.get();
   std::vector<HeaderLine> lines;
-  lines.push_back({options.title.empty() ? absl::StrCat(ToString(fit.method), " fit") : options.title,
-                   {.size = 17, .bold = true}, 22, 2});
+  lines.push_back(
+      {options.title.empty() ? absl::StrCat(ToString(fit.method), " fit") : options.title,
+       {.size = 17, .bold = true},
+       22,
+       2});
   std::string subtitle = absl::StrFormat("mass %.4g kg", fit.params.mass);
   if (model != nullptr)
-    absl::StrAppend(&subtitle, absl::StrFormat(", %d region%s (%s, outlined)", static_cast<int>(model->regions.size()),
-                                               model->regions.size() == 1 ? "" : "s", ToString(model->scheme)));
+    absl::StrAppend(
+        &subtitle,
+        absl::StrFormat(", %d region%s (%s, outlined)", static_cast<int>(model->regions.size()),
+                        model->regions.size() == 1 ? "" : "s", ToString(model->scheme)));
   else
-    absl::StrAppend(&subtitle, ", no density regions (", ToString(fit.method), " fit): silhouette only");
+    absl::StrAppend(&subtitle, ", no density regions (", ToString(fit.method),
+                    " fit): silhouette only");
   absl::StrAppend(&subtitle, "; views along the fitted principal axes, mm from the fitted CoM");
   lines.push_back({subtitle, {.color = "#444"}, 17, 2});
-  if (!options.source.empty()) lines.push_back({absl::StrCat("source: ", options.source), {.color = "#444"}, 17, 2});
+  if (!options.source.empty())
+    lines.push_back({absl::StrCat("source: ", options.source), {.color = "#444"}, 17, 2});
   if (fit.mesh_contradicted)
-    lines.push_back({"mesh contradicted by the data: densities of the rejected fit", {.bold = true, .color = "#b00020"},
-                     17, 2});
+    lines.push_back({"mesh contradicted by the data: densities of the rejected fit",
+                     {.bold = true, .color = "#b00020"},
+                     17,
+                     2});
   return lines;
 }
 
@@ -450,28 +497,39 @@ double DrawHeader(io::SvgCanvas* canvas, const std::vector<HeaderLine>& lines, d
 // The legend (markers; the grey silhouette without regions) and, under it,
 // the colour bar, from y = top in the right column.
 void DrawKey(io::SvgCanvas& canvas, const Layout& layout, double top, const InertiaFit& fit,
-             const std::vector<Marker>& markers, const DensityColors& colors, const io::ColorRamp& ramp) {
+             const std::vector<Marker>& markers, const DensityColors& colors,
+             const io::ColorRamp& ramp) {
   std::vector<io::LegendEntry> entries;
   for (const Marker& m : markers)
-    entries.push_back({.label = m.fitted ? "fitted CoM"
-                                         : 1000 * m.p.norm() < 0.01 ? "true CoM (within 0.01 mm of the fitted)"
-                                         : absl::StrFormat("true CoM (%.3g mm from the fitted)", 1000 * m.p.norm()),
-                       .swatch = io::LegendEntry::Swatch::kMarker,
-                       .marker = m.fitted ? kFittedCom : kTrueCom});
+    entries.push_back(
+        {.label = m.fitted ? "fitted CoM"
+                  : 1000 * m.p.norm() < 0.01
+                      ? "true CoM (within 0.01 mm of the fitted)"
+                      : absl::StrFormat("true CoM (%.3g mm from the fitted)", 1000 * m.p.norm()),
+         .swatch = io::LegendEntry::Swatch::kMarker,
+         .marker = m.fitted ? kFittedCom : kTrueCom});
   if (fit.region_model == nullptr)
-    entries.push_back({.label = "mesh (no density regions)", .swatch = io::LegendEntry::Swatch::kBox,
+    entries.push_back({.label = "mesh (no density regions)",
+                       .swatch = io::LegendEntry::Swatch::kBox,
                        .color = io::HexColor(kGrey)});
   else
-    entries.push_back({.label = "outline of a region or part", .line = io::Stroke{"#202020", 1, ""}});
+    entries.push_back(
+        {.label = "outline of a region or part", .line = io::Stroke{"#202020", 1, ""}});
   canvas.OpenGroup("id=\"legend\"");
   const double end = io::DrawLegend(canvas, layout.column_x, top + 14, entries, 24, kColumn - 10);
   canvas.CloseGroup();
   if (fit.region_model == nullptr) return;
-  io::ColorBar bar{.x = layout.column_x, .y = end + 28, .height = kBarHeight, .lo = 0, .hi = colors.bar_top,
-                   .ticks = colors.bar_ticks, .title = "density (kg/m\xc2\xb3)"};
+  io::ColorBar bar{.x = layout.column_x,
+                   .y = end + 28,
+                   .height = kBarHeight,
+                   .lo = 0,
+                   .hi = colors.bar_top,
+                   .ticks = colors.bar_ticks,
+                   .title = "density (kg/m\xc2\xb3)"};
   if (fit.densities.size() <= 64)
     for (const InertiaFit::RegionDensity& d : fit.densities)
-      bar.marks.emplace_back(d.density, absl::StrFormat("%s: %.4g kg/m\xc2\xb3", d.label, d.density));
+      bar.marks.emplace_back(d.density,
+                             absl::StrFormat("%s: %.4g kg/m\xc2\xb3", d.label, d.density));
   io::DrawColorBar(canvas, bar, ramp);
 }
 
@@ -499,7 +557,8 @@ absl::StatusOr<std::string> DensityPlotSvg(const io::TriangleMesh& mesh, const I
 
   const std::vector<HeaderLine> header = HeaderLines(fit, options);
   const double text_width = layout.width - kLeft - 10;
-  const double top = DrawHeader(nullptr, header, text_width) + 18;  // the panels' titles above `top`
+  const double top =
+      DrawHeader(nullptr, header, text_width) + 18;  // the panels' titles above `top`
   for (io::PlotFrame& f : layout.frames) f.top += top;
   const double height = std::ceil(top + std::max(layout.bottom, KeyHeight(fit, geometry.markers)));
   io::SvgCanvas canvas(layout.width, height, 12);

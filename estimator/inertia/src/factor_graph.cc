@@ -88,8 +88,9 @@ void LogSE3(const M3<T>& R, const V3<T>& t, V3<T>* phi, V3<T>* rho) {
 
 template <typename T>
 Eigen::Matrix<T, 6, 1> Dynamics(const M3<T>& R0, const V3<T>& p0, const M3<T>& R1, const V3<T>& p1,
-                                const M3<T>& R2, const V3<T>& p2, double dt1, double dt2, const T& m,
-                                const V3<T>& c, const M3<T>& H, const Vec3& g, const Vector6d& wrench) {
+                                const M3<T>& R2, const V3<T>& p2, double dt1, double dt2,
+                                const T& m, const V3<T>& c, const M3<T>& H, const Vec3& g,
+                                const Vector6d& wrench) {
   V3<T> phi_a, rho_a, phi_b, rho_b;
   LogSE3<T>(R0.transpose() * R1, R0.transpose() * (p1 - p0), &phi_a, &rho_a);  // eq. 10, 12
   LogSE3<T>(R1.transpose() * R2, R1.transpose() * (p2 - p1), &phi_b, &rho_b);  // eq. 11, 13
@@ -102,7 +103,7 @@ Eigen::Matrix<T, 6, 1> Dynamics(const M3<T>& R0, const V3<T>& p0, const M3<T>& R
   const V3<T> g0 = R0.transpose() * g.cast<T>();
   const V3<T> amg = a - g0;
   const V3<T> A = m * amg - m * c.cross(dw) + m * w2p.cross(w1.cross(c));  // eq. 18
-  const V3<T> B = m * c.cross(amg) + H * dw + w2p.cross(H * w1);          // eq. 19
+  const V3<T> B = m * c.cross(amg) + H * dw + w2p.cross(H * w1);           // eq. 19
   Eigen::Matrix<T, 6, 1> r;
   r.template head<3>() = A - wrench.head<3>().cast<T>();
   r.template tail<3>() = B - wrench.tail<3>().cast<T>();
@@ -148,7 +149,9 @@ struct Inertial {
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   Vector6d h = Vector6d::Zero();
 
-  Eigen::Matrix3d InertiaOrigin() const { return raw ? InertiaFromEntries<double>(h) : InertiaFromL<double>(L, R); }
+  Eigen::Matrix3d InertiaOrigin() const {
+    return raw ? InertiaFromEntries<double>(h) : InertiaFromL<double>(L, R);
+  }
   Vector10d Standard() const {
     const Eigen::Matrix3d Io = InertiaOrigin();
     Vector10d pi;
@@ -311,7 +314,8 @@ bool PolledCopy(const std::vector<Block>& from, std::vector<Block>* to, Interrup
 // Damped step: (H + lambda diag(H)) d = -g; false if not positive definite
 // or `poll` fired. With `cov`, also returns the inertial block of H^-1
 // (lambda should be 0).
-bool SolveStep(const NormalEquations& ne, double lambda, Eigen::VectorXd* step, Matrix10d* cov, InterruptPoll* poll) {
+bool SolveStep(const NormalEquations& ne, double lambda, Eigen::VectorXd* step, Matrix10d* cov,
+               InterruptPoll* poll) {
   const int n = static_cast<int>(ne.B.size());
   BandedCholesky chol;
   if (!chol.Factor(ne, lambda, poll)) return false;
@@ -355,7 +359,8 @@ class Problem {
  public:
   // Stops early (check poll->stopped()) when `poll` fires; so do the loops
   // of Evaluate (then NaN), Retract and DynamicsRms.
-  Problem(const InertiaSamples& s, const InertiaOptions& o, const ConvexHull* hull, InterruptPoll* poll)
+  Problem(const InertiaSamples& s, const InertiaOptions& o, const ConvexHull* hull,
+          InterruptPoll* poll)
       : s_(s), o_(o), hull_(hull), n_(static_cast<int>(s.samples.size())), poll_(poll) {
     meas_.resize(n_);
     for (int k = 0; k < n_; ++k) {
@@ -427,7 +432,8 @@ class Problem {
     int cnt = 0;
     for (int k = 0; k + 2 < n_; ++k) {
       if (poll_->Tick()) break;
-      const double dt1 = s_.samples[k + 1].t - s_.samples[k].t, dt2 = s_.samples[k + 2].t - s_.samples[k + 1].t;
+      const double dt1 = s_.samples[k + 1].t - s_.samples[k].t,
+                   dt2 = s_.samples[k + 2].t - s_.samples[k + 1].t;
       const Pose &a = poses_[k], &b = poses_[k + 1], &c = poses_[k + 2];
       const Vector6d e = Dynamics<double>(a.R, a.p, b.R, b.p, c.R, c.p, dt1, dt2, in_.m, in_.c,
                                           in_.InertiaOrigin(), o_.gravity, wrench_[k]);
@@ -449,12 +455,13 @@ class Problem {
   // forward-mode AutoDiff into the normal equations).
   void AddDynamicsFactor(int k, NormalEquations* ne, double* cost) const {
     const Vec3& g = o_.gravity;
-    const double dt1 = s_.samples[k + 1].t - s_.samples[k].t, dt2 = s_.samples[k + 2].t - s_.samples[k + 1].t;
+    const double dt1 = s_.samples[k + 1].t - s_.samples[k].t,
+                 dt2 = s_.samples[k + 2].t - s_.samples[k + 1].t;
     const Pose &a = poses_[k], &b = poses_[k + 1], &cpose = poses_[k + 2];
     Vector6d e;
     if (!ne) {
-      e = Dynamics<double>(a.R, a.p, b.R, b.p, cpose.R, cpose.p, dt1, dt2, in_.m, in_.c, in_.InertiaOrigin(), g,
-                           wrench_[k]);
+      e = Dynamics<double>(a.R, a.p, b.R, b.p, cpose.R, cpose.p, dt1, dt2, in_.m, in_.c,
+                           in_.InertiaOrigin(), g, wrench_[k]);
       *cost += 0.5 * (whiten_[k] * e).squaredNorm();
       return;
     }
@@ -464,7 +471,8 @@ class Problem {
     for (int q = 0; q < 3; ++q) {
       V3<Jet> d(Var(0, 6 * q), Var(0, 6 * q + 1), Var(0, 6 * q + 2));
       R[q] = ps[q]->R.cast<Jet>() * (M3<Jet>::Identity() + Hat<Jet>(d));
-      P[q] = ps[q]->p.cast<Jet>() + V3<Jet>(Var(0, 6 * q + 3), Var(0, 6 * q + 4), Var(0, 6 * q + 5));
+      P[q] =
+          ps[q]->p.cast<Jet>() + V3<Jet>(Var(0, 6 * q + 3), Var(0, 6 * q + 4), Var(0, 6 * q + 5));
     }
     Jet m;
     V3<Jet> c;
@@ -519,9 +527,11 @@ class Problem {
   void AddConstraintFactors(NormalEquations* ne, double* cost) const {
     if (!UsesConstraints(o_.factor_graph.variant)) return;
     const double sigma = o_.factor_graph.constraint_sigma;
-    const double sm = sigma * m_scale_, sl = sigma * m_scale_ * l_scale_ * l_scale_, sc = sigma * l_scale_;
+    const double sm = sigma * m_scale_, sl = sigma * m_scale_ * l_scale_ * l_scale_,
+                 sc = sigma * l_scale_;
     const double m_min = 1e-6 * m_scale_;
-    if (in_.m < m_min) AddInertialResidual((m_min - in_.m) / sm, -Vector10d::Unit(0) / sm, ne, cost);
+    if (in_.m < m_min)
+      AddInertialResidual((m_min - in_.m) / sm, -Vector10d::Unit(0) / sm, ne, cost);
     for (int i = 0; i < 3; ++i)
       if (in_.L(i) < 0) AddInertialResidual(-in_.L(i) / sl, -Vector10d::Unit(4 + i) / sl, ne, cost);
     if (!hull_) return;
@@ -539,7 +549,8 @@ class Problem {
   void AddTracePrior(NormalEquations* ne, double* cost) const {
     if (!UsesPrior(o_) || !(o_.prior->weight > 0)) return;
     const double sw = std::sqrt(o_.prior->weight);
-    const Eigen::Matrix4d P0inv = PseudoInertiaD::FromParameters(o_.prior->params).Matrix().inverse();
+    const Eigen::Matrix4d P0inv =
+        PseudoInertiaD::FromParameters(o_.prior->params).Matrix().inverse();
     const Jet m = Var(in_.m, 18);
     const V3<Jet> c(Var(in_.c(0), 19), Var(in_.c(1), 20), Var(in_.c(2), 21));
     const V3<Jet> L(Var(in_.L(0), 22), Var(in_.L(1), 23), Var(in_.L(2), 24));
@@ -571,14 +582,16 @@ absl::Status CheckRotationSteps(const InertiaSamples& s, InterruptPoll* poll) {
   const int n = static_cast<int>(s.samples.size());
   for (int k = 0; k + 1 < n; ++k) {
     if (poll->Tick()) return Interrupted();
-    const Eigen::Matrix3d Rr =
-        s.samples[k].orientation.toRotationMatrix().transpose() * s.samples[k + 1].orientation.toRotationMatrix();
+    const Eigen::Matrix3d Rr = s.samples[k].orientation.toRotationMatrix().transpose() *
+                               s.samples[k + 1].orientation.toRotationMatrix();
     if (LogSO3(Rr).norm() > M_PI / 2) {
-      return absl::InvalidArgumentError(absl::StrCat(
-          s.line_numbers.size() > static_cast<size_t>(k + 1) ? absl::StrCat(s.source_name, ":", s.line_numbers[k + 1])
-                                                             : absl::StrCat("samples[", k + 1, "]"),
-          ": the orientation changes by more than 90 degrees since the previous sample; the factor graph's "
-          "finite differences need a higher sample rate"));
+      return absl::InvalidArgumentError(
+          absl::StrCat(s.line_numbers.size() > static_cast<size_t>(k + 1)
+                           ? absl::StrCat(s.source_name, ":", s.line_numbers[k + 1])
+                           : absl::StrCat("samples[", k + 1, "]"),
+                       ": the orientation changes by more than 90 degrees since the previous "
+                       "sample; the factor graph's "
+                       "finite differences need a higher sample rate"));
     }
   }
   return absl::OkStatus();
@@ -592,8 +605,9 @@ struct InitialInertial {
   double len = 0.1;
 };
 
-InitialInertial InitialFromForces(const InertiaSamples& s, const InertiaOptions& o, const ConvexHull* hull,
-                                  const std::vector<KinPoint>& kin, InterruptPoll* poll) {
+InitialInertial InitialFromForces(const InertiaSamples& s, const InertiaOptions& o,
+                                  const ConvexHull* hull, const std::vector<KinPoint>& kin,
+                                  InterruptPoll* poll) {
   StackedLeastSquares ls(4);
   double force_sq = 0;  // |all force rows|^2
   for (size_t i = 0; i < kin.size(); ++i) {
@@ -629,20 +643,26 @@ std::string VariantNote(const InertiaOptions& o) {
   const char* what = "";
   switch (o.factor_graph.variant) {
     case FactorGraphVariant::kBaselineFg:
-      what = "inertial variables [m, c, H_xx..H_yz] (H about the origin) as independent reals, no constraint, no prior";
+      what =
+          "inertial variables [m, c, H_xx..H_yz] (H about the origin) as independent reals, no "
+          "constraint, no prior";
       break;
     case FactorGraphVariant::kNoConstraint:
-      what = "inertial variables [m, c, L, R in SO(3)], no constraint factor (m > 0, c in hull, L >= 0 off), no prior";
+      what =
+          "inertial variables [m, c, L, R in SO(3)], no constraint factor (m > 0, c in hull, L >= "
+          "0 off), no prior";
       break;
     case FactorGraphVariant::kConstraint:
-      what = o.prior ? "[m, c, L, R], constraint factors m > 0, c in hull, L >= 0, trace prior (the prior given)"
+      what = o.prior ? "[m, c, L, R], constraint factors m > 0, c in hull, L >= 0, trace prior "
+                       "(the prior given)"
                      : "[m, c, L, R], constraint factors m > 0, c in hull, L >= 0, no prior";
       break;
     case FactorGraphVariant::kConstraintPrior:
       what = "[m, c, L, R], constraint factors m > 0, c in hull, L >= 0, trace prior";
       break;
   }
-  std::string note = absl::StrCat("factor-graph variant ", ToString(o.factor_graph.variant), ": ", what);
+  std::string note =
+      absl::StrCat("factor-graph variant ", ToString(o.factor_graph.variant), ": ", what);
   if (o.prior && !UsesPrior(o)) absl::StrAppend(&note, " (prior ignored)");
   return note;
 }
@@ -650,8 +670,8 @@ std::string VariantNote(const InertiaOptions& o) {
 // Batch Levenberg-Marquardt from the problem's current values; `ne` and
 // `cost` hold the normal equations and cost at the answer. Returns the
 // number of iterations.
-absl::StatusOr<int> LevenbergMarquardt(Problem& prob, const InertiaOptions& o, NormalEquations* ne, double* cost,
-                                       InterruptPoll* poll) {
+absl::StatusOr<int> LevenbergMarquardt(Problem& prob, const InertiaOptions& o, NormalEquations* ne,
+                                       double* cost, InterruptPoll* poll) {
   *cost = prob.Evaluate(ne);
   if (poll->stopped()) return Interrupted();
   double lambda = 1e-4;
@@ -721,7 +741,8 @@ absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const Inert
   const int n = static_cast<int>(s.samples.size());
   out.notes.push_back(VariantNote(o));
   out.notes.push_back("kinematics: three consecutive poses per dynamics factor (eq. 10-17)");
-  if (s.HasKinematics()) out.notes.push_back("measured kinematics ignored by factor-graph (poses only, as the paper)");
+  if (s.HasKinematics())
+    out.notes.push_back("measured kinematics ignored by factor-graph (poses only, as the paper)");
   TF_RETURN_IF_ERROR(CheckRotationSteps(s, &poll));
 
   const std::vector<KinPoint> kin = FiniteDifferenceKinematics(s, o.gravity, &poll);
@@ -743,7 +764,8 @@ absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const Inert
   out.pi = prob.inertial().Standard();
   out.samples_used = std::max(0, n - 2);
   prob.DynamicsRms(&out.rms_force, &out.rms_torque);
-  out.notes.push_back(absl::StrFormat("Levenberg-Marquardt: %d iterations, final cost %.6g", *it, cost));
+  out.notes.push_back(
+      absl::StrFormat("Levenberg-Marquardt: %d iterations, final cost %.6g", *it, cost));
   out.cov = InertialCovariance(prob, ne, &poll);
   // Excitation: three-point regressors whitened like the dynamics factors.
   double ms = 1, ls = 0.1;

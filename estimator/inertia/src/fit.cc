@@ -33,10 +33,11 @@ int64_t FitWorkingBytes(InertiaMethod method, int64_t samples) {
 namespace {
 
 // Enum names (io/enum_names.h): the CLI spelling, and the proto's after its prefix.
-constexpr io::EnumNameRow<InertiaMethod> kMethodNames[] = {{InertiaMethod::kBaselineLs, "baseline-ls"},
-                                                           {InertiaMethod::kFactorGraph, "factor-graph"},
-                                                           {InertiaMethod::kConstrained, "constrained"},
-                                                           {InertiaMethod::kDensity, "density"}};
+constexpr io::EnumNameRow<InertiaMethod> kMethodNames[] = {
+    {InertiaMethod::kBaselineLs, "baseline-ls"},
+    {InertiaMethod::kFactorGraph, "factor-graph"},
+    {InertiaMethod::kConstrained, "constrained"},
+    {InertiaMethod::kDensity, "density"}};
 constexpr io::EnumNameRow<FactorGraphVariant> kVariantNames[] = {
     {FactorGraphVariant::kBaselineFg, "baseline-fg"},
     {FactorGraphVariant::kNoConstraint, "fg-no-c", "no-c"},
@@ -66,7 +67,8 @@ namespace {
 
 absl::Status CheckSigma(double v, const char* name) {
   if (!std::isfinite(v) || v < 0)
-    return absl::InvalidArgumentError(absl::StrCat(name, ": must be finite and >= 0 (got ", v, ")"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(name, ": must be finite and >= 0 (got ", v, ")"));
   return absl::OkStatus();
 }
 
@@ -76,7 +78,9 @@ absl::Status CheckPositive(double v, const char* name) {
   return absl::OkStatus();
 }
 
-std::string Vec(const Vec3& v) { return absl::StrFormat("(%.6g, %.6g, %.6g)", v.x(), v.y(), v.z()); }
+std::string Vec(const Vec3& v) {
+  return absl::StrFormat("(%.6g, %.6g, %.6g)", v.x(), v.y(), v.z());
+}
 
 absl::Status ValidateMeshOptions(const InertiaOptions& o) {
   TF_RETURN_IF_ERROR(CheckSigma(o.constrained.mesh_prior_weight, "mesh_prior_weight"));
@@ -85,19 +89,22 @@ absl::Status ValidateMeshOptions(const InertiaOptions& o) {
   if (o.density.folds < 2) return absl::InvalidArgumentError("density.folds: must be >= 2");
   TF_RETURN_IF_ERROR(CheckSigma(o.density.mesh_tolerance, "mesh_tolerance"));
   if (o.density.regions.target_regions < 1 || o.density.regions.target_regions > kMaxTargetRegions)
-    return absl::InvalidArgumentError(absl::StrCat("regions.target_regions: must be in 1..", kMaxTargetRegions,
-                                                   " (got ", o.density.regions.target_regions, ")"));
+    return absl::InvalidArgumentError(absl::StrCat("regions.target_regions: must be in 1..",
+                                                   kMaxTargetRegions, " (got ",
+                                                   o.density.regions.target_regions, ")"));
   if (o.method == InertiaMethod::kDensity && !o.mesh)
-    return absl::InvalidArgumentError("mesh: the density method needs the object's closed mesh (--mesh)");
+    return absl::InvalidArgumentError(
+        "mesh: the density method needs the object's closed mesh (--mesh)");
   if (o.mesh) {
     for (size_t i = 0; i < o.mesh->vertices.size(); ++i)
       if (!o.mesh->vertices[i].allFinite())
-        return absl::InvalidArgumentError(absl::StrCat(o.mesh_name, ": vertex ", i, " is not finite"));
+        return absl::InvalidArgumentError(
+            absl::StrCat(o.mesh_name, ": vertex ", i, " is not finite"));
     for (size_t t = 0; t < o.mesh->triangles.size(); ++t)
       for (int k : o.mesh->triangles[t])
         if (k < 0 || k >= static_cast<int>(o.mesh->vertices.size()))
-          return absl::InvalidArgumentError(absl::StrCat(o.mesh_name, ": triangle ", t, " has vertex index ", k,
-                                                         " out of range"));
+          return absl::InvalidArgumentError(absl::StrCat(o.mesh_name, ": triangle ", t,
+                                                         " has vertex index ", k, " out of range"));
     if (o.method == InertiaMethod::kDensity || o.method == InertiaMethod::kConstrained) {
       if (absl::Status st = io::RequireClosedSolid(io::CheckMesh(*o.mesh), o.mesh_name); !st.ok())
         return st;
@@ -119,18 +126,18 @@ absl::Status ValidateInertiaOptions(const InertiaOptions& o) {
       {n.angular_velocity_sigma, "noise.angular_velocity_sigma"},
       {n.linear_acceleration_sigma, "noise.linear_acceleration_sigma"},
       {n.angular_acceleration_sigma, "noise.angular_acceleration_sigma"}};
-  for (const auto& [v, name] : sigmas)
-    TF_RETURN_IF_ERROR(CheckSigma(v, name));
+  for (const auto& [v, name] : sigmas) TF_RETURN_IF_ERROR(CheckSigma(v, name));
   const BaselineLsOptions& ls = o.baseline_ls;
   if (ls.savitzky_golay && (ls.savitzky_golay_window < 5 || ls.savitzky_golay_window % 2 == 0))
-    return absl::InvalidArgumentError(absl::StrCat("savitzky_golay_window: must be odd and >= 5 (got ",
-                                                   ls.savitzky_golay_window, ")"));
+    return absl::InvalidArgumentError(absl::StrCat(
+        "savitzky_golay_window: must be odd and >= 5 (got ", ls.savitzky_golay_window, ")"));
   if (o.smoothing_window != 0 && (o.smoothing_window < 5 || o.smoothing_window % 2 == 0))
-    return absl::InvalidArgumentError(absl::StrCat("smoothing_window: must be 0 (automatic) or odd and >= 5 (got ",
-                                                   o.smoothing_window, ")"));
+    return absl::InvalidArgumentError(absl::StrCat(
+        "smoothing_window: must be 0 (automatic) or odd and >= 5 (got ", o.smoothing_window, ")"));
   if (!std::isfinite(o.constrained.regularization) || o.constrained.regularization < 0)
     return absl::InvalidArgumentError("regularization: must be finite and >= 0");
-  if (o.reweighting_rounds < 1) return absl::InvalidArgumentError("reweighting_rounds: must be >= 1");
+  if (o.reweighting_rounds < 1)
+    return absl::InvalidArgumentError("reweighting_rounds: must be >= 1");
   if (o.max_iterations < 1) return absl::InvalidArgumentError("max_iterations: must be >= 1");
   const FactorGraphOptions& fg = o.factor_graph;
   const std::pair<double, const char*> pos[] = {
@@ -141,8 +148,7 @@ absl::Status ValidateInertiaOptions(const InertiaOptions& o) {
       {fg.min_position_sigma, "factor_graph.min_position_sigma"},
       {fg.min_orientation_sigma, "factor_graph.min_orientation_sigma"},
       {fg.constraint_sigma, "factor_graph.constraint_sigma"}};
-  for (const auto& [v, name] : pos)
-    TF_RETURN_IF_ERROR(CheckPositive(v, name));
+  for (const auto& [v, name] : pos) TF_RETURN_IF_ERROR(CheckPositive(v, name));
   if (!(o.excitation_threshold >= 0 && o.excitation_threshold < 1))
     return absl::InvalidArgumentError("excitation_threshold: must be in [0, 1)");
   TF_RETURN_IF_ERROR(ValidateMeshOptions(o));
@@ -152,10 +158,11 @@ absl::Status ValidateInertiaOptions(const InertiaOptions& o) {
     if (!h.ok()) return h.status();
     hull = *std::move(h);
   }
-  if (o.method == InertiaMethod::kFactorGraph && o.factor_graph.variant == FactorGraphVariant::kConstraintPrior &&
-      !o.prior)
+  if (o.method == InertiaMethod::kFactorGraph &&
+      o.factor_graph.variant == FactorGraphVariant::kConstraintPrior && !o.prior)
     return absl::InvalidArgumentError(
-        "prior: the factor-graph variant fg-c-g needs a prior (the geodesic prior factor B); give one or use fg-c");
+        "prior: the factor-graph variant fg-c-g needs a prior (the geodesic prior factor B); give "
+        "one or use fg-c");
   if (o.prior) {
     const InertialParameters& p = o.prior->params;
     TF_RETURN_IF_ERROR(CheckPositive(p.mass, "prior.mass"));
@@ -168,10 +175,9 @@ absl::Status ValidateInertiaOptions(const InertiaOptions& o) {
           "prior: not physically consistent (its pseudo-inertia is not positive definite: check "
           "the inertia's triangle inequalities)");
     if (hull && !hull->Contains(p.com, 1e-9)) {
-      return absl::InvalidArgumentError(absl::StrCat("prior.com ", Vec(p.com),
-                                                     " is outside the hull (by ",
-                                                     absl::StrFormat("%.3g", hull->SignedDistanceBound(p.com)),
-                                                     " m)"));
+      return absl::InvalidArgumentError(
+          absl::StrCat("prior.com ", Vec(p.com), " is outside the hull (by ",
+                       absl::StrFormat("%.3g", hull->SignedDistanceBound(p.com)), " m)"));
     }
   }
   return absl::OkStatus();
@@ -179,8 +185,8 @@ absl::Status ValidateInertiaOptions(const InertiaOptions& o) {
 
 namespace internal {
 
-void ResidualRms(const std::vector<KinPoint>& kin, const std::vector<Vector6d>& wrench, const Vector10d& pi,
-                 InterruptPoll* poll, double* rms_force, double* rms_torque) {
+void ResidualRms(const std::vector<KinPoint>& kin, const std::vector<Vector6d>& wrench,
+                 const Vector10d& pi, InterruptPoll* poll, double* rms_force, double* rms_torque) {
   double sf = 0, st = 0;
   for (size_t i = 0; i < kin.size(); ++i) {
     if (poll->Tick()) break;
@@ -245,23 +251,28 @@ double ThreadCpuSeconds() {
 std::string DescribeFit(const InertiaFit& f) {
   const auto in = f.params.inertia_com.ToArray();
   const auto se = f.inertia_se.ToArray();
-  std::string out = absl::StrFormat("method: %s (%d iterations, %.1f ms, %d samples used)\n", ToString(f.method),
-                                    f.iterations, 1e3 * f.time_seconds, f.samples_used);
+  std::string out =
+      absl::StrFormat("method: %s (%d iterations, %.1f ms, %d samples used)\n", ToString(f.method),
+                      f.iterations, 1e3 * f.time_seconds, f.samples_used);
   out += absl::StrFormat("mass: %.6g kg (se %.2g)\n", f.params.mass, f.mass_se);
-  out += absl::StrFormat("com: (%.6g, %.6g, %.6g) m (se %.2g, %.2g, %.2g)\n", f.params.com.x(), f.params.com.y(),
-                         f.params.com.z(), f.com_se.x(), f.com_se.y(), f.com_se.z());
+  out +=
+      absl::StrFormat("com: (%.6g, %.6g, %.6g) m (se %.2g, %.2g, %.2g)\n", f.params.com.x(),
+                      f.params.com.y(), f.params.com.z(), f.com_se.x(), f.com_se.y(), f.com_se.z());
   out += "inertia about the CoM (kg m^2):";
   const char* names[] = {"Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"};
-  for (int i = 0; i < 6; ++i) out += absl::StrFormat(" %s %.6g (se %.2g)%s", names[i], in[i], se[i], i < 5 ? "," : "\n");
-  out += absl::StrFormat("principal moments: %.6g, %.6g, %.6g\n", f.principal_moments(0), f.principal_moments(1),
-                         f.principal_moments(2));
+  for (int i = 0; i < 6; ++i)
+    out += absl::StrFormat(" %s %.6g (se %.2g)%s", names[i], in[i], se[i], i < 5 ? "," : "\n");
+  out += absl::StrFormat("principal moments: %.6g, %.6g, %.6g\n", f.principal_moments(0),
+                         f.principal_moments(1), f.principal_moments(2));
   for (int i = 0; i < 3; ++i)
-    out += absl::StrFormat("  axis %d: (%.4f, %.4f, %.4f)\n", i, f.principal_axes(0, i), f.principal_axes(1, i),
-                           f.principal_axes(2, i));
-  out += absl::StrFormat("physically consistent: %s (smallest eigenvalue of the scaled pseudo-inertia %.3g)\n",
-                         f.physically_consistent ? "yes" : "NO", f.pseudo_inertia_min_eigenvalue);
+    out += absl::StrFormat("  axis %d: (%.4f, %.4f, %.4f)\n", i, f.principal_axes(0, i),
+                           f.principal_axes(1, i), f.principal_axes(2, i));
+  out += absl::StrFormat(
+      "physically consistent: %s (smallest eigenvalue of the scaled pseudo-inertia %.3g)\n",
+      f.physically_consistent ? "yes" : "NO", f.pseudo_inertia_min_eigenvalue);
   if (!f.com_in_hull) out += "CoM outside the hull\n";
-  out += absl::StrFormat("residual RMS: force %.4g N, torque %.4g N m\n", f.residual_rms_force, f.residual_rms_torque);
+  out += absl::StrFormat("residual RMS: force %.4g N, torque %.4g N m\n", f.residual_rms_force,
+                         f.residual_rms_torque);
   out += "relative singular values:";
   for (double v : f.singular_values) out += absl::StrFormat(" %.3g", v);
   out += "\n";
@@ -272,20 +283,23 @@ std::string DescribeFit(const InertiaFit& f) {
   }
   if (f.mesh_check) {
     const io::MeshCheck& m = *f.mesh_check;
-    out += absl::StrFormat("mesh: %d faces, %d vertices, %s%s, volume %.6g m^3\n", m.faces, m.vertices,
-                           m.closed && m.consistently_oriented ? "closed and consistently oriented" : "NOT a closed solid",
-                           m.junction_edges > 0 ? absl::StrCat(" (", m.junction_edges, " edges where closed parts touch)")
-                                                : std::string(),
-                           m.volume);
+    out += absl::StrFormat(
+        "mesh: %d faces, %d vertices, %s%s, volume %.6g m^3\n", m.faces, m.vertices,
+        m.closed && m.consistently_oriented ? "closed and consistently oriented"
+                                            : "NOT a closed solid",
+        m.junction_edges > 0
+            ? absl::StrCat(" (", m.junction_edges, " edges where closed parts touch)")
+            : std::string(),
+        m.volume);
   }
   if (!f.densities.empty()) {
     out += absl::StrFormat("densities (%s%s, regulariser %.3g by %s):\n",
                            f.density_realizable ? "density-realizable" : "not used",
-                           f.mesh_contradicted ? ", mesh contradicted" : "", f.density_regularization,
-                           f.density_regularization_rule);
+                           f.mesh_contradicted ? ", mesh contradicted" : "",
+                           f.density_regularization, f.density_regularization_rule);
     for (const InertiaFit::RegionDensity& d : f.densities)
-      out += absl::StrFormat("  %-18s %10.5g kg/m^3 (se %.2g)  volume %.4g m^3\n", d.label, d.density,
-                             d.standard_error, d.volume);
+      out += absl::StrFormat("  %-18s %10.5g kg/m^3 (se %.2g)  volume %.4g m^3\n", d.label,
+                             d.density, d.standard_error, d.volume);
   }
   if (f.method == InertiaMethod::kDensity)
     out += absl::StrFormat("density-realizable: %s\n", f.density_realizable ? "yes" : "NO");
@@ -299,20 +313,25 @@ namespace {
 // CONSTRAINED; given a mesh and no prior, the mesh's uniform-density inertia
 // scaled to the mass of a first fit is the prior of a second.
 absl::StatusOr<internal::MethodOutput> FitConstrainedWithMesh(const InertiaSamples& samples,
-                                                              const InertiaOptions& options, const ConvexHull* hull) {
+                                                              const InertiaOptions& options,
+                                                              const ConvexHull* hull) {
   absl::StatusOr<internal::MethodOutput> first = internal::FitConstrained(samples, options, hull);
-  if (!first.ok() || !options.mesh || options.prior || !(options.constrained.mesh_prior_weight > 0)) return first;
+  if (!first.ok() || !options.mesh || options.prior || !(options.constrained.mesh_prior_weight > 0))
+    return first;
   const SolidMoments solid = MeshMoments(*options.mesh);
   if (!(solid.volume > 0) || !(first->pi(0) > 0)) return first;
   InertiaOptions with_prior = options;
-  with_prior.prior = InertiaPrior{InertialParameters::FromStandard(solid.Standard(first->pi(0) / solid.volume)),
-                                  options.constrained.mesh_prior_weight};
-  absl::StatusOr<internal::MethodOutput> second = internal::FitConstrained(samples, with_prior, hull);
+  with_prior.prior =
+      InertiaPrior{InertialParameters::FromStandard(solid.Standard(first->pi(0) / solid.volume)),
+                   options.constrained.mesh_prior_weight};
+  absl::StatusOr<internal::MethodOutput> second =
+      internal::FitConstrained(samples, with_prior, hull);
   if (!second.ok()) return second;
   second->iterations += first->iterations;
   second->notes.push_back(absl::StrFormat(
-      "prior: %s at uniform density %.4g kg/m^3 (the fitted mass %.6g kg), weight %g", options.mesh_name,
-      first->pi(0) / solid.volume, first->pi(0), options.constrained.mesh_prior_weight));
+      "prior: %s at uniform density %.4g kg/m^3 (the fitted mass %.6g kg), weight %g",
+      options.mesh_name, first->pi(0) / solid.volume, first->pi(0),
+      options.constrained.mesh_prior_weight));
   return second;
 }
 
@@ -323,7 +342,8 @@ absl::StatusOr<internal::MethodOutput> FitConstrainedWithMesh(const InertiaSampl
 // parameter vector the data allow (the free fit's 99.9 % chi^2 ellipsoid):
 // significant AND physically large (kDefaultMeshTolerance says why 0.03).
 absl::StatusOr<internal::MethodOutput> FitDensityOrFallBack(const InertiaSamples& samples,
-                                                            const InertiaOptions& options, const ConvexHull* hull,
+                                                            const InertiaOptions& options,
+                                                            const ConvexHull* hull,
                                                             InertiaFit* fit) {
   fit->mesh_check = io::CheckMesh(*options.mesh);
   absl::StatusOr<RegionModel> regions =
@@ -334,22 +354,26 @@ absl::StatusOr<internal::MethodOutput> FitDensityOrFallBack(const InertiaSamples
   if (!r.ok()) return r.status();
   fit->region_model = model;
   for (size_t i = 0; i < model->regions.size(); ++i) {
-    fit->densities.push_back({model->regions[i].label, r->densities[i], model->regions[i].moments.volume,
-                              r->density_se[i]});
+    fit->densities.push_back({model->regions[i].label, r->densities[i],
+                              model->regions[i].moments.volume, r->density_se[i]});
   }
   fit->density_regularization = r->regularization;
   fit->density_regularization_rule = r->regularization_rule;
   fit->heldout_residual_ratio = r->heldout_ratio;
   const std::string heldout_note = absl::StrFormat(
-      "held-out weighted residual %.3gx the free 10-parameter fit's (z = %.3g over the held-out samples); the "
+      "held-out weighted residual %.3gx the free 10-parameter fit's (z = %.3g over the held-out "
+      "samples); the "
       "predicted wrenches differ like a mass error of %.2g %% and a CoM displacement of %.3g mm",
-      r->heldout_ratio, r->heldout_z, 100 * r->heldout_mass_equivalent, 1000 * r->heldout_com_equivalent);
+      r->heldout_ratio, r->heldout_z, 100 * r->heldout_mass_equivalent,
+      1000 * r->heldout_com_equivalent);
   r->notes.push_back(heldout_note);
   const Vec3& s = r->gyration_radii;
   const double tolerance = options.density.mesh_tolerance;
   const std::string mesh_note = absl::StrFormat(
-      "mesh test: the densities this mesh can carry are %.3g (first-order Riemannian) from the parameters the "
-      "data allow (least chi^2 excess %.3g, bound %.3g at 99.9 %%); tolerance %g: a %g %% error of the mass or a "
+      "mesh test: the densities this mesh can carry are %.3g (first-order Riemannian) from the "
+      "parameters the "
+      "data allow (least chi^2 excess %.3g, bound %.3g at 99.9 %%); tolerance %g: a %g %% error of "
+      "the mass or a "
       "principal second moment, or a CoM move of %.3g / %.3g / %.3g mm along the principal axes",
       r->mesh_distance, r->mesh_chi2_excess, r->mesh_chi2_bound, tolerance, 100 * tolerance,
       1000 * tolerance * s(0) / std::sqrt(2.0), 1000 * tolerance * s(1) / std::sqrt(2.0),
@@ -362,8 +386,10 @@ absl::StatusOr<internal::MethodOutput> FitDensityOrFallBack(const InertiaSamples
   }
   fit->mesh_contradicted = true;
   fit->mesh_contradiction = absl::StrFormat(
-      "the data contradict the mesh: every density it can carry is %.3g (Riemannian, tolerance %g) from what the "
-      "data allow; check scale and object_in_mesh (the answer is CONSTRAINED's; the densities are those of the "
+      "the data contradict the mesh: every density it can carry is %.3g (Riemannian, tolerance %g) "
+      "from what the "
+      "data allow; check scale and object_in_mesh (the answer is CONSTRAINED's; the densities are "
+      "those of the "
       "rejected mesh fit)",
       r->mesh_distance, tolerance);
   InertiaOptions plain = options;
@@ -412,15 +438,16 @@ void SetExcitation(const internal::MethodOutput& r, double threshold, InertiaFit
     const double rel = top > 0 ? sv / std::sqrt(top) : 0.0;
     fit->singular_values.push_back(rel);
     if (rel < threshold) {
-      fit->poorly_excited.push_back(
-          absl::StrFormat("%s (relative singular value %.2g)", NameDirection(es.eigenvectors().col(i)), rel));
+      fit->poorly_excited.push_back(absl::StrFormat("%s (relative singular value %.2g)",
+                                                    NameDirection(es.eigenvectors().col(i)), rel));
     }
   }
 }
 
 }  // namespace
 
-absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in, const InertiaOptions& options) {
+absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in,
+                                      const InertiaOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   const double cpu_start = ThreadCpuSeconds();
   internal::InterruptPoll poll(options.interrupt);
@@ -428,10 +455,10 @@ absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in, const In
   TF_RETURN_IF_ERROR(ValidateInertiaOptions(options));
   const int need = MinimumSamples(samples_in, options.method);
   if (static_cast<int>(samples_in.samples.size()) < need) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        samples_in.source_name.empty() ? "samples" : samples_in.source_name, ": ",
-        samples_in.samples.size(), " sample(s), at least ", need, " needed by ", ToString(options.method),
-        " for the 10 inertial parameters"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(samples_in.source_name.empty() ? "samples" : samples_in.source_name, ": ",
+                     samples_in.samples.size(), " sample(s), at least ", need, " needed by ",
+                     ToString(options.method), " for the 10 inertial parameters"));
   }
   const InertiaSamples samples = internal::NormalizedCopy(samples_in, &poll);
   if (poll.stopped()) return internal::Interrupted();
@@ -442,17 +469,27 @@ absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in, const In
   InertiaFit fit;
   absl::StatusOr<internal::MethodOutput> r;
   switch (options.method) {
-    case InertiaMethod::kBaselineLs: r = internal::FitBaselineLs(samples, options); break;
-    case InertiaMethod::kFactorGraph: r = internal::FitFactorGraph(samples, options, hp); break;
-    case InertiaMethod::kConstrained: r = FitConstrainedWithMesh(samples, options, hp); break;
-    case InertiaMethod::kDensity: r = FitDensityOrFallBack(samples, options, hp, &fit); break;
+    case InertiaMethod::kBaselineLs:
+      r = internal::FitBaselineLs(samples, options);
+      break;
+    case InertiaMethod::kFactorGraph:
+      r = internal::FitFactorGraph(samples, options, hp);
+      break;
+    case InertiaMethod::kConstrained:
+      r = FitConstrainedWithMesh(samples, options, hp);
+      break;
+    case InertiaMethod::kDensity:
+      r = FitDensityOrFallBack(samples, options, hp, &fit);
+      break;
   }
   if (!r.ok()) return r.status();
-  if (options.mesh && (options.method == InertiaMethod::kBaselineLs || options.method == InertiaMethod::kFactorGraph))
+  if (options.mesh && (options.method == InertiaMethod::kBaselineLs ||
+                       options.method == InertiaMethod::kFactorGraph))
     r->notes.push_back(absl::StrCat("mesh ignored by ", ToString(options.method)));
   const FactorGraphVariant variant = options.factor_graph.variant;
   if (options.method != InertiaMethod::kFactorGraph && variant != FactorGraphVariant::kConstraint)
-    r->notes.push_back(absl::StrCat("fg_variant ", ToString(variant), " ignored by ", ToString(options.method)));
+    r->notes.push_back(
+        absl::StrCat("fg_variant ", ToString(variant), " ignored by ", ToString(options.method)));
 
   fit.method = options.method;
   fit.standard = r->pi;

@@ -8,8 +8,8 @@
 
 namespace tactforce::inertia::internal {
 
-GlsData PrepareGls(const InertiaSamples& s, const InertiaOptions& o, std::vector<std::string>* notes,
-                   InterruptPoll* poll) {
+GlsData PrepareGls(const InertiaSamples& s, const InertiaOptions& o,
+                   std::vector<std::string>* notes, InterruptPoll* poll) {
   GlsData d;
   d.kin = SmoothedKinematics(s, o.gravity, o.noise, o.smoothing_window, notes, poll);
   if (poll->stopped()) return d;
@@ -27,7 +27,8 @@ GlsData PrepareGls(const InertiaSamples& s, const InertiaOptions& o, std::vector
     f2 += d.wrench[k].head<3>().squaredNorm();
     t2 += d.wrench[k].tail<3>().squaredNorm();
   }
-  notes->push_back(d.known ? "wrench noise: from the given sigmas" : "wrench noise: estimated from residuals");
+  notes->push_back(d.known ? "wrench noise: from the given sigmas"
+                           : "wrench noise: estimated from residuals");
   // Floors keep the weights finite on noise-free data.
   d.floor_f = 1e-18 * std::max(f2 / (3.0 * n), 1e-300);
   d.floor_t = 1e-18 * std::max(t2 / (3.0 * n), 1e-300);
@@ -39,8 +40,8 @@ GlsData PrepareGls(const InertiaSamples& s, const InertiaOptions& o, std::vector
   return d;
 }
 
-void AccumulateGls(const GlsData& d, const Vector10d& pi, InterruptPoll* poll, GlsSums* total, int blocks,
-                   std::vector<GlsSums>* per_block, std::vector<Matrix6d>* whiteners) {
+void AccumulateGls(const GlsData& d, const Vector10d& pi, InterruptPoll* poll, GlsSums* total,
+                   int blocks, std::vector<GlsSums>* per_block, std::vector<Matrix6d>* whiteners) {
   const int n = static_cast<int>(d.kin.size());
   Matrix6x10 unit_a[3], unit_dw[3];  // d Y / d(a - g), d Y / d dw (constant)
   for (int j = 0; j < 3; ++j) {
@@ -107,7 +108,8 @@ void AccumulateGls(const GlsData& d, const Vector10d& pi, InterruptPoll* poll, G
       const Vec3 e = Vec3::Unit(j);
       if (q.var_a > 0) add_bias(q.var_a, unit_a[j]);
       if (q.var_dw > 0) add_bias(q.var_dw, unit_dw[j]);
-      if (q.var_rot > 0) add_bias(q.var_rot, Regressor(Vec3::Zero(), Vec3::Zero(), Skew(q.a_minus_g) * e));
+      if (q.var_rot > 0)
+        add_bias(q.var_rot, Regressor(Vec3::Zero(), Vec3::Zero(), Skew(q.a_minus_g) * e));
       if (q.var_w > 0) {
         const double eps = 1e-4 * std::max(1.0, q.w.norm());
         add_bias(q.var_w, (Regressor(q.w + eps * e, Vec3::Zero(), Vec3::Zero()) -

@@ -19,13 +19,13 @@ struct GlsData {
   std::vector<Vector6d> wrench;
   std::vector<Matrix6d> wcov;
   std::vector<Matrix6x10> Y;
-  bool known = true;  // wrench noise given (else estimated from residuals)
+  bool known = true;                // wrench noise given (else estimated from residuals)
   double floor_f = 0, floor_t = 0;  // variance floors (noise-free data)
   Matrix10d YtY = Matrix10d::Zero();
   Vector10d Ytb = Vector10d::Zero();
 };
-GlsData PrepareGls(const InertiaSamples& s, const InertiaOptions& o, std::vector<std::string>* notes,
-                   InterruptPoll* poll);
+GlsData PrepareGls(const InertiaSamples& s, const InertiaOptions& o,
+                   std::vector<std::string>* notes, InterruptPoll* poll);
 
 // Normal equations of the whitened problem at the estimate pi: A = sum
 // (WY)^T WY, b = sum (WY)^T W w, c = sum |W w|^2, and the first-order
@@ -39,10 +39,13 @@ struct GlsSums {
 };
 // Totals, and optionally per contiguous block of samples (`blocks` >= 1)
 // and the whitening matrices W (W^T W = C^-1) per sample.
-void AccumulateGls(const GlsData& d, const Vector10d& pi, InterruptPoll* poll, GlsSums* total, int blocks = 1,
-                   std::vector<GlsSums>* per_block = nullptr, std::vector<Matrix6d>* whiteners = nullptr);
+void AccumulateGls(const GlsData& d, const Vector10d& pi, InterruptPoll* poll, GlsSums* total,
+                   int blocks = 1, std::vector<GlsSums>* per_block = nullptr,
+                   std::vector<Matrix6d>* whiteners = nullptr);
 // Block of sample k when the samples are cut into `blocks` contiguous blocks.
-inline int BlockOf(int k, int n, int blocks) { return static_cast<int>((static_cast<long>(k) * blocks) / n); }
+inline int BlockOf(int k, int n, int blocks) {
+  return static_cast<int>((static_cast<long>(k) * blocks) / n);
+}
 // A - bias when the corrected matrix stays well positive definite (its
 // smallest scaled eigenvalue above half of A's), else A.
 Matrix10d BiasCorrected(const GlsSums& sums, const Vector10d& scale, bool* applied);

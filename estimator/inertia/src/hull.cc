@@ -31,14 +31,15 @@ absl::StatusOr<ConvexHull> QhullHull(const std::vector<Vec3>& pts, double size) 
   char* log_text = nullptr;
   size_t log_size = 0;
   std::FILE* log = open_memstream(&log_text, &log_size);
-  if (log == nullptr) return absl::InternalError("hull: cannot open a memory stream for qhull's messages");
+  if (log == nullptr)
+    return absl::InternalError("hull: cannot open a memory stream for qhull's messages");
 
   qhT qh_storage;
   qhT* qh = &qh_storage;
   qh_zero(qh, log);
   char options[] = "qhull";
-  const int exit_code = qh_new_qhull(qh, 3, static_cast<int>(pts.size()), coords.data(), False, options,
-                                     nullptr, log);
+  const int exit_code = qh_new_qhull(qh, 3, static_cast<int>(pts.size()), coords.data(), False,
+                                     options, nullptr, log);
   ConvexHull hull;
   hull.size = size;
   if (exit_code == 0) {
@@ -70,8 +71,9 @@ absl::StatusOr<ConvexHull> QhullHull(const std::vector<Vec3>& pts, double size) 
   if (exit_code != 0 || hull.normals.size() < 4) {
     const size_t end = message.find('\n');
     message = std::string(absl::StripAsciiWhitespace(message.substr(0, end)));
-    return absl::InvalidArgumentError(absl::StrCat("hull: degenerate: qhull failed (code ", exit_code, ")",
-                                                   message.empty() ? "" : ": ", message));
+    return absl::InvalidArgumentError(absl::StrCat("hull: degenerate: qhull failed (code ",
+                                                   exit_code, ")", message.empty() ? "" : ": ",
+                                                   message));
   }
   return hull;
 }
@@ -80,7 +82,8 @@ absl::StatusOr<ConvexHull> QhullHull(const std::vector<Vec3>& pts, double size) 
 
 double ConvexHull::SignedDistanceBound(const Vec3& x) const {
   double worst = -std::numeric_limits<double>::infinity();
-  for (size_t j = 0; j < normals.size(); ++j) worst = std::max(worst, normals[j].dot(x) - offsets[j]);
+  for (size_t j = 0; j < normals.size(); ++j)
+    worst = std::max(worst, normals[j].dot(x) - offsets[j]);
   return worst;
 }
 
@@ -96,7 +99,8 @@ absl::StatusOr<ConvexHull> ComputeConvexHull(const std::vector<Vec3>& pts) {
   }
   Vec3 lo = pts[0], hi = pts[0];
   for (int i = 0; i < n; ++i) {
-    if (!pts[i].allFinite()) return absl::InvalidArgumentError(absl::StrCat("hull[", i, "]: not finite"));
+    if (!pts[i].allFinite())
+      return absl::InvalidArgumentError(absl::StrCat("hull[", i, "]: not finite"));
     lo = lo.cwiseMin(pts[i]);
     hi = hi.cwiseMax(pts[i]);
   }
@@ -133,7 +137,8 @@ absl::StatusOr<ConvexHull> ComputeConvexHull(const std::vector<Vec3>& pts) {
     if (d > best) best = d, i3 = i;
   }
   if (i3 < 0 || best <= 1e-9 * size)
-    return absl::InvalidArgumentError("hull: degenerate: all vertices are coplanar (a flat object has no volume)");
+    return absl::InvalidArgumentError(
+        "hull: degenerate: all vertices are coplanar (a flat object has no volume)");
 
   return QhullHull(pts, size);
 }

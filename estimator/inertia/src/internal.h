@@ -93,18 +93,21 @@ InertiaSamples NormalizedCopy(const InertiaSamples& s, InterruptPoll* poll);
 // has fired; callers check poll->stopped().
 
 // Three-point differences at samples 1..N-2 (BASELINE_LS).
-std::vector<KinPoint> FiniteDifferenceKinematics(const InertiaSamples& s, const Vec3& g, InterruptPoll* poll);
+std::vector<KinPoint> FiniteDifferenceKinematics(const InertiaSamples& s, const Vec3& g,
+                                                 InterruptPoll* poll);
 // The measured columns, unsmoothed.
-std::vector<KinPoint> MeasuredKinematicsPoints(const InertiaSamples& s, const Vec3& g, InterruptPoll* poll);
+std::vector<KinPoint> MeasuredKinematicsPoints(const InertiaSamples& s, const Vec3& g,
+                                               InterruptPoll* poll);
 
 // Weights of a local polynomial fit of `degree` over `window` samples around
 // sample k (window shifted inside the data at the ends): row r (0..min(deg,2))
 // gives the r-th derivative at t_k as sum_j W(r, j) y_{lo + j}.
-Eigen::MatrixXd LocalPolyWeights(const std::vector<double>& t, int k, int window, int degree, int* lo);
+Eigen::MatrixXd LocalPolyWeights(const std::vector<double>& t, int k, int window, int degree,
+                                 int* lo);
 
 // Smooths each column of `values` (rows = samples) with a local polynomial.
-Eigen::MatrixXd SmoothSeries(const std::vector<double>& t, const Eigen::MatrixXd& values, int window,
-                             int degree, InterruptPoll* poll);
+Eigen::MatrixXd SmoothSeries(const std::vector<double>& t, const Eigen::MatrixXd& values,
+                             int window, int degree, InterruptPoll* poll);
 
 // CONSTRAINED kinematics: from poses by local-polynomial fits (position, and
 // orientation in a local chart), window/degree chosen per signal by an
@@ -121,9 +124,9 @@ Vector10d ParameterScale(double m0, double length);
 // Output of a method, completed by FitInertia.
 struct MethodOutput {
   Vector10d pi = Vector10d::Zero();
-  Matrix10d cov = Matrix10d::Zero();   // covariance of pi; zero if unknown
-  Matrix10d info = Matrix10d::Zero();  // Y^T W Y (excitation analysis)
-  Vector10d scale = Vector10d::Ones(); // parameter scale for the analysis
+  Matrix10d cov = Matrix10d::Zero();    // covariance of pi; zero if unknown
+  Matrix10d info = Matrix10d::Zero();   // Y^T W Y (excitation analysis)
+  Vector10d scale = Vector10d::Ones();  // parameter scale for the analysis
   double rms_force = 0, rms_torque = 0;
   int iterations = 0;
   int samples_used = 0;
@@ -191,7 +194,8 @@ Vector10d ScaledLeastSquares(const Eigen::MatrixXd& triangle, const Vector10d& s
 // positive semi-definite information matrix A computed in scaled
 // coordinates; eigenvalues below relative_tolerance * the largest are
 // dropped (unidentifiable directions get zero variance).
-Matrix10d ScaledPseudoInverse(const Matrix10d& A, const Vector10d& scale, double relative_tolerance);
+Matrix10d ScaledPseudoInverse(const Matrix10d& A, const Vector10d& scale,
+                              double relative_tolerance);
 
 // Rough mass and length scale from an unconstrained estimate (fallbacks
 // when it is unphysical).

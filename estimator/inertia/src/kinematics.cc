@@ -84,7 +84,8 @@ bool WrenchCovariance(const InertiaSample& s, ForceSource source, const InertiaN
   return true;
 }
 
-std::vector<KinPoint> FiniteDifferenceKinematics(const InertiaSamples& s, const Vec3& g, InterruptPoll* poll) {
+std::vector<KinPoint> FiniteDifferenceKinematics(const InertiaSamples& s, const Vec3& g,
+                                                 InterruptPoll* poll) {
   std::vector<KinPoint> out;
   const auto& x = s.samples;
   const int n = static_cast<int>(x.size());
@@ -102,15 +103,18 @@ std::vector<KinPoint> FiniteDifferenceKinematics(const InertiaSamples& s, const 
     p.R = R1;
     p.w = (hf * rb + hb * rf) / (hb + hf);
     p.dw = 2.0 * (rf - rb) / (hb + hf);
-    const Vec3 a = 2.0 * ((x[k + 1].position - x[k].position) / hf - (x[k].position - x[k - 1].position) / hb) /
-                   (hb + hf);
+    const Vec3 a =
+        2.0 *
+        ((x[k + 1].position - x[k].position) / hf - (x[k].position - x[k - 1].position) / hb) /
+        (hb + hf);
     p.a_minus_g = R1.transpose() * (a - g);
     out.push_back(p);
   }
   return out;
 }
 
-std::vector<KinPoint> MeasuredKinematicsPoints(const InertiaSamples& s, const Vec3& g, InterruptPoll* poll) {
+std::vector<KinPoint> MeasuredKinematicsPoints(const InertiaSamples& s, const Vec3& g,
+                                               InterruptPoll* poll) {
   std::vector<KinPoint> out;
   out.reserve(s.samples.size());
   for (int k = 0; k < static_cast<int>(s.samples.size()); ++k) {
@@ -161,7 +165,8 @@ Eigen::MatrixXd ComputeWeights(const std::vector<double>& t, int k, int w, int d
 
 }  // namespace
 
-Eigen::MatrixXd LocalPolyWeights(const std::vector<double>& t, int k, int window, int degree, int* lo_out) {
+Eigen::MatrixXd LocalPolyWeights(const std::vector<double>& t, int k, int window, int degree,
+                                 int* lo_out) {
   const int n = static_cast<int>(t.size());
   const int w = std::max(1, std::min(window, n));
   const int deg = std::max(0, std::min(degree, w - 1));
@@ -201,8 +206,8 @@ Eigen::MatrixXd ComputeWeights(const std::vector<double>& t, int k, int w, int d
 
 }  // namespace
 
-Eigen::MatrixXd SmoothSeries(const std::vector<double>& t, const Eigen::MatrixXd& values, int window,
-                             int degree, InterruptPoll* poll) {
+Eigen::MatrixXd SmoothSeries(const std::vector<double>& t, const Eigen::MatrixXd& values,
+                             int window, int degree, InterruptPoll* poll) {
   Eigen::MatrixXd out = Eigen::MatrixXd::Zero(values.rows(), values.cols());
   for (int k = 0; k < values.rows(); ++k) {
     if (poll->Tick(4)) break;
@@ -225,8 +230,12 @@ struct Candidate {
 // orientations). Computed lazily for one k at a time (O(window) memory).
 class Charted {
  public:
-  static Charted Positions(const std::vector<Vec3>& p, int span) { return Charted(&p, nullptr, span); }
-  static Charted Rotations(const std::vector<Eigen::Matrix3d>& R, int span) { return Charted(nullptr, &R, span); }
+  static Charted Positions(const std::vector<Vec3>& p, int span) {
+    return Charted(&p, nullptr, span);
+  }
+  static Charted Rotations(const std::vector<Eigen::Matrix3d>& R, int span) {
+    return Charted(nullptr, &R, span);
+  }
 
   Vec3 At(int k, int j) const {
     if (k != k_) Fill(k);
@@ -258,10 +267,10 @@ class Charted {
 
 struct FitResult {
   Candidate chosen{1, 0};
-  double sigma2 = 0;   // noise variance used
+  double sigma2 = 0;  // noise variance used
   bool estimated = false;
-  std::vector<Vec3> d[3];        // value, 1st, 2nd derivative per sample
-  std::vector<double> wsq[3];    // sum of squared weights per sample
+  std::vector<Vec3> d[3];      // value, 1st, 2nd derivative per sample
+  std::vector<double> wsq[3];  // sum of squared weights per sample
 };
 
 constexpr int kMaxWindow = 101;
@@ -273,7 +282,8 @@ Vec3 Apply(const Charted& c, int k, const Eigen::MatrixXd& W, int lo, int r) {
   return acc;
 }
 
-FitResult Final(const std::vector<double>& t, const Charted& c, Candidate cand, InterruptPoll* poll) {
+FitResult Final(const std::vector<double>& t, const Charted& c, Candidate cand,
+                InterruptPoll* poll) {
   const int n = static_cast<int>(t.size());
   FitResult f;
   f.chosen = cand;
@@ -299,7 +309,8 @@ constexpr Candidate kRoughnessFit{7, 4};
 // so white noise of any level is recovered without bias while a smooth
 // signal (its variation well inside the fit's degree over the window)
 // contributes only its fit error.
-double RoughnessVariance(const std::vector<double>& t, const Charted& c, Candidate e, InterruptPoll* poll) {
+double RoughnessVariance(const std::vector<double>& t, const Charted& c, Candidate e,
+                         InterruptPoll* poll) {
   const int n = static_cast<int>(t.size());
   e.window = std::min(e.window, n);
   e.degree = std::min(e.degree, e.window - 1);
@@ -330,7 +341,8 @@ FitResult SelectAndFit(const std::vector<double>& t, const Charted& c, int order
     f.sigma2 = std::max(sigma2, 0.0);
     return f;
   }
-  const Candidate ref = order == 0 ? Candidate{1, 0} : Candidate{std::min(7, n), std::min(4, std::min(7, n) - 1)};
+  const Candidate ref =
+      order == 0 ? Candidate{1, 0} : Candidate{std::min(7, n), std::min(4, std::min(7, n) - 1)};
   std::vector<Candidate> cands;
   if (order == 0) cands.push_back({1, 0});
   for (int w : {5, 7, 9, 11, 15, 21, 31, 41, 51, 71, 101}) {
@@ -403,31 +415,34 @@ struct SeriesNoise {
 // correction see it; other unknown sigmas leave the series as measured
 // (returns false) unless a fixed window is asked for.
 bool SmoothMeasuredSeries(const std::vector<double>& t, const SeriesNoise& noise, int fixed_window,
-                          std::vector<Vec3>* series, std::vector<double>* variance, std::vector<std::string>* notes,
-                          InterruptPoll* poll) {
+                          std::vector<Vec3>* series, std::vector<double>* variance,
+                          std::vector<std::string>* notes, InterruptPoll* poll) {
   const bool estimated = !(noise.sigma > 0) && noise.estimate;
   if (!(noise.sigma > 0) && !estimated && fixed_window <= 0) return false;
   const int n = static_cast<int>(series->size());
   const Charted c = Charted::Positions(*series, kMaxWindow);
-  const double sigma2 = estimated ? RoughnessVariance(t, c, kRoughnessFit, poll) : noise.sigma * noise.sigma;
+  const double sigma2 =
+      estimated ? RoughnessVariance(t, c, kRoughnessFit, poll) : noise.sigma * noise.sigma;
   FitResult f = SelectAndFit(t, c, 0, sigma2, fixed_window, poll);
   f.estimated = estimated;
   variance->assign(n, 0.0);
   for (int k = 0; k < n; ++k) (*series)[k] += f.d[0][k], (*variance)[k] = f.sigma2 * f.wsq[0][k];
   if (notes) notes->push_back(Describe(noise.name, f));
   if (notes && estimated) {
-    notes->push_back(absl::StrFormat(
-        "%s noise: sigma %.3g %s estimated from the data (roughness against a local quartic over %d samples; "
-        "give it to override)",
-        noise.name, std::sqrt(f.sigma2), noise.unit, kRoughnessFit.window));
+    notes->push_back(
+        absl::StrFormat("%s noise: sigma %.3g %s estimated from the data (roughness against a "
+                        "local quartic over %d samples; "
+                        "give it to override)",
+                        noise.name, std::sqrt(f.sigma2), noise.unit, kRoughnessFit.window));
   }
   return true;
 }
 
 }  // namespace
 
-std::vector<KinPoint> SmoothedKinematics(const InertiaSamples& s, const Vec3& g, const InertiaNoise& noise,
-                                         int fixed_window, std::vector<std::string>* notes, InterruptPoll* poll) {
+std::vector<KinPoint> SmoothedKinematics(const InertiaSamples& s, const Vec3& g,
+                                         const InertiaNoise& noise, int fixed_window,
+                                         std::vector<std::string>* notes, InterruptPoll* poll) {
   const int n = static_cast<int>(s.samples.size());
   std::vector<double> t(n);
   std::vector<Vec3> p(n);
@@ -441,26 +456,32 @@ std::vector<KinPoint> SmoothedKinematics(const InertiaSamples& s, const Vec3& g,
   if (s.HasKinematics()) {
     std::vector<KinPoint> m = MeasuredKinematicsPoints(s, g, poll);
     if (poll->stopped()) return m;
-    auto smooth = [&](const char* name, double sigma, bool estimate, const char* unit, auto get, auto set,
-                      double KinPoint::*var) {
+    auto smooth = [&](const char* name, double sigma, bool estimate, const char* unit, auto get,
+                      auto set, double KinPoint::*var) {
       std::vector<Vec3> series(n);
       for (int k = 0; k < n; ++k) series[k] = get(k);
       std::vector<double> variance;
-      if (!SmoothMeasuredSeries(t, {name, unit, sigma, estimate}, fixed_window, &series, &variance, notes, poll))
+      if (!SmoothMeasuredSeries(t, {name, unit, sigma, estimate}, fixed_window, &series, &variance,
+                                notes, poll))
         return;
       for (int k = 0; k < n; ++k) set(k, series[k]), m[k].*var = variance[k];
     };
     std::vector<Vec3> acc(n);
     for (int k = 0; k < n; ++k) acc[k] = s.samples[k].kinematics->acceleration;
-    smooth("measured angular velocity", noise.angular_velocity_sigma, false, "rad/s",
-           [&](int k) { return m[k].w; }, [&](int k, const Vec3& v) { m[k].w = v; }, &KinPoint::var_w);
-    smooth("measured angular acceleration", noise.angular_acceleration_sigma, true, "rad/s^2",
-           [&](int k) { return m[k].dw; }, [&](int k, const Vec3& v) { m[k].dw = v; }, &KinPoint::var_dw);
-    smooth("measured acceleration", noise.linear_acceleration_sigma, true, "m/s^2",
-           [&](int k) { return acc[k]; }, [&](int k, const Vec3& v) { acc[k] = v; }, &KinPoint::var_a);
+    smooth(
+        "measured angular velocity", noise.angular_velocity_sigma, false, "rad/s",
+        [&](int k) { return m[k].w; }, [&](int k, const Vec3& v) { m[k].w = v; }, &KinPoint::var_w);
+    smooth(
+        "measured angular acceleration", noise.angular_acceleration_sigma, true, "rad/s^2",
+        [&](int k) { return m[k].dw; }, [&](int k, const Vec3& v) { m[k].dw = v; },
+        &KinPoint::var_dw);
+    smooth(
+        "measured acceleration", noise.linear_acceleration_sigma, true, "m/s^2",
+        [&](int k) { return acc[k]; }, [&](int k, const Vec3& v) { acc[k] = v; }, &KinPoint::var_a);
     if (noise.orientation_sigma > 0) {
       const Charted c = Charted::Rotations(R, kMaxWindow);
-      FitResult f = SelectAndFit(t, c, 0, noise.orientation_sigma * noise.orientation_sigma, fixed_window, poll);
+      FitResult f = SelectAndFit(t, c, 0, noise.orientation_sigma * noise.orientation_sigma,
+                                 fixed_window, poll);
       for (int k = 0; k < n; ++k) {
         m[k].R = R[k] * ExpSO3(f.d[0][k]);
         m[k].var_rot = f.sigma2 * f.wsq[0][k];
@@ -471,9 +492,12 @@ std::vector<KinPoint> SmoothedKinematics(const InertiaSamples& s, const Vec3& g,
     return m;
   }
   const double sp2 = noise.position_sigma > 0 ? noise.position_sigma * noise.position_sigma : -1.0;
-  const double sr2 = noise.orientation_sigma > 0 ? noise.orientation_sigma * noise.orientation_sigma : -1.0;
-  const FitResult fp = SelectAndFit(t, Charted::Positions(p, kMaxWindow), 2, sp2, fixed_window, poll);
-  const FitResult fr = SelectAndFit(t, Charted::Rotations(R, kMaxWindow), 2, sr2, fixed_window, poll);
+  const double sr2 =
+      noise.orientation_sigma > 0 ? noise.orientation_sigma * noise.orientation_sigma : -1.0;
+  const FitResult fp =
+      SelectAndFit(t, Charted::Positions(p, kMaxWindow), 2, sp2, fixed_window, poll);
+  const FitResult fr =
+      SelectAndFit(t, Charted::Rotations(R, kMaxWindow), 2, sr2, fixed_window, poll);
   if (poll->stopped()) return {};
   if (notes) {
     notes->push_back(Describe("kinematics from positions", fp));
@@ -500,7 +524,8 @@ std::vector<KinPoint> SmoothedKinematics(const InertiaSamples& s, const Vec3& g,
 
 Vector10d ParameterScale(double m0, double l) {
   Vector10d s;
-  s << m0, m0 * l, m0 * l, m0 * l, m0 * l * l, m0 * l * l, m0 * l * l, m0 * l * l, m0 * l * l, m0 * l * l;
+  s << m0, m0 * l, m0 * l, m0 * l, m0 * l * l, m0 * l * l, m0 * l * l, m0 * l * l, m0 * l * l,
+      m0 * l * l;
   return s;
 }
 

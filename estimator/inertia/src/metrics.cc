@@ -13,7 +13,9 @@
 
 namespace tactforce::inertia {
 
-Eigen::Matrix4d PseudoInertia(const InertialParameters& p) { return PseudoInertiaD::FromParameters(p).Matrix(); }
+Eigen::Matrix4d PseudoInertia(const InertialParameters& p) {
+  return PseudoInertiaD::FromParameters(p).Matrix();
+}
 
 InertialParameters FromPseudoInertia(const Eigen::Matrix4d& P) {
   return PseudoInertiaD::FromMatrix(Eigen::Matrix4d(0.5 * (P + P.transpose()))).Parameters();

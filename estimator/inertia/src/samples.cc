@@ -29,13 +29,14 @@ constexpr double kMinQuaternionNorm = 1e-3;
 
 const std::vector<std::string> kPoseColumns = {"t", "px", "py", "pz", "qw", "qx", "qy", "qz"};
 const std::vector<std::string> kWrenchColumns = {"fx", "fy", "fz", "tx", "ty", "tz"};
-const std::vector<std::string> kKinematicsRequired = {"wx", "wy", "wz", "dwx", "dwy",
+const std::vector<std::string> kKinematicsRequired = {"wx",  "wy", "wz", "dwx", "dwy",
                                                       "dwz", "ax", "ay", "az"};
 const std::vector<std::string> kVelocityColumns = {"vx", "vy", "vz"};
 
 std::vector<std::string> ContactColumns(int i) {
   std::vector<std::string> out;
-  for (const char* s : {"px", "py", "pz", "fx", "fy", "fz"}) out.push_back(absl::StrCat("c", i, "_", s));
+  for (const char* s : {"px", "py", "pz", "fx", "fy", "fz"})
+    out.push_back(absl::StrCat("c", i, "_", s));
   return out;
 }
 
@@ -50,8 +51,10 @@ struct Locator {
   bool csv() const { return !s.line_numbers.empty(); }
   // field: CSV column names, or the struct path.
   std::string At(int i, const std::string& csv_columns, const std::string& field) const {
-    if (csv()) return absl::StrCat(Sample(i), ": column", csv_columns.find(',') == std::string::npos ? " '" : "s '",
-                                   csv_columns, "'");
+    if (csv())
+      return absl::StrCat(Sample(i), ": column",
+                          csv_columns.find(',') == std::string::npos ? " '" : "s '", csv_columns,
+                          "'");
     return absl::StrCat(Sample(i), ".", field);
   }
 };
@@ -63,16 +66,18 @@ std::string Fmt(double v) { return absl::StrFormat("%.6g", v); }
 // A finite value past planner/validation.h's limit for its kind: named, so
 // that no fit runs on numbers whose products overflow.
 template <typename Value>
-absl::Status CheckBounded(const Locator& loc, int i, std::string_view csv_columns, std::string_view field,
-                          const Value& v, double limit, const char* unit) {
+absl::Status CheckBounded(const Locator& loc, int i, std::string_view csv_columns,
+                          std::string_view field, const Value& v, double limit, const char* unit) {
   if (planner::IsBounded(v, limit)) return absl::OkStatus();
-  return planner::MagnitudeError(loc.At(i, std::string(csv_columns), std::string(field)), v, limit, unit);
+  return planner::MagnitudeError(loc.At(i, std::string(csv_columns), std::string(field)), v, limit,
+                                 unit);
 }
 
 // Time, position and orientation of sample i.
 absl::Status ValidatePose(const Locator& loc, const InertiaSamples& s, int i) {
   const InertiaSample& x = s.samples[i];
-  if (!std::isfinite(x.t)) return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "t", "t"), ": not finite"));
+  if (!std::isfinite(x.t))
+    return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "t", "t"), ": not finite"));
   if (i > 0 && !(x.t > s.samples[i - 1].t)) {
     return absl::InvalidArgumentError(absl::StrCat(
         loc.At(i, "t", "t"), ": time ", Fmt(x.t),
@@ -81,15 +86,19 @@ absl::Status ValidatePose(const Locator& loc, const InertiaSamples& s, int i) {
   }
   // Poses are differentiated over time: a step below the resolution is noise.
   const double* previous = i > 0 ? &s.samples[i - 1].t : nullptr;
-  if (!planner::IsBounded(x.t, planner::kMaxTime) || (previous && x.t - *previous < planner::kMinTimeStep))
+  if (!planner::IsBounded(x.t, planner::kMaxTime) ||
+      (previous && x.t - *previous < planner::kMinTimeStep))
     return planner::CheckTime(loc.At(i, "t", "t"), x.t, previous);
   if (!Finite(x.position))
-    return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "px,py,pz", "position"), ": not finite"));
-  if (auto st = CheckBounded(loc, i, "px,py,pz", "position", x.position, planner::kMaxLength, "m"); !st.ok())
+    return absl::InvalidArgumentError(
+        absl::StrCat(loc.At(i, "px,py,pz", "position"), ": not finite"));
+  if (auto st = CheckBounded(loc, i, "px,py,pz", "position", x.position, planner::kMaxLength, "m");
+      !st.ok())
     return st;
   const double qn = x.orientation.coeffs().norm();
   if (!std::isfinite(qn))
-    return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "qw,qx,qy,qz", "orientation"), ": not finite"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(loc.At(i, "qw,qx,qy,qz", "orientation"), ": not finite"));
   if (qn < kMinQuaternionNorm) {
     return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "qw,qx,qy,qz", "orientation"),
                                                    ": quaternion norm ", Fmt(qn),
@@ -101,17 +110,22 @@ absl::Status ValidatePose(const Locator& loc, const InertiaSamples& s, int i) {
 // The wrench of sample i and its sigmas.
 absl::Status ValidateWrench(const Locator& loc, const InertiaSample& x, int i) {
   if (!Finite(x.force))
-    return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "fx,fy,fz", "wrench.force"), ": not finite"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(loc.At(i, "fx,fy,fz", "wrench.force"), ": not finite"));
   if (!Finite(x.torque))
-    return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "tx,ty,tz", "wrench.torque"), ": not finite"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(loc.At(i, "tx,ty,tz", "wrench.torque"), ": not finite"));
   if (!(x.force_sigma >= 0) || !std::isfinite(x.force_sigma))
-    return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "f_sigma", "force_sigma"), ": must be finite and >= 0"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(loc.At(i, "f_sigma", "force_sigma"), ": must be finite and >= 0"));
   if (!(x.torque_sigma >= 0) || !std::isfinite(x.torque_sigma))
-    return absl::InvalidArgumentError(absl::StrCat(loc.At(i, "t_sigma", "torque_sigma"), ": must be finite and >= 0"));
-  for (auto st : {CheckBounded(loc, i, "fx,fy,fz", "wrench.force", x.force, planner::kMaxForce, "N"),
-                  CheckBounded(loc, i, "tx,ty,tz", "wrench.torque", x.torque, planner::kMaxForce, "N m"),
-                  CheckBounded(loc, i, "f_sigma", "force_sigma", x.force_sigma, planner::kMaxForce, "N"),
-                  CheckBounded(loc, i, "t_sigma", "torque_sigma", x.torque_sigma, planner::kMaxForce, "N m")})
+    return absl::InvalidArgumentError(
+        absl::StrCat(loc.At(i, "t_sigma", "torque_sigma"), ": must be finite and >= 0"));
+  for (auto st :
+       {CheckBounded(loc, i, "fx,fy,fz", "wrench.force", x.force, planner::kMaxForce, "N"),
+        CheckBounded(loc, i, "tx,ty,tz", "wrench.torque", x.torque, planner::kMaxForce, "N m"),
+        CheckBounded(loc, i, "f_sigma", "force_sigma", x.force_sigma, planner::kMaxForce, "N"),
+        CheckBounded(loc, i, "t_sigma", "torque_sigma", x.torque_sigma, planner::kMaxForce, "N m")})
     if (!st.ok()) return st;
   return absl::OkStatus();
 }
@@ -128,25 +142,31 @@ absl::Status ValidateContacts(const Locator& loc, const InertiaSamples& s, int i
     const ContactReading& r = x.contacts[c];
     const std::string pfx = absl::StrCat("c", c, "_");
     if (!Finite(r.point))
-      return absl::InvalidArgumentError(absl::StrCat(
-          loc.At(i, absl::StrCat(pfx, "px,", pfx, "py,", pfx, "pz"), absl::StrCat("contacts[", c, "].point")),
-          ": not finite"));
+      return absl::InvalidArgumentError(
+          absl::StrCat(loc.At(i, absl::StrCat(pfx, "px,", pfx, "py,", pfx, "pz"),
+                              absl::StrCat("contacts[", c, "].point")),
+                       ": not finite"));
     if (!Finite(r.force))
-      return absl::InvalidArgumentError(absl::StrCat(
-          loc.At(i, absl::StrCat(pfx, "fx,", pfx, "fy,", pfx, "fz"), absl::StrCat("contacts[", c, "].force")),
-          ": not finite"));
+      return absl::InvalidArgumentError(
+          absl::StrCat(loc.At(i, absl::StrCat(pfx, "fx,", pfx, "fy,", pfx, "fz"),
+                              absl::StrCat("contacts[", c, "].force")),
+                       ": not finite"));
     if (!(r.sigma >= 0) || !std::isfinite(r.sigma))
       return absl::InvalidArgumentError(absl::StrCat(
           loc.At(i, absl::StrCat(pfx, "sigma"), absl::StrCat("contacts[", c, "].sigma")),
           ": must be finite and >= 0"));
-    if (!planner::IsBounded(r.point, planner::kMaxLength) || !planner::IsBounded(r.force, planner::kMaxForce) ||
+    if (!planner::IsBounded(r.point, planner::kMaxLength) ||
+        !planner::IsBounded(r.force, planner::kMaxForce) ||
         !planner::IsBounded(r.sigma, planner::kMaxForce)) {
-      for (auto st : {CheckBounded(loc, i, absl::StrCat(pfx, "px,", pfx, "py,", pfx, "pz"),
-                                   absl::StrCat("contacts[", c, "].point"), r.point, planner::kMaxLength, "m"),
-                      CheckBounded(loc, i, absl::StrCat(pfx, "fx,", pfx, "fy,", pfx, "fz"),
-                                   absl::StrCat("contacts[", c, "].force"), r.force, planner::kMaxForce, "N"),
-                      CheckBounded(loc, i, absl::StrCat(pfx, "sigma"), absl::StrCat("contacts[", c, "].sigma"),
-                                   r.sigma, planner::kMaxForce, "N")})
+      for (auto st :
+           {CheckBounded(loc, i, absl::StrCat(pfx, "px,", pfx, "py,", pfx, "pz"),
+                         absl::StrCat("contacts[", c, "].point"), r.point, planner::kMaxLength,
+                         "m"),
+            CheckBounded(loc, i, absl::StrCat(pfx, "fx,", pfx, "fy,", pfx, "fz"),
+                         absl::StrCat("contacts[", c, "].force"), r.force, planner::kMaxForce, "N"),
+            CheckBounded(loc, i, absl::StrCat(pfx, "sigma"),
+                         absl::StrCat("contacts[", c, "].sigma"), r.sigma, planner::kMaxForce,
+                         "N")})
         if (!st.ok()) return st;
     }
   }
@@ -170,13 +190,15 @@ absl::Status ValidateKinematics(const Locator& loc, const InertiaSample& x, int 
   const Field fields[] = {
       {"wx,wy,wz|angular_velocity", &k.angular_velocity, planner::kMaxAngularVelocity, "rad/s"},
       {"vx,vy,vz|velocity", &k.velocity, planner::kMaxVelocity, "m/s"},
-      {"dwx,dwy,dwz|angular_acceleration", &k.angular_acceleration, planner::kMaxAngularAcceleration, "rad/s^2"},
+      {"dwx,dwy,dwz|angular_acceleration", &k.angular_acceleration,
+       planner::kMaxAngularAcceleration, "rad/s^2"},
       {"ax,ay,az|acceleration", &k.acceleration, planner::kMaxAcceleration, "m/s^2"}};
   for (const Field& f : fields) {
     if (!planner::IsBounded(*f.value, f.limit)) {
       const std::string both(f.names);
       const size_t bar = both.find('|');
-      const std::string where = loc.At(i, both.substr(0, bar), "kinematics." + both.substr(bar + 1));
+      const std::string where =
+          loc.At(i, both.substr(0, bar), "kinematics." + both.substr(bar + 1));
       if (!Finite(*f.value)) return absl::InvalidArgumentError(absl::StrCat(where, ": not finite"));
       return planner::MagnitudeError(where, *f.value, f.limit, f.unit);
     }
@@ -197,13 +219,14 @@ absl::Status DetectForceSource(const io::CsvTable& table, InertiaSamples* out) {
       const size_t us = c.find('_');
       if (us == std::string::npos) continue;
       bool digits = true;
-      for (size_t k = 1; k < us; ++k) digits = digits && std::isdigit(static_cast<unsigned char>(c[k]));
+      for (size_t k = 1; k < us; ++k)
+        digits = digits && std::isdigit(static_cast<unsigned char>(c[k]));
       if (!digits) continue;
       int id = 0;
       // Found by the csv fuzzer: std::stoi threw on c99999999999_px.
       if (!absl::SimpleAtoi(c.substr(1, us - 1), &id) || id > kMaxContactColumn) {
-        return absl::InvalidArgumentError(absl::StrCat(src, ": column '", c, "': contact index out of range (0..",
-                                                       kMaxContactColumn, ")"));
+        return absl::InvalidArgumentError(absl::StrCat(
+            src, ": column '", c, "': contact index out of range (0..", kMaxContactColumn, ")"));
       }
       contact_ids.insert(id);
     }
@@ -211,9 +234,9 @@ absl::Status DetectForceSource(const io::CsvTable& table, InertiaSamples* out) {
   bool any_wrench = false;
   for (const auto& c : kWrenchColumns) any_wrench = any_wrench || table.Has(c);
   if (any_wrench && !contact_ids.empty()) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        src, ": both wrench columns (fx..tz) and contact columns (c", *contact_ids.begin(),
-        "_...) are present; give one force source"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(src, ": both wrench columns (fx..tz) and contact columns (c",
+                     *contact_ids.begin(), "_...) are present; give one force source"));
   }
   if (any_wrench) {
     TF_RETURN_IF_ERROR(table.Require(kWrenchColumns));
@@ -222,7 +245,8 @@ absl::Status DetectForceSource(const io::CsvTable& table, InertiaSamples* out) {
   }
   if (contact_ids.empty()) {
     return absl::InvalidArgumentError(absl::StrCat(
-        src, ": missing force columns: need fx,fy,fz,tx,ty,tz (wrench) or c0_px..c0_fz (contacts)"));
+        src,
+        ": missing force columns: need fx,fy,fz,tx,ty,tz (wrench) or c0_px..c0_fz (contacts)"));
   }
   out->source = ForceSource::kContacts;
   const int n = *contact_ids.rbegin() + 1;
@@ -236,8 +260,9 @@ absl::Status DetectForceSource(const io::CsvTable& table, InertiaSamples* out) {
     for (const auto& c : ContactColumns(i))
       if (!table.Has(c)) missing.push_back(c);
     if (!missing.empty()) {
-      return absl::InvalidArgumentError(absl::StrCat(src, ": inconsistent contact columns: contact ", i,
-                                                     ": missing column(s) ", absl::StrJoin(missing, ", ")));
+      return absl::InvalidArgumentError(
+          absl::StrCat(src, ": inconsistent contact columns: contact ", i, ": missing column(s) ",
+                       absl::StrJoin(missing, ", ")));
     }
   }
   out->num_contacts = n;
@@ -289,13 +314,15 @@ struct RowLayout {
   KinematicsColumns kinematics;
 };
 
-RowLayout LayoutRows(const io::CsvTable& table, const InertiaSamples& out, const KinematicsColumns& kin) {
+RowLayout LayoutRows(const io::CsvTable& table, const InertiaSamples& out,
+                     const KinematicsColumns& kin) {
   auto col = [&](const std::string& name) { return table.ColumnIndex(name); };
   RowLayout l;
   l.t = col("t");
   for (int k = 0; k < 3; ++k) l.p[k] = col(kPoseColumns[1 + k]);
   for (int k = 0; k < 4; ++k) l.q[k] = col(kPoseColumns[4 + k]);
-  for (int k = 0; k < 6 && out.source == ForceSource::kWrench; ++k) l.wrench[k] = col(kWrenchColumns[k]);
+  for (int k = 0; k < 6 && out.source == ForceSource::kWrench; ++k)
+    l.wrench[k] = col(kWrenchColumns[k]);
   l.force_sigma = col("f_sigma"), l.torque_sigma = col("t_sigma");
   for (int i = 0; i < out.num_contacts; ++i) {
     std::array<int, 7> a;
@@ -307,7 +334,8 @@ RowLayout LayoutRows(const io::CsvTable& table, const InertiaSamples& out, const
   auto kc = [&](const char* a, const char* b, const char* c) {
     return std::array<int, 3>{col(a), col(b), col(c)};
   };
-  l.w = kc("wx", "wy", "wz"), l.v = kc("vx", "vy", "vz"), l.dw = kc("dwx", "dwy", "dwz"), l.a = kc("ax", "ay", "az");
+  l.w = kc("wx", "wy", "wz"), l.v = kc("vx", "vy", "vz"), l.dw = kc("dwx", "dwy", "dwz"),
+  l.a = kc("ax", "ay", "az");
   l.kinematics = kin;
   return l;
 }
@@ -348,8 +376,8 @@ absl::Status RejectNan(const io::CsvTable& table) {
   for (size_t r = 0; r < table.rows.size(); ++r) {
     for (size_t c = 0; c < table.rows[r].size(); ++c) {
       if (std::isnan(table.rows[r][c])) {
-        return absl::InvalidArgumentError(absl::StrCat(table.source, ":", table.line_numbers[r], ": column '",
-                                                       table.columns[c], "': NaN"));
+        return absl::InvalidArgumentError(absl::StrCat(table.source, ":", table.line_numbers[r],
+                                                       ": column '", table.columns[c], "': NaN"));
       }
     }
   }
@@ -379,7 +407,8 @@ absl::Status ValidateInertiaSamples(const InertiaSamples& s, InterruptPoll* poll
     if (poll->Tick()) return Interrupted();
     const InertiaSample& x = s.samples[i];
     TF_RETURN_IF_ERROR(ValidatePose(loc, s, i));
-    absl::Status forces = s.source == ForceSource::kWrench ? ValidateWrench(loc, x, i) : ValidateContacts(loc, s, i);
+    absl::Status forces =
+        s.source == ForceSource::kWrench ? ValidateWrench(loc, x, i) : ValidateContacts(loc, s, i);
     if (!forces.ok()) return forces;
     TF_RETURN_IF_ERROR(ValidateKinematics(loc, x, i, kin));
   }
@@ -414,15 +443,16 @@ absl::StatusOr<InertiaSamples> InertiaSamplesFromCsv(const io::CsvTable& table) 
   const RowLayout layout = LayoutRows(table, out, *kin);
   out.samples.reserve(table.rows.size());
   out.line_numbers = table.line_numbers;
-  for (const std::vector<double>& row : table.rows) out.samples.push_back(ReadRow(row, layout, out.source));
+  for (const std::vector<double>& row : table.rows)
+    out.samples.push_back(ReadRow(row, layout, out.source));
   TF_RETURN_IF_ERROR(RejectNan(table));
   TF_RETURN_IF_ERROR(ValidateInertiaSamples(out));
   const int need = MinimumSamples(out, InertiaMethod::kBaselineLs);  // the least of the methods
   if (static_cast<int>(out.samples.size()) < need) {
-    return absl::InvalidArgumentError(absl::StrCat(
-        src, ": ", out.samples.size(), " sample(s), at least ", need,
-        " needed for the 10 inertial parameters (6 equations per sample",
-        out.HasKinematics() ? "" : ", after differentiating the poses", ")"));
+    return absl::InvalidArgumentError(
+        absl::StrCat(src, ": ", out.samples.size(), " sample(s), at least ", need,
+                     " needed for the 10 inertial parameters (6 equations per sample",
+                     out.HasKinematics() ? "" : ", after differentiating the poses", ")"));
   }
   NormalizeOrientations(out);
   return out;
@@ -465,7 +495,8 @@ std::string InertiaSamplesToCsv(const InertiaSamples& s) {
   }
   const bool kin = s.HasKinematics();
   if (kin) {
-    for (const char* c : {"wx", "wy", "wz", "vx", "vy", "vz", "dwx", "dwy", "dwz", "ax", "ay", "az"})
+    for (const char* c :
+         {"wx", "wy", "wz", "vx", "vy", "vz", "dwx", "dwy", "dwz", "ax", "ay", "az"})
       cols.push_back(c);
   }
   std::string out = absl::StrJoin(cols, ",") + "\n";
@@ -502,7 +533,8 @@ std::string InertiaSamplesToCsv(const InertiaSamples& s) {
     }
     if (kin) {
       const MeasuredKinematics& k = *x.kinematics;
-      for (const Vec3* v : {&k.angular_velocity, &k.velocity, &k.angular_acceleration, &k.acceleration})
+      for (const Vec3* v :
+           {&k.angular_velocity, &k.velocity, &k.angular_acceleration, &k.acceleration})
         for (int j = 0; j < 3; ++j) add((*v)(j));
     }
     out += '\n';

@@ -31,8 +31,8 @@ ExcitationTrajectory ExcitationTrajectory::Default() {
   return e;
 }
 
-void ExcitationTrajectory::Evaluate(double t, Vec3* p, Vec3* v, Vec3* a, Eigen::Matrix3d* R, Vec3* w,
-                                    Vec3* dw) const {
+void ExcitationTrajectory::Evaluate(double t, Vec3* p, Vec3* v, Vec3* a, Eigen::Matrix3d* R,
+                                    Vec3* w, Vec3* dw) const {
   Vec3 x = position_offset, dx = Vec3::Zero(), ddx = Vec3::Zero();
   for (const SinusoidComponent& c : position) {
     const double om = 2 * M_PI * c.frequency_hz, arg = om * t + c.phase;
@@ -52,7 +52,8 @@ void ExcitationTrajectory::Evaluate(double t, Vec3* p, Vec3* v, Vec3* a, Eigen::
   const Eigen::Matrix3d R2 = Eigen::AngleAxisd(q(1), e2).toRotationMatrix();
   const Eigen::Matrix3d R3 = Eigen::AngleAxisd(q(2), e3).toRotationMatrix();
   const Eigen::Matrix3d A = R3.transpose() * R2.transpose();  // R3^T R2^T
-  const Eigen::Matrix3d dA = -dq(2) * Skew(e3) * A - R3.transpose() * dq(1) * Skew(e2) * R2.transpose();
+  const Eigen::Matrix3d dA =
+      -dq(2) * Skew(e3) * A - R3.transpose() * dq(1) * Skew(e2) * R2.transpose();
   const Eigen::Matrix3d dR3t = -dq(2) * Skew(e3) * R3.transpose();
   if (p) *p = x;
   if (v) *v = dx;
@@ -60,15 +61,19 @@ void ExcitationTrajectory::Evaluate(double t, Vec3* p, Vec3* v, Vec3* a, Eigen::
   if (R) *R = R1 * R2 * R3;
   if (w) *w = A * e1 * dq(0) + R3.transpose() * e2 * dq(1) + e3 * dq(2);
   if (dw)
-    *dw = A * e1 * ddq(0) + dA * e1 * dq(0) + R3.transpose() * e2 * ddq(1) + dR3t * e2 * dq(1) + e3 * ddq(2);
+    *dw = A * e1 * ddq(0) + dA * e1 * dq(0) + R3.transpose() * e2 * ddq(1) + dR3t * e2 * dq(1) +
+          e3 * ddq(2);
 }
 
 absl::StatusOr<SimulationNoise> NadeauNoise(const std::string& level) {
   SimulationNoise n;
   double k;
-  if (level == "low") k = 0.5;
-  else if (level == "moderate") k = 1.0;
-  else if (level == "high") k = 2.0;
+  if (level == "low")
+    k = 0.5;
+  else if (level == "moderate")
+    k = 1.0;
+  else if (level == "high")
+    k = 2.0;
   else
     return absl::InvalidArgumentError(
         absl::StrCat("noise level: unknown '", level, "' (expected low, moderate or high)"));
@@ -81,10 +86,12 @@ absl::StatusOr<SimulationNoise> NadeauNoise(const std::string& level) {
 
 std::vector<std::string> BuiltInObjectNames() { return {"seed-table1", "box"}; }
 
-absl::StatusOr<SimulatedObject> ObjectFromParameters(const std::string& name, const InertialParameters& p) {
+absl::StatusOr<SimulatedObject> ObjectFromParameters(const std::string& name,
+                                                     const InertialParameters& p) {
   if (!(p.mass > 0) || !p.com.allFinite() || ScaledPseudoInertiaMinEigenvalue(p) <= 0) {
     return absl::InvalidArgumentError(absl::StrCat(
-        "object '", name, "': parameters are not physically consistent (mass > 0 and a positive definite "
+        "object '", name,
+        "': parameters are not physically consistent (mass > 0 and a positive definite "
         "pseudo-inertia are required)"));
   }
   const Eigen::Matrix3d h = p.inertia_com.Matrix();
@@ -123,12 +130,14 @@ absl::StatusOr<SimulatedObject> BuiltInObject(const std::string& name) {
   if (name == "seed-table1") {
     p.mass = 1.3;
     p.com = Vec3(0.2, 0.5, 0.1);
-    p.inertia_com = InertiaTensor::FromArray({40.15e-2, 12.92e-2, 47.99e-2, -12.97e-2, -2.59e-2, -6.49e-2});
+    p.inertia_com =
+        InertiaTensor::FromArray({40.15e-2, 12.92e-2, 47.99e-2, -12.97e-2, -2.59e-2, -6.49e-2});
   } else if (name == "box") {
     p.mass = 0.5;
     p.com = Vec3(0.02, -0.01, 0.03);
     const double a = 0.2, b = 0.1, c = 0.05;
-    const Eigen::Matrix3d d = (p.mass / 12.0 * Vec3(b * b + c * c, a * a + c * c, a * a + b * b)).asDiagonal();
+    const Eigen::Matrix3d d =
+        (p.mass / 12.0 * Vec3(b * b + c * c, a * a + c * c, a * a + b * b)).asDiagonal();
     const Eigen::Matrix3d R = Eigen::AngleAxisd(0.5, Vec3(1, 2, 3).normalized()).toRotationMatrix();
     p.inertia_com = InertiaTensor::FromMatrix(R * d * R.transpose());
   } else {
@@ -150,9 +159,12 @@ void NoisyPose(std::mt19937_64& rng, const SimulationNoise& n, InertiaSample& s)
   }
 }
 
-void NoisySample(std::mt19937_64& rng, const SimulationNoise& n, ForceSource src, InertiaSample& s) {
+void NoisySample(std::mt19937_64& rng, const SimulationNoise& n, ForceSource src,
+                 InertiaSample& s) {
   std::normal_distribution<double> N(0.0, 1.0);
-  auto v3 = [&](double sigma) { return sigma > 0 ? Vec3(sigma * Vec3(N(rng), N(rng), N(rng))) : Vec3::Zero(); };
+  auto v3 = [&](double sigma) {
+    return sigma > 0 ? Vec3(sigma * Vec3(N(rng), N(rng), N(rng))) : Vec3::Zero();
+  };
   if (src == ForceSource::kWrench) {
     s.force += v3(n.force_sigma);
     s.torque += v3(n.torque_sigma);
@@ -168,17 +180,22 @@ void NoisySample(std::mt19937_64& rng, const SimulationNoise& n, ForceSource src
 }
 
 absl::Status ValidateSimulationOptions(const SimulationOptions& o) {
-  if (!(o.rate_hz > 0) || !std::isfinite(o.rate_hz)) return absl::InvalidArgumentError("rate_hz: must be > 0");
-  if (!(o.duration > 0) || !std::isfinite(o.duration)) return absl::InvalidArgumentError("duration: must be > 0");
+  if (!(o.rate_hz > 0) || !std::isfinite(o.rate_hz))
+    return absl::InvalidArgumentError("rate_hz: must be > 0");
+  if (!(o.duration > 0) || !std::isfinite(o.duration))
+    return absl::InvalidArgumentError("duration: must be > 0");
   if (!o.gravity.allFinite()) return absl::InvalidArgumentError("gravity: not finite");
   const SimulationNoise& n = o.noise;
-  for (double v : {n.force_sigma, n.torque_sigma, n.position_sigma, n.orientation_sigma,
-                   n.linear_acceleration_sigma, n.angular_acceleration_sigma, n.angular_velocity_sigma}) {
-    if (!(v >= 0) || !std::isfinite(v)) return absl::InvalidArgumentError("noise: sigmas must be finite and >= 0");
+  for (double v :
+       {n.force_sigma, n.torque_sigma, n.position_sigma, n.orientation_sigma,
+        n.linear_acceleration_sigma, n.angular_acceleration_sigma, n.angular_velocity_sigma}) {
+    if (!(v >= 0) || !std::isfinite(v))
+      return absl::InvalidArgumentError("noise: sigmas must be finite and >= 0");
   }
   for (const auto* list : {&o.trajectory.position, &o.trajectory.orientation}) {
     for (const SinusoidComponent& c : *list) {
-      if (c.axis < 0 || c.axis > 2) return absl::InvalidArgumentError("trajectory: axis must be 0, 1 or 2");
+      if (c.axis < 0 || c.axis > 2)
+        return absl::InvalidArgumentError("trajectory: axis must be 0, 1 or 2");
       if (!std::isfinite(c.amplitude) || !std::isfinite(c.frequency_hz) || !std::isfinite(c.phase))
         return absl::InvalidArgumentError("trajectory: components must be finite");
     }
@@ -188,7 +205,8 @@ absl::Status ValidateSimulationOptions(const SimulationOptions& o) {
 
 // In hand: the object and its fingertip contacts as a planner trajectory
 // problem (the steps are added per sample).
-planner::TrajectoryProblem InHandProblem(const SimulatedObject& object, const SimulationOptions& o) {
+planner::TrajectoryProblem InHandProblem(const SimulatedObject& object,
+                                         const SimulationOptions& o) {
   const InertialParameters& p = object.params;
   planner::TrajectoryProblem traj;
   traj.base.object.mass = p.mass;
@@ -216,14 +234,16 @@ absl::Status AddInHandForces(const planner::TrajectoryProblem& traj, const Simul
   planner::PlanOptions po;
   absl::StatusOr<planner::TrajectoryResult> r =
       planner::PlanTrajectory(traj, po, planner::SolverKind::kGeometric, /*warm_start=*/true);
-  if (!r.ok()) return absl::InvalidArgumentError(absl::StrCat("in-hand forces: ", r.status().message()));
+  if (!r.ok())
+    return absl::InvalidArgumentError(absl::StrCat("in-hand forces: ", r.status().message()));
   for (size_t k = 0; k < s->samples.size(); ++k) {
     const planner::PlanResult& pr = r->steps[k];
     if (pr.status != planner::PlanStatus::kOptimal) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "in-hand forces infeasible at t = %.4g s (%s): raise friction or min_normal_force, or slow the "
-          "trajectory",
-          s->samples[k].t, pr.message));
+      return absl::InvalidArgumentError(
+          absl::StrFormat("in-hand forces infeasible at t = %.4g s (%s): raise friction or "
+                          "min_normal_force, or slow the "
+                          "trajectory",
+                          s->samples[k].t, pr.message));
     }
     for (int i = 0; i < o.num_contacts; ++i) {
       ContactReading c;
@@ -254,10 +274,13 @@ absl::StatusOr<SimulationResult> SimulateInertia(const SimulationOptions& o) {
   }
   const int steps = static_cast<int>(std::floor(o.duration * o.rate_hz + 1e-9)) + 1;
   if (steps < 5) return absl::InvalidArgumentError("duration * rate_hz: fewer than 5 samples");
-  if (steps > 10'000'000) return absl::InvalidArgumentError("duration * rate_hz: more than 1e7 samples");
+  if (steps > 10'000'000)
+    return absl::InvalidArgumentError("duration * rate_hz: more than 1e7 samples");
   const bool in_hand = o.mode == SimulationMode::kInHand;
-  if (in_hand && (o.num_contacts < 1 || o.num_contacts > static_cast<int>(object.contact_points.size()))) {
-    return absl::InvalidArgumentError(absl::StrCat("num_contacts: must be 1..", object.contact_points.size()));
+  if (in_hand &&
+      (o.num_contacts < 1 || o.num_contacts > static_cast<int>(object.contact_points.size()))) {
+    return absl::InvalidArgumentError(
+        absl::StrCat("num_contacts: must be 1..", object.contact_points.size()));
   }
 
   const InertialParameters& p = object.params;

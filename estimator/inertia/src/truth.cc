@@ -15,7 +15,8 @@ namespace tactforce::inertia {
 absl::StatusOr<InertiaTruth> ParseTruthJson(const std::string& text, const std::string& source) {
   absl::StatusOr<io::JsonValue> root = io::ParseJson(text, source);
   if (!root.ok()) return root.status();
-  if (!root->is_object()) return absl::InvalidArgumentError(absl::StrCat(source, ": expected a JSON object"));
+  if (!root->is_object())
+    return absl::InvalidArgumentError(absl::StrCat(source, ": expected a JSON object"));
   auto key_error = [&](const std::string& key, const std::string& what) {
     return absl::InvalidArgumentError(absl::StrCat(source, ": key '", key, "': ", what));
   };
@@ -23,13 +24,15 @@ absl::StatusOr<InertiaTruth> ParseTruthJson(const std::string& text, const std::
                    std::vector<double>* out) -> absl::Status {
     const io::JsonValue* v = root->Find(key);
     if (v == nullptr) {
-      return required ? absl::InvalidArgumentError(absl::StrCat(source, ": missing key '", key, "'"))
-                      : absl::OkStatus();
+      return required
+                 ? absl::InvalidArgumentError(absl::StrCat(source, ": missing key '", key, "'"))
+                 : absl::OkStatus();
     }
     if (!v->is_array() || v->array().size() != n)
       return key_error(key, absl::StrCat("expected an array of ", n, " numbers"));
     for (const io::JsonValue& x : v->array()) {
-      if (!x.is_number()) return key_error(key, absl::StrCat("expected an array of ", n, " numbers"));
+      if (!x.is_number())
+        return key_error(key, absl::StrCat("expected an array of ", n, " numbers"));
       if (!std::isfinite(x.number())) return key_error(key, "not finite");
       out->push_back(x.number());
     }
@@ -46,8 +49,8 @@ absl::StatusOr<InertiaTruth> ParseTruthJson(const std::string& text, const std::
   TF_RETURN_IF_ERROR(array("inertia_com", 6, true, &inertia));
   TF_RETURN_IF_ERROR(array("gravity_world", 3, false, &g));
   truth.params.com = Vec3(com[0], com[1], com[2]);
-  truth.params.inertia_com =
-      InertiaTensor::FromArray({inertia[0], inertia[1], inertia[2], inertia[3], inertia[4], inertia[5]});
+  truth.params.inertia_com = InertiaTensor::FromArray(
+      {inertia[0], inertia[1], inertia[2], inertia[3], inertia[4], inertia[5]});
   if (!g.empty()) truth.gravity_world = Vec3(g[0], g[1], g[2]);
   return truth;
 }

@@ -48,8 +48,7 @@ absl::StatusOr<planner::TrajectoryProblem> ToTrajectoryProblem(const v1::Traject
 
 // Planner -> wire. Every field is written explicitly (UNSPECIFIED enums are
 // never produced), so a request round-trips through FromProto unchanged.
-v1::PlanRequest ToRequest(const planner::PlanProblem& problem,
-                          const planner::PlanOptions& options,
+v1::PlanRequest ToRequest(const planner::PlanProblem& problem, const planner::PlanOptions& options,
                           planner::SolverKind solver);
 v1::PlanResponse ToProto(const planner::PlanResult& result);
 // The same into `out` (cleared first; on its arena, without a copy).
@@ -59,8 +58,8 @@ void ToProto(const planner::PlanResult& result, v1::PlanResponse* out);
 // covariance (100 entries, checked by the planner's validation) or the
 // short form mass_sigma / com_covariance converted to it; errors name the
 // field ("object.uncertainty.covariance: 99 entries, need 100 ...").
-absl::Status UncertaintyFromProto(const v1::ParameterUncertainty& in, double mass, const planner::Vec3& com,
-                                  planner::ParameterUncertainty* out);
+absl::Status UncertaintyFromProto(const v1::ParameterUncertainty& in, double mass,
+                                  const planner::Vec3& com, planner::ParameterUncertainty* out);
 
 // Single-value mappings.
 v1::Vec3 ToProto(const planner::Vec3& v);

@@ -151,9 +151,9 @@ struct PlanSettings {
 //     retry later").
 // Either way a request is validated once. The solve checks the CallControl
 // before it starts ("before the solve started") and after it ends ("after
-// N us of solving"), and polls it in between (CallState::interrupt). Log details: "solver=<SOLVER|-> contacts=N";
-// results on OK: "plan_status=<STATUS> solve_us=N". A queued request also
-// logs "rpc=<rpc> event=queued solver=... contacts=N" at debug.
+// N us of solving"), and polls it in between (CallState::interrupt). Log details:
+// "solver=<SOLVER|-> contacts=N"; results on OK: "plan_status=<STATUS> solve_us=N". A queued
+// request also logs "rpc=<rpc> event=queued solver=... contacts=N" at debug.
 class PlanDispatcher {
  public:
   // `pool` (and `ipopt_lane`) must outlive the dispatcher. `ipopt_lane`:
@@ -161,7 +161,8 @@ class PlanDispatcher {
   // geometric work never waits behind Ipopt solves (which a process runs
   // one at a time); nullptr = on `pool` with everything else.
   PlanDispatcher(Executor* pool, PlanSettings settings, Executor* ipopt_lane = nullptr)
-      : pool_(pool), ipopt_lane_(ipopt_lane != nullptr ? ipopt_lane : pool),
+      : pool_(pool),
+        ipopt_lane_(ipopt_lane != nullptr ? ipopt_lane : pool),
         settings_(std::move(settings)) {}
 
   // `request` is read before Dispatch returns; `response`, `control` and
@@ -169,8 +170,7 @@ class PlanDispatcher {
   // stream's own (PlanStream), or nullptr for the solving thread's
   // (ThreadPlanBuffers()). Log text is formatted only at enabled levels.
   void Dispatch(const v1::PlanRequest& request, v1::PlanResponse* response, CallLog log,
-                const CallControl& control, CallDone done,
-                PlanBuffers* buffers = nullptr) const;
+                const CallControl& control, CallDone done, PlanBuffers* buffers = nullptr) const;
 
   const PlanSettings& settings() const { return settings_; }
 
@@ -216,8 +216,8 @@ using UnaryHandler =
 // CallControl as interrupt extended by the WorkBudget of
 // limits.solve_timeout_ms; the
 // call stops with the CallControl's reason "before the work started" or
-// "after the work finished", or RESOURCE_EXHAUSTED when the budget ran out. `request`, `response` and
-// `control` must stay valid until done(status) has run.
+// "after the work finished", or RESOURCE_EXHAUSTED when the budget ran out. `request`, `response`
+// and `control` must stay valid until done(status) has run.
 template <class Request, class Response>
 void DispatchOnPool(const Request& request, Response* response, CallLog log, Executor* pool,
                     const CallControl& control, CallLimits limits,
@@ -227,7 +227,8 @@ void DispatchOnPool(const Request& request, Response* response, CallLog log, Exe
     if (control.ShouldStop()) return control.StopReason("before the work started");
     const WorkBudget budget(limits.solve_timeout_seconds(), control.Interrupt());
     absl::StatusOr<Response> result = handler(request, limits, CallState{budget.Interrupt()});
-    if (!result.ok()) return control.ShouldStop() ? result.status() : budget.Explain(result.status());
+    if (!result.ok())
+      return control.ShouldStop() ? result.status() : budget.Explain(result.status());
     if (control.ShouldStop()) return control.StopReason("after the work finished");
     *response = *std::move(result);
     return absl::OkStatus();

@@ -26,7 +26,8 @@ inline constexpr int64_t kDefaultMaxInertiaSamples = 1'000'000;
 // mesh mapped to the object frame; errors of the file itself start with
 // "options.mesh: <name>: ...". INERTIA_METHOD_UNSPECIFIED is DENSITY when a
 // mesh is given, else CONSTRAINED.
-absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::InertiaFitOptions& options);
+absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(
+    const v1::InertiaFitOptions& options);
 v1::InertiaMethod InertiaMethodToProto(inertia::InertiaMethod method);
 // Wire spelling, "INERTIA_METHOD_DENSITY" (v1::InertiaMethod_Name); the
 // library's inertia::ToString is the CLI spelling ("density").
@@ -40,12 +41,13 @@ struct ObjectMesh {
   io::TriangleMesh mesh;
   std::string name;
 };
-absl::StatusOr<ObjectMesh> MeshFromProto(const v1::MeshInput& input, std::string_view field = "options.mesh");
+absl::StatusOr<ObjectMesh> MeshFromProto(const v1::MeshInput& input,
+                                         std::string_view field = "options.mesh");
 
 // A MeshInput carrying a mesh file's `bytes` with the placement applied by
 // io::LoadMesh (so that MeshFromProto gives the same mesh as LoadMesh).
-v1::MeshInput MeshInputToProto(std::string bytes, const std::string& format, const std::string& name,
-                               const io::MeshPlacement& placement);
+v1::MeshInput MeshInputToProto(std::string bytes, const std::string& format,
+                               const std::string& name, const io::MeshPlacement& placement);
 
 inertia::InertialParameters InertialParametersFromProto(const v1::InertialParameters& params);
 v1::InertialParameters InertialParametersToProto(const inertia::InertialParameters& params);
@@ -65,10 +67,12 @@ inertia::InertiaFit InertiaFitFromProto(const v1::FitInertiaResponse& response);
 // by InertiaStream::Fit. `progress` receives the fraction done (may be empty).
 // `fit`, when not null, receives the library's result as well (with the
 // region model of a DENSITY fit, e.g. for inertia::DensityPlotSvg).
-absl::StatusOr<v1::FitInertiaResponse> FitInertiaSamples(
-    const inertia::InertiaSamples& samples, const v1::InertiaFitOptions& options,
-    const CallLimits& limits = {}, std::function<void(double)> progress = {},
-    inertia::InertiaFit* fit = nullptr, const CallState& state = {});
+absl::StatusOr<v1::FitInertiaResponse> FitInertiaSamples(const inertia::InertiaSamples& samples,
+                                                         const v1::InertiaFitOptions& options,
+                                                         const CallLimits& limits = {},
+                                                         std::function<void(double)> progress = {},
+                                                         inertia::InertiaFit* fit = nullptr,
+                                                         const CallState& state = {});
 
 // The FitInertia request stream, one message at a time. Samples are
 // converted as they arrive (the proto messages are not kept). Add() fails

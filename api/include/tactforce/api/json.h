@@ -30,5 +30,4 @@ absl::StatusOr<v1::PlanRequest> ParsePlanRequestJson(std::string_view json,
 // when pretty-printed.
 std::string ToJson(const google::protobuf::Message& message, bool compact = false);
 
-
 }  // namespace tactforce::api

@@ -47,15 +47,16 @@ inline constexpr int kMaxPlotSteps = 24;
 
 // What is drawn of one contact (object frame, SI units).
 struct ContactGlyph {
-  std::string label;  // the contact's name, else "contact i"
+  std::string label;                               // the contact's name, else "contact i"
   planner::Vec3 position = planner::Vec3::Zero();  // m
   planner::Vec3 normal = planner::Vec3::UnitZ();   // unit, into the object
-  planner::Vec3 tangent1 = planner::Vec3::UnitX(), tangent2 = planner::Vec3::UnitY();  // TangentBasis
+  planner::Vec3 tangent1 = planner::Vec3::UnitX(),
+                tangent2 = planner::Vec3::UnitY();  // TangentBasis
   double friction = 0;
-  int cone_sides = 0;       // facets of the drawn pyramid; 0: the exact circular cone
-  double apex_shift = 0;    // N along the normal: the drawn robust cone's apex
-  bool has_force = false;   // the response carries a force for this contact
-  planner::Vec3 force = planner::Vec3::Zero();  // N
+  int cone_sides = 0;      // facets of the drawn pyramid; 0: the exact circular cone
+  double apex_shift = 0;   // N along the normal: the drawn robust cone's apex
+  bool has_force = false;  // the response carries a force for this contact
+  planner::Vec3 force = planner::Vec3::Zero();           // N
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // S_ii of the trusted ellipsoid (N^2)
   // (G^+ S_b G^+T)_ii: the force spread the inertial-parameter uncertainty
   // causes (N^2); zero without object.uncertainty.
@@ -64,9 +65,9 @@ struct ContactGlyph {
 
 // One plan as drawn.
 struct PlanScene {
-  std::string status;            // "OPTIMAL", "INFEASIBLE", ...
-  std::string settings;          // "2 contacts, 12-facet pyramids, confidence 1, solver GEOMETRIC"
-  std::string outcome;           // "objective 1.2 N², min margin 0.3 N" and the message, if any
+  std::string status;    // "OPTIMAL", "INFEASIBLE", ...
+  std::string settings;  // "2 contacts, 12-facet pyramids, confidence 1, solver GEOMETRIC"
+  std::string outcome;   // "objective 1.2 N², min margin 0.3 N" and the message, if any
   planner::Vec3 com = planner::Vec3::Zero();
   planner::Vec3 gravity = planner::Vec3::Zero();  // m/s^2
   std::vector<ContactGlyph> contacts;
@@ -80,8 +81,8 @@ absl::StatusOr<PlanScene> BuildPlanScene(const planner::PlanProblem& problem,
 
 // The SVG document of one plan; `source` (the request's file name; may be
 // empty) is named under the title. Errors: the request's (field paths).
-absl::StatusOr<std::string> PlanSvg(const v1::PlanRequest& request, const v1::PlanResponse& response,
-                                    std::string_view source = "");
+absl::StatusOr<std::string> PlanSvg(const v1::PlanRequest& request,
+                                    const v1::PlanResponse& response, std::string_view source = "");
 
 // Which of `steps` steps a trajectory plot shows: all when at most
 // `max_steps`, else `max_steps` evenly spaced ones from the first to the last.
@@ -91,6 +92,7 @@ std::vector<int> PlottedSteps(int steps, int max_steps = kMaxPlotSteps);
 // views, small), all at one length and force scale, and one legend; `source`
 // as in PlanSvg.
 absl::StatusOr<std::string> TrajectorySvg(const v1::TrajectoryRequest& request,
-                                          const v1::TrajectoryResponse& response, std::string_view source = "");
+                                          const v1::TrajectoryResponse& response,
+                                          std::string_view source = "");
 
 }  // namespace tactforce::api

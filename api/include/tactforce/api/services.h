@@ -68,7 +68,7 @@ absl::StatusOr<v1::TrajectoryResponse> HandleTrajectory(const v1::TrajectoryRequ
                                                         const CallState& state = {});
 absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
     const v1::FrictionProbeRequest& request, const CallLimits& limits = {},
-                                             const CallState& state = {});
+    const CallState& state = {});
 absl::StatusOr<v1::EstimateResponse> HandleEstimate(const v1::EstimateRequest& request,
                                                     const CallLimits& limits = {},
                                                     const CallState& state = {});

@@ -12,7 +12,6 @@ namespace tactforce::api {
 // sigma); objective, min margin, solver, time (us), iterations; and a
 // cross-check line when the response has one. Contact names come from the
 // request (index when unnamed). Ends with a newline.
-std::string FormatPlanTable(const v1::PlanRequest& request,
-                            const v1::PlanResponse& response);
+std::string FormatPlanTable(const v1::PlanRequest& request, const v1::PlanResponse& response);
 
 }  // namespace tactforce::api

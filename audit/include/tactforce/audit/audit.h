@@ -49,7 +49,16 @@
 
 namespace tactforce::audit {
 
-enum class Effect { kDeadzone, kSaturation, kNonlinearity, kHysteresis, kDelay, kLag, kDrift, kCrosstalk };
+enum class Effect {
+  kDeadzone,
+  kSaturation,
+  kNonlinearity,
+  kHysteresis,
+  kDelay,
+  kLag,
+  kDrift,
+  kCrosstalk
+};
 inline constexpr int kNumEffects = 8;
 const char* EffectName(Effect e);  // "deadzone", ... (report.json vocabulary)
 absl::StatusOr<Effect> ParseEffect(const std::string& name);
@@ -73,7 +82,7 @@ std::vector<std::string> AllEffectNames();
 std::vector<std::string> EffectFields(Effect e);
 
 struct AuditOptions {
-  double heldout_fraction = 0.35;   // later block used for scoring, (0.1, 0.6)
+  double heldout_fraction = 0.35;  // later block used for scoring, (0.1, 0.6)
   // Blocked hold-out (k-fold in time): after the selection on the final
   // block, further causes are chosen and scored by cross-validation over
   // `blocks` contiguous time blocks (each held out in turn, fitted on the
@@ -84,8 +93,8 @@ struct AuditOptions {
   // deviation of its 5-sample moving mean from its median stays below
   // silent_sigmas x its noise (robust, from first differences) / sqrt(5).
   double silent_sigmas = 8;
-  bool phantom = true;              // try the phantom candidate (each round)
-  double min_gain = 0.01;           // relative held-out RMS gain to accept a cause
+  bool phantom = true;     // try the phantom candidate (each round)
+  double min_gain = 0.01;  // relative held-out RMS gain to accept a cause
   // Absolute floor beside min_gain: the held-out RMS (force equivalent,
   // reading units / |gain|) must also fall by at least this fraction of the
   // reference force range (1e-6: 10 uN on a 10 N range, 10x above the
@@ -93,12 +102,12 @@ struct AuditOptions {
   // so a large relative gain on a negligible residual is no cause.
   double min_rms_drop = 1e-6;
   int max_causes = 3;
-  double max_delay = 0.3;           // s, |delay| bound
-  double max_lag = 0.5;             // s
-  int max_evaluations = 60;         // NLopt evaluations per local refinement
+  double max_delay = 0.3;    // s, |delay| bound
+  double max_lag = 0.5;      // s
+  int max_evaluations = 60;  // NLopt evaluations per local refinement
   int min_samples = kMinAuditSamples;
   bool uncertainties = true;
-  std::vector<Effect> candidates;   // empty = all (crosstalk needs a shear column)
+  std::vector<Effect> candidates;  // empty = all (crosstalk needs a shear column)
   // A given model: its effects are the base the nominal fit starts from
   // (gain/offset are re-fitted; its as-given held-out RMS is reported).
   std::optional<sim::SensorModel> model;
@@ -115,40 +124,40 @@ struct AuditOptions {
 };
 
 struct ForceBin {
-  double lo = 0, hi = 0;       // N (reference)
+  double lo = 0, hi = 0;  // N (reference)
   int count = 0;
-  double mean_residual = 0;    // N (residual / gain)
-  double std_error = 0;        // N
+  double mean_residual = 0;  // N (residual / gain)
+  double std_error = 0;      // N
 };
 
 struct Diagnostics {
-  double train_rms = 0;        // reading units
-  double heldout_rms = 0;      // reading units
+  double train_rms = 0;          // reading units
+  double heldout_rms = 0;        // reading units
   double heldout_rms_force = 0;  // N equivalent (/ |gain|)
   std::vector<ForceBin> bias_bins;
   double loading_mean = 0, unloading_mean = 0;  // N, mean residual
   int loading_count = 0, unloading_count = 0;
   int ljung_box_lags = 0;
-  double ljung_box_q = 0, ljung_box_p = 1;      // held-out residuals
-  int xcorr_lag_samples = 0;                    // > 0: reading lags reference
+  double ljung_box_q = 0, ljung_box_p = 1;  // held-out residuals
+  int xcorr_lag_samples = 0;                // > 0: reading lags reference
   double xcorr_lag_seconds = 0;
-  double residual_time_slope = 0;               // N/s
-  std::vector<double> residual_time_bins;       // N, mean residual per tenth of the run
+  double residual_time_slope = 0;          // N/s
+  std::vector<double> residual_time_bins;  // N, mean residual per tenth of the run
 };
 
 struct Cause {
-  std::string effect;                            // vocabulary above
+  std::string effect;  // vocabulary above
   // Functional form where an effect has more than one: hysteresis "play" or
   // "prandtl_ishlinskii"; nonlinearity "quadratic" or "power_law"; else "".
   std::string form;
-  std::map<std::string, double> parameters;      // sensor-model field -> value
+  std::map<std::string, double> parameters;  // sensor-model field -> value
   // Array parameters (PI hysteresis: pi_thresholds, pi_weights).
   std::map<std::string, std::vector<double>> array_parameters;
-  std::map<std::string, double> uncertainties;   // 1 sigma (joint final fit)
-  double heldout_rms_before = 0;                 // reading units
+  std::map<std::string, double> uncertainties;  // 1 sigma (joint final fit)
+  double heldout_rms_before = 0;                // reading units
   double heldout_rms_after = 0;
-  double gain = 0;                               // percent
-  double delta_bic = 0;                          // BIC_h(after) - BIC_h(before) (< 0)
+  double gain = 0;       // percent
+  double delta_bic = 0;  // BIC_h(after) - BIC_h(before) (< 0)
   // How the cause was found: "final_block" (the split at heldout_fraction),
   // "blocked" (the blocked hold-out), "taxels" (per-taxel data).
   std::string found_by = "final_block";
@@ -177,9 +186,9 @@ struct DownstreamGain {
   int grasps = 0;
   // RMS over contacts of |estimate from corrected readings - estimate from
   // exact normal forces| (N): the estimation error due to the readings.
-  double error_nominal = 0;    // readings corrected by the nominal model
-  double error_extended = 0;   // corrected by the extended model
-  double gain = 0;             // percent
+  double error_nominal = 0;         // readings corrected by the nominal model
+  double error_extended = 0;        // corrected by the extended model
+  double gain = 0;                  // percent
   double error_exact_readings = 0;  // N, estimator's own error vs the true forces (for scale)
   std::string method;
 };
@@ -187,13 +196,13 @@ struct DownstreamGain {
 struct AuditReport {
   std::string source;
   int n_samples = 0, n_train = 0, n_heldout = 0, skipped_nan_rows = 0;
-  double split_time = 0;       // first held-out time
+  double split_time = 0;  // first held-out time
   // Blocked hold-out: the first time of each block and the last sample's
   // time (blocks + 1 values; empty when off).
   std::vector<double> block_times;
   std::string reading_units;
   bool nominal_adequate = true;
-  std::vector<Cause> causes;   // strongest first
+  std::vector<Cause> causes;  // strongest first
   sim::SensorModel nominal_model;
   sim::SensorModel extended_model;
   std::optional<double> given_model_heldout_rms;  // --model as given
@@ -207,10 +216,10 @@ struct AuditReport {
   // nuisance delay fitted with every model; a constant sensor delay is part of
   // it, indistinguishable from two streams). Fixed = as given.
   std::optional<double> clock_offset_s;
-  std::string clock_offset_mode;        // "estimated" | "fixed" | "" (one CSV)
-  double clock_offset_xcorr_s = 0;      // estimated: the cross-correlation stage
-  double clock_offset_refinement_s = 0; // estimated: the audit's refinement
-  double clock_offset_correlation = 0;  // estimated: peak |correlation|
+  std::string clock_offset_mode;         // "estimated" | "fixed" | "" (one CSV)
+  double clock_offset_xcorr_s = 0;       // estimated: the cross-correlation stage
+  double clock_offset_refinement_s = 0;  // estimated: the audit's refinement
+  double clock_offset_correlation = 0;   // estimated: peak |correlation|
   // Series for plots.
   std::vector<double> t, reference, reading, predicted_nominal, predicted_extended;
 };
@@ -221,7 +230,8 @@ absl::StatusOr<AuditReport> RunAudit(const MeasuredData& data, const AuditOption
 // dir/{reading_vs_reference,residual_vs_reference,residual_vs_time}.svg.
 // report.json's "extended_model" is the written model's path. `source` (the
 // measured CSV's name; may be empty) is named in every plot.
-absl::Status WriteAuditReport(const AuditReport& report, const std::string& dir, const std::string& source = "");
+absl::Status WriteAuditReport(const AuditReport& report, const std::string& dir,
+                              const std::string& source = "");
 // The names of the files WriteAuditReport writes (what `audit --out --force`
 // may replace in an earlier report's folder).
 std::vector<std::string> AuditReportFileNames();

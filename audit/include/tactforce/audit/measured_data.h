@@ -36,24 +36,24 @@
 namespace tactforce::audit {
 
 struct MeasuredData {
-  std::string source;                 // file name(s), for messages
-  std::vector<double> t;              // s
-  std::vector<double> reference;      // N
-  std::vector<double> reading;        // sensor units
-  std::vector<double> shear;          // N, empty when absent
-  std::vector<int> trial;             // per sample (0 when absent)
-  std::vector<int> segment_starts;    // first sample index of each trial (starts with 0)
-  std::vector<int> line;              // source line per sample (may be empty)
+  std::string source;               // file name(s), for messages
+  std::vector<double> t;            // s
+  std::vector<double> reference;    // N
+  std::vector<double> reading;      // sensor units
+  std::vector<double> shear;        // N, empty when absent
+  std::vector<int> trial;           // per sample (0 when absent)
+  std::vector<int> segment_starts;  // first sample index of each trial (starts with 0)
+  std::vector<int> line;            // source line per sample (may be empty)
   // Per-taxel readings (sensor units), taxels[j][i] = taxel j at sample i;
   // empty unless the CSV has taxel_<j> columns.
   std::vector<std::vector<double>> taxels;
   int skipped_nan_rows = 0;
-  std::vector<std::string> notes;     // e.g. alignment facts
+  std::vector<std::string> notes;  // e.g. alignment facts
   // Two streams only.
   enum class ClockOffset { kNone, kFixed, kEstimated };
   ClockOffset clock_offset_source = ClockOffset::kNone;
-  double clock_offset = 0;             // s, applied (reading time - offset = reference time)
-  double clock_offset_correlation = 0; // kEstimated: peak |correlation|
+  double clock_offset = 0;              // s, applied (reading time - offset = reference time)
+  double clock_offset_correlation = 0;  // kEstimated: peak |correlation|
 };
 
 // Largest reading magnitude accepted (sensor units; raw 32-bit counts fit).
@@ -72,7 +72,8 @@ inline constexpr int kMinAuditSamples = 40;
 // Per-taxel CSVs: "<file>: missing column(s) taxel_5, taxel_17 (per-taxel
 // data needs taxel_0 ... taxel_41)". expected_taxels = 0: N is the highest
 // taxel index + 1 (a CSV without taxel columns is single-channel data).
-absl::StatusOr<MeasuredData> MeasuredDataFromCsv(const io::CsvTable& table, int expected_taxels = 0);
+absl::StatusOr<MeasuredData> MeasuredDataFromCsv(const io::CsvTable& table,
+                                                 int expected_taxels = 0);
 absl::StatusOr<MeasuredData> ReadMeasuredCsv(const std::string& path, int expected_taxels = 0);
 absl::StatusOr<MeasuredData> ParseMeasuredCsv(const std::string& text, const std::string& source,
                                               int expected_taxels = 0);
@@ -84,7 +85,8 @@ enum class ClockOffsetMode {
   kEstimate,  // estimate it within clock_offset +/- max_clock_offset
 };
 struct AlignOptions {
-  double clock_offset = 0;  // s: reading time minus this = reference time (kEstimate: search centre)
+  double clock_offset =
+      0;  // s: reading time minus this = reference time (kEstimate: search centre)
   ClockOffsetMode mode = ClockOffsetMode::kFixed;
   double max_clock_offset = 1.0;  // s, kEstimate: half-width of the search
 };
@@ -103,8 +105,8 @@ struct ClockOffsetEstimate {
 absl::StatusOr<ClockOffsetEstimate> EstimateClockOffset(const std::vector<double>& reference_t,
                                                         const std::vector<double>& reference_value,
                                                         const std::vector<double>& reading_t,
-                                                        const std::vector<double>& reading_value, double centre,
-                                                        double max_offset);
+                                                        const std::vector<double>& reading_value,
+                                                        double centre, double max_offset);
 absl::StatusOr<MeasuredData> AlignStreams(const io::CsvTable& reference,
                                           const io::CsvTable& reading,
                                           const AlignOptions& options = {});

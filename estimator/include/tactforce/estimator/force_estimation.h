@@ -49,9 +49,9 @@ struct ForceEstimate {
   EstimateStatus status = EstimateStatus::kSolverFailure;
   std::string message;  // also notes flagged readings (e.g. negative values)
   EstimateMethod method = EstimateMethod::kProjection;
-  std::vector<Vec3> forces;          // per contact, request order (N)
-  std::vector<double> normal_forces; // n_i . f_i (N)
-  std::vector<double> residuals;     // per reading: n_j . f_j - reading_j (N)
+  std::vector<Vec3> forces;            // per contact, request order (N)
+  std::vector<double> normal_forces;   // n_i . f_i (N)
+  std::vector<double> residuals;       // per reading: n_j . f_j - reading_j (N)
   std::vector<int> negative_readings;  // indices (into readings) below zero
   int iterations = 0;
   int64_t solve_time_us = 0;
@@ -72,9 +72,9 @@ absl::StatusOr<ForceEstimate> EstimateForces(const planner::PlanProblem& problem
 struct EstimationWorkspace {
   planner::PlanningWorkspace planning;
   std::vector<int> intrinsic, extrinsic;  // contact indices
-  Eigen::MatrixXd placed;    // unit normals placed at their contacts' rows (3n x k)
-  Eigen::MatrixXd reduced;   // placed^T B or B^T N_E
-  Eigen::MatrixXd weighted;  // W (placed^T B)
+  Eigen::MatrixXd placed;                 // unit normals placed at their contacts' rows (3n x k)
+  Eigen::MatrixXd reduced;                // placed^T B or B^T N_E
+  Eigen::MatrixXd weighted;               // W (placed^T B)
   Eigen::VectorXd measured, values, coordinates;
 };
 

@@ -22,10 +22,10 @@ namespace tactforce::estimator {
 using planner::Vec3;
 
 struct FrictionSample {
-  double t = 0.0;                       // s
-  Vec3 force = Vec3::Zero();            // N
-  Vec3 contact_point = Vec3::Zero();    // m
-  std::optional<bool> slip;             // explicit slip flag, when measured
+  double t = 0.0;                     // s
+  Vec3 force = Vec3::Zero();          // N
+  Vec3 contact_point = Vec3::Zero();  // m
+  std::optional<bool> slip;           // explicit slip flag, when measured
 };
 
 struct FrictionTrial {
@@ -62,14 +62,14 @@ struct FrictionOptions {
 struct TrialFriction {
   std::string name;
   bool slipped = false;
-  bool valid = false;       // false: no estimate (message says why)
-  double mu = 0.0;          // slipped: estimate; else lower bound
-  double mu_sigma = 0.0;    // slipped: standard error of mu over the pre-slip samples
-  bool lower_bound = false; // no slip: mu >= the largest |f_t| / f_n seen
-  double slip_time = 0.0;   // s, onset: the last sample at rest before the motion
-  int slip_index = -1;      // onset sample (the window ends one sample before it)
-  int detection_index = -1; // where travel/flag first said "slip"
-  double force_angle = 0.0; // rad, acos(f_hat . n) before slip
+  bool valid = false;        // false: no estimate (message says why)
+  double mu = 0.0;           // slipped: estimate; else lower bound
+  double mu_sigma = 0.0;     // slipped: standard error of mu over the pre-slip samples
+  bool lower_bound = false;  // no slip: mu >= the largest |f_t| / f_n seen
+  double slip_time = 0.0;    // s, onset: the last sample at rest before the motion
+  int slip_index = -1;       // onset sample (the window ends one sample before it)
+  int detection_index = -1;  // where travel/flag first said "slip"
+  double force_angle = 0.0;  // rad, acos(f_hat . n) before slip
   Vec3 normal = Vec3::Zero();
   int mesh_triangle = -1;
   std::string message;
@@ -106,7 +106,7 @@ struct FrictionSimOptions {
   double slide_speed = 0.02;      // m/s reached after slip
   // After slip the probe accelerates with (mu_s - mu_k) f_n / probe_mass
   // (mu_k = 0.8 mu): static friction breaks abruptly.
-  double probe_mass = 0.05;       // kg
+  double probe_mass = 0.05;          // kg
   double duration_after_slip = 0.3;  // s
   bool write_slip_flags = false;
   uint64_t seed = 1;

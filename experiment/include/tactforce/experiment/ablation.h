@@ -72,12 +72,12 @@ struct AblationSource {
 };
 
 struct AblationConfig {
-  int seeds = 3;                // runs per (method, source), seeds first_seed..
+  int seeds = 3;  // runs per (method, source), seeds first_seed..
   uint64_t first_seed = 1;
-  double duration = 10.0;       // s, every source's trajectory
-  double rate = 100.0;          // Hz
-  std::vector<std::string> sources;         // names; empty: all built in
-  std::vector<AblationMethod> methods;      // empty: all
+  double duration = 10.0;                         // s, every source's trajectory
+  double rate = 100.0;                            // Hz
+  std::vector<std::string> sources;               // names; empty: all built in
+  std::vector<AblationMethod> methods;            // empty: all
   std::function<void(double fraction)> progress;  // may be empty
 };
 
@@ -101,9 +101,9 @@ struct AblationRow {
   double median_riemannian = 0;  // +inf when most runs are inconsistent
   double median_mass_error_percent = 0;
   double median_com_error_mm = 0;
-  int consistent = 0;  // runs with a physically consistent estimate
-  int runs = 0;        // fits that returned an estimate
-  int failed = 0;      // fits that returned an error (not in the medians)
+  int consistent = 0;                // runs with a physically consistent estimate
+  int runs = 0;                      // fits that returned an estimate
+  int failed = 0;                    // fits that returned an error (not in the medians)
   std::vector<std::string> objects;  // per run
   std::vector<double> eq38;          // per run
 };
@@ -118,7 +118,8 @@ struct AblationTable {
 // A failing fit is counted (`failed`), a failing source is an error.
 absl::StatusOr<AblationTable> RunAblation(const AblationConfig& config);
 // The same on the given sources.
-absl::StatusOr<AblationTable> RunAblation(const AblationConfig& config, const std::vector<AblationSource>& sources);
+absl::StatusOr<AblationTable> RunAblation(const AblationConfig& config,
+                                          const std::vector<AblationSource>& sources);
 
 // The paper's values, computed here from its Tables I-IV with the metrics
 // above. Convention (the one that reproduces the 4.46 / 4.14 / 5.04 /
@@ -135,7 +136,8 @@ struct PaperAblationValue {
   int consistent = 0;
 };
 std::vector<PaperAblationValue> PaperAblationValues();
-std::optional<PaperAblationValue> FindPaperValue(const std::string& method, const std::string& source);
+std::optional<PaperAblationValue> FindPaperValue(const std::string& method,
+                                                 const std::string& source);
 
 // Markdown table with the paper's values beside ours, the convention, and
 // the in-hand targets (fg-c median eq. 38 <= 0.2 x fg-no-c and x baseline-fg).

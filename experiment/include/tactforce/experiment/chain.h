@@ -33,17 +33,18 @@ enum class Planning { kTruth, kPoint, kUncertain };
 const char* ToString(Planning p);  // "truth", "point", "uncertain"
 
 struct ChainConfig {
-  std::vector<GraspObject> objects = {GraspObject::kSphere, GraspObject::kWrench, GraspObject::kCylinder};
-  uint64_t seed = 1;              // seeds seed .. seed + seeds - 1
+  std::vector<GraspObject> objects = {GraspObject::kSphere, GraspObject::kWrench,
+                                      GraspObject::kCylinder};
+  uint64_t seed = 1;  // seeds seed .. seed + seeds - 1
   int seeds = 2;
-  int trials = 5;                 // closed-loop trials per object, seed and planning
-  int probe_trials = 3;           // in-grasp friction probes per object and seed
-  double inhand_duration = 4;     // s of in-hand excitation logged per object and seed
+  int trials = 5;              // closed-loop trials per object, seed and planning
+  int probe_trials = 3;        // in-grasp friction probes per object and seed
+  double inhand_duration = 4;  // s of in-hand excitation logged per object and seed
   inertia::InertiaMethod fit_method = inertia::InertiaMethod::kConstrained;
-  double confidence = 1.0;        // kappa of the friction and parameter uncertainty (std. devs)
-  GraspConfig grasp;              // the closed loop (object, seed, planning_model are set per run)
-  ProbeConfig probe;              // the probe (object = its box; seed set per run)
-  InHandConfig inhand;            // the in-hand run (custom object, seed, duration set per run)
+  double confidence = 1.0;  // kappa of the friction and parameter uncertainty (std. devs)
+  GraspConfig grasp;        // the closed loop (object, seed, planning_model are set per run)
+  ProbeConfig probe;        // the probe (object = its box; seed set per run)
+  InHandConfig inhand;      // the in-hand run (custom object, seed, duration set per run)
 };
 // InvalidArgument naming the field ("trials: must be >= 1, got 0").
 absl::Status ValidateChainConfig(const ChainConfig& c);
@@ -54,8 +55,8 @@ struct ChainEstimates {
   uint64_t seed = 0;
   double mu_true = 0, mu = 0, mu_sigma = 0;  // mean and std. dev. over valid probes
   int probes_valid = 0;
-  double mass_true = 0, mass = 0, mass_se = 0;          // kg
-  planner::Vec3 com_true = planner::Vec3::Zero();       // m
+  double mass_true = 0, mass = 0, mass_se = 0;     // kg
+  planner::Vec3 com_true = planner::Vec3::Zero();  // m
   planner::Vec3 com = planner::Vec3::Zero(), com_se = planner::Vec3::Zero();
   // Some estimate (mu, mass or a CoM component) is off by more than its standard error.
   bool off_by_more_than_se = false;
@@ -66,17 +67,17 @@ struct ChainRow {
   GraspObject object = GraspObject::kSphere;
   Planning planning = Planning::kTruth;
   int successes = 0, trials = 0;
-  int plan_failures = 0;            // seeds whose plan could not be made (trials count as failed)
-  std::string plan_failure;         // the first such seed's planner message
-  int trials_run = 0;               // trials actually simulated (the two figures below are over these)
-  double median_squeeze_n = 0;      // N, median over trials of the mean sum of normal forces
-  double min_slip_margin = 1;       // smallest over trials (TrialResult::min_slip_margin)
+  int plan_failures = 0;        // seeds whose plan could not be made (trials count as failed)
+  std::string plan_failure;     // the first such seed's planner message
+  int trials_run = 0;           // trials actually simulated (the two figures below are over these)
+  double median_squeeze_n = 0;  // N, median over trials of the mean sum of normal forces
+  double min_slip_margin = 1;   // smallest over trials (TrialResult::min_slip_margin)
   double median_trial_slip_margin = 1;  // median over trials of each trial's smallest
-  bool estimates_off = false;       // any seed's estimates off by more than their standard error
+  bool estimates_off = false;  // any seed's estimates off by more than their standard error
 };
 
 struct ChainReport {
-  std::vector<ChainRow> rows;       // per object: truth, point, uncertain
+  std::vector<ChainRow> rows;  // per object: truth, point, uncertain
   std::vector<ChainEstimates> estimates;
   double wall_seconds = 0;
 };

@@ -41,7 +41,7 @@ enum class GraspObject {
   kSphere,    // 0.082 kg, r 35 mm, 2-finger pinch, mu 0.8
   kWrench,    // 0.3 kg wrench (handle + head), 3 fingers, mu 0.9
   kCylinder,  // 0.36 kg, d 0.11 m, 4 fingers, mu 0.6
-  kCube,      // 8 cm, 0.15 kg, 2 fingers (mu 0.8) pivot it about a bottom edge on the table (mu 0.6)
+  kCube,  // 8 cm, 0.15 kg, 2 fingers (mu 0.8) pivot it about a bottom edge on the table (mu 0.6)
 };
 const char* ToString(GraspObject o);  // "sphere", "wrench", "cylinder", "cube"
 absl::StatusOr<GraspObject> ParseGraspObject(std::string_view name);
@@ -79,14 +79,14 @@ const char* ToString(SensorArray s);  // "channel", "taxel"
 absl::StatusOr<SensorArray> ParseSensorArray(std::string_view name);
 
 struct PhaseDurations {  // s
-  double close = 0.3;        // fingertips move from open to contact (position control)
-  double settle = 0.5;       // force loop on, object on the table
+  double close = 0.3;    // fingertips move from open to contact (position control)
+  double settle = 0.5;   // force loop on, object on the table
   double hold = 0.5;
-  double lift = 1.0;         // minimum-jerk lift (cube: pivot up)
+  double lift = 1.0;  // minimum-jerk lift (cube: pivot up)
   double hold_lifted = 1.0;
-  double place = 0.8;        // back down
-  double placed = 0;         // held on the table after the place (0 = none)
-  double switched = 0;       // then the other feedback (raw <-> estimated) for this long (0 = none)
+  double place = 0.8;   // back down
+  double placed = 0;    // held on the table after the place (0 = none)
+  double switched = 0;  // then the other feedback (raw <-> estimated) for this long (0 = none)
 };
 
 // The trial's timeline: today's short trial, or GeoDEx Sec. IV-C's wrench
@@ -109,7 +109,8 @@ PhaseDurations ProtocolPhases(Protocol p);
 //   slip_drop: any other failure.
 // The first that applies, in this order.
 enum class FailureCause { kNone, kNonActivation, kPhantomForce, kOverReadingTilt, kSlipDrop };
-const char* ToString(FailureCause c);  // "none", "non_activation", "phantom_force", "over_reading_tilt", "slip_drop"
+const char* ToString(
+    FailureCause c);  // "none", "non_activation", "phantom_force", "over_reading_tilt", "slip_drop"
 std::vector<FailureCause> AllFailureCauses();  // the four causes, without kNone
 
 // A constructed sensor fault on one fingertip's summed reading (tests and
@@ -128,18 +129,19 @@ struct SensorFault {
 // SI; `inertia` about the CoM; `friction` and `friction_sigma` replace every
 // fingertip contact's (extrinsic contacts keep theirs).
 struct PlanningModel {
-  double mass = 0;                                   // kg
-  planner::Vec3 com = planner::Vec3::Zero();         // m
-  planner::Inertia inertia;                          // kg m^2, about the CoM
-  double friction = 0;                               // mu of the fingertips
-  double friction_sigma = 0;                         // std. dev. of mu (0 = known)
-  planner::ParameterUncertainty uncertainty;         // of pi about the origin (zero = known)
+  double mass = 0;                            // kg
+  planner::Vec3 com = planner::Vec3::Zero();  // m
+  planner::Inertia inertia;                   // kg m^2, about the CoM
+  double friction = 0;                        // mu of the fingertips
+  double friction_sigma = 0;                  // std. dev. of mu (0 = known)
+  planner::ParameterUncertainty uncertainty;  // of pi about the origin (zero = known)
 };
 
 struct GraspConfig {
   GraspObject object = GraspObject::kWrench;
   Feedback feedback = Feedback::kEstimated;
-  estimator::EstimateMethod estimator = estimator::EstimateMethod::kNormalLsq;  // or kProjection (GeoDEx)
+  estimator::EstimateMethod estimator =
+      estimator::EstimateMethod::kNormalLsq;       // or kProjection (GeoDEx)
   SensorMode sensors = SensorMode::kGeoDexRandom;  // kChannel's model
   ErrorRanges error_ranges;
   SensorArray sensor_array = SensorArray::kChannel;
@@ -148,23 +150,24 @@ struct GraspConfig {
   sim::SensorModel sensor_model;  // kModel
   uint64_t seed = 1;              // trial k draws from (seed, k), independent of feedback
   PhaseDurations phases;
-  double lift_height = 0.05;      // m
-  double pivot_angle_deg = 15;    // cube
-  double control_rate = 200;      // Hz: sensor sampling, estimation, admittance update
+  double lift_height = 0.05;    // m
+  double pivot_angle_deg = 15;  // cube
+  double control_rate = 200;    // Hz: sensor sampling, estimation, admittance update
   // Admittance: each control tick moves a fingertip target by
   // gain * K^-1 (f_desired - f_observed), K = kp (see Admittance).
   Admittance admittance = Admittance::kFull;
   double admittance_gain = 0.2;
-  double kp = 10000;              // N/m, fingertip PD stiffness (also its tangential stiffness)
+  double kp = 10000;  // N/m, fingertip PD stiffness (also its tangential stiffness)
   double damping_ratio = 1.0;
-  double fingertip_mass = 0.05;   // kg (gravity compensated)
+  double fingertip_mass = 0.05;     // kg (gravity compensated)
   double fingertip_radius = 0.012;  // m
-  double confidence = 1.0;        // planner kappa
-  double max_rotation_deg = 1.0;  // success thresholds from the settle to the end of the lifted hold
-  double max_slip = 0.005;        // m
-  double drop_distance = 0.02;    // m, object this far from where the hand holds it = dropped
+  double confidence = 1.0;          // planner kappa
+  double max_rotation_deg =
+      1.0;                      // success thresholds from the settle to the end of the lifted hold
+  double max_slip = 0.005;      // m
+  double drop_distance = 0.02;  // m, object this far from where the hand holds it = dropped
   PhysicsSettings physics;
-  int trace_trials = 0;          // record TraceSamples for trials 0..trace_trials-1
+  int trace_trials = 0;                         // record TraceSamples for trials 0..trace_trials-1
   std::optional<PlanningModel> planning_model;  // empty: plan with the true parameters
 };
 absl::Status ValidateGraspConfig(const GraspConfig& c);
@@ -185,7 +188,8 @@ struct TrialResult {
   uint64_t seed = 0;
   bool success = false;
   bool dropped = false;
-  std::string failure;          // "", "dropped", "slip 7.1 mm", "rotation 2.3 deg", "moved before the lift (...)"
+  std::string
+      failure;  // "", "dropped", "slip 7.1 mm", "rotation 2.3 deg", "moved before the lift (...)"
   FailureCause cause = FailureCause::kNone;  // kNone when successful
   // The object's pose from the settle's start to the end of the lifted hold,
   // against where the hand's motion since then puts it (m, deg), and the
@@ -195,10 +199,11 @@ struct TrialResult {
   double max_rotation_deg = 0;
   double max_slip_before_lift = 0, max_rotation_before_lift_deg = 0;
   double failure_time = -1;
-  double force_error = 0;       // N, mean |fn_true - fn_desired| over fingertips, hold..hold_lifted
-  double feedback_error = 0;    // N, mean |fn_observed - fn_true| (what the loop was told vs truth)
-  // The loop's own error, mean |fn_desired - fn_observed| (GeoDEx's "error between the desired force and the
-  // estimated values"), hold..hold_lifted, over fingertips; and both errors per fingertip (N).
+  double force_error = 0;     // N, mean |fn_true - fn_desired| over fingertips, hold..hold_lifted
+  double feedback_error = 0;  // N, mean |fn_observed - fn_true| (what the loop was told vs truth)
+  // The loop's own error, mean |fn_desired - fn_observed| (GeoDEx's "error between the desired
+  // force and the estimated values"), hold..hold_lifted, over fingertips; and both errors per
+  // fingertip (N).
   double loop_error = 0;
   std::vector<double> finger_force_error, finger_loop_error;
   // Hold, lift and lifted hold, from MuJoCo's true contact forces: the
@@ -207,9 +212,9 @@ struct TrialResult {
   // fingertips pressing with f_n >= 0.05 N (1 = no shear, 0 = on the cone).
   double squeeze = 0;
   double min_slip_margin = 1;
-  double converge_time = -1;    // s after settle start until the loop's own error stays
-                                // below max(0.1 N, 10 %) for 0.1 s; -1 = never
-  int estimate_failures = 0;    // ticks where the estimator gave no answer (raw used)
+  double converge_time = -1;  // s after settle start until the loop's own error stays
+                              // below max(0.1 N, 10 %) for 0.1 s; -1 = never
+  int estimate_failures = 0;  // ticks where the estimator gave no answer (raw used)
   double sim_seconds = 0, wall_seconds = 0;
   std::vector<sim::SensorModel> sensor_models;  // per fingertip (the draw; channel sensors)
   // Taxel sensors: how far the sensed contact locations (end of the close)
@@ -224,8 +229,8 @@ struct TrialResult {
   // per fingertip under the other feedback, and the object's largest motion
   // from its pose when the switch happened.
   std::vector<double> switched_force_error;
-  double switched_motion = 0;  // m
-  std::vector<TraceSample> trace;                // when record_trace
+  double switched_motion = 0;      // m
+  std::vector<TraceSample> trace;  // when record_trace
 };
 
 // Object, MJCF and force plans of one config, shared by its trials.
@@ -257,15 +262,15 @@ struct BatchSummary {
   // Table III's split: over successful and over failed trials (N; 0 if none).
   double force_error_success_mean = 0, force_error_success_std = 0;
   double force_error_failure_mean = 0, force_error_failure_std = 0;
-  std::map<std::string, int> failure_causes;  // every cause's name -> failed trials
+  std::map<std::string, int> failure_causes;                  // every cause's name -> failed trials
   double loop_error_mean = 0, loop_error_std = 0;             // N, over trials
   std::vector<double> finger_force_error, finger_loop_error;  // N, per fingertip, mean over trials
   std::vector<std::string> finger_names;
-  int replan_failures = 0;                    // taxel sensors
-  double contact_location_error_mean = 0;     // m, taxel sensors
-  std::vector<double> switched_force_error;   // per fingertip, mean over trials (paper protocol)
-  double feedback_error_mean = 0;                    // N
-  double converge_time_mean = -1;                    // s over converged trials; -1 none
+  int replan_failures = 0;                   // taxel sensors
+  double contact_location_error_mean = 0;    // m, taxel sensors
+  std::vector<double> switched_force_error;  // per fingertip, mean over trials (paper protocol)
+  double feedback_error_mean = 0;            // N
+  double converge_time_mean = -1;            // s over converged trials; -1 none
   int converged = 0;
   double wall_seconds = 0, sim_seconds = 0;
   std::vector<TrialResult> results;
@@ -277,6 +282,6 @@ absl::StatusOr<BatchSummary> RunGraspBatch(const GraspConfig& config, int trials
 
 // Desired / estimated / raw / true normal-force traces, one panel per fingertip.
 io::SvgPlot TracePlot(const TrialResult& trial, const std::vector<std::string>& finger_names,
-                  const std::string& title);
+                      const std::string& title);
 
 }  // namespace tactforce::experiment

@@ -42,12 +42,12 @@ namespace tactforce::experiment {
 // (Kabsch over the fingertip centres not in a break): slip becomes pose
 // drift; a break of contact 0 drags the tracked pose with the fingertip.
 enum class Tracker { kVision, kKinematic };
-const char* ToString(Tracker tracker);  // "vision", "kinematic"
+const char* ToString(Tracker tracker);                        // "vision", "kinematic"
 absl::StatusOr<Tracker> ParseTracker(std::string_view text);  // errors name "tracker"
 
 // A point mass inside the object (non-uniform objects).
 struct PointMass {
-  double mass = 0;                                  // kg
+  double mass = 0;                                     // kg
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // object frame (m)
 };
 
@@ -55,7 +55,8 @@ struct PointMass {
 // the point masses.
 struct InHandObject {
   std::string name;
-  Eigen::Vector3d dimensions = Eigen::Vector3d(0.18, 0.07, 0.07);  // edge lengths along object x,y,z (m)
+  Eigen::Vector3d dimensions =
+      Eigen::Vector3d(0.18, 0.07, 0.07);             // edge lengths along object x,y,z (m)
   Eigen::Vector3d center = Eigen::Vector3d::Zero();  // box centre in the object frame (m)
   double mass = 0.1;                                 // total (kg)
   std::vector<PointMass> point_masses;
@@ -69,9 +70,11 @@ absl::StatusOr<InHandObject> BuiltInInHandObject(const std::string& name);
 //  "point_masses": optional [{"mass": kg > 0, "position": [x,y,z]}...]
 //  (inside the box; their sum < mass)}. Errors name the source and key
 // ("obj.json: mass: must be > 0, got -1").
-absl::StatusOr<InHandObject> ParseInHandObjectJson(const std::string& text, const std::string& source);
+absl::StatusOr<InHandObject> ParseInHandObjectJson(const std::string& text,
+                                                   const std::string& source);
 absl::StatusOr<InHandObject> ReadInHandObjectFile(const std::string& path);
-absl::Status ValidateInHandObject(const InHandObject& object, const std::string& prefix = "object.");
+absl::Status ValidateInHandObject(const InHandObject& object,
+                                  const std::string& prefix = "object.");
 // Mass, CoM and inertia about the CoM of the box plus its point masses.
 inertia::InertialParameters InHandObjectInertia(const InHandObject& object);
 // The box as a closed, outward-facing triangle mesh (object frame, m).
@@ -102,8 +105,8 @@ absl::StatusOr<TactileForceModel> NamedForceModel(const std::string& name);
 // `dropout_probability` per sample and last 1..dropout_max_samples samples,
 // during which the tracker repeats its last pose.
 struct VisionTrackerModel {
-  double position_sigma = 0.001;         // m
-  double orientation_sigma_deg = 0.5;    // deg
+  double position_sigma = 0.001;       // m
+  double orientation_sigma_deg = 0.5;  // deg
   double dropout_probability = 0.01;
   int dropout_max_samples = 5;
 };
@@ -116,34 +119,34 @@ struct ContactBreak {
 
 // An external push on the object at its CoM (world frame): injects slip.
 struct Push {
-  double start = 0, duration = 0.05;  // s since logging began
+  double start = 0, duration = 0.05;                // s since logging began
   Eigen::Vector3d force = Eigen::Vector3d::Zero();  // N
 };
 
 struct InHandConfig {
-  std::string object = "box_0";          // a built-in name (ignored when `custom` is set)
-  std::optional<InHandObject> custom;    // e.g. from ReadInHandObjectFile
+  std::string object = "box_0";        // a built-in name (ignored when `custom` is set)
+  std::optional<InHandObject> custom;  // e.g. from ReadInHandObjectFile
   Tracker tracker = Tracker::kVision;
-  double duration = 10;                  // s logged (the motion ramps in over the first second)
-  double rate = 100;                     // Hz, log rate
+  double duration = 10;  // s logged (the motion ramps in over the first second)
+  double rate = 100;     // Hz, log rate
   uint64_t seed = 1;
-  std::string force_model = "biotac";    // NamedForceModel
+  std::string force_model = "biotac";                   // NamedForceModel
   std::optional<TactileForceModel> custom_force_model;  // overrides `force_model`
-  bool ideal_forces = false;             // log the true forces and points
-  bool ideal_tracking = false;           // log the true pose
+  bool ideal_forces = false;                            // log the true forces and points
+  bool ideal_tracking = false;                          // log the true pose
   VisionTrackerModel vision;
-  double support_fraction = 0;           // of the weight carried by an unsensed support, [0, 0.9]
+  double support_fraction = 0;  // of the weight carried by an unsensed support, [0, 0.9]
   std::vector<ContactBreak> breaks;
   std::vector<Push> pushes;
   // Excitation: ExcitationTrajectory::Default() scaled to a hand's workspace.
-  double position_scale = 0.3;           // x 0.1 m amplitudes
-  double orientation_scale = 0.4;        // x 0.8 rad amplitudes
-  double friction = 1.0;                 // MuJoCo fingertip/object mu
-  double plan_friction = 0.6;            // mu the planner assumes (margin)
-  double min_normal_force = 2.0;         // N
+  double position_scale = 0.3;     // x 0.1 m amplitudes
+  double orientation_scale = 0.4;  // x 0.8 rad amplitudes
+  double friction = 1.0;           // MuJoCo fingertip/object mu
+  double plan_friction = 0.6;      // mu the planner assumes (margin)
+  double min_normal_force = 2.0;   // N
   double fingertip_radius = 0.012, fingertip_mass = 0.05, kp = 10000;
-  double control_rate = 200;             // Hz: plans, admittance
-  double settle = 0.5;                   // s held still before logging
+  double control_rate = 200;  // Hz: plans, admittance
+  double settle = 0.5;        // s held still before logging
   PhysicsSettings physics = [] {
     PhysicsSettings p;
     p.condim_fingertip = 3;  // point contacts, as the inertia model assumes
@@ -155,9 +158,10 @@ struct InHandConfig {
 absl::Status ValidateInHandConfig(const InHandConfig& config);
 
 struct InHandEvent {
-  double t = 0;       // s since logging began
-  std::string kind;   // contact_lost, contact_made, break_start, break_end, push, tracker_dropout, ...
-  int contact = -1;   // -1: the object / tracker
+  double t = 0;  // s since logging began
+  std::string
+      kind;  // contact_lost, contact_made, break_start, break_end, push, tracker_dropout, ...
+  int contact = -1;  // -1: the object / tracker
   std::string detail;
 };
 
@@ -166,9 +170,10 @@ struct InHandTruthRow {
   double t = 0;
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
   Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
-  std::vector<Eigen::Vector3d> force;   // per contact, applied to the object, object frame (N)
-  std::vector<Eigen::Vector3d> point;   // per contact, object frame (m)
-  std::vector<double> slip_mm;          // contact point travel in the object frame since first made (0 when off)
+  std::vector<Eigen::Vector3d> force;  // per contact, applied to the object, object frame (N)
+  std::vector<Eigen::Vector3d> point;  // per contact, object frame (m)
+  std::vector<double>
+      slip_mm;  // contact point travel in the object frame since first made (0 when off)
   std::vector<bool> in_contact;
 };
 
@@ -186,22 +191,24 @@ struct InHandStats {
   double max_slip_mm = 0;
   double tracker_position_error_max_mm = 0, tracker_position_error_final_mm = 0;
   double tracker_rotation_error_max_deg = 0;
-  double slip_tracker_correlation = 0;  // Pearson r of tracker position error vs max slip per sample
+  double slip_tracker_correlation =
+      0;  // Pearson r of tracker position error vs max slip per sample
   int tracker_dropouts = 0;
-  int contact_losses = 0;               // unscheduled
-  double min_normal_force = 0;          // N, over contacts in contact and not in a break
+  int contact_losses = 0;       // unscheduled
+  double min_normal_force = 0;  // N, over contacts in contact and not in a break
   double wall_seconds = 0;
 };
 
 struct InHandRun {
   std::string object_name;
   InHandObject object;
-  inertia::InertiaSamples samples;          // what the sensors and tracker logged
+  inertia::InertiaSamples samples;  // what the sensors and tracker logged
   inertia::InertialParameters truth;
   Eigen::Vector3d gravity = Eigen::Vector3d(0, 0, -9.81);  // world
   std::shared_ptr<const io::TriangleMesh> mesh;
-  std::vector<Eigen::Vector3d> hull;        // the box corners
-  double tracker_position_sigma = 0, tracker_orientation_sigma = 0;  // what the tracker assumed (m, rad)
+  std::vector<Eigen::Vector3d> hull;  // the box corners
+  double tracker_position_sigma = 0,
+         tracker_orientation_sigma = 0;  // what the tracker assumed (m, rad)
   std::vector<InHandTruthRow> truth_log;
   std::vector<Eigen::Vector3d> tracker_error;  // per sample: tracked - true position (world, m)
   std::vector<InHandEvent> events;

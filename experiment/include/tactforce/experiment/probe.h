@@ -61,25 +61,25 @@ io::TriangleMesh BoxMesh(const Eigen::Vector3d& size);
 
 struct ProbeConfig {
   ProbeObject object;
-  bool on_table = false;       // the box rests on a table (the paper's Fig. 1)
-  double table_mu = 0.5;       // box/table
-  double force_sigma = 0.05;   // N, tactile noise per axis per sample
-  double force_bias = 0.02;    // N, std. dev. of the per-trial constant bias per axis
+  bool on_table = false;      // the box rests on a table (the paper's Fig. 1)
+  double table_mu = 0.5;      // box/table
+  double force_sigma = 0.05;  // N, tactile noise per axis per sample
+  double force_bias = 0.02;   // N, std. dev. of the per-trial constant bias per axis
   // m, tactile contact-point noise per axis per sample (the friction
   // simulator's default, estimator::FrictionSimOptions::position_noise). With
   // exactly noise-free points EstimateFriction's onset threshold (median +
   // k MAD of the quiet travel) collapses to MuJoCo's sub-micrometre creep.
   double contact_sigma = 2e-5;
-  double hold_scale = 1.0;     // scales the planned holding forces (negative control < 1)
-  double max_motion = 0.001;   // m, object travel allowed before slip
-  double max_rotation_deg = 1; // deg, object rotation allowed before slip
+  double hold_scale = 1.0;           // scales the planned holding forces (negative control < 1)
+  double max_motion = 0.001;         // m, object travel allowed before slip
+  double max_rotation_deg = 1;       // deg, object rotation allowed before slip
   double probe_travel_stop = 0.003;  // m of probe travel on the object that ends a trial
-  double kp = 10000;           // N/m, holding fingertip stiffness (damping ratio 1)
+  double kp = 10000;                 // N/m, holding fingertip stiffness (damping ratio 1)
   // Per 200 Hz tick: the 3D force admittance of `experiment grasp` (which
   // uses 0.2), slower here so the hold stays stiff; 0: impedance only.
   double admittance_gain = 0.05;
   double fingertip_radius = 0.012, fingertip_mass = 0.05;
-  double confidence = 1.0;     // planner kappa
+  double confidence = 1.0;  // planner kappa
   // N, the planner's normal-force sigma of a holding fingertip: the grip
   // margin (README: 0.05 and 0.3 let the box creep past 1 mm / 1 deg).
   double plan_sigma = 1.0;
@@ -95,13 +95,13 @@ absl::Status ValidateProbeConfig(const ProbeConfig& c);
 struct ProbeTrialResult {
   std::string surface;
   int trial = 0;
-  double mu_true = 0;        // MJCF
-  double mu_slope = 0;       // slope method on the same pair
-  double mu_estimated = 0;   // eq. 5 (0 when not valid)
-  double error = 0;          // mu_slope - mu_estimated (the paper's mu_gt - mu)
+  double mu_true = 0;       // MJCF
+  double mu_slope = 0;      // slope method on the same pair
+  double mu_estimated = 0;  // eq. 5 (0 when not valid)
+  double error = 0;         // mu_slope - mu_estimated (the paper's mu_gt - mu)
   bool valid = false;
   std::string invalid_reason;
-  double object_motion_mm = 0;     // max before slip (whole probe if no slip)
+  double object_motion_mm = 0;  // max before slip (whole probe if no slip)
   double object_rotation_deg = 0;
   bool slip_detected = false;
   int mesh_triangle = -1;
@@ -111,7 +111,7 @@ struct ProbeTrialResult {
 struct SurfaceSummary {
   std::string surface;
   double mu_true = 0, mu_slope = 0;
-  double mu_plate_probe = 0;     // RunSlopeAndProbe's plate probe (noise free)
+  double mu_plate_probe = 0;  // RunSlopeAndProbe's plate probe (noise free)
   bool plate_probe_valid = false;
   int trials = 0, valid = 0;
   double median_estimate = 0, median_signed_error = 0, median_abs_error = 0;
@@ -122,7 +122,7 @@ struct SurfaceSummary {
 struct ProbeSummary {
   int trials = 0, valid = 0, slip_detected_valid = 0;
   double median_signed_error = 0, median_abs_error = 0;  // pooled valid trials
-  double mean_in_grasp_minus_plate = 0;  // mean over surfaces with both
+  double mean_in_grasp_minus_plate = 0;                  // mean over surfaces with both
   std::vector<SurfaceSummary> per_surface;
 };
 
@@ -134,14 +134,14 @@ struct ProbeReport {
 
 // One trial on one surface; `mu_slope` is copied into the result. Trial k of
 // seed s draws the same sensor bias, noise and probe position whatever else runs.
-absl::StatusOr<ProbeTrialResult> RunProbeTrial(const ProbeConfig& c, const SurfacePair& surface, int trial,
-                                               double mu_slope);
+absl::StatusOr<ProbeTrialResult> RunProbeTrial(const ProbeConfig& c, const SurfacePair& surface,
+                                               int trial, double mu_slope);
 
 // Per surface: the slope method and the plate probe (RunSlopeAndProbe), then
 // `trials` in-grasp trials; the summary. `progress(done, total)` after each
 // trial (may be empty).
-absl::StatusOr<ProbeReport> RunProbeExperiment(const ProbeConfig& c, const std::vector<SurfacePair>& surfaces,
-                                               int trials,
+absl::StatusOr<ProbeReport> RunProbeExperiment(const ProbeConfig& c,
+                                               const std::vector<SurfacePair>& surfaces, int trials,
                                                const std::function<void(int, int)>& progress = {});
 
 }  // namespace tactforce::experiment

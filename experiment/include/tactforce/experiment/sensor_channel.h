@@ -51,7 +51,7 @@ struct ErrorRanges {
   double threshold_min = 0.1, threshold_max = 0.5;  // N
   double hysteresis_max = 0.2;                      // N, residual after release (= loop width / 2)
   double force_error_min = 0.1, force_error_max = 0.5;  // N, |error|, random sign
-  double noise_min = 0.01, noise_max = 0.03;        // N, std. dev.
+  double noise_min = 0.01, noise_max = 0.03;            // N, std. dev.
 };
 absl::Status ValidateErrorRanges(const ErrorRanges& r, const std::string& prefix = "errors.");
 

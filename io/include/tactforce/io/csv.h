@@ -14,8 +14,8 @@ struct CsvTable {
   std::string source;                // file name (for messages)
   std::vector<std::string> columns;  // header, in file order
   std::vector<std::vector<double>> rows;
-  std::vector<int> line_numbers;     // 1-based file line of each row
-  int skipped_rows = 0;              // rows dropped by skip_nan_rows
+  std::vector<int> line_numbers;  // 1-based file line of each row
+  int skipped_rows = 0;           // rows dropped by skip_nan_rows
 
   int ColumnIndex(const std::string& name) const;  // -1 when absent
   bool Has(const std::string& name) const { return ColumnIndex(name) >= 0; }

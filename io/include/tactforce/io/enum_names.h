@@ -13,8 +13,8 @@
 //   listing the listed names in table order.
 //
 // Usage:
-//   constexpr io::EnumNameRow<Color> kColorNames[] = {{Color::kRed, "red"}, {Color::kBlue, "blue"}};
-//   io::EnumName(kColorNames, Color::kRed)                       -> "red"
+//   constexpr io::EnumNameRow<Color> kColorNames[] = {{Color::kRed, "red"}, {Color::kBlue,
+//   "blue"}}; io::EnumName(kColorNames, Color::kRed)                       -> "red"
 //   io::ParseEnumName(kColorNames, "BLUE", "color")              -> Color::kBlue
 //   io::ParseEnumName(kColorNames, "COLOR_RED", "color", "color_") -> Color::kRed
 #pragma once
@@ -41,7 +41,8 @@ struct EnumNameRow {
 std::string NormalizeEnumName(std::string_view text);
 
 // "<field>: unknown '<text>' (expected a, b or c)".
-absl::Status UnknownEnumName(std::string_view field, std::string_view text, const std::vector<std::string>& names);
+absl::Status UnknownEnumName(std::string_view field, std::string_view text,
+                             const std::vector<std::string>& names);
 
 // The name of the first row holding `value` ("?" when none does).
 template <typename Enum>
@@ -63,7 +64,8 @@ absl::StatusOr<Enum> ParseEnumName(std::span<const EnumNameRow<Enum>> rows, std:
   const bool wire = !prefix.empty() && key.rfind(prefix, 0) == 0;
   for (const EnumNameRow<Enum>& r : rows) {
     if (key == NormalizeEnumName(r.name)) return r.value;
-    if (wire && key.substr(prefix.size()) == NormalizeEnumName(*r.wire ? r.wire : r.name)) return r.value;
+    if (wire && key.substr(prefix.size()) == NormalizeEnumName(*r.wire ? r.wire : r.name))
+      return r.value;
   }
   std::vector<std::string> names;
   for (const EnumNameRow<Enum>& r : rows)
@@ -71,8 +73,8 @@ absl::StatusOr<Enum> ParseEnumName(std::span<const EnumNameRow<Enum>> rows, std:
   return UnknownEnumName(field, text, names);
 }
 template <typename Enum, size_t N>
-absl::StatusOr<Enum> ParseEnumName(const EnumNameRow<Enum> (&rows)[N], std::string_view text, std::string_view field,
-                                   std::string_view wire_prefix = "") {
+absl::StatusOr<Enum> ParseEnumName(const EnumNameRow<Enum> (&rows)[N], std::string_view text,
+                                   std::string_view field, std::string_view wire_prefix = "") {
   return ParseEnumName(std::span<const EnumNameRow<Enum>>(rows), text, field, wire_prefix);
 }
 

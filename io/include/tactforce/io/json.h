@@ -49,7 +49,7 @@ class JsonValue {
   // Object members in file order (keys unique; a duplicate key is an error).
   const std::vector<std::pair<std::string, JsonValue>>& members() const { return members_; }
   const JsonValue* Find(std::string_view key) const;  // nullptr when absent
-  int line() const { return line_; }                  // 1-based line where it starts; 0 if built in code
+  int line() const { return line_; }  // 1-based line where it starts; 0 if built in code
   // 1-based byte column of its first byte (a string's opening quote, a
   // container's '{' / '['); 0 if built in code.
   int column() const { return column_; }
@@ -94,11 +94,26 @@ class JsonWriter {
   void String(std::string_view v);
   void Null();
   // Convenience: Key(k) + value.
-  void Field(std::string_view key, double v) { Key(key); Number(v); }
-  void Field(std::string_view key, std::string_view v) { Key(key); String(v); }
-  void Field(std::string_view key, const char* v) { Key(key); String(v); }
-  void FieldBool(std::string_view key, bool v) { Key(key); Bool(v); }
-  void FieldInt(std::string_view key, long long v) { Key(key); Int(v); }
+  void Field(std::string_view key, double v) {
+    Key(key);
+    Number(v);
+  }
+  void Field(std::string_view key, std::string_view v) {
+    Key(key);
+    String(v);
+  }
+  void Field(std::string_view key, const char* v) {
+    Key(key);
+    String(v);
+  }
+  void FieldBool(std::string_view key, bool v) {
+    Key(key);
+    Bool(v);
+  }
+  void FieldInt(std::string_view key, long long v) {
+    Key(key);
+    Int(v);
+  }
   // Arrays of numbers on one line.
   void NumberArray(std::string_view key, const std::vector<double>& values);
   const std::string& str() const { return out_; }
@@ -107,7 +122,7 @@ class JsonWriter {
   void BeforeValue();
   void Newline();
   std::string out_;
-  std::vector<bool> first_;   // per open container: no element written yet
+  std::vector<bool> first_;  // per open container: no element written yet
   bool after_key_ = false;
 };
 

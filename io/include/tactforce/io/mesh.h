@@ -100,18 +100,19 @@ absl::StatusOr<MeshDescriptor> ReadMeshDescriptor(const std::string& path);
 // the descriptor's values.
 struct MeshRequest {
   MeshRequest() = default;
-  MeshRequest(std::string mesh_path) : path(std::move(mesh_path)) {}  // NOLINT: implicit, LoadMesh({path})
+  MeshRequest(std::string mesh_path)
+      : path(std::move(mesh_path)) {}  // NOLINT: implicit, LoadMesh({path})
   std::string path;
   std::optional<double> scale;
   std::optional<MeshPlacement> pose;  // position and orientation only (scale ignored)
 };
 
 struct LoadedMesh {
-  TriangleMesh mesh;            // object frame, metres
-  std::string name;             // file name of the mesh for messages ("Hammer.ply")
-  std::string mesh_path;        // the mesh file read
-  std::string format;           // "stl", "obj" or "ply"
-  MeshPlacement placement;      // as applied
+  TriangleMesh mesh;        // object frame, metres
+  std::string name;         // file name of the mesh for messages ("Hammer.ply")
+  std::string mesh_path;    // the mesh file read
+  std::string format;       // "stl", "obj" or "ply"
+  MeshPlacement placement;  // as applied
 };
 absl::StatusOr<LoadedMesh> LoadMesh(const MeshRequest& request);
 
@@ -122,7 +123,7 @@ absl::StatusOr<LoadedMesh> LoadMesh(const MeshRequest& request);
 struct MeshCheck {
   int vertices = 0;
   int faces = 0;
-  int boundary_edges = 0;         // edges used by one triangle only
+  int boundary_edges = 0;  // edges used by one triangle only
   // Edges used by more than two triangles, not as many times in each
   // direction (no solid on either side is well defined).
   int non_manifold_edges = 0;
@@ -131,12 +132,12 @@ struct MeshCheck {
   // and handle). The surface is still a closed oriented boundary; mass
   // properties are those of the union.
   int junction_edges = 0;
-  int inconsistent_edges = 0;     // shared edges traversed twice in the same direction
-  int degenerate_faces = 0;       // zero-area triangles
+  int inconsistent_edges = 0;             // shared edges traversed twice in the same direction
+  int degenerate_faces = 0;               // zero-area triangles
   double degenerate_area_fraction = 0.0;  // (tiny) area of degenerate faces / total area
-  double volume = 0.0;            // signed enclosed volume (divergence theorem), mesh units^3
+  double volume = 0.0;  // signed enclosed volume (divergence theorem), mesh units^3
   double area = 0.0;
-  bool closed = false;            // boundary_edges == 0 && non_manifold_edges == 0
+  bool closed = false;                 // boundary_edges == 0 && non_manifold_edges == 0
   bool consistently_oriented = false;  // inconsistent_edges == 0
 };
 MeshCheck CheckMesh(const TriangleMesh& mesh);
@@ -145,15 +146,15 @@ MeshCheck CheckMesh(const TriangleMesh& mesh);
 // InvalidArgument naming `name` and the problem, e.g.
 //   "Hammer.ply: 14 boundary edges: the mesh is not closed"
 //   "box.stl: volume -0.001 m^3 is negative: the mesh is inside out (flip the winding)"
-//   "part.obj: 12 edges are traversed twice in the same direction: the triangles are not consistently oriented"
-//   "x.ply: 2 non-manifold edges (shared by more than two triangles)"
+//   "part.obj: 12 edges are traversed twice in the same direction: the triangles are not
+//   consistently oriented" "x.ply: 2 non-manifold edges (shared by more than two triangles)"
 absl::Status RequireClosedSolid(const MeshCheck& check, std::string_view name);
 
 struct NearestTriangle {
   int triangle = -1;
-  double distance = 0.0;         // m
-  Eigen::Vector3d closest;       // closest point on the mesh
-  Eigen::Vector3d inward_normal; // unit, pointing INTO the object
+  double distance = 0.0;          // m
+  Eigen::Vector3d closest;        // closest point on the mesh
+  Eigen::Vector3d inward_normal;  // unit, pointing INTO the object
 };
 
 // Nearest triangle to `point` (brute force; meshes here are small).

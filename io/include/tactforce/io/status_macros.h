@@ -11,11 +11,11 @@
 
 // Evaluates `expr` (an absl::Status) once; returns it from the enclosing
 // function when it is not OK.
-#define TF_RETURN_IF_ERROR(expr)                                 \
-  do {                                                           \
-    if (::absl::Status tf_status_ = (expr); !tf_status_.ok()) {  \
-      return tf_status_;                                         \
-    }                                                            \
+#define TF_RETURN_IF_ERROR(expr)                                \
+  do {                                                          \
+    if (::absl::Status tf_status_ = (expr); !tf_status_.ok()) { \
+      return tf_status_;                                        \
+    }                                                           \
   } while (false)
 
 #define TF_STATUS_CONCAT_INNER_(a, b) a##b
@@ -28,8 +28,8 @@
 #define TF_ASSIGN_OR_RETURN(lhs, rexpr) \
   TF_ASSIGN_OR_RETURN_IMPL_(TF_STATUS_CONCAT_(tf_statusor_, __LINE__), lhs, rexpr)
 
-#define TF_ASSIGN_OR_RETURN_IMPL_(statusor, lhs, rexpr) \
-  auto statusor = (rexpr);                              \
+#define TF_ASSIGN_OR_RETURN_IMPL_(statusor, lhs, rexpr)    \
+  auto statusor = (rexpr);                                 \
   if (!statusor.ok()) return std::move(statusor).status(); \
   lhs = *std::move(statusor)
 

@@ -32,7 +32,7 @@ std::string HexColor(uint32_t rgb);
 double NiceStep(double raw);
 
 struct Ticks {
-  double step = 1;             // distance between ticks, data units
+  double step = 1;               // distance between ticks, data units
   std::vector<double> values{};  // ascending multiples of step
 };
 
@@ -95,7 +95,8 @@ bool Overlap(const TextBox& a, const TextBox& b, double slack = 0.5);
 // `text` in lines of at most `max_width` px at `size` px, broken at spaces;
 // at most `max_lines` lines, the last shortened with "\u2026" when the text
 // does not fit (a word longer than a line is shortened the same way).
-std::vector<std::string> WrapText(std::string_view text, double size, double max_width, int max_lines = 3);
+std::vector<std::string> WrapText(std::string_view text, double size, double max_width,
+                                  int max_lines = 3);
 
 // Places labels beside points so that no two labels, and no label and a
 // blocked box, overlap, inside `bounds`: tries eight positions around the
@@ -115,17 +116,17 @@ class LabelPlacer {
 };
 
 struct TextStyle {
-  double size = 0;   // px; 0: the canvas's font size
+  double size = 0;  // px; 0: the canvas's font size
   bool bold = false;
   TextAnchor anchor = TextAnchor::kStart;
-  std::string color{};  // empty: black
+  std::string color{};    // empty: black
   bool vertical = false;  // rotated -90 degrees about (x, y), read bottom to top
 };
 
 struct Stroke {
   std::string color = "black";
-  double width = 1;   // px
-  std::string dash{};   // SVG dash array, e.g. "5,4"; empty: solid
+  double width = 1;    // px
+  std::string dash{};  // SVG dash array, e.g. "5,4"; empty: solid
 };
 
 // An SVG document being written: elements in drawing order (later on top).
@@ -144,15 +145,16 @@ class SvgCanvas {
   // `text` wrapped (WrapText) to `max_width` px, lines `line_height` px apart
   // (0: 1.3 x the size), the first baseline at y; returns the baseline one
   // line below the last. Titles that fit the canvas, whatever their length.
-  double WrappedText(double x, double y, std::string_view text, double max_width, const TextStyle& style = {},
-                     double line_height = 0, int max_lines = 3);
+  double WrappedText(double x, double y, std::string_view text, double max_width,
+                     const TextStyle& style = {}, double line_height = 0, int max_lines = 3);
   void Line(double x1, double y1, double x2, double y2, const Stroke& stroke);
   // A rectangle filled with `fill` ("none" for an outline) and, when
   // `outline` is set, stroked; `css_class` (optional) comes first, as
   // <rect class="frame" x=... y=... width=... height=... .../>.
-  void Rect(double x, double y, double w, double h, std::string_view fill, const Stroke* outline = nullptr,
-            std::string_view css_class = "");
-  void Circle(double cx, double cy, double r, std::string_view fill, const Stroke* outline = nullptr);
+  void Rect(double x, double y, double w, double h, std::string_view fill,
+            const Stroke* outline = nullptr, std::string_view css_class = "");
+  void Circle(double cx, double cy, double r, std::string_view fill,
+              const Stroke* outline = nullptr);
   // An ellipse of semi-axes rx, ry px centred on (cx, cy), its rx axis turned
   // `angle_deg` degrees from +x (clockwise on screen, as SVG's rotate());
   // filled with `fill` ("none" for an outline) and stroked when `outline` is
@@ -185,19 +187,19 @@ class SvgCanvas {
 // A rectangle on the canvas and the data ranges at its edges.
 struct PlotFrame {
   double left = 0, top = 0, width = 1, height = 1;  // px
-  double x_lo = 0, x_hi = 1;  // data x at the left and right edges
-  double y_lo = 0, y_hi = 1;  // data y at the bottom and top edges
+  double x_lo = 0, x_hi = 1;                        // data x at the left and right edges
+  double y_lo = 0, y_hi = 1;                        // data y at the bottom and top edges
 
   double right() const { return left + width; }
   double bottom() const { return top + height; }
-  double X(double x) const { return left + (x - x_lo) / (x_hi - x_lo) * width; }  // px
+  double X(double x) const { return left + (x - x_lo) / (x_hi - x_lo) * width; }       // px
   double Y(double y) const { return bottom() - (y - y_lo) / (y_hi - y_lo) * height; }  // px
 };
 
 struct AxisStyle {
   std::string title{};       // centred below the frame (x) or rotated left of it (y); empty: none
-  double title_offset = 32;   // px from the frame's edge to the title's baseline
-  bool grid = true;           // a light line across the frame at each tick
+  double title_offset = 32;  // px from the frame's edge to the title's baseline
+  bool grid = true;          // a light line across the frame at each tick
   bool tick_labels = true;
   double tick_font_size = 0;  // px; 0: the canvas's font size
 };
@@ -209,8 +211,8 @@ struct AxisStyle {
 // its left neighbour is skipped; the y title moves left of the widest y tick
 // label, and the x title below the x tick labels, when title_offset is too
 // small for them.
-void DrawAxes(SvgCanvas& canvas, const PlotFrame& frame, const Ticks& x_ticks, const AxisStyle& x_style,
-              const Ticks& y_ticks, const AxisStyle& y_style);
+void DrawAxes(SvgCanvas& canvas, const PlotFrame& frame, const Ticks& x_ticks,
+              const AxisStyle& x_style, const Ticks& y_ticks, const AxisStyle& y_style);
 
 // The frame's rectangle, unfilled (css_class as in SvgCanvas::Rect).
 void DrawFrameOutline(SvgCanvas& canvas, const PlotFrame& frame, const Stroke& stroke,
@@ -235,18 +237,18 @@ void DrawScatter(SvgCanvas& canvas, const PlotFrame& frame, const std::vector<do
                  double opacity = 0.6, size_t max_points = 2500);
 
 enum class MarkerShape {
-  kCross,  // "+", arms of `size` px
-  kRing,   // circle of diameter `size` px, not filled
-  kBox,    // filled square of `size` px
+  kCross,    // "+", arms of `size` px
+  kRing,     // circle of diameter `size` px, not filled
+  kBox,      // filled square of `size` px
   kDiamond,  // a square of diagonal `size` px standing on a corner, not filled
 };
 
 struct MarkerStyle {
   MarkerShape shape = MarkerShape::kCross;
   std::string color = "black";
-  double size = 14;        // px
-  double line_width = 2;   // px
-  bool halo = false;       // a white outline underneath, for markers over colour
+  double size = 14;         // px
+  double line_width = 2;    // px
+  bool halo = false;        // a white outline underneath, for markers over colour
   std::string css_class{};  // on the marker's <g> when set
 };
 
@@ -265,17 +267,17 @@ void DrawArrow(SvgCanvas& canvas, double x1, double y1, double x2, double y2, co
 struct LegendEntry {
   std::string label{};
   enum class Swatch { kLine, kBox, kMarker } swatch = Swatch::kLine;
-  Stroke line{};        // kLine: colour, width and dash of the sample line
-  std::string color{};  // kBox: fill
-  MarkerStyle marker{}; // kMarker (drawn without halo or class)
+  Stroke line{};         // kLine: colour, width and dash of the sample line
+  std::string color{};   // kBox: fill
+  MarkerStyle marker{};  // kMarker (drawn without halo or class)
 };
 
 // Entries one under the other: the first label's baseline at y, `row` px
 // apart; a 20 px swatch at x, its label at x + 24, wrapped to `max_width` px
 // (whole legend, swatch included; 0: no wrapping) with one more row per
 // extra line. Returns the baseline below the last entry.
-double DrawLegend(SvgCanvas& canvas, double x, double y, const std::vector<LegendEntry>& entries, double row = 16,
-                  double max_width = 0);
+double DrawLegend(SvgCanvas& canvas, double x, double y, const std::vector<LegendEntry>& entries,
+                  double row = 16, double max_width = 0);
 // The height DrawLegend takes (rows x row) at the canvas font size `font_size`.
 double LegendHeight(const std::vector<LegendEntry>& entries, double font_size, double row = 16,
                     double max_width = 0);
@@ -297,8 +299,8 @@ class ColorRamp {
 struct ColorBar {
   double x = 0, y = 0, width = 18, height = 200;  // px; `lo` at the bottom
   double lo = 0, hi = 1;
-  Ticks ticks{};          // labelled right of the bar
-  std::string title{};    // above the bar
+  Ticks ticks{};                  // labelled right of the bar
+  std::string title{};            // above the bar
   std::string id = "colour-bar";  // of the bar's <g>; also names its gradient
   // Values marked by a thin white line across the bar, each with a tooltip.
   std::vector<std::pair<double, std::string>> marks{};

@@ -22,8 +22,8 @@
 namespace tactforce::planner {
 
 struct DenseQp {
-  Eigen::MatrixXd hessian;  // H, n x n, SPD
-  Eigen::VectorXd gradient; // g, n
+  Eigen::MatrixXd hessian;    // H, n x n, SPD
+  Eigen::VectorXd gradient;   // g, n
   Eigen::MatrixXd eq_matrix;  // p x n (may have 0 rows)
   Eigen::VectorXd eq_rhs;
   Eigen::MatrixXd in_matrix;  // m x n (may have 0 rows)
@@ -37,16 +37,16 @@ struct DenseQp {
   // M_b^T a_r. A scan of all rows then costs 3 n per block and 3 per row
   // instead of n per row, and a normal is formed only for a row that enters.
   Eigen::Matrix<double, Eigen::Dynamic, 3> in_directions;  // m x 3
-  std::vector<int> in_block_first;  // blocks + 1, from 0 to m
-  Eigen::MatrixXd in_block_maps;    // 3 blocks x n
+  std::vector<int> in_block_first;                         // blocks + 1, from 0 to m
+  Eigen::MatrixXd in_block_maps;                           // 3 blocks x n
   // H = I (`hessian` is then ignored): the minimum-norm point of a polytope,
   // the geometric planner's case. Starts from J = I with no factorisation.
   bool identity_hessian = false;
 };
 
 struct DenseQpSettings {
-  int max_iterations = 0;        // 0 = 5 * (n + m) + 20
-  double tolerance = 1e-11;      // relative: violation test and degeneracy
+  int max_iterations = 0;    // 0 = 5 * (n + m) + 20
+  double tolerance = 1e-11;  // relative: violation test and degeneracy
   // Inequality rows to try first (previous active set): each is added in
   // this order when violated, which usually finishes in a few steps. Viewed,
   // not copied: must outlive the solve.
@@ -72,27 +72,27 @@ struct DenseQpResult {
 // inequalities), reused from solve to solve. One per thread; contents are
 // scratch between solves.
 struct DenseQpWorkspace {
-  Eigen::MatrixXd normals;      // n x (p + m): constraint normals as columns, formed on demand
-  Eigen::VectorXd rhs;          // p + m
-  Eigen::VectorXd normal_norms; // p + m (where formed)
-  std::vector<char> has_normal; // p + m: column formed in this solve
-  Eigen::VectorXd distance;     // m: (b - a^T x) / |a| at the last scan
-  Eigen::VectorXd inverse_norms;  // m: 1 / |a|
+  Eigen::MatrixXd normals;         // n x (p + m): constraint normals as columns, formed on demand
+  Eigen::VectorXd rhs;             // p + m
+  Eigen::VectorXd normal_norms;    // p + m (where formed)
+  std::vector<char> has_normal;    // p + m: column formed in this solve
+  Eigen::VectorXd distance;        // m: (b - a^T x) / |a| at the last scan
+  Eigen::VectorXd inverse_norms;   // m: 1 / |a|
   Eigen::VectorXd distance_bound;  // m: -tolerance max(1, |b|) / |a|; -inf while active
   Eigen::Matrix<double, Eigen::Dynamic, 4> unit_rows;  // m x 4: a_r / |a|, b / |a| (structured)
-  Eigen::VectorXd block_values; // 6 blocks: per-block Gram M_b M_b^T (structured rows)
-  Eigen::VectorXd x, d, z, r, u;  // n each (r, u: leading q entries used)
-  Eigen::MatrixXd J, R;         // n x n
-  Eigen::VectorXd hx;           // n: H x, for the objective
-  std::vector<int> active;      // stacked indices, factorisation order
-  std::vector<char> is_active;  // p + m
+  Eigen::VectorXd block_values;     // 6 blocks: per-block Gram M_b M_b^T (structured rows)
+  Eigen::VectorXd x, d, z, r, u;    // n each (r, u: leading q entries used)
+  Eigen::MatrixXd J, R;             // n x n
+  Eigen::VectorXd hx;               // n: H x, for the objective
+  std::vector<int> active;          // stacked indices, factorisation order
+  std::vector<char> is_active;      // p + m
   Eigen::LLT<Eigen::MatrixXd> llt;  // H = L L^T (general Hessians only)
 };
 
 DenseQpResult SolveDenseQp(const DenseQp& qp, const DenseQpSettings& settings = {});
 
 // The same solve in place: `workspace` and `result` keep their storage.
-void SolveDenseQp(const DenseQp& qp, const DenseQpSettings& settings,
-                  DenseQpWorkspace* workspace, DenseQpResult* result);
+void SolveDenseQp(const DenseQp& qp, const DenseQpSettings& settings, DenseQpWorkspace* workspace,
+                  DenseQpResult* result);
 
 }  // namespace tactforce::planner

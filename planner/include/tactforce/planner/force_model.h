@@ -27,12 +27,12 @@ using Vector6d = Eigen::Matrix<double, 6, 1>;
 
 // Equilibrium of the contact forces with gravity and the external wrench.
 struct ForceEquilibrium {
-  MatrixXd grasp_matrix;  // G = [I ... I; [p_1]x ... [p_n]x], 6 x 3n
-  Vector6d wrench;        // b = -(w_g + w_ext), w_g = (m g, c x m g)
-  MatrixXd null_basis;    // B: orthonormal basis of null(G), 3n x d
-  VectorXd particular;    // f0 = G^+ b (minimum norm; orthogonal to B)
-  int rank = 0;           // numerical rank of G
-  double residual = 0.0;  // |G f0 - b| (N, N m)
+  MatrixXd grasp_matrix;    // G = [I ... I; [p_1]x ... [p_n]x], 6 x 3n
+  Vector6d wrench;          // b = -(w_g + w_ext), w_g = (m g, c x m g)
+  MatrixXd null_basis;      // B: orthonormal basis of null(G), 3n x d
+  VectorXd particular;      // f0 = G^+ b (minimum norm; orthogonal to B)
+  int rank = 0;             // numerical rank of G
+  double residual = 0.0;    // |G f0 - b| (N, N m)
   bool consistent = false;  // b in range(G) within tolerance
   // Independent equilibrium rows U_r^T G f = U_r^T b (r = rank): the same
   // affine set as G f = b when consistent, without redundant rows.
@@ -57,8 +57,7 @@ struct EquilibriumScratch {
 // values of G_c). Lost rotations (collinear or coincident contacts) move
 // their directions from the range to the null space. independent_rows are
 // then the orthonormal range basis (rank x 3n), independent_rhs = rows f0.
-ForceEquilibrium ComputeForceEquilibrium(const PlanProblem& problem,
-                                         double rank_tolerance);
+ForceEquilibrium ComputeForceEquilibrium(const PlanProblem& problem, double rank_tolerance);
 void ComputeForceEquilibrium(const PlanProblem& problem, double rank_tolerance,
                              EquilibriumScratch* scratch, ForceEquilibrium* out);
 
@@ -67,7 +66,8 @@ void ComputeForceEquilibrium(const PlanProblem& problem, double rank_tolerance,
 // L = B E diag(sigma) (3n x n_I), so S_f = L L^T.
 struct MeasurementEllipsoid {
   MatrixXd factor;
-  MatrixXd plane_factor;  // E diag(sigma) = B^T N_I diag(sigma): L in FE-plane coordinates (d x n_I)
+  MatrixXd
+      plane_factor;  // E diag(sigma) = B^T N_I diag(sigma): L in FE-plane coordinates (d x n_I)
   // sqrt(a^T S_f a): the support function of the unit ellipsoid along a.
   double Support(const VectorXd& a) const;
   MatrixXd ForceCovariance() const { return factor * factor.transpose(); }
@@ -110,9 +110,8 @@ struct ConstraintRows {
 // every contact, tightened by `confidence` times the ellipsoid support.
 // Facet directions come from a table built once per process.
 ConstraintRows BuildConstraintRows(const PlanProblem& problem,
-                                   const MeasurementEllipsoid& ellipsoid,
-                                   int cone_sides, double confidence,
-                                   bool with_friction_facets);
+                                   const MeasurementEllipsoid& ellipsoid, int cone_sides,
+                                   double confidence, bool with_friction_facets);
 void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid,
                          int cone_sides, double confidence, bool with_friction_facets,
                          ConstraintRows* out);
@@ -147,8 +146,7 @@ double TangentialSpread(const Vec3& normal, const Eigen::Matrix3d& covariance);
 // `normal_sigma` / `tangential_sigma` as from the two functions above.
 std::vector<double> ExactConeShift(const PlanProblem& problem,
                                    const std::vector<double>& normal_sigma,
-                                   const std::vector<double>& tangential_sigma,
-                                   double confidence);
+                                   const std::vector<double>& tangential_sigma, double confidence);
 void ExactConeShift(const PlanProblem& problem, const std::vector<double>& normal_sigma,
                     const std::vector<double>& tangential_sigma, double confidence,
                     std::vector<double>* out);
@@ -159,10 +157,10 @@ double ExactConeSlack(const Vec3& normal, double mu, double shift, const Vec3& f
 
 // The tightening for uncertain inertial parameters (parameter_uncertainty.h).
 struct ParameterTightening {
-  bool active = false;      // non-zero covariance and kappa_b > 0
-  double confidence = 0.0;  // kappa_b
+  bool active = false;                              // non-zero covariance and kappa_b > 0
+  double confidence = 0.0;                          // kappa_b
   std::vector<Eigen::Matrix3d> contact_covariance;  // P_i = (G^+ S_b G^+T)_ii (N^2)
-  VectorXd row_margin;             // kappa_b sqrt(a^T P_i a) per row (N), taken off rhs
+  VectorXd row_margin;              // kappa_b sqrt(a^T P_i a) per row (N), taken off rhs
   std::vector<double> cone_margin;  // EXACT: kappa_b (mu rho_n,b + rho_t,b) (N), in cone_shift
 };
 
@@ -171,7 +169,7 @@ struct PreparedProblem {
   PlanProblem problem;  // validated, normals of unit length
   ForceEquilibrium equilibrium;
   MeasurementEllipsoid ellipsoid;
-  ConstraintRows rows;  // PYRAMID: facets + bounds; EXACT: bounds only
+  ConstraintRows rows;                   // PYRAMID: facets + bounds; EXACT: bounds only
   std::vector<double> normal_sigma;      // rho_n,i (N)
   std::vector<double> tangential_sigma;  // rho_t,i (N)
   // EXACT: ExactConeShift() at options.confidence (N), the one tightening of

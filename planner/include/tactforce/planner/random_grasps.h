@@ -14,8 +14,8 @@ struct RandomGraspOptions {
   int min_contacts = 2;
   int max_contacts = 6;
   double min_friction = 0.2, max_friction = 1.2;
-  double max_sigma = 0.5;      // N
-  double max_min_force = 1.0;  // N
+  double max_sigma = 0.5;                  // N
+  double max_min_force = 1.0;              // N
   double min_mass = 0.05, max_mass = 2.0;  // kg
   double extrinsic_probability = 0.15;
   // Fraction of grasps made infeasible on purpose: frictionless contacts

@@ -53,9 +53,7 @@ class ForceSolver {
   explicit ForceSolver(SolverKind kind) : kind_(kind) {}
 
   // Rejects options this backend cannot honour (InvalidArgument).
-  virtual absl::Status CheckSupported(const PlanOptions& options) const {
-    return absl::OkStatus();
-  }
+  virtual absl::Status CheckSupported(const PlanOptions& options) const { return absl::OkStatus(); }
   // From workspace->prepared, fills status, message, forces (one per
   // contact; empty unless optimal), iterations and, where meaningful,
   // active_set / cross_check / ipopt. `result` arrives reset (status

@@ -22,17 +22,17 @@ struct Inertia {
 };
 
 struct TrajectoryStep {
-  Vec3 gravity = Vec3(0, 0, -9.81);       // in the (rotating) object frame
-  Vec3 linear_acceleration = Vec3::Zero();   // a of the object origin (m/s^2)
-  Vec3 angular_velocity = Vec3::Zero();      // w (rad/s)
-  Vec3 angular_acceleration = Vec3::Zero();  // dw (rad/s^2)
+  Vec3 gravity = Vec3(0, 0, -9.81);              // in the (rotating) object frame
+  Vec3 linear_acceleration = Vec3::Zero();       // a of the object origin (m/s^2)
+  Vec3 angular_velocity = Vec3::Zero();          // w (rad/s)
+  Vec3 angular_acceleration = Vec3::Zero();      // dw (rad/s^2)
   std::optional<std::vector<Contact>> contacts;  // overrides the base contacts
-  Wrench external_wrench;  // added to the base's external wrench at this step
+  Wrench external_wrench;                        // added to the base's external wrench at this step
 };
 
 struct TrajectoryProblem {
-  PlanProblem base;                 // object, contacts, constant external wrench
-  std::optional<Inertia> inertia;   // required when any step rotates
+  PlanProblem base;                // object, contacts, constant external wrench
+  std::optional<Inertia> inertia;  // required when any step rotates
   std::vector<TrajectoryStep> steps;
 };
 
@@ -65,8 +65,8 @@ absl::StatusOr<TrajectoryResult> PlanTrajectory(const TrajectoryProblem& traject
 // `final_normal_force`; the holding grasp must keep the object still.
 struct FrictionProbe {
   Vec3 position = Vec3::Zero();
-  Vec3 normal = Vec3::UnitZ();   // into the object
-  Vec3 tangent = Vec3::UnitX();  // projected onto the tangent plane
+  Vec3 normal = Vec3::UnitZ();        // into the object
+  Vec3 tangent = Vec3::UnitX();       // projected onto the tangent plane
   double tangential_force = 1.0;      // N
   double initial_normal_force = 4.0;  // N
   double final_normal_force = 0.0;    // N
@@ -75,15 +75,14 @@ struct FrictionProbe {
 };
 
 struct ProbePlan {
-  std::vector<double> times;        // s
-  std::vector<Vec3> probe_forces;   // N, applied by the probe to the object
-  TrajectoryResult holding;         // the holding fingers' plan per step
+  std::vector<double> times;       // s
+  std::vector<Vec3> probe_forces;  // N, applied by the probe to the object
+  TrajectoryResult holding;        // the holding fingers' plan per step
 };
 
 // Errors name the field ("probe.normal: zero length", ...).
 absl::StatusOr<ProbePlan> PlanFrictionProbe(const PlanProblem& holding_grasp,
-                                            const FrictionProbe& probe,
-                                            const PlanOptions& options, SolverKind kind,
-                                            const SolveControl& control = {});
+                                            const FrictionProbe& probe, const PlanOptions& options,
+                                            SolverKind kind, const SolveControl& control = {});
 
 }  // namespace tactforce::planner

@@ -83,9 +83,9 @@ enum class SolverKind { kGeometric, kIpopt, kCrossCheck };
 // Settings of the IPOPT backend (and of CROSS_CHECK's reference solve),
 // kept apart from the geometric ones as Drake keeps options per solver.
 struct IpoptOptions {
-  double tolerance = 1e-9;      // Ipopt's tol (scaled overall NLP error)
-  int max_iterations = 3000;    // per Ipopt run
-  double max_cpu_seconds = 0.0; // CPU budget of one solve; 0 = no limit
+  double tolerance = 1e-9;       // Ipopt's tol (scaled overall NLP error)
+  int max_iterations = 3000;     // per Ipopt run
+  double max_cpu_seconds = 0.0;  // CPU budget of one solve; 0 = no limit
 };
 
 // Settings of a plan (Ceres-style: IsValid explains itself). The member
@@ -99,10 +99,10 @@ struct PlanOptions {
   static constexpr double kMaxConfidence = 1e3;
 
   ConeModel cone = ConeModel::kPyramid;
-  int cone_sides = 12;       // k, facets of the inscribed pyramid, kMin..kMaxConeSides
-  double confidence = 1.0;   // kappa >= 0: rows tightened by kappa * ellipsoid support
+  int cone_sides = 12;           // k, facets of the inscribed pyramid, kMin..kMaxConeSides
+  double confidence = 1.0;       // kappa >= 0: rows tightened by kappa * ellipsoid support
   double rank_tolerance = 1e-9;  // relative singular-value cut-off for null(G)
-  int max_contacts = 64;     // a limit of the caller (api::CallLimits), checked by validation
+  int max_contacts = 64;         // a limit of the caller (api::CallLimits), checked by validation
 
   // Geometric backend: constraint rows active at a previous, similar solve
   // (PlanResult::active_set). Only speeds things up; never changes the answer.
@@ -137,11 +137,11 @@ const char* ToString(UncertaintySource source);
 // One tightened constraint's margin split by source (N), at the plan.
 struct RowMargin {
   int contact = 0;
-  bool cone = false;      // EXACT cone of `contact` rather than a row
-  int row = -1;           // index into the prepared rows (-1 for a cone)
-  int facet = -1;         // a pyramid facet's index; -1: a normal-force bound or a cone
-  bool upper = false;     // the maximum (not minimum) normal-force bound
-  double slack = 0.0;     // of the tightened row / cone at the forces
+  bool cone = false;         // EXACT cone of `contact` rather than a row
+  int row = -1;              // index into the prepared rows (-1 for a cone)
+  int facet = -1;            // a pyramid facet's index; -1: a normal-force bound or a cone
+  bool upper = false;        // the maximum (not minimum) normal-force bound
+  double slack = 0.0;        // of the tightened row / cone at the forces
   double measurement = 0.0;  // kappa sqrt(a^T S_f a) (cone: kappa (mu rho_n + rho_t))
   double parameters = 0.0;   // kappa_b sqrt(a^T G^+ S_b G^+T a) (cone: likewise)
 };

@@ -18,7 +18,7 @@ inline constexpr double kMaxMass = 1e6;          // kg
 inline constexpr double kMaxAcceleration = 1e4;  // m/s^2: gravity
 inline constexpr double kMaxForce = 1e9;         // N (N m for torques): wrench, force bounds, sigma
 inline constexpr double kMaxFriction = 1e3;      // friction coefficient
-inline constexpr double kMaxVelocity = 1e3;             // m/s
+inline constexpr double kMaxVelocity = 1e3;      // m/s
 inline constexpr double kMaxAngularVelocity = 1e3;      // rad/s
 inline constexpr double kMaxAngularAcceleration = 1e5;  // rad/s^2
 inline constexpr double kMaxInertia = 1e12;             // kg m^2 (kMaxMass x kMaxLength^2)
@@ -37,11 +37,15 @@ bool IsBounded(const Vec3& value, double limit);
 // The error of a value IsBounded rejects: "<field>: not a finite number"
 // ("... vector"), "<field>: magnitude exceeds <limit> <unit>" (vectors:
 // "component magnitude exceeds ...").
-absl::Status MagnitudeError(absl::string_view field, double value, double limit, absl::string_view unit);
-absl::Status MagnitudeError(absl::string_view field, const Vec3& value, double limit, absl::string_view unit);
+absl::Status MagnitudeError(absl::string_view field, double value, double limit,
+                            absl::string_view unit);
+absl::Status MagnitudeError(absl::string_view field, const Vec3& value, double limit,
+                            absl::string_view unit);
 // IsBounded, else MagnitudeError.
-absl::Status CheckMagnitude(absl::string_view field, double value, double limit, absl::string_view unit);
-absl::Status CheckMagnitude(absl::string_view field, const Vec3& value, double limit, absl::string_view unit);
+absl::Status CheckMagnitude(absl::string_view field, double value, double limit,
+                            absl::string_view unit);
+absl::Status CheckMagnitude(absl::string_view field, const Vec3& value, double limit,
+                            absl::string_view unit);
 // A time stamp (s): finite and |t| <= kMaxTime; with `previous` (the
 // sample before, already checked), also t - previous >= kMinTimeStep:
 // "<field>: step 1e-302 s after the previous sample is below the resolution
@@ -57,8 +61,7 @@ bool NormalizeDirection(Vec3* direction);
 // normals; a normal of any finite non-zero length is normalised without
 // overflow. Errors are
 // absl::InvalidArgumentError("<field path>: <what is wrong>").
-absl::StatusOr<PlanProblem> ValidateProblem(const PlanProblem& problem,
-                                            const PlanOptions& options);
+absl::StatusOr<PlanProblem> ValidateProblem(const PlanProblem& problem, const PlanOptions& options);
 // The same into `validated` (which must not alias `problem`), reusing its
 // storage; on error its contents are unspecified.
 absl::Status ValidateProblem(const PlanProblem& problem, const PlanOptions& options,
@@ -91,8 +94,8 @@ absl::Status ValidatePlan(const PlanProblem& problem, const PlanOptions& options
                           ValidatedPlan* plan);
 
 // A rotational inertia about the CoM (kg m^2) that an object can have:
-// finite, components at most kMaxInertia, positive semidefinite, principal moments obeying the triangle
-// inequality (up to rounding). InvalidArgument("object.inertia: ...").
+// finite, components at most kMaxInertia, positive semidefinite, principal moments obeying the
+// triangle inequality (up to rounding). InvalidArgument("object.inertia: ...").
 absl::Status ValidateInertia(const Inertia& inertia);
 
 // One step of a motion (trajectory.h), "steps[i]...." in errors: gravity,
@@ -104,6 +107,7 @@ absl::Status ValidateTrajectoryStep(const TrajectoryStep& step, int index, bool 
 // A friction probe's numbers ("probe.normal: zero length", ...), with its
 // unit normal and unit tangent (projected onto the tangent plane), each
 // computed without overflow.
-absl::Status ValidateFrictionProbe(const FrictionProbe& probe, Vec3* unit_normal, Vec3* unit_tangent);
+absl::Status ValidateFrictionProbe(const FrictionProbe& probe, Vec3* unit_normal,
+                                   Vec3* unit_tangent);
 
 }  // namespace tactforce::planner

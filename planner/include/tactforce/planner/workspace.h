@@ -23,12 +23,12 @@
 namespace tactforce::planner {
 
 struct PlanningWorkspace {
-  PreparedProblem prepared;              // the last request, validated and prepared
+  PreparedProblem prepared;  // the last request, validated and prepared
   EquilibriumScratch equilibrium_scratch;
-  DenseQp qp;                            // the FE-plane QP of the last solve
+  DenseQp qp;  // the FE-plane QP of the last solve
   DenseQpWorkspace qp_workspace;
   DenseQpResult qp_result;
-  Eigen::VectorXd forces;                // 3n stacked forces (N)
+  Eigen::VectorXd forces;  // 3n stacked forces (N)
 };
 
 }  // namespace tactforce::planner

@@ -159,7 +159,7 @@ class AdmittedStream : public Reactor, public IdleEndable {
   StreamRegistry* streams_;
   const char* rpc_;
   std::atomic<bool> cancelled_{false};
-  const RpcGuard guard_;  // polls cancelled_ too
+  const RpcGuard guard_;                 // polls cancelled_ too
   std::atomic<bool> registered_{false};  // admitted and not yet closed
   std::atomic<int> refs_{1};
   std::mutex mu_;  // guards the flags and clocks below

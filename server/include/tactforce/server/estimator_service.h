@@ -21,7 +21,6 @@
 
 namespace tactforce::server {
 
-
 // FitInertia is registered raw (its reactor parses each message itself:
 // see estimator_service.cc); the unary RPCs are typed.
 using EstimatorBase = v1::Estimator::WithCallbackMethod_EstimateForces<
@@ -34,7 +33,9 @@ class EstimatorService final : public EstimatorBase, public HostedService {
   // call; `max_inertia_samples`: most samples one FitInertia stream may carry.
   EstimatorService(WorkerPool* pool, StreamRegistry* streams, api::CallLimits limits,
                    int64_t max_inertia_samples = api::kDefaultMaxInertiaSamples)
-      : pool_(pool), streams_(streams), limits_(std::move(limits)),
+      : pool_(pool),
+        streams_(streams),
+        limits_(std::move(limits)),
         max_inertia_samples_(max_inertia_samples) {}
 
   std::string service_name() const override {
@@ -62,7 +63,8 @@ class EstimatorService final : public EstimatorBase, public HostedService {
 // models: tens of milliseconds to seconds).
 class AuditService final : public v1::Audit::CallbackService, public HostedService {
  public:
-  AuditService(WorkerPool* pool, api::CallLimits limits) : pool_(pool), limits_(std::move(limits)) {}
+  AuditService(WorkerPool* pool, api::CallLimits limits)
+      : pool_(pool), limits_(std::move(limits)) {}
   std::string service_name() const override { return std::string(v1::Audit::service_full_name()); }
   grpc::Service* grpc_service() override { return this; }
   grpc::ServerUnaryReactor* AuditModel(grpc::CallbackServerContext* context,

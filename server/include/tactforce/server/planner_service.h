@@ -46,8 +46,8 @@ namespace tactforce::server {
 
 // PlanStream is registered raw (its reactor parses each message itself: see
 // planner_service.cc); the unary RPCs are typed.
-using PlannerBase = v1::Planner::WithCallbackMethod_Plan<v1::Planner::WithRawCallbackMethod_PlanStream<
-    v1::Planner::WithCallbackMethod_PlanTrajectory<
+using PlannerBase = v1::Planner::WithCallbackMethod_Plan<
+    v1::Planner::WithRawCallbackMethod_PlanStream<v1::Planner::WithCallbackMethod_PlanTrajectory<
         v1::Planner::WithCallbackMethod_PlanFrictionProbe<v1::Planner::Service>>>>;
 
 class PlannerService final : public PlannerBase, public HostedService {
@@ -82,7 +82,7 @@ class PlannerService final : public PlannerBase, public HostedService {
 
   WorkerPool* pool_;
   WorkerPool* ipopt_lane_;
-  StreamRegistry* streams_;  // PlanStream's admission and idle timeout
+  StreamRegistry* streams_;    // PlanStream's admission and idle timeout
   api::PlanDispatcher plans_;  // its settings' limits serve every Planner RPC
   // Plan's request and response on one arena per call.
   ArenaMessageAllocator<v1::PlanRequest, v1::PlanResponse> plan_messages_;

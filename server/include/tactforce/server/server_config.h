@@ -15,9 +15,9 @@ namespace tactforce::server {
 
 struct ServerConfig {
   std::string listen = "127.0.0.1:50051";
-  int workers = 0;  // 0 = std::thread::hardware_concurrency()
+  int workers = 0;        // 0 = std::thread::hardware_concurrency()
   int ipopt_workers = 1;  // the Ipopt lane's threads (Ipopt runs one solve at a time per process)
-  int queue = 64;   // solves waiting for a worker, beyond which RESOURCE_EXHAUSTED
+  int queue = 64;         // solves waiting for a worker, beyond which RESOURCE_EXHAUSTED
   // The limits of every call, filled by the flags: --max-contacts,
   // --max-trajectory-work, --max-audit-samples, --max-fit-bytes,
   // --max-message-bytes (max_response_bytes, also the transport's limit) and

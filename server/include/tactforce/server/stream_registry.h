@@ -25,9 +25,9 @@
 namespace tactforce::server {
 
 struct StreamLimits {
-  int max_streams = 1000;  // open streaming calls; 0 = no limit
+  int max_streams = 1000;                          // open streaming calls; 0 = no limit
   std::chrono::milliseconds idle_timeout{60'000};  // 0 = never
-  int64_t max_inflight_samples = 2'000'000;  // FitInertia samples held; 0 = no limit
+  int64_t max_inflight_samples = 2'000'000;        // FitInertia samples held; 0 = no limit
   // FitInertia bytes held by all streams (api::InertiaStream::held_bytes);
   // 0 = no limit. 256 MiB: a quarter of the shipped Kubernetes limit (1 GiB).
   int64_t max_inflight_bytes = int64_t{256} << 20;

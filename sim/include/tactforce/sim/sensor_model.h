@@ -32,16 +32,16 @@
 namespace tactforce::sim {
 
 struct EffectParams {
-  double threshold = 0;          // N, >= 0
-  double threshold_shift = 0;    // [0, 1]
-  double hysteresis_width = 0;   // N, >= 0 (full loop width; residual after release = width/2)
-  double delay = 0;              // s (negative: reading leads, e.g. a clock offset)
-  double lag = 0;                // s, >= 0
-  double saturation = 0;         // N, > 0 to enable: no response above this force
-  double curvature = 0;          // relative deviation at full_scale (e.g. 0.03 = 3 %)
-  double full_scale = 20;        // N, > 0 (only scales curvature)
-  double drift = 0;              // N/s
-  double crosstalk = 0;          // N per N of shear
+  double threshold = 0;         // N, >= 0
+  double threshold_shift = 0;   // [0, 1]
+  double hysteresis_width = 0;  // N, >= 0 (full loop width; residual after release = width/2)
+  double delay = 0;             // s (negative: reading leads, e.g. a clock offset)
+  double lag = 0;               // s, >= 0
+  double saturation = 0;        // N, > 0 to enable: no response above this force
+  double curvature = 0;         // relative deviation at full_scale (e.g. 0.03 = 3 %)
+  double full_scale = 20;       // N, > 0 (only scales curvature)
+  double drift = 0;             // N/s
+  double crosstalk = 0;         // N per N of shear
   // Power-law nonlinearity u -> full_scale * sign(u) |u/full_scale|^p
   // (p > 0; 0 = off; the gain absorbs the full_scale^(1-p) factor, so this
   // is reading = a * F^p + b in the force domain).
@@ -56,15 +56,15 @@ struct EffectParams {
 };
 
 struct SensorModel {
-  std::string units = "N";       // the reading's units (free text: N, counts, uT)
-  double gain = 1;               // reading units per N (may be negative)
-  double offset = 0;             // reading units
-  double noise = 0;              // N, additive Gaussian sigma per taxel under the contact patch
-  double partial_error = 0;      // N, error of a partially covered taxel
+  std::string units = "N";   // the reading's units (free text: N, counts, uT)
+  double gain = 1;           // reading units per N (may be negative)
+  double offset = 0;         // reading units
+  double noise = 0;          // N, additive Gaussian sigma per taxel under the contact patch
+  double partial_error = 0;  // N, error of a partially covered taxel
   EffectParams effects;
   // Fitted models (audit output): 1-sigma uncertainty per field name.
   std::map<std::string, double> uncertainty;
-  std::string source;            // free text: "simulated", "audit of run.csv", ...
+  std::string source;  // free text: "simulated", "audit of run.csv", ...
 };
 
 // JSON (see README): a flat object, keys = the field names above plus
@@ -82,14 +82,14 @@ absl::Status ValidateSensorModel(const SensorModel& model);
 // Shared by the simulation (per taxel) and the audit (whole-sensor fits), so
 // a fitted model re-simulates exactly as it was fitted.
 struct ChannelInput {
-  const double* t = nullptr;       // strictly increasing within a segment
-  const double* force = nullptr;   // N
-  const double* shear = nullptr;   // N, may be null (= 0)
+  const double* t = nullptr;      // strictly increasing within a segment
+  const double* force = nullptr;  // N
+  const double* shear = nullptr;  // N, may be null (= 0)
   int n = 0;
   // Sample indices where an independent segment (trial) starts; dynamic state
   // (delay history, lag, play operator) restarts there. Empty = one segment.
   const std::vector<int>* segment_starts = nullptr;
-  double t0 = 0;                   // drift reference time
+  double t0 = 0;  // drift reference time
 };
 // out[i] = force-domain output (before gain/offset). out is resized.
 void ApplyChannel(const EffectParams& p, const ChannelInput& in, std::vector<double>* out);

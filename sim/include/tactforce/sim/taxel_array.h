@@ -44,9 +44,9 @@ namespace tactforce::sim {
 
 // The ranges each taxel's parameters are drawn from (uniform), and the patch.
 struct TaxelRanges {
-  double threshold_min = 0.1, threshold_max = 0.5;      // N, activation threshold
-  double hysteresis_max = 0.2;                          // N, residual after release, drawn in [0, max]
-  double hysteresis_decay = 2.0;                        // s, relaxation time constant (0 = the residual stays)
+  double threshold_min = 0.1, threshold_max = 0.5;  // N, activation threshold
+  double hysteresis_max = 0.2;                      // N, residual after release, drawn in [0, max]
+  double hysteresis_decay = 2.0;  // s, relaxation time constant (0 = the residual stays)
   double force_error_min = 0.1, force_error_max = 0.5;  // N, magnitude, random sign per taxel
   double noise_min = 0.01, noise_max = 0.03;            // N, std. dev.
   double saturation = 20;                               // N per taxel, > 0
@@ -98,7 +98,8 @@ class TaxelArray {
   // t in s (non-decreasing); contact: point on the surface (fingertip frame,
   // m); force: on the fingertip, pressing into it (fingertip frame, N); a zero
   // force is no contact.
-  const TaxelArrayReading& Step(double t, const Eigen::Vector3d& contact, const Eigen::Vector3d& force);
+  const TaxelArrayReading& Step(double t, const Eigen::Vector3d& contact,
+                                const Eigen::Vector3d& force);
 
   const std::vector<Taxel>& taxels() const { return taxels_; }
   const std::vector<TaxelParams>& params() const { return params_; }

@@ -20,9 +20,9 @@ namespace tactforce::inertia {
 
 // Unit-density volume integrals of a solid, about the object origin.
 struct SolidMoments {
-  double volume = 0.0;                                // m^3
-  Vec3 first = Vec3::Zero();                          // integral of x dV (m^4)
-  Eigen::Matrix3d second = Eigen::Matrix3d::Zero();   // integral of x x^T dV (m^5)
+  double volume = 0.0;                               // m^3
+  Vec3 first = Vec3::Zero();                         // integral of x dV (m^4)
+  Eigen::Matrix3d second = Eigen::Matrix3d::Zero();  // integral of x x^T dV (m^5)
 
   Vec3 Centroid() const { return volume != 0 ? Vec3(first / volume) : Vec3::Zero(); }
   // Standard parameters [m, m c, I_origin] of the solid at `density` (kg/m^3).
@@ -64,10 +64,10 @@ struct RegionOptions {
 };
 
 struct DensityRegion {
-  std::string label;                  // "cell (2,0,1)", "colour #c0c0c0", "solid"
-  SolidMoments moments;               // unit density
+  std::string label;                       // "cell (2,0,1)", "colour #c0c0c0", "solid"
+  SolidMoments moments;                    // unit density
   std::array<int, 3> cell = {-1, -1, -1};  // kGrid: cell index along the grid axes
-  uint32_t color = 0;                 // kColors: 0xRRGGBB
+  uint32_t color = 0;                      // kColors: 0xRRGGBB
 };
 
 struct RegionModel {

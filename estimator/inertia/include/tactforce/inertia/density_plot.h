@@ -16,9 +16,9 @@
 namespace tactforce::inertia {
 
 struct DensityPlotOptions {
-  std::string title;            // drawn on top; empty: "<method> fit"
-  std::optional<Vec3> true_com; // object frame, m; drawn as a second marker
-  std::string source;           // the input files, named under the title; empty: none
+  std::string title;             // drawn on top; empty: "<method> fit"
+  std::optional<Vec3> true_com;  // object frame, m; drawn as a second marker
+  std::string source;            // the input files, named under the title; empty: none
 };
 
 // The SVG document. `mesh` is the fitted mesh (object frame, m) and `fit`

@@ -102,10 +102,10 @@ struct InertiaPrior {
 // Unknown measured linear and angular acceleration sigmas are estimated
 // from the series' roughness (CONSTRAINED, DENSITY); the notes name them.
 struct InertiaNoise {
-  double force_sigma = 0.0;         // N per component: each contact force (contacts) or the wrench force
-  double torque_sigma = 0.0;        // N m per component, wrench source only
-  double position_sigma = 0.0;      // m, object position
-  double orientation_sigma = 0.0;   // rad, object orientation (per axis)
+  double force_sigma = 0.0;   // N per component: each contact force (contacts) or the wrench force
+  double torque_sigma = 0.0;  // N m per component, wrench source only
+  double position_sigma = 0.0;              // m, object position
+  double orientation_sigma = 0.0;           // rad, object orientation (per axis)
   double angular_velocity_sigma = 0.0;      // rad/s, measured kinematics
   double linear_acceleration_sigma = 0.0;   // m/s^2, measured kinematics
   double angular_acceleration_sigma = 0.0;  // rad/s^2, measured kinematics
@@ -222,13 +222,13 @@ absl::Status ValidateInertiaOptions(const InertiaOptions& options);
 
 struct InertiaFit {
   InertiaMethod method = InertiaMethod::kConstrained;
-  InertialParameters params;       // mass, CoM, inertia about the CoM
+  InertialParameters params;               // mass, CoM, inertia about the CoM
   Vector10d standard = Vector10d::Zero();  // standard parameters (about the origin)
   Vec3 principal_moments = Vec3::Zero();   // ascending (kg m^2)
   Eigen::Matrix3d principal_axes = Eigen::Matrix3d::Identity();  // columns, right-handed
-  bool physically_consistent = false;      // 4x4 pseudo-inertia positive definite
+  bool physically_consistent = false;          // 4x4 pseudo-inertia positive definite
   double pseudo_inertia_min_eigenvalue = 0.0;  // of P scaled to unit mass and size
-  bool com_in_hull = true;                 // true when no hull was given
+  bool com_in_hull = true;                     // true when no hull was given
   // A non-negative density inside the mesh produces these parameters
   // (DENSITY, by construction; false for the other methods).
   bool density_realizable = false;
@@ -262,18 +262,18 @@ struct InertiaFit {
   };
   std::vector<RegionDensity> densities;
   std::shared_ptr<const RegionModel> region_model;
-  double density_regularization = 0.0;     // the strength used
-  std::string density_regularization_rule; // "held-out time blocks (5 folds)" or "given"
+  double density_regularization = 0.0;      // the strength used
+  std::string density_regularization_rule;  // "held-out time blocks (5 folds)" or "given"
   std::optional<io::MeshCheck> mesh_check;
   // Held-out weighted residual of DENSITY relative to CONSTRAINED's (0 = not tested).
   double heldout_residual_ratio = 0.0;
-  bool mesh_contradicted = false;          // the answer is CONSTRAINED's
-  std::string mesh_contradiction;          // one line, empty when not contradicted
+  bool mesh_contradicted = false;  // the answer is CONSTRAINED's
+  std::string mesh_contradiction;  // one line, empty when not contradicted
 
   int iterations = 0;
-  double time_seconds = 0.0;   // wall clock
-  double cpu_seconds = 0.0;    // CPU time of the calling thread (all work runs in it)
-  int samples_used = 0;        // samples that produced an equation
+  double time_seconds = 0.0;       // wall clock
+  double cpu_seconds = 0.0;        // CPU time of the calling thread (all work runs in it)
+  int samples_used = 0;            // samples that produced an equation
   std::vector<std::string> notes;  // e.g. "prior ignored by baseline-ls"
 };
 

@@ -11,10 +11,10 @@
 namespace tactforce::inertia {
 
 struct ConvexHull {
-  std::vector<Vec3> normals;   // unit, outward
-  std::vector<double> offsets; // n . x <= d inside
-  std::vector<Vec3> vertices;  // hull vertices (subset of the input)
-  double size = 0.0;           // diagonal of the axis-aligned bounding box (m)
+  std::vector<Vec3> normals;    // unit, outward
+  std::vector<double> offsets;  // n . x <= d inside
+  std::vector<Vec3> vertices;   // hull vertices (subset of the input)
+  double size = 0.0;            // diagonal of the axis-aligned bounding box (m)
 
   // Largest n_j . x - d_j (m): <= 0 inside, > 0 outside.
   double SignedDistanceBound(const Vec3& x) const;

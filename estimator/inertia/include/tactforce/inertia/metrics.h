@@ -32,11 +32,11 @@ double PaperInertialError(const Eigen::Matrix4d& p_gt, const Eigen::Matrix4d& p_
 double RiemannianDistance(const Eigen::Matrix4d& p_gt, const Eigen::Matrix4d& p_est);
 
 struct InertiaErrors {
-  double paper_metric = 0.0;   // |4 - Tr(P_gt^-1 P_est)|
-  double riemannian = 0.0;     // affine-invariant distance (inf if inconsistent)
-  double mass_percent = 0.0;   // 100 |m_est - m_gt| / m_gt
-  double com_mm = 0.0;         // 1000 |c_est - c_gt|
-  bool consistent = false;     // estimate's pseudo-inertia positive definite
+  double paper_metric = 0.0;  // |4 - Tr(P_gt^-1 P_est)|
+  double riemannian = 0.0;    // affine-invariant distance (inf if inconsistent)
+  double mass_percent = 0.0;  // 100 |m_est - m_gt| / m_gt
+  double com_mm = 0.0;        // 1000 |c_est - c_gt|
+  bool consistent = false;    // estimate's pseudo-inertia positive definite
 };
 
 InertiaErrors CompareInertia(const InertialParameters& truth, const InertialParameters& estimate);

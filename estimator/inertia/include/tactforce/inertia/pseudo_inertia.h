@@ -41,9 +41,9 @@ struct PseudoInertiaTpl {
   using Matrix4 = Eigen::Matrix<Scalar, 4, 4>;
   using Vector10 = Eigen::Matrix<Scalar, 10, 1>;
 
-  Scalar mass = Scalar(0);                 // m (kg)
-  Vector3 h = Vector3::Zero();             // m c (kg m)
-  Matrix3 sigma = Matrix3::Zero();         // second moment about the origin (kg m^2)
+  Scalar mass = Scalar(0);          // m (kg)
+  Vector3 h = Vector3::Zero();      // m c (kg m)
+  Matrix3 sigma = Matrix3::Zero();  // second moment about the origin (kg m^2)
 
   // From the standard parameters pi (inertia about the origin).
   template <typename Derived>
@@ -57,7 +57,9 @@ struct PseudoInertiaTpl {
     return j;
   }
   // From mass, CoM and inertia about the CoM (double only).
-  static PseudoInertiaTpl FromParameters(const InertialParameters& p) { return FromStandard(p.ToStandard()); }
+  static PseudoInertiaTpl FromParameters(const InertialParameters& p) {
+    return FromStandard(p.ToStandard());
+  }
   // From a 4x4 matrix: its upper triangle (J need not be positive definite).
   template <typename Derived>
   static PseudoInertiaTpl FromMatrix(const Eigen::MatrixBase<Derived>& J) {

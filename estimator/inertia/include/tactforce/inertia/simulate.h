@@ -33,10 +33,10 @@ namespace tactforce::inertia {
 inline constexpr double kPaperForceVariances[] = {0.0, 0.1, 0.25, 0.5, 1.0};  // N^2
 
 struct SinusoidComponent {
-  int axis = 0;              // position: world x,y,z = 0,1,2; orientation: yaw(z), pitch(y), roll(x) = 0,1,2
-  double amplitude = 0.0;    // m or rad
+  int axis = 0;  // position: world x,y,z = 0,1,2; orientation: yaw(z), pitch(y), roll(x) = 0,1,2
+  double amplitude = 0.0;  // m or rad
   double frequency_hz = 0.0;
-  double phase = 0.0;        // rad
+  double phase = 0.0;  // rad
 };
 
 struct ExcitationTrajectory {
@@ -50,8 +50,7 @@ struct ExcitationTrajectory {
   static ExcitationTrajectory Default();
   // Position, world velocity and acceleration; rotation, body angular
   // velocity and acceleration (analytic derivatives).
-  void Evaluate(double t, Vec3* p, Vec3* v, Vec3* a, Eigen::Matrix3d* R, Vec3* w,
-                Vec3* dw) const;
+  void Evaluate(double t, Vec3* p, Vec3* v, Vec3* a, Eigen::Matrix3d* R, Vec3* w, Vec3* dw) const;
 };
 
 enum class SimulationMode { kWristWrench, kInHand };
@@ -95,8 +94,8 @@ struct SimulationOptions {
   std::string object = "seed-table1";
   std::optional<SimulatedObject> custom;  // used instead of `object` when set
   SimulationMode mode = SimulationMode::kInHand;
-  int num_contacts = 4;   // in-hand: 2..4 of the object's contact points
-  double duration = 10.0; // s
+  int num_contacts = 4;    // in-hand: 2..4 of the object's contact points
+  double duration = 10.0;  // s
   double rate_hz = 100.0;
   ExcitationTrajectory trajectory = ExcitationTrajectory::Default();
   Vec3 gravity = Vec3(0, 0, -9.81);
