@@ -300,6 +300,22 @@ v1::InertialParameters InertialParametersToProto(const inertia::InertialParamete
   return out;
 }
 
+namespace {
+
+inertia::InertiaNoise NoiseFromProto(const v1::InertiaNoise& n) {
+  inertia::InertiaNoise out;
+  out.force_sigma = n.force_sigma();
+  out.torque_sigma = n.torque_sigma();
+  out.position_sigma = n.position_sigma();
+  out.orientation_sigma = n.orientation_sigma();
+  out.angular_velocity_sigma = n.angular_velocity_sigma();
+  out.linear_acceleration_sigma = n.linear_acceleration_sigma();
+  out.angular_acceleration_sigma = n.angular_acceleration_sigma();
+  return out;
+}
+
+}  // namespace
+
 absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::InertiaFitOptions& o) {
   inertia::InertiaOptions out;
   TF_RETURN_IF_ERROR(CheckOptionMagnitudes(o));
@@ -319,14 +335,7 @@ absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::Inerti
     prior.weight = o.prior().weight() == 0.0 ? 1.0 : o.prior().weight();
     out.prior = prior;
   }
-  const v1::InertiaNoise& n = o.noise();
-  out.noise.force_sigma = n.force_sigma();
-  out.noise.torque_sigma = n.torque_sigma();
-  out.noise.position_sigma = n.position_sigma();
-  out.noise.orientation_sigma = n.orientation_sigma();
-  out.noise.angular_velocity_sigma = n.angular_velocity_sigma();
-  out.noise.linear_acceleration_sigma = n.linear_acceleration_sigma();
-  out.noise.angular_acceleration_sigma = n.angular_acceleration_sigma();
+  out.noise = NoiseFromProto(o.noise());
   out.baseline_ls.savitzky_golay = o.savitzky_golay();
   // uint32 counts past int's range are named here, not wrapped negative.
   for (const auto& [value, field] : {std::pair{o.savitzky_golay_window(), "savitzky_golay_window"},
@@ -343,12 +352,8 @@ absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::Inerti
   out.smoothing_window = static_cast<int>(o.smoothing_window());
   if (o.max_iterations() != 0) out.max_iterations = static_cast<int>(o.max_iterations());
   if (o.has_regularization()) out.constrained.regularization = o.regularization();
-  absl::StatusOr<inertia::RegionScheme> scheme = RegionSchemeFromProto(o.regions());
-  if (!scheme.ok()) return scheme.status();
-  out.density.regions.scheme = *scheme;
-  absl::StatusOr<inertia::FactorGraphVariant> variant = FactorGraphVariantFromProto(o.fg_variant());
-  if (!variant.ok()) return variant.status();
-  out.factor_graph.variant = *variant;
+  TF_ASSIGN_OR_RETURN(out.density.regions.scheme, RegionSchemeFromProto(o.regions()));
+  TF_ASSIGN_OR_RETURN(out.factor_graph.variant, FactorGraphVariantFromProto(o.fg_variant()));
   if (o.target_regions() != 0) {
     if (o.target_regions() > static_cast<uint32_t>(inertia::kMaxTargetRegions))
       return absl::InvalidArgumentError(absl::StrCat("options.target_regions: must be in 1..",

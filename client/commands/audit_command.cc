@@ -15,9 +15,11 @@
 
 namespace tactforce::cli {
 
-CLI::App* AddAuditCommand(CLI::App& app, AuditArgs& args) {
-  CLI::App* cmd = app.add_subcommand(
-      "audit", "Show what the sensor model gets wrong on measured data, name the cause, extend it");
+namespace {
+
+// The measured data: one CSV, or two streams with their clock-offset flags.
+// Returns --csv (other flags depend on it).
+CLI::Option* AddAuditInputFlags(CLI::App* cmd, AuditArgs& args) {
   auto* csv =
       cmd->add_option("--csv", args.csv,
                       "Measured data: t,reference,reading[,shear][,trial], or per taxel "
@@ -57,12 +59,20 @@ CLI::App* AddAuditCommand(CLI::App& app, AuditArgs& args) {
   none->needs(ref)->excludes(search)->excludes(centre);
   search->needs(ref);
   centre->needs(ref);
+  return csv;
+}
+
+}  // namespace
+
+CLI::App* AddAuditCommand(CLI::App& app, AuditArgs& args) {
+  CLI::App* cmd = app.add_subcommand(
+      "audit", "Show what the sensor model gets wrong on measured data, name the cause, extend it");
+  CLI::Option* csv = AddAuditInputFlags(cmd, args);
   cmd->add_option("--model", args.model_path,
                   "Start from this model JSON instead of the affine nominal");
   cmd->add_option("--out", args.out_dir,
                   "Report directory (report.json, summary.txt, model, SVG plots); refused when it "
-                  "already holds "
-                  "files, unless --force")
+                  "already holds files, unless --force")
       ->required();
   cmd->add_flag("--force", args.force, "Replace the report files of an earlier audit in --out");
   cmd->add_option("--units", args.units, "Name of the reading's units, for the report")
@@ -76,14 +86,12 @@ CLI::App* AddAuditCommand(CLI::App& app, AuditArgs& args) {
       ->capture_default_str();
   cmd->add_option("--taxels", args.taxels,
                   "Per-taxel CSV (t,reference,taxel_0..taxel_<N-1>): the taxel count expected; a "
-                  "missing column is "
-                  "named (default: the highest taxel_<j> + 1)")
+                  "missing column is named (default: the highest taxel_<j> + 1)")
       ->check(Between(1, audit::kMaxTaxels))
       ->needs(csv);
   cmd->add_option("--blocks", args.blocks,
                   "Blocked hold-out: audit this many contiguous time blocks on their own too, so "
-                  "an effect that "
-                  "appears only late is found (0 = off)")
+                  "an effect that appears only late is found (0 = off)")
       ->check(Between(0, 10))
       ->capture_default_str();
   cmd->add_flag("--quiet", args.quiet, "Do not print the summary");

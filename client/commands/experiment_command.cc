@@ -377,13 +377,7 @@ int RunSlope(const ExperimentArgs& a) {
   return kExitOk;
 }
 
-}  // namespace
-
-CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args) {
-  CLI::App* cmd = app.add_subcommand(
-      "experiment",
-      "Closed-loop experiments in MuJoCo (grasp, slope, probe, inhand, ablation, chain)");
-  cmd->require_subcommand(1);
+CLI::App* AddGraspSubcommand(CLI::App* cmd, ExperimentArgs& args) {
   CLI::App* g = cmd->add_subcommand("grasp",
                                     "Grasp-and-lift trials with force feedback on raw or estimated "
                                     "tactile forces (GeoDEx Table III)");
@@ -408,8 +402,7 @@ CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args) {
       ->capture_default_str();
   g->add_option("--admittance", args.admittance,
                 "full: target += K^-1 (f_desired - f_observed), 3D (the paper's loop); normal: "
-                "along the sensed "
-                "normal only, planned tangential force fed forward")
+                "along the sensed normal only, planned tangential force fed forward")
       ->capture_default_str();
   g->add_option(
        "--sensor-model", args.sensor_model_path,
@@ -427,8 +420,7 @@ CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args) {
       ->type_name("FILE");
   g->add_option("--protocol", args.protocol,
                 "short: close, settle, hold, lift 5 cm, hold 1 s, place; paper: GeoDEx Fig. 12's "
-                "50 s (lift at 27 s, "
-                "placed at 33 s, feedback switched at 40 s)")
+                "50 s (lift at 27 s, placed at 33 s, feedback switched at 40 s)")
       ->capture_default_str();
   g->add_flag("--no-progress", args.no_progress, "No progress bar on stderr");
   g->add_flag("--details", args.details,
@@ -438,7 +430,10 @@ CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args) {
       "  tactforce experiment grasp --object wrench --trials 5\n"
       "  tactforce experiment grasp --object all --trials 20 --plots /tmp/plots --json\n"
       "  tactforce experiment grasp --object all --sensors taxel --trials 50 --feedback both");
-  args.grasp = g;
+  return g;
+}
+
+CLI::App* AddSlopeSubcommand(CLI::App* cmd, ExperimentArgs& args) {
   CLI::App* s = cmd->add_subcommand("slope",
                                     "Friction by the slope method vs the probing estimate, and "
                                     "MuJoCo's creep under static friction");
@@ -455,7 +450,18 @@ CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args) {
       "Examples:\n"
       "  tactforce experiment slope --mu 0.3,0.5 --no-creep\n"
       "  tactforce experiment slope --json");
-  args.slope = s;
+  return s;
+}
+
+}  // namespace
+
+CLI::App* AddExperimentCommand(CLI::App& app, ExperimentArgs& args) {
+  CLI::App* cmd = app.add_subcommand(
+      "experiment",
+      "Closed-loop experiments in MuJoCo (grasp, slope, probe, inhand, ablation, chain)");
+  cmd->require_subcommand(1);
+  args.grasp = AddGraspSubcommand(cmd, args);
+  args.slope = AddSlopeSubcommand(cmd, args);
   AddInHandSubcommand(cmd, args.inhand);
   AddAblationSubcommand(cmd, args.ablation);
   AddProbeCommand(cmd, args.probe);

@@ -114,6 +114,20 @@ double RatioStandardError(const FrictionTrial& trial, const Vec3& n, int last_st
   return std::sqrt(variance / m);
 }
 
+// The first sample flagged as slipping, else the first whose tangential
+// travel from the first sample exceeds `slip_distance`; -1 when neither.
+int DetectSlip(const std::vector<FrictionSample>& s, const Eigen::Matrix3d& tangent_projector,
+               double slip_distance) {
+  for (size_t k = 0; k < s.size(); ++k) {
+    if (s[k].slip.has_value() && *s[k].slip) return static_cast<int>(k);
+  }
+  for (size_t k = 1; k < s.size(); ++k) {
+    if ((tangent_projector * (s[k].contact_point - s[0].contact_point)).norm() > slip_distance)
+      return static_cast<int>(k);
+  }
+  return -1;
+}
+
 TrialFriction EstimateTrial(const FrictionTrial& trial, const Vec3& n, const FrictionOptions& o) {
   TrialFriction out;
   out.name = trial.name;
@@ -122,20 +136,7 @@ TrialFriction EstimateTrial(const FrictionTrial& trial, const Vec3& n, const Fri
   const int count = static_cast<int>(s.size());
   const Eigen::Matrix3d tangent_projector = Eigen::Matrix3d::Identity() - n * n.transpose();
 
-  // Detection: first slip flag, else tangential travel beyond slip_distance.
-  int detect = -1;
-  for (int k = 0; k < count && detect < 0; ++k) {
-    if (s[k].slip.has_value() && *s[k].slip) detect = k;
-  }
-  if (detect < 0) {
-    for (int k = 1; k < count; ++k) {
-      if ((tangent_projector * (s[k].contact_point - s[0].contact_point)).norm() >
-          o.slip_distance) {
-        detect = k;
-        break;
-      }
-    }
-  }
+  const int detect = DetectSlip(s, tangent_projector, o.slip_distance);
   auto ratio = [&](const Vec3& f) {
     const double fn = f.dot(n);
     return std::pair<double, double>{fn, (f - fn * n).norm()};

@@ -181,6 +181,23 @@ std::array<int, 3> CellCounts(const Vec3& extent, double h) {
   return n;
 }
 
+// Moments of the grid cell whose upper corner is (i, j, k), by inclusion and
+// exclusion of the octant integrals at its 8 corners.
+template <class OctantIndex>
+SolidMoments CellFromOctants(const std::vector<SolidMoments>& octant, const OctantIndex& idx, int i,
+                             int j, int k) {
+  SolidMoments cell;
+  for (int d = 0; d < 8; ++d) {
+    const int di = d & 1, dj = (d >> 1) & 1, dk = (d >> 2) & 1;
+    const SolidMoments& o = octant[idx(i - di, j - dj, k - dk)];
+    if ((di + dj + dk) % 2 == 0)
+      cell += o;
+    else
+      cell -= o;
+  }
+  return cell;
+}
+
 // Incomplete when `poll` fires (the caller checks poll->stopped()).
 RegionModel GridRegions(const io::TriangleMesh& mesh, const SolidMoments& total,
                         const std::array<int, 3>& n, const Eigen::Matrix3d& axes, const Vec3& lo,
@@ -214,15 +231,7 @@ RegionModel GridRegions(const io::TriangleMesh& mesh, const SolidMoments& total,
   for (int i = 1; i <= n[0]; ++i)
     for (int j = 1; j <= n[1]; ++j)
       for (int k = 1; k <= n[2]; ++k) {
-        SolidMoments cell;
-        for (int d = 0; d < 8; ++d) {
-          const int di = d & 1, dj = (d >> 1) & 1, dk = (d >> 2) & 1;
-          const SolidMoments& o = octant[idx(i - di, j - dj, k - dk)];
-          if ((di + dj + dk) % 2 == 0)
-            cell += o;
-          else
-            cell -= o;
-        }
+        const SolidMoments cell = CellFromOctants(octant, idx, i, j, k);
         if (!(cell.volume > min_volume)) continue;
         DensityRegion r;
         r.cell = {i - 1, j - 1, k - 1};

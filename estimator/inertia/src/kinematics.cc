@@ -438,6 +438,20 @@ bool SmoothMeasuredSeries(const std::vector<double>& t, const SeriesNoise& noise
   return true;
 }
 
+// Measured kinematics: the orientations smoothed on SO(3) (their own noise
+// level), with each point's variance.
+void SmoothMeasuredOrientations(const std::vector<double>& t, const std::vector<Eigen::Matrix3d>& R,
+                                double sigma, int fixed_window, std::vector<KinPoint>* m,
+                                std::vector<std::string>* notes, InterruptPoll* poll) {
+  const FitResult f =
+      SelectAndFit(t, Charted::Rotations(R, kMaxWindow), 0, sigma * sigma, fixed_window, poll);
+  for (size_t k = 0; k < m->size(); ++k) {
+    (*m)[k].R = R[k] * ExpSO3(f.d[0][k]);
+    (*m)[k].var_rot = f.sigma2 * f.wsq[0][k];
+  }
+  if (notes) notes->push_back(Describe("orientation", f));
+}
+
 }  // namespace
 
 std::vector<KinPoint> SmoothedKinematics(const InertiaSamples& s, const Vec3& g,
@@ -478,16 +492,8 @@ std::vector<KinPoint> SmoothedKinematics(const InertiaSamples& s, const Vec3& g,
     smooth(
         "measured acceleration", noise.linear_acceleration_sigma, true, "m/s^2",
         [&](int k) { return acc[k]; }, [&](int k, const Vec3& v) { acc[k] = v; }, &KinPoint::var_a);
-    if (noise.orientation_sigma > 0) {
-      const Charted c = Charted::Rotations(R, kMaxWindow);
-      FitResult f = SelectAndFit(t, c, 0, noise.orientation_sigma * noise.orientation_sigma,
-                                 fixed_window, poll);
-      for (int k = 0; k < n; ++k) {
-        m[k].R = R[k] * ExpSO3(f.d[0][k]);
-        m[k].var_rot = f.sigma2 * f.wsq[0][k];
-      }
-      if (notes) notes->push_back(Describe("orientation", f));
-    }
+    if (noise.orientation_sigma > 0)
+      SmoothMeasuredOrientations(t, R, noise.orientation_sigma, fixed_window, &m, notes, poll);
     for (int k = 0; k < n; ++k) m[k].a_minus_g = m[k].R.transpose() * (acc[k] - g);
     return m;
   }
