@@ -175,17 +175,6 @@ double MeasurementEllipsoid::Support(const VectorXd& a) const {
   return factor.cols() == 0 ? 0.0 : (factor.transpose() * a).norm();
 }
 
-Eigen::Matrix3d MeasurementEllipsoid::ContactCovariance(int contact) const {
-  // Sum of l l^T over the factor's columns (a few 3-vectors): cheaper than a
-  // general product of a 3 x k block with its transpose.
-  Eigen::Matrix3d s = Eigen::Matrix3d::Zero();
-  for (int j = 0; j < factor.cols(); ++j) {
-    const Vec3 l = factor.col(j).segment<3>(3 * contact);
-    s.noalias() += l * l.transpose();
-  }
-  return s;
-}
-
 void ComputeMeasurementEllipsoid(const PlanProblem& problem, const ForceEquilibrium& eq,
                                  MeasurementEllipsoid* out) {
   const int n = static_cast<int>(problem.contacts.size());
@@ -208,6 +197,17 @@ void ComputeMeasurementEllipsoid(const PlanProblem& problem, const ForceEquilibr
   // L = B E diag(sigma): the FE-plane projection of the reading noise.
   out->factor.resize(3 * n, count);
   if (count > 0) out->factor.noalias() = eq.null_basis.lazyProduct(out->plane_factor);
+  // S_ii as the sum of l l^T over the factor's columns (a few 3-vectors):
+  // cheaper than a general product of a 3 x k block with its transpose.
+  out->contact_covariance.resize(n);
+  for (int i = 0; i < n; ++i) {
+    Eigen::Matrix3d& s = out->contact_covariance[i];
+    s.setZero();
+    for (int j = 0; j < count; ++j) {
+      const Vec3 l = out->factor.col(j).segment<3>(3 * i);
+      s.noalias() += l * l.transpose();
+    }
+  }
 }
 
 MeasurementEllipsoid ComputeMeasurementEllipsoid(const PlanProblem& problem,
@@ -276,16 +276,12 @@ const FacetTable& Facets() {
 
 }  // namespace
 
-// Zeroes `matrix` (m x cols) for new rows. When the shape is unchanged only
-// the blocks the previous rows wrote are cleared: every row is zero outside
-// its contact's three columns.
-void ClearRowBlocks(int m, int cols, ConstraintRows* rows) {
-  if (rows->matrix.rows() != m || rows->matrix.cols() != cols ||
-      static_cast<int>(rows->info.size()) != m) {
-    rows->matrix.setZero(m, cols);
-    return;
+MatrixXd ConstraintRows::Dense(int num_contacts) const {
+  MatrixXd a = MatrixXd::Zero(static_cast<Eigen::Index>(info.size()), 3 * num_contacts);
+  for (int r = 0; r < static_cast<int>(info.size()); ++r) {
+    a.block<1, 3>(r, 3 * info[r].contact) = directions.row(r);
   }
-  for (int r = 0; r < m; ++r) rows->matrix.block<1, 3>(r, 3 * rows->info[r].contact).setZero();
+  return a;
 }
 
 void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid,
@@ -297,7 +293,7 @@ void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid&
     m += (with_friction_facets ? cone_sides : 0) + 1 + (c.max_normal_force > 0.0 ? 1 : 0);
   }
   ConstraintRows& rows = *out;
-  ClearRowBlocks(m, 3 * n, &rows);
+  rows.directions.resize(m, 3);
   rows.rhs.resize(m);
   rows.nominal_rhs.resize(m);
   rows.info.clear();
@@ -309,7 +305,7 @@ void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid&
   const double cos_half = std::cos(std::numbers::pi / cone_sides);
   int r = 0;
   auto add = [&](int contact, const Vec3& a, double d, double support, RowKind kind, int facet) {
-    rows.matrix.block<1, 3>(r, 3 * contact) = a.transpose();
+    rows.directions.row(r) = a.transpose();
     rows.nominal_rhs(r) = d;
     rows.rhs(r) = d - confidence * support;
     rows.info.push_back({contact, kind, facet});
@@ -366,7 +362,7 @@ void RowsOnPlane(const ConstraintRows& rows, const ForceEquilibrium& eq, MatrixX
     const int i = rows.info[first].contact;
     int count = 1;
     while (first + count < m && rows.info[first + count].contact == i) ++count;
-    const auto a = rows.matrix.block(first, 3 * i, count, 3);
+    const auto a = rows.directions.block(first, 0, count, 3);
     plane_matrix->middleRows(first, count).noalias() =
         a.lazyProduct(eq.null_basis.middleRows<3>(3 * i));
     plane_rhs->segment(first, count).noalias() -= a * eq.particular.segment<3>(3 * i);

@@ -47,7 +47,7 @@ void FillPlaneQp(const PreparedProblem& prepared, DenseQp* qp) {
   }
   qp->in_matrix.resize(0, d);
   qp->in_block_maps = eq.null_basis;
-  qp->in_directions.resize(m, 3);
+  qp->in_directions = rows.directions;
   qp->in_block_first.assign(prepared.num_contacts() + 1, m);
   qp->in_rhs.resize(m);
   const double* f0 = eq.particular.data();
@@ -56,8 +56,7 @@ void FillPlaneQp(const PreparedProblem& prepared, DenseQp* qp) {
   for (int r = m - 1; r >= 0; --r) qp->in_block_first[rows.info[r].contact] = r;
   for (int r = 0; r < m; ++r) {
     const int i = rows.info[r].contact;
-    const auto a = rows.matrix.block<1, 3>(r, 3 * i);
-    qp->in_directions.row(r) = a;
+    const auto a = rows.directions.row(r);
     qp->in_rhs(r) = rows.rhs(r) - (a(0) * f0[3 * i] + a(1) * f0[3 * i + 1] + a(2) * f0[3 * i + 2]);
   }
 }

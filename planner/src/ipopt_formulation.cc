@@ -128,10 +128,11 @@ void AddEquilibriumRows(const EquilibriumInUnknowns& eq, Formulation* form) {
 // hold by itself, 0 <= d; returns the INFEASIBLE message when one does not.
 std::string AddPlanRows(const PreparedProblem& prepared, const MatrixXd* map, Formulation* form) {
   const ConstraintRows& rows = prepared.rows;
-  for (int k = 0; k < rows.matrix.rows(); ++k) {
-    Eigen::RowVectorXd a = rows.matrix.row(k);
+  const MatrixXd dense = rows.Dense(prepared.num_contacts());
+  for (int k = 0; k < dense.rows(); ++k) {
+    Eigen::RowVectorXd a = dense.row(k);
     if (map != nullptr) a = a * *map;
-    const double size = rows.matrix.row(k).cwiseAbs().maxCoeff();
+    const double size = dense.row(k).cwiseAbs().maxCoeff();
     if (a.cwiseAbs().maxCoeff() <= 1e-12 * size) {
       if (rows.rhs(k) < -kFeasibilityTolerance * std::max(1.0, std::abs(rows.nominal_rhs(k)))) {
         return rows.Describe(k, prepared.problem) + " cannot be met: its robust bound is " +

@@ -373,7 +373,7 @@ void TightenForParameters(const PlanOptions& options, PreparedProblem* p) {
   double* rhs = rows.rhs.data();
   for (int r = 0; r < m; ++r) {
     const int c = info[r].contact;
-    const Vec3 a = rows.matrix.block<1, 3>(r, 3 * c).transpose();
+    const Vec3 a = rows.directions.row(r).transpose();
     margin[r] = kappa_b * std::sqrt(std::max(0.0, a.dot(covariance[c] * a)));
     rhs[r] -= margin[r];
   }
@@ -410,7 +410,7 @@ void FillRowMargins(const PreparedProblem& prepared, const std::vector<Vec3>& fo
     const RowKind kind = info[r].kind;
     const double part = parameters ? parameters[r] : 0.0;
     const double slack =
-        have_forces ? rhs[r] - rows.matrix.block<1, 3>(r, 3 * c).dot(forces[c].transpose()) : 0.0;
+        have_forces ? rhs[r] - rows.directions.row(r).dot(forces[c].transpose()) : 0.0;
     o[r] = RowMargin{c,
                      false,
                      r,

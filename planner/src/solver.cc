@@ -25,8 +25,7 @@ double MinMargin(const PreparedProblem& prepared, const PlanOptions& options,
   const ConstraintRows& rows = prepared.rows;
   for (int r = 0; r < static_cast<int>(rows.info.size()); ++r) {
     const int i = rows.info[r].contact;
-    margin = std::min(margin,
-                      rows.rhs(r) - rows.matrix.block<1, 3>(r, 3 * i).dot(forces[i].transpose()));
+    margin = std::min(margin, rows.rhs(r) - rows.directions.row(r).dot(forces[i].transpose()));
   }
   if (options.cone == ConeModel::kExact) {
     for (int i = 0; i < prepared.num_contacts(); ++i) {

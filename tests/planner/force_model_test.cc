@@ -141,9 +141,9 @@ TEST(ConstraintRows, PyramidRowsAndRobustTightening) {
   const MeasurementEllipsoid e = ComputeMeasurementEllipsoid(p, eq);
   const int k = 8;
   const ConstraintRows rows = BuildConstraintRows(p, e, k, 2.0, true);
-  ASSERT_EQ(rows.matrix.rows(), 3 * (k + 1));
-  for (int r = 0; r < rows.matrix.rows(); ++r) {
-    const VectorXd a = rows.matrix.row(r).transpose();
+  ASSERT_EQ(rows.directions.rows(), 3 * (k + 1));
+  for (int r = 0; r < rows.directions.rows(); ++r) {
+    const VectorXd a = rows.Dense(static_cast<int>(p.contacts.size())).row(r).transpose();
     EXPECT_NEAR(rows.nominal_rhs(r) - rows.rhs(r), 2.0 * e.Support(a), 1e-14);
   }
   // Facet j of contact 0: u_j - mu cos(pi/k) n, u_j = cos t1 + sin t2.
@@ -151,7 +151,7 @@ TEST(ConstraintRows, PyramidRowsAndRobustTightening) {
   const double th = 2 * std::numbers::pi * 3 / k;
   const Vec3 expected = std::cos(th) * t1 + std::sin(th) * t2 -
                         0.5 * std::cos(std::numbers::pi / k) * p.contacts[0].normal;
-  EXPECT_LE((rows.matrix.block<1, 3>(3, 0).transpose() - expected).norm(), 1e-15);
+  EXPECT_LE((rows.directions.row(3).transpose() - expected).norm(), 1e-15);
   EXPECT_EQ(rows.Describe(3, p), "contact 0 friction cone facet 3");
   EXPECT_EQ(rows.Describe(k, p), "contact 0 minimum normal force");
 }

@@ -70,7 +70,7 @@ TEST(IpoptFormulation, FullForceSpaceKeepsEveryRowAndStartsAtTheMinimumNormEquil
   EXPECT_EQ(form.num_vars(), 12);
   EXPECT_TRUE(form.cones.empty());
   EXPECT_EQ(form.num_equilibrium, prepared.equilibrium.rank);
-  const int plan_rows = static_cast<int>(prepared.rows.matrix.rows());
+  const int plan_rows = static_cast<int>(prepared.rows.directions.rows());
   ASSERT_EQ(form.num_linear, form.num_equilibrium + plan_rows);
   EXPECT_EQ(form.num_constraints(), form.num_linear);
 
@@ -78,7 +78,10 @@ TEST(IpoptFormulation, FullForceSpaceKeepsEveryRowAndStartsAtTheMinimumNormEquil
   const MatrixXd l = DenseLinear(form);
   const int ne = form.num_equilibrium;
   EXPECT_LE((l.topRows(ne) - prepared.equilibrium.independent_rows).cwiseAbs().maxCoeff(), 0.0);
-  EXPECT_LE((l.bottomRows(plan_rows) - prepared.rows.matrix).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_LE((l.bottomRows(plan_rows) - prepared.rows.Dense(prepared.num_contacts()))
+                .cwiseAbs()
+                .maxCoeff(),
+            0.0);
   double scale = 1.0;
   for (int r = 0; r < form.num_linear; ++r) {
     if (r < ne) {
@@ -155,7 +158,7 @@ TEST(IpoptFormulation, FrictionlessContactHasOneUnknownAlongItsNormal) {
 
   // The table's facets have no unknown left: no row for them.
   const int plan_rows = form.num_linear - form.num_equilibrium;
-  EXPECT_EQ(plan_rows, prepared.rows.matrix.rows() - o.cone_sides);
+  EXPECT_EQ(plan_rows, prepared.rows.directions.rows() - o.cone_sides);
   for (int r = form.num_equilibrium; r < form.num_linear; ++r) {
     const RowInfo& info = prepared.rows.info[form.origin[r].index];
     EXPECT_FALSE(info.contact == 2 && info.kind == RowKind::kFrictionFacet) << r;
@@ -206,8 +209,9 @@ TEST(IpoptFormulation, ViolationsAreMeasuredInNewtons) {
     VectorXd x(form.num_vars());
     for (int j = 0; j < x.size(); ++j) x(j) = value(rng);
     const std::vector<Vec3> forces = form.Forces(x.head(form.num_forces));
-    double expected =
-        std::max(0.0, (prepared.rows.matrix * Stack(forces) - prepared.rows.rhs).maxCoeff());
+    double expected = std::max(
+        0.0, (prepared.rows.Dense(prepared.num_contacts()) * Stack(forces) - prepared.rows.rhs)
+                 .maxCoeff());
     for (int i = 0; i < 4; ++i) {
       const Contact& c = prepared.problem.contacts[i];
       const Vec3 tangential = forces[i] - c.normal.dot(forces[i]) * c.normal;

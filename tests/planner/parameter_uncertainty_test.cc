@@ -143,7 +143,7 @@ void CheckExactness(SolverKind kind, ConeModel cone, uint64_t seed, int grasps, 
     // The reported parameter margin is the support function, computed apart.
     for (const RowMargin& m : r->row_margins) {
       if (m.cone) continue;
-      const Eigen::VectorXd a = prep.rows.matrix.row(m.row).transpose();
+      const Eigen::VectorXd a = prep.rows.Dense(prep.num_contacts()).row(m.row).transpose();
       const double support = kappa_b * (param_factor.transpose() * a).norm();
       t->support_error =
           std::max(t->support_error, std::abs(support - m.parameters) / std::max(1.0, support));
@@ -153,7 +153,7 @@ void CheckExactness(SolverKind kind, ConeModel cone, uint64_t seed, int grasps, 
     // is exactly d - slack, so the active rows are met with equality.
     for (const RowMargin& m : r->row_margins) {
       if (m.cone) continue;
-      const Eigen::VectorXd a = prep.rows.matrix.row(m.row).transpose();
+      const Eigen::VectorXd a = prep.rows.Dense(prep.num_contacts()).row(m.row).transpose();
       Eigen::VectorXd df = Eigen::VectorXd::Zero(f.size());
       const Eigen::VectorXd zp = param_factor.transpose() * a, zm = meas.transpose() * a;
       if (zp.norm() > 0) df += kappa_b * param_factor * zp.normalized();

@@ -71,8 +71,11 @@ struct MeasurementEllipsoid {
   // sqrt(a^T S_f a): the support function of the unit ellipsoid along a.
   double Support(const VectorXd& a) const;
   MatrixXd ForceCovariance() const { return factor * factor.transpose(); }
-  // 3x3 block S_ii of contact i.
-  Eigen::Matrix3d ContactCovariance(int contact) const;
+  // 3x3 block S_ii of contact i (N^2), formed once per ellipsoid.
+  const Eigen::Matrix3d& ContactCovariance(int contact) const {
+    return contact_covariance[contact];
+  }
+  std::vector<Eigen::Matrix3d> contact_covariance;  // S_ii, one per contact
 };
 
 MeasurementEllipsoid ComputeMeasurementEllipsoid(const PlanProblem& problem,
@@ -96,12 +99,17 @@ struct RowInfo {
 };
 
 // Linear rows a^T f <= d. `nominal_rhs` is d; `rhs` is the robust
-// d - kappa sqrt(a^T S_f a).
+// d - kappa sqrt(a^T S_f a). Row r touches only the three coordinates of
+// contact info[r].contact, so only those are stored: the full m x 3n matrix
+// A is never formed unless a caller asks for it (Dense).
 struct ConstraintRows {
-  MatrixXd matrix;  // m x 3n
+  Eigen::Matrix<double, Eigen::Dynamic, 3> directions;  // m x 3: row r of A on its contact
   VectorXd rhs;
   VectorXd nominal_rhs;
   std::vector<RowInfo> info;
+  // A (m x 3n, zero outside each row's contact), for backends that take
+  // whole rows (the Ipopt formulation) and for checks.
+  MatrixXd Dense(int num_contacts) const;
   // "contact 2 (index) friction facet 5", for messages.
   std::string Describe(int row, const PlanProblem& problem) const;
 };
