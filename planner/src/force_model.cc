@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include <Eigen/SVD>
+#include <emmintrin.h>
 
 #include "absl/strings/str_cat.h"
 #include "tactforce/planner/parameter_uncertainty.h"
@@ -19,17 +20,24 @@ namespace {
 // in its upper part; reflector k (unit, zero above row k) goes to
 // reflectors.col(k), a zero column meaning "no reflection". Then Q = H_0 ...
 // H_{c-1} is accumulated into `q` (rows x rows).
-// y -= 2 (v . y) v over `length` contiguous entries.
+// y -= 2 (v . y) v over `length` contiguous entries, two lanes at a time
+// (SSE2, part of x86-64): the dot product keeps two chains, even and odd
+// entries, summed at the end, so the result does not depend on the width.
 inline void Reflect(const double* __restrict v, double* __restrict y, int length) {
-  double dot0 = 0.0, dot1 = 0.0;  // two chains: pairs of lanes
+  __m128d dots = _mm_setzero_pd();  // (even chain, odd chain)
   int r = 0;
   for (; r + 1 < length; r += 2) {
-    dot0 += v[r] * y[r];
-    dot1 += v[r + 1] * y[r + 1];
+    dots = _mm_add_pd(dots, _mm_mul_pd(_mm_loadu_pd(v + r), _mm_loadu_pd(y + r)));
   }
+  double dot0 = _mm_cvtsd_f64(dots);
+  const double dot1 = _mm_cvtsd_f64(_mm_unpackhi_pd(dots, dots));
   if (r < length) dot0 += v[r] * y[r];
   const double scale = 2.0 * (dot0 + dot1);
-  for (r = 0; r < length; ++r) y[r] -= scale * v[r];
+  const __m128d scales = _mm_set1_pd(scale);
+  for (r = 0; r + 1 < length; r += 2) {
+    _mm_storeu_pd(y + r, _mm_sub_pd(_mm_loadu_pd(y + r), _mm_mul_pd(scales, _mm_loadu_pd(v + r))));
+  }
+  if (r < length) y[r] -= scale * v[r];
 }
 
 // Written out rather than Eigen::HouseholderQR because forming Q through
