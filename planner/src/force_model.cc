@@ -304,19 +304,30 @@ void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid&
   rows.directions.resize(m, 3);
   rows.rhs.resize(m);
   rows.nominal_rhs.resize(m);
-  rows.info.clear();
-  rows.info.reserve(m);
+  rows.info.resize(m);
 
   const FacetTable& facets = Facets();
   const bool table =
       cone_sides >= PlanOptions::kMinConeSides && cone_sides <= PlanOptions::kMaxConeSides;
+  const double* cos_table = table ? facets.cos_theta.data() + facets.offset[cone_sides] : nullptr;
+  const double* sin_table = table ? facets.sin_theta.data() + facets.offset[cone_sides] : nullptr;
   const double cos_half = std::cos(std::numbers::pi / cone_sides);
+  // Raw column pointers: the row loop stores through them without Eigen's
+  // per-call bookkeeping.
+  double* const dx = rows.directions.col(0).data();
+  double* const dy = rows.directions.col(1).data();
+  double* const dz = rows.directions.col(2).data();
+  double* const rhs = rows.rhs.data();
+  double* const nominal = rows.nominal_rhs.data();
+  RowInfo* const info = rows.info.data();
   int r = 0;
   auto add = [&](int contact, const Vec3& a, double d, double support, RowKind kind, int facet) {
-    rows.directions.row(r) = a.transpose();
-    rows.nominal_rhs(r) = d;
-    rows.rhs(r) = d - confidence * support;
-    rows.info.push_back({contact, kind, facet});
+    dx[r] = a(0);
+    dy[r] = a(1);
+    dz[r] = a(2);
+    nominal[r] = d;
+    rhs[r] = d - confidence * support;
+    info[r] = {contact, kind, facet};
     ++r;
   };
   for (int i = 0; i < n; ++i) {
@@ -336,8 +347,8 @@ void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid&
       const double s1n = t1.dot(sn), s2n = t2.dot(sn);
       for (int j = 0; j < cone_sides; ++j) {
         const double theta = table ? 0.0 : 2.0 * std::numbers::pi * j / cone_sides;
-        const double co = table ? facets.cos_theta[facets.offset[cone_sides] + j] : std::cos(theta);
-        const double si = table ? facets.sin_theta[facets.offset[cone_sides] + j] : std::sin(theta);
+        const double co = table ? cos_table[j] : std::cos(theta);
+        const double si = table ? sin_table[j] : std::sin(theta);
         const double quadratic = co * co * s11 + si * si * s22 + 2.0 * co * si * s12 -
                                  2.0 * k * (co * s1n + si * s2n) + k * k * snn;
         add(i, co * t1 + si * t2 - k * nrm, 0.0, std::sqrt(std::max(0.0, quadratic)),
