@@ -6,7 +6,8 @@
 # times, after a warm-up pass) through the workspace path; with "qp", only
 # the FE-plane QPs of the same grasps (TimedQpSolve); "dispatch": Plan
 # requests through api::PlanDispatcher inline (TimedDispatchPlan); "cross":
-# CROSS_CHECK solves (TimedCrossCheckSolve).
+# CROSS_CHECK solves (TimedCrossCheckSolve). Below the total: the preparation
+# (PrepareInPlace) and the QP (SolveDenseQp) per solve, from the same run.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 contacts="${1:-4}"
@@ -31,4 +32,9 @@ for line in open(path):
         total = int(line.split()[1])
 print(f"{function}: {solves} solves, {total} instructions, {total / solves:.0f} per solve")
 PY
+# The split inside the same run: preparation and QP per solve (inclusive).
+callgrind_annotate --inclusive=yes "$out/cg.out" 2>/dev/null |
+  awk -v solves="$solves" '
+    /PrepareInPlace\(/ && !p { gsub(",", "", $1); printf "  PrepareInPlace: %.0f per solve\n", $1 / solves; p = 1 }
+    /SolveDenseQp\(/ && !q { gsub(",", "", $1); printf "  SolveDenseQp: %.0f per solve\n", $1 / solves; q = 1 }'
 rm -rf "$out"
