@@ -22,6 +22,14 @@
 namespace tactforce::api {
 namespace {
 
+// The limits of CallLimits that a library checks itself, set into its
+// options (planner::PlanOptions, estimator::EstimateOptions): the one place
+// they cross from the call to the libraries.
+template <class Options>
+void SetLibraryLimits(const CallLimits& limits, Options* options) {
+  options->max_contacts = limits.max_contacts;
+}
+
 // Prefixes field paths of a nested message ("plan." + "contacts[1].normal").
 absl::Status Nested(const absl::Status& s, const char* prefix) {
   if (s.ok() || s.code() != absl::StatusCode::kInvalidArgument) return s;
@@ -137,7 +145,7 @@ absl::Status CheckHoldingGrasp(const PlanCall& call) {
 
 absl::StatusOr<PlanCall> PreparePlan(const v1::PlanRequest& request, const CallLimits& limits) {
   TF_ASSIGN_OR_RETURN(PlanCall call, FromProto(request));
-  call.options.max_contacts = limits.max_contacts;
+  SetLibraryLimits(limits, &call.options);
   // The tighter of the request's and the server's CPU limits (0 = none).
   const double cap = limits.solve_timeout_seconds();
   double& asked = call.options.ipopt.max_cpu_seconds;
@@ -292,7 +300,7 @@ absl::StatusOr<v1::EstimateResponse> HandleEstimate(const v1::EstimateRequest& r
                                                    planner::PlanOptions::kMinConeSides, "..",
                                                    planner::PlanOptions::kMaxConeSides));
   if (request.cone_sides() != 0) o.cone_sides = static_cast<int>(request.cone_sides());
-  o.max_contacts = limits.max_contacts;
+  SetLibraryLimits(limits, &o);
   const std::vector<double> readings(request.readings().begin(), request.readings().end());
   // The worker thread's buffers: warm estimates allocate only the response.
   thread_local estimator::EstimationWorkspace workspace;

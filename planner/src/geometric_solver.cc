@@ -91,7 +91,7 @@ class GeometricSolver final : public ForceSolver {
     DenseQpResult& qp_result = workspace->qp_result;
     SolveDenseQp(workspace->qp, settings, &workspace->qp_workspace, &qp_result);
     result->iterations = qp_result.iterations;
-    result->active_set = qp_result.active_set;
+    result->geometric.active_set = qp_result.active_set;
     switch (qp_result.status) {
       case DenseQpStatus::kOptimal: {
         result->status = PlanStatus::kOptimal;

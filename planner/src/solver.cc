@@ -74,7 +74,7 @@ void ResetResult(PlanResult* result) {
   result->ipopt.runs = 0;
   result->ipopt.status = 0;
   result->ipopt.status_name.clear();
-  result->active_set.clear();
+  result->geometric.active_set.clear();
 }
 
 void Fail(const char* message, PlanResult* result) {

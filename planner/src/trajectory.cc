@@ -87,7 +87,8 @@ absl::StatusOr<TrajectoryResult> PlanTrajectory(const TrajectoryProblem& t,
       return absl::Status(s.code(), own_contacts ? absl::StrCat("steps[", i, "].", msg)
                                                  : absl::StrCat(msg, " (at steps[", i, "])"));
     }
-    if (warm_start && r.status == PlanStatus::kOptimal) step_options.warm_start = r.active_set;
+    if (warm_start && r.status == PlanStatus::kOptimal)
+      step_options.warm_start = r.geometric.active_set;
     switch (r.status) {
       case PlanStatus::kOptimal:
         ++out.optimal;

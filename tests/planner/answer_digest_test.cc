@@ -79,7 +79,7 @@ void HashResult(const PlanResult& r, Fnv1a* h) {
   h->Double(r.min_margin);
   h->Int(static_cast<int>(r.solver));
   h->Int(r.iterations);
-  for (int a : r.active_set) h->Int(a);
+  for (int a : r.geometric.active_set) h->Int(a);
   for (const RowMargin& m : r.row_margins) {
     h->Int(m.contact);
     h->Int(m.cone);
@@ -180,7 +180,7 @@ uint64_t DigestOfAnswers() {
       HashResult(result, &digest);
       if (set.solver == SolverKind::kGeometric && result.status == PlanStatus::kOptimal) {
         // A warm start from the answer's own active set: the same answer.
-        options.warm_start = result.active_set;
+        options.warm_start = result.geometric.active_set;
         status = Plan(grasp.problem, options, set.solver, &workspace, &result);
         digest.Int(static_cast<int>(status.code()));
         if (status.ok()) HashResult(result, &digest);
@@ -232,7 +232,7 @@ TEST(PlannerAnswerDigest, CrossCheckIsItsTwoBackendsBitForBit) {
                    << "grasp " << g << " uncertainty " << static_cast<int>(set.uncertainty));
       EXPECT_EQ(cross->status, geometric->status);
       EXPECT_EQ(cross->forces, geometric->forces);
-      EXPECT_EQ(cross->active_set, geometric->active_set);
+      EXPECT_EQ(cross->geometric.active_set, geometric->geometric.active_set);
       EXPECT_EQ(cross->iterations, geometric->iterations);
       EXPECT_EQ(cross->cross_check->ipopt_status, ipopt->status);
       EXPECT_EQ(cross->ipopt.runs, ipopt->ipopt.runs);

@@ -44,7 +44,7 @@ void ExpectSameAnswer(const PlanResult& a, const PlanResult& b) {
   EXPECT_EQ(a.normal_force_sigma, b.normal_force_sigma);
   EXPECT_EQ(a.min_margin, b.min_margin);
   EXPECT_EQ(a.objective, b.objective);
-  EXPECT_EQ(a.active_set, b.active_set);
+  EXPECT_EQ(a.geometric.active_set, b.geometric.active_set);
   EXPECT_EQ(a.message, b.message);
 }
 
@@ -72,7 +72,7 @@ TEST(PlanningWorkspace, WarmGeometricSolvesAllocateNothing) {
     EXPECT_EQ(tactforce::testing::AllocationCount() - before, 0) << n << " contacts";
     EXPECT_EQ(optimal, 60);
     // Warm-started like PlanStream: the previous answer's active set.
-    std::vector<int> previous = result.active_set;
+    std::vector<int> previous = result.geometric.active_set;
     previous.reserve(64);
     options.warm_start.reserve(64);
     const long warm_before = tactforce::testing::AllocationCount();
@@ -80,7 +80,7 @@ TEST(PlanningWorkspace, WarmGeometricSolvesAllocateNothing) {
     for (const PlanProblem& p : grasps) {
       options.warm_start.assign(previous.begin(), previous.end());
       ASSERT_TRUE(solver->Solve(p, options, &workspace, &result).ok());
-      previous.assign(result.active_set.begin(), result.active_set.end());
+      previous.assign(result.geometric.active_set.begin(), result.geometric.active_set.end());
     }
     tactforce::testing::ArmAllocationTrap(false);
     EXPECT_EQ(tactforce::testing::AllocationCount() - warm_before, 0)

@@ -2,7 +2,7 @@
 // closed mesh. The standard parameters are linear in the K densities,
 // pi = Phi rho, so the GLS data term of CONSTRAINED becomes a quadratic in
 // rho; with a smoothness penalty between neighbouring regions the fit is a
-// non-negative quadratic programme in K unknowns (primal active set). The
+// non-negative quadratic programme in K unknowns (the planner's dense QP). The
 // penalty's strength is chosen by held-out contiguous time blocks.
 #include <algorithm>
 #include <cmath>
@@ -18,6 +18,7 @@
 #include "internal.h"
 #include "tactforce/inertia/pseudo_inertia.h"
 #include "tactforce/io/status_macros.h"
+#include "tactforce/planner/dense_qp.h"
 
 namespace tactforce::inertia::internal {
 namespace {
@@ -25,61 +26,25 @@ namespace {
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
-// min 1/2 u^T Q u - g^T u  s.t. u >= 0, Q symmetric positive definite
-// (Lawson-Hanson style primal active set). Stops early (incomplete answer)
-// when `poll` fires.
+// min 1/2 u^T Q u - g^T u  s.t. u >= 0, Q symmetric positive definite, on
+// the planner's dense QP (rows -u_i <= 0). The bounds active at the answer
+// are exactly 0 (the covariance's free set is u > 0). Counts 1 + the QP's
+// steps into `iterations`; polls once per solve (~1 unit per microsecond).
 VectorXd NonNegativeQp(const MatrixXd& Q, const VectorXd& g, int* iterations, InterruptPoll* poll) {
   const int K = static_cast<int>(g.size());
-  VectorXd u = VectorXd::Zero(K);
-  std::vector<bool> free(K, false);
-  const double tol = 1e-12 * std::max(1.0, g.cwiseAbs().maxCoeff());
-  auto solve_free = [&](VectorXd* z) {
-    std::vector<int> idx;
-    for (int i = 0; i < K; ++i)
-      if (free[i]) idx.push_back(i);
-    const int m = static_cast<int>(idx.size());
-    MatrixXd Qf(m, m);
-    VectorXd gf(m);
-    for (int a = 0; a < m; ++a) {
-      gf(a) = g(idx[a]);
-      for (int b = 0; b < m; ++b) Qf(a, b) = Q(idx[a], idx[b]);
-    }
-    const VectorXd zf = Qf.ldlt().solve(gf);
-    z->setZero(K);
-    for (int a = 0; a < m; ++a) (*z)(idx[a]) = zf(a);
-  };
-  for (int outer = 0; outer < 4 * K + 10; ++outer) {
-    ++*iterations;
-    const VectorXd w = g - Q * u;  // negative gradient
-    int j = -1;
-    double best = tol;
-    for (int i = 0; i < K; ++i)
-      if (!free[i] && w(i) > best) best = w(i), j = i;
-    if (j < 0) break;
-    free[j] = true;
-    for (int inner = 0; inner <= K; ++inner) {
-      const int64_t m = std::count(free.begin(), free.end(), true);
-      if (poll->Tick(1 + m * m * m / 1000))
-        return u.cwiseMax(0.0);  // ~1 unit per microsecond of LDLT
-      VectorXd z;
-      solve_free(&z);
-      bool positive = true;
-      for (int i = 0; i < K; ++i)
-        if (free[i] && !(z(i) > 0)) positive = false;
-      if (positive) {
-        u = z;
-        break;
-      }
-      double alpha = 1.0;
-      for (int i = 0; i < K; ++i)
-        if (free[i] && !(z(i) > 0)) alpha = std::min(alpha, u(i) / (u(i) - z(i)));
-      u += alpha * (z - u);
-      for (int i = 0; i < K; ++i)
-        if (free[i] && u(i) <= 1e-14 * std::max(1.0, u.cwiseAbs().maxCoeff()))
-          free[i] = false, u(i) = 0;
-    }
-  }
-  return u.cwiseMax(0.0);
+  const int64_t k3 = static_cast<int64_t>(K) * K * K;
+  if (poll->Tick(1 + k3 / 100)) return VectorXd::Zero(K);
+  planner::DenseQp qp;
+  qp.hessian = Q;
+  qp.gradient = -g;
+  qp.in_matrix = -MatrixXd::Identity(K, K);
+  qp.in_rhs = VectorXd::Zero(K);
+  const planner::DenseQpResult r = planner::SolveDenseQp(qp);
+  *iterations += 1 + r.iterations;
+  if (r.status != planner::DenseQpStatus::kOptimal || !r.x.allFinite()) return VectorXd::Zero(K);
+  VectorXd u = r.x.cwiseMax(0.0);
+  for (int i : r.active_set) u(i) = 0.0;
+  return u;
 }
 
 // The quadratic data term in u = rho / rho_ref: 1/2 u^T H u - g^T u + c/2.

@@ -56,7 +56,7 @@ class ForceSolver {
   virtual absl::Status CheckSupported(const PlanOptions& options) const { return absl::OkStatus(); }
   // From workspace->prepared, fills status, message, forces (one per
   // contact; empty unless optimal), iterations and, where meaningful,
-  // active_set / cross_check / ipopt. `result` arrives reset (status
+  // geometric / cross_check / ipopt. `result` arrives reset (status
   // kSolverFailure, empty vectors and message).
   virtual void DoSolve(const PlanOptions& options, const SolveControl& control,
                        PlanningWorkspace* workspace, PlanResult* result) const = 0;

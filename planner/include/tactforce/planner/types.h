@@ -105,7 +105,7 @@ struct PlanOptions {
   int max_contacts = 64;         // a limit of the caller (api::CallLimits), checked by validation
 
   // Geometric backend: constraint rows active at a previous, similar solve
-  // (PlanResult::active_set). Only speeds things up; never changes the answer.
+  // (PlanResult::geometric.active_set). Only speeds things up; never changes the answer.
   std::vector<int> warm_start;
 
   IpoptOptions ipopt;  // the Ipopt reference
@@ -170,6 +170,13 @@ struct IpoptDetails {
   std::string status_name;  // its name ("Solve_Succeeded")
 };
 
+// What the GEOMETRIC backend reports beyond the common result (beside
+// IpoptDetails): the constraint rows active at its optimum, which warm-start
+// a similar next solve (PlanOptions::warm_start). Empty for other backends.
+struct GeometricDetails {
+  std::vector<int> active_set;
+};
+
 // Relative size below which a margin is round-off (see PlanResult::min_margin).
 inline constexpr double kMarginRoundOff = 1e-9;
 
@@ -191,8 +198,7 @@ struct PlanResult {
   // IPOPT (and CROSS_CHECK's reference solve, inside cross_check's report
   // fields): Ipopt's own status.
   IpoptDetails ipopt;
-  // Geometric backend: active constraint rows at the optimum (warm starts).
-  std::vector<int> active_set;
+  GeometricDetails geometric;  // GEOMETRIC (and CROSS_CHECK's answer)
   // Only when the problem carries uncertainty (object.uncertainty or a
   // friction_sigma); empty otherwise, so such plans are unchanged.
   std::vector<RowMargin> row_margins;  // every row, then every EXACT cone
