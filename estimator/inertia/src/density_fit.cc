@@ -30,7 +30,14 @@ using Eigen::VectorXd;
 // the planner's dense QP (rows -u_i <= 0). The bounds active at the answer
 // are exactly 0 (the covariance's free set is u > 0). Counts 1 + the QP's
 // steps into `iterations`; polls once per solve (~1 unit per microsecond).
-VectorXd NonNegativeQp(const MatrixXd& Q, const VectorXd& g, int* iterations, InterruptPoll* poll) {
+// Counts of the non-negative solves of one fit.
+struct QpCounts {
+  int iterations = 0;  // 1 per solve plus the QP's active-set steps
+  int failures = 0;    // solves that did not end optimal (their answer is zero)
+};
+
+VectorXd NonNegativeQp(const MatrixXd& Q, const VectorXd& g, QpCounts* counts,
+                       InterruptPoll* poll) {
   const int K = static_cast<int>(g.size());
   const int64_t k3 = static_cast<int64_t>(K) * K * K;
   if (poll->Tick(1 + k3 / 100)) return VectorXd::Zero(K);
@@ -40,8 +47,11 @@ VectorXd NonNegativeQp(const MatrixXd& Q, const VectorXd& g, int* iterations, In
   qp.in_matrix = -MatrixXd::Identity(K, K);
   qp.in_rhs = VectorXd::Zero(K);
   const planner::DenseQpResult r = planner::SolveDenseQp(qp);
-  *iterations += 1 + r.iterations;
-  if (r.status != planner::DenseQpStatus::kOptimal || !r.x.allFinite()) return VectorXd::Zero(K);
+  counts->iterations += 1 + r.iterations;
+  if (r.status != planner::DenseQpStatus::kOptimal || !r.x.allFinite()) {
+    ++counts->failures;
+    return VectorXd::Zero(K);
+  }
   VectorXd u = r.x.cwiseMax(0.0);
   for (int i : r.active_set) u(i) = 0.0;
   return u;
@@ -150,7 +160,7 @@ struct DensityState {
   Vector10d pi;
   VectorXd u;
   double lambda_rel = 0;  // smoothness strength relative to the data's curvature
-  int qp_iterations = 0;
+  QpCounts qp;
   GlsSums total;
   std::vector<GlsSums> blocks;      // per held-out time block
   std::vector<Matrix6d> whiteners;  // per sample (last round)
@@ -189,7 +199,7 @@ double ChooseStrength(const DensityBasis& b, const MatrixXd& ridge, DensityState
     for (int f = 0; f < folds; ++f) {
       const double tr_scale = std::max(st->train[f].H.trace() / K, 1e-300);
       const VectorXd uf = NonNegativeQp(st->train[f].H + rel * tr_scale / b.l_scale * b.L + ridge,
-                                        st->train[f].g, &st->qp_iterations, poll);
+                                        st->train[f].g, &st->qp, poll);
       if (poll->stopped()) return chosen;
       cv += st->held[f].Value(uf);
     }
@@ -223,9 +233,14 @@ absl::Status DensityRound(const GlsData& gls, const DensityBasis& b, const Regio
   if (choose && K > 1 && !regions.neighbours.empty())
     st->lambda_rel = ChooseStrength(b, ridge, st, poll);
   st->Hreg = st->full.H + st->lambda_rel * h_scale / b.l_scale * b.L + ridge;
-  st->u = NonNegativeQp(st->Hreg, st->full.g, &st->qp_iterations, poll);
+  const int failures_before = st->qp.failures;
+  st->u = NonNegativeQp(st->Hreg, st->full.g, &st->qp, poll);
   st->pi = b.Phi_u * st->u;
-  return poll->stopped() ? Interrupted() : absl::OkStatus();
+  if (poll->stopped()) return Interrupted();
+  if (st->qp.failures > failures_before)
+    return absl::InternalError(absl::StrCat("DENSITY round ", round + 1,
+                                            ": the non-negative density solve did not converge"));
+  return absl::OkStatus();
 }
 
 // Standard errors of the densities and the covariance of pi on the free set
@@ -263,7 +278,7 @@ void HeldOutContradiction(const GlsData& gls, const DensityBasis& b, int folds, 
     const double h_scale = std::max(st->full.H.trace() / K, 1e-300);
     const VectorXd uf = NonNegativeQp(st->train[f].H + st->lambda_rel * tr_scale / b.l_scale * b.L +
                                           1e-10 * h_scale * MatrixXd::Identity(K, K),
-                                      st->train[f].g, &st->qp_iterations, poll);
+                                      st->train[f].g, &st->qp, poll);
     pi_density[f] = b.Phi_u * uf;
     pi_free[f] =
         FreeGls(st->total.A - st->blocks[f].A, st->total.b - st->blocks[f].b, b.parameter_scale);
@@ -396,7 +411,7 @@ MeshDistance DistanceToRealizable(const MatrixXd& C, const Vector10d& xf, const 
     const MatrixXd H = Cv.transpose() * weight.asDiagonal() * Cv;
     const double scale = std::max(H.trace() / K, 1e-300);
     *u = NonNegativeQp(H + 1e-12 * scale * MatrixXd::Identity(K, K),
-                       Cv.transpose() * weight.asDiagonal() * xv, &st->qp_iterations, poll);
+                       Cv.transpose() * weight.asDiagonal() * xv, &st->qp, poll);
     return Vector10d(Cv * *u - xv);
   };
   MeshDistance out;
@@ -489,7 +504,7 @@ absl::StatusOr<MethodOutput> FitDensity(const InertiaSamples& s, const InertiaOp
     if (o.progress) o.progress(0.9 * (round + 1) / o.reweighting_rounds);
   }
   out.pi = st.pi;
-  out.iterations = st.qp_iterations;  // the fit's own solves (not the contradiction test's)
+  out.iterations = st.qp.iterations;  // the fit's own solves (not the contradiction test's)
   out.samples_used = n;
   out.regularization = st.lambda_rel;
   out.regularization_rule =
