@@ -31,16 +31,15 @@
 //   print_level 0, sb yes, and no console journal: Ipopt never prints.
 //   linear_solver       mumps (the only one in Debian's build), with
 //   mumps_pivot_order   0 (AMD): fixed, so runs are reproducible, and
-//   mumps_mem_percent   100: Ipopt's 1000 made the per-factorisation
-//                       allocation dominate (1.0 -> 0.53 ms per iteration).
-//   mu_strategy         monotone: on 600 random grasps adaptive needed 3.5x
-//                       the iterations on EXACT (max 2489) for the same
-//                       answers; monotone 24 on average, at most 317.
-//   bound_relax_factor  0: rows hold to Ipopt's tolerance (with the default
-//                       1e-8 a 40 N bound was missed by 4e-7 N and plans
-//                       differed from the geometric backend by 5e-6 N; now
-//                       1.2e-7 N over the 2,000-grasp property test), and
-//                       the cone slacks stay strictly positive.
+//   mumps_mem_percent   100: Ipopt's 1000 makes the per-factorisation
+//                       allocation dominate the iteration time.
+//   mu_strategy         monotone: on random grasps adaptive needs several
+//                       times the iterations on EXACT for the same answers.
+//   bound_relax_factor  0: rows hold to Ipopt's tolerance (the default 1e-8
+//                       relaxes a bound in proportion to its size, so a 40 N
+//                       bound is missed by about 4e-7 N and plans drift from
+//                       the geometric backend's), and the cone slacks stay
+//                       strictly positive.
 //   hessian_constant, jac_d_constant   yes for PYRAMID (a convex QP: nothing
 //                       is re-evaluated); jac_c_constant yes always (the
 //                       equalities are linear in both models).
@@ -196,7 +195,7 @@ std::string ConfigureIpopt(Ipopt::IpoptApplication& app, const PlanOptions& opti
   NoteRejected(o.SetStringValue("linear_solver", "mumps"), "linear_solver", &r);
   NoteRejected(o.SetIntegerValue("mumps_pivot_order", 0), "mumps_pivot_order", &r);
   // MUMPS workspace: 100% above its estimate instead of Ipopt's 1000%; the
-  // allocation per factorisation dominated the run time of these tiny
+  // allocation per factorisation dominates the run time of these tiny
   // systems (Ipopt doubles it and refactorises if MUMPS ever asks for more).
   NoteRejected(o.SetIntegerValue("mumps_mem_percent", 100), "mumps_mem_percent", &r);
   NoteRejected(o.SetStringValue("jac_c_constant", "yes"), "jac_c_constant", &r);

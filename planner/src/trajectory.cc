@@ -136,10 +136,7 @@ absl::StatusOr<ProbePlan> PlanFrictionProbe(const PlanProblem& holding_grasp,
     step.external_wrench = {f, probe.position.cross(f)};
     trajectory.steps.push_back(step);
   }
-  absl::StatusOr<TrajectoryResult> holding =
-      PlanTrajectory(trajectory, options, kind, true, control);
-  if (!holding.ok()) return holding.status();
-  plan.holding = *std::move(holding);
+  TF_ASSIGN_OR_RETURN(plan.holding, PlanTrajectory(trajectory, options, kind, true, control));
   return plan;
 }
 

@@ -124,29 +124,17 @@ absl::Status ValidateProblem(const PlanProblem& problem, const PlanOptions& opti
       CheckMagnitude("object.gravity", out.object.gravity, kMaxAcceleration, "m/s^2"));
   TF_RETURN_IF_ERROR(
       CheckMagnitude("external_wrench.force", out.external_wrench.force, kMaxForce, "N"));
-  if (auto s =
-          CheckMagnitude("external_wrench.torque", out.external_wrench.torque, kMaxForce, "N m");
-      !s.ok()) {
-    return s;
-  }
+  TF_RETURN_IF_ERROR(
+      CheckMagnitude("external_wrench.torque", out.external_wrench.torque, kMaxForce, "N m"));
 
   TF_RETURN_IF_ERROR(ValidateParameterUncertainty(out.object.uncertainty));
   const Motion& motion = out.motion;
-  if (auto s = CheckMagnitude("motion.linear_acceleration", motion.linear_acceleration,
-                              kMaxAcceleration, "m/s^2");
-      !s.ok()) {
-    return s;
-  }
-  if (auto s = CheckMagnitude("motion.angular_velocity", motion.angular_velocity,
-                              kMaxAngularVelocity, "rad/s");
-      !s.ok()) {
-    return s;
-  }
-  if (auto s = CheckMagnitude("motion.angular_acceleration", motion.angular_acceleration,
-                              kMaxAngularAcceleration, "rad/s^2");
-      !s.ok()) {
-    return s;
-  }
+  TF_RETURN_IF_ERROR(CheckMagnitude("motion.linear_acceleration", motion.linear_acceleration,
+                                    kMaxAcceleration, "m/s^2"));
+  TF_RETURN_IF_ERROR(CheckMagnitude("motion.angular_velocity", motion.angular_velocity,
+                                    kMaxAngularVelocity, "rad/s"));
+  TF_RETURN_IF_ERROR(CheckMagnitude("motion.angular_acceleration", motion.angular_acceleration,
+                                    kMaxAngularAcceleration, "rad/s^2"));
 
   if (out.contacts.empty()) return Invalid("contacts", "at least one contact is required");
   if (static_cast<int>(out.contacts.size()) > options.max_contacts)

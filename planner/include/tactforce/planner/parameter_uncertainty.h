@@ -1,5 +1,5 @@
 // Plans that hold for every value of uncertain inertial parameters and
-// friction (issue 28), in the spirit of GeoDEx's own tightening.
+// friction, in the spirit of GeoDEx's own tightening.
 //
 // The wrench the contacts supply is linear in the 10 inertial parameters
 // pi = (m, m c, I_o) (types.h): b = Y(g, a, w, dw) pi. A covariance S_pi
