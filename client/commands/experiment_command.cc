@@ -115,6 +115,9 @@ absl::Status SetSensorsAndProtocol(const ExperimentArgs& a, ex::GraspConfig* bas
       return absl::InvalidArgumentError(absl::StrCat("--taxel-ranges: ", r.status().message()));
     base->taxel_ranges = *r;
   }
+  if (a.contact_cap_deg != 0 && *array != ex::SensorArray::kTaxel)
+    return absl::InvalidArgumentError("--contact-cap: needs --sensors taxel");
+  base->contact_cap_deg = a.contact_cap_deg;
   auto protocol = ex::ParseProtocol(a.protocol);
   if (!protocol.ok())
     return absl::InvalidArgumentError(absl::StrCat("--", protocol.status().message()));
@@ -418,6 +421,11 @@ CLI::App* AddGraspSubcommand(CLI::App* cmd, ExperimentArgs& args) {
        "--taxel-ranges", args.taxel_ranges_path,
        "Taxel ranges JSON (tactforce.taxel_ranges.v1) for --sensors taxel (default: the paper's)")
       ->type_name("FILE");
+  g->add_option("--contact-cap", args.contact_cap_deg,
+                "--sensors taxel: each contact lands on its fingertip at a polar angle from the "
+                "apex drawn uniformly by area over this cap (deg, 0-90; 0 = on the apex taxel)")
+      ->check(CLI::Range(0.0, 90.0))
+      ->capture_default_str();
   g->add_option("--protocol", args.protocol,
                 "short: close, settle, hold, lift 5 cm, hold 1 s, place; paper: GeoDEx Fig. 12's "
                 "50 s (lift at 27 s, placed at 33 s, feedback switched at 40 s)")

@@ -32,6 +32,7 @@ struct ExperimentArgs {
   std::string sensors = "channel";  // channel|taxel
   std::string protocol = "short";   // short|paper
   std::string taxel_ranges_path;    // --taxel-ranges FILE (sim::TaxelRanges JSON)
+  double contact_cap_deg = 0;       // --contact-cap DEG (GraspConfig::contact_cap_deg)
   // slope
   std::vector<double> mus = {0.3, 0.5, 0.7, 0.9};
   double tilt_rate = 0.5;  // deg/s

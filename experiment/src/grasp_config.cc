@@ -198,6 +198,9 @@ absl::Status ValidateGraspConfig(const GraspConfig& c) {
   if (c.sensor_array == SensorArray::kTaxel) {
     TF_RETURN_IF_ERROR(sim::ValidateTaxelRanges(c.taxel_ranges, "taxel_ranges."));
   }
+  if (!(c.contact_cap_deg >= 0 && c.contact_cap_deg <= 90))
+    return bad("contact_cap_deg",
+               absl::StrFormat("must be in [0, 90] deg, got %g", c.contact_cap_deg));
   TF_RETURN_IF_ERROR(ValidateFault(c.fault));
   if (c.sensors == SensorMode::kModel) {
     if (auto s = sim::ValidateSensorModel(c.sensor_model); !s.ok())

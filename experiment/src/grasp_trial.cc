@@ -68,6 +68,29 @@ FingerContact MeasureFinger(const mjModel* m, const mjData* d, int finger_geom, 
   return out;
 }
 
+// The taxel fingertip's frame (fingertip -> world) for a contact whose
+// normal (into the object) is `normal`: z = normal when cap_deg is 0, so the
+// contact is centred on the apex taxel; otherwise the fingertip is turned so
+// the contact lands at a polar angle from the apex drawn uniformly by area
+// over the cap (cos uniform in [cos cap, 1]) and a uniform azimuth.
+Matrix3d FingertipFrame(const Vec3& normal, double cap_deg, uint64_t seed) {
+  Matrix3d frame;
+  const Vec3 x = normal.unitOrthogonal();
+  frame.col(0) = x;
+  frame.col(1) = normal.cross(x);
+  frame.col(2) = normal;
+  if (!(cap_deg > 0)) return frame;
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  const double cos_cap = std::cos(cap_deg * std::numbers::pi / 180);
+  const double c = 1 - (1 - cos_cap) * u01(rng), s = std::sqrt(std::max(0.0, 1 - c * c));
+  const double az = 2 * std::numbers::pi * u01(rng);
+  // The contact direction in the fingertip frame, d; frame^T normal = d.
+  const Vec3 d(s * std::cos(az), s * std::sin(az), c);
+  return frame *
+         Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), d).toRotationMatrix().transpose();
+}
+
 double AngleDeg(const Matrix3d& R) {
   const double c = std::clamp((R.trace() - 1) / 2, -1.0, 1.0);
   return std::acos(c) * 180 / std::numbers::pi;
@@ -107,8 +130,7 @@ struct Fingertip {
       open;          // contact normal; centre touching the contact and 15 mm back (world, at rest)
   double delta = 0;  // normal admittance offset (m), Admittance::kNormal
   Vec3 offset;       // target - touching centre (hand frame, m)
-  Matrix3d frame =
-      Matrix3d::Identity();  // taxel fingertip frame -> world (z = the contact normal at rest)
+  Matrix3d frame = Matrix3d::Identity();  // taxel fingertip frame -> world (FingertipFrame)
 };
 
 // What the loop saw and was told at the last control tick (per fingertip).
@@ -252,11 +274,11 @@ void TrialRun::LocateFingertips() {
     f.open = f.center - f.normal * kOpenGap;
     f.delta = im_.tick_desired[0][i] / cfg_.kp;
     f.offset = im_.tick_force[0][i] / cfg_.kp;
-    // Any right-handed frame whose z is the contact normal (the fingertips only translate).
-    const Vec3 x = f.normal.unitOrthogonal();
-    f.frame.col(0) = x;
-    f.frame.col(1) = f.normal.cross(x);
-    f.frame.col(2) = f.normal;
+    // The fingertips only translate, so the frame drawn here holds all trial.
+    f.frame = FingertipFrame(f.normal, cfg_.contact_cap_deg, SplitMix(res_.seed + 43 * (i + 1)));
+    if (cfg_.sensor_array == SensorArray::kTaxel)
+      res_.contact_polar_deg.push_back(
+          std::acos(std::clamp(f.frame.col(2).dot(f.normal), -1.0, 1.0)) * 180 / std::numbers::pi);
   }
 }
 

@@ -1,6 +1,7 @@
 // `experiment grasp` with 42-taxel fingertips (issue 26): trials per object,
 // shifted taxel ranges, every failure cause from a constructed fault, the
 // paper protocol, and bad input naming its field or flag.
+#include <algorithm>
 #include <random>
 #include <string>
 
@@ -172,6 +173,37 @@ TEST(TaxelGrasp, MovingTheObjectBeforeTheLiftFails) {
   }
 }
 
+// Where the contact lands on the fingertip (contact_cap_deg): 0 keeps every
+// contact on the apex; a cap draws each fingertip's polar angle within it, the
+// same draw for raw and estimated feedback, and the taxels still sense the
+// contacts they feel (within a centimetre of the specification's).
+TEST(TaxelGrasp, ContactCapPlacesTheContactOffTheApex) {
+  for (double cap : {0.0, 60.0}) {
+    std::vector<double> polar[2];
+    for (Feedback f : {Feedback::kRaw, Feedback::kEstimated}) {
+      GraspConfig c = TaxelConfig(GraspObject::kWrench, f);
+      c.seed = TestSeed();
+      c.contact_cap_deg = cap;
+      auto setup = GraspSetup::Create(c);
+      ASSERT_TRUE(setup.ok()) << setup.status();
+      auto r = RunGraspTrial(**setup, 1);
+      ASSERT_TRUE(r.ok()) << r.status();
+      ASSERT_EQ(r->contact_polar_deg.size(), 3u);
+      for (double p : r->contact_polar_deg) {
+        EXPECT_GE(p, 0.0);
+        EXPECT_LE(p, cap + 1e-6);
+      }
+      // A light contact off the apex may activate no taxel by the end of the
+      // close (that fingertip keeps the specification's contact).
+      EXPECT_GE(r->contacts_sensed, 1);
+      EXPECT_LT(r->contact_location_error, 0.01);
+      polar[f == Feedback::kEstimated] = r->contact_polar_deg;
+    }
+    EXPECT_EQ(polar[0], polar[1]) << "paired trials draw the same fingertip posture";
+    if (cap > 0) EXPECT_GT(*std::max_element(polar[0].begin(), polar[0].end()), 1.0);
+  }
+}
+
 TEST(TaxelGrasp, BadConfigNamesTheField) {
   GraspConfig c = TaxelConfig(GraspObject::kWrench, Feedback::kRaw);
   c.taxel_ranges.threshold_min = -0.1;
@@ -187,6 +219,9 @@ TEST(TaxelGrasp, BadConfigNamesTheField) {
   c = TaxelConfig(GraspObject::kWrench, Feedback::kRaw);
   c.phases.switched = -1;
   EXPECT_NE(ValidateGraspConfig(c).message().find("phases.switched"), std::string::npos);
+  c = TaxelConfig(GraspObject::kWrench, Feedback::kRaw);
+  c.contact_cap_deg = 95;
+  EXPECT_NE(ValidateGraspConfig(c).message().find("contact_cap_deg"), std::string::npos);
   EXPECT_FALSE(ParseSensorArray("array").ok());
   EXPECT_FALSE(ParseProtocol("long").ok());
 }
@@ -234,6 +269,12 @@ TEST_F(TaxelCliTest, BadInputNamesTheFlag) {
   EXPECT_NE(r.err.find("threshold_min"), std::string::npos) << r.err;
   r = Tactforce({"experiment", "grasp", "--taxel-ranges", ranges});
   ExpectBadInput(r);
+  r = Tactforce({"experiment", "grasp", "--contact-cap", "30"});
+  ExpectBadInput(r);
+  EXPECT_NE(r.err.find("--contact-cap"), std::string::npos) << r.err;
+  r = Tactforce({"experiment", "grasp", "--sensors", "taxel", "--contact-cap", "120"});
+  ExpectBadInput(r);
+  EXPECT_NE(r.err.find("--contact-cap"), std::string::npos) << r.err;
 }
 
 }  // namespace

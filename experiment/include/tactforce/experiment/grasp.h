@@ -146,6 +146,12 @@ struct GraspConfig {
   ErrorRanges error_ranges;
   SensorArray sensor_array = SensorArray::kChannel;
   sim::TaxelRanges taxel_ranges;  // kTaxel: drawn per taxel, fingertip and trial
+  // kTaxel: where on the fingertip its contact lands. Each fingertip's axis is
+  // drawn per trial (the same for raw and estimated feedback) so that the
+  // contact's polar angle from the apex is uniform by area over the cap of
+  // this half-angle (deg, [0, 90]; azimuth uniform). 0: every fingertip points
+  // along its contact normal, so every contact is centred on the apex taxel.
+  double contact_cap_deg = 0;
   SensorFault fault;
   sim::SensorModel sensor_model;  // kModel
   uint64_t seed = 1;              // trial k draws from (seed, k), independent of feedback
@@ -225,6 +231,9 @@ struct TrialResult {
   double contact_normal_error_deg = 0;
   int contacts_sensed = 0;
   bool replan_failed = false;
+  // Taxel sensors: where each fingertip's contact landed at rest, its polar
+  // angle from the apex (deg; GraspConfig::contact_cap_deg).
+  std::vector<double> contact_polar_deg;
   // Switched phase (PhaseDurations::switched > 0): mean |fn_true - fn_desired|
   // per fingertip under the other feedback, and the object's largest motion
   // from its pose when the switch happened.
