@@ -27,6 +27,7 @@
 #include "tactforce/v1/estimator.pb.h"
 #include "tactforce/v1/inertia.pb.h"
 #include "tactforce/v1/planner.pb.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::cli {
 
@@ -120,9 +121,8 @@ template <class Answer, class Request>
 absl::StatusOr<Answer> CallBackend(const BackendArgs& args,
                                    absl::StatusOr<Answer> (Backend::*method)(const Request&),
                                    const Request& request) {
-  absl::StatusOr<std::unique_ptr<Backend>> backend = MakeBackend(args);
-  if (!backend.ok()) return backend.status();
-  return ((**backend).*method)(request);
+  TF_ASSIGN_OR_RETURN(std::unique_ptr<Backend> backend, MakeBackend(args));
+  return ((*backend).*method)(request);
 }
 
 }  // namespace tactforce::cli

@@ -150,9 +150,8 @@ absl::StatusOr<AuditAnswer> RemoteBackend::AuditModel(const AuditCall& call) {
 }  // namespace
 
 absl::StatusOr<std::unique_ptr<Backend>> MakeRemoteBackend(const ConnectionArgs& args) {
-  absl::StatusOr<RemoteServer> server = RemoteServer::Open(args);
-  if (!server.ok()) return server.status();
-  return std::make_unique<RemoteBackend>(*std::move(server));
+  TF_ASSIGN_OR_RETURN(RemoteServer server, RemoteServer::Open(args));
+  return std::make_unique<RemoteBackend>(std::move(server));
 }
 
 }  // namespace tactforce::cli

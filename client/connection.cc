@@ -13,14 +13,14 @@
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
 #include "cli_common.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::cli {
 namespace {
 
 absl::StatusOr<std::string> ReadPem(const std::string& path, const char* flag) {
-  absl::StatusOr<std::string> text = ReadInput(path, flag);
-  if (!text.ok()) return text.status();
-  if (text->find("-----BEGIN ") == std::string::npos) {
+  TF_ASSIGN_OR_RETURN(std::string text, ReadInput(path, flag));
+  if (text.find("-----BEGIN ") == std::string::npos) {
     return absl::InvalidArgumentError(absl::StrCat(flag, ": '", path, "' is not a PEM file"));
   }
   return text;
@@ -74,20 +74,16 @@ absl::StatusOr<std::shared_ptr<grpc::Channel>> MakeChannel(const ConnectionArgs&
   } else {
     grpc::SslCredentialsOptions ssl;
     if (!args.tls_ca.empty()) {
-      absl::StatusOr<std::string> ca = ReadPem(args.tls_ca, "--tls-ca");
-      if (!ca.ok()) return ca.status();
-      ssl.pem_root_certs = *std::move(ca);
+      TF_ASSIGN_OR_RETURN(ssl.pem_root_certs, ReadPem(args.tls_ca, "--tls-ca"));
     }
     if (!args.tls_cert.empty() || !args.tls_key.empty()) {
       if (args.tls_cert.empty() || args.tls_key.empty()) {
         return absl::InvalidArgumentError("--tls-cert and --tls-key must be given together");
       }
-      absl::StatusOr<std::string> cert = ReadPem(args.tls_cert, "--tls-cert");
-      if (!cert.ok()) return cert.status();
-      absl::StatusOr<std::string> key = ReadPem(args.tls_key, "--tls-key");
-      if (!key.ok()) return key.status();
-      ssl.pem_cert_chain = *std::move(cert);
-      ssl.pem_private_key = *std::move(key);
+      TF_ASSIGN_OR_RETURN(std::string cert, ReadPem(args.tls_cert, "--tls-cert"));
+      TF_ASSIGN_OR_RETURN(std::string key, ReadPem(args.tls_key, "--tls-key"));
+      ssl.pem_cert_chain = std::move(cert);
+      ssl.pem_private_key = std::move(key);
     }
     credentials = grpc::SslCredentials(ssl);
     if (!args.tls_server_name.empty()) {

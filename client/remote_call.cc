@@ -4,15 +4,15 @@
 #include "remote_call.h"
 
 #include <utility>
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::cli {
 
 absl::StatusOr<RemoteServer> RemoteServer::Open(const ConnectionArgs& args,
                                                 grpc::ChannelArguments channel_args) {
-  absl::StatusOr<std::shared_ptr<grpc::Channel>> channel =
-      MakeChannel(args, args.server, std::move(channel_args));
-  if (!channel.ok()) return channel.status();
-  return RemoteServer(*std::move(channel), args.server, args.deadline_ms);
+  TF_ASSIGN_OR_RETURN(std::shared_ptr<grpc::Channel> channel,
+                      MakeChannel(args, args.server, std::move(channel_args)));
+  return RemoteServer(std::move(channel), args.server, args.deadline_ms);
 }
 
 RemoteServer::RemoteServer(std::shared_ptr<grpc::Channel> channel, std::string target,

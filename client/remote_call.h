@@ -16,6 +16,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "connection.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::cli {
 
@@ -82,9 +83,8 @@ absl::StatusOr<Response> CallUnary(const RemoteServer& server,
 template <class Stub, class Request, class Response>
 absl::StatusOr<Response> CallUnary(const ConnectionArgs& args,
                                    UnaryRpc<Stub, Request, Response> rpc, const Request& request) {
-  absl::StatusOr<RemoteServer> server = RemoteServer::Open(args);
-  if (!server.ok()) return server.status();
-  return CallUnary(*server, rpc, request);
+  TF_ASSIGN_OR_RETURN(RemoteServer server, RemoteServer::Open(args));
+  return CallUnary(server, rpc, request);
 }
 
 }  // namespace tactforce::cli

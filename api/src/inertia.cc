@@ -40,16 +40,14 @@ inertia::InertiaTensor TensorFromProto(const v1::Inertia& t) {
   return inertia::InertiaTensor{t.ixx(), t.iyy(), t.izz(), t.ixy(), t.ixz(), t.iyz()};
 }
 
-absl::Status Prefixed(const absl::Status& status, absl::string_view prefix) {
-  return absl::Status(status.code(), absl::StrCat(prefix, status.message()));
-}
-
 // Library messages about the mesh start with its name ("box.stl: 3
-// boundary edges ..."); over the API they start with the field.
+// boundary edges ..."); over the API they start with the field. The
+// others start with the option's own path ("gravity: ..."), which sits
+// under "options.".
 absl::Status PrefixedForField(const absl::Status& status, const std::string& mesh_name) {
   if (!mesh_name.empty() && absl::StartsWith(status.message(), absl::StrCat(mesh_name, ":")))
-    return Prefixed(status, "options.mesh: ");
-  return Prefixed(status, "options.");
+    return io::PrependPath(status, "options.mesh");
+  return absl::Status(status.code(), absl::StrCat("options.", status.message()));
 }
 
 absl::StatusOr<inertia::RegionScheme> RegionSchemeFromProto(v1::RegionScheme scheme) {
@@ -233,8 +231,8 @@ absl::StatusOr<ObjectMesh> MeshFromProto(const v1::MeshInput& input, std::string
       return absl::InvalidArgumentError(absl::StrCat(
           field, ".format: empty and no name to take it from (give \"stl\", \"obj\" or \"ply\")"));
     absl::StatusOr<std::string> from_name = io::MeshFormatFromPath(input.name());
-    if (!from_name.ok()) return Prefixed(from_name.status(), absl::StrCat(field, ".format: "));
-    format = *from_name;
+    if (!from_name.ok()) return io::PrependPath(from_name.status(), absl::StrCat(field, ".format"));
+    format = *std::move(from_name);
   }
   io::MeshPlacement placement;
   if (input.has_scale()) placement.scale = input.scale();
@@ -245,7 +243,7 @@ absl::StatusOr<ObjectMesh> MeshFromProto(const v1::MeshInput& input, std::string
   }
   TF_RETURN_IF_ERROR(io::ValidatePlacement(placement, field));
   absl::StatusOr<io::TriangleMesh> mesh = io::ReadMeshBytes(input.data(), format, out.name);
-  if (!mesh.ok()) return Prefixed(mesh.status(), absl::StrCat(field, ": "));
+  if (!mesh.ok()) return io::PrependPath(mesh.status(), field);
   out.mesh = io::TransformToObjectFrame(*mesh, placement);
   return out;
 }
@@ -375,10 +373,9 @@ absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::Inerti
   }
   if (o.has_mesh_tolerance()) out.density.mesh_tolerance = o.mesh_tolerance();
   if (o.has_mesh()) {
-    absl::StatusOr<ObjectMesh> mesh = MeshFromProto(o.mesh());
-    if (!mesh.ok()) return mesh.status();
-    out.mesh_name = mesh->name;
-    out.mesh = std::make_shared<const io::TriangleMesh>(std::move(mesh->mesh));
+    TF_ASSIGN_OR_RETURN(ObjectMesh mesh, MeshFromProto(o.mesh()));
+    out.mesh_name = mesh.name;
+    out.mesh = std::make_shared<const io::TriangleMesh>(std::move(mesh.mesh));
   }
   if (o.has_truth() && !inertia::IsPhysicallyConsistent(InertialParametersFromProto(o.truth()))) {
     return absl::InvalidArgumentError(
@@ -512,28 +509,26 @@ absl::StatusOr<v1::FitInertiaResponse> FitInertiaSamples(const inertia::InertiaS
                                                          std::function<void(double)> progress,
                                                          inertia::InertiaFit* fit_out,
                                                          const CallState& state) {
-  absl::StatusOr<inertia::InertiaOptions> converted = InertiaOptionsFromProto(options);
-  if (!converted.ok()) return converted.status();
+  TF_ASSIGN_OR_RETURN(inertia::InertiaOptions converted, InertiaOptionsFromProto(options));
   const int64_t n = static_cast<int64_t>(samples.samples.size());
   if (limits.max_fit_bytes > 0 &&
-      inertia::FitWorkingBytes(converted->method, n) > limits.max_fit_bytes) {
+      inertia::FitWorkingBytes(converted.method, n) > limits.max_fit_bytes) {
     return absl::InvalidArgumentError(absl::StrCat(
-        "samples: a ", InertiaMethodName(converted->method), " fit of ", n, " samples needs about ",
-        inertia::FitWorkingBytes(converted->method, n) >> 20,
+        "samples: a ", InertiaMethodName(converted.method), " fit of ", n, " samples needs about ",
+        inertia::FitWorkingBytes(converted.method, n) >> 20,
         " MiB of working memory, over the server's limit of ", limits.max_fit_bytes >> 20,
         " MiB (--max-fit-bytes): send at most ",
-        limits.max_fit_bytes / inertia::FitWorkingBytes(converted->method, 1), " samples"));
+        limits.max_fit_bytes / inertia::FitWorkingBytes(converted.method, 1), " samples"));
   }
-  converted->progress = std::move(progress);
-  converted->interrupt = state.interrupt;
-  absl::StatusOr<inertia::InertiaFit> fit = inertia::FitInertia(samples, *converted);
-  if (!fit.ok()) return fit.status();
-  v1::FitInertiaResponse response = InertiaFitToProto(*fit);
-  if (fit_out != nullptr) *fit_out = *fit;
+  converted.progress = std::move(progress);
+  converted.interrupt = state.interrupt;
+  TF_ASSIGN_OR_RETURN(inertia::InertiaFit fit, inertia::FitInertia(samples, converted));
+  v1::FitInertiaResponse response = InertiaFitToProto(fit);
+  if (fit_out != nullptr) *fit_out = fit;
   response.set_samples_received(static_cast<int32_t>(samples.samples.size()));
   if (options.has_truth()) {
     const inertia::InertiaErrors e =
-        inertia::CompareInertia(InertialParametersFromProto(options.truth()), fit->params);
+        inertia::CompareInertia(InertialParametersFromProto(options.truth()), fit.params);
     v1::InertiaErrors* errors = response.mutable_errors();
     errors->set_paper_metric(e.paper_metric);
     errors->set_riemannian(e.riemannian);

@@ -198,9 +198,8 @@ absl::Status ParseJson(std::string_view json, google::protobuf::Message* message
   if (absl::StripAsciiWhitespace(absl::string_view(json.data(), json.size())).empty()) {
     return absl::InvalidArgumentError(absl::StrCat(what, ": empty input"));
   }
-  absl::StatusOr<io::JsonValue> tree = io::ParseJson(json, what);
-  if (!tree.ok()) return tree.status();
-  TF_RETURN_IF_ERROR(FieldChecker(what).Message(*tree, message->GetDescriptor(), ""));
+  TF_ASSIGN_OR_RETURN(io::JsonValue tree, io::ParseJson(json, what));
+  TF_RETURN_IF_ERROR(FieldChecker(what).Message(tree, message->GetDescriptor(), ""));
   google::protobuf::util::JsonParseOptions options;
   options.ignore_unknown_fields = false;  // a misspelt field is an error
   options.case_insensitive_enum_parsing = false;
@@ -217,8 +216,7 @@ absl::Status ParseJson(std::string_view json, google::protobuf::Message* message
 absl::StatusOr<v1::PlanRequest> ParsePlanRequestJson(std::string_view json,
                                                      std::string_view source) {
   v1::PlanRequest request;
-  absl::Status status = ParseJson(json, &request, source.empty() ? "request JSON" : source);
-  if (!status.ok()) return status;
+  TF_RETURN_IF_ERROR(ParseJson(json, &request, source.empty() ? "request JSON" : source));
   return request;
 }
 

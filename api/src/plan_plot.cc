@@ -20,6 +20,7 @@
 #include "tactforce/api/plan_plot.h"
 #include "tactforce/io/svg.h"
 #include "tactforce/planner/trajectory.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::api {
 namespace {
@@ -513,29 +514,24 @@ std::string RenderTrajectory(const std::vector<PlanScene>& scenes, const std::ve
 
 absl::StatusOr<std::string> PlanSvg(const v1::PlanRequest& request,
                                     const v1::PlanResponse& response, std::string_view source) {
-  absl::StatusOr<PlanCall> call = FromProto(request);
-  if (!call.ok()) return call.status();
-  absl::StatusOr<PlanScene> scene = BuildPlanScene(call->problem, call->options, response);
-  if (!scene.ok()) return scene.status();
-  return RenderPlan(*scene, source);
+  TF_ASSIGN_OR_RETURN(PlanCall call, FromProto(request));
+  TF_ASSIGN_OR_RETURN(PlanScene scene, BuildPlanScene(call.problem, call.options, response));
+  return RenderPlan(scene, source);
 }
 
 absl::StatusOr<std::string> TrajectorySvg(const v1::TrajectoryRequest& request,
                                           const v1::TrajectoryResponse& response,
                                           std::string_view source) {
-  absl::StatusOr<PlanCall> call = FromProto(request.plan());
-  if (!call.ok()) return call.status();
-  absl::StatusOr<planner::TrajectoryProblem> motion = ToTrajectoryProblem(request, call->problem);
-  if (!motion.ok()) return motion.status();
+  TF_ASSIGN_OR_RETURN(PlanCall call, FromProto(request.plan()));
+  TF_ASSIGN_OR_RETURN(planner::TrajectoryProblem motion,
+                      ToTrajectoryProblem(request, call.problem));
   const int steps = std::min(request.steps_size(), response.steps_size());
   const std::vector<int> shown = PlottedSteps(steps);
   std::vector<PlanScene> scenes;
   for (int k : shown) {
     absl::StatusOr<PlanScene> scene =
-        BuildPlanScene(planner::StepProblem(*motion, k), call->options, response.steps(k));
-    if (!scene.ok())
-      return absl::Status(scene.status().code(),
-                          absl::StrCat("steps[", k, "]: ", scene.status().message()));
+        BuildPlanScene(planner::StepProblem(motion, k), call.options, response.steps(k));
+    if (!scene.ok()) return io::PrependPath(scene.status(), absl::StrCat("steps[", k, "]"));
     scenes.push_back(*std::move(scene));
   }
   return RenderTrajectory(scenes, shown, TrajectoryHeading(response, steps, shown), source);

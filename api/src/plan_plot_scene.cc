@@ -14,6 +14,7 @@
 #include "tactforce/api/plan_plot.h"
 #include "tactforce/planner/force_model.h"
 #include "tactforce/planner/validation.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::api {
 namespace {
@@ -68,9 +69,8 @@ std::string Outcome(const v1::PlanResponse& response) {
 absl::StatusOr<PlanScene> BuildPlanScene(const planner::PlanProblem& problem,
                                          const planner::PlanOptions& options,
                                          const v1::PlanResponse& response) {
-  absl::StatusOr<planner::PlanProblem> validated = planner::ValidateProblem(problem, options);
-  if (!validated.ok()) return validated.status();
-  const planner::PreparedProblem prepared = planner::Prepare(*std::move(validated), options);
+  TF_ASSIGN_OR_RETURN(planner::PlanProblem validated, planner::ValidateProblem(problem, options));
+  const planner::PreparedProblem prepared = planner::Prepare(std::move(validated), options);
   const int n = prepared.num_contacts();
   const std::vector<double> shift = ApexShifts(prepared, options);
   const bool forces = response.forces_size() == n;

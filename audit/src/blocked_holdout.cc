@@ -90,8 +90,8 @@ Selection LocalSelection(ChannelEvaluator& eng, const Selection& global) {
 
 // A block's cause must gain this many times min_gain, forward and reversed:
 // `blocks` blocks are searched, so a chance gain is more likely somewhere
-// (on the 200 null hidden-effect seeds, 2 drifts of 1.2 % and 1.7 % in one
-// block each were named with 1 x min_gain).
+// (with 1 x min_gain, null runs get small drifts named in single blocks;
+// audit/README.md gives the counts).
 constexpr double kBlockGainFactor = 2.0;
 
 // Whether effect e in p lowers the held-out RMS on `eng` by at least

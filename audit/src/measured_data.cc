@@ -226,17 +226,15 @@ absl::StatusOr<MeasuredData> ParseMeasuredCsv(const std::string& text, const std
                                               int expected_taxels) {
   io::CsvOptions opt;
   opt.skip_nan_rows = true;
-  auto table = io::ParseCsv(text, source, opt);
-  if (!table.ok()) return table.status();
-  return MeasuredDataFromCsv(*table, expected_taxels);
+  TF_ASSIGN_OR_RETURN(auto table, io::ParseCsv(text, source, opt));
+  return MeasuredDataFromCsv(table, expected_taxels);
 }
 
 absl::StatusOr<MeasuredData> ReadMeasuredCsv(const std::string& path, int expected_taxels) {
   io::CsvOptions opt;
   opt.skip_nan_rows = true;
-  auto table = io::ReadCsvFile(path, opt);
-  if (!table.ok()) return table.status();
-  return MeasuredDataFromCsv(*table, expected_taxels);
+  TF_ASSIGN_OR_RETURN(auto table, io::ReadCsvFile(path, opt));
+  return MeasuredDataFromCsv(table, expected_taxels);
 }
 
 namespace {
@@ -512,11 +510,9 @@ absl::StatusOr<MeasuredData> ReadAndAlignStreams(const std::string& reference_pa
                                                  const AlignOptions& options) {
   io::CsvOptions opt;
   opt.skip_nan_rows = true;
-  auto ref = io::ReadCsvFile(reference_path, opt);
-  if (!ref.ok()) return ref.status();
-  auto rd = io::ReadCsvFile(reading_path, opt);
-  if (!rd.ok()) return rd.status();
-  return AlignStreams(*ref, *rd, options);
+  TF_ASSIGN_OR_RETURN(auto ref, io::ReadCsvFile(reference_path, opt));
+  TF_ASSIGN_OR_RETURN(auto rd, io::ReadCsvFile(reading_path, opt));
+  return AlignStreams(ref, rd, options);
 }
 
 }  // namespace tactforce::audit

@@ -28,6 +28,7 @@
 #include "tactforce/planner/examples.h"
 #include "tactforce/planner/solver.h"
 #include "tactforce/io/json.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::cli {
 namespace {
@@ -51,8 +52,7 @@ absl::StatusOr<DemoRow> RunGrasp(const planner::ExampleGrasp& grasp, int repeat)
     absl::StatusOr<planner::PlanResult> result =
         planner::Plan(grasp.problem, grasp.options, planner::SolverKind::kCrossCheck);
     if (!result.ok()) {
-      return absl::Status(result.status().code(),
-                          absl::StrCat(grasp.name, ": ", result.status().message()));
+      return io::PrependPath(result.status(), grasp.name);
     }
     if (run == 0) {
       row.response = api::ToProto(*result);
@@ -192,23 +192,16 @@ absl::StatusOr<RemoteResult> RunRemote(const DemoArgs& args, const std::vector<D
   RemoteResult result;
   result.address = args.server;
 
-  absl::StatusOr<RemoteServer> server = RemoteServer::Open(connection);
-  if (!server.ok()) return server.status();
-  absl::StatusOr<std::string> health = CheckHealth(*server, "");
-  if (!health.ok()) return health.status();
-  result.health = *health;
-  absl::StatusOr<std::string> planner_health = CheckHealth(*server, "tactforce.v1.Planner");
-  if (!planner_health.ok()) return planner_health.status();
-  result.planner_health = *planner_health;
+  TF_ASSIGN_OR_RETURN(RemoteServer server, RemoteServer::Open(connection));
+  TF_ASSIGN_OR_RETURN(result.health, CheckHealth(server, ""));
+  TF_ASSIGN_OR_RETURN(result.planner_health, CheckHealth(server, "tactforce.v1.Planner"));
 
-  absl::StatusOr<std::unique_ptr<Backend>> backend = MakeRemoteBackend(connection);
-  if (!backend.ok()) return backend.status();
+  TF_ASSIGN_OR_RETURN(std::unique_ptr<Backend> backend, MakeRemoteBackend(connection));
   for (const DemoRow& row : local) {
     RemoteRow remote;
     remote.name = row.grasp.name;
-    absl::StatusOr<v1::PlanResponse> response = (*backend)->Plan(row.request);
-    if (!response.ok()) return response.status();
-    remote.response = *std::move(response);
+    TF_ASSIGN_OR_RETURN(v1::PlanResponse response, backend->Plan(row.request));
+    remote.response = std::move(response);
     remote.max_diff_vs_local = MaxForceDiff(remote.response, row.response);
     remote.match = remote.response.status() == row.response.status() &&
                    remote.max_diff_vs_local <= kMatchTolerance;
@@ -217,7 +210,7 @@ absl::StatusOr<RemoteResult> RunRemote(const DemoArgs& args, const std::vector<D
     geometric.set_solver(v1::SOLVER_GEOMETRIC);
     for (int run = 0; run < std::max(args.repeat, 1); ++run) {
       const auto start = std::chrono::steady_clock::now();
-      absl::StatusOr<v1::PlanResponse> fast = (*backend)->Plan(geometric);
+      absl::StatusOr<v1::PlanResponse> fast = backend->Plan(geometric);
       const int64_t us = std::chrono::duration_cast<std::chrono::microseconds>(
                              std::chrono::steady_clock::now() - start)
                              .count();
@@ -237,13 +230,11 @@ absl::StatusOr<RemoteResult> RunRemote(const DemoArgs& args, const std::vector<D
     spec.duration_s = args.load_seconds;
     spec.deadline_ms = connection.deadline_ms;
     spec.requests = RandomRequestMix(/*seed=*/1, /*count=*/256);
-    absl::StatusOr<std::vector<std::shared_ptr<grpc::Channel>>> channels =
-        ConnectLoadChannels(connection, connection.server, /*per_target=*/1, spec);
-    if (!channels.ok()) return channels.status();
-    absl::StatusOr<LoadReport> load = RunLoad(spec, *channels);
-    if (!load.ok()) return load.status();
+    TF_ASSIGN_OR_RETURN(std::vector<std::shared_ptr<grpc::Channel>> channels,
+                        ConnectLoadChannels(connection, connection.server, /*per_target=*/1, spec));
+    TF_ASSIGN_OR_RETURN(LoadReport load, RunLoad(spec, channels));
     result.has_load = true;
-    result.load = *std::move(load);
+    result.load = std::move(load);
   }
   return result;
 }

@@ -11,6 +11,7 @@
 #include "tactforce/experiment/chain.h"
 #include "tactforce/inertia/fit.h"
 #include "tactforce/io/json.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::cli {
 namespace {
@@ -24,13 +25,11 @@ absl::StatusOr<ex::ChainConfig> Config(const ChainArgs& a) {
   c.objects.clear();
   for (const std::string& name : a.objects) {
     absl::StatusOr<ex::GraspObject> o = ex::ParseGraspObject(name);
-    if (!o.ok())
-      return absl::InvalidArgumentError(absl::StrCat("--objects: ", o.status().message()));
+    if (!o.ok()) return io::PrependPath(o.status(), "--objects");
     c.objects.push_back(*o);
   }
   absl::StatusOr<inertia::InertiaMethod> m = inertia::ParseInertiaMethod(a.fit_method);
-  if (!m.ok())
-    return absl::InvalidArgumentError(absl::StrCat("--fit-method: ", m.status().message()));
+  if (!m.ok()) return io::PrependPath(m.status(), "--fit-method");
   c.fit_method = *m;
   c.trials = a.trials;
   c.seeds = a.seeds;

@@ -139,8 +139,7 @@ absl::StatusOr<GraspRun> GraspRunFromFlags(const ExperimentArgs& a) {
 // Trial 0's force traces of the batch run with `c` as PLOTS/OBJECT_FEEDBACK.svg.
 absl::Status WriteTracePlot(const std::string& plots_dir, const ex::GraspConfig& c,
                             const ex::TrialResult& t0) {
-  auto setup = ex::GraspSetup::Create(c);
-  if (!setup.ok()) return setup.status();
+  TF_ASSIGN_OR_RETURN(auto setup, ex::GraspSetup::Create(c));
   const std::string title = absl::StrFormat(
       "%s, %s feedback, trial 0 (%s): desired / estimated / raw / true normal force",
       ex::ToString(c.object), ex::ToString(c.feedback), t0.success ? "success" : t0.failure);
@@ -148,10 +147,10 @@ absl::Status WriteTracePlot(const std::string& plots_dir, const ex::GraspConfig&
       (std::filesystem::path(plots_dir) /
        absl::StrCat(ex::ToString(c.object), "_", ex::ToString(c.feedback), ".svg"))
           .string();
-  if (absl::Status st = io::WriteTextFile(
-          path, io::RenderSvg(ex::TracePlot(t0, (*setup)->finger_names(), title)));
+  if (absl::Status st =
+          io::WriteTextFile(path, io::RenderSvg(ex::TracePlot(t0, setup->finger_names(), title)));
       !st.ok())
-    return absl::Status(st.code(), absl::StrCat("--plots: ", st.message()));
+    return io::PrependPath(st, "--plots");
   return absl::OkStatus();
 }
 
@@ -283,9 +282,8 @@ absl::StatusOr<std::vector<Creep>> MeasureCreepTable() {
        {std::pair{std::string("chosen"), ex::PhysicsSettings{}},
         std::pair{std::string("mujoco-default"), ex::PhysicsSettings::MujocoDefaults()}}) {
     for (double ratio : {0.5, 0.9}) {
-      auto v = ex::MeasureCreep(p, 0.5, ratio);
-      if (!v.ok()) return v.status();
-      creep.push_back({name, ratio, *v});
+      TF_ASSIGN_OR_RETURN(auto v, ex::MeasureCreep(p, 0.5, ratio));
+      creep.push_back({name, ratio, v});
     }
   }
   return creep;

@@ -13,6 +13,7 @@
 #include "progress.h"
 #include "tactforce/experiment/probe.h"
 #include "tactforce/io/json.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::cli {
 namespace {
@@ -42,16 +43,13 @@ absl::StatusOr<std::vector<ex::SurfacePair>> Surfaces(const ProbeArgs& a) {
   if (a.mus.empty()) return ex::BuiltInSurfaces();
   std::vector<ex::SurfacePair> out;
   for (double mu : a.mus) out.push_back({absl::StrFormat("mu=%g", mu), mu});
-  if (absl::Status s = ex::ValidateSurfaces(out); !s.ok())
-    return absl::InvalidArgumentError(absl::StrCat("--mu: ", s.message()));
+  if (absl::Status s = ex::ValidateSurfaces(out); !s.ok()) return io::PrependPath(s, "--mu");
   return out;
 }
 
 absl::StatusOr<ex::ProbeConfig> Config(const ProbeArgs& a) {
   ex::ProbeConfig c;
-  absl::StatusOr<ex::ProbeObject> o = ResolveObject(a.object);
-  if (!o.ok()) return o.status();
-  c.object = *o;
+  TF_ASSIGN_OR_RETURN(c.object, ResolveObject(a.object));
   c.on_table = a.on_table;
   c.seed = a.seed;
   c.force_sigma = a.force_sigma;

@@ -54,17 +54,14 @@ bool IsMeshPath(const std::string& path) {
 // descriptor .json) or a CSV with x,y,z columns.
 absl::StatusOr<std::vector<Vec3>> ReadHullVertices(const std::string& path) {
   if (IsMeshPath(path)) {
-    absl::StatusOr<io::LoadedMesh> mesh = io::LoadMesh(io::MeshRequest(path));
-    if (!mesh.ok()) return mesh.status();
-    return mesh->mesh.vertices;
+    TF_ASSIGN_OR_RETURN(io::LoadedMesh mesh, io::LoadMesh(io::MeshRequest(path)));
+    return mesh.mesh.vertices;
   }
-  absl::StatusOr<io::CsvTable> table = io::ReadCsvFile(path);
-  if (!table.ok()) return table.status();
-  TF_RETURN_IF_ERROR(table->Require({"x", "y", "z"}));
-  const int ix = table->ColumnIndex("x"), iy = table->ColumnIndex("y"),
-            iz = table->ColumnIndex("z");
+  TF_ASSIGN_OR_RETURN(io::CsvTable table, io::ReadCsvFile(path));
+  TF_RETURN_IF_ERROR(table.Require({"x", "y", "z"}));
+  const int ix = table.ColumnIndex("x"), iy = table.ColumnIndex("y"), iz = table.ColumnIndex("z");
   std::vector<Vec3> out;
-  for (const std::vector<double>& row : table->rows) out.emplace_back(row[ix], row[iy], row[iz]);
+  for (const std::vector<double>& row : table.rows) out.emplace_back(row[ix], row[iy], row[iz]);
   return out;
 }
 
@@ -89,9 +86,7 @@ absl::StatusOr<io::MeshPlacement> ParseMeshPose(const std::string& text) {
                      " in '", text, "')"));
   std::array<double, 7> v{};
   for (size_t i = 0; i < 7; ++i) {
-    absl::StatusOr<double> x = ParseNumber(tokens[i], "--mesh-pose");
-    if (!x.ok()) return x.status();
-    v[i] = *x;
+    TF_ASSIGN_OR_RETURN(v[i], ParseNumber(tokens[i], "--mesh-pose"));
   }
   io::MeshPlacement pose;
   pose.position = Vec3(v[0], v[1], v[2]);
@@ -115,27 +110,22 @@ absl::StatusOr<FlagMesh> LoadFlagMesh(const InertiaArgs& args) {
   io::MeshRequest request;
   request.path = args.mesh_path;
   if (!args.mesh_scale.empty()) {
-    absl::StatusOr<double> scale = ParseNumber(args.mesh_scale, "--mesh-scale");
-    if (!scale.ok()) return scale.status();
-    if (!(*scale > 0))
+    TF_ASSIGN_OR_RETURN(const double scale, ParseNumber(args.mesh_scale, "--mesh-scale"));
+    if (!(scale > 0))
       return absl::InvalidArgumentError(
           absl::StrCat("--mesh-scale: must be > 0 (got ", args.mesh_scale, ")"));
-    request.scale = *scale;
+    request.scale = scale;
   }
   if (!args.mesh_pose.empty()) {
-    absl::StatusOr<io::MeshPlacement> pose = ParseMeshPose(args.mesh_pose);
-    if (!pose.ok()) return pose.status();
-    request.pose = *pose;
+    TF_ASSIGN_OR_RETURN(request.pose, ParseMeshPose(args.mesh_pose));
   }
   std::error_code ec;
   if (!std::filesystem::exists(args.mesh_path, ec))
     return absl::InvalidArgumentError(
         absl::StrCat("--mesh: '", args.mesh_path, "' does not exist"));
-  absl::StatusOr<io::LoadedMesh> loaded = io::LoadMesh(request);
-  if (!loaded.ok()) return loaded.status();
-  absl::StatusOr<std::string> bytes = ReadInput(loaded->mesh_path, "--mesh");
-  if (!bytes.ok()) return bytes.status();
-  return FlagMesh{*std::move(loaded), *std::move(bytes)};
+  TF_ASSIGN_OR_RETURN(io::LoadedMesh loaded, io::LoadMesh(request));
+  TF_ASSIGN_OR_RETURN(std::string bytes, ReadInput(loaded.mesh_path, "--mesh"));
+  return FlagMesh{std::move(loaded), std::move(bytes)};
 }
 
 // An optional number flag that must be >= 0: nullopt when not given, else
@@ -145,12 +135,11 @@ absl::StatusOr<std::optional<double>> ParseNonNegative(const std::string& text,
                                                        const std::string& rule = "",
                                                        const std::string& advice = "") {
   if (text.empty()) return std::nullopt;
-  absl::StatusOr<double> x = ParseNumber(text, flag);
-  if (!x.ok()) return x.status();
-  if (*x < 0)
+  TF_ASSIGN_OR_RETURN(const double x, ParseNumber(text, flag));
+  if (x < 0)
     return absl::InvalidArgumentError(
         absl::StrCat(flag, ": must be >= 0", rule, " (got ", text, ")", advice));
-  return *x;
+  return x;
 }
 
 // The method (default: density with --mesh, else constrained), --truth,
@@ -164,26 +153,23 @@ absl::Status SetModelOptions(const InertiaArgs& args, v1::InertiaFitOptions* o) 
     return absl::InvalidArgumentError(absl::StrCat("--", method.status().message()));
   o->set_method(api::InertiaMethodToProto(*method));
   if (!args.truth_path.empty()) {
-    absl::StatusOr<inertia::InertiaTruth> truth = inertia::ReadTruthJsonFile(args.truth_path);
-    if (!truth.ok()) return truth.status();
-    *o->mutable_truth() = api::InertialParametersToProto(truth->params);
-    if (truth->gravity_world && args.gravity.empty())
-      *o->mutable_gravity() = api::ToProto(*truth->gravity_world);
+    TF_ASSIGN_OR_RETURN(const inertia::InertiaTruth truth,
+                        inertia::ReadTruthJsonFile(args.truth_path));
+    *o->mutable_truth() = api::InertialParametersToProto(truth.params);
+    if (truth.gravity_world && args.gravity.empty())
+      *o->mutable_gravity() = api::ToProto(*truth.gravity_world);
   }
   if (!args.gravity.empty()) {
-    absl::StatusOr<Eigen::Vector3d> g = ParseVec3(args.gravity, "--gravity");
-    if (!g.ok()) return g.status();
-    *o->mutable_gravity() = api::ToProto(*g);
+    TF_ASSIGN_OR_RETURN(Eigen::Vector3d g, ParseVec3(args.gravity, "--gravity"));
+    *o->mutable_gravity() = api::ToProto(g);
   }
   if (!args.hull_path.empty()) {
-    absl::StatusOr<std::vector<Vec3>> hull = ReadHullVertices(args.hull_path);
-    if (!hull.ok()) return hull.status();
-    for (const Vec3& v : *hull) *o->add_hull() = api::ToProto(v);
+    TF_ASSIGN_OR_RETURN(std::vector<Vec3> hull, ReadHullVertices(args.hull_path));
+    for (const Vec3& v : hull) *o->add_hull() = api::ToProto(v);
   }
   if (!args.prior_path.empty()) {
-    absl::StatusOr<inertia::InertiaTruth> prior = inertia::ReadTruthJsonFile(args.prior_path);
-    if (!prior.ok()) return prior.status();
-    *o->mutable_prior()->mutable_params() = api::InertialParametersToProto(prior->params);
+    TF_ASSIGN_OR_RETURN(inertia::InertiaTruth prior, inertia::ReadTruthJsonFile(args.prior_path));
+    *o->mutable_prior()->mutable_params() = api::InertialParametersToProto(prior.params);
     o->mutable_prior()->set_weight(args.prior_weight);
   }
   return absl::OkStatus();
@@ -203,8 +189,7 @@ absl::Status SetSolverOptions(const InertiaArgs& args, v1::InertiaFitOptions* o)
   if (!args.fg_variant.empty()) {
     absl::StatusOr<inertia::FactorGraphVariant> v =
         inertia::ParseFactorGraphVariant(args.fg_variant);
-    if (!v.ok())
-      return absl::InvalidArgumentError(absl::StrCat("--fg-variant: ", v.status().message()));
+    if (!v.ok()) return io::PrependPath(v.status(), "--fg-variant");
     if (*v == inertia::FactorGraphVariant::kConstraintPrior && args.prior_path.empty())
       return absl::InvalidArgumentError(
           "--fg-variant fg-c-g needs --prior FILE (its geodesic prior; truth JSON format)");
@@ -219,27 +204,23 @@ absl::Status SetSolverOptions(const InertiaArgs& args, v1::InertiaFitOptions* o)
 // --mesh-prior-weight and --contradiction-ratio.
 absl::Status SetDensityOptions(const InertiaArgs& args, v1::InertiaFitOptions* o) {
   absl::StatusOr<inertia::RegionScheme> scheme = inertia::ParseRegionScheme(args.regions);
-  if (!scheme.ok())
-    return absl::InvalidArgumentError(absl::StrCat("--regions: ", scheme.status().message()));
+  if (!scheme.ok()) return io::PrependPath(scheme.status(), "--regions");
   o->set_regions(api::RegionSchemeToProto(*scheme));
   if (args.target_regions < 0 || args.target_regions > inertia::kMaxTargetRegions)
     return absl::InvalidArgumentError(absl::StrCat("--target-regions: must be in 1..",
                                                    inertia::kMaxTargetRegions, ", 0 = 12 (got ",
                                                    args.target_regions, ")"));
   o->set_target_regions(static_cast<uint32_t>(args.target_regions));
-  absl::StatusOr<std::optional<double>> regularization =
-      ParseNonNegative(args.density_regularization, "--density-regularization", "",
-                       "; leave it out for the held-out choice");
-  if (!regularization.ok()) return regularization.status();
-  if (regularization->has_value()) o->set_density_regularization(**regularization);
-  absl::StatusOr<std::optional<double>> prior_weight =
-      ParseNonNegative(args.mesh_prior_weight, "--mesh-prior-weight");
-  if (!prior_weight.ok()) return prior_weight.status();
-  if (prior_weight->has_value()) o->set_mesh_prior_weight(**prior_weight);
-  absl::StatusOr<std::optional<double>> tolerance =
-      ParseNonNegative(args.mesh_tolerance, "--mesh-tolerance", ", 0 disables");
-  if (!tolerance.ok()) return tolerance.status();
-  if (tolerance->has_value()) o->set_mesh_tolerance(**tolerance);
+  TF_ASSIGN_OR_RETURN(std::optional<double> regularization,
+                      ParseNonNegative(args.density_regularization, "--density-regularization", "",
+                                       "; leave it out for the held-out choice"));
+  if (regularization.has_value()) o->set_density_regularization(*regularization);
+  TF_ASSIGN_OR_RETURN(std::optional<double> prior_weight,
+                      ParseNonNegative(args.mesh_prior_weight, "--mesh-prior-weight"));
+  if (prior_weight.has_value()) o->set_mesh_prior_weight(*prior_weight);
+  TF_ASSIGN_OR_RETURN(std::optional<double> tolerance,
+                      ParseNonNegative(args.mesh_tolerance, "--mesh-tolerance", ", 0 disables"));
+  if (tolerance.has_value()) o->set_mesh_tolerance(*tolerance);
   return absl::OkStatus();
 }
 
@@ -252,11 +233,10 @@ absl::StatusOr<v1::InertiaFitOptions> BuildOptions(const InertiaArgs& args,
   TF_RETURN_IF_ERROR(SetSolverOptions(args, &o));
   TF_RETURN_IF_ERROR(SetDensityOptions(args, &o));
   if (!args.mesh_path.empty()) {
-    absl::StatusOr<FlagMesh> loaded = LoadFlagMesh(args);
-    if (!loaded.ok()) return loaded.status();
-    *o.mutable_mesh() = api::MeshInputToProto(loaded->bytes, loaded->loaded.format,
-                                              loaded->loaded.name, loaded->loaded.placement);
-    *mesh = *std::move(loaded);
+    TF_ASSIGN_OR_RETURN(FlagMesh loaded, LoadFlagMesh(args));
+    *o.mutable_mesh() = api::MeshInputToProto(loaded.bytes, loaded.loaded.format,
+                                              loaded.loaded.name, loaded.loaded.placement);
+    *mesh = std::move(loaded);
   }
   return o;
 }
@@ -282,10 +262,9 @@ absl::Status WritePlot(const InertiaArgs& args, const FlagMesh& mesh, inertia::I
   if (options.has_truth()) plot.true_com = api::FromProto(options.truth().com());
   plot.source = absl::StrCat("--csv ", args.csv, " --mesh ", args.mesh_path);
   absl::StatusOr<std::string> svg = inertia::DensityPlotSvg(mesh.loaded.mesh, fit, plot);
-  if (!svg.ok())
-    return absl::Status(svg.status().code(), absl::StrCat("--plot: ", svg.status().message()));
+  if (!svg.ok()) return io::PrependPath(svg.status(), "--plot");
   if (absl::Status written = io::WriteTextFile(args.plot_path, *svg); !written.ok()) {
-    return absl::InvalidArgumentError(absl::StrCat("--plot: ", written.message()));
+    return io::PrependPath(written, "--plot");
   }
   return absl::OkStatus();
 }

@@ -112,10 +112,9 @@ absl::Status CheckFlagsForRpc(const LoadArgs& args, LoadRpc rpc) {
 // InvalidArgument naming the flag for combinations that cannot run.
 absl::StatusOr<LoadSpec> LoadSpecFromFlags(const LoadArgs& args) {
   LoadSpec spec;
-  absl::StatusOr<LoadRpc> rpc = ParseRpc(args.rpc);
-  if (!rpc.ok()) return rpc.status();
-  TF_RETURN_IF_ERROR(CheckFlagsForRpc(args, *rpc));
-  spec.rpc = *rpc;
+  TF_ASSIGN_OR_RETURN(LoadRpc rpc, ParseRpc(args.rpc));
+  TF_RETURN_IF_ERROR(CheckFlagsForRpc(args, rpc));
+  spec.rpc = rpc;
   spec.engine = args.engine == "sync" ? LoadEngine::kSync : LoadEngine::kCallback;
   spec.rate = args.rate;
   spec.concurrency =

@@ -70,23 +70,19 @@ void ApplySolverFlags(const PlanArgs& args, v1::PlanRequest* request) {
 absl::Status ApplyEstimateFlags(const PlanArgs& args, v1::PlanRequest* request) {
   if (!args.inertia_path.empty()) {
     absl::StatusOr<std::string> text = ReadInput(args.inertia_path);
-    if (!text.ok())
-      return absl::Status(text.status().code(),
-                          absl::StrCat("--inertia: ", text.status().message()));
+    if (!text.ok()) return io::PrependPath(text.status(), "--inertia");
     v1::FitInertiaResponse fit;
     if (absl::Status s = api::ParseJson(*text, &fit, InputName(args.inertia_path)); !s.ok()) {
-      return absl::InvalidArgumentError(absl::StrCat("--inertia: ", s.message()));
+      return io::PrependPath(s, "--inertia");
     }
     TF_RETURN_IF_ERROR(api::ApplyInertiaFit(fit, "--inertia", request));
   }
   if (!args.friction_path.empty()) {
     absl::StatusOr<std::string> text = ReadInput(args.friction_path);
-    if (!text.ok())
-      return absl::Status(text.status().code(),
-                          absl::StrCat("--friction: ", text.status().message()));
+    if (!text.ok()) return io::PrependPath(text.status(), "--friction");
     v1::FrictionResponse friction;
     if (absl::Status s = api::ParseJson(*text, &friction, InputName(args.friction_path)); !s.ok()) {
-      return absl::InvalidArgumentError(absl::StrCat("--friction: ", s.message()));
+      return io::PrependPath(s, "--friction");
     }
     TF_RETURN_IF_ERROR(api::ApplyFrictionEstimate(friction, "--friction", request));
   }
@@ -96,10 +92,9 @@ absl::Status ApplyEstimateFlags(const PlanArgs& args, v1::PlanRequest* request) 
 // The picture, written to a temporary name and renamed when complete
 // (io::WriteTextFile); errors name --plot.
 absl::Status WritePlot(const std::string& path, const absl::StatusOr<std::string>& svg) {
-  if (!svg.ok())
-    return absl::Status(svg.status().code(), absl::StrCat("--plot: ", svg.status().message()));
+  if (!svg.ok()) return io::PrependPath(svg.status(), "--plot");
   if (absl::Status written = io::WriteTextFile(path, *svg); !written.ok()) {
-    return absl::InvalidArgumentError(absl::StrCat("--plot: ", written.message()));
+    return io::PrependPath(written, "--plot");
   }
   return absl::OkStatus();
 }

@@ -73,24 +73,20 @@ absl::StatusOr<Vec3> ParseTriple(const io::JsonValue& v, const std::string& wher
 // {"position_offset": [x,y,z], "orientation_offset": [yaw,pitch,roll],
 //  "position": [{"axis","amplitude","frequency_hz","phase"}...], "orientation": [...]}
 absl::StatusOr<inertia::ExcitationTrajectory> ReadTrajectory(const std::string& path) {
-  absl::StatusOr<std::string> text = ReadInput(path, "--trajectory");
-  if (!text.ok()) return text.status();
-  absl::StatusOr<io::JsonValue> root = io::ParseJson(*text, InputName(path));
-  if (!root.ok()) return root.status();
-  if (!root->is_object())
+  TF_ASSIGN_OR_RETURN(std::string text, ReadInput(path, "--trajectory"));
+  TF_ASSIGN_OR_RETURN(io::JsonValue root, io::ParseJson(text, InputName(path)));
+  if (!root.is_object())
     return absl::InvalidArgumentError(absl::StrCat(path, ": expected a JSON object"));
   inertia::ExcitationTrajectory t;
-  for (const auto& [key, value] : root->members()) {
+  for (const auto& [key, value] : root.members()) {
     const std::string where = absl::StrCat(path, ": ", key);
     absl::Status s;
     if (key == "position_offset" || key == "orientation_offset") {
-      absl::StatusOr<Vec3> v = ParseTriple(value, where);
-      if (!v.ok()) return v.status();
-      (key == "position_offset" ? t.position_offset : t.orientation_offset) = *v;
+      TF_ASSIGN_OR_RETURN(Vec3 v, ParseTriple(value, where));
+      (key == "position_offset" ? t.position_offset : t.orientation_offset) = v;
     } else if (key == "position" || key == "orientation") {
-      absl::StatusOr<std::vector<inertia::SinusoidComponent>> c = ParseComponents(value, where);
-      if (!c.ok()) return c.status();
-      (key == "position" ? t.position : t.orientation) = *c;
+      TF_ASSIGN_OR_RETURN(std::vector<inertia::SinusoidComponent> c, ParseComponents(value, where));
+      (key == "position" ? t.position : t.orientation) = c;
     } else {
       return absl::InvalidArgumentError(absl::StrCat(
           where,
@@ -131,7 +127,7 @@ absl::Status WriteBinaryStl(const io::TriangleMesh& mesh, const std::string& pat
     bytes.push_back('\0');
   }
   if (absl::Status written = io::WriteTextFile(path, bytes); !written.ok()) {
-    return absl::InvalidArgumentError(absl::StrCat("--out: ", written.message()));
+    return io::PrependPath(written, "--out");
   }
   return absl::OkStatus();
 }
@@ -141,13 +137,12 @@ absl::Status WriteBinaryStl(const io::TriangleMesh& mesh, const std::string& pat
 absl::Status SetObject(const SimulateInertiaArgs& args, inertia::SimulationOptions* o) {
   o->object = args.object;
   if (args.params_path.empty()) return absl::OkStatus();
-  absl::StatusOr<inertia::InertiaTruth> params = inertia::ReadTruthJsonFile(args.params_path);
-  if (!params.ok()) return params.status();
-  absl::StatusOr<inertia::SimulatedObject> custom = inertia::ObjectFromParameters(
-      std::filesystem::path(args.params_path).stem().string(), params->params);
-  if (!custom.ok()) return custom.status();
-  o->custom = *custom;
-  if (params->gravity_world) o->gravity = *params->gravity_world;
+  TF_ASSIGN_OR_RETURN(const inertia::InertiaTruth params,
+                      inertia::ReadTruthJsonFile(args.params_path));
+  TF_ASSIGN_OR_RETURN(o->custom,
+                      inertia::ObjectFromParameters(
+                          std::filesystem::path(args.params_path).stem().string(), params.params));
+  if (params.gravity_world) o->gravity = *params.gravity_world;
   return absl::OkStatus();
 }
 
@@ -157,9 +152,7 @@ absl::Status SetNoise(const SimulateInertiaArgs& args, inertia::SimulationOption
   if (!(args.force_variance >= 0) || !std::isfinite(args.force_variance))
     return absl::InvalidArgumentError("--force-variance: must be finite and >= 0 (N^2)");
   if (!args.noise_level.empty()) {
-    absl::StatusOr<inertia::SimulationNoise> level = inertia::NadeauNoise(args.noise_level);
-    if (!level.ok()) return level.status();
-    o->noise = *level;
+    TF_ASSIGN_OR_RETURN(o->noise, inertia::NadeauNoise(args.noise_level));
     o->write_kinematics = true;  // the levels are noise on measured accelerations
   }
   if (args.force_variance > 0) o->noise.force_sigma = std::sqrt(args.force_variance);
@@ -174,9 +167,7 @@ absl::Status SetNoise(const SimulateInertiaArgs& args, inertia::SimulationOption
 // and --frequency-scale.
 absl::Status SetTrajectory(const SimulateInertiaArgs& args, inertia::SimulationOptions* o) {
   if (!args.trajectory_path.empty()) {
-    absl::StatusOr<inertia::ExcitationTrajectory> t = ReadTrajectory(args.trajectory_path);
-    if (!t.ok()) return t.status();
-    o->trajectory = *t;
+    TF_ASSIGN_OR_RETURN(o->trajectory, ReadTrajectory(args.trajectory_path));
     return absl::OkStatus();
   }
   if (!(args.amplitude_scale > 0) || !(args.frequency_scale > 0))

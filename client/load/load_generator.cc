@@ -138,14 +138,13 @@ absl::StatusOr<LoadReport> RunLoad(const LoadSpec& spec,
 absl::StatusOr<std::vector<std::shared_ptr<grpc::Channel>>> ConnectLoadChannels(
     const ConnectionArgs& connection, const std::string& target_list, int per_target,
     const LoadSpec& spec) {
-  absl::StatusOr<std::vector<std::string>> targets = SplitTargets(target_list);
-  if (!targets.ok()) return targets.status();
+  TF_ASSIGN_OR_RETURN(std::vector<std::string> targets, SplitTargets(target_list));
   if (per_target < 1) return absl::InvalidArgumentError("--channels: must be >= 1");
   // The warm-up gets at least 10 s whatever --deadline-ms (0 = none), so a
   // run measuring short deadlines (--deadline-ms 1) still connects.
   const int deadline_ms = std::max(connection.deadline_ms, kMinWarmUpDeadlineMs);
   std::vector<std::shared_ptr<grpc::Channel>> channels;
-  for (const std::string& target : *targets) {
+  for (const std::string& target : targets) {
     // Addresses behind one target: the entries of an ipv4:/ipv6: list.
     const int addresses = HasUriScheme(target)
                               ? static_cast<int>(std::count(target.begin(), target.end(), ',')) + 1
@@ -155,18 +154,17 @@ absl::StatusOr<std::vector<std::shared_ptr<grpc::Channel>>> ConnectLoadChannels(
       // Without this, channels with equal arguments share one connection.
       args.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
       if (HasUriScheme(target)) args.SetLoadBalancingPolicyName("round_robin");
-      absl::StatusOr<std::shared_ptr<grpc::Channel>> channel =
-          MakeChannel(connection, target, args);
-      if (!channel.ok()) return channel.status();
+      TF_ASSIGN_OR_RETURN(std::shared_ptr<grpc::Channel> channel,
+                          MakeChannel(connection, target, args));
       // Warm-up, which also connects: the first call fails fast with the
       // reason (connection refused, TLS handshake) when the target cannot be
       // reached. round_robin connects to every address; a few calls make
       // sure each is used (and the request accepted) before measuring.
-      const RemoteServer server(*channel, target, deadline_ms);
+      const RemoteServer server(channel, target, deadline_ms);
       for (int i = 0; i < 2 * addresses; ++i) {
         TF_RETURN_IF_ERROR(WarmUpCall(server, spec));
       }
-      channels.push_back(*std::move(channel));
+      channels.push_back(std::move(channel));
     }
   }
   return channels;

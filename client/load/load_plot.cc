@@ -11,6 +11,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "tactforce/io/status_macros.h"
 #include "tactforce/io/svg.h"
 #include "tactforce/io/text_file.h"
 
@@ -229,7 +230,7 @@ absl::Status WriteLoadPlot(const LoadReport& report, const std::string& target,
                            const std::string& path) {
   absl::Status written = io::WriteTextFile(path, LoadPlotSvg(report, target));
   if (!written.ok()) {
-    return absl::InvalidArgumentError(absl::StrCat("--plot: ", written.message()));
+    return io::PrependPath(written, "--plot");
   }
   return absl::OkStatus();
 }

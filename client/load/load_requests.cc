@@ -91,9 +91,8 @@ absl::StatusOr<std::vector<T>> ParseJsonMessages(const std::string& text,
     out.push_back(std::move(message));
     return out;
   }
-  absl::StatusOr<std::vector<std::pair<size_t, size_t>>> elements = SplitJsonList(text, source);
-  if (!elements.ok()) return elements.status();
-  for (const auto& [begin, end] : *elements) {
+  TF_ASSIGN_OR_RETURN(auto elements, SplitJsonList(text, source));
+  for (const auto& [begin, end] : elements) {
     // Preceded by as many line breaks and spaces as the element has before
     // it in the file, so that positions in errors are the file's.
     const io::TextPosition at = io::PositionInText(text, begin);
@@ -134,27 +133,20 @@ absl::Status SetRequestsFromFile(const std::string& text, const LoadRequestSourc
   switch (spec->rpc) {
     case LoadRpc::kPlan:
     case LoadRpc::kStream: {
-      auto requests = ParseJsonMessages<v1::PlanRequest>(text, name);
-      if (!requests.ok()) return requests.status();
-      spec->requests = *std::move(requests);
+      TF_ASSIGN_OR_RETURN(spec->requests, ParseJsonMessages<v1::PlanRequest>(text, name));
       return absl::OkStatus();
     }
     case LoadRpc::kEstimate: {
-      auto requests = ParseJsonMessages<v1::EstimateRequest>(text, name);
-      if (!requests.ok()) return requests.status();
-      spec->estimate_requests = *std::move(requests);
+      TF_ASSIGN_OR_RETURN(spec->estimate_requests,
+                          ParseJsonMessages<v1::EstimateRequest>(text, name));
       return absl::OkStatus();
     }
     case LoadRpc::kAudit: {
-      auto requests = ParseJsonMessages<v1::AuditRequest>(text, name);
-      if (!requests.ok()) return requests.status();
-      spec->audit_requests = *std::move(requests);
+      TF_ASSIGN_OR_RETURN(spec->audit_requests, ParseJsonMessages<v1::AuditRequest>(text, name));
       return absl::OkStatus();
     }
     case LoadRpc::kFitInertia: {
-      auto stream = FitInertiaStreamFromFile(text, source);
-      if (!stream.ok()) return stream.status();
-      spec->fit_inertia_stream = *std::move(stream);
+      TF_ASSIGN_OR_RETURN(spec->fit_inertia_stream, FitInertiaStreamFromFile(text, source));
       return absl::OkStatus();
     }
     case LoadRpc::kHealth:
@@ -168,9 +160,8 @@ absl::Status SetRequestsFromFile(const std::string& text, const LoadRequestSourc
 absl::Status SetLoadRequests(const LoadRequestSource& source, LoadSpec* spec) {
   if (spec->rpc == LoadRpc::kHealth) return absl::OkStatus();
   if (!source.path.empty()) {
-    absl::StatusOr<std::string> text = ReadInput(source.path);
-    if (!text.ok()) return text.status();
-    return SetRequestsFromFile(*text, source, spec);
+    TF_ASSIGN_OR_RETURN(std::string text, ReadInput(source.path));
+    return SetRequestsFromFile(text, source, spec);
   }
   switch (spec->rpc) {
     case LoadRpc::kPlan:

@@ -277,9 +277,7 @@ absl::StatusOr<ForceEstimate> EstimateForces(const PlanProblem& problem,
                                              const EstimateOptions& options) {
   EstimationWorkspace workspace;
   ForceEstimate out;
-  if (absl::Status s = EstimateForces(problem, readings, options, &workspace, &out); !s.ok()) {
-    return s;
-  }
+  TF_RETURN_IF_ERROR(EstimateForces(problem, readings, options, &workspace, &out));
   return out;
 }
 

@@ -49,17 +49,11 @@ absl::Status ValidateTrial(const FrictionTrial& trial, int index, int min_sample
     if (k > 0 && !(s.t > trial.samples[k - 1].t))
       return absl::InvalidArgumentError(sp + ".t: not increasing");
     // The pre-slip line fit is over time: steps below the resolution are noise.
-    if (absl::Status st =
-            planner::CheckTime(sp + ".t", s.t, k > 0 ? &trial.samples[k - 1].t : nullptr);
-        !st.ok())
-      return st;
-    if (absl::Status st = planner::CheckMagnitude(sp + ".force", s.force, planner::kMaxForce, "N");
-        !st.ok())
-      return st;
-    if (absl::Status st = planner::CheckMagnitude(sp + ".contact_point", s.contact_point,
-                                                  planner::kMaxLength, "m");
-        !st.ok())
-      return st;
+    TF_RETURN_IF_ERROR(
+        planner::CheckTime(sp + ".t", s.t, k > 0 ? &trial.samples[k - 1].t : nullptr));
+    TF_RETURN_IF_ERROR(planner::CheckMagnitude(sp + ".force", s.force, planner::kMaxForce, "N"));
+    TF_RETURN_IF_ERROR(
+        planner::CheckMagnitude(sp + ".contact_point", s.contact_point, planner::kMaxLength, "m"));
   }
   Vec3 unit = trial.normal.value_or(Vec3::UnitZ());
   if (trial.normal && !planner::NormalizeDirection(&unit))
@@ -208,18 +202,14 @@ absl::Status ValidateOptions(const FrictionOptions& o) {
   };
   if (!(o.slip_distance > 0) || !std::isfinite(o.slip_distance))
     return bad("slip_distance", "finite and > 0 m", o.slip_distance);
-  if (absl::Status s =
-          planner::CheckMagnitude("slip_distance", o.slip_distance, planner::kMaxLength, "m");
-      !s.ok())
-    return s;
+  TF_RETURN_IF_ERROR(
+      planner::CheckMagnitude("slip_distance", o.slip_distance, planner::kMaxLength, "m"));
   if (o.window < 1) return bad("window", ">= 1 sample", o.window);
   if (o.fit_window < 3) return bad("fit_window", ">= 3 samples", o.fit_window);
   if (!(o.min_normal_force >= 0) || !std::isfinite(o.min_normal_force))
     return bad("min_normal_force", "finite and >= 0 N", o.min_normal_force);
-  if (absl::Status s =
-          planner::CheckMagnitude("min_normal_force", o.min_normal_force, planner::kMaxForce, "N");
-      !s.ok())
-    return s;
+  TF_RETURN_IF_ERROR(
+      planner::CheckMagnitude("min_normal_force", o.min_normal_force, planner::kMaxForce, "N"));
   if (!(o.noise_k > 0) || !std::isfinite(o.noise_k))
     return bad("noise_k", "finite and > 0", o.noise_k);
   if (!(o.min_onset_fraction >= 0 && o.min_onset_fraction < 1))

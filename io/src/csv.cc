@@ -10,6 +10,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_join.h"
 #include "tactforce/io/text_file.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::io {
 namespace {
@@ -117,9 +118,8 @@ absl::StatusOr<CsvTable> ParseCsv(const std::string& text, const std::string& so
 }
 
 absl::StatusOr<CsvTable> ReadCsvFile(const std::string& path, const CsvOptions& options) {
-  absl::StatusOr<std::string> text = ReadTextFile(path);
-  if (!text.ok()) return text.status();
-  return ParseCsv(*text, SourceName(path), options);
+  TF_ASSIGN_OR_RETURN(std::string text, ReadTextFile(path));
+  return ParseCsv(text, SourceName(path), options);
 }
 
 }  // namespace tactforce::io

@@ -146,11 +146,9 @@ TriangleMesh TransformToObjectFrame(const TriangleMesh& mesh, const MeshPlacemen
 }
 
 absl::StatusOr<MeshDescriptor> ReadMeshDescriptor(const std::string& path) {
-  absl::StatusOr<std::string> text = ReadTextFile(path);
-  if (!text.ok()) return text.status();
-  absl::StatusOr<Json> json = ParseDescriptorJson(*text, path);
-  if (!json.ok()) return json.status();
-  const Json& j = *json;
+  TF_ASSIGN_OR_RETURN(std::string text, ReadTextFile(path));
+  TF_ASSIGN_OR_RETURN(Json json, ParseDescriptorJson(text, path));
+  const Json& j = json;
   if (!j.is_object())
     return KeyError(path, absl::StrCat("expected a JSON object (got ", j.type_name(), ")"));
   for (const auto& [key, value] : j.items()) {
@@ -188,16 +186,14 @@ absl::StatusOr<MeshDescriptor> ReadMeshDescriptor(const std::string& path) {
                                            "' (expected position, quaternion)"));
     }
     if (const auto p = pose->find("position"); p != pose->end()) {
-      absl::StatusOr<std::vector<double>> v =
-          Numbers(*p, 3, path, "object_in_mesh.position", "[x, y, z]");
-      if (!v.ok()) return v.status();
-      d.placement.position = Vector3d((*v)[0], (*v)[1], (*v)[2]);
+      TF_ASSIGN_OR_RETURN(std::vector<double> v,
+                          Numbers(*p, 3, path, "object_in_mesh.position", "[x, y, z]"));
+      d.placement.position = Vector3d(v[0], v[1], v[2]);
     }
     if (const auto q = pose->find("quaternion"); q != pose->end()) {
-      absl::StatusOr<std::vector<double>> v =
-          Numbers(*q, 4, path, "object_in_mesh.quaternion", "[w, x, y, z]");
-      if (!v.ok()) return v.status();
-      d.placement.orientation = Eigen::Quaterniond((*v)[0], (*v)[1], (*v)[2], (*v)[3]);
+      TF_ASSIGN_OR_RETURN(std::vector<double> v,
+                          Numbers(*q, 4, path, "object_in_mesh.quaternion", "[w, x, y, z]"));
+      d.placement.orientation = Eigen::Quaterniond(v[0], v[1], v[2], v[3]);
       if (absl::Status s = CheckQuaternion(d.placement.orientation, "object_in_mesh.quaternion");
           !s.ok())
         return KeyError(path, s.message());
@@ -211,10 +207,9 @@ absl::StatusOr<LoadedMesh> LoadMesh(const MeshRequest& request) {
   const std::string ext =
       absl::AsciiStrToLower(std::filesystem::path(request.path).extension().string());
   if (ext == ".json") {
-    absl::StatusOr<MeshDescriptor> d = ReadMeshDescriptor(request.path);
-    if (!d.ok()) return d.status();
-    out.mesh_path = d->mesh_path;
-    out.placement = d->placement;
+    TF_ASSIGN_OR_RETURN(MeshDescriptor d, ReadMeshDescriptor(request.path));
+    out.mesh_path = d.mesh_path;
+    out.placement = d.placement;
   } else {
     out.mesh_path = request.path;
   }
@@ -224,14 +219,12 @@ absl::StatusOr<LoadedMesh> LoadMesh(const MeshRequest& request) {
     out.placement.orientation = request.pose->orientation;
   }
   TF_RETURN_IF_ERROR(ValidatePlacement(out.placement));
-  absl::StatusOr<std::string> format = MeshFormatFromPath(out.mesh_path);
-  if (!format.ok()) return format.status();
-  absl::StatusOr<TriangleMesh> mesh = ReadMeshFile(out.mesh_path);
-  if (!mesh.ok()) return mesh.status();
-  out.format = *format;
+  TF_ASSIGN_OR_RETURN(std::string format, MeshFormatFromPath(out.mesh_path));
+  TF_ASSIGN_OR_RETURN(TriangleMesh mesh, ReadMeshFile(out.mesh_path));
+  out.format = format;
   out.name = std::filesystem::path(out.mesh_path).filename().string();
   out.placement.orientation.normalize();
-  out.mesh = TransformToObjectFrame(*mesh, out.placement);
+  out.mesh = TransformToObjectFrame(mesh, out.placement);
   return out;
 }
 

@@ -89,15 +89,14 @@ absl::StatusOr<TriangleMesh> FromScene(const aiScene& scene, const std::string& 
   for (unsigned i = 0; i < scene.mNumMeshes; ++i)
     colored = colored && scene.mMeshes[i]->HasVertexColors(0);
   TriangleMesh mesh;
-  absl::StatusOr<std::vector<int>> vertex_of = Weld(scene, name, &mesh.vertices);
-  if (!vertex_of.ok()) return vertex_of.status();
+  TF_ASSIGN_OR_RETURN(const std::vector<int> vertex_of, Weld(scene, name, &mesh.vertices));
   size_t first_corner = 0;  // of the current mesh in vertex_of
   for (unsigned i = 0; i < scene.mNumMeshes; ++i) {
     const aiMesh& m = *scene.mMeshes[i];
-    const int* welded = vertex_of->data() + first_corner;
+    const int* welded = vertex_of.data() + first_corner;
     first_corner += m.mNumVertices;
     // Polygons as fans (assimp's own triangulation aborts on some malformed
-    // PLY faces: found by the mesh fuzzer); points and lines are not surface.
+    // PLY faces); points and lines are not surface.
     for (unsigned t = 0; t < m.mNumFaces; ++t) {
       const aiFace& f = m.mFaces[t];
       for (unsigned k = 0; k < f.mNumIndices; ++k) {
@@ -190,9 +189,7 @@ absl::StatusOr<TriangleMesh> ReadMesh(std::string_view bytes, const std::string&
                                       const std::string& name) {
   internal::CheckedPly ply;
   if (hint == "ply") {
-    absl::StatusOr<internal::CheckedPly> checked = internal::CheckPly(bytes, name);
-    if (!checked.ok()) return checked.status();
-    ply = *std::move(checked);
+    TF_ASSIGN_OR_RETURN(ply, internal::CheckPly(bytes, name));
     if (!ply.assimp_bytes.empty()) bytes = ply.assimp_bytes;
   }
   if (hint == "stl") {
@@ -246,11 +243,9 @@ absl::StatusOr<TriangleMesh> ReadMeshBytes(std::string_view bytes, std::string_v
 }
 
 absl::StatusOr<TriangleMesh> ReadMeshFile(const std::string& path) {
-  absl::StatusOr<std::string> format = MeshFormatFromPath(path);
-  if (!format.ok()) return format.status();
-  absl::StatusOr<std::string> bytes = ReadTextFile(path);
-  if (!bytes.ok()) return bytes.status();
-  return ReadMeshBytes(*bytes, *format, path);
+  TF_ASSIGN_OR_RETURN(std::string format, MeshFormatFromPath(path));
+  TF_ASSIGN_OR_RETURN(std::string bytes, ReadTextFile(path));
+  return ReadMeshBytes(bytes, format, path);
 }
 
 }  // namespace tactforce::io

@@ -1,14 +1,13 @@
 // PLY files checked before assimp reads them, and their per-face colours.
 // assimp 5.2's PLY reader trusts the file: it reads past the end of a header
 // that stops early or hides `end_header` inside another line (SEGV), asserts
-// (abort) on unknown property types (both found by the mesh fuzzer), and
-// allocates by the header's element counts and the lengths of lists before
-// reading them (a 400-byte file declaring 1e8 vertices took 1.2 GB, then
-// std::bad_alloc). So the header is parsed here, every count is checked
-// against the limits and the bytes present, and the body is walked item by
-// item; assimp only sees files whose every count is backed by data.
-// Debian's assimp also drops colour properties of the face element, which
-// the density fit uses to find an object's parts: the walk collects them.
+// (abort) on unknown property types, and allocates by the header's element
+// counts and the lengths of lists before reading them (a file of a few
+// hundred bytes can make it allocate gigabytes). So the header is parsed here, every count is
+// checked against the limits and the bytes present, and the body is walked item by item; assimp
+// only sees files whose every count is backed by data. Debian's assimp also drops colour properties
+// of the face element, which the density fit uses to find an object's parts: the walk collects
+// them.
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -409,9 +408,9 @@ absl::StatusOr<std::vector<uint32_t>> WalkBody(const Header& h, absl::string_vie
 }  // namespace
 
 // A mesh needs a non-empty `vertex` element and faces (`face`, or the
-// `tristrips` some exporters write). assimp, given neither, treated other
-// elements' data as its vertices and allocated 1.6 GB for a 244-byte file
-// (found by the mesh fuzzer).
+// `tristrips` some exporters write). assimp, given neither, treats other
+// elements' data as its vertices and can allocate gigabytes for a file of a
+// few hundred bytes.
 absl::Status RequireMeshElements(const Header& h, const std::string& name) {
   bool vertices = false, faces = false;
   for (const Element& e : h.elements) {
@@ -429,18 +428,14 @@ absl::Status RequireMeshElements(const Header& h, const std::string& name) {
 
 absl::StatusOr<CheckedPly> CheckPly(std::string_view bytes_std, const std::string& name) {
   const absl::string_view bytes(bytes_std.data(), bytes_std.size());
-  absl::StatusOr<Header> header = ParseHeader(bytes, name);
-  if (!header.ok()) return header.status();
-  if (absl::Status counts = CheckCounts(*header, bytes.substr(header->body_start), name);
-      !counts.ok())
-    return counts;
-  TF_RETURN_IF_ERROR(RequireMeshElements(*header, name));
-  absl::StatusOr<std::vector<uint32_t>> colors = WalkBody(*header, bytes, name);
-  if (!colors.ok()) return colors.status();
+  TF_ASSIGN_OR_RETURN(Header header, ParseHeader(bytes, name));
+  TF_RETURN_IF_ERROR(CheckCounts(header, bytes.substr(header.body_start), name));
+  TF_RETURN_IF_ERROR(RequireMeshElements(header, name));
+  TF_ASSIGN_OR_RETURN(std::vector<uint32_t> colors, WalkBody(header, bytes, name));
   CheckedPly checked;
-  checked.face_colors = *std::move(colors);
-  const size_t body = header->body_start;
-  if (header->encoding != Encoding::kAscii && body < bytes.size() && bytes[body] == '\n' &&
+  checked.face_colors = std::move(colors);
+  const size_t body = header.body_start;
+  if (header.encoding != Encoding::kAscii && body < bytes.size() && bytes[body] == '\n' &&
       bytes[body - 2] != '\r')
     checked.assimp_bytes = absl::StrCat(bytes.substr(0, body), "\n", bytes.substr(body));
   return checked;

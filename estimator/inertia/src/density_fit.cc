@@ -485,22 +485,19 @@ absl::StatusOr<MethodOutput> FitDensity(const InertiaSamples& s, const InertiaOp
   const GlsData gls = PrepareGls(s, o, &out.notes, &poll);
   if (poll.stopped()) return Interrupted();
   const int n = static_cast<int>(gls.kin.size());
-  absl::StatusOr<DensityBasis> basis = MakeDensityBasis(gls, regions, o);
-  if (!basis.ok()) return basis.status();
-  out.scale = basis->parameter_scale;
+  TF_ASSIGN_OR_RETURN(DensityBasis basis, MakeDensityBasis(gls, regions, o));
+  out.scale = basis.parameter_scale;
 
   const int folds = std::clamp(o.density.folds, 2, std::max(2, n / 10));
   const bool choose = o.density.regularization < 0;
   DensityState st;
-  st.pi = basis->pi_uniform;
-  st.u = VectorXd::Ones(basis->K);
+  st.pi = basis.pi_uniform;
+  st.u = VectorXd::Ones(basis.K);
   st.lambda_rel = choose ? 0.0 : o.density.regularization;
   for (int round = 0; round < o.reweighting_rounds; ++round) {
     if (poll.Check()) return Interrupted();
-    if (absl::Status r =
-            DensityRound(gls, *basis, regions, o, round, folds, choose, &st, &out, &poll);
-        !r.ok())
-      return r;
+    TF_RETURN_IF_ERROR(
+        DensityRound(gls, basis, regions, o, round, folds, choose, &st, &out, &poll));
     if (o.progress) o.progress(0.9 * (round + 1) / o.reweighting_rounds);
   }
   out.pi = st.pi;
@@ -509,12 +506,12 @@ absl::StatusOr<MethodOutput> FitDensity(const InertiaSamples& s, const InertiaOp
   out.regularization = st.lambda_rel;
   out.regularization_rule =
       choose ? absl::StrCat("held-out time blocks (", folds, " folds)") : "given";
-  out.densities.resize(basis->K);
-  for (int r = 0; r < basis->K; ++r) out.densities[r] = basis->rho_ref * st.u(r);
+  out.densities.resize(basis.K);
+  for (int r = 0; r < basis.K; ++r) out.densities[r] = basis.rho_ref * st.u(r);
   if (poll.Check()) return Interrupted();
-  DensityCovariance(*basis, st, &out);
-  HeldOutContradiction(gls, *basis, folds, &st, &out, &poll);
-  MeshConsistency(gls, *basis, &st, &out, &poll);
+  DensityCovariance(basis, st, &out);
+  HeldOutContradiction(gls, basis, folds, &st, &out, &poll);
+  MeshConsistency(gls, basis, &st, &out, &poll);
   ResidualRms(gls.kin, gls.wrench, st.pi, &poll, &out.rms_force, &out.rms_torque);
   if (poll.stopped()) return Interrupted();
   return out;

@@ -758,14 +758,13 @@ absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const Inert
 
   NormalEquations ne;
   double cost = 0;
-  absl::StatusOr<int> it = LevenbergMarquardt(prob, o, &ne, &cost, &poll);
-  if (!it.ok()) return it.status();
-  out.iterations = *it;
+  TF_ASSIGN_OR_RETURN(int it, LevenbergMarquardt(prob, o, &ne, &cost, &poll));
+  out.iterations = it;
   out.pi = prob.inertial().Standard();
   out.samples_used = std::max(0, n - 2);
   prob.DynamicsRms(&out.rms_force, &out.rms_torque);
   out.notes.push_back(
-      absl::StrFormat("Levenberg-Marquardt: %d iterations, final cost %.6g", *it, cost));
+      absl::StrFormat("Levenberg-Marquardt: %d iterations, final cost %.6g", it, cost));
   out.cov = InertialCovariance(prob, ne, &poll);
   // Excitation: three-point regressors whitened like the dynamics factors.
   double ms = 1, ls = 0.1;

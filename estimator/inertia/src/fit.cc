@@ -106,8 +106,7 @@ absl::Status ValidateMeshOptions(const InertiaOptions& o) {
           return absl::InvalidArgumentError(absl::StrCat(o.mesh_name, ": triangle ", t,
                                                          " has vertex index ", k, " out of range"));
     if (o.method == InertiaMethod::kDensity || o.method == InertiaMethod::kConstrained) {
-      if (absl::Status st = io::RequireClosedSolid(io::CheckMesh(*o.mesh), o.mesh_name); !st.ok())
-        return st;
+      TF_RETURN_IF_ERROR(io::RequireClosedSolid(io::CheckMesh(*o.mesh), o.mesh_name));
     }
   }
   return absl::OkStatus();
@@ -154,9 +153,7 @@ absl::Status ValidateInertiaOptions(const InertiaOptions& o) {
   TF_RETURN_IF_ERROR(ValidateMeshOptions(o));
   std::optional<ConvexHull> hull;
   if (!o.hull.empty()) {
-    absl::StatusOr<ConvexHull> h = ComputeConvexHull(o.hull);
-    if (!h.ok()) return h.status();
-    hull = *std::move(h);
+    TF_ASSIGN_OR_RETURN(hull, ComputeConvexHull(o.hull));
   }
   if (o.method == InertiaMethod::kFactorGraph &&
       o.factor_graph.variant == FactorGraphVariant::kConstraintPrior && !o.prior)
@@ -346,28 +343,26 @@ absl::StatusOr<internal::MethodOutput> FitDensityOrFallBack(const InertiaSamples
                                                             const ConvexHull* hull,
                                                             InertiaFit* fit) {
   fit->mesh_check = io::CheckMesh(*options.mesh);
-  absl::StatusOr<RegionModel> regions =
-      BuildRegions(*options.mesh, options.density.regions, options.mesh_name, options.interrupt);
-  if (!regions.ok()) return regions.status();
-  auto model = std::make_shared<const RegionModel>(*std::move(regions));
-  absl::StatusOr<internal::MethodOutput> r = internal::FitDensity(samples, options, *model);
-  if (!r.ok()) return r.status();
+  TF_ASSIGN_OR_RETURN(RegionModel regions, BuildRegions(*options.mesh, options.density.regions,
+                                                        options.mesh_name, options.interrupt));
+  auto model = std::make_shared<const RegionModel>(std::move(regions));
+  TF_ASSIGN_OR_RETURN(internal::MethodOutput r, internal::FitDensity(samples, options, *model));
   fit->region_model = model;
   for (size_t i = 0; i < model->regions.size(); ++i) {
-    fit->densities.push_back({model->regions[i].label, r->densities[i],
-                              model->regions[i].moments.volume, r->density_se[i]});
+    fit->densities.push_back({model->regions[i].label, r.densities[i],
+                              model->regions[i].moments.volume, r.density_se[i]});
   }
-  fit->density_regularization = r->regularization;
-  fit->density_regularization_rule = r->regularization_rule;
-  fit->heldout_residual_ratio = r->heldout_ratio;
+  fit->density_regularization = r.regularization;
+  fit->density_regularization_rule = r.regularization_rule;
+  fit->heldout_residual_ratio = r.heldout_ratio;
   const std::string heldout_note = absl::StrFormat(
       "held-out weighted residual %.3gx the free 10-parameter fit's (z = %.3g over the held-out "
       "samples); the "
       "predicted wrenches differ like a mass error of %.2g %% and a CoM displacement of %.3g mm",
-      r->heldout_ratio, r->heldout_z, 100 * r->heldout_mass_equivalent,
-      1000 * r->heldout_com_equivalent);
-  r->notes.push_back(heldout_note);
-  const Vec3& s = r->gyration_radii;
+      r.heldout_ratio, r.heldout_z, 100 * r.heldout_mass_equivalent,
+      1000 * r.heldout_com_equivalent);
+  r.notes.push_back(heldout_note);
+  const Vec3& s = r.gyration_radii;
   const double tolerance = options.density.mesh_tolerance;
   const std::string mesh_note = absl::StrFormat(
       "mesh test: the densities this mesh can carry are %.3g (first-order Riemannian) from the "
@@ -375,11 +370,11 @@ absl::StatusOr<internal::MethodOutput> FitDensityOrFallBack(const InertiaSamples
       "data allow (least chi^2 excess %.3g, bound %.3g at 99.9 %%); tolerance %g: a %g %% error of "
       "the mass or a "
       "principal second moment, or a CoM move of %.3g / %.3g / %.3g mm along the principal axes",
-      r->mesh_distance, r->mesh_chi2_excess, r->mesh_chi2_bound, tolerance, 100 * tolerance,
+      r.mesh_distance, r.mesh_chi2_excess, r.mesh_chi2_bound, tolerance, 100 * tolerance,
       1000 * tolerance * s(0) / std::sqrt(2.0), 1000 * tolerance * s(1) / std::sqrt(2.0),
       1000 * tolerance * s(2) / std::sqrt(2.0));
-  r->notes.push_back(mesh_note);
-  const bool contradicted = tolerance > 0 && r->mesh_distance > tolerance;
+  r.notes.push_back(mesh_note);
+  const bool contradicted = tolerance > 0 && r.mesh_distance > tolerance;
   if (!contradicted) {
     fit->density_realizable = true;
     return r;
@@ -391,14 +386,13 @@ absl::StatusOr<internal::MethodOutput> FitDensityOrFallBack(const InertiaSamples
       "data allow; check scale and object_in_mesh (the answer is CONSTRAINED's; the densities are "
       "those of the "
       "rejected mesh fit)",
-      r->mesh_distance, tolerance);
+      r.mesh_distance, tolerance);
   InertiaOptions plain = options;
   plain.mesh = nullptr;
   plain.method = InertiaMethod::kConstrained;
-  absl::StatusOr<internal::MethodOutput> c = internal::FitConstrained(samples, plain, hull);
-  if (!c.ok()) return c.status();
-  c->notes.insert(c->notes.begin(), {fit->mesh_contradiction, mesh_note, heldout_note});
-  c->iterations += r->iterations;
+  TF_ASSIGN_OR_RETURN(internal::MethodOutput c, internal::FitConstrained(samples, plain, hull));
+  c.notes.insert(c.notes.begin(), {fit->mesh_contradiction, mesh_note, heldout_note});
+  c.iterations += r.iterations;
   return c;
 }
 

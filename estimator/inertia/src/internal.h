@@ -29,9 +29,10 @@ absl::Status Interrupted();
 // never stops.
 class InterruptPoll {
  public:
-  // A few thousand samples of the cheapest loops: well under 1 ms of work
-  // between polls for a sample loop, about 10-50 ms for the costliest
-  // (factor-graph AutoDiff, kinematics window selection).
+  // A few thousand samples' worth of work between polls: the callback's cost
+  // is negligible against the loops, and even the costliest loops
+  // (factor-graph AutoDiff, kinematics window selection) see an interrupt
+  // within a small fraction of a fit.
   static constexpr int64_t kInterruptStride = 2048;
 
   explicit InterruptPoll(std::function<bool()> interrupt) : interrupt_(std::move(interrupt)) {}

@@ -407,9 +407,8 @@ absl::Status ValidateInertiaSamples(const InertiaSamples& s, InterruptPoll* poll
     if (poll->Tick()) return Interrupted();
     const InertiaSample& x = s.samples[i];
     TF_RETURN_IF_ERROR(ValidatePose(loc, s, i));
-    absl::Status forces =
-        s.source == ForceSource::kWrench ? ValidateWrench(loc, x, i) : ValidateContacts(loc, s, i);
-    if (!forces.ok()) return forces;
+    TF_RETURN_IF_ERROR(s.source == ForceSource::kWrench ? ValidateWrench(loc, x, i)
+                                                        : ValidateContacts(loc, s, i));
     TF_RETURN_IF_ERROR(ValidateKinematics(loc, x, i, kin));
   }
   return absl::OkStatus();
@@ -438,9 +437,8 @@ absl::StatusOr<InertiaSamples> InertiaSamplesFromCsv(const io::CsvTable& table) 
   InertiaSamples out;
   out.source_name = src;
   TF_RETURN_IF_ERROR(DetectForceSource(table, &out));
-  absl::StatusOr<KinematicsColumns> kin = DetectKinematics(table);
-  if (!kin.ok()) return kin.status();
-  const RowLayout layout = LayoutRows(table, out, *kin);
+  TF_ASSIGN_OR_RETURN(KinematicsColumns kin, DetectKinematics(table));
+  const RowLayout layout = LayoutRows(table, out, kin);
   out.samples.reserve(table.rows.size());
   out.line_numbers = table.line_numbers;
   for (const std::vector<double>& row : table.rows)
@@ -459,15 +457,13 @@ absl::StatusOr<InertiaSamples> InertiaSamplesFromCsv(const io::CsvTable& table) 
 }
 
 absl::StatusOr<InertiaSamples> ParseInertiaCsv(const std::string& text, const std::string& source) {
-  absl::StatusOr<io::CsvTable> t = io::ParseCsv(text, source);
-  if (!t.ok()) return t.status();
-  return InertiaSamplesFromCsv(*t);
+  TF_ASSIGN_OR_RETURN(io::CsvTable t, io::ParseCsv(text, source));
+  return InertiaSamplesFromCsv(t);
 }
 
 absl::StatusOr<InertiaSamples> ReadInertiaCsvFile(const std::string& path) {
-  absl::StatusOr<io::CsvTable> t = io::ReadCsvFile(path);
-  if (!t.ok()) return t.status();
-  return InertiaSamplesFromCsv(*t);
+  TF_ASSIGN_OR_RETURN(io::CsvTable t, io::ReadCsvFile(path));
+  return InertiaSamplesFromCsv(t);
 }
 
 std::string InertiaSamplesToCsv(const InertiaSamples& s) {

@@ -268,9 +268,7 @@ absl::StatusOr<SimulationResult> SimulateInertia(const SimulationOptions& o) {
   if (o.custom) {
     object = *o.custom;
   } else {
-    absl::StatusOr<SimulatedObject> b = BuiltInObject(o.object);
-    if (!b.ok()) return b.status();
-    object = *std::move(b);
+    TF_ASSIGN_OR_RETURN(object, BuiltInObject(o.object));
   }
   const int steps = static_cast<int>(std::floor(o.duration * o.rate_hz + 1e-9)) + 1;
   if (steps < 5) return absl::InvalidArgumentError("duration * rate_hz: fewer than 5 samples");

@@ -13,16 +13,15 @@
 namespace tactforce::inertia {
 
 absl::StatusOr<InertiaTruth> ParseTruthJson(const std::string& text, const std::string& source) {
-  absl::StatusOr<io::JsonValue> root = io::ParseJson(text, source);
-  if (!root.ok()) return root.status();
-  if (!root->is_object())
+  TF_ASSIGN_OR_RETURN(io::JsonValue root, io::ParseJson(text, source));
+  if (!root.is_object())
     return absl::InvalidArgumentError(absl::StrCat(source, ": expected a JSON object"));
   auto key_error = [&](const std::string& key, const std::string& what) {
     return absl::InvalidArgumentError(absl::StrCat(source, ": key '", key, "': ", what));
   };
   auto array = [&](const std::string& key, size_t n, bool required,
                    std::vector<double>* out) -> absl::Status {
-    const io::JsonValue* v = root->Find(key);
+    const io::JsonValue* v = root.Find(key);
     if (v == nullptr) {
       return required
                  ? absl::InvalidArgumentError(absl::StrCat(source, ": missing key '", key, "'"))
@@ -39,7 +38,7 @@ absl::StatusOr<InertiaTruth> ParseTruthJson(const std::string& text, const std::
     return absl::OkStatus();
   };
   InertiaTruth truth;
-  const io::JsonValue* m = root->Find("mass");
+  const io::JsonValue* m = root.Find("mass");
   if (m == nullptr) return absl::InvalidArgumentError(absl::StrCat(source, ": missing key 'mass'"));
   if (!m->is_number() || !std::isfinite(m->number())) return key_error("mass", "expected a number");
   if (!(m->number() > 0)) return key_error("mass", "must be > 0");
@@ -56,9 +55,8 @@ absl::StatusOr<InertiaTruth> ParseTruthJson(const std::string& text, const std::
 }
 
 absl::StatusOr<InertiaTruth> ReadTruthJsonFile(const std::string& path) {
-  absl::StatusOr<std::string> text = io::ReadTextFile(path);
-  if (!text.ok()) return text.status();
-  return ParseTruthJson(*text, io::SourceName(path));
+  TF_ASSIGN_OR_RETURN(std::string text, io::ReadTextFile(path));
+  return ParseTruthJson(text, io::SourceName(path));
 }
 
 std::string TruthToJson(const InertiaTruth& t) {

@@ -1,4 +1,4 @@
-// Plans from earlier estimates (issue 28): a FitInertiaResponse and a
+// Plans from earlier estimates: a FitInertiaResponse and a
 // FrictionResponse fill a PlanRequest's object and friction together with
 // their uncertainty, so the plan holds for every value the estimates allow.
 #pragma once

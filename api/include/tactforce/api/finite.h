@@ -32,7 +32,7 @@ std::optional<std::string> FindNonFinite(const google::protobuf::Message& messag
 // OK, or Internal("<path>: nan in the answer (...)").
 absl::Status CheckFiniteAnswer(const google::protobuf::Message& response);
 // The same for Plan's answer without reflection (Plan is the control-rate
-// path: the walk costs ~2 us, this a few ns per field); the same paths and
+// path, where the reflection walk would dominate this check); the same paths and
 // message. tests/api/finite_test.cc checks it finds every double field the
 // walk finds, so a field added to PlanResponse cannot slip past it.
 absl::Status CheckFiniteAnswer(const v1::PlanResponse& response);
