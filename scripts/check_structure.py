@@ -166,6 +166,9 @@ def strip_code(text):
             j = n if j < 0 else j + len(end)
             out.append('""' + "\n" * text.count("\n", i, j))
             i = j
+        elif c == "'" and re.search(r"(?<![\w'])\d[\w']*$", text[max(0, i - 64):i]):
+            out.append(c)  # a digit separator (4'000'000), not a character literal
+            i += 1
         elif c in "\"'":
             j = i + 1
             while j < n and text[j] != c and text[j] != "\n":
