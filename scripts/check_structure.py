@@ -289,10 +289,6 @@ TEST_FOLDERS = {
     "sim": "sim", "audit": "audit", "experiment": "experiment", "api": "api",
     "server": "server", "cli": "client",
 }
-# The library folders a test may reach through their internal headers
-# (e.g. audit/src/audit_internal.h, client/remote_call.h).
-SUBJECT_FOLDERS = {lib: folder for folder, lib in FOLDERS}
-SUBJECT_FOLDERS["client"] = "client"
 # A test that drives a binary through its harness tests that binary's folder.
 BINARY_HARNESSES = [
     ("support/cli_fixture.h", "client"),  # the `tactforce` CLI
