@@ -27,6 +27,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -122,10 +123,8 @@ struct Args {
   bool no_tools = false, fg = true;
 };
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  Args a;
+// Fills `a` from the command line; false (after a message) on bad input.
+bool ParseArgs(int argc, char** argv, Args& a) {
   const char* src = std::getenv("TACTFORCE_SOURCE_DIR");
   a.tools = std::string(src ? src : ".") + "/../shared/data/inertia";
   for (int i = 1; i < argc; ++i) {
@@ -156,11 +155,49 @@ int main(int argc, char** argv) {
                    "usage: inertia_bench [--runs N] [--tool-runs N] [--duration S] [--tools DIR] "
                    "[--no-tools] "
                    "[--no-factor-graph] [--ablation-seeds N]\n");
-      return 2;
+      return false;
     }
   }
+  return true;
+}
 
-  // ---------------------------------------------------------------- 1
+// One row per method of section 1's table.
+void PrintForceNoiseRows(double var, const Stats (&st)[3]) {
+  const double ls_cpu = Mean(st[0].cpu);
+  for (int i = 0; i < 3; ++i) {
+    if (st[i].runs == 0) continue;
+    std::printf("| %s | %s | %s | %s | %s | %s | %d/%d | %s | %s |\n", Fmt(var).c_str(),
+                ToString(kMethods[i]), Fmt(Mean(st[i].paper)).c_str(), Riem(st[i]).c_str(),
+                Fmt(Mean(st[i].mass)).c_str(), Fmt(Mean(st[i].com_mm)).c_str(), st[i].consistent,
+                st[i].runs, Fmt(1e3 * Mean(st[i].cpu)).c_str(),
+                Fmt(Mean(st[i].cpu) / ls_cpu, "%.1f").c_str());
+  }
+}
+
+struct TargetRow {
+  double var, ratio;
+  bool consistent;
+};
+
+// Section 1's target table and the speed line.
+void PrintForceNoiseTargets(const std::vector<TargetRow>& targets, int samples,
+                            double cpu_constrained, double wall_constrained) {
+  std::printf(
+      "\nPaper Table I (best variant, for orientation): paper metric 0.39, 0.55, 1.26, 1.13, 1.05 "
+      "at "
+      "variances 0, 0.1, 0.25, 0.5, 1.0; baselines about 4-5.\n\n");
+  std::printf("Target (CONSTRAINED paper metric <= 1/5 of FACTOR_GRAPH's, 100 %% consistent):\n\n");
+  std::printf("| var (N^2) | CONSTRAINED / FACTOR_GRAPH | consistent | met |\n|---|---|---|---|\n");
+  for (const TargetRow& t : targets)
+    std::printf("| %s | %s | %s | %s |\n", Fmt(t.var).c_str(), Fmt(t.ratio).c_str(),
+                t.consistent ? "100 %" : "no", t.ratio <= 0.2 && t.consistent ? "yes" : "NO");
+  std::printf("\nSpeed: CONSTRAINED on %d samples: %s ms CPU (%s ms wall).\n\n", samples,
+              Fmt(1e3 * cpu_constrained).c_str(), Fmt(1e3 * wall_constrained).c_str());
+}
+
+// Section 1: seed-table1 in-hand over the paper's force-noise variances.
+// False if a simulation fails.
+bool ForceNoiseSection(const Args& a) {
   std::printf(
       "## seed-table1, in-hand (4 fingertips, planner forces), %.0f s at 100 Hz, %d runs per "
       "row\n\n",
@@ -174,10 +211,6 @@ int main(int argc, char** argv) {
       "| var (N^2) | method | paper metric | Riemannian | mass %% | CoM mm | consistent | CPU ms | "
       "x LS |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|\n");
-  struct TargetRow {
-    double var, ratio;
-    bool consistent;
-  };
   std::vector<TargetRow> targets;
   double cpu_constrained_1000 = 0, wall_constrained_1000 = 0;
   int samples_1000 = 0;
@@ -192,198 +225,207 @@ int main(int argc, char** argv) {
       if (!sim.ok()) {
         std::fprintf(stderr, "simulation failed: %s\n",
                      std::string(sim.status().message()).c_str());
-        return 1;
+        return false;
       }
       samples_1000 = static_cast<int>(sim->samples.samples.size());
       Run(sim->samples, sim->truth.params, Options(InertiaMethod::kConstrained, so.noise, true),
           EquivalentBoxSize(sim->truth.params), st, a.fg);
       std::fprintf(stderr, ".");
     }
-    const double ls_cpu = Mean(st[0].cpu);
-    for (int i = 0; i < 3; ++i) {
-      if (st[i].runs == 0) continue;
-      std::printf("| %s | %s | %s | %s | %s | %s | %d/%d | %s | %s |\n", Fmt(var).c_str(),
-                  ToString(kMethods[i]), Fmt(Mean(st[i].paper)).c_str(), Riem(st[i]).c_str(),
-                  Fmt(Mean(st[i].mass)).c_str(), Fmt(Mean(st[i].com_mm)).c_str(), st[i].consistent,
-                  st[i].runs, Fmt(1e3 * Mean(st[i].cpu)).c_str(),
-                  Fmt(Mean(st[i].cpu) / ls_cpu, "%.1f").c_str());
-    }
+    PrintForceNoiseRows(var, st);
     if (st[1].runs > 0 && st[2].runs > 0)
       targets.push_back(
           {var, Mean(st[2].paper) / Mean(st[1].paper), st[2].consistent == st[2].runs});
     cpu_constrained_1000 = Mean(st[2].cpu);
     wall_constrained_1000 = Mean(st[2].wall);
   }
+  PrintForceNoiseTargets(targets, samples_1000, cpu_constrained_1000, wall_constrained_1000);
+  return true;
+}
+
+// Section 1b: errors in forces and poses. False if a simulation fails.
+bool PoseNoiseSection(const Args& a) {
+  std::printf("## seed-table1, in-hand, errors in forces AND poses, %d runs per row\n\n",
+              a.tool_runs);
   std::printf(
-      "\nPaper Table I (best variant, for orientation): paper metric 0.39, 0.55, 1.26, 1.13, 1.05 "
-      "at "
-      "variances 0, 0.1, 0.25, 0.5, 1.0; baselines about 4-5.\n\n");
-  std::printf("Target (CONSTRAINED paper metric <= 1/5 of FACTOR_GRAPH's, 100 %% consistent):\n\n");
-  std::printf("| var (N^2) | CONSTRAINED / FACTOR_GRAPH | consistent | met |\n|---|---|---|---|\n");
-  for (const TargetRow& t : targets)
-    std::printf("| %s | %s | %s | %s |\n", Fmt(t.var).c_str(), Fmt(t.ratio).c_str(),
-                t.consistent ? "100 %" : "no", t.ratio <= 0.2 && t.consistent ? "yes" : "NO");
-  std::printf("\nSpeed: CONSTRAINED on %d samples: %s ms CPU (%s ms wall).\n\n", samples_1000,
-              Fmt(1e3 * cpu_constrained_1000).c_str(), Fmt(1e3 * wall_constrained_1000).c_str());
-
-  // ---------------------------------------------------------------- 1b
-  {
-    std::printf("## seed-table1, in-hand, errors in forces AND poses, %d runs per row\n\n",
-                a.tool_runs);
-    std::printf(
-        "Force variance 0.25 N^2 plus pose noise (position sigma, orientation sigma); the fits are "
-        "given the "
-        "noise levels (BASELINE_LS with and without Savitzky-Golay smoothing).\n\n");
-    std::printf(
-        "| pose noise | method | paper metric | Riemannian | mass %% | CoM mm | consistent | CPU "
-        "ms | x LS |\n");
-    std::printf("|---|---|---|---|---|---|---|---|---|\n");
-    for (const auto& [ps, rs] : {std::pair{1e-4, 1e-3}, std::pair{5e-4, 5e-3}}) {
-      Stats st[3], sg;
-      for (int r = 0; r < a.tool_runs; ++r) {
-        SimulationOptions so;
-        so.duration = a.duration;
-        so.noise.force_sigma = 0.5;
-        so.noise.position_sigma = ps;
-        so.noise.orientation_sigma = rs;
-        so.seed = 3000 + r;
-        absl::StatusOr<SimulationResult> sim = SimulateInertia(so);
-        if (!sim.ok()) return 1;
-        const InertiaOptions o = Options(InertiaMethod::kConstrained, so.noise, true);
-        Run(sim->samples, sim->truth.params, o, 0.0, st, a.fg);
-        InertiaOptions og = o;
-        og.method = InertiaMethod::kBaselineLs;
-        og.baseline_ls.savitzky_golay = true;
-        absl::StatusOr<InertiaFit> f = FitInertia(sim->samples, og);
-        if (f.ok()) sg.Add(CompareInertia(sim->truth.params, f->params), 0.0, *f);
-        std::fprintf(stderr, ".");
-      }
-      const double ls_cpu = Mean(st[0].cpu);
-      const std::string label = Fmt(ps * 1e3) + " mm, " + Fmt(rs * 1e3) + " mrad";
-      auto row = [&](const char* name, const Stats& x) {
-        std::printf("| %s | %s | %s | %s | %s | %s | %d/%d | %s | %s |\n", label.c_str(), name,
-                    Fmt(Mean(x.paper)).c_str(), Riem(x).c_str(), Fmt(Mean(x.mass)).c_str(),
-                    Fmt(Mean(x.com_mm)).c_str(), x.consistent, x.runs,
-                    Fmt(1e3 * Mean(x.cpu)).c_str(), Fmt(Mean(x.cpu) / ls_cpu, "%.1f").c_str());
-      };
-      row("baseline-ls", st[0]);
-      row("baseline-ls + SG 51", sg);
-      if (st[1].runs) row("factor-graph", st[1]);
-      row("constrained", st[2]);
-    }
-    std::printf("\n");
-  }
-
-  // ---------------------------------------------------------------- 2, 3
-  auto wrist_table = [&](const std::string& title, const std::vector<std::string>& names,
-                         const std::vector<InertiaSamples>& data,
-                         const std::vector<InertialParameters>& truths,
-                         const std::vector<Vec3>& gravities, int runs) {
-    std::printf("## %s, %d runs per row\n\n", title.c_str(), runs);
-    std::printf(
-        "Noise (Nadeau et al. 2023) on measured accelerations and the wrench; the fits are given "
-        "the noise "
-        "levels. CoM error in %% of the object's size (longest edge of the uniform box with the "
-        "same "
-        "inertia).\n\n");
-    std::printf(
-        "| level | object | method | mass %% | CoM %% size | Riemannian | paper metric | "
-        "consistent | CPU ms | "
-        "x LS |\n|---|---|---|---|---|---|---|---|---|---|\n");
-    bool all_met = true;
-    for (const char* level : {"low", "moderate", "high"}) {
-      const SimulationNoise noise = *NadeauNoise(level);
-      for (size_t j = 0; j < data.size(); ++j) {
-        Stats st[3];
-        const double size = EquivalentBoxSize(truths[j]);
-        for (int r = 0; r < runs; ++r) {
-          InertiaSamples s = data[j];
-          AddNoise(s, noise, 7000 + 31 * r + j);
-          InertiaOptions o = Options(InertiaMethod::kConstrained, noise, true);
-          o.gravity = gravities[j];
-          Run(s, truths[j], o, size, st, a.fg);
-          std::fprintf(stderr, ".");
-        }
-        const double ls_cpu = Mean(st[0].cpu);
-        for (int i = 0; i < 3; ++i) {
-          if (st[i].runs == 0) continue;
-          std::printf("| %s | %s | %s | %s | %s | %s | %s | %d/%d | %s | %s |\n", level,
-                      names[j].c_str(), ToString(kMethods[i]), Fmt(Mean(st[i].mass)).c_str(),
-                      Fmt(Mean(st[i].com_pct)).c_str(), Riem(st[i]).c_str(),
-                      Fmt(Mean(st[i].paper)).c_str(), st[i].consistent, st[i].runs,
-                      Fmt(1e3 * Mean(st[i].cpu)).c_str(),
-                      Fmt(Mean(st[i].cpu) / ls_cpu, "%.1f").c_str());
-        }
-        if (std::string(level) == "moderate") {
-          const Stats& c = st[2];
-          const bool met = Mean(c.mass) < 1.0 && Mean(c.com_pct) < 1.0 &&
-                           static_cast<int>(c.riem.size()) == c.runs && Mean(c.riem) < 0.5;
-          all_met = all_met && met;
-          std::printf(
-              "| | | *target (moderate): mass < 1 %%, CoM < 1 %%, Riemannian < 0.5* | | | | | | | "
-              "%s |\n",
-              met ? "met" : "NOT met");
-        }
-      }
-    }
-    std::printf("\n");
-    return all_met;
-  };
-
-  {
-    std::vector<std::string> names;
-    std::vector<InertiaSamples> data;
-    std::vector<InertialParameters> truths;
-    std::vector<Vec3> g;
-    for (const char* obj : {"seed-table1", "box"}) {
+      "Force variance 0.25 N^2 plus pose noise (position sigma, orientation sigma); the fits are "
+      "given the "
+      "noise levels (BASELINE_LS with and without Savitzky-Golay smoothing).\n\n");
+  std::printf(
+      "| pose noise | method | paper metric | Riemannian | mass %% | CoM mm | consistent | CPU "
+      "ms | x LS |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|\n");
+  for (const auto& [ps, rs] : {std::pair{1e-4, 1e-3}, std::pair{5e-4, 5e-3}}) {
+    Stats st[3], sg;
+    for (int r = 0; r < a.tool_runs; ++r) {
       SimulationOptions so;
-      so.object = obj;
-      so.mode = SimulationMode::kWristWrench;
       so.duration = a.duration;
-      so.write_kinematics = true;
+      so.noise.force_sigma = 0.5;
+      so.noise.position_sigma = ps;
+      so.noise.orientation_sigma = rs;
+      so.seed = 3000 + r;
       absl::StatusOr<SimulationResult> sim = SimulateInertia(so);
-      if (!sim.ok()) return 1;
-      names.push_back(obj);
-      data.push_back(sim->samples);
-      truths.push_back(sim->truth.params);
-      g.push_back(so.gravity);
+      if (!sim.ok()) return false;
+      const InertiaOptions o = Options(InertiaMethod::kConstrained, so.noise, true);
+      Run(sim->samples, sim->truth.params, o, 0.0, st, a.fg);
+      InertiaOptions og = o;
+      og.method = InertiaMethod::kBaselineLs;
+      og.baseline_ls.savitzky_golay = true;
+      absl::StatusOr<InertiaFit> f = FitInertia(sim->samples, og);
+      if (f.ok()) sg.Add(CompareInertia(sim->truth.params, f->params), 0.0, *f);
+      std::fprintf(stderr, ".");
     }
-    wrist_table("Wrist sensor, simulated (100 Hz, measured kinematics)", names, data, truths, g,
-                a.tool_runs);
+    const double ls_cpu = Mean(st[0].cpu);
+    const std::string label = Fmt(ps * 1e3) + " mm, " + Fmt(rs * 1e3) + " mrad";
+    auto row = [&](const char* name, const Stats& x) {
+      std::printf("| %s | %s | %s | %s | %s | %s | %d/%d | %s | %s |\n", label.c_str(), name,
+                  Fmt(Mean(x.paper)).c_str(), Riem(x).c_str(), Fmt(Mean(x.mass)).c_str(),
+                  Fmt(Mean(x.com_mm)).c_str(), x.consistent, x.runs, Fmt(1e3 * Mean(x.cpu)).c_str(),
+                  Fmt(Mean(x.cpu) / ls_cpu, "%.1f").c_str());
+    };
+    row("baseline-ls", st[0]);
+    row("baseline-ls + SG 51", sg);
+    if (st[1].runs) row("factor-graph", st[1]);
+    row("constrained", st[2]);
   }
+  std::printf("\n");
+  return true;
+}
+
+// The objects of a wrist-sensor table, one entry per object.
+struct WristData {
+  std::vector<std::string> names;
+  std::vector<InertiaSamples> data;
+  std::vector<InertialParameters> truths;
+  std::vector<Vec3> gravities;
+};
+
+// One noise level's rows for object j, with the target line at "moderate";
+// false if the target is not met.
+bool WristRows(const char* level, const WristData& w, size_t j, int runs, bool fg) {
+  const SimulationNoise noise = *NadeauNoise(level);
+  Stats st[3];
+  const double size = EquivalentBoxSize(w.truths[j]);
+  for (int r = 0; r < runs; ++r) {
+    InertiaSamples s = w.data[j];
+    AddNoise(s, noise, 7000 + 31 * r + j);
+    InertiaOptions o = Options(InertiaMethod::kConstrained, noise, true);
+    o.gravity = w.gravities[j];
+    Run(s, w.truths[j], o, size, st, fg);
+    std::fprintf(stderr, ".");
+  }
+  const double ls_cpu = Mean(st[0].cpu);
+  for (int i = 0; i < 3; ++i) {
+    if (st[i].runs == 0) continue;
+    std::printf("| %s | %s | %s | %s | %s | %s | %s | %d/%d | %s | %s |\n", level,
+                w.names[j].c_str(), ToString(kMethods[i]), Fmt(Mean(st[i].mass)).c_str(),
+                Fmt(Mean(st[i].com_pct)).c_str(), Riem(st[i]).c_str(),
+                Fmt(Mean(st[i].paper)).c_str(), st[i].consistent, st[i].runs,
+                Fmt(1e3 * Mean(st[i].cpu)).c_str(), Fmt(Mean(st[i].cpu) / ls_cpu, "%.1f").c_str());
+  }
+  if (std::string(level) != "moderate") return true;
+  const Stats& c = st[2];
+  const bool met = Mean(c.mass) < 1.0 && Mean(c.com_pct) < 1.0 &&
+                   static_cast<int>(c.riem.size()) == c.runs && Mean(c.riem) < 0.5;
+  std::printf(
+      "| | | *target (moderate): mass < 1 %%, CoM < 1 %%, Riemannian < 0.5* | | | | | | | "
+      "%s |\n",
+      met ? "met" : "NOT met");
+  return met;
+}
+
+// Sections 2 and 3: a wrist-sensor table over Nadeau et al.'s noise levels;
+// true if every moderate-level target is met.
+bool WristTable(const std::string& title, const WristData& w, int runs, bool fg) {
+  std::printf("## %s, %d runs per row\n\n", title.c_str(), runs);
+  std::printf(
+      "Noise (Nadeau et al. 2023) on measured accelerations and the wrench; the fits are given "
+      "the noise "
+      "levels. CoM error in %% of the object's size (longest edge of the uniform box with the "
+      "same "
+      "inertia).\n\n");
+  std::printf(
+      "| level | object | method | mass %% | CoM %% size | Riemannian | paper metric | "
+      "consistent | CPU ms | "
+      "x LS |\n|---|---|---|---|---|---|---|---|---|---|\n");
+  bool all_met = true;
+  for (const char* level : {"low", "moderate", "high"}) {
+    for (size_t j = 0; j < w.data.size(); ++j)
+      all_met = WristRows(level, w, j, runs, fg) && all_met;
+  }
+  std::printf("\n");
+  return all_met;
+}
+
+// Section 2's objects, simulated with measured kinematics; nullopt if a
+// simulation fails.
+std::optional<WristData> SimulatedWristData(const Args& a) {
+  WristData w;
+  for (const char* obj : {"seed-table1", "box"}) {
+    SimulationOptions so;
+    so.object = obj;
+    so.mode = SimulationMode::kWristWrench;
+    so.duration = a.duration;
+    so.write_kinematics = true;
+    absl::StatusOr<SimulationResult> sim = SimulateInertia(so);
+    if (!sim.ok()) return std::nullopt;
+    w.names.push_back(obj);
+    w.data.push_back(sim->samples);
+    w.truths.push_back(sim->truth.params);
+    w.gravities.push_back(so.gravity);
+  }
+  return w;
+}
+
+// Section 3's shared workshop tools; empty (after a note) if one is unreadable.
+WristData SharedToolData(const Args& a) {
+  WristData w;
+  for (const char* tool : {"Hammer", "Screwdriver", "Pliers", "Ruler", "C_Clamp"}) {
+    absl::StatusOr<InertiaSamples> s = ReadInertiaCsvFile(a.tools + "/" + tool + ".csv");
+    absl::StatusOr<InertiaTruth> t = ReadTruthJsonFile(a.tools + "/" + tool + ".truth.json");
+    if (!s.ok() || !t.ok()) {
+      std::printf("## Shared workshop tools: skipped (%s not readable)\n\n", a.tools.c_str());
+      return WristData{};
+    }
+    w.names.push_back(tool);
+    w.data.push_back(*s);
+    w.truths.push_back(t->params);
+    w.gravities.push_back(t->gravity_world.value_or(Vec3(0, 0, -9.81)));
+  }
+  return w;
+}
+
+// Section 4: the paper's ablation. False if it fails.
+bool AblationSection(const Args& a) {
+  tactforce::experiment::AblationConfig c;
+  c.seeds = a.ablation_seeds;
+  c.duration = a.duration;
+  absl::StatusOr<tactforce::experiment::AblationTable> t = tactforce::experiment::RunAblation(c);
+  if (!t.ok()) {
+    std::fprintf(stderr, "ablation failed: %s\n", std::string(t.status().message()).c_str());
+    return false;
+  }
+  std::printf("%s\n", tactforce::experiment::AblationMarkdown(*t).c_str());
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Args a;
+  if (!ParseArgs(argc, argv, a)) return 2;
+  if (!ForceNoiseSection(a) || !PoseNoiseSection(a)) return 1;
+  const std::optional<WristData> simulated = SimulatedWristData(a);
+  if (!simulated) return 1;
+  WristTable("Wrist sensor, simulated (100 Hz, measured kinematics)", *simulated, a.tool_runs,
+             a.fg);
   if (!a.no_tools) {
-    std::vector<std::string> names;
-    std::vector<InertiaSamples> data;
-    std::vector<InertialParameters> truths;
-    std::vector<Vec3> g;
-    for (const char* tool : {"Hammer", "Screwdriver", "Pliers", "Ruler", "C_Clamp"}) {
-      absl::StatusOr<InertiaSamples> s = ReadInertiaCsvFile(a.tools + "/" + tool + ".csv");
-      absl::StatusOr<InertiaTruth> t = ReadTruthJsonFile(a.tools + "/" + tool + ".truth.json");
-      if (!s.ok() || !t.ok()) {
-        std::printf("## Shared workshop tools: skipped (%s not readable)\n\n", a.tools.c_str());
-        names.clear();
-        break;
-      }
-      names.push_back(tool);
-      data.push_back(*s);
-      truths.push_back(t->params);
-      g.push_back(t->gravity_world.value_or(Vec3(0, 0, -9.81)));
-    }
-    if (!names.empty())
-      wrist_table("Wrist sensor, shared workshop tools (Nadeau et al. 2023 simulation, 100 Hz)",
-                  names, data, truths, g, a.tool_runs);
+    const WristData tools = SharedToolData(a);
+    if (!tools.names.empty())
+      WristTable("Wrist sensor, shared workshop tools (Nadeau et al. 2023 simulation, 100 Hz)",
+                 tools, a.tool_runs, a.fg);
   }
-  if (a.ablation_seeds > 0) {
-    tactforce::experiment::AblationConfig c;
-    c.seeds = a.ablation_seeds;
-    c.duration = a.duration;
-    absl::StatusOr<tactforce::experiment::AblationTable> t = tactforce::experiment::RunAblation(c);
-    if (!t.ok()) {
-      std::fprintf(stderr, "ablation failed: %s\n", std::string(t.status().message()).c_str());
-      return 1;
-    }
-    std::printf("%s\n", tactforce::experiment::AblationMarkdown(*t).c_str());
-  }
+  if (a.ablation_seeds > 0 && !AblationSection(a)) return 1;
   std::fprintf(stderr, "\n");
   return 0;
 }

@@ -186,36 +186,43 @@ void ToolTable(const std::vector<Tool>& tools, const std::string& level, int see
   std::printf("\n");
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+struct Args {
   int seeds = 5;
-  const char* src = std::getenv("TACTFORCE_SOURCE_DIR");
-  std::string dir = std::string(src ? src : ".") + "/../shared/data/inertia";
+  std::string dir;
   std::vector<std::string> levels = {"low", "moderate", "high"};
   bool speed = true, in_hand = true;
+};
+
+// Fills `a` from the command line; false (after the usage line) on bad input.
+bool ParseArgs(int argc, char** argv, Args& a) {
+  const char* src = std::getenv("TACTFORCE_SOURCE_DIR");
+  a.dir = std::string(src ? src : ".") + "/../shared/data/inertia";
   for (int i = 1; i < argc; ++i) {
     const std::string k = argv[i];
     auto next = [&]() { return i + 1 < argc ? argv[++i] : ""; };
     if (k == "--seeds")
-      seeds = std::max(1, std::atoi(next()));
+      a.seeds = std::max(1, std::atoi(next()));
     else if (k == "--tools")
-      dir = next();
+      a.dir = next();
     else if (k == "--levels")
-      levels = absl::StrSplit(next(), ',');
+      a.levels = absl::StrSplit(next(), ',');
     else if (k == "--no-speed")
-      speed = false;
+      a.speed = false;
     else if (k == "--no-in-hand")
-      in_hand = false;
+      a.in_hand = false;
     else {
       std::fprintf(
           stderr,
           "usage: inertia_mesh_bench [--seeds N] [--tools DIR] [--levels low,moderate,high] "
           "[--no-speed] [--no-in-hand]\n");
-      return 2;
+      return false;
     }
   }
+  return true;
+}
 
+// The shared tools with their meshes; empty (after a note) if one is unreadable.
+std::vector<Tool> LoadTools(const std::string& dir) {
   std::vector<Tool> tools;
   for (const char* name : {"Hammer", "Screwdriver", "Pliers", "Ruler", "C_Clamp"}) {
     Tool t;
@@ -229,8 +236,7 @@ int main(int argc, char** argv) {
                                                                              : mesh.status())
                                                                   .message())
                                                       .c_str());
-      tools.clear();
-      break;
+      return {};
     }
     t.samples = *s;
     t.truth = truth->params;
@@ -240,112 +246,132 @@ int main(int argc, char** argv) {
     t.mesh_name = mesh->name;
     tools.push_back(std::move(t));
   }
+  return tools;
+}
+
+// Section 2: in-hand data of the built-in objects with their box meshes.
+// False if a simulation fails.
+bool InHandSection(int seeds) {
+  std::printf(
+      "## 2. In-hand data (4 fingertips, planner forces, force variance 0.1 N^2), built-in "
+      "objects with "
+      "their box meshes, %d seeds\n\n",
+      seeds);
+  std::printf(
+      "| object | method | Riemannian | mass %% | CoM mm | consistent | realizable | "
+      "contradicted | CPU ms |\n"
+      "|---|---|---|---|---|---|---|---|---|\n");
+  for (const char* object : {"seed-table1", "box"}) {
+    Cell cells[kNumVariants];
+    for (int seed = 0; seed < seeds; ++seed) {
+      SimulationOptions so;
+      so.object = object;
+      so.mode = SimulationMode::kInHand;
+      so.noise.force_sigma = std::sqrt(0.1);
+      so.seed = 500 + seed;
+      absl::StatusOr<SimulationResult> sim = SimulateInertia(so);
+      if (!sim.ok()) {
+        std::fprintf(stderr, "%s\n", std::string(sim.status().message()).c_str());
+        return false;
+      }
+      auto mesh = std::make_shared<const io::TriangleMesh>(sim->object.mesh);
+      InertiaOptions o;
+      o.noise.force_sigma = so.noise.force_sigma;
+      for (int v : {1, 2, 3})
+        FitInto(sim->samples, sim->truth.params, o, kVariants[v], mesh, "box mesh", &cells[v]);
+      std::fprintf(stderr, ".");
+    }
+    for (int v : {1, 2, 3}) {
+      const Cell& c = cells[v];
+      std::printf("| %s | %s | %s | %s | %s | %d/%d | %d/%d | %d | %s |\n", object,
+                  kVariants[v].name, Fmt(Median(c.riem)).c_str(), Fmt(Median(c.mass)).c_str(),
+                  Fmt(Median(c.com_mm)).c_str(), c.consistent, c.runs, c.realizable, c.runs,
+                  c.contradicted, Fmt(1e3 * Median(c.cpu)).c_str());
+    }
+  }
+  std::printf("\n");
+  return true;
+}
+
+// CPU seconds (median of 3) of loading a tool's mesh, building its regions
+// and a DENSITY fit of 1,000 samples, and the number of regions built.
+struct Timing {
+  double load = 0, build = 0, fit = 0;
+  int regions = 0;
+};
+
+Timing TimeOne(const std::string& dir, const Tool& t, const RegionOptions& ro) {
+  const SimulationNoise noise = *NadeauNoise("moderate");
+  std::vector<double> l, b, f;
+  Timing timing;
+  for (int rep = 0; rep < 3; ++rep) {
+    double c0 = CpuSeconds();
+    absl::StatusOr<io::LoadedMesh> m = io::LoadMesh({dir + "/" + t.name + ".mesh.json"});
+    double c1 = CpuSeconds();
+    absl::StatusOr<RegionModel> r = BuildRegions(m->mesh, ro, m->name);
+    double c2 = CpuSeconds();
+    InertiaSamples s = t.samples;
+    AddNoise(s, noise, 99);
+    InertiaOptions o = NoisyOptions(noise);
+    o.gravity = t.gravity;
+    o.method = InertiaMethod::kDensity;
+    o.mesh = std::make_shared<const io::TriangleMesh>(m->mesh);
+    o.mesh_name = m->name;
+    o.density.regions = ro;
+    absl::StatusOr<InertiaFit> fit = FitInertia(s, o);
+    double c3 = CpuSeconds();
+    l.push_back(c1 - c0), b.push_back(c2 - c1), f.push_back(c3 - c2);
+    timing.regions = r.ok() ? static_cast<int>(r->regions.size()) : 0;
+    if (!fit.ok()) std::fprintf(stderr, "%s\n", std::string(fit.status().message()).c_str());
+  }
+  timing.load = Median(l), timing.build = Median(b), timing.fit = Median(f);
+  return timing;
+}
+
+// Section 3: speed per tool mesh, and the growth with the number of regions.
+void SpeedSection(const std::string& dir, const std::vector<Tool>& tools) {
+  std::printf(
+      "## 3. Speed: load the mesh + build the regions + fit 1,000 samples (DENSITY, 'moderate' "
+      "noise; "
+      "CPU ms, median of 3)\n\n");
+  std::printf(
+      "| mesh | faces | regions | load | regions | fit (incl. regions) | total "
+      "|\n|---|---|---|---|---|---|---|\n");
+  for (const Tool& t : tools) {
+    RegionOptions grid;
+    grid.scheme = RegionScheme::kGrid;
+    const Timing m = TimeOne(dir, t, grid);
+    std::printf("| %s | %d | %d grid | %s | %s | %s | %s |\n", t.mesh_name.c_str(), t.faces,
+                m.regions, Fmt(1e3 * m.load).c_str(), Fmt(1e3 * m.build).c_str(),
+                Fmt(1e3 * m.fit).c_str(), Fmt(1e3 * (m.load + m.fit)).c_str());
+  }
+  std::printf(
+      "\nGrowth with the number of regions (Hammer.ply):\n\n| target regions | regions | regions "
+      "ms | "
+      "fit ms (incl. regions) |\n|---|---|---|---|\n");
+  for (int target : {4, 8, 16, 32, 64, kMaxTargetRegions}) {
+    RegionOptions grid;
+    grid.scheme = RegionScheme::kGrid;
+    grid.target_regions = target;
+    const Timing m = TimeOne(dir, tools[0], grid);
+    std::printf("| %d | %d | %s | %s |\n", target, m.regions, Fmt(1e3 * m.build).c_str(),
+                Fmt(1e3 * m.fit).c_str());
+  }
+  std::printf("\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Args a;
+  if (!ParseArgs(argc, argv, a)) return 2;
+  const std::vector<Tool> tools = LoadTools(a.dir);
   if (!tools.empty()) {
     std::printf("## 1. Shared workshop tools with their meshes\n\n");
-    for (const std::string& level : levels) ToolTable(tools, level, seeds);
+    for (const std::string& level : a.levels) ToolTable(tools, level, a.seeds);
   }
-
-  if (in_hand) {
-    std::printf(
-        "## 2. In-hand data (4 fingertips, planner forces, force variance 0.1 N^2), built-in "
-        "objects with "
-        "their box meshes, %d seeds\n\n",
-        seeds);
-    std::printf(
-        "| object | method | Riemannian | mass %% | CoM mm | consistent | realizable | "
-        "contradicted | CPU ms |\n"
-        "|---|---|---|---|---|---|---|---|---|\n");
-    for (const char* object : {"seed-table1", "box"}) {
-      Cell cells[kNumVariants];
-      for (int seed = 0; seed < seeds; ++seed) {
-        SimulationOptions so;
-        so.object = object;
-        so.mode = SimulationMode::kInHand;
-        so.noise.force_sigma = std::sqrt(0.1);
-        so.seed = 500 + seed;
-        absl::StatusOr<SimulationResult> sim = SimulateInertia(so);
-        if (!sim.ok()) {
-          std::fprintf(stderr, "%s\n", std::string(sim.status().message()).c_str());
-          return 1;
-        }
-        auto mesh = std::make_shared<const io::TriangleMesh>(sim->object.mesh);
-        InertiaOptions o;
-        o.noise.force_sigma = so.noise.force_sigma;
-        for (int v : {1, 2, 3})
-          FitInto(sim->samples, sim->truth.params, o, kVariants[v], mesh, "box mesh", &cells[v]);
-        std::fprintf(stderr, ".");
-      }
-      for (int v : {1, 2, 3}) {
-        const Cell& c = cells[v];
-        std::printf("| %s | %s | %s | %s | %s | %d/%d | %d/%d | %d | %s |\n", object,
-                    kVariants[v].name, Fmt(Median(c.riem)).c_str(), Fmt(Median(c.mass)).c_str(),
-                    Fmt(Median(c.com_mm)).c_str(), c.consistent, c.runs, c.realizable, c.runs,
-                    c.contradicted, Fmt(1e3 * Median(c.cpu)).c_str());
-      }
-    }
-    std::printf("\n");
-  }
-
-  if (speed && !tools.empty()) {
-    std::printf(
-        "## 3. Speed: load the mesh + build the regions + fit 1,000 samples (DENSITY, 'moderate' "
-        "noise; "
-        "CPU ms, median of 3)\n\n");
-    std::printf(
-        "| mesh | faces | regions | load | regions | fit (incl. regions) | total "
-        "|\n|---|---|---|---|---|---|---|\n");
-    const SimulationNoise noise = *NadeauNoise("moderate");
-    auto time_one = [&](const Tool& t, RegionOptions ro, double* load, double* build, double* fit,
-                        int* k) {
-      std::vector<double> l, b, f;
-      for (int rep = 0; rep < 3; ++rep) {
-        double c0 = CpuSeconds();
-        absl::StatusOr<io::LoadedMesh> m = io::LoadMesh({dir + "/" + t.name + ".mesh.json"});
-        double c1 = CpuSeconds();
-        absl::StatusOr<RegionModel> r = BuildRegions(m->mesh, ro, m->name);
-        double c2 = CpuSeconds();
-        InertiaSamples s = t.samples;
-        AddNoise(s, noise, 99);
-        InertiaOptions o = NoisyOptions(noise);
-        o.gravity = t.gravity;
-        o.method = InertiaMethod::kDensity;
-        o.mesh = std::make_shared<const io::TriangleMesh>(m->mesh);
-        o.mesh_name = m->name;
-        o.density.regions = ro;
-        absl::StatusOr<InertiaFit> fit = FitInertia(s, o);
-        double c3 = CpuSeconds();
-        l.push_back(c1 - c0), b.push_back(c2 - c1), f.push_back(c3 - c2);
-        *k = r.ok() ? static_cast<int>(r->regions.size()) : 0;
-        if (!fit.ok()) std::fprintf(stderr, "%s\n", std::string(fit.status().message()).c_str());
-      }
-      *load = Median(l), *build = Median(b), *fit = Median(f);
-    };
-    for (const Tool& t : tools) {
-      double load, build, fit;
-      int k;
-      RegionOptions grid;
-      grid.scheme = RegionScheme::kGrid;
-      time_one(t, grid, &load, &build, &fit, &k);
-      std::printf("| %s | %d | %d grid | %s | %s | %s | %s |\n", t.mesh_name.c_str(), t.faces, k,
-                  Fmt(1e3 * load).c_str(), Fmt(1e3 * build).c_str(), Fmt(1e3 * fit).c_str(),
-                  Fmt(1e3 * (load + fit)).c_str());
-    }
-    std::printf(
-        "\nGrowth with the number of regions (Hammer.ply):\n\n| target regions | regions | regions "
-        "ms | "
-        "fit ms (incl. regions) |\n|---|---|---|---|\n");
-    for (int target : {4, 8, 16, 32, 64, kMaxTargetRegions}) {
-      double load, build, fit;
-      int k;
-      RegionOptions grid;
-      grid.scheme = RegionScheme::kGrid;
-      grid.target_regions = target;
-      time_one(tools[0], grid, &load, &build, &fit, &k);
-      std::printf("| %d | %d | %s | %s |\n", target, k, Fmt(1e3 * build).c_str(),
-                  Fmt(1e3 * fit).c_str());
-    }
-    std::printf("\n");
-  }
+  if (a.in_hand && !InHandSection(a.seeds)) return 1;
+  if (a.speed && !tools.empty()) SpeedSection(a.dir, tools);
   std::fprintf(stderr, "\n");
   return 0;
 }

@@ -20,6 +20,7 @@ PACKAGES=(
   libmujoco-dev
   libassimp-dev libqhull-dev nlohmann-json3-dev
   clang libclang-rt-14-dev   # scripts/fuzz.sh: libFuzzer (libclang_rt.fuzzer), ASan, UBSan
+  clang-format              # scripts/check_structure.py (ctest structure_check): every .h/.cc formatted
 )
 
 missing=()

@@ -56,8 +56,10 @@ StreamLimits ServerConfig::ToStreamLimits() const {
   return limits;
 }
 
-void RegisterFlags(CLI::App& app, ServerConfig* c) {
-  app.option_defaults()->always_capture_default();
+namespace {
+
+// Where to listen and how many threads serve.
+void RegisterListenAndWorkerFlags(CLI::App& app, ServerConfig* c) {
   app.add_option("--listen", c->listen,
                  "Address to listen on, host:port. Port 0 picks a free port; the bound "
                  "address is printed on stdout as 'tactforce-server listening on HOST:PORT'. "
@@ -96,6 +98,10 @@ void RegisterFlags(CLI::App& app, ServerConfig* c) {
                  "Solves that may wait for a worker; beyond that requests fail with "
                  "RESOURCE_EXHAUSTED")
       ->check(CLI::Range(0, 1'000'000));
+}
+
+// The limits of one call.
+void RegisterCallLimitFlags(CLI::App& app, ServerConfig* c) {
   app.add_option("--max-message-bytes", c->limits.max_response_bytes,
                  "Largest request or response message; bigger ones fail with RESOURCE_EXHAUSTED")
       ->check(CLI::Range(int64_t{1024}, int64_t{1} << 30));
@@ -124,6 +130,10 @@ void RegisterFlags(CLI::App& app, ServerConfig* c) {
          "--max-audit-samples", c->limits.max_audit_samples,
          "Most samples one AuditModel request may carry (INVALID_ARGUMENT 'samples: ...' beyond)")
       ->check(CLI::Range(int64_t{40}, int64_t{100'000'000}));
+}
+
+// Limits of the streams, all together and per connection.
+void RegisterStreamFlags(CLI::App& app, ServerConfig* c) {
   app.add_option("--max-streams", c->max_streams,
                  "Most PlanStream and FitInertia streams open at once on this server; a new one "
                  "beyond ends at once with RESOURCE_EXHAUSTED (0 = no limit)")
@@ -155,6 +165,10 @@ void RegisterFlags(CLI::App& app, ServerConfig* c) {
                  "Calls one client connection may have in flight at once (HTTP/2 "
                  "SETTINGS_MAX_CONCURRENT_STREAMS); further calls wait in the client")
       ->check(CLI::Range(1, 1'000'000));
+}
+
+// Reflection, inline solves, TLS, logging and the drain.
+void RegisterServiceFlags(CLI::App& app, ServerConfig* c) {
   app.add_flag("--reflection,!--no-reflection", c->reflection,
                "Serve gRPC server reflection (grpc.reflection.v1alpha), which lets tools such as "
                "grpcurl list and describe the services; --reflection=false or --no-reflection "
@@ -184,6 +198,16 @@ void RegisterFlags(CLI::App& app, ServerConfig* c) {
                  "included) are refused with UNAVAILABLE and in-flight calls get this long to "
                  "finish before they are cancelled")
       ->check(CLI::Range(0, 3'600'000));
+}
+
+}  // namespace
+
+void RegisterFlags(CLI::App& app, ServerConfig* c) {
+  app.option_defaults()->always_capture_default();
+  RegisterListenAndWorkerFlags(app, c);
+  RegisterCallLimitFlags(app, c);
+  RegisterStreamFlags(app, c);
+  RegisterServiceFlags(app, c);
 }
 
 }  // namespace tactforce::server

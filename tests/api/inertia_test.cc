@@ -212,6 +212,98 @@ inertia::SimulationResult SimulatedBox() {
   return *r;
 }
 
+// DENSITY's options (a mesh, regions, truth, gravity set) convert to the
+// library's, and the replaced contradiction_ratio is refused by name.
+void ExpectDensityOptionsConvertOrAreRefusedByName(v1::InertiaFitOptions options) {
+  absl::StatusOr<inertia::InertiaOptions> converted = InertiaOptionsFromProto(options);
+  ASSERT_TRUE(converted.ok()) << converted.status();
+  EXPECT_EQ(converted->method, inertia::InertiaMethod::kDensity);
+  EXPECT_EQ(converted->mesh_name, "box.obj");
+  EXPECT_EQ(converted->density.regions.scheme, inertia::RegionScheme::kGrid);
+  EXPECT_EQ(converted->density.regions.target_regions, 8);
+  EXPECT_LT(converted->density.regularization, 0);  // automatic
+  options.set_density_regularization(0.5);
+  options.set_mesh_prior_weight(2.0);
+  options.set_mesh_tolerance(0.05);
+  converted = InertiaOptionsFromProto(options);
+  ASSERT_TRUE(converted.ok()) << converted.status();
+  EXPECT_EQ(converted->density.regularization, 0.5);
+  EXPECT_EQ(converted->constrained.mesh_prior_weight, 2.0);
+  EXPECT_EQ(converted->density.mesh_tolerance, 0.05);
+  options.clear_mesh_tolerance();
+  // The replaced ratio: 0 still disables the mesh test, any other value is refused by name.
+  options.set_contradiction_ratio(0.0);
+  converted = InertiaOptionsFromProto(options);
+  ASSERT_TRUE(converted.ok()) << converted.status();
+  EXPECT_EQ(converted->density.mesh_tolerance, 0.0);
+  options.set_contradiction_ratio(1.2);
+  converted = InertiaOptionsFromProto(options);
+  ASSERT_FALSE(converted.ok());
+  EXPECT_EQ(converted.status().code(), absl::StatusCode::kInvalidArgument);
+  const std::string refused(converted.status().message());
+  EXPECT_NE(refused.find("options.contradiction_ratio"), std::string::npos) << refused;
+  EXPECT_NE(refused.find("mesh_tolerance"), std::string::npos) << refused;
+  options.set_mesh_tolerance(-1);
+  options.clear_contradiction_ratio();
+  const std::string negative(InertiaOptionsFromProto(options).status().message());
+  EXPECT_NE(negative.find("mesh_tolerance"), std::string::npos) << negative;
+  options.clear_density_regularization();
+  options.clear_mesh_prior_weight();
+  options.clear_mesh_tolerance();
+}
+
+// The DENSITY fit of the noise-free box fills every new response field, the
+// same as the library's fit.
+void ExpectTheBoxsDensityFit(const v1::FitInertiaResponse& r,
+                             const inertia::InertiaFit& library_fit, const io::TriangleMesh& box) {
+  EXPECT_EQ(r.method(), v1::INERTIA_METHOD_DENSITY);
+  EXPECT_TRUE(r.density_realizable());
+  EXPECT_FALSE(r.mesh_contradicted());
+  EXPECT_TRUE(r.mesh_contradiction().empty());
+  EXPECT_EQ(r.region_scheme(), v1::REGION_SCHEME_GRID);
+  ASSERT_GE(r.densities_size(), 2);
+  ASSERT_EQ(static_cast<size_t>(r.densities_size()), library_fit.densities.size());
+  ASSERT_NE(library_fit.region_model, nullptr);  // handed out for plots
+  double volume = 0;
+  for (int i = 0; i < r.densities_size(); ++i) {
+    EXPECT_EQ(r.densities(i).label(), library_fit.densities[i].label);
+    EXPECT_EQ(r.densities(i).density(), library_fit.densities[i].density);
+    EXPECT_GE(r.densities(i).density(), 0.0);
+    EXPECT_GT(r.densities(i).volume(), 0.0);
+    volume += r.densities(i).volume();
+  }
+  ASSERT_TRUE(r.has_mesh_check());
+  EXPECT_TRUE(r.mesh_check().closed());
+  EXPECT_TRUE(r.mesh_check().consistently_oriented());
+  EXPECT_EQ(r.mesh_check().faces(), 12);
+  EXPECT_EQ(r.mesh_check().vertices(), 8);
+  EXPECT_EQ(r.mesh_check().boundary_edges(), 0);
+  EXPECT_NEAR(r.mesh_check().volume(), volume, 1e-9 * volume);
+  EXPECT_NEAR(r.mesh_check().volume(), inertia::MeshMoments(box).volume, 1e-6 * volume);
+  EXPECT_GE(r.density_regularization(), 0.0);
+  EXPECT_FALSE(r.density_regularization_rule().empty());
+  EXPECT_GT(r.heldout_residual_ratio(), 0.0);
+  // Noise-free data of a uniform box: the truth.
+  ASSERT_TRUE(r.has_errors());
+  EXPECT_LT(r.errors().mass_percent(), 0.01);
+  EXPECT_LT(r.errors().riemannian(), 0.02);
+}
+
+void ExpectTheFitRoundTripsThroughTheLibraryType(const v1::FitInertiaResponse& r) {
+  const inertia::InertiaFit back = InertiaFitFromProto(r);
+  EXPECT_EQ(back.method, inertia::InertiaMethod::kDensity);
+  EXPECT_TRUE(back.density_realizable);
+  ASSERT_TRUE(back.mesh_check.has_value());
+  EXPECT_EQ(back.mesh_check->faces, 12);
+  EXPECT_NE(inertia::DescribeFit(back).find("density-realizable: yes"), std::string::npos);
+  const v1::FitInertiaResponse again = InertiaFitToProto(back);
+  EXPECT_EQ(again.densities_size(), r.densities_size());
+  EXPECT_EQ(again.densities(0).standard_error(), r.densities(0).standard_error());
+  EXPECT_EQ(again.density_regularization_rule(), r.density_regularization_rule());
+  EXPECT_EQ(again.heldout_residual_ratio(), r.heldout_residual_ratio());
+  EXPECT_EQ(again.mesh_check().volume(), r.mesh_check().volume());
+}
+
 // The mesh bytes, read and placed as the server does, give back the
 // object-frame box (float precision of the file reader), and a DENSITY fit
 // with it fills every new response field and round-trips through the
@@ -250,90 +342,15 @@ TEST(InertiaMeshInput, PlacedCadMeshGivesTheObjectFrameBoxAndADensityFit) {
   options.set_target_regions(8);
   *options.mutable_truth() = InertialParametersToProto(sim.truth.params);
   *options.mutable_gravity() = ToProto(*sim.truth.gravity_world);
-  absl::StatusOr<inertia::InertiaOptions> converted = InertiaOptionsFromProto(options);
-  ASSERT_TRUE(converted.ok()) << converted.status();
-  EXPECT_EQ(converted->method, inertia::InertiaMethod::kDensity);
-  EXPECT_EQ(converted->mesh_name, "box.obj");
-  EXPECT_EQ(converted->density.regions.scheme, inertia::RegionScheme::kGrid);
-  EXPECT_EQ(converted->density.regions.target_regions, 8);
-  EXPECT_LT(converted->density.regularization, 0);  // automatic
-  options.set_density_regularization(0.5);
-  options.set_mesh_prior_weight(2.0);
-  options.set_mesh_tolerance(0.05);
-  converted = InertiaOptionsFromProto(options);
-  ASSERT_TRUE(converted.ok()) << converted.status();
-  EXPECT_EQ(converted->density.regularization, 0.5);
-  EXPECT_EQ(converted->constrained.mesh_prior_weight, 2.0);
-  EXPECT_EQ(converted->density.mesh_tolerance, 0.05);
-  options.clear_mesh_tolerance();
-  // The replaced ratio: 0 still disables the mesh test, any other value is refused by name.
-  options.set_contradiction_ratio(0.0);
-  converted = InertiaOptionsFromProto(options);
-  ASSERT_TRUE(converted.ok()) << converted.status();
-  EXPECT_EQ(converted->density.mesh_tolerance, 0.0);
-  options.set_contradiction_ratio(1.2);
-  converted = InertiaOptionsFromProto(options);
-  ASSERT_FALSE(converted.ok());
-  EXPECT_EQ(converted.status().code(), absl::StatusCode::kInvalidArgument);
-  const std::string refused(converted.status().message());
-  EXPECT_NE(refused.find("options.contradiction_ratio"), std::string::npos) << refused;
-  EXPECT_NE(refused.find("mesh_tolerance"), std::string::npos) << refused;
-  options.set_mesh_tolerance(-1);
-  options.clear_contradiction_ratio();
-  const std::string negative(InertiaOptionsFromProto(options).status().message());
-  EXPECT_NE(negative.find("mesh_tolerance"), std::string::npos) << negative;
-  options.clear_density_regularization();
-  options.clear_mesh_prior_weight();
-  options.clear_mesh_tolerance();
+  ASSERT_NO_FATAL_FAILURE(ExpectDensityOptionsConvertOrAreRefusedByName(options));
 
   inertia::InertiaFit library_fit;
   absl::StatusOr<v1::FitInertiaResponse> r =
       FitInertiaSamples(sim.samples, options, {}, {}, &library_fit);
   ASSERT_TRUE(r.ok()) << r.status();
-  EXPECT_EQ(r->method(), v1::INERTIA_METHOD_DENSITY);
-  EXPECT_TRUE(r->density_realizable());
-  EXPECT_FALSE(r->mesh_contradicted());
-  EXPECT_TRUE(r->mesh_contradiction().empty());
-  EXPECT_EQ(r->region_scheme(), v1::REGION_SCHEME_GRID);
-  ASSERT_GE(r->densities_size(), 2);
-  ASSERT_EQ(static_cast<size_t>(r->densities_size()), library_fit.densities.size());
-  ASSERT_NE(library_fit.region_model, nullptr);  // handed out for plots
-  double volume = 0;
-  for (int i = 0; i < r->densities_size(); ++i) {
-    EXPECT_EQ(r->densities(i).label(), library_fit.densities[i].label);
-    EXPECT_EQ(r->densities(i).density(), library_fit.densities[i].density);
-    EXPECT_GE(r->densities(i).density(), 0.0);
-    EXPECT_GT(r->densities(i).volume(), 0.0);
-    volume += r->densities(i).volume();
-  }
-  ASSERT_TRUE(r->has_mesh_check());
-  EXPECT_TRUE(r->mesh_check().closed());
-  EXPECT_TRUE(r->mesh_check().consistently_oriented());
-  EXPECT_EQ(r->mesh_check().faces(), 12);
-  EXPECT_EQ(r->mesh_check().vertices(), 8);
-  EXPECT_EQ(r->mesh_check().boundary_edges(), 0);
-  EXPECT_NEAR(r->mesh_check().volume(), volume, 1e-9 * volume);
-  EXPECT_NEAR(r->mesh_check().volume(), inertia::MeshMoments(box).volume, 1e-6 * volume);
-  EXPECT_GE(r->density_regularization(), 0.0);
-  EXPECT_FALSE(r->density_regularization_rule().empty());
-  EXPECT_GT(r->heldout_residual_ratio(), 0.0);
-  // Noise-free data of a uniform box: the truth.
-  ASSERT_TRUE(r->has_errors());
-  EXPECT_LT(r->errors().mass_percent(), 0.01);
-  EXPECT_LT(r->errors().riemannian(), 0.02);
+  ASSERT_NO_FATAL_FAILURE(ExpectTheBoxsDensityFit(*r, library_fit, box));
 
-  const inertia::InertiaFit back = InertiaFitFromProto(*r);
-  EXPECT_EQ(back.method, inertia::InertiaMethod::kDensity);
-  EXPECT_TRUE(back.density_realizable);
-  ASSERT_TRUE(back.mesh_check.has_value());
-  EXPECT_EQ(back.mesh_check->faces, 12);
-  EXPECT_NE(inertia::DescribeFit(back).find("density-realizable: yes"), std::string::npos);
-  const v1::FitInertiaResponse again = InertiaFitToProto(back);
-  EXPECT_EQ(again.densities_size(), r->densities_size());
-  EXPECT_EQ(again.densities(0).standard_error(), r->densities(0).standard_error());
-  EXPECT_EQ(again.density_regularization_rule(), r->density_regularization_rule());
-  EXPECT_EQ(again.heldout_residual_ratio(), r->heldout_residual_ratio());
-  EXPECT_EQ(again.mesh_check().volume(), r->mesh_check().volume());
+  ASSERT_NO_FATAL_FAILURE(ExpectTheFitRoundTripsThroughTheLibraryType(*r));
 
   // Without a mesh the new fields stay empty.
   options.clear_mesh();

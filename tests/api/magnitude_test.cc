@@ -150,8 +150,8 @@ struct Reproducer {
   std::string message_start;  // the field path (and the start of the rule)
 };
 
-std::vector<Reproducer> Reproducers() {
-  std::vector<Reproducer> cases;
+// FitInertia's and AuditModel's reproducers.
+void AddFitAndAuditReproducers(std::vector<Reproducer>& cases) {
   auto inertia = [](std::function<void(v1::FitInertiaRequest&)> spoil) {
     return [spoil] {
       v1::FitInertiaRequest r = Inertia();
@@ -207,7 +207,10 @@ std::vector<Reproducer> Reproducers() {
                      for (auto& s : *r.mutable_samples()) s.set_t(s.t() * 1e300);
                    }),
                    "samples[1].t: magnitude exceeds 1e+12 s"});
+}
 
+// EstimateFriction's and PlanFrictionProbe's reproducers.
+void AddFrictionAndProbeReproducers(std::vector<Reproducer>& cases) {
   auto friction = [](std::function<void(v1::FrictionRequest&)> spoil) {
     return [spoil] {
       v1::FrictionRequest r = Friction();
@@ -246,7 +249,10 @@ std::vector<Reproducer> Reproducers() {
                      r.mutable_plan()->mutable_contacts(0)->set_friction(kInf);
                    }),
                    "plan.contacts[0].friction: not a finite number"});
+}
 
+// PlanTrajectory's, EstimateForces' and Plan's reproducers.
+void AddMotionEstimateAndPlanReproducers(std::vector<Reproducer>& cases) {
   auto motion = [](std::function<void(v1::TrajectoryRequest&)> spoil) {
     return [spoil] {
       v1::TrajectoryRequest r = Motion();
@@ -304,6 +310,13 @@ std::vector<Reproducer> Reproducers() {
                      return Of(HandlePlan(r));
                    },
                    "contacts[2].friction: not a finite number"});
+}
+
+std::vector<Reproducer> Reproducers() {
+  std::vector<Reproducer> cases;
+  AddFitAndAuditReproducers(cases);
+  AddFrictionAndProbeReproducers(cases);
+  AddMotionEstimateAndPlanReproducers(cases);
   return cases;
 }
 
@@ -388,8 +401,8 @@ struct Field {
   bool positive = false;  // a magnitude (signed values would fail its sign rule first)
 };
 
-std::vector<Field> LimitedFields() {
-  std::vector<Field> f;
+// Limited fields of the planner's RPCs: Plan, PlanTrajectory, PlanFrictionProbe.
+void AddPlannerLimitedFields(std::vector<Field>& f) {
   f.push_back({"contacts[1].position", [](double v) {
                  v1::PlanRequest r = Grasp();
                  r.mutable_contacts(1)->mutable_position()->set_y(v);
@@ -449,6 +462,11 @@ std::vector<Field> LimitedFields() {
                  return Of(HandleFrictionProbe(r));
                },
                true});
+}
+
+// Limited fields of the estimators' RPCs: EstimateForces, EstimateFriction,
+// FitInertia, AuditModel.
+void AddEstimatorLimitedFields(std::vector<Field>& f) {
   f.push_back({"readings[1]", [](double v) {
                  v1::EstimateRequest r = Estimate();
                  r.set_readings(1, v);
@@ -489,6 +507,12 @@ std::vector<Field> LimitedFields() {
                  r.mutable_samples(120)->set_reference(v);
                  return Of(HandleAudit(r));
                }});
+}
+
+std::vector<Field> LimitedFields() {
+  std::vector<Field> f;
+  AddPlannerLimitedFields(f);
+  AddEstimatorLimitedFields(f);
   return f;
 }
 

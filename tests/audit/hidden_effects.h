@@ -204,18 +204,19 @@ inline Recovery CheckParameters(Effect e, const sim::EffectParams& truth, const 
   Recovery r;
   double got = NAN, want = NAN;
   const char* name = "";
+  // An effect recovered as the one parameter `key`, within abs_tol + rel_tol |truth|.
+  auto plain = [&](const char* key, double truth_value, double abs_tol, double rel_tol) {
+    name = key;
+    got = get(name);
+    want = truth_value;
+    r.ok = within(got, want, abs_tol, rel_tol);
+  };
   switch (e) {
     case Effect::kDeadzone:
-      name = "threshold";
-      got = get(name);
-      want = truth.threshold;
-      r.ok = within(got, want, 0.03, 0.15);
+      plain("threshold", truth.threshold, 0.03, 0.15);
       break;
     case Effect::kSaturation:
-      name = "saturation";
-      got = get(name);
-      want = truth.saturation;
-      r.ok = within(got, want, 0.05, 0.03);
+      plain("saturation", truth.saturation, 0.05, 0.03);
       break;
     case Effect::kNonlinearity: {
       if (truth.power_exponent > 0) {
@@ -250,28 +251,16 @@ inline Recovery CheckParameters(Effect e, const sim::EffectParams& truth, const 
       r.ok = within(got, want, 0.02, 0.15);
       break;
     case Effect::kDelay:
-      name = "delay";
-      got = get(name);
-      want = truth.delay;
-      r.ok = within(got, want, 0.002, 0.1);
+      plain("delay", truth.delay, 0.002, 0.1);
       break;
     case Effect::kLag:
-      name = "lag";
-      got = get(name);
-      want = truth.lag;
-      r.ok = within(got, want, 0.003, 0.15);
+      plain("lag", truth.lag, 0.003, 0.15);
       break;
     case Effect::kDrift:
-      name = "drift";
-      got = get(name);
-      want = truth.drift;
-      r.ok = within(got, want, 0.002, 0.2);
+      plain("drift", truth.drift, 0.002, 0.2);
       break;
     case Effect::kCrosstalk:
-      name = "crosstalk";
-      got = get(name);
-      want = truth.crosstalk;
-      r.ok = within(got, want, 0.01, 0.1);
+      plain("crosstalk", truth.crosstalk, 0.01, 0.1);
       break;
   }
   r.what = std::string(name) + " got " + std::to_string(got) + " want " + std::to_string(want);

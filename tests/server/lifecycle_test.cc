@@ -113,6 +113,29 @@ TEST(ServerLifecycleTest, SigintAlsoStopsCleanly) {
   EXPECT_EQ(server->WaitExit(std::chrono::seconds(10)).value_or(-1), 0);
 }
 
+// New connections are refused while draining.
+void ExpectNewConnectionsRefused(const std::string& address) {
+  auto fresh = Connect(address, grpc::InsecureChannelCredentials(), [] {
+    grpc::ChannelArguments args;
+    args.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
+    return args;
+  }());
+  auto fresh_stub = v1::Planner::NewStub(fresh);
+  v1::PlanResponse ignored;
+  grpc::Status status =
+      CallPlan(*fresh_stub, WrenchRequest(), &ignored, std::chrono::milliseconds(2000));
+  EXPECT_FALSE(status.ok());
+}
+
+// Unary solves really were in flight at the signal: some finished after it.
+void ExpectSolvesFinishedAfterTheShutdown(const std::string& log) {
+  const size_t shutdown_at = log.find("event=shutdown");
+  ASSERT_NE(shutdown_at, std::string::npos) << log;
+  EXPECT_NE(log.find("rpc=Plan code=OK solver=IPOPT contacts=60", shutdown_at), std::string::npos)
+      << log;
+  EXPECT_NE(log.find("event=drained", shutdown_at), std::string::npos) << log;
+}
+
 TEST(ServerLifecycleTest, SigtermDrainsInFlightCallsAndExitsZero) {
   std::string error;
   auto server = ServerProcess::Start(
@@ -168,19 +191,7 @@ TEST(ServerLifecycleTest, SigtermDrainsInFlightCallsAndExitsZero) {
   }
   (void)watch->Finish();
 
-  // New connections are refused while draining.
-  {
-    auto fresh = Connect(server->address(), grpc::InsecureChannelCredentials(), [] {
-      grpc::ChannelArguments args;
-      args.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
-      return args;
-    }());
-    auto fresh_stub = v1::Planner::NewStub(fresh);
-    v1::PlanResponse ignored;
-    grpc::Status status =
-        CallPlan(*fresh_stub, WrenchRequest(), &ignored, std::chrono::milliseconds(2000));
-    EXPECT_FALSE(status.ok());
-  }
+  ExpectNewConnectionsRefused(server->address());
 
   // Every in-flight call completes normally.
   for (std::thread& t : calls) t.join();
@@ -198,13 +209,7 @@ TEST(ServerLifecycleTest, SigtermDrainsInFlightCallsAndExitsZero) {
 
   EXPECT_EQ(server->WaitExit(std::chrono::seconds(20)).value_or(-1), 0) << server->StderrText();
   EXPECT_LT(Clock::now() - signalled, std::chrono::seconds(15));
-  // Unary solves really were in flight at the signal: some finished after it.
-  const std::string log = server->StderrText();
-  const size_t shutdown_at = log.find("event=shutdown");
-  ASSERT_NE(shutdown_at, std::string::npos) << log;
-  EXPECT_NE(log.find("rpc=Plan code=OK solver=IPOPT contacts=60", shutdown_at), std::string::npos)
-      << log;
-  EXPECT_NE(log.find("event=drained", shutdown_at), std::string::npos) << log;
+  ExpectSolvesFinishedAfterTheShutdown(server->StderrText());
 }
 
 TEST(ServerLifecycleTest, GracePeriodBoundsTheDrain) {

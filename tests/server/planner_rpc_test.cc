@@ -5,6 +5,7 @@
 #include <limits>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <gmock/gmock.h>
@@ -96,7 +97,8 @@ struct BadRequest {
   std::string message_prefix;  // the field path (and start of the reason)
 };
 
-std::vector<BadRequest> BadRequests() {
+// Bad fields of the contacts.
+std::vector<BadRequest> BadContactRequests() {
   return {
       {"no contacts", [](auto& r) { r.clear_contacts(); }, "contacts: at least one contact"},
       {"zero normal", [](auto& r) { r.mutable_contacts(2)->mutable_normal()->Clear(); },
@@ -124,6 +126,12 @@ std::vector<BadRequest> BadRequests() {
       {"unknown contact kind",
        [](auto& r) { r.mutable_contacts(1)->set_kind(static_cast<v1::ContactKind>(7)); },
        "contacts[1].kind: unknown value 7"},
+  };
+}
+
+// Bad fields of the object, the wrench and the solve; limits; pooled requests.
+std::vector<BadRequest> BadProblemRequests() {
+  return {
       {"negative mass", [](auto& r) { r.mutable_object()->set_mass(-1); },
        "object.mass: must be >= 0"},
       {"NaN mass", [](auto& r) { r.mutable_object()->set_mass(kNaN); },
@@ -186,6 +194,12 @@ std::vector<BadRequest> BadRequests() {
        },
        "cone: CONE_MODEL_EXACT is only solved by SOLVER_IPOPT"},
   };
+}
+
+std::vector<BadRequest> BadRequests() {
+  std::vector<BadRequest> all = BadContactRequests();
+  for (BadRequest& bad : BadProblemRequests()) all.push_back(std::move(bad));
+  return all;
 }
 
 TEST_F(PlannerRpcTest, BadRequestsAreInvalidArgumentNamingTheField) {

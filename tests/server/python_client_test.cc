@@ -153,6 +153,16 @@ TEST_F(PythonClientTest, StreamsAnInertiaCsvLikeTheCppFit) {
   EXPECT_THAT(run.err, HasSubstr("bad.csv:3: column 'py': not a number"));
 }
 
+// A Wavefront OBJ of `mesh` with its vertices in millimetres.
+std::string ObjInMillimetres(const io::TriangleMesh& mesh) {
+  std::string obj;
+  for (const inertia::Vec3& v : mesh.vertices)
+    obj += absl::StrFormat("v %.17g %.17g %.17g\n", 1000 * v.x(), 1000 * v.y(), 1000 * v.z());
+  for (const auto& t : mesh.triangles)
+    obj += absl::StrFormat("f %d %d %d\n", t[0] + 1, t[1] + 1, t[2] + 1);
+  return obj;
+}
+
 // --mesh: the mesh file's bytes go in the first message (format from the
 // extension); the method defaults to density, and the answer equals the
 // in-process fit with the same MeshInput. A descriptor JSON carries the
@@ -172,11 +182,7 @@ TEST_F(PythonClientTest, SendsAMeshForADensityFit) {
   const std::string csv = pattern + "/log.csv", truth = pattern + "/truth.json";
   ASSERT_TRUE(inertia::WriteSimulation(*sim, csv, truth).ok());
   // The box in millimetres, for --mesh-scale and the descriptor.
-  std::string obj;
-  for (const inertia::Vec3& v : sim->object.mesh.vertices)
-    obj += absl::StrFormat("v %.17g %.17g %.17g\n", 1000 * v.x(), 1000 * v.y(), 1000 * v.z());
-  for (const auto& t : sim->object.mesh.triangles)
-    obj += absl::StrFormat("f %d %d %d\n", t[0] + 1, t[1] + 1, t[2] + 1);
+  const std::string obj = ObjInMillimetres(sim->object.mesh);
   std::ofstream(pattern + "/box_mm.obj") << obj;
   std::ofstream(pattern + "/box.mesh.json") << R"({"mesh": "box_mm.obj", "scale": 0.001})";
 
