@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "absl/functional/function_ref.h"
 #include "absl/status/status.h"
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
@@ -19,12 +20,12 @@
 namespace tactforce::api {
 namespace {
 
-absl::Status UnknownValue(const std::string& field, int value) {
+absl::Status UnknownValue(absl::string_view field, int value) {
   return absl::InvalidArgumentError(absl::StrCat(field, ": unknown value ", value));
 }
 
 absl::StatusOr<planner::ContactKind> ContactKindFromProto(v1::ContactKind kind,
-                                                          const std::string& field) {
+                                                          absl::string_view field) {
   switch (kind) {
     case v1::CONTACT_KIND_UNSPECIFIED:
     case v1::CONTACT_KIND_INTRINSIC:
@@ -135,59 +136,73 @@ v1::Vec3 ToProto(const planner::Vec3& v) {
   return out;
 }
 
+namespace {
+
+// Every field of `c` from `in` (a reused contact keeps only its name's
+// storage). Errors name the field under the contact's `path`
+// ("contacts[2].kind: unknown value 7"), which is built only then: this
+// runs for every contact of every Plan.
+absl::Status ContactInto(const v1::Contact& in, absl::FunctionRef<std::string()> path,
+                         planner::Contact* c) {
+  c->name = in.name();
+  c->position = FromProto(in.position());
+  c->normal = FromProto(in.normal());
+  c->friction = in.friction();
+  c->friction_sigma = in.friction_sigma();
+  if (absl::StatusOr<planner::ContactKind> kind = ContactKindFromProto(in.kind(), "kind");
+      kind.ok()) {
+    c->kind = *kind;
+  } else {
+    return ContactKindFromProto(in.kind(), path() + ".kind").status();
+  }
+  c->sigma = in.sigma();
+  c->min_normal_force = in.min_normal_force();
+  c->max_normal_force = in.max_normal_force();
+  return absl::OkStatus();
+}
+
+// `request`'s problem into `problem`, whose contact list (and the names'
+// strings) is reused: a warm thread converts without allocating.
+absl::Status ProblemInto(const v1::PlanRequest& request, planner::PlanProblem* problem) {
+  const v1::ObjectModel& object = request.object();
+  problem->object = planner::ObjectModel();  // absent gravity: the planner's (0, 0, -9.81)
+  problem->object.mass = object.mass();
+  problem->object.com = FromProto(object.com());
+  if (object.has_gravity()) problem->object.gravity = FromProto(object.gravity());
+  // A single plan does not use the inertia, but a given one must be physical.
+  if (object.has_inertia()) {
+    const v1::Inertia& in = object.inertia();
+    TF_RETURN_IF_ERROR(
+        planner::ValidateInertia({in.ixx(), in.iyy(), in.izz(), in.ixy(), in.ixz(), in.iyz()}));
+  }
+  if (object.has_uncertainty()) {
+    TF_RETURN_IF_ERROR(UncertaintyFromProto(object.uncertainty(), problem->object.mass,
+                                            problem->object.com, &problem->object.uncertainty));
+  }
+  problem->contacts.resize(static_cast<size_t>(request.contacts_size()));
+  for (int i = 0; i < request.contacts_size(); ++i) {
+    TF_RETURN_IF_ERROR(ContactInto(
+        request.contacts(i), [i] { return absl::StrCat("contacts[", i, "]"); },
+        &problem->contacts[i]));
+  }
+  problem->external_wrench.force = FromProto(request.external_wrench().force());
+  problem->external_wrench.torque = FromProto(request.external_wrench().torque());
+  problem->motion = planner::Motion();
+  return absl::OkStatus();
+}
+
+}  // namespace
+
 absl::StatusOr<planner::Contact> ContactFromProto(const v1::Contact& in, const std::string& path) {
   planner::Contact c;
-  c.name = in.name();
-  c.position = FromProto(in.position());
-  c.normal = FromProto(in.normal());
-  c.friction = in.friction();
-  c.friction_sigma = in.friction_sigma();
-  absl::StatusOr<planner::ContactKind> kind = ContactKindFromProto(in.kind(), "kind");
-  // The field's full path is built only for the error: this runs for every
-  // contact of every Plan.
-  if (!kind.ok()) return ContactKindFromProto(in.kind(), path + ".kind").status();
-  c.kind = *kind;
-  c.sigma = in.sigma();
-  c.min_normal_force = in.min_normal_force();
-  c.max_normal_force = in.max_normal_force();
+  TF_RETURN_IF_ERROR(ContactInto(
+      in, [&path] { return path; }, &c));
   return c;
 }
 
 absl::StatusOr<planner::PlanProblem> ToProblem(const v1::PlanRequest& request) {
   planner::PlanProblem problem;
-  const v1::ObjectModel& object = request.object();
-  problem.object.mass = object.mass();
-  problem.object.com = FromProto(object.com());
-  if (object.has_gravity()) problem.object.gravity = FromProto(object.gravity());
-  // else: the planner's default (0, 0, -9.81).
-  // A single plan does not use the inertia, but a given one must be physical.
-  if (object.has_inertia()) {
-    const v1::Inertia& in = object.inertia();
-    if (absl::Status s =
-            planner::ValidateInertia({in.ixx(), in.iyy(), in.izz(), in.ixy(), in.ixz(), in.iyz()});
-        !s.ok()) {
-      return s;
-    }
-  }
-
-  if (object.has_uncertainty()) {
-    if (absl::Status s = UncertaintyFromProto(object.uncertainty(), problem.object.mass,
-                                              problem.object.com, &problem.object.uncertainty);
-        !s.ok()) {
-      return s;
-    }
-  }
-
-  problem.contacts.reserve(request.contacts_size());
-  for (int i = 0; i < request.contacts_size(); ++i) {
-    absl::StatusOr<planner::Contact> c =
-        ContactFromProto(request.contacts(i), absl::StrCat("contacts[", i, "]"));
-    if (!c.ok()) return c.status();
-    problem.contacts.push_back(*std::move(c));
-  }
-
-  problem.external_wrench.force = FromProto(request.external_wrench().force());
-  problem.external_wrench.torque = FromProto(request.external_wrench().torque());
+  TF_RETURN_IF_ERROR(ProblemInto(request, &problem));
   return problem;
 }
 
@@ -234,18 +249,17 @@ absl::StatusOr<planner::SolverKind> ToSolverKind(const v1::PlanRequest& request)
   return SolverFromProto(request.solver());
 }
 
+absl::Status FromProto(const v1::PlanRequest& request, PlanCall* call) {
+  // Field order of the message, so the first bad field is reported.
+  TF_RETURN_IF_ERROR(ProblemInto(request, &call->problem));
+  TF_ASSIGN_OR_RETURN(call->options, ToOptions(request));
+  TF_ASSIGN_OR_RETURN(call->solver, ToSolverKind(request));
+  return absl::OkStatus();
+}
+
 absl::StatusOr<PlanCall> FromProto(const v1::PlanRequest& request) {
   PlanCall call;
-  // Field order of the message, so the first bad field is reported.
-  absl::StatusOr<planner::PlanProblem> problem = ToProblem(request);
-  if (!problem.ok()) return problem.status();
-  call.problem = *std::move(problem);
-  absl::StatusOr<planner::PlanOptions> options = ToOptions(request);
-  if (!options.ok()) return options.status();
-  call.options = *options;
-  absl::StatusOr<planner::SolverKind> solver = ToSolverKind(request);
-  if (!solver.ok()) return solver.status();
-  call.solver = *solver;
+  TF_RETURN_IF_ERROR(FromProto(request, &call));
   return call;
 }
 

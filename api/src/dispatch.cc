@@ -179,33 +179,37 @@ bool PlanDispatcher::RunsInline(const PlanCall& call) const {
 void PlanDispatcher::Dispatch(const v1::PlanRequest& request, v1::PlanResponse* response,
                               CallLog log, const CallControl& control, CallDone done,
                               PlanBuffers* buffers) const {
-  absl::StatusOr<PlanCall> call = PreparePlan(request, settings_.limits);
+  // Converted into the stream's or this thread's buffers: a warm thread
+  // converts without allocating.
+  PlanBuffers& here = buffers != nullptr ? *buffers : ThreadPlanBuffers();
+  const PlanCall& call = here.call;
+  const absl::Status prepared = PreparePlan(request, settings_.limits, &here.call);
   // Log text is formatted only when its level is on.
   const bool debug = spdlog::should_log(spdlog::level::debug);
   std::string details;
   if (debug || spdlog::should_log(spdlog::level::info)) {
-    details = absl::StrCat("solver=", call.ok() ? planner::ToString(call->solver) : "-",
+    details = absl::StrCat("solver=", prepared.ok() ? planner::ToString(call.solver) : "-",
                            " contacts=", request.contacts_size());
     log.set_details(details);
   }
-  if (!call.ok()) {
-    log.Emit(call.status());
-    done(call.status());
+  if (!prepared.ok()) {
+    log.Emit(prepared);
+    done(prepared);
     return;
   }
   // From here on `log` may be logged (and `response` freed) on a worker
   // thread before RunCall returns: only locals are used after it.
-  if (RunsInline(*call)) {  // validated once, by the solve, into the thread's buffers
-    auto work = [&call, &control, buffers, response](CallLog& call_log) {
-      return ExecutePlan(*call, control, buffers, response, call_log);
+  if (RunsInline(call)) {  // validated once, by the solve, in the same buffers
+    auto work = [&call, &control, &here, response](CallLog& call_log) {
+      return ExecutePlan(call, control, &here, response, call_log);
     };
     RunCall(std::move(log), nullptr, std::move(work), std::move(done), kSolveWords);
     return;
   }
   // Validated once, here, so that a bad request is INVALID_ARGUMENT even
   // under overload and never takes a queue slot; the worker solves the
-  // validated plan without a second check.
-  absl::StatusOr<ValidPlanCall> valid = ValidatePlan(*call);
+  // validated plan (a copy: `here` is this thread's) without a second check.
+  absl::StatusOr<ValidPlanCall> valid = ValidatePlan(call);
   if (!valid.ok()) {
     log.Emit(valid.status());
     done(valid.status());

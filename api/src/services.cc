@@ -143,13 +143,19 @@ absl::Status CheckHoldingGrasp(const PlanCall& call) {
 
 }  // namespace
 
-absl::StatusOr<PlanCall> PreparePlan(const v1::PlanRequest& request, const CallLimits& limits) {
-  TF_ASSIGN_OR_RETURN(PlanCall call, FromProto(request));
-  SetLibraryLimits(limits, &call.options);
+absl::Status PreparePlan(const v1::PlanRequest& request, const CallLimits& limits, PlanCall* call) {
+  TF_RETURN_IF_ERROR(FromProto(request, call));
+  SetLibraryLimits(limits, &call->options);
   // The tighter of the request's and the server's CPU limits (0 = none).
   const double cap = limits.solve_timeout_seconds();
-  double& asked = call.options.ipopt.max_cpu_seconds;
+  double& asked = call->options.ipopt.max_cpu_seconds;
   if (cap > 0 && (asked == 0 || cap < asked)) asked = cap;
+  return absl::OkStatus();
+}
+
+absl::StatusOr<PlanCall> PreparePlan(const v1::PlanRequest& request, const CallLimits& limits) {
+  PlanCall call;
+  TF_RETURN_IF_ERROR(PreparePlan(request, limits, &call));
   return call;
 }
 

@@ -31,30 +31,37 @@ def read_proc_status_kb(pid, field):
     return None
 
 
-def read_cpu_seconds(pid):
-    """User + system CPU time of `pid` in seconds; None once gone."""
+def read_cpu_times(pid):
+    """(user, system) CPU time of `pid` in seconds; None once gone."""
     try:
         with open(f"/proc/{pid}/stat") as f:
             text = f.read()
     except OSError:
         return None
     fields = text[text.rindex(")") + 2:].split()
-    ticks = int(fields[11]) + int(fields[12])  # utime, stime
-    return ticks / os.sysconf("SC_CLK_TCK")
+    tick = os.sysconf("SC_CLK_TCK")
+    return int(fields[11]) / tick, int(fields[12]) / tick  # utime, stime
+
+
+def read_cpu_seconds(pid):
+    """User + system CPU time of `pid` in seconds; None once gone."""
+    times = read_cpu_times(pid)
+    return None if times is None else times[0] + times[1]
 
 
 class Server:
     """tactforce-server --listen 127.0.0.1:0 FLAGS; the bound address is read
-    from its one stdout line, stderr goes to `log_path`."""
+    from its one stdout line, stderr goes to `log_path`. `prefix`: a command
+    the server runs under (e.g. valgrind's), whose process is `pid`."""
 
-    def __init__(self, bin_dir, flags, log_path, start_timeout_s=20.0):
+    def __init__(self, bin_dir, flags, log_path, start_timeout_s=20.0, prefix=()):
         exe = os.path.join(bin_dir, "tactforce-server")
         if not os.access(exe, os.X_OK):
             raise SetupError(f"{exe}: not found or not executable (--bin)")
         self.flags = list(flags)
         self.log_path = log_path
         self._log = open(log_path, "w")
-        self.proc = subprocess.Popen([exe, "--listen", "127.0.0.1:0", *flags],
+        self.proc = subprocess.Popen([*prefix, exe, "--listen", "127.0.0.1:0", *flags],
                                      stdout=subprocess.PIPE, stderr=self._log,
                                      stdin=subprocess.DEVNULL)
         self.pid = self.proc.pid
@@ -199,12 +206,13 @@ class Monitor:
 
 
 class Load:
-    """`tactforce load --target ADDR ARGS --json` in the background; result()
-    waits and parses its one JSON line (printed even when calls failed)."""
+    """`tactforce load --target ADDR ARGS --json` in the background (under
+    `prefix`, e.g. valgrind, when given); result() waits and parses its one
+    JSON line (printed even when calls failed)."""
 
-    def __init__(self, tactforce, address, args, name, workdir):
+    def __init__(self, tactforce, address, args, name, workdir, prefix=()):
         self.name = name
-        self.argv = [tactforce, "load", "--target", address, *args, "--json"]
+        self.argv = [*prefix, tactforce, "load", "--target", address, *args, "--json"]
         self._out = open(os.path.join(workdir, f"load-{name}.out"), "w+")
         self._err = open(os.path.join(workdir, f"load-{name}.err"), "w+")
         self.proc = subprocess.Popen(self.argv, stdout=self._out, stderr=self._err,

@@ -1,10 +1,15 @@
 #include "tactforce/api/convert.h"
 
 #include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <random>
+#include <string>
 
 #include <gtest/gtest.h>
 
 #include "google/protobuf/util/message_differencer.h"
+#include "tactforce/planner/random_grasps.h"
 
 namespace tactforce::api {
 namespace {
@@ -136,6 +141,73 @@ TEST(ConvertTest, UnknownContactKindNamesTheField) {
   EXPECT_EQ(call.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_EQ(call.status().message(), "contacts[1].kind: unknown value 7");
   EXPECT_FALSE(ToProblem(request).ok());
+}
+
+void ExpectReusedConversionsMatch(uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  PlanCall reused;
+  for (int k = 0; k < 200; ++k) {
+    SCOPED_TRACE(k);
+    planner::RandomGraspOptions grasp_options;
+    grasp_options.max_contacts = 8;
+    planner::PlanProblem problem = planner::MakeRandomGrasp(rng, grasp_options).problem;
+    for (planner::Contact& c : problem.contacts) {
+      c.name = std::string(std::uniform_int_distribution<int>(0, 40)(rng), 'n');
+      c.friction_sigma = std::uniform_real_distribution<double>(0.0, 0.05)(rng);
+    }
+    if (rng() % 3 == 0) {
+      problem.object.uncertainty.covariance = planner::Matrix10d::Identity() * 1e-6;
+      problem.object.uncertainty.confidence = 2.0;
+    }
+    planner::PlanOptions options;
+    options.cone_sides = std::uniform_int_distribution<int>(3, 16)(rng);
+    options.confidence = std::uniform_real_distribution<double>(0.0, 3.0)(rng);
+    const auto solver = static_cast<planner::SolverKind>(rng() % 3);
+    v1::PlanRequest request = ToRequest(problem, options, solver);
+    if (rng() % 2 == 0) request.mutable_object()->clear_gravity();
+
+    ASSERT_TRUE(FromProto(request, &reused).ok());
+    absl::StatusOr<PlanCall> fresh = FromProto(request);
+    ASSERT_TRUE(fresh.ok());
+    ExpectSameProblem(reused.problem, fresh->problem);
+    for (size_t i = 0; i < fresh->problem.contacts.size(); ++i) {
+      EXPECT_EQ(reused.problem.contacts[i].friction_sigma,
+                fresh->problem.contacts[i].friction_sigma);
+    }
+    EXPECT_EQ(reused.problem.object.uncertainty.covariance,
+              fresh->problem.object.uncertainty.covariance);
+    EXPECT_EQ(reused.problem.object.uncertainty.confidence,
+              fresh->problem.object.uncertainty.confidence);
+    EXPECT_TRUE(
+        MessageDifferencer::Equals(ToRequest(reused.problem, reused.options, reused.solver),
+                                   ToRequest(fresh->problem, fresh->options, fresh->solver)));
+  }
+}
+
+// A PlanCall kept from request to request (the server's per-thread one)
+// must convert each request exactly as a fresh one does, whatever the
+// previous request held: more or fewer contacts, longer names, gravity,
+// a parameter covariance, other options and solver.
+// Seeds 29 and one drawn at test time (TACTFORCE_TEST_SEED to repeat it).
+TEST(ConvertTest, ReusedPlanCallMatchesAFreshConversion) {
+  const char* env = std::getenv("TACTFORCE_TEST_SEED");
+  const uint64_t drawn = env != nullptr ? std::strtoull(env, nullptr, 10) : std::random_device{}();
+  for (const uint64_t seed : {uint64_t{29}, drawn}) {
+    SCOPED_TRACE(testing::Message() << "TACTFORCE_TEST_SEED=" << seed);
+    ExpectReusedConversionsMatch(seed);
+  }
+}
+
+TEST(ConvertTest, ReusedPlanCallNamesTheBadContact) {
+  PlanCall reused;
+  v1::PlanRequest request;
+  request.add_contacts();
+  request.add_contacts();
+  ASSERT_TRUE(FromProto(request, &reused).ok());
+  request.add_contacts()->set_kind(static_cast<v1::ContactKind>(9));
+  const absl::Status status = FromProto(request, &reused);
+  EXPECT_EQ(status.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_EQ(status.message(), "contacts[2].kind: unknown value 9");
 }
 
 TEST(ConvertTest, UnknownSolverNamesTheField) {

@@ -32,6 +32,11 @@ absl::StatusOr<planner::Contact> ContactFromProto(const v1::Contact& contact,
 
 // Errors: InvalidArgument("<field path>: unknown value N").
 absl::StatusOr<PlanCall> FromProto(const v1::PlanRequest& request);
+// The same into `call`, every field overwritten; its contact list and the
+// contacts' name strings are reused, so converting into a PlanCall kept
+// from call to call allocates nothing once it has held as many contacts.
+// On an error `call` is unspecified.
+absl::Status FromProto(const v1::PlanRequest& request, PlanCall* call);
 absl::StatusOr<planner::PlanProblem> ToProblem(const v1::PlanRequest& request);
 absl::StatusOr<planner::PlanOptions> ToOptions(const v1::PlanRequest& request);
 absl::StatusOr<planner::SolverKind> ToSolverKind(const v1::PlanRequest& request);

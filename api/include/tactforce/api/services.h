@@ -25,6 +25,8 @@ namespace tactforce::api {
 // solve_timeout_ms). Errors: InvalidArgument("<field path>: unknown value
 // N"); the numeric checks are ValidatePlan's.
 absl::StatusOr<PlanCall> PreparePlan(const v1::PlanRequest& request, const CallLimits& limits);
+// The same into `call` (FromProto's in-place form: its storage reused).
+absl::Status PreparePlan(const v1::PlanRequest& request, const CallLimits& limits, PlanCall* call);
 
 // A PlanCall whose problem passed planner::ValidateProblem: made only by
 // ValidatePlan, solved by SolvePlan without a second check.
@@ -35,10 +37,11 @@ struct ValidPlanCall {
 // InvalidArgument naming the field ("contacts[2].normal: zero length").
 absl::StatusOr<ValidPlanCall> ValidatePlan(const PlanCall& call);
 
-// What a plan reuses from call to call: the planner's workspace and result.
-// One per thread (the default) or per stream (PlanStream: one solve at a
-// time per stream).
+// What a plan reuses from call to call: the converted request, the
+// planner's workspace and result. One per thread (the default) or per
+// stream (PlanStream: one solve at a time per stream).
 struct PlanBuffers {
+  PlanCall call;  // PreparePlan's, for a request solved where it was converted
   planner::PlanningWorkspace workspace;
   planner::PlanResult result;
 };
