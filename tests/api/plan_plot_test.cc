@@ -210,7 +210,7 @@ TEST(PlanPlot, ThePyramidAsDrawnLiesInsideEveryTightenedRowAndTouchesOne) {
       if (prepared.rows.info[r].contact != i ||
           prepared.rows.info[r].kind != planner::RowKind::kFrictionFacet)
         continue;
-      const planner::Vec3 a = prepared.rows.matrix.block<1, 3>(r, 3 * i).transpose();
+      const planner::Vec3 a = prepared.rows.directions.row(r).transpose();
       EXPECT_LE(a.dot(apex), prepared.rows.rhs(r) + 1e-12);
       tightest = std::max(tightest, a.dot(apex) - prepared.rows.rhs(r));
       for (int m = 0; m < c.cone_sides; ++m) {  // every edge direction stays inside
