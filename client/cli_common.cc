@@ -57,6 +57,15 @@ void AddOutputFlags(CLI::App* cmd, OutputFormat* out, const std::string& json_wh
       ->excludes(json);
 }
 
+void AddRecordingClockFlags(CLI::App* cmd, double* seconds, double* rate) {
+  cmd->add_option("--seconds", *seconds, "Duration (s)")
+      ->check(Between(0.1, 86400))
+      ->capture_default_str();
+  cmd->add_option("--rate", *rate, "Sample rate (Hz)")
+      ->check(Between(1, 1e5))
+      ->capture_default_str();
+}
+
 namespace {
 
 // A validator of finite numbers for which `ok` holds; `rule` is "must be >= 1".

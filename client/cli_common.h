@@ -58,6 +58,10 @@ struct OutputFormat {
 // PlanResponse").
 void AddOutputFlags(CLI::App* cmd, OutputFormat* out, const std::string& json_what);
 
+// Adds --seconds (0.1 s to a day) and --rate (1 Hz to 100 kHz) for a
+// simulated recording; the defaults are the values already held.
+void AddRecordingClockFlags(CLI::App* cmd, double* seconds, double* rate);
+
 // Numeric flag checks; a failure is a usage error (exit 2) naming the flag:
 // "--window: must be >= 1, got 0".
 CLI::Validator AtLeast(double min);              // finite and >= min

@@ -234,12 +234,7 @@ CLI::App* AddSimulateInertiaCommand(CLI::App& simulate, SimulateInertiaArgs& arg
   cmd->add_option("--contacts", args.contacts, "in-hand: number of fingertips (2-4)")
       ->check(Between(2, 4))
       ->capture_default_str();
-  cmd->add_option("--seconds", args.seconds, "Duration (s)")
-      ->check(Between(0.1, 86400))
-      ->capture_default_str();
-  cmd->add_option("--rate", args.rate, "Sample rate (Hz)")
-      ->check(Between(1, 1e5))
-      ->capture_default_str();
+  AddRecordingClockFlags(cmd, &args.seconds, &args.rate);
   auto* variance = cmd->add_option("--force-variance", args.force_variance,
                                    "Force noise variance per component (N^2; the paper used 0-1)")
                        ->check(AtLeast(0))

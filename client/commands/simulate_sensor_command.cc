@@ -17,12 +17,7 @@ CLI::App* AddSimulateSensorCommand(CLI::App& simulate, SimulateSensorArgs& args)
   cmd->add_option("--profile", args.profile, "Force profile")
       ->check(CLI::IsMember({"press-release", "ramp", "random"}))
       ->capture_default_str();
-  cmd->add_option("--seconds", args.seconds, "Duration (s)")
-      ->check(Between(0.1, 86400))
-      ->capture_default_str();
-  cmd->add_option("--rate", args.rate, "Sample rate (Hz)")
-      ->check(Between(1, 1e5))
-      ->capture_default_str();
+  AddRecordingClockFlags(cmd, &args.seconds, &args.rate);
   cmd->add_option("--seed", args.seed, "Random seed")->capture_default_str();
   cmd->add_option("--out", args.out_dir, "Output directory (created; must be empty unless --force)")
       ->required();
