@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <tuple>
 #include <utility>
 
@@ -50,55 +51,56 @@ absl::Status PrefixedForField(const absl::Status& status, const std::string& mes
   return absl::Status(status.code(), absl::StrCat("options.", status.message()));
 }
 
-absl::StatusOr<inertia::RegionScheme> RegionSchemeFromProto(v1::RegionScheme scheme) {
-  switch (scheme) {
-    case v1::REGION_SCHEME_AUTO:
-      return inertia::RegionScheme::kAuto;
-    case v1::REGION_SCHEME_GRID:
-      return inertia::RegionScheme::kGrid;
-    case v1::REGION_SCHEME_COLORS:
-      return inertia::RegionScheme::kColors;
-    case v1::REGION_SCHEME_SINGLE:
-      return inertia::RegionScheme::kSingle;
-    default:
-      break;
-  }
-  return absl::InvalidArgumentError(
-      absl::StrCat("options.regions: unknown value ", static_cast<int>(scheme)));
-}
+// The library's enums and their proto values, one table each, read both
+// ways: to the proto, the first row holding the value; from it, the row
+// holding the number (none: `missing`).
+template <class Proto, class Library>
+struct EnumPair {
+  Proto proto;
+  Library library;
+};
+constexpr EnumPair<v1::RegionScheme, inertia::RegionScheme> kRegionSchemes[] = {
+    {v1::REGION_SCHEME_AUTO, inertia::RegionScheme::kAuto},
+    {v1::REGION_SCHEME_GRID, inertia::RegionScheme::kGrid},
+    {v1::REGION_SCHEME_COLORS, inertia::RegionScheme::kColors},
+    {v1::REGION_SCHEME_SINGLE, inertia::RegionScheme::kSingle}};
+// UNSPECIFIED is C.
+constexpr EnumPair<v1::FactorGraphVariant, inertia::FactorGraphVariant> kVariants[] = {
+    {v1::FACTOR_GRAPH_VARIANT_BASELINE_FG, inertia::FactorGraphVariant::kBaselineFg},
+    {v1::FACTOR_GRAPH_VARIANT_NO_C, inertia::FactorGraphVariant::kNoConstraint},
+    {v1::FACTOR_GRAPH_VARIANT_C, inertia::FactorGraphVariant::kConstraint},
+    {v1::FACTOR_GRAPH_VARIANT_C_G, inertia::FactorGraphVariant::kConstraintPrior},
+    {v1::FACTOR_GRAPH_VARIANT_UNSPECIFIED, inertia::FactorGraphVariant::kConstraint}};
+constexpr EnumPair<v1::InertiaMethod, inertia::InertiaMethod> kMethods[] = {
+    {v1::INERTIA_METHOD_BASELINE_LS, inertia::InertiaMethod::kBaselineLs},
+    {v1::INERTIA_METHOD_FACTOR_GRAPH, inertia::InertiaMethod::kFactorGraph},
+    {v1::INERTIA_METHOD_CONSTRAINED, inertia::InertiaMethod::kConstrained},
+    {v1::INERTIA_METHOD_DENSITY, inertia::InertiaMethod::kDensity}};
 
-absl::StatusOr<inertia::FactorGraphVariant> FactorGraphVariantFromProto(
-    v1::FactorGraphVariant variant) {
-  switch (variant) {
-    case v1::FACTOR_GRAPH_VARIANT_BASELINE_FG:
-      return inertia::FactorGraphVariant::kBaselineFg;
-    case v1::FACTOR_GRAPH_VARIANT_NO_C:
-      return inertia::FactorGraphVariant::kNoConstraint;
-    case v1::FACTOR_GRAPH_VARIANT_UNSPECIFIED:
-    case v1::FACTOR_GRAPH_VARIANT_C:
-      return inertia::FactorGraphVariant::kConstraint;
-    case v1::FACTOR_GRAPH_VARIANT_C_G:
-      return inertia::FactorGraphVariant::kConstraintPrior;
-    default:
-      break;
-  }
-  return absl::InvalidArgumentError(
-      absl::StrCat("options.fg_variant: unknown value ", static_cast<int>(variant)));
+template <class Proto, class Library, size_t N>
+Proto ProtoOf(const EnumPair<Proto, Library> (&pairs)[N], Library value, Proto missing) {
+  for (const auto& p : pairs)
+    if (p.library == value) return p.proto;
+  return missing;
+}
+template <class Proto, class Library, size_t N>
+std::optional<Library> LibraryOf(const EnumPair<Proto, Library> (&pairs)[N], int number) {
+  for (const auto& p : pairs)
+    if (static_cast<int>(p.proto) == number) return p.library;
+  return std::nullopt;
+}
+// A request's value: "options.<field>: unknown value 7" when no row holds it.
+template <class Proto, class Library, size_t N>
+absl::StatusOr<Library> OptionOf(const EnumPair<Proto, Library> (&pairs)[N], int number,
+                                 const char* field) {
+  if (std::optional<Library> v = LibraryOf(pairs, number)) return *v;
+  return absl::InvalidArgumentError(absl::StrCat("options.", field, ": unknown value ", number));
 }
 
 // UNSPECIFIED and unknown numbers: CONSTRAINED (a response's method; a
 // request's is checked by InertiaOptionsFromProto first).
 inertia::InertiaMethod InertiaMethodFromProto(v1::InertiaMethod method) {
-  switch (method) {
-    case v1::INERTIA_METHOD_BASELINE_LS:
-      return inertia::InertiaMethod::kBaselineLs;
-    case v1::INERTIA_METHOD_FACTOR_GRAPH:
-      return inertia::InertiaMethod::kFactorGraph;
-    case v1::INERTIA_METHOD_DENSITY:
-      return inertia::InertiaMethod::kDensity;
-    default:
-      return inertia::InertiaMethod::kConstrained;
-  }
+  return LibraryOf(kMethods, method).value_or(inertia::InertiaMethod::kConstrained);
 }
 
 v1::MeshCheck MeshCheckToProto(const io::MeshCheck& c) {
@@ -191,31 +193,15 @@ absl::Status CheckOptionMagnitudes(const v1::InertiaFitOptions& o) {
 }  // namespace
 
 v1::FactorGraphVariant FactorGraphVariantToProto(inertia::FactorGraphVariant variant) {
-  switch (variant) {
-    case inertia::FactorGraphVariant::kBaselineFg:
-      return v1::FACTOR_GRAPH_VARIANT_BASELINE_FG;
-    case inertia::FactorGraphVariant::kNoConstraint:
-      return v1::FACTOR_GRAPH_VARIANT_NO_C;
-    case inertia::FactorGraphVariant::kConstraint:
-      return v1::FACTOR_GRAPH_VARIANT_C;
-    case inertia::FactorGraphVariant::kConstraintPrior:
-      return v1::FACTOR_GRAPH_VARIANT_C_G;
-  }
-  return v1::FACTOR_GRAPH_VARIANT_UNSPECIFIED;
+  return ProtoOf(kVariants, variant, v1::FACTOR_GRAPH_VARIANT_UNSPECIFIED);
 }
 
 v1::RegionScheme RegionSchemeToProto(inertia::RegionScheme scheme) {
-  switch (scheme) {
-    case inertia::RegionScheme::kAuto:
-      return v1::REGION_SCHEME_AUTO;
-    case inertia::RegionScheme::kGrid:
-      return v1::REGION_SCHEME_GRID;
-    case inertia::RegionScheme::kColors:
-      return v1::REGION_SCHEME_COLORS;
-    case inertia::RegionScheme::kSingle:
-      return v1::REGION_SCHEME_SINGLE;
-  }
-  return v1::REGION_SCHEME_AUTO;
+  return ProtoOf(kRegionSchemes, scheme, v1::REGION_SCHEME_AUTO);
+}
+
+v1::InertiaMethod InertiaMethodToProto(inertia::InertiaMethod method) {
+  return ProtoOf(kMethods, method, v1::INERTIA_METHOD_UNSPECIFIED);
 }
 
 absl::StatusOr<ObjectMesh> MeshFromProto(const v1::MeshInput& input, std::string_view field_view) {
@@ -262,20 +248,6 @@ v1::MeshInput MeshInputToProto(std::string bytes, const std::string& format,
   q->set_y(placement.orientation.y());
   q->set_z(placement.orientation.z());
   return out;
-}
-
-v1::InertiaMethod InertiaMethodToProto(inertia::InertiaMethod method) {
-  switch (method) {
-    case inertia::InertiaMethod::kBaselineLs:
-      return v1::INERTIA_METHOD_BASELINE_LS;
-    case inertia::InertiaMethod::kFactorGraph:
-      return v1::INERTIA_METHOD_FACTOR_GRAPH;
-    case inertia::InertiaMethod::kConstrained:
-      return v1::INERTIA_METHOD_CONSTRAINED;
-    case inertia::InertiaMethod::kDensity:
-      return v1::INERTIA_METHOD_DENSITY;
-  }
-  return v1::INERTIA_METHOD_UNSPECIFIED;
 }
 
 std::string InertiaMethodName(inertia::InertiaMethod method) {
@@ -350,8 +322,8 @@ absl::StatusOr<inertia::InertiaOptions> InertiaOptionsFromProto(const v1::Inerti
   out.smoothing_window = static_cast<int>(o.smoothing_window());
   if (o.max_iterations() != 0) out.max_iterations = static_cast<int>(o.max_iterations());
   if (o.has_regularization()) out.constrained.regularization = o.regularization();
-  TF_ASSIGN_OR_RETURN(out.density.regions.scheme, RegionSchemeFromProto(o.regions()));
-  TF_ASSIGN_OR_RETURN(out.factor_graph.variant, FactorGraphVariantFromProto(o.fg_variant()));
+  TF_ASSIGN_OR_RETURN(out.density.regions.scheme, OptionOf(kRegionSchemes, o.regions(), "regions"));
+  TF_ASSIGN_OR_RETURN(out.factor_graph.variant, OptionOf(kVariants, o.fg_variant(), "fg_variant"));
   if (o.target_regions() != 0) {
     if (o.target_regions() > static_cast<uint32_t>(inertia::kMaxTargetRegions))
       return absl::InvalidArgumentError(absl::StrCat("options.target_regions: must be in 1..",
@@ -511,6 +483,7 @@ absl::StatusOr<v1::FitInertiaResponse> FitInertiaSamples(const inertia::InertiaS
                                                          const CallState& state) {
   TF_ASSIGN_OR_RETURN(inertia::InertiaOptions converted, InertiaOptionsFromProto(options));
   const int64_t n = static_cast<int64_t>(samples.samples.size());
+  if (n == 0) return absl::InvalidArgumentError("samples: the stream carried no samples");
   if (limits.max_fit_bytes > 0 &&
       inertia::FitWorkingBytes(converted.method, n) > limits.max_fit_bytes) {
     return absl::InvalidArgumentError(absl::StrCat(
@@ -631,14 +604,6 @@ absl::Status InertiaStream::Add(const v1::FitInertiaRequest& message) {
     samples_.samples.push_back(std::move(s));
   }
   return absl::OkStatus();
-}
-
-absl::StatusOr<v1::FitInertiaResponse> InertiaStream::Fit(const CallLimits& limits,
-                                                          std::function<void(double)> progress,
-                                                          const CallState& state) const {
-  if (samples_.samples.empty())
-    return absl::InvalidArgumentError("samples: the stream carried no samples");
-  return FitInertiaSamples(samples_, options_, limits, std::move(progress), nullptr, state);
 }
 
 }  // namespace tactforce::api

@@ -22,11 +22,10 @@
 namespace tactforce::api {
 namespace {
 
-// The limits of CallLimits that a library checks itself, set into its
-// options (planner::PlanOptions, estimator::EstimateOptions): the one place
-// they cross from the call to the libraries.
-template <class Options>
-void SetLibraryLimits(const CallLimits& limits, Options* options) {
+// The limits of CallLimits that the libraries check themselves, set into
+// the planner's options (the estimator's are its EstimateOptions::plan):
+// the one place they cross from the call to the libraries.
+void SetLibraryLimits(const CallLimits& limits, planner::PlanOptions* options) {
   options->max_contacts = limits.max_contacts;
 }
 
@@ -305,8 +304,8 @@ absl::StatusOr<v1::EstimateResponse> HandleEstimate(const v1::EstimateRequest& r
     return absl::InvalidArgumentError(absl::StrCat("cone_sides: must be in ",
                                                    planner::PlanOptions::kMinConeSides, "..",
                                                    planner::PlanOptions::kMaxConeSides));
-  if (request.cone_sides() != 0) o.cone_sides = static_cast<int>(request.cone_sides());
-  SetLibraryLimits(limits, &o);
+  if (request.cone_sides() != 0) o.plan.cone_sides = static_cast<int>(request.cone_sides());
+  SetLibraryLimits(limits, &o.plan);
   const std::vector<double> readings(request.readings().begin(), request.readings().end());
   // The worker thread's buffers: warm estimates allocate only the response.
   thread_local estimator::EstimationWorkspace workspace;

@@ -139,7 +139,7 @@ void NormalLeastSquares(PlanProblem& p, const std::vector<double>& readings,
   planner::MeasurementEllipsoid& no_noise = pw.prepared.ellipsoid;
   no_noise.factor.resize(3 * p.contacts.size(), 0);
   planner::ConstraintRows& rows = pw.prepared.rows;
-  planner::BuildConstraintRows(p, no_noise, o.cone_sides, 0.0, true, &rows);
+  planner::BuildConstraintRows(p, no_noise, o.plan.cone_sides, 0.0, true, &rows);
   planner::RowsOnPlane(rows, eq, &qp.in_matrix, &qp.in_rhs);
   planner::SolveDenseQp(qp, {}, &pw.qp_workspace, &pw.qp_result);
   const planner::DenseQpResult& qr = pw.qp_result;
@@ -189,12 +189,8 @@ absl::Status CheckRequest(const PlanProblem& problem, const std::vector<double>&
                           ForceEstimate* out) {
   if (!std::isfinite(options.origin_weight) || options.origin_weight < 0.0)
     return absl::InvalidArgumentError("origin_weight: must be finite and >= 0");
-  planner::PlanOptions plan_options;
-  plan_options.cone_sides = options.cone_sides;
-  plan_options.rank_tolerance = options.rank_tolerance;
-  plan_options.max_contacts = options.max_contacts;
   PlanProblem& p = ws->planning.prepared.problem;
-  TF_RETURN_IF_ERROR(planner::ValidateProblem(problem, plan_options, &p));
+  TF_RETURN_IF_ERROR(planner::ValidateProblem(problem, options.plan, &p));
   Classify(p, ws);
   if (readings.size() != ws->intrinsic.size()) {
     return absl::InvalidArgumentError(absl::StrCat(
@@ -237,8 +233,8 @@ absl::Status EstimateForces(const PlanProblem& problem, const std::vector<double
   TF_RETURN_IF_ERROR(CheckRequest(problem, readings, options, ws, out));
   PlanProblem& p = ws->planning.prepared.problem;
   ForceEquilibrium& eq = ws->planning.prepared.equilibrium;
-  planner::ComputeForceEquilibrium(p, options.rank_tolerance, &ws->planning.equilibrium_scratch,
-                                   &eq);
+  planner::ComputeForceEquilibrium(p, options.plan.rank_tolerance,
+                                   &ws->planning.equilibrium_scratch, &eq);
   if (!eq.consistent) {
     out->status = EstimateStatus::kInfeasible;
     out->message = absl::StrCat("the contacts cannot resist this wrench: G has rank ", eq.rank,

@@ -69,7 +69,10 @@ class FitInertiaReactor final : public AdmittedStream<grpc::ServerReadReactor<gr
     api::DispatchOnPool<api::InertiaStream, v1::FitInertiaResponse>(
         stream_, &fit_, Log(), pool_, guard(), limits_,
         [](const api::InertiaStream& stream, const api::CallLimits& limits,
-           const api::CallState& state) { return stream.Fit(limits, {}, state); },
+           const api::CallState& state) {
+          return api::FitInertiaSamples(stream.samples(), stream.options(), limits, {}, nullptr,
+                                        state);
+        },
         [this](const absl::Status& status) {
           FinishTakenOver(status.ok() ? SerializeMessage(fit_, response_) : status);
         });

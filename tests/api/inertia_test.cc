@@ -54,7 +54,8 @@ TEST(InertiaStream, RoundTripGivesTheDirectFit) {
       EXPECT_EQ(stream.samples_received(), static_cast<int64_t>(n));
       v1::InertiaFitOptions options;
       options.set_method(v1::INERTIA_METHOD_BASELINE_LS);
-      absl::StatusOr<v1::FitInertiaResponse> streamed = stream.Fit();
+      absl::StatusOr<v1::FitInertiaResponse> streamed =
+          FitInertiaSamples(stream.samples(), stream.options());
       ASSERT_TRUE(streamed.ok()) << streamed.status();
       absl::StatusOr<v1::FitInertiaResponse> direct = FitInertiaSamples(s, v1::InertiaFitOptions());
       ASSERT_TRUE(direct.ok()) << direct.status();
@@ -121,7 +122,8 @@ TEST(InertiaStream, InconsistentMessagesAreNamed) {
     v1::FitInertiaRequest m = Batch(wrench.samples, 0, 3);
     m.mutable_options()->set_method(v1::INERTIA_METHOD_BASELINE_LS);
     ASSERT_TRUE(stream.Add(m).ok());
-    const absl::StatusOr<v1::FitInertiaResponse> r = stream.Fit();
+    const absl::StatusOr<v1::FitInertiaResponse> r =
+        FitInertiaSamples(stream.samples(), stream.options());
     EXPECT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument);
     EXPECT_NE(r.status().message().find("3 sample(s), at least 4 needed"), std::string::npos)
         << r.status();
@@ -133,7 +135,8 @@ TEST(InertiaStream, InconsistentMessagesAreNamed) {
     v1::FitInertiaRequest m = Batch(hand.samples, 0, 20);
     m.mutable_samples(13)->mutable_contacts()->RemoveLast();
     ASSERT_TRUE(stream.Add(m).ok());
-    const absl::StatusOr<v1::FitInertiaResponse> r = stream.Fit();
+    const absl::StatusOr<v1::FitInertiaResponse> r =
+        FitInertiaSamples(stream.samples(), stream.options());
     EXPECT_NE(r.status().message().find("samples[13]: 3 contacts, expected 4"), std::string::npos)
         << r.status();
   }

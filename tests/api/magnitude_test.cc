@@ -122,7 +122,7 @@ v1::FitInertiaRequest Inertia() {
 absl::StatusOr<v1::FitInertiaResponse> HandleInertia(const v1::FitInertiaRequest& request) {
   InertiaStream stream;
   TF_RETURN_IF_ERROR(stream.Add(request));
-  return stream.Fit();
+  return FitInertiaSamples(stream.samples(), stream.options());
 }
 
 // What a handler said: its status, and the first non-finite field of an OK

@@ -205,7 +205,8 @@ TEST(HandlerTest, FitInertiaNamesTheWrenchPath) {
     s->mutable_wrench()->mutable_force()->set_z(k == 42 ? std::nan("") : -9.81);
   }
   ASSERT_TRUE(stream.Add(message).ok());
-  EXPECT_EQ(stream.Fit().status().message(), "samples[42].wrench.force: not finite");
+  EXPECT_EQ(FitInertiaSamples(stream.samples(), stream.options()).status().message(),
+            "samples[42].wrench.force: not finite");
 }
 
 }  // namespace

@@ -445,7 +445,8 @@ absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in,
   const auto start = std::chrono::steady_clock::now();
   const double cpu_start = ThreadCpuSeconds();
   internal::InterruptPoll poll(options.interrupt);
-  TF_RETURN_IF_ERROR(internal::ValidateInertiaSamples(samples_in, &poll));
+  InertiaSamples samples;  // samples_in with unit quaternions
+  TF_RETURN_IF_ERROR(internal::ValidateInertiaSamples(samples_in, &poll, &samples));
   TF_RETURN_IF_ERROR(ValidateInertiaOptions(options));
   const int need = MinimumSamples(samples_in, options.method);
   if (static_cast<int>(samples_in.samples.size()) < need) {
@@ -454,8 +455,6 @@ absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in,
                      samples_in.samples.size(), " sample(s), at least ", need, " needed by ",
                      ToString(options.method), " for the 10 inertial parameters"));
   }
-  const InertiaSamples samples = internal::NormalizedCopy(samples_in, &poll);
-  if (poll.stopped()) return internal::Interrupted();
   std::optional<ConvexHull> hull;
   if (!options.hull.empty()) hull = *ComputeConvexHull(options.hull);
   const ConvexHull* hp = hull ? &*hull : nullptr;

@@ -85,10 +85,11 @@ struct KinPoint {
   double var_w = 0, var_dw = 0, var_a = 0, var_rot = 0;
 };
 
-// ValidateInertiaSamples (samples.h), returning Interrupted() when `poll` fires.
-absl::Status ValidateInertiaSamples(const InertiaSamples& s, InterruptPoll* poll);
-// A copy with unit quaternions (incomplete when `poll` fires).
-InertiaSamples NormalizedCopy(const InertiaSamples& s, InterruptPoll* poll);
+// ValidateInertiaSamples (samples.h), returning Interrupted() when `poll`
+// fires; in the same pass, when `normalized` is not null, a copy of the
+// samples with unit quaternions into it (complete when OK is returned).
+absl::Status ValidateInertiaSamples(const InertiaSamples& s, InterruptPoll* poll,
+                                    InertiaSamples* normalized = nullptr);
 
 // The loops below poll `poll` and stop early (incomplete output) once it
 // has fired; callers check poll->stopped().

@@ -397,11 +397,20 @@ void NormalizeOrientations(InertiaSamples& s) {
 
 namespace internal {
 
-absl::Status ValidateInertiaSamples(const InertiaSamples& s, InterruptPoll* poll) {
+absl::Status ValidateInertiaSamples(const InertiaSamples& s, InterruptPoll* poll,
+                                    InertiaSamples* normalized) {
   const Locator loc{s};
   const std::string src = s.source_name.empty() ? "samples" : s.source_name;
   if (s.source == ForceSource::kContacts && s.num_contacts < 1)
     return absl::InvalidArgumentError(absl::StrCat(src, ": contact source with no contacts"));
+  if (normalized != nullptr) {
+    normalized->source = s.source;
+    normalized->num_contacts = s.num_contacts;
+    normalized->source_name = s.source_name;
+    normalized->line_numbers = s.line_numbers;
+    normalized->samples.clear();
+    normalized->samples.reserve(s.samples.size());
+  }
   const bool kin = s.HasKinematics();
   for (int i = 0; i < static_cast<int>(s.samples.size()); ++i) {
     if (poll->Tick()) return Interrupted();
@@ -410,23 +419,12 @@ absl::Status ValidateInertiaSamples(const InertiaSamples& s, InterruptPoll* poll
     TF_RETURN_IF_ERROR(s.source == ForceSource::kWrench ? ValidateWrench(loc, x, i)
                                                         : ValidateContacts(loc, s, i));
     TF_RETURN_IF_ERROR(ValidateKinematics(loc, x, i, kin));
+    if (normalized != nullptr) {
+      normalized->samples.push_back(x);
+      normalized->samples.back().orientation.normalize();
+    }
   }
   return absl::OkStatus();
-}
-
-InertiaSamples NormalizedCopy(const InertiaSamples& s, InterruptPoll* poll) {
-  InertiaSamples out;
-  out.source = s.source;
-  out.num_contacts = s.num_contacts;
-  out.source_name = s.source_name;
-  out.line_numbers = s.line_numbers;
-  out.samples.reserve(s.samples.size());
-  for (const InertiaSample& x : s.samples) {
-    if (poll->Tick()) break;
-    out.samples.push_back(x);
-    out.samples.back().orientation.normalize();
-  }
-  return out;
 }
 
 }  // namespace internal

@@ -61,10 +61,12 @@ v1::FitInertiaResponse InertiaFitToProto(const inertia::InertiaFit& fit);
 // inertia::DescribeFit); `standard` is recomputed from the parameters.
 inertia::InertiaFit InertiaFitFromProto(const v1::FitInertiaResponse& response);
 
-// Fits `samples` (validated here) with `options` under `limits`
+// Fits `samples` (validated here; none: "samples: the stream carried no
+// samples", after the options' errors) with `options` under `limits`
 // (max_fit_bytes), polling `state.interrupt`; the response carries the
 // error metrics when options.truth is set. Used by the CLI's local mode and
-// by InertiaStream::Fit. `progress` receives the fraction done (may be empty).
+// by the server on an InertiaStream's samples and options. `progress`
+// receives the fraction done (may be empty).
 // `fit`, when not null, receives the library's result as well (with the
 // region model of a DENSITY fit, e.g. for inertia::DensityPlotSvg).
 absl::StatusOr<v1::FitInertiaResponse> FitInertiaSamples(const inertia::InertiaSamples& samples,
@@ -93,10 +95,9 @@ class InertiaStream {
   // anything is allocated: a server reserves it from its budget first.
   int64_t held_bytes_after(const v1::FitInertiaRequest& message) const;
 
-  // After the last message: validates everything and fits.
-  absl::StatusOr<v1::FitInertiaResponse> Fit(const CallLimits& limits = {},
-                                             std::function<void(double)> progress = {},
-                                             const CallState& state = {}) const;
+  // After the last message, what FitInertiaSamples fits (it validates them).
+  const inertia::InertiaSamples& samples() const { return samples_; }
+  const v1::InertiaFitOptions& options() const { return options_; }
 
  private:
   int64_t max_samples_;

@@ -33,9 +33,11 @@ enum class EstimateMethod {
 struct EstimateOptions {
   EstimateMethod method = EstimateMethod::kProjection;
   double origin_weight = 1e-2;  // lambda >= 0
-  int cone_sides = 12;          // NORMAL_LSQ cone pyramid, 3..64
-  double rank_tolerance = 1e-9;
-  int max_contacts = 64;
+  // The problem is validated and its FE-plane built as the planner does,
+  // with these settings: plan.cone_sides (NORMAL_LSQ cone pyramid, 3..64),
+  // plan.rank_tolerance and plan.max_contacts (the caller's limit,
+  // api::SetLibraryLimits). Its other fields are not used.
+  planner::PlanOptions plan;
   // NORMAL_LSQ: sigma below this floor (N) is raised to it (a perfect
   // sensor would otherwise get an infinite weight).
   double min_sigma = 1e-3;
