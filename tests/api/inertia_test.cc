@@ -129,6 +129,11 @@ TEST(InertiaStream, InconsistentMessagesAreNamed) {
         << r.status();
   }
   {
+    const InertiaStream stream;  // no message: the fit says so
+    EXPECT_EQ(FitInertiaSamples(stream.samples(), stream.options()).status().message(),
+              "samples: the stream carried no samples");
+  }
+  {
     // A sample whose contact count differs from the first: the library's
     // validation names it at the fit.
     InertiaStream stream;
