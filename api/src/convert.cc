@@ -115,12 +115,8 @@ absl::Status UncertaintyFromProto(const v1::ParameterUncertainty& in, double mas
                        " entries, need 9 (3x3 row-major)"));
     }
     for (int k = 0; k < 9; ++k) com_covariance(k / 3, k % 3) = in.com_covariance(k);
-    if (absl::Status s =
-            planner::CheckCovariance("object.uncertainty.com_covariance", com_covariance,
-                                     planner::kMaxLength * planner::kMaxLength);
-        !s.ok()) {
-      return s;
-    }
+    TF_RETURN_IF_ERROR(planner::CheckCovariance("object.uncertainty.com_covariance", com_covariance,
+                                                planner::kMaxLength * planner::kMaxLength));
   }
   out->covariance = planner::CovarianceFromMassAndCom(mass, com, in.mass_sigma(), com_covariance);
   return absl::OkStatus();
@@ -208,9 +204,7 @@ absl::StatusOr<planner::PlanProblem> ToProblem(const v1::PlanRequest& request) {
 
 absl::StatusOr<planner::PlanOptions> ToOptions(const v1::PlanRequest& request) {
   planner::PlanOptions options;  // unset fields keep these defaults
-  absl::StatusOr<planner::ConeModel> cone = ConeFromProto(request.cone());
-  if (!cone.ok()) return cone.status();
-  options.cone = *cone;
+  TF_ASSIGN_OR_RETURN(options.cone, ConeFromProto(request.cone()));
   if (request.cone_sides() > static_cast<uint32_t>(std::numeric_limits<int>::max())) {
     // Would wrap to a negative int; the planner's range check sees the rest.
     return absl::InvalidArgumentError(
@@ -426,10 +420,10 @@ absl::StatusOr<planner::TrajectoryProblem> ToTrajectoryProblem(const v1::Traject
     if (in.contacts_size() > 0) {
       std::vector<planner::Contact> contacts;
       for (int i = 0; i < in.contacts_size(); ++i) {
-        absl::StatusOr<planner::Contact> c =
-            ContactFromProto(in.contacts(i), absl::StrCat("steps[", k, "].contacts[", i, "]"));
-        if (!c.ok()) return c.status();
-        contacts.push_back(*std::move(c));
+        TF_ASSIGN_OR_RETURN(
+            planner::Contact c,
+            ContactFromProto(in.contacts(i), absl::StrCat("steps[", k, "].contacts[", i, "]")));
+        contacts.push_back(std::move(c));
       }
       step.contacts = std::move(contacts);
     }

@@ -207,8 +207,8 @@ absl::Status ParseJson(std::string_view json, google::protobuf::Message* message
       google::protobuf::StringPiece(json.data(), json.size()), message, options);
   if (!status.ok()) {
     const auto text = status.message();
-    return absl::InvalidArgumentError(
-        absl::StrCat(what, ": ", OneLine(std::string(text.data(), text.size()))));
+    return io::PrependPath(
+        absl::InvalidArgumentError(OneLine(std::string(text.data(), text.size()))), what);
   }
   return absl::OkStatus();
 }

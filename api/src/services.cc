@@ -29,10 +29,10 @@ void SetLibraryLimits(const CallLimits& limits, planner::PlanOptions* options) {
   options->max_contacts = limits.max_contacts;
 }
 
-// Prefixes field paths of a nested message ("plan." + "contacts[1].normal").
-absl::Status Nested(const absl::Status& s, const char* prefix) {
-  if (s.ok() || s.code() != absl::StatusCode::kInvalidArgument) return s;
-  return absl::InvalidArgumentError(absl::StrCat(prefix, s.message()));
+// Prefixes field paths of a nested message ("plan" + "contacts[1].normal").
+absl::Status Nested(const absl::Status& s, const char* field) {
+  if (s.code() != absl::StatusCode::kInvalidArgument) return s;
+  return io::PrependPath(s, field, ".");
 }
 
 v1::TrajectoryResponse ToProto(const planner::TrajectoryResult& r) {
@@ -137,7 +137,7 @@ absl::Status CheckProbe(const planner::FrictionProbe& probe) {
 // ("plan.contacts[1].friction: not a finite number"): steps that replace
 // the contacts would otherwise never look at it.
 absl::Status CheckHoldingGrasp(const PlanCall& call) {
-  return Nested(planner::ValidateProblem(call.problem, call.options).status(), "plan.");
+  return Nested(planner::ValidateProblem(call.problem, call.options).status(), "plan");
 }
 
 }  // namespace
@@ -226,22 +226,21 @@ absl::StatusOr<v1::TrajectoryResponse> HandleTrajectory(const v1::TrajectoryRequ
                                                         const CallLimits& limits,
                                                         const CallState& state) {
   absl::StatusOr<PlanCall> call = PreparePlan(request.plan(), limits);
-  if (!call.ok()) return Nested(call.status(), "plan.");
+  if (!call.ok()) return Nested(call.status(), "plan");
   TF_RETURN_IF_ERROR(CheckHoldingGrasp(*call));
-  absl::StatusOr<planner::TrajectoryProblem> t = ToTrajectoryProblem(request, call->problem);
-  if (!t.ok()) return t.status();
-  TF_RETURN_IF_ERROR(CheckTrajectorySize(*t, call->options, limits));
+  TF_ASSIGN_OR_RETURN(planner::TrajectoryProblem t, ToTrajectoryProblem(request, call->problem));
+  TF_RETURN_IF_ERROR(CheckTrajectorySize(t, call->options, limits));
   const bool warm = !request.has_warm_start() || request.warm_start();
-  absl::StatusOr<planner::TrajectoryResult> r = planner::PlanTrajectory(
-      *t, call->options, call->solver, warm, planner::SolveControl{state.interrupt});
-  if (!r.ok()) return r.status();
-  return FiniteAnswer<v1::TrajectoryResponse>(ToProto(*r));
+  TF_ASSIGN_OR_RETURN(planner::TrajectoryResult r,
+                      planner::PlanTrajectory(t, call->options, call->solver, warm,
+                                              planner::SolveControl{state.interrupt}));
+  return FiniteAnswer<v1::TrajectoryResponse>(ToProto(r));
 }
 
 absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
     const v1::FrictionProbeRequest& request, const CallLimits& limits, const CallState& state) {
   absl::StatusOr<PlanCall> call = PreparePlan(request.plan(), limits);
-  if (!call.ok()) return Nested(call.status(), "plan.");
+  if (!call.ok()) return Nested(call.status(), "plan");
   TF_RETURN_IF_ERROR(CheckHoldingGrasp(*call));
   planner::FrictionProbe probe;
   probe.position = FromProto(request.position());
@@ -260,20 +259,17 @@ absl::StatusOr<v1::FrictionProbeResponse> HandleFrictionProbe(
                        1;
   // Per step a time (8 bytes) and a probe force (3 doubles), with tags.
   constexpr double kProbeStepBytes = 40;
-  if (absl::Status s = CheckPlannedSteps(
-          {"sample_rate", "probe steps", "holding contacts", steps,
-           steps * static_cast<double>(call->problem.contacts.size()), steps * kProbeStepBytes},
-          call->options.cone_sides, limits);
-      !s.ok()) {
-    return s;
-  }
-  absl::StatusOr<planner::ProbePlan> plan = planner::PlanFrictionProbe(
-      call->problem, probe, call->options, call->solver, planner::SolveControl{state.interrupt});
-  if (!plan.ok()) return plan.status();
+  TF_RETURN_IF_ERROR(CheckPlannedSteps(
+      {"sample_rate", "probe steps", "holding contacts", steps,
+       steps * static_cast<double>(call->problem.contacts.size()), steps * kProbeStepBytes},
+      call->options.cone_sides, limits));
+  TF_ASSIGN_OR_RETURN(planner::ProbePlan plan,
+                      planner::PlanFrictionProbe(call->problem, probe, call->options, call->solver,
+                                                 planner::SolveControl{state.interrupt}));
   v1::FrictionProbeResponse out;
-  for (double t : plan->times) out.add_times(t);
-  for (const auto& f : plan->probe_forces) *out.add_probe_forces() = api::ToProto(f);
-  *out.mutable_holding() = ToProto(plan->holding);
+  for (double t : plan.times) out.add_times(t);
+  for (const auto& f : plan.probe_forces) *out.add_probe_forces() = api::ToProto(f);
+  *out.mutable_holding() = ToProto(plan.holding);
   return FiniteAnswer<v1::FrictionProbeResponse>(std::move(out));
 }
 
@@ -284,8 +280,7 @@ absl::StatusOr<v1::EstimateResponse> HandleEstimate(const v1::EstimateRequest& r
   *as_plan.mutable_object() = request.object();
   *as_plan.mutable_contacts() = request.contacts();
   *as_plan.mutable_external_wrench() = request.external_wrench();
-  absl::StatusOr<planner::PlanProblem> problem = ToProblem(as_plan);
-  if (!problem.ok()) return problem.status();
+  TF_ASSIGN_OR_RETURN(planner::PlanProblem problem, ToProblem(as_plan));
   estimator::EstimateOptions o;
   switch (request.method()) {
     case v1::ESTIMATE_METHOD_UNSPECIFIED:
@@ -310,10 +305,7 @@ absl::StatusOr<v1::EstimateResponse> HandleEstimate(const v1::EstimateRequest& r
   // The worker thread's buffers: warm estimates allocate only the response.
   thread_local estimator::EstimationWorkspace workspace;
   thread_local estimator::ForceEstimate estimate;
-  if (absl::Status s = estimator::EstimateForces(*problem, readings, o, &workspace, &estimate);
-      !s.ok()) {
-    return s;
-  }
+  TF_RETURN_IF_ERROR(estimator::EstimateForces(problem, readings, o, &workspace, &estimate));
   const estimator::ForceEstimate* e = &estimate;
   v1::EstimateResponse out;
   out.set_status(ToProto(e->status));
@@ -382,10 +374,9 @@ absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& r
       return absl::InvalidArgumentError(
           absl::StrCat("pre_slip: unknown value ", static_cast<int>(request.pre_slip())));
   }
-  absl::StatusOr<estimator::FrictionEstimate> e = estimator::EstimateFriction(trials, o);
-  if (!e.ok()) return e.status();
+  TF_ASSIGN_OR_RETURN(estimator::FrictionEstimate e, estimator::EstimateFriction(trials, o));
   v1::FrictionResponse out;
-  for (const auto& t : e->trials) {
+  for (const auto& t : e.trials) {
     v1::TrialFriction* r = out.add_trials();
     r->set_name(t.name);
     r->set_slipped(t.slipped);
@@ -400,11 +391,11 @@ absl::StatusOr<v1::FrictionResponse> HandleFriction(const v1::FrictionRequest& r
     r->set_mesh_triangle(t.mesh_triangle);
     r->set_message(t.message);
   }
-  out.set_median(e->median);
-  out.set_mean(e->mean);
-  out.set_iqr(e->iqr);
-  out.set_mu_sigma(e->mu_sigma);
-  out.set_count(e->count);
+  out.set_median(e.median);
+  out.set_mean(e.mean);
+  out.set_iqr(e.iqr);
+  out.set_mu_sigma(e.mu_sigma);
+  out.set_count(e.count);
   return FiniteAnswer<v1::FrictionResponse>(std::move(out));
 }
 
@@ -473,16 +464,13 @@ absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request,
   if (request.has_blocks()) options.blocks = request.blocks();
   if (!request.reading_units().empty()) options.reading_units = request.reading_units();
   if (!request.model_json().empty()) {
-    absl::StatusOr<sim::SensorModel> model =
-        sim::SensorModelFromJson(request.model_json(), "model_json");
-    if (!model.ok()) return model.status();
-    options.model = *model;
+    TF_ASSIGN_OR_RETURN(options.model,
+                        sim::SensorModelFromJson(request.model_json(), "model_json"));
   }
-  absl::StatusOr<audit::AuditReport> report = audit::RunAudit(data, options);
-  if (!report.ok()) return report.status();
+  TF_ASSIGN_OR_RETURN(audit::AuditReport report, audit::RunAudit(data, options));
   v1::AuditResponse out;
-  out.set_nominal_adequate(report->nominal_adequate);
-  for (const audit::Cause& c : report->causes) {
+  out.set_nominal_adequate(report.nominal_adequate);
+  for (const audit::Cause& c : report.causes) {
     v1::AuditCause* cause = out.add_causes();
     cause->set_effect(c.effect);
     cause->set_form(c.form);
@@ -498,12 +486,12 @@ absl::StatusOr<v1::AuditResponse> HandleAudit(const v1::AuditRequest& request,
     cause->set_found_by(c.found_by);
     for (int b : c.blocks) cause->add_blocks(b);
   }
-  out.set_heldout_rms_before(report->heldout_rms_before);
-  out.set_heldout_rms_after(report->heldout_rms_after);
-  out.set_gain(report->gain);
-  out.set_extended_model_json(sim::SensorModelToJson(report->extended_model));
-  out.set_report_json(audit::AuditReportJson(*report));
-  out.set_summary(audit::FormatAuditSummary(*report));
+  out.set_heldout_rms_before(report.heldout_rms_before);
+  out.set_heldout_rms_after(report.heldout_rms_after);
+  out.set_gain(report.gain);
+  out.set_extended_model_json(sim::SensorModelToJson(report.extended_model));
+  out.set_report_json(audit::AuditReportJson(report));
+  out.set_summary(audit::FormatAuditSummary(report));
   return FiniteAnswer<v1::AuditResponse>(std::move(out));
 }
 

@@ -202,9 +202,8 @@ absl::StatusOr<AblationTable> RunAblation(const AblationConfig& config,
     for (int k = 0; k < config.seeds; ++k) {
       absl::StatusOr<AblationData> data = source.make(config.first_seed + k);
       if (!data.ok())
-        return absl::Status(data.status().code(),
-                            absl::StrCat("source ", source.name, ", seed ", config.first_seed + k,
-                                         ": ", data.status().message()));
+        return io::PrependPath(
+            data.status(), absl::StrCat("source ", source.name, ", seed ", config.first_seed + k));
       FitAll(*data, methods, &runs);
       if (config.progress) config.progress(++done / total);
     }

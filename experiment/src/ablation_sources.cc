@@ -9,6 +9,7 @@
 #include "tactforce/experiment/ablation.h"
 #include "tactforce/experiment/inhand.h"
 #include "tactforce/inertia/simulate.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::experiment {
 namespace {
@@ -50,9 +51,8 @@ AblationSource Simulation(const AblationConfig& c, double variance) {
     so.rate_hz = c.rate;
     so.noise.force_sigma = std::sqrt(variance);
     so.seed = seed;
-    absl::StatusOr<inertia::SimulationResult> sim = inertia::SimulateInertia(so);
-    if (!sim.ok()) return sim.status();
-    return FromSimulation(*std::move(sim), so);
+    TF_ASSIGN_OR_RETURN(inertia::SimulationResult sim, inertia::SimulateInertia(so));
+    return FromSimulation(std::move(sim), so);
   };
   return s;
 }
@@ -68,14 +68,11 @@ AblationSource Wrist(const AblationConfig& c) {
     so.mode = inertia::SimulationMode::kWristWrench;
     so.duration = c.duration;
     so.rate_hz = c.rate;
-    absl::StatusOr<inertia::SimulationNoise> noise = inertia::NadeauNoise("moderate");
-    if (!noise.ok()) return noise.status();
-    so.noise = *noise;
+    TF_ASSIGN_OR_RETURN(so.noise, inertia::NadeauNoise("moderate"));
     so.write_kinematics = true;
     so.seed = seed;
-    absl::StatusOr<inertia::SimulationResult> sim = inertia::SimulateInertia(so);
-    if (!sim.ok()) return sim.status();
-    return FromSimulation(*std::move(sim), so);
+    TF_ASSIGN_OR_RETURN(inertia::SimulationResult sim, inertia::SimulateInertia(so));
+    return FromSimulation(std::move(sim), so);
   };
   return s;
 }
@@ -95,13 +92,12 @@ AblationSource InHand(const AblationConfig& c, Tracker tracker) {
     ic.duration = c.duration;
     ic.rate = c.rate;
     ic.seed = seed;
-    absl::StatusOr<InHandRun> run = RunInHand(ic);
-    if (!run.ok()) return run.status();
+    TF_ASSIGN_OR_RETURN(InHandRun run, RunInHand(ic));
     AblationData d;
-    d.object = run->object_name;
-    d.truth = run->truth;
-    d.base = InHandFitOptions(*run, inertia::InertiaMethod::kConstrained);
-    d.samples = std::move(run->samples);
+    d.object = run.object_name;
+    d.truth = run.truth;
+    d.base = InHandFitOptions(run, inertia::InertiaMethod::kConstrained);
+    d.samples = std::move(run.samples);
     return d;
   };
   return s;

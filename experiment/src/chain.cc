@@ -30,9 +30,8 @@ absl::StatusOr<Truth> ObjectTruth(const ChainConfig& config, GraspObject object)
   GraspConfig gc = config.grasp;
   gc.object = object;
   gc.planning_model.reset();
-  absl::StatusOr<std::unique_ptr<GraspSetup>> setup = GraspSetup::Create(gc);
-  if (!setup.ok()) return setup.status();
-  const GraspSetup::Impl& im = (*setup)->impl();
+  TF_ASSIGN_OR_RETURN(std::unique_ptr<GraspSetup> setup, GraspSetup::Create(gc));
+  const GraspSetup::Impl& im = setup->impl();
   return Truth{im.base.object.mass, im.base.contacts.front().friction, im.base.object.com,
                im.inertia};
 }
@@ -52,9 +51,8 @@ absl::Status ProbeFriction(const ChainConfig& config, uint64_t seed, ChainEstima
   const SurfacePair surface{absl::StrCat(ToString(e->object), "-fingertip"), e->mu_true};
   std::vector<double> mus;
   for (int k = 0; k < config.probe_trials; ++k) {
-    absl::StatusOr<ProbeTrialResult> t = RunProbeTrial(pc, surface, k, e->mu_true);
-    if (!t.ok()) return t.status();
-    if (t->valid) mus.push_back(t->mu_estimated);
+    TF_ASSIGN_OR_RETURN(ProbeTrialResult t, RunProbeTrial(pc, surface, k, e->mu_true));
+    if (t.valid) mus.push_back(t.mu_estimated);
   }
   e->probes_valid = static_cast<int>(mus.size());
   if (mus.size() < 2)
@@ -77,12 +75,10 @@ absl::StatusOr<inertia::InertiaFit> FitInHand(const ChainConfig& config, uint64_
   ic.seed = seed;
   ic.duration = config.inhand_duration;
   absl::StatusOr<InHandRun> run = RunInHand(ic);
-  if (!run.ok())
-    return absl::Status(run.status().code(), absl::StrCat("inhand: ", run.status().message()));
+  if (!run.ok()) return io::PrependPath(run.status(), "inhand");
   absl::StatusOr<inertia::InertiaFit> fit =
       inertia::FitInertia(run->samples, InHandFitOptions(*run, config.fit_method));
-  if (!fit.ok())
-    return absl::Status(fit.status().code(), absl::StrCat("fit: ", fit.status().message()));
+  if (!fit.ok()) return io::PrependPath(fit.status(), "fit");
   return fit;
 }
 
@@ -118,9 +114,8 @@ absl::StatusOr<ChainEstimates> Estimate(const ChainConfig& config, GraspObject o
   e.mass_true = truth.mass;
   e.com_true = truth.com;
   TF_RETURN_IF_ERROR(ProbeFriction(config, seed, &e));
-  absl::StatusOr<inertia::InertiaFit> fit = FitInHand(config, seed, truth, object);
-  if (!fit.ok()) return fit.status();
-  FillModels(config, *fit, &e);
+  TF_ASSIGN_OR_RETURN(inertia::InertiaFit fit, FitInHand(config, seed, truth, object));
+  FillModels(config, fit, &e);
   return e;
 }
 
@@ -139,7 +134,7 @@ absl::Status RunPlanned(const ChainConfig& config, const ChainEstimates& e, Chai
     if (row->plan_failures++ == 0) row->plan_failure = std::string(b.status().message());
     return absl::OkStatus();
   }
-  if (!b.ok()) return b.status();
+  TF_RETURN_IF_ERROR(b.status());
   row->successes += b->successes;
   row->trials_run += b->trials;
   for (const TrialResult& t : b->results) {
@@ -209,21 +204,19 @@ absl::StatusOr<ChainReport> RunChain(const ChainConfig& config,
   const int total = static_cast<int>(config.objects.size()) * config.seeds * 4;
   int done = 0;
   for (GraspObject object : config.objects) {
-    absl::StatusOr<Truth> truth = ObjectTruth(config, object);
-    if (!truth.ok()) return truth.status();
+    TF_ASSIGN_OR_RETURN(Truth truth, ObjectTruth(config, object));
     std::vector<ChainRow> rows(3);
     std::vector<std::vector<double>> squeezes(3), margins(3);
     for (int p = 0; p < 3; ++p)
       rows[p].object = object, rows[p].planning = static_cast<Planning>(p);
     for (int s = 0; s < config.seeds; ++s) {
-      absl::StatusOr<ChainEstimates> e = Estimate(config, object, config.seed + s, *truth);
-      if (!e.ok()) return e.status();
+      TF_ASSIGN_OR_RETURN(ChainEstimates e, Estimate(config, object, config.seed + s, truth));
       if (progress) progress(++done, total);
       for (int p = 0; p < 3; ++p) {
-        TF_RETURN_IF_ERROR(RunPlanned(config, *e, &rows[p], &squeezes[p], &margins[p]));
+        TF_RETURN_IF_ERROR(RunPlanned(config, e, &rows[p], &squeezes[p], &margins[p]));
         if (progress) progress(++done, total);
       }
-      report.estimates.push_back(*e);
+      report.estimates.push_back(e);
     }
     for (int p = 0; p < 3; ++p) {
       rows[p].median_squeeze_n = Median(squeezes[p]);

@@ -87,12 +87,10 @@ absl::StatusOr<std::vector<PointMass>> JsonPointMasses(const io::JsonValue& v,
     const io::JsonValue* p = e.Find("position");
     if (m == nullptr || p == nullptr) return FieldError(at, "needs \"mass\" and \"position\"");
     PointMass pm;
-    absl::StatusOr<double> mass = JsonNumber(*m, at + ".mass");
-    if (!mass.ok()) return mass.status();
-    absl::StatusOr<Vector3d> pos = JsonTriple(*p, at + ".position");
-    if (!pos.ok()) return pos.status();
-    pm.mass = *mass;
-    pm.position = *pos;
+    TF_ASSIGN_OR_RETURN(double mass, JsonNumber(*m, at + ".mass"));
+    TF_ASSIGN_OR_RETURN(Vector3d pos, JsonTriple(*p, at + ".position"));
+    pm.mass = mass;
+    pm.position = pos;
     out.push_back(pm);
   }
   return out;
@@ -105,17 +103,12 @@ absl::Status ReadObjectMember(const std::string& key, const io::JsonValue& value
     if (!value.is_string()) return FieldError(where, "expected a string");
     o->name = value.string();
   } else if (key == "dimensions" || key == "center") {
-    absl::StatusOr<Vector3d> v = JsonTriple(value, where);
-    if (!v.ok()) return v.status();
-    (key == "dimensions" ? o->dimensions : o->center) = *v;
+    TF_ASSIGN_OR_RETURN(Vector3d v, JsonTriple(value, where));
+    (key == "dimensions" ? o->dimensions : o->center) = v;
   } else if (key == "mass") {
-    absl::StatusOr<double> m = JsonNumber(value, where);
-    if (!m.ok()) return m.status();
-    o->mass = *m;
+    TF_ASSIGN_OR_RETURN(o->mass, JsonNumber(value, where));
   } else if (key == "point_masses") {
-    absl::StatusOr<std::vector<PointMass>> p = JsonPointMasses(value, where);
-    if (!p.ok()) return p.status();
-    o->point_masses = *p;
+    TF_ASSIGN_OR_RETURN(o->point_masses, JsonPointMasses(value, where));
   } else {
     return FieldError(where, "unknown key (expected name, dimensions, mass, center, point_masses)");
   }
@@ -180,23 +173,21 @@ absl::Status ValidateInHandObject(const InHandObject& o, const std::string& pref
 
 absl::StatusOr<InHandObject> ParseInHandObjectJson(const std::string& text,
                                                    const std::string& source) {
-  absl::StatusOr<io::JsonValue> root = io::ParseJson(text, source);
-  if (!root.ok()) return root.status();
-  if (!root->is_object()) return FieldError(source, "expected a JSON object");
+  TF_ASSIGN_OR_RETURN(io::JsonValue root, io::ParseJson(text, source));
+  if (!root.is_object()) return FieldError(source, "expected a JSON object");
   InHandObject o;
   o.name = std::filesystem::path(source).stem().string();
-  if (root->Find("dimensions") == nullptr) return FieldError(source, "missing key 'dimensions'");
-  if (root->Find("mass") == nullptr) return FieldError(source, "missing key 'mass'");
-  for (const auto& [key, value] : root->members())
+  if (root.Find("dimensions") == nullptr) return FieldError(source, "missing key 'dimensions'");
+  if (root.Find("mass") == nullptr) return FieldError(source, "missing key 'mass'");
+  for (const auto& [key, value] : root.members())
     TF_RETURN_IF_ERROR(ReadObjectMember(key, value, absl::StrCat(source, ": ", key), &o));
   TF_RETURN_IF_ERROR(ValidateInHandObject(o, source + ": "));
   return o;
 }
 
 absl::StatusOr<InHandObject> ReadInHandObjectFile(const std::string& path) {
-  absl::StatusOr<std::string> text = io::ReadTextFile(path);
-  if (!text.ok()) return text.status();
-  return ParseInHandObjectJson(*text, path);
+  TF_ASSIGN_OR_RETURN(std::string text, io::ReadTextFile(path));
+  return ParseInHandObjectJson(text, path);
 }
 
 inertia::InertialParameters InHandObjectInertia(const InHandObject& o) {
@@ -246,8 +237,8 @@ absl::Status ValidateInHandConfig(const InHandConfig& c) {
   auto bad = [](const char* field, const std::string& why) { return FieldError(field, why); };
   if (c.custom) {
     TF_RETURN_IF_ERROR(ValidateInHandObject(*c.custom));
-  } else if (absl::StatusOr<InHandObject> b = BuiltInInHandObject(c.object); !b.ok()) {
-    return b.status();
+  } else {
+    TF_RETURN_IF_ERROR(BuiltInInHandObject(c.object).status());
   }
   if (!(c.rate > 0) || !std::isfinite(c.rate) || c.rate > 1000)
     return bad("rate", absl::StrFormat("must be in (0, 1000] Hz, got %g", c.rate));
@@ -256,8 +247,7 @@ absl::Status ValidateInHandConfig(const InHandConfig& c) {
   if (c.duration * c.rate < 10)
     return bad("duration", "duration * rate must give at least 10 samples");
   if (!c.custom_force_model) {
-    if (absl::StatusOr<TactileForceModel> m = NamedForceModel(c.force_model); !m.ok())
-      return m.status();
+    TF_RETURN_IF_ERROR(NamedForceModel(c.force_model).status());
   } else {
     const TactileForceModel& m = *c.custom_force_model;
     for (double v : {m.bias_sigma, m.noise_floor, m.noise_slope, m.point_sigma})

@@ -269,20 +269,18 @@ absl::StatusOr<InHandRun> RunInHand(const InHandConfig& config,
                                     const std::function<void(double)>& progress) {
   using namespace inhand_internal;  // NOLINT: the run's internals
   const auto wall0 = std::chrono::steady_clock::now();
-  absl::StatusOr<Setup> setup = PrepareInHand(config);
-  if (!setup.ok()) return setup.status();
-  auto scene = Scene::FromMjcf(setup->mjcf);
-  if (!scene.ok()) return scene.status();
+  TF_ASSIGN_OR_RETURN(Setup setup, PrepareInHand(config));
+  TF_ASSIGN_OR_RETURN(auto scene, Scene::FromMjcf(setup.mjcf));
   InHandRun run;
-  run.object = setup->object;
-  run.object_name = setup->object.name;
-  run.truth = setup->truth;
-  run.mesh = std::make_shared<const io::TriangleMesh>(InHandObjectMesh(setup->object));
+  run.object = setup.object;
+  run.object_name = setup.object.name;
+  run.truth = setup.truth;
+  run.mesh = std::make_shared<const io::TriangleMesh>(InHandObjectMesh(setup.object));
   run.hull = run.mesh->vertices;
   run.samples.source = inertia::ForceSource::kContacts;
   run.samples.num_contacts = kFingers;
   run.samples.source_name = absl::StrCat("inhand ", run.object_name);
-  InHandSim sim(*setup, **scene);
+  InHandSim sim(setup, *scene);
   sim.Locate();
   TF_RETURN_IF_ERROR(sim.Simulate(progress, &run));
   sim.FinishForceStats(&run.stats);
@@ -290,7 +288,7 @@ absl::StatusOr<InHandRun> RunInHand(const InHandConfig& config,
     run.tracker_position_sigma = config.vision.position_sigma;
     run.tracker_orientation_sigma = config.vision.orientation_sigma_deg * M_PI / 180;
   }
-  ComputeStats(*setup, &run);
+  ComputeStats(setup, &run);
   run.stats.wall_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   if (progress) progress(1.0);

@@ -131,7 +131,7 @@ absl::Status PlanTicks(Setup* s) {
   auto planned =
       planner::PlanTrajectory(traj, planner::PlanOptions{}, planner::SolverKind::kGeometric, true);
   if (!planned.ok())
-    return absl::InternalError(absl::StrCat("planner: ", planned.status().message()));
+    return io::PrependPath(absl::InternalError(planned.status().message()), "planner");
   for (int j = 0; j < ticks; ++j) {
     const planner::PlanResult& r = planned->steps[j];
     const double t = j * s->dt_tick - s->cfg.settle;
@@ -237,17 +237,14 @@ absl::StatusOr<Setup> PrepareInHand(const InHandConfig& config) {
   if (config.custom) {
     s.object = *config.custom;
   } else {
-    absl::StatusOr<InHandObject> o = BuiltInInHandObject(config.object);
-    if (!o.ok()) return o.status();
-    s.object = *o;
+    TF_ASSIGN_OR_RETURN(s.object, BuiltInInHandObject(config.object));
   }
   if (s.object.name.empty()) s.object.name = config.object;
   s.truth = InHandObjectInertia(s.object);
-  absl::StatusOr<TactileForceModel> fm =
-      config.custom_force_model ? absl::StatusOr<TactileForceModel>(*config.custom_force_model)
-                                : NamedForceModel(config.force_model);
-  if (!fm.ok()) return fm.status();
-  s.force_model = *fm;
+  TF_ASSIGN_OR_RETURN(s.force_model,
+                      config.custom_force_model
+                          ? absl::StatusOr<TactileForceModel>(*config.custom_force_model)
+                          : NamedForceModel(config.force_model));
   LayOutContacts(&s);
   s.excitation = ScaledExcitation(config);
   TF_RETURN_IF_ERROR(PlanTicks(&s));

@@ -7,6 +7,7 @@
 #include "absl/strings/str_join.h"
 #include "tactforce/experiment/probe.h"
 #include "tactforce/io/json.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::experiment {
 namespace {
@@ -85,22 +86,20 @@ absl::StatusOr<ProbeObject> FindProbeObject(const std::string& name) {
 
 absl::StatusOr<ProbeObject> ProbeObjectFromJson(const std::string& text,
                                                 const std::string& source) {
-  absl::StatusOr<io::JsonValue> doc = io::ParseJson(text, source);
-  if (!doc.ok()) return doc.status();
-  if (!doc->is_object())
+  TF_ASSIGN_OR_RETURN(io::JsonValue doc, io::ParseJson(text, source));
+  if (!doc.is_object())
     return Bad(source, "must be a JSON object {\"size\": [x, y, z], \"mass\": m}");
   ProbeObject o;
   o.name = source;
   bool has_size = false, has_mass = false;
-  for (const auto& [key, v] : doc->members()) {
+  for (const auto& [key, v] : doc.members()) {
     const std::string at = At(source, v);
     if (key == "name") {
       if (!v.is_string()) return Bad(at + "name", "must be a string");
       o.name = v.string();
     } else if (key == "size" || key == "com_offset") {
-      absl::StatusOr<Vector3d> x = Vec3Field(v, at + key);
-      if (!x.ok()) return x.status();
-      (key == "size" ? o.size : o.com_offset) = *x;
+      TF_ASSIGN_OR_RETURN(Vector3d x, Vec3Field(v, at + key));
+      (key == "size" ? o.size : o.com_offset) = x;
       has_size = has_size || key == "size";
     } else if (key == "mass") {
       if (!v.is_number()) return Bad(at + "mass", "must be a number (kg)");
@@ -112,8 +111,7 @@ absl::StatusOr<ProbeObject> ProbeObjectFromJson(const std::string& text,
   }
   if (!has_size) return Bad(source + ": size", "missing");
   if (!has_mass) return Bad(source + ": mass", "missing");
-  if (absl::Status s = ValidateProbeObject(o); !s.ok())
-    return Bad(source, std::string(s.message()));
+  TF_RETURN_IF_ERROR(io::PrependPath(ValidateProbeObject(o), source));
   return o;
 }
 

@@ -127,8 +127,7 @@ absl::Status ValidateProbeConfig(const ProbeConfig& c) {
   auto bad = [](const char* f, const std::string& why) {
     return absl::InvalidArgumentError(absl::StrCat(f, ": ", why));
   };
-  if (absl::Status s = ValidateProbeObject(c.object); !s.ok())
-    return absl::InvalidArgumentError(absl::StrCat("object.", s.message()));
+  TF_RETURN_IF_ERROR(io::PrependPath(ValidateProbeObject(c.object), "object", "."));
   if (!(c.force_sigma >= 0 && c.force_sigma <= 5))
     return bad("force_sigma", absl::StrFormat("must be in [0, 5] N, got %g", c.force_sigma));
   if (!(c.force_bias >= 0 && c.force_bias <= 5))
@@ -158,25 +157,22 @@ absl::StatusOr<ProbeTrialResult> RunProbeTrial(const ProbeConfig& c, const Surfa
   TF_RETURN_IF_ERROR(ValidateProbeConfig(c));
   TF_RETURN_IF_ERROR(ValidateSurfaces({surface}));
   std::mt19937_64 rng(TrialSeed(c.seed, surface.name, trial));
-  absl::StatusOr<ProbeSetup> setup = MakeProbeSetup(c, surface, rng);
-  if (!setup.ok()) return setup.status();
-  absl::StatusOr<ProbeRecording> rec = SimulateProbe(c, *setup, rng);
-  if (!rec.ok()) return rec.status();
+  TF_ASSIGN_OR_RETURN(ProbeSetup setup, MakeProbeSetup(c, surface, rng));
+  TF_ASSIGN_OR_RETURN(ProbeRecording rec, SimulateProbe(c, setup, rng));
   ProbeTrialResult r;
   r.surface = surface.name;
   r.trial = trial;
   r.mu_true = surface.mu;
   r.mu_slope = mu_slope;
-  if (rec->dropped || rec->trial.samples.size() < 3) {
+  if (rec.dropped || rec.trial.samples.size() < 3) {
     r.invalid_reason =
-        rec->dropped ? "object dropped (moved more than 20 mm)" : "probe never touched the object";
+        rec.dropped ? "object dropped (moved more than 20 mm)" : "probe never touched the object";
   } else {
     estimator::FrictionOptions options = c.slope.friction;
     options.mesh = BoxMesh(c.object.size);  // the normal from the nearest triangle, as in the paper
-    absl::StatusOr<estimator::FrictionEstimate> est =
-        estimator::EstimateFriction({rec->trial}, options);
-    if (!est.ok()) return est.status();
-    Judge(c, *rec, est->trials[0], &r);
+    TF_ASSIGN_OR_RETURN(estimator::FrictionEstimate est,
+                        estimator::EstimateFriction({rec.trial}, options));
+    Judge(c, rec, est.trials[0], &r);
   }
   r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   return r;
@@ -193,17 +189,15 @@ absl::StatusOr<ProbeReport> RunProbeExperiment(const ProbeConfig& c,
   ProbeReport report;
   const int total = trials * static_cast<int>(surfaces.size());
   for (const SurfacePair& surface : surfaces) {
-    absl::StatusOr<SlopeRow> ref = RunSlopeAndProbe(c.slope, surface.mu);
-    if (!ref.ok()) return ref.status();
+    TF_ASSIGN_OR_RETURN(SlopeRow ref, RunSlopeAndProbe(c.slope, surface.mu));
     std::vector<ProbeTrialResult> rows;
     for (int k = 0; k < trials; ++k) {
-      absl::StatusOr<ProbeTrialResult> r = RunProbeTrial(c, surface, k, ref->mu_slope);
-      if (!r.ok()) return r.status();
-      rows.push_back(*r);
-      report.trials.push_back(*std::move(r));
+      TF_ASSIGN_OR_RETURN(ProbeTrialResult r, RunProbeTrial(c, surface, k, ref.mu_slope));
+      rows.push_back(r);
+      report.trials.push_back(std::move(r));
       if (progress) progress(static_cast<int>(report.trials.size()), total);
     }
-    report.summary.per_surface.push_back(Summarize(surface, *ref, rows));
+    report.summary.per_surface.push_back(Summarize(surface, ref, rows));
   }
   Pool(&report);
   report.wall_seconds =

@@ -11,6 +11,7 @@
 #include "probe_internal.h"
 #include "scene.h"
 #include "tactforce/planner/solver.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::experiment {
 namespace {
@@ -160,7 +161,7 @@ absl::StatusOr<ProbeSetup> MakeProbeSetup(const ProbeConfig& c, const SurfacePai
   options.confidence = c.confidence;
   absl::StatusOr<planner::ProbePlan> plan =
       planner::PlanFrictionProbe(holding, s.probe, options, planner::SolverKind::kGeometric);
-  if (!plan.ok()) return absl::InternalError(absl::StrCat("planner: ", plan.status().message()));
+  if (!plan.ok()) return io::PrependPath(absl::InternalError(plan.status().message()), "planner");
   for (size_t k = 0; k < plan->holding.steps.size(); ++k)
     if (plan->holding.steps[k].status != planner::PlanStatus::kOptimal)
       return absl::FailedPreconditionError(absl::StrFormat(

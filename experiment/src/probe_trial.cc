@@ -16,6 +16,7 @@
 #include "absl/strings/str_cat.h"
 #include "probe_internal.h"
 #include "scene.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::experiment {
 namespace {
@@ -239,9 +240,8 @@ absl::StatusOr<ProbeRecording> ProbeRun::Run() {
 
 absl::StatusOr<ProbeRecording> SimulateProbe(const ProbeConfig& c, const ProbeSetup& setup,
                                              std::mt19937_64& rng) {
-  absl::StatusOr<std::unique_ptr<Scene>> scene = Scene::FromMjcf(setup.mjcf);
-  if (!scene.ok()) return scene.status();
-  ProbeRun run(c, setup, **scene, rng);
+  TF_ASSIGN_OR_RETURN(std::unique_ptr<Scene> scene, Scene::FromMjcf(setup.mjcf));
+  ProbeRun run(c, setup, *scene, rng);
   run.Locate();
   return run.Run();
 }

@@ -100,9 +100,8 @@ absl::Status ValidateErrorRanges(const ErrorRanges& r, const std::string& prefix
   };
   TF_RETURN_IF_ERROR(range("threshold_min", r.threshold_min, "threshold_max", r.threshold_max));
   TF_RETURN_IF_ERROR(range("hysteresis_max", 0.0, "hysteresis_max", r.hysteresis_max));
-  if (auto s = range("force_error_min", r.force_error_min, "force_error_max", r.force_error_max);
-      !s.ok())
-    return s;
+  TF_RETURN_IF_ERROR(
+      range("force_error_min", r.force_error_min, "force_error_max", r.force_error_max));
   TF_RETURN_IF_ERROR(range("noise_min", r.noise_min, "noise_max", r.noise_max));
   return absl::OkStatus();
 }

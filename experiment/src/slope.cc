@@ -80,9 +80,9 @@ void PlaceTip(Scene& s, double theta, double radius) {
 // Slope: the tilt (rad) at which the fingertip has slid `slip_distance`.
 absl::StatusOr<double> SlipTilt(const SlopeConfig& c, double mu) {
   const double r = c.fingertip_radius;
-  auto sc = Scene::FromMjcf(PlateMjcf(c.physics, mu, c.fingertip_mass, r, true));
-  if (!sc.ok()) return sc.status();
-  Scene& s = **sc;
+  TF_ASSIGN_OR_RETURN(auto sc,
+                      Scene::FromMjcf(PlateMjcf(c.physics, mu, c.fingertip_mass, r, true)));
+  Scene& s = *sc;
   const double theta0 = std::max(0.0, std::atan(mu) - c.start_margin_deg * kDeg);
   PlaceTip(s, theta0, r);
   const double dt = s.m->opt.timestep;
@@ -105,9 +105,9 @@ absl::StatusOr<double> SlipTilt(const SlopeConfig& c, double mu) {
 // settle, while the normal force ramps down at `probe_ramp` under a constant
 // tangential force; until 0.3 s after the slip or the normal force is gone.
 absl::StatusOr<estimator::FrictionTrial> ProbeTrial(const SlopeConfig& c, double mu) {
-  auto sc = Scene::FromMjcf(PlateMjcf(c.physics, mu, c.fingertip_mass, c.fingertip_radius, false));
-  if (!sc.ok()) return sc.status();
-  Scene& s = **sc;
+  TF_ASSIGN_OR_RETURN(auto sc, Scene::FromMjcf(PlateMjcf(c.physics, mu, c.fingertip_mass,
+                                                         c.fingertip_radius, false)));
+  Scene& s = *sc;
   mj_forward(s.m, s.d);
   const int plate = s.Geom("plate"), tip = s.Geom("tip");
   const double dt = s.m->opt.timestep;
@@ -177,15 +177,12 @@ absl::StatusOr<SlopeRow> RunSlopeAndProbe(const SlopeConfig& c, double mu) {
   TF_RETURN_IF_ERROR(ValidateSlopeConfig(one));
   SlopeRow row;
   row.mu = mu;
-  absl::StatusOr<double> theta = SlipTilt(c, mu);
-  if (!theta.ok()) return theta.status();
-  row.slip_tilt_deg = *theta / kDeg;
-  row.mu_slope = std::tan(*theta);
-  absl::StatusOr<estimator::FrictionTrial> trial = ProbeTrial(c, mu);
-  if (!trial.ok()) return trial.status();
-  auto est = estimator::EstimateFriction({*trial}, c.friction);
-  if (!est.ok()) return est.status();
-  const estimator::TrialFriction& tr = est->trials[0];
+  TF_ASSIGN_OR_RETURN(double theta, SlipTilt(c, mu));
+  row.slip_tilt_deg = theta / kDeg;
+  row.mu_slope = std::tan(theta);
+  TF_ASSIGN_OR_RETURN(estimator::FrictionTrial trial, ProbeTrial(c, mu));
+  TF_ASSIGN_OR_RETURN(auto est, estimator::EstimateFriction({trial}, c.friction));
+  const estimator::TrialFriction& tr = est.trials[0];
   row.probe_valid = tr.valid && tr.slipped;
   row.mu_probe = tr.mu;
   row.probe_message = tr.message;
@@ -196,9 +193,8 @@ absl::StatusOr<std::vector<SlopeRow>> RunSlopeTable(const SlopeConfig& c) {
   TF_RETURN_IF_ERROR(ValidateSlopeConfig(c));
   std::vector<SlopeRow> rows;
   for (double mu : c.mus) {
-    auto r = RunSlopeAndProbe(c, mu);
-    if (!r.ok()) return r.status();
-    rows.push_back(*r);
+    TF_ASSIGN_OR_RETURN(auto r, RunSlopeAndProbe(c, mu));
+    rows.push_back(r);
   }
   return rows;
 }
@@ -211,9 +207,8 @@ absl::StatusOr<double> MeasureCreep(const PhysicsSettings& physics, double mu, d
         absl::StrFormat("load_ratio: must be in [0, 1), got %g", load_ratio));
   if (!(mu > 0)) return absl::InvalidArgumentError("mu: must be > 0");
   const double r = 0.012;
-  auto sc = Scene::FromMjcf(PlateMjcf(physics, mu, fingertip_mass, r, true));
-  if (!sc.ok()) return sc.status();
-  Scene& s = **sc;
+  TF_ASSIGN_OR_RETURN(auto sc, Scene::FromMjcf(PlateMjcf(physics, mu, fingertip_mass, r, true)));
+  Scene& s = *sc;
   const double theta = std::atan(load_ratio * mu);
   PlaceTip(s, theta, r);
   const double dt = s.m->opt.timestep;

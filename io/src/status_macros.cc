@@ -4,9 +4,10 @@
 
 namespace tactforce::io {
 
-absl::Status PrependPath(const absl::Status& status, absl::string_view path) {
+absl::Status PrependPath(const absl::Status& status, absl::string_view path,
+                         absl::string_view separator) {
   if (status.ok() || path.empty()) return status;
-  absl::Status out(status.code(), absl::StrCat(path, ": ", status.message()));
+  absl::Status out(status.code(), absl::StrCat(path, separator, status.message()));
   status.ForEachPayload(
       [&out](absl::string_view url, const absl::Cord& payload) { out.SetPayload(url, payload); });
   return out;

@@ -1,6 +1,7 @@
 // ServerHost (server_host.h): credentials from PEM files, the builder with
 // message limits, health and reflection, and the drain on shutdown.
 #include "tactforce/server/server_host.h"
+#include "tactforce/io/status_macros.h"
 
 #include <algorithm>
 #include <fstream>
@@ -42,19 +43,15 @@ absl::StatusOr<std::shared_ptr<grpc::ServerCredentials>> MakeCredentials(const T
   if (tls.cert.empty() || tls.key.empty())
     return absl::InvalidArgumentError("--tls-cert and --tls-key must be given together");
 
-  absl::StatusOr<std::string> cert = ReadPem(tls.cert, "--tls-cert");
-  if (!cert.ok()) return cert.status();
-  absl::StatusOr<std::string> key = ReadPem(tls.key, "--tls-key");
-  if (!key.ok()) return key.status();
+  TF_ASSIGN_OR_RETURN(std::string cert, ReadPem(tls.cert, "--tls-cert"));
+  TF_ASSIGN_OR_RETURN(std::string key, ReadPem(tls.key, "--tls-key"));
 
   grpc::SslServerCredentialsOptions ssl;
-  ssl.pem_key_cert_pairs.push_back({*key, *cert});
+  ssl.pem_key_cert_pairs.push_back({key, cert});
   if (tls.client_ca.empty()) {
     ssl.client_certificate_request = GRPC_SSL_DONT_REQUEST_CLIENT_CERTIFICATE;
   } else {
-    absl::StatusOr<std::string> ca = ReadPem(tls.client_ca, "--tls-client-ca");
-    if (!ca.ok()) return ca.status();
-    ssl.pem_root_certs = *ca;
+    TF_ASSIGN_OR_RETURN(ssl.pem_root_certs, ReadPem(tls.client_ca, "--tls-client-ca"));
     // Mutual TLS: a client without a certificate signed by this CA fails the
     // handshake and never reaches a service.
     ssl.client_certificate_request = GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;
@@ -161,9 +158,8 @@ std::vector<std::string> ServerHost::service_names() const {
 
 absl::Status ServerHost::Start() {
   if (server_ != nullptr) return absl::FailedPreconditionError("server already started");
-  absl::StatusOr<std::shared_ptr<grpc::ServerCredentials>> credentials =
-      MakeCredentials(options_.tls);
-  if (!credentials.ok()) return credentials.status();
+  TF_ASSIGN_OR_RETURN(std::shared_ptr<grpc::ServerCredentials> credentials,
+                      MakeCredentials(options_.tls));
 
   // Process-wide switch; must be set before the builder is made.
   static std::once_flag once;
@@ -176,7 +172,7 @@ absl::Status ServerHost::Start() {
   builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, options_.reuse_port ? 1 : 0);
   builder.SetOption(std::make_unique<ReflectionOption>(options_.reflection));
   int selected_port = 0;
-  builder.AddListeningPort(options_.listen, *credentials, &selected_port);
+  builder.AddListeningPort(options_.listen, credentials, &selected_port);
   std::vector<std::string> hosted;
   for (const auto& service : services_) {
     builder.RegisterService(service->grpc_service());

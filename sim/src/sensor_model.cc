@@ -13,6 +13,7 @@
 #include "tactforce/io/json.h"
 #include "tactforce/io/suggest.h"
 #include "tactforce/io/text_file.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::sim {
 namespace {
@@ -103,7 +104,7 @@ absl::Status ValidateSensorModel(const SensorModel& m) {
   for (auto st : {nonneg(m.noise, "noise"), nonneg(m.partial_error, "partial_error"),
                   nonneg(e.threshold, "threshold"), nonneg(e.hysteresis_width, "hysteresis_width"),
                   nonneg(e.lag, "lag"), nonneg(e.saturation, "saturation")})
-    if (!st.ok()) return st;
+    TF_RETURN_IF_ERROR(st);
   if (e.threshold_shift < 0 || e.threshold_shift > 1)
     return absl::InvalidArgumentError(
         absl::StrCat("model field 'threshold_shift': must be in [0, 1], got ", e.threshold_shift));
@@ -161,14 +162,13 @@ absl::Status ValidateSensorModel(const SensorModel& m) {
 
 absl::StatusOr<SensorModel> SensorModelFromJson(const std::string& text,
                                                 const std::string& source) {
-  auto doc = io::ParseJson(text, source);
-  if (!doc.ok()) return doc.status();
-  if (!doc->is_object())
+  TF_ASSIGN_OR_RETURN(auto doc, io::ParseJson(text, source));
+  if (!doc.is_object())
     return absl::InvalidArgumentError(
         absl::StrCat(source, ": a sensor model must be a JSON object"));
   SensorModel m;
   m.source.clear();
-  for (const auto& [key, v] : doc->members()) {
+  for (const auto& [key, v] : doc.members()) {
     auto where = absl::StrCat(source, ":", v.line(), ": field '", key, "'");
     if (key == "format") {
       if (!v.is_string() || v.string() != kFormat)
@@ -224,15 +224,13 @@ absl::StatusOr<SensorModel> SensorModelFromJson(const std::string& text,
       return absl::InvalidArgumentError(
           absl::StrCat(where, ": unknown field", io::DidYouMean(key, ModelKeys())));
   }
-  if (auto st = ValidateSensorModel(m); !st.ok())
-    return absl::InvalidArgumentError(absl::StrCat(source, ": ", st.message()));
+  TF_RETURN_IF_ERROR(io::PrependPath(ValidateSensorModel(m), source));
   return m;
 }
 
 absl::StatusOr<SensorModel> LoadSensorModel(const std::string& path) {
-  absl::StatusOr<std::string> text = io::ReadTextFile(path);
-  if (!text.ok()) return text.status();
-  return SensorModelFromJson(*text, io::SourceName(path));
+  TF_ASSIGN_OR_RETURN(std::string text, io::ReadTextFile(path));
+  return SensorModelFromJson(text, io::SourceName(path));
 }
 
 std::string SensorModelToJson(const SensorModel& m) {

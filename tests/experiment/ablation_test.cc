@@ -15,6 +15,7 @@
 #include "support/cli_fixture.h"
 #include "tactforce/inertia/metrics.h"
 #include "tactforce/inertia/simulate.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::experiment {
 namespace {
@@ -36,22 +37,20 @@ AblationSource DrawnSource() {
         inertia::InertiaTensor::FromArray({p.mass / 12 * (e.y() * e.y() + e.z() * e.z()),
                                            p.mass / 12 * (e.x() * e.x() + e.z() * e.z()),
                                            p.mass / 12 * (e.x() * e.x() + e.y() * e.y()), 0, 0, 0});
-    absl::StatusOr<inertia::SimulatedObject> object = inertia::ObjectFromParameters("drawn", p);
-    if (!object.ok()) return object.status();
+    TF_ASSIGN_OR_RETURN(inertia::SimulatedObject object, inertia::ObjectFromParameters("drawn", p));
     inertia::SimulationOptions so;
-    so.custom = *object;
+    so.custom = object;
     so.mode = inertia::SimulationMode::kWristWrench;
     so.duration = 2.0;
     so.noise.force_sigma = 0.05;
     so.seed = seed;
-    absl::StatusOr<inertia::SimulationResult> sim = inertia::SimulateInertia(so);
-    if (!sim.ok()) return sim.status();
+    TF_ASSIGN_OR_RETURN(inertia::SimulationResult sim, inertia::SimulateInertia(so));
     AblationData d;
     d.object = "drawn";
-    d.truth = sim->truth.params;
-    d.samples = sim->samples;
+    d.truth = sim.truth.params;
+    d.samples = sim.samples;
     d.base.noise.force_sigma = so.noise.force_sigma;
-    d.base.mesh = std::make_shared<const io::TriangleMesh>(sim->object.mesh);
+    d.base.mesh = std::make_shared<const io::TriangleMesh>(sim.object.mesh);
     return d;
   };
   return s;

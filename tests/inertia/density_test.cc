@@ -15,6 +15,7 @@
 #include "tactforce/inertia/samples.h"
 #include "tactforce/inertia/truth.h"
 #include "tactforce/inertia/simulate.h"
+#include "tactforce/io/status_macros.h"
 #include "test_util.h"
 
 namespace tactforce::inertia {
@@ -216,19 +217,16 @@ TwoMaterialBox MakeTwoMaterialBox(double rho_a, double rho_b, bool colours,
 absl::StatusOr<SimulationResult> WristData(const InertialParameters& params,
                                            const std::string& level, uint64_t seed,
                                            double duration = 5.0) {
-  absl::StatusOr<SimulatedObject> object = ObjectFromParameters("two-material box", params);
-  if (!object.ok()) return object.status();
+  TF_ASSIGN_OR_RETURN(SimulatedObject object, ObjectFromParameters("two-material box", params));
   SimulationOptions o;
-  o.custom = *object;
+  o.custom = object;
   o.mode = SimulationMode::kWristWrench;
   o.duration = duration;
   o.rate_hz = 100;
   o.write_kinematics = true;
   o.seed = seed;
   if (!level.empty()) {
-    absl::StatusOr<SimulationNoise> n = NadeauNoise(level);
-    if (!n.ok()) return n.status();
-    o.noise = *n;
+    TF_ASSIGN_OR_RETURN(o.noise, NadeauNoise(level));
   }
   return SimulateInertia(o);
 }

@@ -82,6 +82,15 @@ TEST(PrependPath, NestsOutermostFirstAndKeepsCodeAndPayload) {
   EXPECT_EQ(std::string(*s.GetPayload("tactforce/field")), "mass");
 }
 
+TEST(PrependPath, DotSeparatorContinuesAFieldPath) {
+  const absl::Status inner = absl::OutOfRangeError("contacts[1].normal: zero length");
+  const absl::Status s = PrependPath(PrependPath(inner, "plan", "."), "request");
+  EXPECT_EQ(s.code(), absl::StatusCode::kOutOfRange);
+  EXPECT_EQ(s.message(), "request: plan.contacts[1].normal: zero length");
+  EXPECT_TRUE(PrependPath(absl::OkStatus(), "plan", ".").ok());
+  EXPECT_EQ(PrependPath(inner, "", "."), inner);
+}
+
 TEST(PrependPath, LeavesOkAndEmptyPathAlone) {
   EXPECT_TRUE(PrependPath(absl::OkStatus(), "x").ok());
   const absl::Status e = absl::NotFoundError("gone");

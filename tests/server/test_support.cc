@@ -14,6 +14,7 @@
 #include "tactforce/api/convert.h"
 #include "tactforce/planner/examples.h"
 #include "tactforce/planner/random_grasps.h"
+#include "tactforce/io/status_macros.h"
 
 namespace tactforce::testing {
 namespace {
@@ -192,9 +193,8 @@ absl::StatusOr<std::vector<std::string>> ReflectionListServices(
     const std::shared_ptr<grpc::Channel>& channel) {
   ReflectionProtocol protocol;
   if (!protocol.ok()) return absl::InternalError("cannot load reflection.proto");
-  auto response = protocol.Ask(channel, "list_services", "*");
-  if (!response.ok()) return response.status();
-  const google::protobuf::Message& m = **response;
+  TF_ASSIGN_OR_RETURN(auto response, protocol.Ask(channel, "list_services", "*"));
+  const google::protobuf::Message& m = *response;
   const auto* field = m.GetDescriptor()->FindFieldByName("list_services_response");
   if (!m.GetReflection()->HasField(m, field))
     return absl::NotFoundError("no list_services_response");
@@ -212,9 +212,8 @@ absl::StatusOr<std::vector<std::string>> ReflectionFilesContainingSymbol(
     const std::shared_ptr<grpc::Channel>& channel, const std::string& symbol) {
   ReflectionProtocol protocol;
   if (!protocol.ok()) return absl::InternalError("cannot load reflection.proto");
-  auto response = protocol.Ask(channel, "file_containing_symbol", symbol);
-  if (!response.ok()) return response.status();
-  const google::protobuf::Message& m = **response;
+  TF_ASSIGN_OR_RETURN(auto response, protocol.Ask(channel, "file_containing_symbol", symbol));
+  const google::protobuf::Message& m = *response;
   const auto* field = m.GetDescriptor()->FindFieldByName("file_descriptor_response");
   if (!m.GetReflection()->HasField(m, field))
     return absl::NotFoundError("no file_descriptor_response");

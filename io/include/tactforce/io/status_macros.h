@@ -35,10 +35,14 @@
 
 namespace tactforce::io {
 
-// `status` with "path: " in front of its message (code and payloads kept);
-// an OK status, or an empty path, is returned unchanged. Nested calls build
-// dotted paths outermost first: PrependPath(PrependPath(s, "mass"),
-// "object") reads "object: mass: ...".
-absl::Status PrependPath(const absl::Status& status, absl::string_view path);
+// `status` with `path` and `separator` in front of its message (code and
+// payloads kept); an OK status, or an empty path, is returned unchanged.
+// Nested calls prepend outermost first: PrependPath(PrependPath(s, "mass"),
+// "object") reads "object: mass: ...". Separator "." continues a message
+// that starts with a field path into a dotted one: PrependPath(s, "plan",
+// ".") on "contacts[1].normal: zero length" reads
+// "plan.contacts[1].normal: zero length".
+absl::Status PrependPath(const absl::Status& status, absl::string_view path,
+                         absl::string_view separator = ": ");
 
 }  // namespace tactforce::io
