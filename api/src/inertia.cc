@@ -48,7 +48,7 @@ inertia::InertiaTensor TensorFromProto(const v1::Inertia& t) {
 absl::Status PrefixedForField(const absl::Status& status, const std::string& mesh_name) {
   if (!mesh_name.empty() && absl::StartsWith(status.message(), absl::StrCat(mesh_name, ":")))
     return io::PrependPath(status, "options.mesh");
-  return absl::Status(status.code(), absl::StrCat("options.", status.message()));
+  return io::PrependPath(status, "options", ".");
 }
 
 // The library's enums and their proto values, one table each, read both
@@ -146,10 +146,8 @@ absl::Status CheckParameterMagnitudes(const std::string& path, const v1::Inertia
                                                     {"izz", in.izz()}, {"ixy", in.ixy()},
                                                     {"ixz", in.ixz()}, {"iyz", in.iyz()}};
   for (const auto& [name, v] : moments) {
-    if (auto s = planner::CheckMagnitude(absl::StrCat(path, ".inertia.", name), v,
-                                         planner::kMaxInertia, "kg m^2");
-        !s.ok())
-      return s;
+    TF_RETURN_IF_ERROR(planner::CheckMagnitude(absl::StrCat(path, ".inertia.", name), v,
+                                               planner::kMaxInertia, "kg m^2"));
   }
   return absl::OkStatus();
 }
@@ -158,10 +156,8 @@ absl::Status CheckParameterMagnitudes(const std::string& path, const v1::Inertia
 // fit's products of them stay finite); other options are the library's.
 absl::Status CheckOptionMagnitudes(const v1::InertiaFitOptions& o) {
   using planner::CheckMagnitude;
-  if (auto s = CheckMagnitude("options.gravity", FromProto(o.gravity()), planner::kMaxAcceleration,
-                              "m/s^2");
-      !s.ok())
-    return s;
+  TF_RETURN_IF_ERROR(CheckMagnitude("options.gravity", FromProto(o.gravity()),
+                                    planner::kMaxAcceleration, "m/s^2"));
   for (int i = 0; i < o.hull_size(); ++i) {
     if (!planner::IsBounded(FromProto(o.hull(i)), planner::kMaxLength))
       return planner::MagnitudeError(absl::StrCat("options.hull[", i, "]"), FromProto(o.hull(i)),
