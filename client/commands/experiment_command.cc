@@ -116,9 +116,9 @@ absl::Status SetSensorsAndProtocol(const ExperimentArgs& a, ex::GraspConfig* bas
       return absl::InvalidArgumentError(absl::StrCat("--taxel-ranges: ", r.status().message()));
     base->taxel_ranges = *r;
   }
-  if (a.contact_cap_deg != 0 && *array != ex::SensorArray::kTaxel)
+  if (a.contact_cap_deg.has_value() && *array != ex::SensorArray::kTaxel)
     return absl::InvalidArgumentError("--contact-cap: needs --sensors taxel");
-  base->contact_cap_deg = a.contact_cap_deg;
+  if (a.contact_cap_deg.has_value()) base->contact_cap_deg = *a.contact_cap_deg;
   auto sensing = ex::ParseContactSensing(a.contact_sensing);
   if (!sensing.ok())
     return absl::InvalidArgumentError(absl::StrCat("--", sensing.status().message()));
@@ -437,9 +437,9 @@ CLI::App* AddGraspSubcommand(CLI::App* cmd, ExperimentArgs& args) {
       ->type_name("FILE");
   g->add_option("--contact-cap", args.contact_cap_deg,
                 "--sensors taxel: each contact lands on its fingertip at a polar angle from the "
-                "apex drawn uniformly by area over this cap (deg, 0-90; 0 = on the apex taxel)")
-      ->check(CLI::Range(0.0, 90.0))
-      ->capture_default_str();
+                "apex drawn uniformly by area over this cap (deg, 0-90; 0 = on the apex taxel; "
+                "default 60, the dome's outermost taxel ring)")
+      ->check(CLI::Range(0.0, 90.0));
   g->add_option(
        "--contact-sensing", args.contact_sensing,
        "--sensors taxel: the contact planned on, from the taxels: mean (GeoDEx: force-"

@@ -156,6 +156,10 @@ struct PlanningModel {
   planner::ParameterUncertainty uncertainty;  // of pi about the origin (zero = known)
 };
 
+// GraspConfig::contact_cap_deg's default (deg): the dome's outermost taxel
+// ring (sim::DefaultFingertip: the apex and rings at 30 and 60 deg).
+inline constexpr double kDefaultContactCapDeg = 60;
+
 struct GraspConfig {
   GraspObject object = GraspObject::kWrench;
   Feedback feedback = Feedback::kEstimated;
@@ -170,7 +174,9 @@ struct GraspConfig {
   // contact's polar angle from the apex is uniform by area over the cap of
   // this half-angle (deg, [0, 90]; azimuth uniform). 0: every fingertip points
   // along its contact normal, so every contact is centred on the apex taxel.
-  double contact_cap_deg = 0;
+  // Default: the polar angle of the dome's outermost taxel ring
+  // (sim::DefaultFingertip), so a contact lands anywhere on the taxelised tip.
+  double contact_cap_deg = kDefaultContactCapDeg;
   ContactSensing contact_sensing = ContactSensing::kTaxelMean;  // kTaxel
   SensorFault fault;
   sim::SensorModel sensor_model;  // kModel
