@@ -17,6 +17,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
+#include "absl/strings/strip.h"
 #include "cli_common.h"
 #include "experiment_grasp_report.h"
 #include "progress.h"
@@ -121,7 +122,8 @@ absl::Status SetSensorsAndProtocol(const ExperimentArgs& a, ex::GraspConfig* bas
   if (a.contact_cap_deg.has_value()) base->contact_cap_deg = *a.contact_cap_deg;
   auto sensing = ex::ParseContactSensing(a.contact_sensing);
   if (!sensing.ok())
-    return absl::InvalidArgumentError(absl::StrCat("--", sensing.status().message()));
+    return absl::InvalidArgumentError(absl::StrCat(
+        "--contact-sensing", absl::StripPrefix(sensing.status().message(), "contact_sensing")));
   if (*sensing != ex::ContactSensing::kTaxelMean && *array != ex::SensorArray::kTaxel)
     return absl::InvalidArgumentError("--contact-sensing: needs --sensors taxel");
   base->contact_sensing = *sensing;

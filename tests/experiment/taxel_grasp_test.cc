@@ -309,6 +309,15 @@ TEST_F(TaxelCliTest, BadInputNamesTheFlag) {
   r = Tactforce({"experiment", "grasp", "--sensors", "taxel", "--contact-cap", "120"});
   ExpectBadInput(r);
   EXPECT_NE(r.err.find("--contact-cap"), std::string::npos) << r.err;
+  r = Tactforce({"experiment", "grasp", "--sensors", "taxel", "--contact-sensing", "centroid"});
+  ExpectBadInput(r);
+  EXPECT_NE(r.err.find("--contact-sensing: unknown 'centroid'"), std::string::npos) << r.err;
+  r = Tactforce({"experiment", "grasp", "--contact-sensing", "surface"});
+  ExpectBadInput(r);
+  EXPECT_NE(r.err.find("--contact-sensing: needs --sensors taxel"), std::string::npos) << r.err;
+  r = Tactforce({"experiment", "grasp", "--sensors", "taxel", "--normal-uncertainty", "95"});
+  ExpectBadInput(r);
+  EXPECT_NE(r.err.find("--normal-uncertainty"), std::string::npos) << r.err;
 }
 
 }  // namespace
