@@ -68,11 +68,6 @@ FingerContact MeasureFinger(const mjModel* m, const mjData* d, int finger_geom, 
   return out;
 }
 
-// The taxel fingertip's frame (fingertip -> world) for a contact whose
-// normal (into the object) is `normal`: z = normal when cap_deg is 0, so the
-// contact is centred on the apex taxel; otherwise the fingertip is turned so
-// the contact lands at a polar angle from the apex drawn uniformly by area
-// over the cap (cos uniform in [cos cap, 1]) and a uniform azimuth.
 // A force error with its tangential part (off `normal`) shrunk by `bound`
 // (N): what of it lies within the error a wrong normal alone can make.
 Vec3 TrustedError(const Vec3& error, const Vec3& normal, double bound) {
@@ -82,6 +77,11 @@ Vec3 TrustedError(const Vec3& error, const Vec3& normal, double bound) {
   return t > bound ? Vec3(en + et * (1 - bound / t)) : en;
 }
 
+// The taxel fingertip's frame (fingertip -> world) for a contact whose
+// normal (into the object) is `normal`: z = normal when cap_deg is 0, so the
+// contact is centred on the apex taxel; otherwise the fingertip is turned so
+// the contact lands at a polar angle from the apex drawn uniformly by area
+// over the cap (cos uniform in [cos cap, 1]) and a uniform azimuth.
 Matrix3d FingertipFrame(const Vec3& normal, double cap_deg, uint64_t seed) {
   Matrix3d frame;
   const Vec3 x = normal.unitOrthogonal();
