@@ -16,6 +16,8 @@
 #include "absl/strings/match.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
+#include "absl/strings/strip.h"
 #include "cli_common.h"
 #include "experiment_grasp_report.h"
 #include "progress.h"
@@ -115,9 +117,17 @@ absl::Status SetSensorsAndProtocol(const ExperimentArgs& a, ex::GraspConfig* bas
       return absl::InvalidArgumentError(absl::StrCat("--taxel-ranges: ", r.status().message()));
     base->taxel_ranges = *r;
   }
-  if (a.contact_cap_deg != 0 && *array != ex::SensorArray::kTaxel)
+  if (a.contact_cap_deg.has_value() && *array != ex::SensorArray::kTaxel)
     return absl::InvalidArgumentError("--contact-cap: needs --sensors taxel");
-  base->contact_cap_deg = a.contact_cap_deg;
+  if (a.contact_cap_deg.has_value()) base->contact_cap_deg = *a.contact_cap_deg;
+  auto sensing = ex::ParseContactSensing(a.contact_sensing);
+  if (!sensing.ok())
+    return absl::InvalidArgumentError(absl::StrCat(
+        "--contact-sensing", absl::StripPrefix(sensing.status().message(), "contact_sensing")));
+  if (*sensing != ex::ContactSensing::kTaxelMean && *array != ex::SensorArray::kTaxel)
+    return absl::InvalidArgumentError("--contact-sensing: needs --sensors taxel");
+  base->contact_sensing = *sensing;
+  base->normal_uncertainty_deg = a.normal_uncertainty_deg;
   auto protocol = ex::ParseProtocol(a.protocol);
   if (!protocol.ok())
     return absl::InvalidArgumentError(absl::StrCat("--", protocol.status().message()));
@@ -156,13 +166,21 @@ absl::Status WriteTracePlot(const std::string& plots_dir, const ex::GraspConfig&
 
 // --details: one line per trial on stderr.
 void PrintTrialDetails(const ex::GraspConfig& c, const ex::BatchSummary& b) {
-  for (const ex::TrialResult& t : b.results)
+  for (const ex::TrialResult& t : b.results) {
+    std::string sensed;
+    if (c.sensor_array == ex::SensorArray::kTaxel)
+      sensed = absl::StrFormat(
+          "  slip margin %.2f  sensed contact off by %.2f mm, %.1f deg; polar %s deg",
+          t.min_slip_margin, t.contact_location_error * 1e3, t.contact_normal_error_deg,
+          absl::StrJoin(t.contact_polar_deg, "/",
+                        [](std::string* o, double v) { absl::StrAppendFormat(o, "%.0f", v); }));
     std::cerr << absl::StrFormat(
-        "%s %s trial %d: %s%s  slip %.2f mm  rotation %.2f deg  force error %.3f N\n",
+        "%s %s trial %d: %s%s  slip %.2f mm  rotation %.2f deg  force error %.3f N%s\n",
         ex::ToString(c.object), ex::ToString(c.feedback), t.trial,
         t.success ? "success" : t.failure,
         t.success ? "" : absl::StrCat(" (", ex::ToString(t.cause), ")"), t.max_slip * 1e3,
-        t.max_rotation_deg, t.force_error);
+        t.max_rotation_deg, t.force_error, sensed);
+  }
 }
 
 // Every object x mode batch in order, with `bar` counting trials; the
@@ -421,8 +439,20 @@ CLI::App* AddGraspSubcommand(CLI::App* cmd, ExperimentArgs& args) {
       ->type_name("FILE");
   g->add_option("--contact-cap", args.contact_cap_deg,
                 "--sensors taxel: each contact lands on its fingertip at a polar angle from the "
-                "apex drawn uniformly by area over this cap (deg, 0-90; 0 = on the apex taxel)")
-      ->check(CLI::Range(0.0, 90.0))
+                "apex drawn uniformly by area over this cap (deg, 0-90; 0 = on the apex taxel; "
+                "default 60, the dome's outermost taxel ring)")
+      ->check(CLI::Range(0.0, 90.0));
+  g->add_option(
+       "--contact-sensing", args.contact_sensing,
+       "--sensors taxel: the contact planned on, from the taxels: mean (GeoDEx: force-"
+       "weighted mean position and normal) or surface (that position projected onto the "
+       "fingertip's surface, its normal there); what-if: true-normal, true-location, truth")
+      ->capture_default_str();
+  g->add_option("--normal-uncertainty", args.normal_uncertainty_deg,
+                "Admittance full: the contact normals' angular uncertainty (deg); the tangential "
+                "force error within |f| sin of it is not acted on (negative: the taxel layout's "
+                "resolution with --sensors taxel, 0 with channel)")
+      ->check(CLI::Range(-1.0, 89.0))
       ->capture_default_str();
   g->add_option("--protocol", args.protocol,
                 "short: close, settle, hold, lift 5 cm, hold 1 s, place; paper: GeoDEx Fig. 12's "

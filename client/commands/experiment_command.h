@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,11 +29,13 @@ struct ExperimentArgs {
   std::string sensor_model_path;         // one model JSON for every fingertip
   bool ideal = false;                    // ideal sensors
   bool no_progress = false;
-  bool details = false;             // one line per trial
-  std::string sensors = "channel";  // channel|taxel
-  std::string protocol = "short";   // short|paper
-  std::string taxel_ranges_path;    // --taxel-ranges FILE (sim::TaxelRanges JSON)
-  double contact_cap_deg = 0;       // --contact-cap DEG (GraspConfig::contact_cap_deg)
+  bool details = false;                   // one line per trial
+  std::string sensors = "channel";        // channel|taxel
+  std::string protocol = "short";         // short|paper
+  std::string taxel_ranges_path;          // --taxel-ranges FILE (sim::TaxelRanges JSON)
+  std::optional<double> contact_cap_deg;  // --contact-cap DEG (default: GraspConfig's)
+  double normal_uncertainty_deg = -1;     // --normal-uncertainty DEG (GraspConfig)
+  std::string contact_sensing = "mean";   // --contact-sensing (GraspConfig::contact_sensing)
   // slope
   std::vector<double> mus = {0.3, 0.5, 0.7, 0.9};
   double tilt_rate = 0.5;  // deg/s

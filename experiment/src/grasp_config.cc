@@ -25,6 +25,12 @@ constexpr io::EnumNameRow<Admittance> kAdmittanceNames[] = {{Admittance::kFull, 
                                                             {Admittance::kNormal, "normal"}};
 constexpr io::EnumNameRow<SensorArray> kSensorNames[] = {{SensorArray::kTaxel, "taxel"},
                                                          {SensorArray::kChannel, "channel"}};
+constexpr io::EnumNameRow<ContactSensing> kContactSensingNames[] = {
+    {ContactSensing::kTaxelMean, "mean"},
+    {ContactSensing::kSurface, "surface"},
+    {ContactSensing::kTrueNormal, "true-normal"},
+    {ContactSensing::kTrueLocation, "true-location"},
+    {ContactSensing::kTruth, "truth"}};
 constexpr io::EnumNameRow<Protocol> kProtocolNames[] = {{Protocol::kShort, "short"},
                                                         {Protocol::kPaper, "paper"}};
 
@@ -56,6 +62,12 @@ const char* ToString(SensorArray s) { return io::EnumName(kSensorNames, s); }
 
 absl::StatusOr<SensorArray> ParseSensorArray(std::string_view name) {
   return io::ParseEnumName(kSensorNames, name, "sensors");
+}
+
+const char* ToString(ContactSensing s) { return io::EnumName(kContactSensingNames, s); }
+
+absl::StatusOr<ContactSensing> ParseContactSensing(std::string_view name) {
+  return io::ParseEnumName(kContactSensingNames, name, "contact_sensing");
 }
 
 const char* ToString(Protocol p) { return io::EnumName(kProtocolNames, p); }
@@ -170,6 +182,10 @@ absl::Status ValidateGraspConfig(const GraspConfig& c) {
   if (c.control_rate * c.physics.timestep > 1.0 + 1e-9)
     return bad("control_rate", absl::StrFormat("%g Hz is faster than the physics (timestep %g s)",
                                                c.control_rate, c.physics.timestep));
+  if (!(std::isfinite(c.normal_uncertainty_deg) && c.normal_uncertainty_deg < 90))
+    return bad("normal_uncertainty_deg",
+               absl::StrFormat("must be < 90 deg (negative: from the taxel layout), got %g",
+                               c.normal_uncertainty_deg));
   if (!(c.admittance_gain > 0 && c.admittance_gain <= 1))
     return bad("admittance_gain", absl::StrFormat("must be in (0, 1], got %g", c.admittance_gain));
   TF_RETURN_IF_ERROR(positive("kp", c.kp));

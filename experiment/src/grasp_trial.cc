@@ -68,6 +68,15 @@ FingerContact MeasureFinger(const mjModel* m, const mjData* d, int finger_geom, 
   return out;
 }
 
+// A force error with its tangential part (off `normal`) shrunk by `bound`
+// (N): what of it lies within the error a wrong normal alone can make.
+Vec3 TrustedError(const Vec3& error, const Vec3& normal, double bound) {
+  if (!(bound > 0)) return error;
+  const Vec3 en = normal * normal.dot(error), et = error - en;
+  const double t = et.norm();
+  return t > bound ? Vec3(en + et * (1 - bound / t)) : en;
+}
+
 // The taxel fingertip's frame (fingertip -> world) for a contact whose
 // normal (into the object) is `normal`: z = normal when cap_deg is 0, so the
 // contact is centred on the apex taxel; otherwise the fingertip is turned so
@@ -137,6 +146,7 @@ struct Fingertip {
 struct Readings {
   std::vector<double> raw, est, truth, observed, shear;
   std::vector<Vec3> observed_force;
+  bool estimate_used = false;  // observed = the estimate (not the raw readings)
   explicit Readings(int n) : raw(n), est(n), truth(n), observed(n), shear(n), observed_force(n) {}
 };
 
@@ -155,6 +165,12 @@ class TrialRun {
     res_.seed = SplitMix(cfg_.seed * 0x100000001b3ULL + static_cast<uint64_t>(trial));
     est_opt_.method = cfg_.estimator;
     kd_ = 2 * cfg_.damping_ratio * std::sqrt(cfg_.kp * cfg_.fingertip_mass);
+    double deg = cfg_.normal_uncertainty_deg;
+    if (deg < 0 && cfg_.sensor_array == SensorArray::kTaxel) {
+      const sim::FingertipGeometry g{cfg_.fingertip_radius, sim::FingertipGeometry{}.body_length};
+      deg = sim::DomeResolutionDeg(sim::DefaultFingertip(g), g);
+    }
+    sin_normal_uncertainty_ = deg > 0 ? std::sin(deg * std::numbers::pi / 180) : 0.0;
   }
 
   absl::Status DrawSensors();
@@ -174,6 +190,7 @@ class TrialRun {
                    double rot);
   void ApplyFingertipPd(double t, Phase phase, const HandMotion& hm);
   void ReadTaxels(double t);
+  sim::Taxel SensedContact(const sim::FingertipReading& taxels, const Vec3& true_point) const;
   void ApplyFault(double t);
   void SenseContactsAndReplan(int tick);
   void TrackSwitched(const std::vector<double>& desired);
@@ -215,6 +232,7 @@ class TrialRun {
   int object_body_ = -1, obj_q_ = -1;
   estimator::EstimateOptions est_opt_;
   double kd_ = 0;
+  double sin_normal_uncertainty_ = 0;  // GraspConfig::normal_uncertainty_deg resolved
   Readings readings_;
   bool est_ok_ = false;
   double err_sum_ = 0, fb_sum_ = 0, squeeze_sum_ = 0;
@@ -359,9 +377,38 @@ void TrialRun::ReadTaxels(double t) {
     r.truth[i] = w.normal;
     r.shear[i] = std::sqrt(std::max(0.0, w.force.squaredNorm() - w.normal * w.normal));
     r.raw[i] = out.fingertip.force;
-    sensed_point_[i] = centre + f.frame * (out.fingertip.location - tip_centre);
-    sensed_normal_[i] = f.frame * out.fingertip.normal;
+    const sim::Taxel sensed = SensedContact(out.fingertip, point);
+    sensed_point_[i] = centre + f.frame * (sensed.position - tip_centre);
+    sensed_normal_[i] = f.frame * sensed.normal;
   }
+}
+
+// The contact a fingertip reports (fingertip frame; GraspConfig::contact_sensing)
+// from its taxels' aggregate and, for the what-if modes, the true contact
+// point on its surface. A zero normal: nothing sensed.
+sim::Taxel TrialRun::SensedContact(const sim::FingertipReading& taxels,
+                                   const Vec3& true_point) const {
+  const sim::FingertipGeometry g{cfg_.fingertip_radius, sim::FingertipGeometry{}.body_length};
+  sim::Taxel out{taxels.location, taxels.normal};
+  if (out.normal.norm() < 0.5) return out;
+  const Vec3 true_normal = (true_point - Vec3(0, 0, g.body_length)).normalized();
+  switch (cfg_.contact_sensing) {
+    case ContactSensing::kTaxelMean:
+      break;
+    case ContactSensing::kSurface:
+      out = sim::ProjectOntoFingertip(g, taxels.location);
+      break;
+    case ContactSensing::kTrueNormal:
+      out.normal = true_normal;
+      break;
+    case ContactSensing::kTrueLocation:
+      out.position = true_point;
+      break;
+    case ContactSensing::kTruth:
+      out = {true_point, true_normal};
+      break;
+  }
+  return out;
 }
 
 // The constructed fault (GraspConfig::fault) on one fingertip's reading.
@@ -436,6 +483,7 @@ void TrialRun::Observe(int tick, Phase phase) {
   if (!est_ok_ && phase != Phase::kClose) ++res_.estimate_failures;
   const Feedback feedback = ActiveFeedback(phase);
   r.observed = feedback == Feedback::kRaw ? r.raw : r.est;
+  r.estimate_used = feedback == Feedback::kEstimated && est_ok_;
   for (int i = 0; i < nf_; ++i)
     r.observed_force[i] =
         feedback == Feedback::kRaw || !est_ok_ ? Vec3(r.raw[i] * tips_[i].normal) : e->forces[i];
@@ -449,7 +497,10 @@ void TrialRun::UpdateTargets(int tick) {
   for (int i = 0; i < nf_; ++i) {
     Fingertip& f = tips_[i];
     if (cfg_.admittance == Admittance::kFull) {
-      Vec3 step = cfg_.admittance_gain * (desired_force[i] - r.observed_force[i]) / cfg_.kp;
+      const Vec3 error = TrustedError(
+          desired_force[i] - r.observed_force[i], f.normal,
+          r.estimate_used ? r.observed_force[i].norm() * sin_normal_uncertainty_ : 0.0);
+      Vec3 step = cfg_.admittance_gain * error / cfg_.kp;
       if (step.norm() > kMaxTargetStep) step *= kMaxTargetStep / step.norm();
       f.offset += step;
       if (f.offset.norm() > 0.03) f.offset *= 0.03 / f.offset.norm();

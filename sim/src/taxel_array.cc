@@ -187,6 +187,39 @@ void IntegrateRay(const std::vector<Taxel>& taxels, const std::vector<size_t>& c
 
 }  // namespace
 
+Taxel ProjectOntoFingertip(const FingertipGeometry& g, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d centre(0, 0, g.body_length);
+  Eigen::Vector3d n =
+      p.z() >= g.body_length ? Eigen::Vector3d(p - centre) : Eigen::Vector3d(p.x(), p.y(), 0);
+  if (n.norm() < 1e-12) n = Eigen::Vector3d::UnitZ();  // the centre (or axis): the apex
+  n.normalize();
+  if (p.z() >= g.body_length || n.z() > 0) return {centre + g.radius * n, n};
+  return {Eigen::Vector3d(g.radius * n.x(), g.radius * n.y(), p.z()), n};
+}
+
+double DomeResolutionDeg(const std::vector<Taxel>& taxels, const FingertipGeometry& g) {
+  const Eigen::Vector3d centre(0, 0, g.body_length);
+  std::vector<Eigen::Vector3d> dirs;
+  for (const Taxel& t : taxels)
+    if ((t.position - centre).norm() > 1e-12) dirs.push_back((t.position - centre).normalized());
+  if (dirs.empty()) return 180;
+  // The smallest cosine to the nearest taxel over a 0.5 deg grid of the dome.
+  double min_best = 1;
+  for (int ip = 0; ip <= 180; ++ip) {
+    const double polar = ip * std::numbers::pi / 360;
+    const int n_az = std::max(1, static_cast<int>(std::ceil(720 * std::sin(polar))));
+    for (int ia = 0; ia < n_az; ++ia) {
+      const double az = 2 * std::numbers::pi * ia / n_az;
+      const Eigen::Vector3d u(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az),
+                              std::cos(polar));
+      double best = -1;
+      for (const Eigen::Vector3d& d : dirs) best = std::max(best, u.dot(d));
+      min_best = std::min(min_best, best);
+    }
+  }
+  return std::acos(std::clamp(min_best, -1.0, 1.0)) * 180 / std::numbers::pi;
+}
+
 TaxelLoads ComputeTaxelLoads(const std::vector<Taxel>& taxels, const TaxelRanges& r,
                              const Eigen::Vector3d& contact, const Eigen::Vector3d& force) {
   const size_t n = taxels.size();

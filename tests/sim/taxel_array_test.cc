@@ -3,6 +3,7 @@
 // error under partial contact, and errors that name the field.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <set>
 
@@ -90,6 +91,73 @@ TEST(TaxelArray, NoTaxelLoadFallsAsTheForceGrows) {
                                << " N: the patch's force is on the taxels";
     }
   }
+}
+
+// The dome's resolution is the covering radius of its taxels: every point of
+// the hemisphere (directions drawn from the test's seed) lies within it of
+// some taxel, seen from the tip's centre.
+TEST(TaxelArray, DomeResolutionCoversTheHemisphere) {
+  const FingertipGeometry g;
+  const std::vector<Taxel> taxels = DefaultFingertip(g);
+  const double res = DomeResolutionDeg(taxels, g);
+  EXPECT_GT(res, 0.0);
+  EXPECT_LT(res, 45.0);
+  const Eigen::Vector3d centre(0, 0, g.body_length);
+  std::mt19937_64 rng(TestSeed() + 4);
+  std::uniform_real_distribution<double> u(0, 1);
+  double worst = 0;
+  for (int rep = 0; rep < 2000; ++rep) {
+    const double c = u(rng), s = std::sqrt(1 - c * c), az = 2 * M_PI * u(rng);
+    const Eigen::Vector3d dir(s * std::cos(az), s * std::sin(az), c);
+    double best = 180;
+    for (const Taxel& t : taxels)
+      best = std::min(
+          best, std::acos(std::clamp(dir.dot((t.position - centre).normalized()), -1.0, 1.0)) *
+                    180 / M_PI);
+    worst = std::max(worst, best);
+  }
+  EXPECT_LE(worst, res + 0.5) << "the 0.5 deg grid bounds the covering radius";
+  EXPECT_GT(worst, 0.8 * res) << "2000 directions come near the worst point";
+}
+
+// Contacts off the apex (polar angle drawn up to 50 deg from the test's seed,
+// 1-3 N along the surface normal, the paper's ranges): the sensed normal (the
+// normalised force-weighted mean of the taxel normals) is off by up to the
+// dome's resolution, and projecting the sensed location onto the surface puts
+// it on the surface with that same normal (on the dome both are the mean
+// direction of the loaded taxels): the projection moves the location out to
+// the surface but cannot correct the normal.
+TEST(TaxelArray, SensedContactOffTheApexWithinTheDomeResolution) {
+  const FingertipGeometry g;
+  const Eigen::Vector3d centre(0, 0, g.body_length);
+  const double res = DomeResolutionDeg(DefaultFingertip(g), g);
+  std::mt19937_64 rng(TestSeed() + 5);
+  std::uniform_real_distribution<double> u(0, 1);
+  int within = 0, sensed = 0;
+  double sum_err = 0;
+  for (int rep = 0; rep < 60; ++rep) {
+    auto a = TaxelArray::Create(TaxelRanges{}, rng());
+    ASSERT_TRUE(a.ok()) << a.status();
+    const double polar = 50 * M_PI / 180 * u(rng), az = 2 * M_PI * u(rng), f = 1 + 2 * u(rng);
+    const Eigen::Vector3d n(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az),
+                            std::cos(polar));
+    const Eigen::Vector3d contact = centre + g.radius * n;
+    for (int k = 1; k <= 40; ++k) a->Step(0.005 * k, contact, -f * k / 40 * n);
+    const FingertipReading& r = a->last().fingertip;
+    if (!(r.normal.norm() > 0.5)) continue;
+    ++sensed;
+    const double err = std::acos(std::clamp(r.normal.dot(n), -1.0, 1.0)) * 180 / M_PI;
+    sum_err += err;
+    within += err <= res;
+    const Taxel p = ProjectOntoFingertip(g, r.location);
+    EXPECT_NEAR((p.position - centre).norm(), g.radius, 1e-12);
+    EXPECT_LT((p.normal - r.normal).norm(), 1e-9) << "rep " << rep;
+  }
+  std::printf("dome resolution %.2f deg; sensed %d/60, normal error mean %.2f deg, %d within\n",
+              res, sensed, sum_err / std::max(1, sensed), within);
+  EXPECT_GE(sensed, 55);
+  EXPECT_GE(within, sensed - 3);
+  EXPECT_LT(sum_err / std::max(1, sensed), res / 2);
 }
 
 // A slow press at the apex, noise off: every step where the summed reading

@@ -78,6 +78,25 @@ enum class SensorArray {
 const char* ToString(SensorArray s);  // "channel", "taxel"
 absl::StatusOr<SensorArray> ParseSensorArray(std::string_view name);
 
+// Where the plans and the estimator take each taxel fingertip's contact
+// from at the end of the close.
+enum class ContactSensing {
+  // GeoDEx IV-A: the force-weighted mean taxel position and the normalised
+  // force-weighted mean taxel normal (the mean position lies inside the surface).
+  kTaxelMean,
+  // That position projected onto the fingertip's known surface
+  // (sim::ProjectOntoFingertip), the normal the surface's normal there.
+  kSurface,
+  // Diagnostics (what-if runs): MuJoCo's true contact normal with the
+  // kTaxelMean location, the true location with the kTaxelMean normal, or both true.
+  kTrueNormal,
+  kTrueLocation,
+  kTruth,
+};
+const char* ToString(
+    ContactSensing s);  // "mean", "surface", "true-normal", "true-location", "truth"
+absl::StatusOr<ContactSensing> ParseContactSensing(std::string_view name);
+
 struct PhaseDurations {  // s
   double close = 0.3;    // fingertips move from open to contact (position control)
   double settle = 0.5;   // force loop on, object on the table
@@ -137,6 +156,10 @@ struct PlanningModel {
   planner::ParameterUncertainty uncertainty;  // of pi about the origin (zero = known)
 };
 
+// GraspConfig::contact_cap_deg's default (deg): the dome's outermost taxel
+// ring (sim::DefaultFingertip: the apex and rings at 30 and 60 deg).
+inline constexpr double kDefaultContactCapDeg = 60;
+
 struct GraspConfig {
   GraspObject object = GraspObject::kWrench;
   Feedback feedback = Feedback::kEstimated;
@@ -151,7 +174,10 @@ struct GraspConfig {
   // contact's polar angle from the apex is uniform by area over the cap of
   // this half-angle (deg, [0, 90]; azimuth uniform). 0: every fingertip points
   // along its contact normal, so every contact is centred on the apex taxel.
-  double contact_cap_deg = 0;
+  // Default: the polar angle of the dome's outermost taxel ring
+  // (sim::DefaultFingertip), so a contact lands anywhere on the taxelised tip.
+  double contact_cap_deg = kDefaultContactCapDeg;
+  ContactSensing contact_sensing = ContactSensing::kTaxelMean;  // kTaxel
   SensorFault fault;
   sim::SensorModel sensor_model;  // kModel
   uint64_t seed = 1;              // trial k draws from (seed, k), independent of feedback
@@ -163,6 +189,16 @@ struct GraspConfig {
   // gain * K^-1 (f_desired - f_observed), K = kp (see Admittance).
   Admittance admittance = Admittance::kFull;
   double admittance_gain = 0.2;
+  // kFull with estimated feedback: how far (deg) the contact normals the
+  // estimate stands on may be off. A normal off by delta turns the estimated
+  // force f by delta, a tangential error up to |f| sin(delta) (the estimate's
+  // tangential part comes from equilibrium on those normals, not from a
+  // measurement), so the tangential part of (f_desired - f_estimated) is
+  // acted on only beyond |f_estimated| sin(delta). Raw feedback has no
+  // estimate and is not changed. Negative: the taxel layout's resolution
+  // (sim::DomeResolutionDeg) with taxel sensors, 0 with channel sensors
+  // (their normals are the specification's).
+  double normal_uncertainty_deg = -1;
   double kp = 10000;  // N/m, fingertip PD stiffness (also its tangential stiffness)
   double damping_ratio = 1.0;
   double fingertip_mass = 0.05;     // kg (gravity compensated)

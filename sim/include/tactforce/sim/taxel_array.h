@@ -82,6 +82,19 @@ struct TaxelLoads {
 TaxelLoads ComputeTaxelLoads(const std::vector<Taxel>& taxels, const TaxelRanges& r,
                              const Eigen::Vector3d& contact, const Eigen::Vector3d& force);
 
+// The point of the fingertip's surface nearest to `p` (fingertip frame of
+// DefaultFingertip, m) and the outward surface normal there: the hemisphere
+// above z = body_length, the cylinder below it. A sensed location (a
+// force-weighted mean of taxel positions, which lies inside the surface)
+// placed back on the known surface; its normal is the surface's.
+Taxel ProjectOntoFingertip(const FingertipGeometry& g, const Eigen::Vector3d& p);
+
+// The array's angular resolution on its dome (deg): the largest angle, seen
+// from the tip's centre (0, 0, body_length), from a point of the hemisphere
+// (polar angle <= 90 deg) to its nearest taxel. A contact normal sensed from
+// the taxels can be off by about this much where no neighbour shares the load.
+double DomeResolutionDeg(const std::vector<Taxel>& taxels, const FingertipGeometry& g = {});
+
 struct TaxelArrayReading {
   std::vector<double> load;     // N, noise-free true load per taxel
   std::vector<double> reading;  // N, per taxel
