@@ -78,7 +78,7 @@ absl::Status ValidateMeasuredData(const MeasuredData& d, int min_samples) {
   }
   for (auto st : {check_finite(d.t, "t"), check_finite(d.reference, "reference"),
                   check_finite(d.reading, "reading"), check_finite(d.shear, "shear")})
-    if (!st.ok()) return st;
+    TF_RETURN_IF_ERROR(st);
   // Magnitudes far beyond any sensor: their squares and products (the fits'
   // sums) stay finite, so no answer is computed from an overflow.
   auto check_bounded = [&](const std::vector<double>& v, const char* col, double limit,
@@ -89,15 +89,13 @@ absl::Status ValidateMeasuredData(const MeasuredData& d, int min_samples) {
     return absl::OkStatus();
   };
   for (size_t j = 0; j < d.taxels.size(); ++j)
-    if (auto st = check_bounded(d.taxels[j], absl::StrCat("taxel_", j).c_str(), kMaxReading,
-                                "sensor units");
-        !st.ok())
-      return st;
+    TF_RETURN_IF_ERROR(
+        check_bounded(d.taxels[j], absl::StrCat("taxel_", j).c_str(), kMaxReading, "sensor units"));
   for (auto st : {check_bounded(d.t, "t", planner::kMaxTime, "s"),
                   check_bounded(d.reference, "reference", planner::kMaxForce, "N"),
                   check_bounded(d.reading, "reading", kMaxReading, "sensor units"),
                   check_bounded(d.shear, "shear", planner::kMaxForce, "N")})
-    if (!st.ok()) return st;
+    TF_RETURN_IF_ERROR(st);
   std::vector<int> starts = d.segment_starts.empty() ? std::vector<int>{0} : d.segment_starts;
   for (size_t i = 1; i < n; ++i) {
     if (std::binary_search(starts.begin(), starts.end(), static_cast<int>(i))) continue;
@@ -117,15 +115,10 @@ absl::Status ValidateMeasuredData(const MeasuredData& d, int min_samples) {
           absl::StrCat(Column(d, col), " is constant (", *lo, "): ", why));
     return absl::OkStatus();
   };
-  if (auto st =
-          check_const(d.reference, "reference",
-                      "the audit needs a varying reference force (press, ramp or random profile)");
-      !st.ok())
-    return st;
-  if (auto st = check_const(d.reading, "reading", "the sensor does not respond; nothing to audit");
-      !st.ok())
-    return st;
-  return absl::OkStatus();
+  TF_RETURN_IF_ERROR(
+      check_const(d.reference, "reference",
+                  "the audit needs a varying reference force (press, ramp or random profile)"));
+  return check_const(d.reading, "reading", "the sensor does not respond; nothing to audit");
 }
 
 namespace {

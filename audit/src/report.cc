@@ -398,30 +398,25 @@ absl::Status WriteAuditReport(const AuditReport& r, const std::string& dir,
         {"measured", "#888888", r.reference, r.reading, false, 2.6, 0.45},
         {"extended model", "#e6550d", r.reference, r.predicted_extended, false, 1.1, 0.9},
         {"nominal model", "#3182bd", xs, ys, true}};
-    if (auto st = write("reading_vs_reference.svg",
-                        Plot({"Reading vs reference", "reference force [N]", ylab, source}, se));
-        !st.ok())
-      return st;
+    TF_RETURN_IF_ERROR(
+        write("reading_vs_reference.svg",
+              Plot({"Reading vs reference", "reference force [N]", ylab, source}, se)));
   }
   {
     std::vector<Series> se = {
         {"nominal residual", "#3182bd", r.reference, res_n, false, 2.4, 0.45},
         {"extended residual", "#e6550d", r.reference, res_e, false, 1.2, 0.9}};
-    if (auto st =
-            write("residual_vs_reference.svg", Plot({"Residual vs reference (force equivalent)",
-                                                     "reference force [N]", "residual [N]", source},
-                                                    se));
-        !st.ok())
-      return st;
+    TF_RETURN_IF_ERROR(
+        write("residual_vs_reference.svg", Plot({"Residual vs reference (force equivalent)",
+                                                 "reference force [N]", "residual [N]", source},
+                                                se)));
   }
   {
     std::vector<Series> se = {{"nominal residual", "#3182bd", r.t, res_n, false, 2.4, 0.45},
                               {"extended residual", "#e6550d", r.t, res_e, false, 1.2, 0.9}};
-    if (auto st = write("residual_vs_time.svg", Plot({"Residual vs time (force equivalent)",
-                                                      "t [s]", "residual [N]", source},
-                                                     se, r.split_time));
-        !st.ok())
-      return st;
+    TF_RETURN_IF_ERROR(write("residual_vs_time.svg", Plot({"Residual vs time (force equivalent)",
+                                                           "t [s]", "residual [N]", source},
+                                                          se, r.split_time)));
   }
   return absl::OkStatus();
 }

@@ -219,8 +219,8 @@ absl::Status ValidateGraspConfig(const GraspConfig& c) {
                absl::StrFormat("must be in [0, 90] deg, got %g", c.contact_cap_deg));
   TF_RETURN_IF_ERROR(ValidateFault(c.fault));
   if (c.sensors == SensorMode::kModel) {
-    if (auto s = sim::ValidateSensorModel(c.sensor_model); !s.ok())
-      return absl::InvalidArgumentError(absl::StrCat("sensor_model.", s.message()));
+    TF_RETURN_IF_ERROR(
+        io::PrependPath(sim::ValidateSensorModel(c.sensor_model), "sensor_model", "."));
     if (c.sensor_model.gain == 0) return bad("sensor_model.gain", "must not be 0");
   }
   return absl::OkStatus();

@@ -45,9 +45,8 @@ void ApplyPlanningModel(const std::optional<PlanningModel>& model, planner::Plan
 absl::StatusOr<planner::PlanOptions> SetUpObjectAndMotion(const GraspConfig& config,
                                                           const ObjectSpec& spec,
                                                           GraspSetup::Impl* im) {
-  absl::StatusOr<ObjectGrasp> grasp = ResolveGrasp(spec);
-  if (!grasp.ok()) return grasp.status();
-  im->base = grasp->problem;
+  TF_ASSIGN_OR_RETURN(ObjectGrasp grasp, ResolveGrasp(spec));
+  im->base = grasp.problem;
   im->inertia = spec.inertia(im->base.object.mass);
   im->plan_base = im->base;
   im->plan_inertia = im->inertia;
@@ -63,7 +62,7 @@ absl::StatusOr<planner::PlanOptions> SetUpObjectAndMotion(const GraspConfig& con
       ++im->n_fingers;
       im->finger_names.push_back(c.name);
     }
-  planner::PlanOptions options = grasp->options;
+  planner::PlanOptions options = grasp.options;
   options.confidence = config.confidence;
   return options;
 }
@@ -102,7 +101,7 @@ absl::Status PlanTicks(const GraspConfig& config, const planner::PlanOptions& op
   const planner::TrajectoryProblem traj = TickTrajectory(*im, dt_tick, im->plan_base, 0);
   auto planned = planner::PlanTrajectory(traj, options, planner::SolverKind::kGeometric, true);
   if (!planned.ok())
-    return absl::InternalError(absl::StrCat("planner: ", planned.status().message()));
+    return io::PrependPath(absl::InternalError(planned.status().message()), "planner");
   for (int j = 0; j < im->ticks; ++j) {
     const planner::PlanResult& r = planned->steps[j];
     if (r.status != planner::PlanStatus::kOptimal)
@@ -206,7 +205,7 @@ absl::StatusOr<TickPlans> PlanTickRange(const GraspConfig& config, const GraspSe
   auto planned =
       planner::PlanTrajectory(traj, im.plan_options, planner::SolverKind::kGeometric, true);
   if (!planned.ok())
-    return absl::InternalError(absl::StrCat("planner: ", planned.status().message()));
+    return io::PrependPath(absl::InternalError(planned.status().message()), "planner");
   TickPlans out;
   for (size_t k = 0; k < traj.steps.size(); ++k) {
     const planner::PlanResult& r = planned->steps[k];
@@ -236,20 +235,18 @@ absl::StatusOr<std::unique_ptr<GraspSetup>> GraspSetup::Create(const GraspConfig
   std::unique_ptr<GraspSetup> setup(new GraspSetup());
   setup->config_ = config;
   setup->impl_ = std::make_unique<Impl>();
-  absl::StatusOr<planner::PlanOptions> options =
-      SetUpObjectAndMotion(config, *spec, setup->impl_.get());
-  if (!options.ok()) return options.status();
-  setup->impl_->plan_options = *options;
+  TF_ASSIGN_OR_RETURN(planner::PlanOptions options,
+                      SetUpObjectAndMotion(config, *spec, setup->impl_.get()));
+  setup->impl_->plan_options = options;
   if (config.fault.kind != SensorFault::Kind::kNone &&
       config.fault.finger >= setup->impl_->n_fingers)
     return absl::InvalidArgumentError(
         absl::StrFormat("fault.finger: must be < %d (the %s grasp's fingers), got %d",
                         setup->impl_->n_fingers, ToString(config.object), config.fault.finger));
-  TF_RETURN_IF_ERROR(PlanTicks(config, *options, setup->impl_.get()));
+  TF_RETURN_IF_ERROR(PlanTicks(config, options, setup->impl_.get()));
   setup->mjcf_ = GraspMjcf(config, *spec, *setup->impl_);
   // Compile once here so model errors surface at set-up.
-  auto scene = Scene::FromMjcf(setup->mjcf_);
-  if (!scene.ok()) return scene.status();
+  TF_RETURN_IF_ERROR(Scene::FromMjcf(setup->mjcf_).status());
   return setup;
 }
 

@@ -253,10 +253,10 @@ absl::Status TrialRun::DrawSensors() {
     const sim::FingertipGeometry geometry{cfg_.fingertip_radius,
                                           sim::FingertipGeometry{}.body_length};
     for (int i = 0; i < nf_; ++i) {
-      auto a =
-          sim::TaxelArray::Create(cfg_.taxel_ranges, SplitMix(res_.seed + 31 * (i + 1)), geometry);
-      if (!a.ok()) return a.status();
-      arrays_.push_back(std::move(*a));
+      TF_ASSIGN_OR_RETURN(
+          auto a,
+          sim::TaxelArray::Create(cfg_.taxel_ranges, SplitMix(res_.seed + 31 * (i + 1)), geometry));
+      arrays_.push_back(std::move(a));
     }
     sensed_point_.assign(nf_, Vec3::Zero());
     sensed_normal_.assign(nf_, Vec3::Zero());
@@ -268,9 +268,8 @@ absl::Status TrialRun::DrawSensors() {
       model = DrawGeoDexModel(cfg_.error_ranges, rng);
     else if (cfg_.sensors == SensorMode::kModel)
       model = cfg_.sensor_model;
-    auto ch = SensorChannel::Create(model, SplitMix(res_.seed + 17 * (i + 1)));
-    if (!ch.ok()) return ch.status();
-    channels_.push_back(std::move(*ch));
+    TF_ASSIGN_OR_RETURN(auto ch, SensorChannel::Create(model, SplitMix(res_.seed + 17 * (i + 1))));
+    channels_.push_back(std::move(ch));
     res_.sensor_models.push_back(model);
   }
   return absl::OkStatus();
@@ -648,9 +647,8 @@ absl::StatusOr<TrialResult> RunGraspTrial(const GraspSetup& setup, int trial) {
   const auto wall0 = std::chrono::steady_clock::now();
   if (trial < 0)
     return absl::InvalidArgumentError(absl::StrFormat("trial: must be >= 0, got %d", trial));
-  auto scene = Scene::FromMjcf(setup.mjcf());
-  if (!scene.ok()) return scene.status();
-  TrialRun run(setup, trial, **scene);
+  TF_ASSIGN_OR_RETURN(auto scene, Scene::FromMjcf(setup.mjcf()));
+  TrialRun run(setup, trial, *scene);
   TF_RETURN_IF_ERROR(run.DrawSensors());
   run.LocateFingertips();
   TF_RETURN_IF_ERROR(run.Simulate());
@@ -704,23 +702,21 @@ absl::StatusOr<BatchSummary> RunGraspBatch(const GraspConfig& config, int trials
                                            const std::function<void(int)>& progress) {
   if (trials < 1)
     return absl::InvalidArgumentError(absl::StrFormat("trials: must be >= 1, got %d", trials));
-  auto setup = GraspSetup::Create(config);
-  if (!setup.ok()) return setup.status();
+  TF_ASSIGN_OR_RETURN(auto setup, GraspSetup::Create(config));
   BatchSummary b;
   b.object = config.object;
   b.feedback = config.feedback;
   b.trials = trials;
-  b.finger_names = (*setup)->finger_names();
+  b.finger_names = setup->finger_names();
   double conv = 0;
   for (int k = 0; k < trials; ++k) {
-    auto r = RunGraspTrial(**setup, k);
-    if (!r.ok()) return r.status();
-    b.successes += r->success;
-    b.drops += r->dropped;
-    b.wall_seconds += r->wall_seconds;
-    b.sim_seconds += r->sim_seconds;
-    if (r->converge_time >= 0) conv += r->converge_time, ++b.converged;
-    b.results.push_back(std::move(*r));
+    TF_ASSIGN_OR_RETURN(auto r, RunGraspTrial(*setup, k));
+    b.successes += r.success;
+    b.drops += r.dropped;
+    b.wall_seconds += r.wall_seconds;
+    b.sim_seconds += r.sim_seconds;
+    if (r.converge_time >= 0) conv += r.converge_time, ++b.converged;
+    b.results.push_back(std::move(r));
     if (progress) progress(k + 1);
   }
   double s = 0, s2 = 0, fb = 0;

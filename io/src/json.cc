@@ -9,6 +9,7 @@
 // keeps tactforce's layout and number format (nlohmann would print 1e6 as
 // 1000000.0) and uses nlohmann's string escaping.
 #include "tactforce/io/json.h"
+#include "tactforce/io/status_macros.h"
 
 #include <algorithm>
 #include <cctype>
@@ -161,7 +162,7 @@ class JsonTreeBuilder {
   }
 
   absl::StatusOr<JsonValue> Finish(bool parsed) {
-    if (!error_.ok()) return error_;
+    TF_RETURN_IF_ERROR(error_);
     if (!parsed || !root_) return Error("no JSON value", text_.size());
     return *std::move(root_);
   }

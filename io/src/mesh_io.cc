@@ -210,12 +210,11 @@ absl::StatusOr<TriangleMesh> ReadMesh(std::string_view bytes, const std::string&
     if (message.empty()) message = "cannot read the file";
     return absl::InvalidArgumentError(absl::StrCat(name, ": assimp: ", message));
   }
-  absl::StatusOr<TriangleMesh> mesh = FromScene(*scene, name);
-  if (!mesh.ok()) return mesh;
-  TF_RETURN_IF_ERROR(CheckLimits(*mesh, name));
+  TF_ASSIGN_OR_RETURN(TriangleMesh mesh, FromScene(*scene, name));
+  TF_RETURN_IF_ERROR(CheckLimits(mesh, name));
   // assimp keeps the file's face order; a count mismatch means it did not.
-  if (mesh->face_colors.empty() && ply.face_colors.size() == mesh->triangles.size())
-    mesh->face_colors = std::move(ply.face_colors);
+  if (mesh.face_colors.empty() && ply.face_colors.size() == mesh.triangles.size())
+    mesh.face_colors = std::move(ply.face_colors);
   return mesh;
 }
 

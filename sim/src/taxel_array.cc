@@ -83,14 +83,13 @@ absl::Status ValidateTaxelRanges(const TaxelRanges& r, const std::string& prefix
 
 absl::StatusOr<TaxelRanges> TaxelRangesFromJson(const std::string& text,
                                                 const std::string& source) {
-  auto doc = io::ParseJson(text, source);
-  if (!doc.ok()) return doc.status();
-  if (!doc->is_object())
+  TF_ASSIGN_OR_RETURN(auto doc, io::ParseJson(text, source));
+  if (!doc.is_object())
     return absl::InvalidArgumentError(absl::StrCat(source, ": taxel ranges must be a JSON object"));
   TaxelRanges r;
   std::vector<std::string> keys = {"format"};
   for (const RangeField& f : RangeFields()) keys.push_back(f.name);
-  for (const auto& [key, v] : doc->members()) {
+  for (const auto& [key, v] : doc.members()) {
     const std::string where = absl::StrCat(source, ":", v.line(), ": field '", key, "'");
     if (key == "format") {
       if (!v.is_string() || v.string() != kFormat)
@@ -116,9 +115,8 @@ absl::StatusOr<TaxelRanges> TaxelRangesFromJson(const std::string& text,
 }
 
 absl::StatusOr<TaxelRanges> LoadTaxelRanges(const std::string& path) {
-  absl::StatusOr<std::string> text = io::ReadTextFile(path);
-  if (!text.ok()) return text.status();
-  return TaxelRangesFromJson(*text, io::SourceName(path));
+  TF_ASSIGN_OR_RETURN(std::string text, io::ReadTextFile(path));
+  return TaxelRangesFromJson(text, io::SourceName(path));
 }
 
 std::string TaxelRangesToJson(const TaxelRanges& r) {

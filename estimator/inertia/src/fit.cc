@@ -321,11 +321,10 @@ absl::StatusOr<internal::MethodOutput> FitConstrainedWithMesh(const InertiaSampl
   with_prior.prior =
       InertiaPrior{InertialParameters::FromStandard(solid.Standard(first->pi(0) / solid.volume)),
                    options.constrained.mesh_prior_weight};
-  absl::StatusOr<internal::MethodOutput> second =
-      internal::FitConstrained(samples, with_prior, hull);
-  if (!second.ok()) return second;
-  second->iterations += first->iterations;
-  second->notes.push_back(absl::StrFormat(
+  TF_ASSIGN_OR_RETURN(internal::MethodOutput second,
+                      internal::FitConstrained(samples, with_prior, hull));
+  second.iterations += first->iterations;
+  second.notes.push_back(absl::StrFormat(
       "prior: %s at uniform density %.4g kg/m^3 (the fitted mass %.6g kg), weight %g",
       options.mesh_name, first->pi(0) / solid.volume, first->pi(0),
       options.constrained.mesh_prior_weight));

@@ -92,9 +92,8 @@ absl::Status ValidatePose(const Locator& loc, const InertiaSamples& s, int i) {
   if (!Finite(x.position))
     return absl::InvalidArgumentError(
         absl::StrCat(loc.At(i, "px,py,pz", "position"), ": not finite"));
-  if (auto st = CheckBounded(loc, i, "px,py,pz", "position", x.position, planner::kMaxLength, "m");
-      !st.ok())
-    return st;
+  TF_RETURN_IF_ERROR(
+      CheckBounded(loc, i, "px,py,pz", "position", x.position, planner::kMaxLength, "m"));
   const double qn = x.orientation.coeffs().norm();
   if (!std::isfinite(qn))
     return absl::InvalidArgumentError(
@@ -126,7 +125,7 @@ absl::Status ValidateWrench(const Locator& loc, const InertiaSample& x, int i) {
         CheckBounded(loc, i, "tx,ty,tz", "wrench.torque", x.torque, planner::kMaxForce, "N m"),
         CheckBounded(loc, i, "f_sigma", "force_sigma", x.force_sigma, planner::kMaxForce, "N"),
         CheckBounded(loc, i, "t_sigma", "torque_sigma", x.torque_sigma, planner::kMaxForce, "N m")})
-    if (!st.ok()) return st;
+    TF_RETURN_IF_ERROR(st);
   return absl::OkStatus();
 }
 
@@ -167,7 +166,7 @@ absl::Status ValidateContacts(const Locator& loc, const InertiaSamples& s, int i
             CheckBounded(loc, i, absl::StrCat(pfx, "sigma"),
                          absl::StrCat("contacts[", c, "].sigma"), r.sigma, planner::kMaxForce,
                          "N")})
-        if (!st.ok()) return st;
+        TF_RETURN_IF_ERROR(st);
     }
   }
   return absl::OkStatus();
