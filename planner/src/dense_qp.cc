@@ -49,6 +49,16 @@ inline void Axpy(int n, double alpha, const double* __restrict x, double* __rest
   for (int i = 0; i < n; ++i) y[i] += alpha * x[i];
 }
 
+// [x y] <- [x y] [c -s; s c] over n entries: the columns' part of a Givens
+// rotation (vectorised: the pointers do not alias).
+inline void Rotate(int n, double c, double s, double* __restrict x, double* __restrict y) {
+  for (int i = 0; i < n; ++i) {
+    const double a = x[i], b = y[i];
+    x[i] = c * a + s * b;
+    y[i] = -s * a + c * b;
+  }
+}
+
 // Rotation (c, s) with [c s; -s c] [a; b] = [h; 0]. sqrt(a^2 + b^2) unless
 // that would over- or underflow (std::hypot costs several times more).
 void Givens(double a, double b, double* c, double* s, double* h) {
@@ -213,6 +223,10 @@ class ActiveSetSolver {
   int BlockingActive(double* step) const;
   // Direction in primal (z) and dual (r) spaces for adding constraint k.
   void Directions(int k);
+  // The same after DropFromFactorization, from the d it turned.
+  void DirectionsAfterDrop();
+  // r = R^-1 d_1.
+  void BackSubstitute();
   void AddToFactorization();
   void AddByRotations();
   void DropFromFactorization(int position);
@@ -252,8 +266,23 @@ void ActiveSetSolver<Factors>::Directions(int k) {
   double* z = f_.z.data();
   std::fill(z, z + N(), 0.0);
   for (int c = q; c < N(); ++c) Axpy(N(), f_.d(c), f_.J.col(c).data(), z);
-  // r = R^-1 d_1 (R upper triangular, q x q): back substitution by
-  // columns (contiguous), in place on a copy of d_1.
+  BackSubstitute();
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::DirectionsAfterDrop() {
+  // The drop turned J's columns and d alike and freed column q: J_2 gained
+  // it, so z gains its term; only r is formed again.
+  const int q = Active();
+  Axpy(N(), f_.d(q), f_.J.col(q).data(), f_.z.data());
+  BackSubstitute();
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::BackSubstitute() {
+  // r = R^-1 d_1 (R upper triangular, q x q), by columns (contiguous), in
+  // place on a copy of d_1.
+  const int q = Active();
   double* r = f_.r.data();
   for (int i = 0; i < q; ++i) r[i] = f_.d(i);
   for (int c = q - 1; c >= 0; --c) {
@@ -304,11 +333,7 @@ void ActiveSetSolver<Factors>::AddByRotations() {
     if (s == 0.0) continue;
     d(j - 1) = h;
     d(j) = 0.0;
-    for (int row = 0; row < N(); ++row) {
-      const double a = J(row, j - 1), b = J(row, j);
-      J(row, j - 1) = c * a + s * b;
-      J(row, j) = -s * a + c * b;
-    }
+    Rotate(N(), c, s, J.col(j - 1).data(), J.col(j).data());
   }
   f_.R.col(q).head(q + 1) = d.head(q + 1);
 }
@@ -340,11 +365,11 @@ void ActiveSetSolver<Factors>::DropFromFactorization(int position) {
       R(j, col) = c * a + s * b;
       R(j + 1, col) = -s * a + c * b;
     }
-    for (int row = 0; row < N(); ++row) {
-      const double a = J(row, j), b = J(row, j + 1);
-      J(row, j) = c * a + s * b;
-      J(row, j + 1) = -s * a + c * b;
-    }
+    Rotate(N(), c, s, J.col(j).data(), J.col(j + 1).data());
+    // d = J^T a of the constraint being added turns with J.
+    const double a = f_.d(j), b = f_.d(j + 1);
+    f_.d(j) = c * a + s * b;
+    f_.d(j + 1) = -s * a + c * b;
   }
   w_.active.erase(w_.active.begin() + position);
   for (int k = position; k < q - 1; ++k) f_.u(k) = f_.u(k + 1);
@@ -720,9 +745,13 @@ std::optional<DenseQpStatus> ActiveSetSolver<Factors>::AddInequality(int k, int 
   const double tol = settings_.tolerance;
   double u_new = 0.0;  // multiplier of the constraint being added
   EnsureNormal(k);
-  while (true) {
+  for (bool dropped = false;; dropped = true) {
     if (++iterations_ > max_iterations) return DenseQpStatus::kIterationLimit;
-    Directions(k);
+    if (dropped) {
+      DirectionsAfterDrop();
+    } else {
+      Directions(k);
+    }
     const int q = Active();
     double t1;  // partial step length
     const int drop = BlockingActive(&t1);
