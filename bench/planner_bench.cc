@@ -244,13 +244,17 @@ int CallgrindQpRun(int solves, int contacts) {
   DenseQpResult result;
   for (const DenseQp& qp : qps) SolveDenseQp(qp, {}, &workspace, &result);
   int failures = 0;
-  int64_t iterations = 0;
+  int64_t iterations = 0, active = 0;
   for (int i = 0; i < solves; ++i) {
     if (!TimedQpSolve(qps[i % qps.size()], &workspace, &result)) ++failures;
     iterations += result.iterations;
+    active += static_cast<int64_t>(result.active_set.size());
   }
-  std::printf("%d QP solves of %d contacts, %.2f iterations each, %d failures\n", solves, contacts,
-              static_cast<double>(iterations) / solves, failures);
+  std::printf(
+      "%d QP solves of %d contacts, %.2f iterations each, %.2f rows active at the end, %d "
+      "failures\n",
+      solves, contacts, static_cast<double>(iterations) / solves,
+      static_cast<double>(active) / solves, failures);
   return failures == 0 ? 0 : 1;
 }
 

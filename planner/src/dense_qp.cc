@@ -30,6 +30,35 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // Rows with a normal shorter than this are treated as 0^T x <= b.
 constexpr double kZeroNorm = 1e-200;
 
+// a . b over n entries, two lanes at a time (the pairs' sums added last).
+inline double Dot(int n, const double* __restrict a, const double* __restrict b) {
+  int i = 0;
+  double sum = 0.0;
+#ifdef __SSE2__
+  __m128d acc = _mm_setzero_pd();
+  for (; i + 1 < n; i += 2)
+    acc = _mm_add_pd(acc, _mm_mul_pd(_mm_loadu_pd(a + i), _mm_loadu_pd(b + i)));
+  sum = _mm_cvtsd_f64(acc) + _mm_cvtsd_f64(_mm_unpackhi_pd(acc, acc));
+#endif
+  for (; i < n; ++i) sum += a[i] * b[i];
+  return sum;
+}
+
+// y += alpha x over n entries (vectorised: the pointers do not alias).
+inline void Axpy(int n, double alpha, const double* __restrict x, double* __restrict y) {
+  for (int i = 0; i < n; ++i) y[i] += alpha * x[i];
+}
+
+// [x y] <- [x y] [c -s; s c] over n entries: the columns' part of a Givens
+// rotation (vectorised: the pointers do not alias).
+inline void Rotate(int n, double c, double s, double* __restrict x, double* __restrict y) {
+  for (int i = 0; i < n; ++i) {
+    const double a = x[i], b = y[i];
+    x[i] = c * a + s * b;
+    y[i] = -s * a + c * b;
+  }
+}
+
 // Rotation (c, s) with [c s; -s c] [a; b] = [h; 0]. sqrt(a^2 + b^2) unless
 // that would over- or underflow (std::hypot costs several times more).
 void Givens(double a, double b, double* c, double* s, double* h) {
@@ -160,9 +189,11 @@ class ActiveSetSolver {
   // distance = (b - A x) / |a| of every inequality row (dense rows), into
   // w_.distance.
   void ScanRows();
-  // The same for structured rows, block by block, each block's rows
-  // considered as its distances are formed (SelectInRange).
-  void ScanBlocks(double* worst_distance, int* worst);
+  // The same for structured rows, block by block; each block's farthest
+  // row violated beyond `threshold` (SelectInRange) goes to w_.pending.
+  void ScanBlocks(double threshold);
+  // Adds a violated row to w_.pending, in the order of its distance.
+  void Push(int row);
   // Rows [begin, end) of w_.distance, whose least entry is `least`: the
   // inactive row farthest outside its half-space, if it is violated and
   // farther than *worst_distance.
@@ -192,7 +223,12 @@ class ActiveSetSolver {
   int BlockingActive(double* step) const;
   // Direction in primal (z) and dual (r) spaces for adding constraint k.
   void Directions(int k);
+  // The same after DropFromFactorization, from the d it turned.
+  void DirectionsAfterDrop();
+  // r = R^-1 d_1.
+  void BackSubstitute();
   void AddToFactorization();
+  void AddByRotations();
   void DropFromFactorization(int position);
   // Appends stacked constraint k to the active set with multiplier `u`.
   void Activate(int k, double u);
@@ -225,31 +261,70 @@ void ActiveSetSolver<Factors>::Directions(int k) {
   const int q = Active();
   const double* a = w_.normals.col(k).data();
   // d = J^T a
-  for (int i = 0; i < N(); ++i) {
-    const double* column = f_.J.col(i).data();
-    double sum = 0.0;
-    for (int row = 0; row < N(); ++row) sum += column[row] * a[row];
-    f_.d(i) = sum;
-  }
+  for (int i = 0; i < N(); ++i) f_.d(i) = Dot(N(), f_.J.col(i).data(), a);
   // z = J_2 d_2 (the columns after the active ones)
   double* z = f_.z.data();
   std::fill(z, z + N(), 0.0);
-  for (int c = q; c < N(); ++c) {
-    const double dc = f_.d(c);
-    const double* column = f_.J.col(c).data();
-    for (int row = 0; row < N(); ++row) z[row] += dc * column[row];
-  }
-  // r = R^-1 d_1 (R upper triangular, q x q): back substitution
-  for (int i = q - 1; i >= 0; --i) {
-    double sum = f_.d(i);
-    for (int c = i + 1; c < q; ++c) sum -= f_.R(i, c) * f_.r(c);
-    f_.r(i) = sum / f_.R(i, i);
+  for (int c = q; c < N(); ++c) Axpy(N(), f_.d(c), f_.J.col(c).data(), z);
+  BackSubstitute();
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::DirectionsAfterDrop() {
+  // The drop turned J's columns and d alike and freed column q: J_2 gained
+  // it, so z gains its term; only r is formed again.
+  const int q = Active();
+  Axpy(N(), f_.d(q), f_.J.col(q).data(), f_.z.data());
+  BackSubstitute();
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::BackSubstitute() {
+  // r = R^-1 d_1 (R upper triangular, q x q), by columns (contiguous), in
+  // place on a copy of d_1.
+  const int q = Active();
+  double* r = f_.r.data();
+  for (int i = 0; i < q; ++i) r[i] = f_.d(i);
+  for (int c = q - 1; c >= 0; --c) {
+    r[c] /= f_.R(c, c);
+    Axpy(c, -r[c], f_.R.col(c).data(), r);
   }
 }
 
 template <class Factors>
 void ActiveSetSolver<Factors>::AddToFactorization() {
+  // J_2 (the columns after the active ones) is turned so that d_2 = J_2^T a
+  // becomes |d_2| e_1 by one Householder reflection I - 2 v v^T / v^T v,
+  // v = d_2 - alpha e_1: a rank-1 update J_2 -= w v^T with w = J_2 v 2 / v^T v
+  // and J_2 v = z - alpha J_q (z = J_2 d_2 from Directions), a quarter of the
+  // arithmetic of a chain of Givens rotations. The new column q is then
+  // z / |d_2| (the reflection's z / alpha, its sign turned so that R keeps a
+  // positive diagonal).
   const int q = Active();  // before adding
+  auto& d = f_.d;
+  auto& J = f_.J;
+  double tail = 0.0;  // |d_2|^2
+  for (int j = q; j < N(); ++j) tail += d(j) * d(j);
+  if (!(tail > 1e-290 && tail < 1e290)) return AddByRotations();
+  const double norm = std::sqrt(tail);
+  const double alpha = d(q) > 0.0 ? -norm : norm;
+  const double scale = 1.0 / (norm * (norm + std::abs(d(q))));  // 2 / v^T v
+  double* __restrict wv = f_.hx.data();                         // w; hx is free until Finish
+  const double* z = f_.z.data();
+  const double* column_q = J.col(q).data();
+  for (int row = 0; row < N(); ++row) wv[row] = (z[row] - alpha * column_q[row]) * scale;
+  for (int c = q + 1; c < N(); ++c) Axpy(N(), -d(c), wv, J.col(c).data());
+  const double inverse = 1.0 / norm;
+  double* new_column = J.col(q).data();
+  for (int row = 0; row < N(); ++row) new_column[row] = z[row] * inverse;
+  f_.R.col(q).head(q) = d.head(q);
+  f_.R(q, q) = norm;
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::AddByRotations() {
+  // The same by Givens rotations (d_2 too long or too short to square).
+  const int q = Active();
   auto& d = f_.d;
   auto& J = f_.J;
   for (int j = N() - 1; j > q; --j) {
@@ -258,11 +333,7 @@ void ActiveSetSolver<Factors>::AddToFactorization() {
     if (s == 0.0) continue;
     d(j - 1) = h;
     d(j) = 0.0;
-    for (int row = 0; row < N(); ++row) {
-      const double a = J(row, j - 1), b = J(row, j);
-      J(row, j - 1) = c * a + s * b;
-      J(row, j) = -s * a + c * b;
-    }
+    Rotate(N(), c, s, J.col(j - 1).data(), J.col(j).data());
   }
   f_.R.col(q).head(q + 1) = d.head(q + 1);
 }
@@ -294,11 +365,11 @@ void ActiveSetSolver<Factors>::DropFromFactorization(int position) {
       R(j, col) = c * a + s * b;
       R(j + 1, col) = -s * a + c * b;
     }
-    for (int row = 0; row < N(); ++row) {
-      const double a = J(row, j), b = J(row, j + 1);
-      J(row, j) = c * a + s * b;
-      J(row, j + 1) = -s * a + c * b;
-    }
+    Rotate(N(), c, s, J.col(j).data(), J.col(j + 1).data());
+    // d = J^T a of the constraint being added turns with J.
+    const double a = f_.d(j), b = f_.d(j + 1);
+    f_.d(j) = c * a + s * b;
+    f_.d(j + 1) = -s * a + c * b;
   }
   w_.active.erase(w_.active.begin() + position);
   for (int k = position; k < q - 1; ++k) f_.u(k) = f_.u(k + 1);
@@ -457,12 +528,13 @@ void ActiveSetSolver<Factors>::SelectInRange(int begin, int end, double least,
 }
 
 template <class Factors>
-void ActiveSetSolver<Factors>::ScanBlocks(double* worst_distance, int* worst) {
+void ActiveSetSolver<Factors>::ScanBlocks(double threshold) {
   // Per block: y = M_b x (3 N products, unrolled for FixedFactors), then 3
   // products per unit row. No block is skipped: a bound such as
   // |a_r| |y_b - y_ref| proving its rows satisfied costs more than it saves,
   // since on the planner's grasps nearly every block holds an active or
-  // nearly active row.
+  // nearly active row. Each block's farthest violated row is kept in
+  // w_.pending (Push).
   const int values = static_cast<int>(qp_.in_block_maps.rows());
   const auto& unit = w_.unit_rows;
   const double* __restrict x = f_.x.data();
@@ -490,7 +562,22 @@ void ActiveSetSolver<Factors>::ScanBlocks(double* worst_distance, int* worst) {
     const int first = qp_.in_block_first[block], end = qp_.in_block_first[block + 1];
     const double least = UnitRowDistances(unit.data() + first, m_, end - first, y0, y1, y2,
                                           w_.distance.data() + first);
-    SelectInRange(first, end, least, worst_distance, worst);
+    double block_distance = threshold;
+    int block_row = -1;
+    SelectInRange(first, end, least, &block_distance, &block_row);
+    if (block_row >= 0) Push(block_row);
+  }
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::Push(int row) {
+  // Kept most violated last (popped first): a few entries, insertion sort.
+  std::vector<int>& pending = w_.pending;
+  const double* distance = w_.distance.data();
+  pending.push_back(row);
+  for (int i = static_cast<int>(pending.size()) - 1;
+       i > 0 && distance[pending[i - 1]] < distance[pending[i]]; --i) {
+    std::swap(pending[i - 1], pending[i]);
   }
 }
 
@@ -512,7 +599,28 @@ int ActiveSetSolver<Factors>::MostViolated() {
   double worst_distance = -tol * x_norm;
   int worst = -1;
   if (structured_) {
-    ScanBlocks(&worst_distance, &worst);
+    // The other blocks' violated rows of the last scan are tried before a
+    // new scan, in the order of their distance then, each if it is still at
+    // least half as far outside as it was (w_.distance keeps the scan's
+    // values): one scan then serves several steps. Taking every row still
+    // violated costs more steps (drops) than the scans it saves at 3-4
+    // contacts; only the first scan's rows, more still.
+    while (!w_.pending.empty()) {
+      const int row = w_.pending.back();
+      w_.pending.pop_back();
+      const int k = p_ + row;
+      if (w_.is_active[k]) continue;
+      EnsureNormal(k);
+      const double distance = Slack(k) * w_.inverse_norms(row);
+      if (distance < w_.distance_bound(row) && distance < worst_distance &&
+          distance <= 0.5 * w_.distance(row)) {
+        return k;
+      }
+    }
+    ScanBlocks(worst_distance);
+    if (w_.pending.empty()) return -1;
+    worst = w_.pending.back();
+    w_.pending.pop_back();
   } else {
     ScanRows();
     const double least =
@@ -554,6 +662,7 @@ bool ActiveSetSolver<Factors>::Initialize() {
   w_.has_normal.assign(p_ + m_, 0);
   w_.active.clear();
   w_.active.reserve(N() + 1);
+  w_.pending.clear();
   w_.normals.resize(N(), p_ + m_);
   w_.rhs.resize(p_ + m_);
   w_.rhs.head(p_) = qp_.eq_rhs;
@@ -636,9 +745,13 @@ std::optional<DenseQpStatus> ActiveSetSolver<Factors>::AddInequality(int k, int 
   const double tol = settings_.tolerance;
   double u_new = 0.0;  // multiplier of the constraint being added
   EnsureNormal(k);
-  while (true) {
+  for (bool dropped = false;; dropped = true) {
     if (++iterations_ > max_iterations) return DenseQpStatus::kIterationLimit;
-    Directions(k);
+    if (dropped) {
+      DirectionsAfterDrop();
+    } else {
+      Directions(k);
+    }
     const int q = Active();
     double t1;  // partial step length
     const int drop = BlockingActive(&t1);

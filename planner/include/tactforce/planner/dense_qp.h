@@ -86,6 +86,7 @@ struct DenseQpWorkspace {
   Eigen::VectorXd hx;               // n: H x, for the objective
   std::vector<int> active;          // stacked indices, factorisation order
   std::vector<char> is_active;      // p + m
+  std::vector<int> pending;         // violated rows of the last scan not yet tried
   Eigen::LLT<Eigen::MatrixXd> llt;  // H = L L^T (general Hessians only)
 };
 
