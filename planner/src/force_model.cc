@@ -379,9 +379,21 @@ MatrixXd ConstraintRows::Dense(int num_contacts) const {
   return a;
 }
 
-void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid,
-                         int cone_sides, double confidence, bool with_friction_facets,
-                         ConstraintRows* out) {
+namespace {
+
+// Largest eigenvalue's root of the 2x2 form [a b; b c] (the covariance in
+// the tangent plane): TangentialSpread from the forms it is made of.
+double SpreadOfForms(double a, double b, double c) {
+  const double lambda_max = 0.5 * (a + c) + std::hypot(0.5 * (a - c), b);
+  return std::sqrt(std::max(0.0, lambda_max));
+}
+
+// BuildConstraintRows; with `normal_sigma` and `tangential_sigma` given and
+// the facets' quadratic forms of S_ii formed (confidence > 0, facets), also
+// the per-contact sigmas from those same forms, and returns true.
+bool BuildRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid, int cone_sides,
+               double confidence, bool with_friction_facets, ConstraintRows* out,
+               std::vector<double>* normal_sigma, std::vector<double>* tangential_sigma) {
   const int n = static_cast<int>(problem.contacts.size());
   int m = 0;
   for (const Contact& c : problem.contacts) {
@@ -417,6 +429,11 @@ void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid&
     info[r] = {contact, kind, facet};
     ++r;
   };
+  const bool sigmas = normal_sigma != nullptr && confidence > 0.0 && with_friction_facets;
+  if (sigmas) {
+    normal_sigma->resize(n);
+    tangential_sigma->resize(n);
+  }
   for (int i = 0; i < n; ++i) {
     const Contact& c = problem.contacts[i];
     const Vec3& nrm = c.normal;
@@ -432,6 +449,7 @@ void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid&
       const Vec3 s1 = s * t1, s2 = s * t2;
       const double s11 = t1.dot(s1), s22 = t2.dot(s2), s12 = t1.dot(s2);
       const double s1n = t1.dot(sn), s2n = t2.dot(sn);
+      if (sigmas) (*tangential_sigma)[i] = SpreadOfForms(s11, s12, s22);
       for (int j = 0; j < cone_sides; ++j) {
         const double theta = table ? 0.0 : 2.0 * std::numbers::pi * j / cone_sides;
         const double co = table ? cos_table[j] : std::cos(theta);
@@ -443,11 +461,22 @@ void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid&
       }
     }
     const double normal_support = std::sqrt(std::max(0.0, snn));
+    if (sigmas) (*normal_sigma)[i] = normal_support;
     add(i, -nrm, -c.min_normal_force, normal_support, RowKind::kMinNormal, 0);
     if (c.max_normal_force > 0.0) {
       add(i, nrm, c.max_normal_force, normal_support, RowKind::kMaxNormal, 0);
     }
   }
+  return sigmas;
+}
+
+}  // namespace
+
+void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid,
+                         int cone_sides, double confidence, bool with_friction_facets,
+                         ConstraintRows* out) {
+  BuildRows(problem, ellipsoid, cone_sides, confidence, with_friction_facets, out, nullptr,
+            nullptr);
 }
 
 ConstraintRows BuildConstraintRows(const PlanProblem& problem,
@@ -504,9 +533,7 @@ double TangentialSpread(const Vec3& normal, const Eigen::Matrix3d& s) {
   // P S P has the normal in its kernel; its other eigenvalues are those of
   // the 2x2 block [t1 t2]^T S [t1 t2].
   const auto [t1, t2] = TangentBasis(normal);
-  const double a = t1.dot(s * t1), b = t1.dot(s * t2), c = t2.dot(s * t2);
-  const double lambda_max = 0.5 * (a + c) + std::hypot(0.5 * (a - c), b);
-  return std::sqrt(std::max(0.0, lambda_max));
+  return SpreadOfForms(t1.dot(s * t1), t1.dot(s * t2), t2.dot(s * t2));
 }
 
 std::vector<double> TangentialForceSigma(const PlanProblem& problem,
@@ -542,10 +569,13 @@ void PrepareInPlace(const PlanOptions& options, EquilibriumScratch* scratch, Pre
   ApplyFrictionUncertainty(options.confidence, &p->problem, &p->nominal_friction);
   ComputeForceEquilibrium(p->problem, options.rank_tolerance, scratch, &p->equilibrium);
   ComputeMeasurementEllipsoid(p->problem, p->equilibrium, &p->ellipsoid);
-  BuildConstraintRows(p->problem, p->ellipsoid, options.cone_sides, options.confidence,
-                      options.cone == ConeModel::kPyramid, &p->rows);
-  NormalForceSigma(p->problem, p->ellipsoid, &p->normal_sigma);
-  TangentialForceSigma(p->problem, p->ellipsoid, &p->tangential_sigma);
+  // The sigmas come with the rows when those formed the same quadratic forms.
+  if (!BuildRows(p->problem, p->ellipsoid, options.cone_sides, options.confidence,
+                 options.cone == ConeModel::kPyramid, &p->rows, &p->normal_sigma,
+                 &p->tangential_sigma)) {
+    NormalForceSigma(p->problem, p->ellipsoid, &p->normal_sigma);
+    TangentialForceSigma(p->problem, p->ellipsoid, &p->tangential_sigma);
+  }
   if (options.cone == ConeModel::kExact) {
     ExactConeShift(p->problem, p->normal_sigma, p->tangential_sigma, options.confidence,
                    &p->cone_shift);
