@@ -99,6 +99,97 @@ double EquilibriumResidual(const PlanProblem& problem, const VectorXd& f, const 
   return std::sqrt(force.squaredNorm() + torque.squaredNorm());
 }
 
+// H x I3 with H = I - 2 v v^T (n x n), v = (e_1 + u) / |e_1 + u|, u = 1 /
+// sqrt(n): H e_1 = -u, so the first three columns of H x I3 span the force
+// columns F = [I; ...; I] of G_c^T and the rest their complement, with no
+// factorisation. Applied in place to a 3n vector (contact-major).
+class ContactMixer {
+ public:
+  explicit ContactMixer(int n) : n_(n) {
+    const double u = 1.0 / std::sqrt(double(n));
+    const double norm = std::sqrt(2.0 + 2.0 * u);
+    first_ = (1.0 + u) / norm;
+    other_ = u / norm;
+  }
+  void Apply(double* x) const {
+    for (int k = 0; k < 3; ++k) {
+      double others = 0.0;
+      for (int i = 1; i < n_; ++i) others += x[3 * i + k];
+      const double scale = 2.0 * (first_ * x[k] + other_ * others);
+      x[k] -= scale * first_;
+      const double step = scale * other_;
+      for (int i = 1; i < n_; ++i) x[3 * i + k] -= step;
+    }
+  }
+
+ private:
+  int n_;
+  double first_ = 0.0, other_ = 0.0;  // v_1 and v_i (i > 1)
+};
+
+// Whether the upper triangular R_t's three singular values all exceed the
+// rank cut-off rank_tolerance * max(1, sqrt(n), sigma_1), decided from
+// bounds: sigma_3 >= |det R| / (sigma_1 sigma_2) >= 2 |det R| / |R|_F^2 and
+// sigma_1 <= |R|_F. Only when the bounds do not decide is the SVD needed.
+bool ClearlyFullRank(const Eigen::Matrix3d& r, double rank_tolerance, int n) {
+  const double frobenius2 = r.squaredNorm();
+  if (!(frobenius2 > 0.0)) return false;
+  const double det = std::abs(r(0, 0) * r(1, 1) * r(2, 2));
+  const double cutoff =
+      rank_tolerance * std::max({1.0, std::sqrt(double(n)), std::sqrt(frobenius2)});
+  return 2.0 * det / frobenius2 > cutoff;
+}
+
+// The torque block R_t (upper triangular, the first 3 rows of `reduced`)
+// and its rank: from bounds when clearly full (no SVD, U = W = I), else from
+// its SVD R_t = U S W^T.
+struct TorqueRange {
+  TorqueRange(const MatrixXd& reduced, bool has_block, double rank_tolerance, int n) {
+    if (!has_block) return;
+    r = reduced.topRows<3>().triangularView<Eigen::Upper>();
+    if (ClearlyFullRank(r, rank_tolerance, n)) {
+      rank = 3;
+      return;
+    }
+    svd_used = true;
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    u = svd.matrixU();
+    w = svd.matrixV();
+    s = svd.singularValues();
+    const double cutoff = rank_tolerance * std::max({1.0, std::sqrt(double(n)), s(0)});
+    while (rank < 3 && s(rank) > cutoff) ++rank;
+  }
+  Eigen::Matrix3d r = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d u = Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d w = Eigen::Matrix3d::Identity();
+  Vec3 s = Vec3::Zero();
+  int rank = 0;
+  bool svd_used = false;
+};
+
+// f0 = Q_f y_f + Q_t y_t from R^T y = b_c (minimum norm): Q_f y_f puts
+// b_f / n on every contact; R_t^T y_t = b_c,t = b_t - c x b_f (through the
+// SVD's pseudo-inverse when it was needed).
+void ParticularSolution(const Vec3& centroid, const TorqueRange& torque, const MatrixXd& q_torque,
+                        ForceEquilibrium* eq) {
+  const int dim = static_cast<int>(q_torque.rows());
+  const int n = dim / 3;
+  const Vec3 b_force = eq->wrench.head<3>();
+  const Vec3 b_torque = eq->wrench.tail<3>() - centroid.cross(b_force);
+  eq->particular.resize(dim);
+  for (int i = 0; i < n; ++i) eq->particular.segment<3>(3 * i) = b_force / n;
+  if (torque.rank == 0) return;
+  Vec3 y_torque = Vec3::Zero();
+  if (torque.svd_used) {
+    for (int k = 0; k < torque.rank; ++k) {
+      y_torque += (torque.w.col(k).dot(b_torque) / torque.s(k)) * torque.u.col(k);
+    }
+  } else {
+    y_torque = torque.r.transpose().triangularView<Eigen::Lower>().solve(b_torque);
+  }
+  eq->particular.noalias() += q_torque * y_torque;
+}
+
 }  // namespace
 
 void ComputeForceEquilibrium(const PlanProblem& problem, double rank_tolerance,
@@ -106,67 +197,63 @@ void ComputeForceEquilibrium(const PlanProblem& problem, double rank_tolerance,
   const int n = static_cast<int>(problem.contacts.size());
   const int dim = 3 * n;
   FillGraspMatrixAndWrench(problem, eq);
-
-  // G_c^T about the centroid, reduced to R: [R_f R_ft; 0 R_t] (3 + 3 rows
-  // when 3n >= 6; a single contact has only the force block).
   Vec3 centroid = Vec3::Zero();
   for (const Contact& c : problem.contacts) centroid += c.position;
   centroid /= n;
-  MatrixXd& a = scratch->reflected;
-  a.resize(dim, 6);
+  const ContactMixer mixer(n);
+
+  // Q_f = (H x I3) e_k = -F / sqrt(n), R_f = -sqrt(n) I. The torque columns
+  // T (rows [p_i - c]x^T) are orthogonal to F, so (H x I3) T = [0; T''] and
+  // the QR of T'' (3(n-1) x 3) gives R_t and Q'' = [Q''_t | Q''_rest].
+  const bool has_torque_block = n >= 2;
+  MatrixXd& torque = scratch->reflected;
+  torque.resize(dim, 3);
   for (int i = 0; i < n; ++i) {
-    a.block<3, 3>(3 * i, 0).setIdentity();
-    a.block<3, 3>(3 * i, 3) = Skew(problem.contacts[i].position - centroid).transpose();
+    torque.block<3, 3>(3 * i, 0) = Skew(problem.contacts[i].position - centroid).transpose();
   }
-  HouseholderQr(a, scratch->reflectors, scratch->orthogonal);
-  const MatrixXd& q = scratch->orthogonal;
-  const bool has_torque_block = dim >= 6;
+  for (int k = 0; k < 3; ++k) mixer.Apply(torque.col(k).data());
+  MatrixXd& reduced = scratch->reduced;
+  reduced = torque.bottomRows(dim - 3);
+  HouseholderQr(reduced, scratch->reflectors, scratch->orthogonal);
+  const MatrixXd& q = scratch->orthogonal;  // Q'' (3(n-1) square)
 
   // Rank: the force block always has rank 3 (singular values sqrt(n)).
-  Eigen::Matrix3d torque_u = Eigen::Matrix3d::Identity();
-  Eigen::Matrix3d torque_w = Eigen::Matrix3d::Identity();
-  Vec3 torque_s = Vec3::Zero();
-  if (has_torque_block) {
-    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(a.block<3, 3>(3, 3),
-                                                Eigen::ComputeFullU | Eigen::ComputeFullV);
-    torque_u = svd.matrixU();
-    torque_w = svd.matrixV();
-    torque_s = svd.singularValues();
-  }
-  const double cutoff = rank_tolerance * std::max({1.0, std::sqrt(double(n)), torque_s(0)});
-  int torque_rank = 0;
-  while (torque_rank < 3 && torque_s(torque_rank) > cutoff) ++torque_rank;
+  const TorqueRange torque_range(reduced, has_torque_block, rank_tolerance, n);
+  const int torque_rank = torque_range.rank;
+  const bool svd_used = torque_range.svd_used;
+  const Eigen::Matrix3d& torque_u = torque_range.u;
   eq->rank = 3 + torque_rank;
 
-  // Range basis [Q_f, Q_t U_r] and null basis [Q_t U_lost, Q_rest].
+  // Q_t = (H x I3) [0; Q''_t] (3n x 3): the torque range columns, and with
+  // the SVD, rotated into U (range U_r, lost U_lost).
+  MatrixXd& q_torque = scratch->torque_basis;
+  q_torque.setZero(dim, 3);
+  if (has_torque_block) {
+    q_torque.bottomRows(dim - 3) = q.leftCols<3>();
+    for (int k = 0; k < 3; ++k) mixer.Apply(q_torque.col(k).data());
+  }
   const int lost = has_torque_block ? 3 - torque_rank : 0;
   const int rest = has_torque_block ? dim - 6 : dim - 3;
-  eq->independent_rows.resize(eq->rank, dim);
-  eq->independent_rows.topRows<3>() = q.leftCols<3>().transpose();
+  eq->independent_rows.setZero(eq->rank, dim);
+  const double force_entry = -1.0 / std::sqrt(double(n));
+  for (int j = 0; j < dim; ++j) eq->independent_rows(j % 3, j) = force_entry;
   eq->null_basis.resize(dim, lost + rest);
-  if (has_torque_block) {
-    const auto q_torque = q.middleCols<3>(3);
+  if (svd_used) {
     eq->independent_rows.bottomRows(torque_rank).noalias() =
-        (q_torque * torque_u.leftCols(torque_rank)).transpose();
+        torque_u.leftCols(torque_rank).transpose() * q_torque.transpose();
     eq->null_basis.leftCols(lost).noalias() = q_torque * torque_u.rightCols(lost);
+  } else if (torque_rank == 3) {
+    eq->independent_rows.bottomRows<3>() = q_torque.transpose();
   }
-  eq->null_basis.rightCols(rest) = q.rightCols(rest);
+  for (int j = 0; j < rest; ++j) {
+    double* column = eq->null_basis.col(lost + j).data();
+    std::fill(column, column + 3, 0.0);
+    const double* source = q.col((has_torque_block ? 3 : 0) + j).data();
+    std::copy(source, source + dim - 3, column + 3);
+    mixer.Apply(column);
+  }
 
-  // f0 = Q_f y_f + Q_t y_t from R^T y = b_c (minimum norm): R_f^T y_f = b_f,
-  // y_t = pinv(R_t^T)(b_c,t - R_ft^T y_f), b_c,t = b_t - c x b_f.
-  const Vec3 b_force = eq->wrench.head<3>();
-  const Vec3 b_torque = eq->wrench.tail<3>() - centroid.cross(b_force);
-  const Vec3 y_force =
-      a.block<3, 3>(0, 0).transpose().triangularView<Eigen::Lower>().solve(b_force);
-  eq->particular.noalias() = q.leftCols<3>() * y_force;
-  if (has_torque_block && torque_rank > 0) {
-    const Vec3 rhs = b_torque - a.block<3, 3>(0, 3).transpose() * y_force;
-    Vec3 y_torque = Vec3::Zero();
-    for (int k = 0; k < torque_rank; ++k) {
-      y_torque += (torque_w.col(k).dot(rhs) / torque_s(k)) * torque_u.col(k);
-    }
-    eq->particular.noalias() += q.middleCols<3>(3) * y_torque;
-  }
+  ParticularSolution(centroid, torque_range, scratch->torque_basis, eq);
   eq->independent_rhs.noalias() = eq->independent_rows * eq->particular;
   eq->residual = EquilibriumResidual(problem, eq->particular, eq->wrench);
   eq->consistent = eq->residual <= 1e-8 * std::max(1.0, eq->wrench.norm());
@@ -292,9 +379,21 @@ MatrixXd ConstraintRows::Dense(int num_contacts) const {
   return a;
 }
 
-void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid,
-                         int cone_sides, double confidence, bool with_friction_facets,
-                         ConstraintRows* out) {
+namespace {
+
+// Largest eigenvalue's root of the 2x2 form [a b; b c] (the covariance in
+// the tangent plane): TangentialSpread from the forms it is made of.
+double SpreadOfForms(double a, double b, double c) {
+  const double lambda_max = 0.5 * (a + c) + std::hypot(0.5 * (a - c), b);
+  return std::sqrt(std::max(0.0, lambda_max));
+}
+
+// BuildConstraintRows; with `normal_sigma` and `tangential_sigma` given and
+// the facets' quadratic forms of S_ii formed (confidence > 0, facets), also
+// the per-contact sigmas from those same forms, and returns true.
+bool BuildRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid, int cone_sides,
+               double confidence, bool with_friction_facets, ConstraintRows* out,
+               std::vector<double>* normal_sigma, std::vector<double>* tangential_sigma) {
   const int n = static_cast<int>(problem.contacts.size());
   int m = 0;
   for (const Contact& c : problem.contacts) {
@@ -330,6 +429,11 @@ void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid&
     info[r] = {contact, kind, facet};
     ++r;
   };
+  const bool sigmas = normal_sigma != nullptr && confidence > 0.0 && with_friction_facets;
+  if (sigmas) {
+    normal_sigma->resize(n);
+    tangential_sigma->resize(n);
+  }
   for (int i = 0; i < n; ++i) {
     const Contact& c = problem.contacts[i];
     const Vec3& nrm = c.normal;
@@ -345,6 +449,7 @@ void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid&
       const Vec3 s1 = s * t1, s2 = s * t2;
       const double s11 = t1.dot(s1), s22 = t2.dot(s2), s12 = t1.dot(s2);
       const double s1n = t1.dot(sn), s2n = t2.dot(sn);
+      if (sigmas) (*tangential_sigma)[i] = SpreadOfForms(s11, s12, s22);
       for (int j = 0; j < cone_sides; ++j) {
         const double theta = table ? 0.0 : 2.0 * std::numbers::pi * j / cone_sides;
         const double co = table ? cos_table[j] : std::cos(theta);
@@ -356,11 +461,22 @@ void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid&
       }
     }
     const double normal_support = std::sqrt(std::max(0.0, snn));
+    if (sigmas) (*normal_sigma)[i] = normal_support;
     add(i, -nrm, -c.min_normal_force, normal_support, RowKind::kMinNormal, 0);
     if (c.max_normal_force > 0.0) {
       add(i, nrm, c.max_normal_force, normal_support, RowKind::kMaxNormal, 0);
     }
   }
+  return sigmas;
+}
+
+}  // namespace
+
+void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid,
+                         int cone_sides, double confidence, bool with_friction_facets,
+                         ConstraintRows* out) {
+  BuildRows(problem, ellipsoid, cone_sides, confidence, with_friction_facets, out, nullptr,
+            nullptr);
 }
 
 ConstraintRows BuildConstraintRows(const PlanProblem& problem,
@@ -417,9 +533,7 @@ double TangentialSpread(const Vec3& normal, const Eigen::Matrix3d& s) {
   // P S P has the normal in its kernel; its other eigenvalues are those of
   // the 2x2 block [t1 t2]^T S [t1 t2].
   const auto [t1, t2] = TangentBasis(normal);
-  const double a = t1.dot(s * t1), b = t1.dot(s * t2), c = t2.dot(s * t2);
-  const double lambda_max = 0.5 * (a + c) + std::hypot(0.5 * (a - c), b);
-  return std::sqrt(std::max(0.0, lambda_max));
+  return SpreadOfForms(t1.dot(s * t1), t1.dot(s * t2), t2.dot(s * t2));
 }
 
 std::vector<double> TangentialForceSigma(const PlanProblem& problem,
@@ -455,10 +569,13 @@ void PrepareInPlace(const PlanOptions& options, EquilibriumScratch* scratch, Pre
   ApplyFrictionUncertainty(options.confidence, &p->problem, &p->nominal_friction);
   ComputeForceEquilibrium(p->problem, options.rank_tolerance, scratch, &p->equilibrium);
   ComputeMeasurementEllipsoid(p->problem, p->equilibrium, &p->ellipsoid);
-  BuildConstraintRows(p->problem, p->ellipsoid, options.cone_sides, options.confidence,
-                      options.cone == ConeModel::kPyramid, &p->rows);
-  NormalForceSigma(p->problem, p->ellipsoid, &p->normal_sigma);
-  TangentialForceSigma(p->problem, p->ellipsoid, &p->tangential_sigma);
+  // The sigmas come with the rows when those formed the same quadratic forms.
+  if (!BuildRows(p->problem, p->ellipsoid, options.cone_sides, options.confidence,
+                 options.cone == ConeModel::kPyramid, &p->rows, &p->normal_sigma,
+                 &p->tangential_sigma)) {
+    NormalForceSigma(p->problem, p->ellipsoid, &p->normal_sigma);
+    TangentialForceSigma(p->problem, p->ellipsoid, &p->tangential_sigma);
+  }
   if (options.cone == ConeModel::kExact) {
     ExactConeShift(p->problem, p->normal_sigma, p->tangential_sigma, options.confidence,
                    &p->cone_shift);

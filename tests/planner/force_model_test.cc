@@ -90,6 +90,54 @@ TEST(ForceEquilibrium, CollinearContactsLoseOneRotation) {
   EXPECT_LE((eq.independent_rows * eq.particular - eq.independent_rhs).norm(), 1e-14);
 }
 
+// Generic, collinear and coincident contacts, 1 to 8 of them, drawn from a
+// fixed seed and from gtest's: the FE-plane against an independent
+// pseudo-inverse (Eigen's complete orthogonal decomposition of G), on both
+// rank paths (bounds, and the 3x3 SVD when the torque block is singular).
+TEST(ForceEquilibrium, BasesMatchAnIndependentDecompositionOnEveryRankPath) {
+  for (const unsigned seed :
+       {29u, static_cast<unsigned>(testing::UnitTest::GetInstance()->random_seed())}) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> g;
+    for (int trial = 0; trial < 60; ++trial) {
+      const int n = 1 + trial % 8;
+      const int kind = (trial / 8) % 3;  // 0 generic, 1 collinear, 2 coincident
+      const Vec3 axis = Vec3(g(rng), g(rng), g(rng)).normalized();
+      const Vec3 base = 0.02 * Vec3(g(rng), g(rng), g(rng));
+      PlanProblem p;
+      p.object.mass = 0.2;
+      p.object.com = base;  // on the line and at the point: a consistent wrench
+      for (int i = 0; i < n; ++i) {
+        const Vec3 pos = kind == 0   ? Vec3(0.03 * Vec3(g(rng), g(rng), g(rng)))
+                         : kind == 1 ? Vec3(base + 0.03 * g(rng) * axis)
+                                     : base;
+        p.contacts.push_back(MakeContact(pos, Vec3(g(rng), g(rng), g(rng))));
+      }
+      // One or two contacts resist only a wrench whose line passes through the first.
+      if (n <= 2) p.object.com = p.contacts[0].position;
+      SCOPED_TRACE(testing::Message() << "seed " << seed << " trial " << trial);
+      const ForceEquilibrium eq = ComputeForceEquilibrium(p, 1e-9);
+      const int expected_rank = std::min(3 * n, kind == 2 ? 3 : kind == 1 || n == 2 ? 5 : 6);
+      ASSERT_EQ(eq.rank, n == 1 ? 3 : expected_rank);
+      const MatrixXd& b = eq.null_basis;
+      ASSERT_EQ(b.cols(), 3 * n - eq.rank);
+      ASSERT_EQ(eq.independent_rows.rows(), eq.rank);
+      MatrixXd basis(3 * n, 3 * n);
+      basis.leftCols(eq.rank) = eq.independent_rows.transpose();
+      basis.rightCols(b.cols()) = b;
+      EXPECT_LE(
+          (basis.transpose() * basis - MatrixXd::Identity(3 * n, 3 * n)).cwiseAbs().maxCoeff(),
+          1e-13);
+      if (b.cols() > 0) EXPECT_LE((eq.grasp_matrix * b).cwiseAbs().maxCoeff(), 1e-14);
+      const MatrixXd pinv = eq.grasp_matrix.completeOrthogonalDecomposition().pseudoInverse();
+      EXPECT_LE((eq.particular - pinv * eq.wrench).cwiseAbs().maxCoeff(),
+                1e-12 * std::max(1.0, eq.wrench.norm()));
+      EXPECT_TRUE(eq.consistent);
+      EXPECT_LE((eq.independent_rows * eq.particular - eq.independent_rhs).norm(), 1e-13);
+    }
+  }
+}
+
 TEST(TangentBasis, FollowsTheStatedConvention) {
   const auto [t1, t2] = TangentBasis(Vec3(0, 0, 1));
   EXPECT_LE((t1 - Vec3(1, 0, 0)).norm(), 1e-15);  // x is first on ties

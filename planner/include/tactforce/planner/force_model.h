@@ -42,19 +42,24 @@ struct ForceEquilibrium {
 
 // Buffers ComputeForceEquilibrium reuses (contents are scratch).
 struct EquilibriumScratch {
-  MatrixXd reflected;   // G_c^T (3n x 6), reduced in place to R
-  MatrixXd reflectors;  // Householder vectors, 3n x 6
-  MatrixXd orthogonal;  // Q (3n x 3n)
+  MatrixXd reflected;     // (H x I3) T, the mixed torque columns (3n x 3)
+  MatrixXd reduced;       // their last 3(n-1) rows, reduced in place to R_t
+  MatrixXd reflectors;    // Householder vectors, 3(n-1) x 3
+  MatrixXd orthogonal;    // Q'' (3(n-1) x 3(n-1))
+  MatrixXd torque_basis;  // Q_t (3n x 3)
 };
 
-// Builds G and b and the FE-plane in closed form: about the contacts'
-// centroid c the force rows of the centred G_c = [I ...; [p_i - c]x ...]
-// are orthogonal to its torque rows, and G_c has the same null space and
-// equilibrium set as G (G = T G_c, T invertible). A Householder QR of G_c^T
-// (3n x 6) gives Q = [range | null]; only the 3x3 torque block R_t needs an
-// SVD, for the rank: a torque direction counts when its singular value
-// exceeds rank_tolerance * max(1, sqrt(n), sigma_max(R_t)) (the singular
-// values of G_c). Lost rotations (collinear or coincident contacts) move
+// Builds G and b and the FE-plane: about the contacts' centroid c the force
+// rows of the centred G_c = [I ...; [p_i - c]x ...] are orthogonal to its
+// torque rows, and G_c has the same null space and equilibrium set as G
+// (G = T G_c, T invertible). The force rows' range and complement come in
+// closed form from one Householder reflection of the n contacts (H x I3, H e_1
+// = -1 / sqrt(n)), which maps the torque columns to [0; T'']; a Householder
+// QR of T'' (3(n-1) x 3) gives the torque block R_t and the rest of the
+// basis. Rank: a torque direction counts when its singular value exceeds
+// rank_tolerance * max(1, sqrt(n), sigma_max(R_t)) (the singular values of
+// G_c); bounds from det R_t and |R_t|_F decide a clearly full rank, else a
+// 3x3 SVD of R_t. Lost rotations (collinear or coincident contacts) move
 // their directions from the range to the null space. independent_rows are
 // then the orthonormal range basis (rank x 3n), independent_rhs = rows f0.
 ForceEquilibrium ComputeForceEquilibrium(const PlanProblem& problem, double rank_tolerance);
