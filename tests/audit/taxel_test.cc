@@ -4,6 +4,7 @@
 // at test time (printed; TACTFORCE_TEST_SEED=<n> repeats a run); the
 // 200-seed evaluations are audit_hidden_eval (README).
 #include <cstdlib>
+#include <algorithm>
 #include <iostream>
 #include <random>
 
@@ -147,33 +148,36 @@ TEST(Phantom, HysteresisIsNotAPhantom) {
 // ---- blocked hold-out --------------------------------------------------------
 
 // Late effects are named in ~95 % of the 200-seed evaluation (a late lag can
-// be named delay): 3 of 4 drawn cases must be, each with its blocks right.
+// be named delay), and a named one shows in the last block but not the first
+// in most cases: 9 of 12 drawn cases must be both. A fixed 12 keeps a
+// chance failure rare for any drawn seed (measured: 0 of 200 seeds below 9).
 TEST(BlockedHoldout, LateEffectIsNamedAndItsBlockShown) {
   std::mt19937_64 rng(TestSeed() + 4);
-  int named = 0;
-  for (int k = 0; k < 4; ++k) {
+  const std::vector<Effect> late = {Effect::kHysteresis, Effect::kLag, Effect::kNonlinearity,
+                                    Effect::kDelay};
+  int right = 0;
+  for (int k = 0; k < 12; ++k) {
     const uint64_t seed = rng() % 1000000;
-    const std::vector<Effect> late = {Effect::kHysteresis, Effect::kLag, Effect::kNonlinearity,
-                                      Effect::kDelay};
     const Effect e = late[(seed + k) % late.size()];
     auto hc = testing::MakeLateCase(e, seed);
     auto rep = RunAudit(hc.data, testing::FastOptions(hc));
     ASSERT_TRUE(rep.ok()) << rep.status();
+    ASSERT_EQ(rep->block_times.size(), 5u);
     const Cause* found = nullptr;
     for (const auto& c : rep->causes)
       if (c.effect == EffectName(e)) found = &c;
-    ASSERT_EQ(rep->block_times.size(), 5u);
-    if (found == nullptr) {
-      std::cout << "not named: " << EffectName(e) << " seed " << seed << ":\n"
-                << FormatAuditSummary(*rep);
+    const auto has = [&](int b) {
+      return std::find(found->blocks.begin(), found->blocks.end(), b) != found->blocks.end();
+    };
+    if (found != nullptr && has(4) && !has(1)) {
+      ++right;
       continue;
     }
-    ++named;
-    EXPECT_THAT(found->blocks, ::testing::Contains(4)) << EffectName(e) << " seed " << seed;
-    EXPECT_THAT(found->blocks, ::testing::Not(::testing::Contains(1)))
-        << EffectName(e) << " seed " << seed;
+    std::cout << (found == nullptr ? "not named: " : "blocks wrong: ") << EffectName(e) << " seed "
+              << seed << ":\n"
+              << FormatAuditSummary(*rep);
   }
-  EXPECT_GE(named, 3);
+  EXPECT_GE(right, 9);
 }
 
 TEST(BlockedHoldout, StationaryEffectShowsInEveryBlock) {
