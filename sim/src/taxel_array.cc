@@ -239,7 +239,11 @@ TaxelLoads ComputeTaxelLoads(const std::vector<Taxel>& taxels, const TaxelRanges
     if (d <= nearest + 2 * a) candidates.push_back(i);
     out.coverage[i] = std::clamp((reach - d) / (2 * r.taxel_radius), 0.0, 1.0);
   }
-  const Eigen::Vector3d normal = SurfaceNormal(taxels, contact, reach);
+  // The patch's plane from a neighbourhood that does not grow with the force:
+  // a plane that tilted as the patch grew moved pressure between cells, so a
+  // taxel's load could fall while the force rose.
+  const Eigen::Vector3d normal =
+      SurfaceNormal(taxels, contact, r.patch_radius_max + r.taxel_radius);
   const Eigen::Vector3d e1 = normal.unitOrthogonal(), e2 = normal.cross(e1);
   std::vector<double> share(n, 0.0);
   for (int k = 0; k < kPatchRays; ++k) {
