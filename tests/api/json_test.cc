@@ -10,6 +10,7 @@
 #include "absl/strings/str_cat.h"
 #include "google/protobuf/util/message_differencer.h"
 #include "tactforce/api/convert.h"
+#include "support/test_seed.h"
 
 namespace tactforce::api {
 namespace {
@@ -178,7 +179,7 @@ TEST(JsonTest, WrongValueTypesNameFileLineColumn) {
       {R"("object": {"com": {"x": )", "[1]}}", "object.com.x",
        "expected a number (double), got an array"},
   };
-  std::mt19937 rng(::testing::UnitTest::GetInstance()->random_seed() + 7);
+  std::mt19937 rng(::tactforce::testing::GtestSeed() + 7);
   for (const Case& c : cases) {
     const int blank_lines = std::uniform_int_distribution<int>(0, 5)(rng);
     const int indent = std::uniform_int_distribution<int>(0, 8)(rng);

@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "support/cli_fixture.h"
+#include "support/test_seed.h"
 
 namespace tactforce::testing {
 namespace {
@@ -204,7 +205,7 @@ TEST_F(CliConventionsTest, MisspeltCommandsAndFlagsGetDidYouMean) {
       {{"audit"}, "--heldout"},
       {{"simulate", "inertia"}, "--contacts"},
   };
-  std::mt19937 rng(::testing::UnitTest::GetInstance()->random_seed() + 25);
+  std::mt19937 rng(::tactforce::testing::GtestSeed() + 25);
   for (const Case& c : cases) {
     std::string typo = c.name;
     const size_t first = c.name[0] == '-' ? 2 : 0;

@@ -13,6 +13,7 @@
 #include "support/cli_fixture.h"
 #include "tactforce/inertia/fit.h"
 #include "tactforce/inertia/metrics.h"
+#include "support/test_seed.h"
 
 namespace tactforce::experiment {
 namespace {
@@ -34,7 +35,7 @@ InHandObject DrawObject(uint64_t seed) {
   return o;
 }
 
-uint64_t TestSeed() { return 20240601 + ::testing::UnitTest::GetInstance()->random_seed(); }
+uint64_t TestSeed() { return 20240601 + ::tactforce::testing::GtestSeed(); }
 
 TEST(InHandTest, IdealDataSourceOnADrawnObject) {
   InHandConfig c;

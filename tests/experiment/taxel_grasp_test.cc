@@ -10,12 +10,13 @@
 #include "support/cli_fixture.h"
 #include "tactforce/experiment/grasp.h"
 #include "tactforce/sim/taxel_array.h"
+#include "support/test_seed.h"
 
 namespace tactforce::experiment {
 namespace {
 
-// --gtest_random_seed changes the draws; the default (0) is reproducible.
-uint64_t TestSeed() { return 2611270 + ::testing::UnitTest::GetInstance()->random_seed(); }
+// The draws follow GoogleTest's seed, printed once (support/test_seed.h).
+uint64_t TestSeed() { return 2611270 + ::tactforce::testing::GtestSeed(); }
 
 // Shorter phases than the CLI's default so the file stays quick; same loop.
 GraspConfig TaxelConfig(GraspObject object, Feedback feedback) {

@@ -1,4 +1,5 @@
 #include "tactforce/planner/force_model.h"
+#include "support/test_seed.h"
 
 #include <cmath>
 #include <numbers>
@@ -95,8 +96,7 @@ TEST(ForceEquilibrium, CollinearContactsLoseOneRotation) {
 // pseudo-inverse (Eigen's complete orthogonal decomposition of G), on both
 // rank paths (bounds, and the 3x3 SVD when the torque block is singular).
 TEST(ForceEquilibrium, BasesMatchAnIndependentDecompositionOnEveryRankPath) {
-  for (const unsigned seed :
-       {29u, static_cast<unsigned>(testing::UnitTest::GetInstance()->random_seed())}) {
+  for (const unsigned seed : {29u, static_cast<unsigned>(::tactforce::testing::GtestSeed())}) {
     std::mt19937 rng(seed);
     std::normal_distribution<double> g;
     for (int trial = 0; trial < 60; ++trial) {
@@ -115,7 +115,7 @@ TEST(ForceEquilibrium, BasesMatchAnIndependentDecompositionOnEveryRankPath) {
       }
       // One or two contacts resist only a wrench whose line passes through the first.
       if (n <= 2) p.object.com = p.contacts[0].position;
-      SCOPED_TRACE(testing::Message() << "seed " << seed << " trial " << trial);
+      SCOPED_TRACE(::testing::Message() << "seed " << seed << " trial " << trial);
       const ForceEquilibrium eq = ComputeForceEquilibrium(p, 1e-9);
       const int expected_rank = std::min(3 * n, kind == 2 ? 3 : kind == 1 || n == 2 ? 5 : 6);
       ASSERT_EQ(eq.rank, n == 1 ? 3 : expected_rank);

@@ -26,6 +26,7 @@
 #include "tactforce/v1/estimator.grpc.pb.h"
 #include "tactforce/v1/info.grpc.pb.h"
 #include "test_support.h"
+#include "support/test_seed.h"
 
 namespace tactforce::testing {
 namespace {
@@ -84,7 +85,7 @@ TEST_F(HardeningTest, UnaryRequestsThatCannotBeParsedAreInvalidArgumentNamingThe
       {"/tactforce.v1.Audit/AuditModel", "tactforce.v1.AuditRequest"},
       {"/tactforce.v1.Info/GetServerInfo", "tactforce.v1.ServerInfoRequest"}};
   // The bytes, then a corrupt field drawn per run after a valid request.
-  std::mt19937_64 rng(::testing::UnitTest::GetInstance()->random_seed());
+  std::mt19937_64 rng(::tactforce::testing::GtestSeed());
   const std::string good = WrenchRequest().SerializeAsString();
   for (const auto& [method, type] : methods) {
     const grpc::Status status = RawUnary(channel_, method, Bytes(Corrupt()));
@@ -114,7 +115,7 @@ TEST_F(HardeningTest, PlanStreamWithACorruptRequestEndsNamingItsIndex) {
           channel_.get(), RpcMethod("/tactforce.v1.Planner/PlanStream", RpcMethod::BIDI_STREAMING),
           &context));
   // The corrupt message's position is drawn per run (2..4).
-  std::mt19937_64 rng(::testing::UnitTest::GetInstance()->random_seed());
+  std::mt19937_64 rng(::tactforce::testing::GtestSeed());
   const int corrupt = std::uniform_int_distribution<int>(2, 4)(rng);
   int responses = 0;
   for (int i = 0; i < 6; ++i) {
@@ -181,7 +182,7 @@ TEST_F(HardeningTest, FitInertiaWithACorruptMessageIsNeverAPartialFit) {
   for (const auto& m : messages) good.push_back(Bytes(m));
   // The whole stream fits.
   EXPECT_TRUE(StreamRaw(channel_, good).ok());
-  std::mt19937_64 rng(::testing::UnitTest::GetInstance()->random_seed());
+  std::mt19937_64 rng(::tactforce::testing::GtestSeed());
   const int corrupt = std::uniform_int_distribution<int>(1, 3)(rng);
   corrupted = good;
   corrupted[corrupt] = Bytes(corrupt == 2 ? Corrupt() : Corrupt(&rng));
@@ -321,7 +322,7 @@ TEST_F(IpoptLaneTest, GeometricWorkIsServedWhileIpoptIsBusy) {
   } while (queued.ok() && Clock::now() - start < std::chrono::seconds(20));
   ASSERT_EQ(queued.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED) << Describe(queued);
   // Geometric work on the pool, drawn per run, while Ipopt is still busy.
-  std::mt19937_64 rng(::testing::UnitTest::GetInstance()->random_seed());
+  std::mt19937_64 rng(::tactforce::testing::GtestSeed());
   for (int i = 0; i < 5; ++i) {
     v1::PlanResponse response;
     const grpc::Status s = CallPlan(*stub_, RandomRequest(rng(), 16, v1::SOLVER_GEOMETRIC),

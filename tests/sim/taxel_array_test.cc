@@ -12,12 +12,13 @@
 #include <Eigen/Geometry>
 
 #include "tactforce/sim/taxel_array.h"
+#include "support/test_seed.h"
 
 namespace tactforce::sim {
 namespace {
 
-// --gtest_random_seed changes the draws; the default (0) is reproducible.
-uint64_t TestSeed() { return 20261127 + ::testing::UnitTest::GetInstance()->random_seed(); }
+// The draws follow GoogleTest's seed, printed once (support/test_seed.h).
+uint64_t TestSeed() { return 20261127 + ::tactforce::testing::GtestSeed(); }
 
 const Eigen::Vector3d kApex(0, 0, 0.042);  // DefaultFingertip's apex
 
