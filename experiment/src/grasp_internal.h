@@ -12,6 +12,7 @@
 #include "absl/status/statusor.h"
 #include "tactforce/planner/solver.h"
 #include "tactforce/planner/types.h"
+#include "tactforce/sim/simulate.h"
 
 namespace tactforce::experiment {
 
@@ -58,6 +59,10 @@ struct GraspSetup::Impl {
   std::vector<std::vector<double>> tick_desired;       // per tick, per finger (N)
   std::vector<std::vector<planner::Vec3>> tick_force;  // per tick, per finger, object frame (N)
   planner::PlanOptions plan_options;  // what the ticks were planned with (re-plans use them too)
+  sim::FingertipGeometry fingertip;   // the config's fingertip radius, the default body
+  // sin of the sensed normal's trusted error (GraspConfig::normal_uncertainty_deg
+  // resolved once per set-up: taxels without a value take the dome's resolution).
+  double sin_normal_uncertainty = 0;
 
   // The hand's motion at time t (lift, hold, place; or the pivot).
   HandMotion Motion(double t) const;

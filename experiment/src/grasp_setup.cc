@@ -15,6 +15,7 @@
 #include "scene.h"
 #include "tactforce/planner/solver.h"
 #include "tactforce/io/status_macros.h"
+#include "tactforce/sim/taxel_array.h"
 
 namespace tactforce::experiment {
 namespace {
@@ -238,6 +239,12 @@ absl::StatusOr<std::unique_ptr<GraspSetup>> GraspSetup::Create(const GraspConfig
   TF_ASSIGN_OR_RETURN(planner::PlanOptions options,
                       SetUpObjectAndMotion(config, *spec, setup->impl_.get()));
   setup->impl_->plan_options = options;
+  setup->impl_->fingertip = {config.fingertip_radius, sim::FingertipGeometry{}.body_length};
+  double deg = config.normal_uncertainty_deg;
+  if (deg < 0 && config.sensor_array == SensorArray::kTaxel)
+    deg = sim::DomeResolutionDeg(sim::DefaultFingertip(setup->impl_->fingertip),
+                                 setup->impl_->fingertip);
+  setup->impl_->sin_normal_uncertainty = deg > 0 ? std::sin(deg * std::numbers::pi / 180) : 0.0;
   if (config.fault.kind != SensorFault::Kind::kNone &&
       config.fault.finger >= setup->impl_->n_fingers)
     return absl::InvalidArgumentError(

@@ -165,12 +165,6 @@ class TrialRun {
     res_.seed = SplitMix(cfg_.seed * 0x100000001b3ULL + static_cast<uint64_t>(trial));
     est_opt_.method = cfg_.estimator;
     kd_ = 2 * cfg_.damping_ratio * std::sqrt(cfg_.kp * cfg_.fingertip_mass);
-    double deg = cfg_.normal_uncertainty_deg;
-    if (deg < 0 && cfg_.sensor_array == SensorArray::kTaxel) {
-      const sim::FingertipGeometry g{cfg_.fingertip_radius, sim::FingertipGeometry{}.body_length};
-      deg = sim::DomeResolutionDeg(sim::DefaultFingertip(g), g);
-    }
-    sin_normal_uncertainty_ = deg > 0 ? std::sin(deg * std::numbers::pi / 180) : 0.0;
   }
 
   absl::Status DrawSensors();
@@ -232,7 +226,6 @@ class TrialRun {
   int object_body_ = -1, obj_q_ = -1;
   estimator::EstimateOptions est_opt_;
   double kd_ = 0;
-  double sin_normal_uncertainty_ = 0;  // GraspConfig::normal_uncertainty_deg resolved
   Readings readings_;
   bool est_ok_ = false;
   double err_sum_ = 0, fb_sum_ = 0, squeeze_sum_ = 0;
@@ -250,8 +243,7 @@ class TrialRun {
 absl::Status TrialRun::DrawSensors() {
   std::mt19937_64 rng(res_.seed);
   if (cfg_.sensor_array == SensorArray::kTaxel) {
-    const sim::FingertipGeometry geometry{cfg_.fingertip_radius,
-                                          sim::FingertipGeometry{}.body_length};
+    const sim::FingertipGeometry& geometry = im_.fingertip;
     for (int i = 0; i < nf_; ++i) {
       TF_ASSIGN_OR_RETURN(
           auto a,
@@ -387,7 +379,7 @@ void TrialRun::ReadTaxels(double t) {
 // point on its surface. A zero normal: nothing sensed.
 sim::Taxel TrialRun::SensedContact(const sim::FingertipReading& taxels,
                                    const Vec3& true_point) const {
-  const sim::FingertipGeometry g{cfg_.fingertip_radius, sim::FingertipGeometry{}.body_length};
+  const sim::FingertipGeometry& g = im_.fingertip;
   sim::Taxel out{taxels.location, taxels.normal};
   if (out.normal.norm() < 0.5) return out;
   const Vec3 true_normal = (true_point - Vec3(0, 0, g.body_length)).normalized();
@@ -498,7 +490,7 @@ void TrialRun::UpdateTargets(int tick) {
     if (cfg_.admittance == Admittance::kFull) {
       const Vec3 error = TrustedError(
           desired_force[i] - r.observed_force[i], f.normal,
-          r.estimate_used ? r.observed_force[i].norm() * sin_normal_uncertainty_ : 0.0);
+          r.estimate_used ? r.observed_force[i].norm() * im_.sin_normal_uncertainty : 0.0);
       Vec3 step = cfg_.admittance_gain * error / cfg_.kp;
       if (step.norm() > kMaxTargetStep) step *= kMaxTargetStep / step.norm();
       f.offset += step;
