@@ -1,6 +1,7 @@
 // The one path of a service call (dispatch.h): RunCall places the work
-// (inline or on the pool, refused when the pool is full), logs one line and
-// ends the call; PlanDispatcher adds the Plan-specific steps in front of it
+// (inline, or on the pool where the worker runs it as an inline call;
+// refused when the pool is full), runs it guarded against exceptions, logs
+// one line and ends the call; PlanDispatcher adds the Plan-specific steps in front of it
 // (conversion with limits, the inline-or-pool choice, validation before
 // queueing) and the solve with its deadline and cancellation checks.
 #include "tactforce/api/dispatch.h"
@@ -43,21 +44,6 @@ absl::Status ExecutePlan(const Call& call, const CallControl& control, PlanBuffe
                                  " solve_us=", response->solve_time_us()));
   }
   return absl::OkStatus();
-}
-
-// Work that throws (std::bad_alloc from an allocation a request drove, an
-// exception of a third-party library) ends its call with a status; nothing
-// escapes into gRPC's threads or the worker pool, which would abort.
-absl::Status RunGuarded(const CallWork& work, CallLog& log) {
-  try {
-    return work(log);
-  } catch (const std::bad_alloc&) {
-    return absl::ResourceExhaustedError("out of memory while serving this request");
-  } catch (const std::exception& e) {
-    return absl::InternalError(absl::StrCat("internal error: ", e.what()));
-  } catch (...) {
-    return absl::InternalError("internal error: an unknown exception");
-  }
 }
 
 }  // namespace
@@ -144,27 +130,44 @@ absl::Status WorkBudget::Explain(absl::Status status) const {
 }
 
 bool RunCall(CallLog log, Executor* pool, CallWork work, CallDone done, const PoolWords& words) {
-  if (pool == nullptr) {
-    const absl::Status status = RunGuarded(work, log);
-    log.Emit(status);
-    done(status);
-    return true;
+  if (pool != nullptr) {
+    log.set_pooled();
+    // The pool task owns the log, the work and `done` (the caller's objects
+    // may be gone once `done` has run, possibly before TrySubmit returns) and
+    // runs the call as an inline one, on its worker.
+    struct Call {
+      CallLog log;
+      CallWork work;
+      CallDone done;
+    };
+    auto call = std::make_shared<Call>(Call{std::move(log), std::move(work), std::move(done)});
+    if (pool->TrySubmit([call] {
+          RunCall(std::move(call->log), nullptr, std::move(call->work), std::move(call->done));
+        })) {
+      return true;
+    }
+    // The pool dropped its copy; `call` is still ours.
+    const absl::Status busy = BusyStatus(*pool, words);
+    call->log.Emit(busy);
+    call->done(busy);
+    return false;
   }
-  log.set_pooled();
-  // The pool task owns the log, the work and `done`: the caller's objects may
-  // be gone once `done` has run, possibly before TrySubmit returns.
-  auto task = std::make_shared<std::pair<CallLog, CallWork>>(std::move(log), std::move(work));
-  const bool queued = pool->TrySubmit([task, done] {
-    const absl::Status status = RunGuarded(task->second, task->first);
-    task->first.Emit(status);
-    done(status);
-  });
-  if (!queued) {  // the pool dropped its copy; `task` and `done` are still ours
-    const absl::Status status = BusyStatus(*pool, words);
-    task->first.Emit(status);
-    done(status);
+  // Work that throws (std::bad_alloc from an allocation a request drove, an
+  // exception of a third-party library) ends its call with a status; nothing
+  // escapes into gRPC's threads or the worker pool, which would abort.
+  absl::Status status;
+  try {
+    status = work(log);
+  } catch (const std::bad_alloc&) {
+    status = absl::ResourceExhaustedError("out of memory while serving this request");
+  } catch (const std::exception& e) {
+    status = absl::InternalError(absl::StrCat("internal error: ", e.what()));
+  } catch (...) {
+    status = absl::InternalError("internal error: an unknown exception");
   }
-  return queued;
+  log.Emit(status);
+  done(status);
+  return true;
 }
 
 bool UsesIpopt(v1::Solver solver) {

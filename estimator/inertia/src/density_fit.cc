@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <utility>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -17,6 +19,7 @@
 #include "gls.h"
 #include "internal.h"
 #include "tactforce/inertia/pseudo_inertia.h"
+#include "tactforce/io/mesh.h"
 #include "tactforce/io/status_macros.h"
 #include "tactforce/planner/dense_qp.h"
 
@@ -451,7 +454,7 @@ double ChiSquareQuantile(int dof, double z) {
   return k * c * c * c;
 }
 
-// The mesh test (fit.cc decides): how far, in first-order Riemannian units
+// The mesh test (ReportDensity decides): how far, in first-order Riemannian units
 // at the density answer, the densities the regions can carry are from the
 // parameters the data allow at the 99.9 % chi^2 bound (10 degrees of
 // freedom) of the free fit.
@@ -475,10 +478,63 @@ void MeshConsistency(const GlsData& gls, const DensityBasis& b, DensityState* st
   }
 }
 
+// DENSITY's answer in `fit` (region model, densities, strength, the
+// held-out and mesh-test notes) and the mesh test's verdict: the data
+// contradict the mesh when every density its regions can carry lies farther
+// than o.density.mesh_tolerance, in first-order Riemannian units (the
+// affine-invariant distance between pseudo-inertias, metrics.h), from every
+// parameter vector the data allow (the free fit's 99.9 % chi^2 ellipsoid):
+// significant AND physically large (kDefaultMeshTolerance says why 0.03).
+void ReportDensity(std::shared_ptr<const RegionModel> model, const InertiaOptions& o,
+                   MethodOutput* r, InertiaFit* fit) {
+  for (size_t i = 0; i < model->regions.size(); ++i) {
+    fit->densities.push_back({model->regions[i].label, r->densities[i],
+                              model->regions[i].moments.volume, r->density_se[i]});
+  }
+  fit->region_model = std::move(model);
+  fit->density_regularization = r->regularization;
+  fit->density_regularization_rule = r->regularization_rule;
+  fit->heldout_residual_ratio = r->heldout_ratio;
+  r->notes.push_back(absl::StrFormat(
+      "held-out weighted residual %.3gx the free 10-parameter fit's (z = %.3g over the held-out "
+      "samples); the "
+      "predicted wrenches differ like a mass error of %.2g %% and a CoM displacement of %.3g mm",
+      r->heldout_ratio, r->heldout_z, 100 * r->heldout_mass_equivalent,
+      1000 * r->heldout_com_equivalent));
+  const Vec3& s = r->gyration_radii;
+  const double tolerance = o.density.mesh_tolerance;
+  r->notes.push_back(absl::StrFormat(
+      "mesh test: the densities this mesh can carry are %.3g (first-order Riemannian) from the "
+      "parameters the "
+      "data allow (least chi^2 excess %.3g, bound %.3g at 99.9 %%); tolerance %g: a %g %% error of "
+      "the mass or a "
+      "principal second moment, or a CoM move of %.3g / %.3g / %.3g mm along the principal axes",
+      r->mesh_distance, r->mesh_chi2_excess, r->mesh_chi2_bound, tolerance, 100 * tolerance,
+      1000 * tolerance * s(0) / std::sqrt(2.0), 1000 * tolerance * s(1) / std::sqrt(2.0),
+      1000 * tolerance * s(2) / std::sqrt(2.0)));
+  if (!(tolerance > 0 && r->mesh_distance > tolerance)) {
+    fit->density_realizable = true;
+    return;
+  }
+  fit->mesh_contradicted = true;
+  fit->mesh_contradiction = absl::StrFormat(
+      "the data contradict the mesh: every density it can carry is %.3g (Riemannian, tolerance %g) "
+      "from what the "
+      "data allow; check scale and object_in_mesh (the answer is CONSTRAINED's; the densities are "
+      "those of the "
+      "rejected mesh fit)",
+      r->mesh_distance, tolerance);
+}
+
 }  // namespace
 
 absl::StatusOr<MethodOutput> FitDensity(const InertiaSamples& s, const InertiaOptions& o,
-                                        const RegionModel& regions) {
+                                        InertiaFit* fit) {
+  fit->mesh_check = io::CheckMesh(*o.mesh);
+  TF_ASSIGN_OR_RETURN(RegionModel built,
+                      BuildRegions(*o.mesh, o.density.regions, o.mesh_name, o.interrupt));
+  auto model = std::make_shared<const RegionModel>(std::move(built));
+  const RegionModel& regions = *model;
   InterruptPoll poll(o.interrupt);
   MethodOutput out;
   for (const std::string& n : regions.notes) out.notes.push_back(n);
@@ -514,6 +570,7 @@ absl::StatusOr<MethodOutput> FitDensity(const InertiaSamples& s, const InertiaOp
   MeshConsistency(gls, basis, &st, &out, &poll);
   ResidualRms(gls.kin, gls.wrench, st.pi, &poll, &out.rms_force, &out.rms_torque);
   if (poll.stopped()) return Interrupted();
+  ReportDensity(std::move(model), o, &out, fit);
   return out;
 }
 

@@ -331,67 +331,21 @@ absl::StatusOr<internal::MethodOutput> FitConstrainedWithMesh(const InertiaSampl
   return second;
 }
 
-// DENSITY; when the data contradict the mesh, CONSTRAINED's answer, marked.
-// The data contradict the mesh when every density its regions can carry lies
-// farther than options.density.mesh_tolerance, in first-order Riemannian units (the
-// affine-invariant distance between pseudo-inertias, metrics.h), from every
-// parameter vector the data allow (the free fit's 99.9 % chi^2 ellipsoid):
-// significant AND physically large (kDefaultMeshTolerance says why 0.03).
-absl::StatusOr<internal::MethodOutput> FitDensityOrFallBack(const InertiaSamples& samples,
-                                                            const InertiaOptions& options,
-                                                            const ConvexHull* hull,
-                                                            InertiaFit* fit) {
-  fit->mesh_check = io::CheckMesh(*options.mesh);
-  TF_ASSIGN_OR_RETURN(RegionModel regions, BuildRegions(*options.mesh, options.density.regions,
-                                                        options.mesh_name, options.interrupt));
-  auto model = std::make_shared<const RegionModel>(std::move(regions));
-  TF_ASSIGN_OR_RETURN(internal::MethodOutput r, internal::FitDensity(samples, options, *model));
-  fit->region_model = model;
-  for (size_t i = 0; i < model->regions.size(); ++i) {
-    fit->densities.push_back({model->regions[i].label, r.densities[i],
-                              model->regions[i].moments.volume, r.density_se[i]});
-  }
-  fit->density_regularization = r.regularization;
-  fit->density_regularization_rule = r.regularization_rule;
-  fit->heldout_residual_ratio = r.heldout_ratio;
-  const std::string heldout_note = absl::StrFormat(
-      "held-out weighted residual %.3gx the free 10-parameter fit's (z = %.3g over the held-out "
-      "samples); the "
-      "predicted wrenches differ like a mass error of %.2g %% and a CoM displacement of %.3g mm",
-      r.heldout_ratio, r.heldout_z, 100 * r.heldout_mass_equivalent,
-      1000 * r.heldout_com_equivalent);
-  r.notes.push_back(heldout_note);
-  const Vec3& s = r.gyration_radii;
-  const double tolerance = options.density.mesh_tolerance;
-  const std::string mesh_note = absl::StrFormat(
-      "mesh test: the densities this mesh can carry are %.3g (first-order Riemannian) from the "
-      "parameters the "
-      "data allow (least chi^2 excess %.3g, bound %.3g at 99.9 %%); tolerance %g: a %g %% error of "
-      "the mass or a "
-      "principal second moment, or a CoM move of %.3g / %.3g / %.3g mm along the principal axes",
-      r.mesh_distance, r.mesh_chi2_excess, r.mesh_chi2_bound, tolerance, 100 * tolerance,
-      1000 * tolerance * s(0) / std::sqrt(2.0), 1000 * tolerance * s(1) / std::sqrt(2.0),
-      1000 * tolerance * s(2) / std::sqrt(2.0));
-  r.notes.push_back(mesh_note);
-  const bool contradicted = tolerance > 0 && r.mesh_distance > tolerance;
-  if (!contradicted) {
-    fit->density_realizable = true;
-    return r;
-  }
-  fit->mesh_contradicted = true;
-  fit->mesh_contradiction = absl::StrFormat(
-      "the data contradict the mesh: every density it can carry is %.3g (Riemannian, tolerance %g) "
-      "from what the "
-      "data allow; check scale and object_in_mesh (the answer is CONSTRAINED's; the densities are "
-      "those of the "
-      "rejected mesh fit)",
-      r.mesh_distance, tolerance);
+// The data contradict the mesh (FitDensity's verdict in `fit`): CONSTRAINED's
+// answer without the mesh, its notes led by the verdict and by the rejected
+// DENSITY fit's mesh-test and held-out notes (the last two of `density`).
+absl::StatusOr<internal::MethodOutput> ConstrainedInstead(const InertiaSamples& samples,
+                                                          const InertiaOptions& options,
+                                                          const ConvexHull* hull,
+                                                          const internal::MethodOutput& density,
+                                                          const InertiaFit& fit) {
   InertiaOptions plain = options;
   plain.mesh = nullptr;
   plain.method = InertiaMethod::kConstrained;
   TF_ASSIGN_OR_RETURN(internal::MethodOutput c, internal::FitConstrained(samples, plain, hull));
-  c.notes.insert(c.notes.begin(), {fit->mesh_contradiction, mesh_note, heldout_note});
-  c.iterations += r.iterations;
+  const std::vector<std::string>& n = density.notes;
+  c.notes.insert(c.notes.begin(), {fit.mesh_contradiction, n[n.size() - 1], n[n.size() - 2]});
+  c.iterations += density.iterations;
   return c;
 }
 
@@ -471,7 +425,8 @@ absl::StatusOr<InertiaFit> FitInertia(const InertiaSamples& samples_in,
       r = FitConstrainedWithMesh(samples, options, hp);
       break;
     case InertiaMethod::kDensity:
-      r = FitDensityOrFallBack(samples, options, hp, &fit);
+      r = internal::FitDensity(samples, options, &fit);
+      if (r.ok() && fit.mesh_contradicted) r = ConstrainedInstead(samples, options, hp, *r, fit);
       break;
   }
   if (!r.ok()) return r.status();

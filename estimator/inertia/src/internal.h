@@ -158,8 +158,13 @@ struct MethodOutput {
 absl::StatusOr<MethodOutput> FitBaselineLs(const InertiaSamples& s, const InertiaOptions& o);
 absl::StatusOr<MethodOutput> FitConstrained(const InertiaSamples& s, const InertiaOptions& o,
                                             const ConvexHull* hull);
+// DENSITY on the regions of o.mesh, complete: besides the output, `fit`
+// receives the mesh check, the region model, the densities, the strength
+// and the mesh test's verdict (density_realizable, or mesh_contradicted with
+// mesh_contradiction; FitInertia then falls back to CONSTRAINED). The last
+// two notes are the held-out note and the mesh test's.
 absl::StatusOr<MethodOutput> FitDensity(const InertiaSamples& s, const InertiaOptions& o,
-                                        const RegionModel& regions);
+                                        InertiaFit* fit);
 absl::StatusOr<MethodOutput> FitFactorGraph(const InertiaSamples& s, const InertiaOptions& o,
                                             const ConvexHull* hull);
 

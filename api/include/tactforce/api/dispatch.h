@@ -115,8 +115,9 @@ using CallDone = std::function<void(const absl::Status& status)>;
 // may add results to the log line.
 using CallWork = std::function<absl::Status(CallLog& log)>;
 
-// Runs `work` inline (pool == nullptr) or on `pool`, emits `log` with its
-// status and calls done(status). A full pool drops `work` and ends the call
+// Runs `work` inline (pool == nullptr) or on `pool` (the worker runs the
+// call as an inline one), emits `log` with its status and calls
+// done(status). A full pool drops `work` and ends the call
 // with BusyStatus(*pool, words). Returns false only then. An exception out
 // of `work` becomes the call's status (std::bad_alloc RESOURCE_EXHAUSTED
 // "out of memory while serving this request", any other INTERNAL), never

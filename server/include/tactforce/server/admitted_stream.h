@@ -12,8 +12,9 @@
 //   * a reference count: gRPC holds one until OnDone, the reaper one while
 //     it looks at the stream, pooled work one while it runs (reactors are
 //     made with `new` and delete themselves at the last Unref).
-// Messages are read and written raw (grpc::ByteBuffer): gRPC's typed reader
-// reports a message it cannot parse exactly like the end of the stream.
+// Messages are read and written raw (grpc::ByteBuffer, ParseMessage and
+// SerializeMessage below): gRPC's typed reader reports a message it cannot
+// parse exactly like the end of the stream.
 //
 // `Reactor` is grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>
 // or grpc::ServerReadReactor<grpc::ByteBuffer>. A derived reactor calls
@@ -29,10 +30,34 @@
 #include <grpcpp/support/byte_buffer.h>
 
 #include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
 #include "tactforce/server/rpc_support.h"
 #include "tactforce/server/stream_registry.h"
 
 namespace tactforce::server {
+
+// A stream message from its raw bytes (why raw: above). InvalidArgument "cannot be parsed as
+// tactforce.v1.PlanRequest"; the buffer is emptied either way.
+template <class Message>
+absl::Status ParseMessage(grpc::ByteBuffer* buffer, Message* message) {
+  const bool parsed = grpc::SerializationTraits<Message>::Deserialize(buffer, message).ok();
+  buffer->Clear();
+  if (parsed) return absl::OkStatus();
+  message->Clear();
+  return absl::InvalidArgumentError(
+      absl::StrCat("cannot be parsed as ", Message::descriptor()->full_name()));
+}
+// A message into a raw buffer (a response, or a bidi stream's next write).
+template <class Message>
+absl::Status SerializeMessage(const Message& message, grpc::ByteBuffer* buffer) {
+  buffer->Clear();  // gRPC serializes only into an empty buffer
+  bool own_buffer = false;
+  if (grpc::SerializationTraits<Message>::Serialize(message, buffer, &own_buffer).ok()) {
+    return absl::OkStatus();
+  }
+  return absl::InternalError(
+      absl::StrCat("cannot serialize the ", Message::descriptor()->full_name()));
+}
 
 template <class Reactor>
 class AdmittedStream : public Reactor, public IdleEndable {

@@ -43,31 +43,6 @@ grpc::Status ToGrpcStatus(const absl::Status& status);
 // logfmt value (api::LogValue): bare when safe, else double-quoted.
 using api::LogValue;
 
-// Raw stream messages (the streaming reactors read and write
-// grpc::ByteBuffer so that a message that cannot be parsed is told apart
-// from the end of the stream, which gRPC's typed reader reports alike).
-// InvalidArgument "cannot be parsed as tactforce.v1.PlanRequest"; the
-// buffer is emptied either way.
-template <class Message>
-absl::Status ParseMessage(grpc::ByteBuffer* buffer, Message* message) {
-  const bool parsed = grpc::SerializationTraits<Message>::Deserialize(buffer, message).ok();
-  buffer->Clear();
-  if (parsed) return absl::OkStatus();
-  message->Clear();
-  return absl::InvalidArgumentError(
-      absl::StrCat("cannot be parsed as ", Message::descriptor()->full_name()));
-}
-template <class Message>
-absl::Status SerializeMessage(const Message& message, grpc::ByteBuffer* buffer) {
-  buffer->Clear();  // gRPC serializes only into an empty buffer
-  bool own_buffer = false;
-  if (grpc::SerializationTraits<Message>::Serialize(message, buffer, &own_buffer).ok()) {
-    return absl::OkStatus();
-  }
-  return absl::InternalError(
-      absl::StrCat("cannot serialize the ", Message::descriptor()->full_name()));
-}
-
 // Deadline and cancellation of one RPC, safe to poll from any thread while
 // the RPC is not finished. The deadline is converted to the steady clock
 // when the guard is made, so wall-clock jumps do not matter.
