@@ -111,15 +111,16 @@ class ContactMixer {
     first_ = (1.0 + u) / norm;
     other_ = u / norm;
   }
+  // The three components at once (each summed in contact order, as one
+  // component at a time would).
   void Apply(double* x) const {
-    for (int k = 0; k < 3; ++k) {
-      double others = 0.0;
-      for (int i = 1; i < n_; ++i) others += x[3 * i + k];
-      const double scale = 2.0 * (first_ * x[k] + other_ * others);
-      x[k] -= scale * first_;
-      const double step = scale * other_;
-      for (int i = 1; i < n_; ++i) x[3 * i + k] -= step;
-    }
+    Eigen::Map<Vec3> head(x);
+    Vec3 others = Vec3::Zero();
+    for (int i = 1; i < n_; ++i) others += Eigen::Map<const Vec3>(x + 3 * i);
+    const Vec3 scale = 2.0 * (first_ * head + other_ * others);
+    head -= scale * first_;
+    const Vec3 step = scale * other_;
+    for (int i = 1; i < n_; ++i) Eigen::Map<Vec3>(x + 3 * i) -= step;
   }
 
  private:
