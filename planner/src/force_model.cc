@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <tuple>
 
 #include <Eigen/SVD>
 #include <emmintrin.h>
@@ -370,6 +371,23 @@ const FacetTable& Facets() {
   return *table;
 }
 
+// cos and sin of 2 pi j / K, j < K: the table's, or (K out of its range)
+// computed into `own`.
+std::pair<const double*, const double*> FacetAngles(int cone_sides, std::vector<double>* own) {
+  if (cone_sides >= PlanOptions::kMinConeSides && cone_sides <= PlanOptions::kMaxConeSides) {
+    const FacetTable& facets = Facets();
+    return {facets.cos_theta.data() + facets.offset[cone_sides],
+            facets.sin_theta.data() + facets.offset[cone_sides]};
+  }
+  own->resize(2 * std::max(cone_sides, 0));
+  for (int j = 0; j < cone_sides; ++j) {
+    const double theta = 2.0 * std::numbers::pi * j / cone_sides;
+    (*own)[j] = std::cos(theta);
+    (*own)[cone_sides + j] = std::sin(theta);
+  }
+  return {own->data(), own->data() + std::max(cone_sides, 0)};
+}
+
 }  // namespace
 
 MatrixXd ConstraintRows::Dense(int num_contacts) const {
@@ -389,6 +407,58 @@ double SpreadOfForms(double a, double b, double c) {
   return std::sqrt(std::max(0.0, lambda_max));
 }
 
+// One contact's pyramid facets a_j = co_j t1 + si_j t2 - k n, j < count,
+// stored from row 0 of the given columns: nominal 0, robust 0 - kappa
+// sqrt(max(0, a_j^T S a_j)), the quadratic from the contact's six forms of
+// S. Two facets per SSE2 instruction, each lane the scalar expression in the
+// same order (so the rows do not depend on the pairing).
+struct FacetForms {
+  Vec3 t1, t2, normal;
+  double k = 0.0;  // mu cos(pi / K)
+  double s11 = 0.0, s22 = 0.0, s12 = 0.0, s1n = 0.0, s2n = 0.0, snn = 0.0;
+};
+
+void FacetRows(const FacetForms& f, const double* co, const double* si, int count,
+               double confidence, double* dx, double* dy, double* dz, double* nominal,
+               double* rhs) {
+  const double two_k = 2.0 * f.k, kk_snn = f.k * f.k * f.snn;
+  const Vec3 kn = f.k * f.normal;
+  const auto row = [&](double c, double s, int j) {
+    const double quadratic = c * c * f.s11 + s * s * f.s22 + 2.0 * c * s * f.s12 -
+                             two_k * (c * f.s1n + s * f.s2n) + kk_snn;
+    dx[j] = c * f.t1(0) + s * f.t2(0) - kn(0);
+    dy[j] = c * f.t1(1) + s * f.t2(1) - kn(1);
+    dz[j] = c * f.t1(2) + s * f.t2(2) - kn(2);
+    nominal[j] = 0.0;
+    rhs[j] = 0.0 - confidence * std::sqrt(std::max(0.0, quadratic));
+  };
+  const __m128d zero = _mm_setzero_pd(), two = _mm_set1_pd(2.0);
+  const __m128d s11 = _mm_set1_pd(f.s11), s22 = _mm_set1_pd(f.s22), s12 = _mm_set1_pd(f.s12);
+  const __m128d s1n = _mm_set1_pd(f.s1n), s2n = _mm_set1_pd(f.s2n);
+  const __m128d twok = _mm_set1_pd(two_k), kksnn = _mm_set1_pd(kk_snn);
+  const __m128d kappa = _mm_set1_pd(confidence);
+  const auto axis = [](__m128d c, __m128d s, double t1, double t2, double kn) {
+    return _mm_sub_pd(_mm_add_pd(_mm_mul_pd(c, _mm_set1_pd(t1)), _mm_mul_pd(s, _mm_set1_pd(t2))),
+                      _mm_set1_pd(kn));
+  };
+  int j = 0;
+  for (; j + 1 < count; j += 2) {
+    const __m128d c = _mm_loadu_pd(co + j), s = _mm_loadu_pd(si + j);
+    __m128d q = _mm_add_pd(_mm_mul_pd(_mm_mul_pd(c, c), s11), _mm_mul_pd(_mm_mul_pd(s, s), s22));
+    q = _mm_add_pd(q, _mm_mul_pd(_mm_mul_pd(_mm_mul_pd(two, c), s), s12));
+    q = _mm_sub_pd(q, _mm_mul_pd(twok, _mm_add_pd(_mm_mul_pd(c, s1n), _mm_mul_pd(s, s2n))));
+    q = _mm_add_pd(q, kksnn);
+    // max(q, 0) is 0 for a NaN q, as std::max(0.0, q).
+    const __m128d support = _mm_sqrt_pd(_mm_max_pd(q, zero));
+    _mm_storeu_pd(rhs + j, _mm_sub_pd(zero, _mm_mul_pd(kappa, support)));
+    _mm_storeu_pd(nominal + j, zero);
+    _mm_storeu_pd(dx + j, axis(c, s, f.t1(0), f.t2(0), kn(0)));
+    _mm_storeu_pd(dy + j, axis(c, s, f.t1(1), f.t2(1), kn(1)));
+    _mm_storeu_pd(dz + j, axis(c, s, f.t1(2), f.t2(2), kn(2)));
+  }
+  if (j < count) row(co[j], si[j], j);
+}
+
 // BuildConstraintRows; with `normal_sigma` and `tangential_sigma` given and
 // the facets' quadratic forms of S_ii formed (confidence > 0, facets), also
 // the per-contact sigmas from those same forms, and returns true.
@@ -406,11 +476,10 @@ bool BuildRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid
   rows.nominal_rhs.resize(m);
   rows.info.resize(m);
 
-  const FacetTable& facets = Facets();
-  const bool table =
-      cone_sides >= PlanOptions::kMinConeSides && cone_sides <= PlanOptions::kMaxConeSides;
-  const double* cos_table = table ? facets.cos_theta.data() + facets.offset[cone_sides] : nullptr;
-  const double* sin_table = table ? facets.sin_theta.data() + facets.offset[cone_sides] : nullptr;
+  std::vector<double> own;  // only for a cone_sides outside the table's range
+  const auto [cos_theta, sin_theta] = with_friction_facets
+                                          ? FacetAngles(cone_sides, &own)
+                                          : std::pair<const double*, const double*>();
   const double cos_half = std::cos(std::numbers::pi / cone_sides);
   // Raw column pointers: the row loop stores through them without Eigen's
   // per-call bookkeeping.
@@ -445,21 +514,22 @@ bool BuildRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid
     if (with_friction_facets) {
       // a = cos t1 + sin t2 - k n with k = mu cos(pi/K); a^T S a expands into
       // six quadratic forms of (t1, t2, n) computed once per contact.
-      const auto [t1, t2] = TangentBasis(nrm);
-      const double k = c.friction * cos_half;
-      const Vec3 s1 = s * t1, s2 = s * t2;
-      const double s11 = t1.dot(s1), s22 = t2.dot(s2), s12 = t1.dot(s2);
-      const double s1n = t1.dot(sn), s2n = t2.dot(sn);
-      if (sigmas) (*tangential_sigma)[i] = SpreadOfForms(s11, s12, s22);
-      for (int j = 0; j < cone_sides; ++j) {
-        const double theta = table ? 0.0 : 2.0 * std::numbers::pi * j / cone_sides;
-        const double co = table ? cos_table[j] : std::cos(theta);
-        const double si = table ? sin_table[j] : std::sin(theta);
-        const double quadratic = co * co * s11 + si * si * s22 + 2.0 * co * si * s12 -
-                                 2.0 * k * (co * s1n + si * s2n) + k * k * snn;
-        add(i, co * t1 + si * t2 - k * nrm, 0.0, std::sqrt(std::max(0.0, quadratic)),
-            RowKind::kFrictionFacet, j);
-      }
+      FacetForms forms;
+      std::tie(forms.t1, forms.t2) = TangentBasis(nrm);
+      forms.normal = nrm;
+      forms.k = c.friction * cos_half;
+      const Vec3 s1 = s * forms.t1, s2 = s * forms.t2;
+      forms.s11 = forms.t1.dot(s1);
+      forms.s22 = forms.t2.dot(s2);
+      forms.s12 = forms.t1.dot(s2);
+      forms.s1n = forms.t1.dot(sn);
+      forms.s2n = forms.t2.dot(sn);
+      forms.snn = snn;
+      if (sigmas) (*tangential_sigma)[i] = SpreadOfForms(forms.s11, forms.s12, forms.s22);
+      FacetRows(forms, cos_theta, sin_theta, cone_sides, confidence, dx + r, dy + r, dz + r,
+                nominal + r, rhs + r);
+      for (int j = 0; j < cone_sides; ++j) info[r + j] = {i, RowKind::kFrictionFacet, j};
+      r += cone_sides;
     }
     const double normal_support = std::sqrt(std::max(0.0, snn));
     if (sigmas) (*normal_sigma)[i] = normal_support;
