@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <tuple>
 
@@ -475,6 +476,7 @@ bool BuildRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid
   rows.rhs.resize(m);
   rows.nominal_rhs.resize(m);
   rows.info.resize(m);
+  rows.contact_first.resize(n + 1);
 
   std::vector<double> own;  // only for a cone_sides outside the table's range
   const auto [cos_theta, sin_theta] = with_friction_facets
@@ -505,6 +507,7 @@ bool BuildRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid
     tangential_sigma->resize(n);
   }
   for (int i = 0; i < n; ++i) {
+    rows.contact_first[i] = r;
     const Contact& c = problem.contacts[i];
     const Vec3& nrm = c.normal;
     const Eigen::Matrix3d s =
@@ -538,6 +541,7 @@ bool BuildRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid
       add(i, nrm, c.max_normal_force, normal_support, RowKind::kMaxNormal, 0);
     }
   }
+  rows.contact_first[n] = r;
   return sigmas;
 }
 
@@ -556,6 +560,58 @@ ConstraintRows BuildConstraintRows(const PlanProblem& problem,
   ConstraintRows rows;
   BuildConstraintRows(problem, ellipsoid, cone_sides, confidence, with_friction_facets, &rows);
   return rows;
+}
+
+namespace {
+
+// Calls visit(r, pair) for the slacks of rows r, r + 1 (pair: both lanes)
+// and visit_one(r, slack) for a block's odd last row, contact by contact.
+// kDotOrder: a_x f_x + (a_y f_y + a_z f_z), else (a_x f_x + a_y f_y) + a_z f_z.
+template <bool kDotOrder, typename Pair, typename One>
+void ForEachSlack(const ConstraintRows& rows, const double* f, Pair visit, One visit_one) {
+  const double* dx = rows.directions.col(0).data();
+  const double* dy = rows.directions.col(1).data();
+  const double* dz = rows.directions.col(2).data();
+  const double* rhs = rows.rhs.data();
+  const int n = static_cast<int>(rows.contact_first.size()) - 1;
+  for (int i = 0; i < n; ++i) {
+    const double fx = f[3 * i], fy = f[3 * i + 1], fz = f[3 * i + 2];
+    const __m128d x = _mm_set1_pd(fx), y = _mm_set1_pd(fy), z = _mm_set1_pd(fz);
+    int r = rows.contact_first[i];
+    const int end = rows.contact_first[i + 1];
+    for (; r + 1 < end; r += 2) {
+      const __m128d ax = _mm_mul_pd(_mm_loadu_pd(dx + r), x);
+      const __m128d ay = _mm_mul_pd(_mm_loadu_pd(dy + r), y);
+      const __m128d az = _mm_mul_pd(_mm_loadu_pd(dz + r), z);
+      const __m128d dot =
+          kDotOrder ? _mm_add_pd(ax, _mm_add_pd(ay, az)) : _mm_add_pd(_mm_add_pd(ax, ay), az);
+      visit(r, _mm_sub_pd(_mm_loadu_pd(rhs + r), dot));
+    }
+    if (r < end) {
+      const double dot =
+          kDotOrder ? dx[r] * fx + (dy[r] * fy + dz[r] * fz) : dx[r] * fx + dy[r] * fy + dz[r] * fz;
+      visit_one(r, rhs[r] - dot);
+    }
+  }
+}
+
+}  // namespace
+
+void RowSlacks(const ConstraintRows& rows, const double* forces, double* slacks) {
+  ForEachSlack<false>(
+      rows, forces, [slacks](int r, __m128d pair) { _mm_storeu_pd(slacks + r, pair); },
+      [slacks](int r, double slack) { slacks[r] = slack; });
+}
+
+double MinRowSlack(const ConstraintRows& rows, const double* forces) {
+  // Lane minima (a NaN slack, which a finite answer cannot have, is not
+  // ordered as std::min would; the least finite value is the same).
+  __m128d lanes = _mm_set1_pd(std::numeric_limits<double>::infinity());
+  double least = std::numeric_limits<double>::infinity();
+  ForEachSlack<true>(
+      rows, forces, [&lanes](int, __m128d pair) { lanes = _mm_min_pd(lanes, pair); },
+      [&least](int, double slack) { least = std::min(least, slack); });
+  return std::min({least, _mm_cvtsd_f64(lanes), _mm_cvtsd_f64(_mm_unpackhi_pd(lanes, lanes))});
 }
 
 void RowsOnPlane(const ConstraintRows& rows, const ForceEquilibrium& eq, MatrixXd* plane_matrix,

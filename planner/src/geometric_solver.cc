@@ -48,27 +48,9 @@ void FillPlaneQp(const PreparedProblem& prepared, DenseQp* qp) {
   qp->in_matrix.resize(0, d);
   qp->in_block_maps = eq.null_basis;
   qp->in_directions = rows.directions;
-  // A contact's rows are consecutive (BuildConstraintRows), and every
-  // contact has at least its minimum-normal-force row: one pass by contacts,
-  // d - a . f0_i on raw columns (the same sum, in the same order, as a row's).
-  const int n = prepared.num_contacts();
-  qp->in_block_first.resize(n + 1);
+  qp->in_block_first = rows.contact_first;  // contact i's rows are block i
   qp->in_rhs.resize(m);
-  const double* __restrict dx = rows.directions.col(0).data();
-  const double* __restrict dy = rows.directions.col(1).data();
-  const double* __restrict dz = rows.directions.col(2).data();
-  const double* __restrict rhs = rows.rhs.data();
-  double* __restrict plane_rhs = qp->in_rhs.data();
-  const double* f0 = eq.particular.data();
-  int r = 0;
-  for (int i = 0; i < n; ++i) {
-    qp->in_block_first[i] = r;
-    int end = r;
-    while (end < m && rows.info[end].contact == i) ++end;
-    const double fx = f0[3 * i], fy = f0[3 * i + 1], fz = f0[3 * i + 2];
-    for (; r < end; ++r) plane_rhs[r] = rhs[r] - (dx[r] * fx + dy[r] * fy + dz[r] * fz);
-  }
-  qp->in_block_first[n] = m;
+  RowSlacks(rows, eq.particular.data(), qp->in_rhs.data());
 }
 
 class GeometricSolver final : public ForceSolver {

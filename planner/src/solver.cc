@@ -21,22 +21,7 @@ namespace {
 // Each row touches one contact's three coordinates.
 double MinMargin(const PreparedProblem& prepared, const PlanOptions& options,
                  const std::vector<Vec3>& forces) {
-  double margin = std::numeric_limits<double>::infinity();
-  const ConstraintRows& rows = prepared.rows;
-  const int m = static_cast<int>(rows.info.size());
-  // Raw columns, contact by contact (a contact's rows are consecutive), with
-  // the sum ordered as Eigen's 3-vector dot: a_x f_x + (a_y f_y + a_z f_z).
-  const double* dx = rows.directions.col(0).data();
-  const double* dy = rows.directions.col(1).data();
-  const double* dz = rows.directions.col(2).data();
-  const double* rhs = rows.rhs.data();
-  for (int r = 0; r < m;) {
-    const int i = rows.info[r].contact;
-    const double fx = forces[i](0), fy = forces[i](1), fz = forces[i](2);
-    for (; r < m && rows.info[r].contact == i; ++r) {
-      margin = std::min(margin, rhs[r] - (dx[r] * fx + (dy[r] * fy + dz[r] * fz)));
-    }
-  }
+  double margin = MinRowSlack(prepared.rows, forces.front().data());
   if (options.cone == ConeModel::kExact) {
     for (int i = 0; i < prepared.num_contacts(); ++i) {
       const Contact& c = prepared.problem.contacts[i];

@@ -112,6 +112,9 @@ struct ConstraintRows {
   VectorXd rhs;
   VectorXd nominal_rhs;
   std::vector<RowInfo> info;
+  // A contact's rows are consecutive: those of contact i are
+  // [contact_first[i], contact_first[i + 1]) (n + 1 entries, the last m).
+  std::vector<int> contact_first;
   // A (m x 3n, zero outside each row's contact), for backends that take
   // whole rows (the Ipopt formulation) and for checks.
   MatrixXd Dense(int num_contacts) const;
@@ -128,6 +131,14 @@ ConstraintRows BuildConstraintRows(const PlanProblem& problem,
 void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid,
                          int cone_sides, double confidence, bool with_friction_facets,
                          ConstraintRows* out);
+
+// The rows' slacks d_r - a_r . f_i at the stacked forces f (3n, N; f_i its
+// row's contact's three entries), a_r . f_i summed (a_x f_x + a_y f_y) + a_z
+// f_z; two rows per SSE2 instruction, each lane the scalar expression.
+void RowSlacks(const ConstraintRows& rows, const double* forces, double* slacks);
+// The least of them, a_r . f_i summed a_x f_x + (a_y f_y + a_z f_z) (as
+// Eigen's 3-vector dot); +inf without rows.
+double MinRowSlack(const ConstraintRows& rows, const double* forces);
 
 // The rows on the FE-plane f = f0 + B x: plane_matrix = A B (m x d),
 // plane_rhs = d - A f0, formed contact by contact (each row of A touches
