@@ -477,14 +477,12 @@ bool BuildRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid
   rows.nominal_rhs.resize(m);
   rows.info.resize(m);
   rows.contact_first.resize(n + 1);
-
   std::vector<double> own;  // only for a cone_sides outside the table's range
   const auto [cos_theta, sin_theta] = with_friction_facets
                                           ? FacetAngles(cone_sides, &own)
                                           : std::pair<const double*, const double*>();
   const double cos_half = std::cos(std::numbers::pi / cone_sides);
-  // Raw column pointers: the row loop stores through them without Eigen's
-  // per-call bookkeeping.
+  // Raw column pointers: no per-call bookkeeping of Eigen's in the row loop.
   double* const dx = rows.directions.col(0).data();
   double* const dy = rows.directions.col(1).data();
   double* const dz = rows.directions.col(2).data();
