@@ -75,10 +75,10 @@ void HouseholderQr(MatrixXd& a, MatrixXd& reflectors, MatrixXd& q) {
   }
 }
 
-// Fills G (6 x 3n) and b.
-void FillGraspMatrixAndWrench(const PlanProblem& problem, ForceEquilibrium* eq) {
-  const int n = static_cast<int>(problem.contacts.size());
-  eq->grasp_matrix.resize(6, 3 * n);
+// Fills b and, with `grasp_matrix`, G (6 x 3n; else G is left empty).
+void FillGraspMatrixAndWrench(const PlanProblem& problem, bool grasp_matrix, ForceEquilibrium* eq) {
+  const int n = grasp_matrix ? static_cast<int>(problem.contacts.size()) : 0;
+  eq->grasp_matrix.resize(grasp_matrix ? 6 : 0, 3 * n);
   for (int i = 0; i < n; ++i) {
     eq->grasp_matrix.block<3, 3>(0, 3 * i).setIdentity();
     eq->grasp_matrix.block<3, 3>(3, 3 * i) = Skew(problem.contacts[i].position);
@@ -154,6 +154,14 @@ struct TorqueRange {
       rank = 3;
       return;
     }
+    RankFromSvd(rank_tolerance, n);
+  }
+  // The rare path (collinear or coincident contacts), out of line. GCC 12
+  // warns, wrongly, that the fixed-size SVD's singular values may be used
+  // uninitialised once it is inlined here.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+  [[gnu::noinline]] void RankFromSvd(double rank_tolerance, int n) {
     svd_used = true;
     const Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
     u = svd.matrixU();
@@ -162,6 +170,7 @@ struct TorqueRange {
     const double cutoff = rank_tolerance * std::max({1.0, std::sqrt(double(n)), s(0)});
     while (rank < 3 && s(rank) > cutoff) ++rank;
   }
+#pragma GCC diagnostic pop
   Eigen::Matrix3d r = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d u = Eigen::Matrix3d::Identity();
   Eigen::Matrix3d w = Eigen::Matrix3d::Identity();
@@ -193,13 +202,34 @@ void ParticularSolution(const Vec3& centroid, const TorqueRange& torque, const M
   eq->particular.noalias() += q_torque * y_torque;
 }
 
+// The independent rows [Q_f^T; U_r^T Q_t^T] (rank x 3n) and their right-hand
+// side rows f0; with `range_rows` false both are left empty.
+void FillIndependentRows(const TorqueRange& torque, const MatrixXd& q_torque, bool range_rows,
+                         ForceEquilibrium* eq) {
+  const int dim = range_rows ? static_cast<int>(q_torque.rows()) : 0;
+  eq->independent_rows.setZero(range_rows ? eq->rank : 0, dim);
+  if (!range_rows) {
+    eq->independent_rhs.resize(0);
+    return;
+  }
+  const double force_entry = -1.0 / std::sqrt(double(dim / 3));
+  for (int j = 0; j < dim; ++j) eq->independent_rows(j % 3, j) = force_entry;
+  if (torque.svd_used) {
+    eq->independent_rows.bottomRows(torque.rank).noalias() =
+        torque.u.leftCols(torque.rank).transpose() * q_torque.transpose();
+  } else if (torque.rank == 3) {
+    eq->independent_rows.bottomRows<3>() = q_torque.transpose();
+  }
+  eq->independent_rhs.noalias() = eq->independent_rows * eq->particular;
+}
+
 }  // namespace
 
 void ComputeForceEquilibrium(const PlanProblem& problem, double rank_tolerance,
-                             EquilibriumScratch* scratch, ForceEquilibrium* eq) {
+                             EquilibriumScratch* scratch, ForceEquilibrium* eq, bool range_rows) {
   const int n = static_cast<int>(problem.contacts.size());
   const int dim = 3 * n;
-  FillGraspMatrixAndWrench(problem, eq);
+  FillGraspMatrixAndWrench(problem, range_rows, eq);
   Vec3 centroid = Vec3::Zero();
   for (const Contact& c : problem.contacts) centroid += c.position;
   centroid /= n;
@@ -237,17 +267,8 @@ void ComputeForceEquilibrium(const PlanProblem& problem, double rank_tolerance,
   }
   const int lost = has_torque_block ? 3 - torque_rank : 0;
   const int rest = has_torque_block ? dim - 6 : dim - 3;
-  eq->independent_rows.setZero(eq->rank, dim);
-  const double force_entry = -1.0 / std::sqrt(double(n));
-  for (int j = 0; j < dim; ++j) eq->independent_rows(j % 3, j) = force_entry;
   eq->null_basis.resize(dim, lost + rest);
-  if (svd_used) {
-    eq->independent_rows.bottomRows(torque_rank).noalias() =
-        torque_u.leftCols(torque_rank).transpose() * q_torque.transpose();
-    eq->null_basis.leftCols(lost).noalias() = q_torque * torque_u.rightCols(lost);
-  } else if (torque_rank == 3) {
-    eq->independent_rows.bottomRows<3>() = q_torque.transpose();
-  }
+  if (svd_used) eq->null_basis.leftCols(lost).noalias() = q_torque * torque_u.rightCols(lost);
   for (int j = 0; j < rest; ++j) {
     double* column = eq->null_basis.col(lost + j).data();
     std::fill(column, column + 3, 0.0);
@@ -257,7 +278,7 @@ void ComputeForceEquilibrium(const PlanProblem& problem, double rank_tolerance,
   }
 
   ParticularSolution(centroid, torque_range, scratch->torque_basis, eq);
-  eq->independent_rhs.noalias() = eq->independent_rows * eq->particular;
+  FillIndependentRows(torque_range, q_torque, range_rows, eq);
   eq->residual = EquilibriumResidual(problem, eq->particular, eq->wrench);
   eq->consistent = eq->residual <= 1e-8 * std::max(1.0, eq->wrench.norm());
 }
@@ -690,9 +711,12 @@ double ExactConeSlack(const Vec3& normal, double mu, double shift, const Vec3& f
   return (mu * normal.dot(force) - shift) - tangential.norm();
 }
 
-void PrepareInPlace(const PlanOptions& options, EquilibriumScratch* scratch, PreparedProblem* p) {
+void PrepareInPlace(const PlanOptions& options, EquilibriumScratch* scratch, PreparedProblem* p,
+                    bool geometric_only) {
   ApplyFrictionUncertainty(options.confidence, &p->problem, &p->nominal_friction);
-  ComputeForceEquilibrium(p->problem, options.rank_tolerance, scratch, &p->equilibrium);
+  // The parameter tightening reads G and the independent rows too.
+  const bool range_rows = !geometric_only || HasModelUncertainty(p->problem);
+  ComputeForceEquilibrium(p->problem, options.rank_tolerance, scratch, &p->equilibrium, range_rows);
   ComputeMeasurementEllipsoid(p->problem, p->equilibrium, &p->ellipsoid);
   // The sigmas come with the rows when those formed the same quadratic forms.
   if (!BuildRows(p->problem, p->ellipsoid, options.cone_sides, options.confidence,

@@ -154,7 +154,8 @@ absl::Status ForceSolver::SolveValidated(const PlanOptions& options, const Solve
                                          std::chrono::steady_clock::time_point start,
                                          PlanningWorkspace* workspace, PlanResult* result) const {
   TF_RETURN_IF_ERROR(CheckSupported(options));
-  PrepareInPlace(options, &workspace->equilibrium_scratch, &workspace->prepared);
+  PrepareInPlace(options, &workspace->equilibrium_scratch, &workspace->prepared,
+                 kind_ == SolverKind::kGeometric);
   SolveAndFinish(options, control, workspace, result);
   result->solve_time_us = MicrosSince(start);
   return absl::OkStatus();

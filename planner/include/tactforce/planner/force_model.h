@@ -27,7 +27,7 @@ using Vector6d = Eigen::Matrix<double, 6, 1>;
 
 // Equilibrium of the contact forces with gravity and the external wrench.
 struct ForceEquilibrium {
-  MatrixXd grasp_matrix;    // G = [I ... I; [p_1]x ... [p_n]x], 6 x 3n
+  MatrixXd grasp_matrix;    // G = [I ... I; [p_1]x ... [p_n]x], 6 x 3n (see range_rows)
   Vector6d wrench;          // b = -(w_g + w_ext), w_g = (m g, c x m g)
   MatrixXd null_basis;      // B: orthonormal basis of null(G), 3n x d
   VectorXd particular;      // f0 = G^+ b (minimum norm; orthogonal to B)
@@ -62,9 +62,13 @@ struct EquilibriumScratch {
 // 3x3 SVD of R_t. Lost rotations (collinear or coincident contacts) move
 // their directions from the range to the null space. independent_rows are
 // then the orthonormal range basis (rank x 3n), independent_rhs = rows f0.
+// In place with `range_rows` false, G and the independent rows and rhs
+// (which only the Ipopt formulation and the parameter tightening read) are
+// left empty.
 ForceEquilibrium ComputeForceEquilibrium(const PlanProblem& problem, double rank_tolerance);
 void ComputeForceEquilibrium(const PlanProblem& problem, double rank_tolerance,
-                             EquilibriumScratch* scratch, ForceEquilibrium* out);
+                             EquilibriumScratch* scratch, ForceEquilibrium* out,
+                             bool range_rows = true);
 
 // Trusted measurement ellipsoid (GeoDEx Def. 5, Prop. 3) in force space:
 // S_f = B E diag(sigma^2) E^T B^T with E = B^T N_I, stored as the factor
@@ -210,8 +214,11 @@ struct PreparedProblem {
 
 PreparedProblem Prepare(PlanProblem validated, const PlanOptions& options);
 // In place: `prepared->problem` already holds the validated problem; every
-// other member is recomputed, reusing its storage.
+// other member is recomputed, reusing its storage. `geometric_only`: for the
+// GEOMETRIC backend alone, which does not read G and the independent
+// equilibrium rows; they are left empty unless the problem carries model
+// uncertainty (HasModelUncertainty), whose tightening reads them.
 void PrepareInPlace(const PlanOptions& options, EquilibriumScratch* scratch,
-                    PreparedProblem* prepared);
+                    PreparedProblem* prepared, bool geometric_only = false);
 
 }  // namespace tactforce::planner
