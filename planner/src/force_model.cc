@@ -481,9 +481,10 @@ void FacetRows(const FacetForms& f, const double* co, const double* si, int coun
   if (j < count) row(co[j], si[j], j);
 }
 
-// BuildConstraintRows; with `normal_sigma` and `tangential_sigma` given and
-// the facets' quadratic forms of S_ii formed (confidence > 0, facets), also
-// the per-contact sigmas from those same forms, and returns true.
+// BuildConstraintRows; with `normal_sigma` given and the facets' quadratic
+// forms of S_ii formed (confidence > 0, facets), also the per-contact sigmas
+// from those same forms (the tangential ones when `tangential_sigma` is
+// given too), and returns true.
 bool BuildRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid, int cone_sides,
                double confidence, bool with_friction_facets, ConstraintRows* out,
                std::vector<double>* normal_sigma, std::vector<double>* tangential_sigma) {
@@ -523,7 +524,7 @@ bool BuildRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid
   const bool sigmas = normal_sigma != nullptr && confidence > 0.0 && with_friction_facets;
   if (sigmas) {
     normal_sigma->resize(n);
-    tangential_sigma->resize(n);
+    if (tangential_sigma != nullptr) tangential_sigma->resize(n);
   }
   for (int i = 0; i < n; ++i) {
     rows.contact_first[i] = r;
@@ -547,7 +548,9 @@ bool BuildRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid
       forms.s1n = forms.t1.dot(sn);
       forms.s2n = forms.t2.dot(sn);
       forms.snn = snn;
-      if (sigmas) (*tangential_sigma)[i] = SpreadOfForms(forms.s11, forms.s12, forms.s22);
+      if (sigmas && tangential_sigma != nullptr) {
+        (*tangential_sigma)[i] = SpreadOfForms(forms.s11, forms.s12, forms.s22);
+      }
       FacetRows(forms, cos_theta, sin_theta, cone_sides, confidence, dx + r, dy + r, dz + r,
                 nominal + r, rhs + r);
       for (int j = 0; j < cone_sides; ++j) info[r + j] = {i, RowKind::kFrictionFacet, j};
@@ -719,11 +722,13 @@ void PrepareInPlace(const PlanOptions& options, EquilibriumScratch* scratch, Pre
   ComputeForceEquilibrium(p->problem, options.rank_tolerance, scratch, &p->equilibrium, range_rows);
   ComputeMeasurementEllipsoid(p->problem, p->equilibrium, &p->ellipsoid);
   // The sigmas come with the rows when those formed the same quadratic forms.
+  // The tangential ones serve the EXACT cones only (not a GEOMETRIC solve).
+  std::vector<double>* tangential = geometric_only ? nullptr : &p->tangential_sigma;
+  if (geometric_only) p->tangential_sigma.clear();
   if (!BuildRows(p->problem, p->ellipsoid, options.cone_sides, options.confidence,
-                 options.cone == ConeModel::kPyramid, &p->rows, &p->normal_sigma,
-                 &p->tangential_sigma)) {
+                 options.cone == ConeModel::kPyramid, &p->rows, &p->normal_sigma, tangential)) {
     NormalForceSigma(p->problem, p->ellipsoid, &p->normal_sigma);
-    TangentialForceSigma(p->problem, p->ellipsoid, &p->tangential_sigma);
+    if (tangential != nullptr) TangentialForceSigma(p->problem, p->ellipsoid, tangential);
   }
   if (options.cone == ConeModel::kExact) {
     ExactConeShift(p->problem, p->normal_sigma, p->tangential_sigma, options.confidence,

@@ -199,7 +199,7 @@ struct PreparedProblem {
   MeasurementEllipsoid ellipsoid;
   ConstraintRows rows;                   // PYRAMID: facets + bounds; EXACT: bounds only
   std::vector<double> normal_sigma;      // rho_n,i (N)
-  std::vector<double> tangential_sigma;  // rho_t,i (N)
+  std::vector<double> tangential_sigma;  // rho_t,i (N); empty after a geometric_only prepare
   // EXACT: ExactConeShift() at options.confidence (N), the one tightening of
   // the exact cones that every backend and the reported margin use.
   // PYRAMID: empty (the facets in `rows` carry the tightening).
@@ -216,8 +216,9 @@ PreparedProblem Prepare(PlanProblem validated, const PlanOptions& options);
 // In place: `prepared->problem` already holds the validated problem; every
 // other member is recomputed, reusing its storage. `geometric_only`: for the
 // GEOMETRIC backend alone, which does not read G and the independent
-// equilibrium rows; they are left empty unless the problem carries model
-// uncertainty (HasModelUncertainty), whose tightening reads them.
+// equilibrium rows (left empty unless the problem carries model uncertainty,
+// HasModelUncertainty, whose tightening reads them) nor the tangential sigmas
+// (left empty: only the EXACT cones use them).
 void PrepareInPlace(const PlanOptions& options, EquilibriumScratch* scratch,
                     PreparedProblem* prepared, bool geometric_only = false);
 
