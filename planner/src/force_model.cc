@@ -548,9 +548,8 @@ bool BuildRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid
       forms.s1n = forms.t1.dot(sn);
       forms.s2n = forms.t2.dot(sn);
       forms.snn = snn;
-      if (sigmas && tangential_sigma != nullptr) {
+      if (sigmas && tangential_sigma)
         (*tangential_sigma)[i] = SpreadOfForms(forms.s11, forms.s12, forms.s22);
-      }
       FacetRows(forms, cos_theta, sin_theta, cone_sides, confidence, dx + r, dy + r, dz + r,
                 nominal + r, rhs + r);
       for (int j = 0; j < cone_sides; ++j) info[r + j] = {i, RowKind::kFrictionFacet, j};
