@@ -306,16 +306,41 @@ void ComputeMeasurementEllipsoid(const PlanProblem& problem, const ForceEquilibr
   if (count == 0 || d == 0) count = 0;
   // E diag(sigma) = B^T N_I diag(sigma): one column per intrinsic contact
   // with sigma > 0, from that contact's three rows of B.
+  // Raw loops, each sum in the order of Eigen's products: an entry of B_i^T v
+  // as (b_0 v_0 + b_1 v_1) + b_2 v_2, one of B E over k in turn.
+  const int dim = 3 * n;
+  const double* basis = eq.null_basis.data();  // column k at basis + k dim
   out->plane_factor.resize(d, count);
   for (int i = 0, j = 0; i < n && j < count; ++i) {
     const Contact& c = problem.contacts[i];
     if (!noisy(c)) continue;
-    out->plane_factor.col(j++).noalias() =
-        eq.null_basis.middleRows<3>(3 * i).transpose() * (c.sigma * c.normal);
+    const Vec3 v = c.sigma * c.normal;
+    double* e = out->plane_factor.col(j++).data();
+    for (int k = 0; k < d; ++k) {
+      const double* b = basis + k * dim + 3 * i;
+      e[k] = b[0] * v(0) + b[1] * v(1) + b[2] * v(2);
+    }
   }
-  // L = B E diag(sigma): the FE-plane projection of the reading noise.
-  out->factor.resize(3 * n, count);
-  if (count > 0) out->factor.noalias() = eq.null_basis.lazyProduct(out->plane_factor);
+  // L = B E diag(sigma): the FE-plane projection of the reading noise, two
+  // rows at a time with the running sums in registers.
+  out->factor.resize(dim, count);
+  for (int j = 0; j < count; ++j) {
+    double* l = out->factor.col(j).data();
+    const double* e = out->plane_factor.col(j).data();
+    int r = 0;
+    for (; r + 1 < dim; r += 2) {
+      __m128d sum = _mm_mul_pd(_mm_loadu_pd(basis + r), _mm_set1_pd(e[0]));
+      for (int k = 1; k < d; ++k) {
+        sum = _mm_add_pd(sum, _mm_mul_pd(_mm_loadu_pd(basis + k * dim + r), _mm_set1_pd(e[k])));
+      }
+      _mm_storeu_pd(l + r, sum);
+    }
+    for (; r < dim; ++r) {
+      double sum = basis[r] * e[0];
+      for (int k = 1; k < d; ++k) sum += basis[k * dim + r] * e[k];
+      l[r] = sum;
+    }
+  }
   // S_ii as the sum of l l^T over the factor's columns (a few 3-vectors):
   // cheaper than a general product of a 3 x k block with its transpose.
   out->contact_covariance.resize(n);
