@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <tuple>
 
 #include <Eigen/SVD>
 #include <emmintrin.h>
@@ -73,10 +75,10 @@ void HouseholderQr(MatrixXd& a, MatrixXd& reflectors, MatrixXd& q) {
   }
 }
 
-// Fills G (6 x 3n) and b.
-void FillGraspMatrixAndWrench(const PlanProblem& problem, ForceEquilibrium* eq) {
-  const int n = static_cast<int>(problem.contacts.size());
-  eq->grasp_matrix.resize(6, 3 * n);
+// Fills b and, with `grasp_matrix`, G (6 x 3n; else G is left empty).
+void FillGraspMatrixAndWrench(const PlanProblem& problem, bool grasp_matrix, ForceEquilibrium* eq) {
+  const int n = grasp_matrix ? static_cast<int>(problem.contacts.size()) : 0;
+  eq->grasp_matrix.resize(grasp_matrix ? 6 : 0, 3 * n);
   for (int i = 0; i < n; ++i) {
     eq->grasp_matrix.block<3, 3>(0, 3 * i).setIdentity();
     eq->grasp_matrix.block<3, 3>(3, 3 * i) = Skew(problem.contacts[i].position);
@@ -111,15 +113,16 @@ class ContactMixer {
     first_ = (1.0 + u) / norm;
     other_ = u / norm;
   }
+  // The three components at once (each summed in contact order, as one
+  // component at a time would).
   void Apply(double* x) const {
-    for (int k = 0; k < 3; ++k) {
-      double others = 0.0;
-      for (int i = 1; i < n_; ++i) others += x[3 * i + k];
-      const double scale = 2.0 * (first_ * x[k] + other_ * others);
-      x[k] -= scale * first_;
-      const double step = scale * other_;
-      for (int i = 1; i < n_; ++i) x[3 * i + k] -= step;
-    }
+    Eigen::Map<Vec3> head(x);
+    Vec3 others = Vec3::Zero();
+    for (int i = 1; i < n_; ++i) others += Eigen::Map<const Vec3>(x + 3 * i);
+    const Vec3 scale = 2.0 * (first_ * head + other_ * others);
+    head -= scale * first_;
+    const Vec3 step = scale * other_;
+    for (int i = 1; i < n_; ++i) Eigen::Map<Vec3>(x + 3 * i) -= step;
   }
 
  private:
@@ -151,6 +154,14 @@ struct TorqueRange {
       rank = 3;
       return;
     }
+    RankFromSvd(rank_tolerance, n);
+  }
+  // The rare path (collinear or coincident contacts), out of line. GCC 12
+  // warns, wrongly, that the fixed-size SVD's singular values may be used
+  // uninitialised once it is inlined here.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+  [[gnu::noinline]] void RankFromSvd(double rank_tolerance, int n) {
     svd_used = true;
     const Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
     u = svd.matrixU();
@@ -159,6 +170,7 @@ struct TorqueRange {
     const double cutoff = rank_tolerance * std::max({1.0, std::sqrt(double(n)), s(0)});
     while (rank < 3 && s(rank) > cutoff) ++rank;
   }
+#pragma GCC diagnostic pop
   Eigen::Matrix3d r = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d u = Eigen::Matrix3d::Identity();
   Eigen::Matrix3d w = Eigen::Matrix3d::Identity();
@@ -190,13 +202,34 @@ void ParticularSolution(const Vec3& centroid, const TorqueRange& torque, const M
   eq->particular.noalias() += q_torque * y_torque;
 }
 
+// The independent rows [Q_f^T; U_r^T Q_t^T] (rank x 3n) and their right-hand
+// side rows f0; with `range_rows` false both are left empty.
+void FillIndependentRows(const TorqueRange& torque, const MatrixXd& q_torque, bool range_rows,
+                         ForceEquilibrium* eq) {
+  const int dim = range_rows ? static_cast<int>(q_torque.rows()) : 0;
+  eq->independent_rows.setZero(range_rows ? eq->rank : 0, dim);
+  if (!range_rows) {
+    eq->independent_rhs.resize(0);
+    return;
+  }
+  const double force_entry = -1.0 / std::sqrt(double(dim / 3));
+  for (int j = 0; j < dim; ++j) eq->independent_rows(j % 3, j) = force_entry;
+  if (torque.svd_used) {
+    eq->independent_rows.bottomRows(torque.rank).noalias() =
+        torque.u.leftCols(torque.rank).transpose() * q_torque.transpose();
+  } else if (torque.rank == 3) {
+    eq->independent_rows.bottomRows<3>() = q_torque.transpose();
+  }
+  eq->independent_rhs.noalias() = eq->independent_rows * eq->particular;
+}
+
 }  // namespace
 
 void ComputeForceEquilibrium(const PlanProblem& problem, double rank_tolerance,
-                             EquilibriumScratch* scratch, ForceEquilibrium* eq) {
+                             EquilibriumScratch* scratch, ForceEquilibrium* eq, bool range_rows) {
   const int n = static_cast<int>(problem.contacts.size());
   const int dim = 3 * n;
-  FillGraspMatrixAndWrench(problem, eq);
+  FillGraspMatrixAndWrench(problem, range_rows, eq);
   Vec3 centroid = Vec3::Zero();
   for (const Contact& c : problem.contacts) centroid += c.position;
   centroid /= n;
@@ -234,17 +267,8 @@ void ComputeForceEquilibrium(const PlanProblem& problem, double rank_tolerance,
   }
   const int lost = has_torque_block ? 3 - torque_rank : 0;
   const int rest = has_torque_block ? dim - 6 : dim - 3;
-  eq->independent_rows.setZero(eq->rank, dim);
-  const double force_entry = -1.0 / std::sqrt(double(n));
-  for (int j = 0; j < dim; ++j) eq->independent_rows(j % 3, j) = force_entry;
   eq->null_basis.resize(dim, lost + rest);
-  if (svd_used) {
-    eq->independent_rows.bottomRows(torque_rank).noalias() =
-        torque_u.leftCols(torque_rank).transpose() * q_torque.transpose();
-    eq->null_basis.leftCols(lost).noalias() = q_torque * torque_u.rightCols(lost);
-  } else if (torque_rank == 3) {
-    eq->independent_rows.bottomRows<3>() = q_torque.transpose();
-  }
+  if (svd_used) eq->null_basis.leftCols(lost).noalias() = q_torque * torque_u.rightCols(lost);
   for (int j = 0; j < rest; ++j) {
     double* column = eq->null_basis.col(lost + j).data();
     std::fill(column, column + 3, 0.0);
@@ -254,7 +278,7 @@ void ComputeForceEquilibrium(const PlanProblem& problem, double rank_tolerance,
   }
 
   ParticularSolution(centroid, torque_range, scratch->torque_basis, eq);
-  eq->independent_rhs.noalias() = eq->independent_rows * eq->particular;
+  FillIndependentRows(torque_range, q_torque, range_rows, eq);
   eq->residual = EquilibriumResidual(problem, eq->particular, eq->wrench);
   eq->consistent = eq->residual <= 1e-8 * std::max(1.0, eq->wrench.norm());
 }
@@ -282,16 +306,41 @@ void ComputeMeasurementEllipsoid(const PlanProblem& problem, const ForceEquilibr
   if (count == 0 || d == 0) count = 0;
   // E diag(sigma) = B^T N_I diag(sigma): one column per intrinsic contact
   // with sigma > 0, from that contact's three rows of B.
+  // Raw loops, each sum in the order of Eigen's products: an entry of B_i^T v
+  // as (b_0 v_0 + b_1 v_1) + b_2 v_2, one of B E over k in turn.
+  const int dim = 3 * n;
+  const double* basis = eq.null_basis.data();  // column k at basis + k dim
   out->plane_factor.resize(d, count);
   for (int i = 0, j = 0; i < n && j < count; ++i) {
     const Contact& c = problem.contacts[i];
     if (!noisy(c)) continue;
-    out->plane_factor.col(j++).noalias() =
-        eq.null_basis.middleRows<3>(3 * i).transpose() * (c.sigma * c.normal);
+    const Vec3 v = c.sigma * c.normal;
+    double* e = out->plane_factor.col(j++).data();
+    for (int k = 0; k < d; ++k) {
+      const double* b = basis + k * dim + 3 * i;
+      e[k] = b[0] * v(0) + b[1] * v(1) + b[2] * v(2);
+    }
   }
-  // L = B E diag(sigma): the FE-plane projection of the reading noise.
-  out->factor.resize(3 * n, count);
-  if (count > 0) out->factor.noalias() = eq.null_basis.lazyProduct(out->plane_factor);
+  // L = B E diag(sigma): the FE-plane projection of the reading noise, two
+  // rows at a time with the running sums in registers.
+  out->factor.resize(dim, count);
+  for (int j = 0; j < count; ++j) {
+    double* l = out->factor.col(j).data();
+    const double* e = out->plane_factor.col(j).data();
+    int r = 0;
+    for (; r + 1 < dim; r += 2) {
+      __m128d sum = _mm_mul_pd(_mm_loadu_pd(basis + r), _mm_set1_pd(e[0]));
+      for (int k = 1; k < d; ++k) {
+        sum = _mm_add_pd(sum, _mm_mul_pd(_mm_loadu_pd(basis + k * dim + r), _mm_set1_pd(e[k])));
+      }
+      _mm_storeu_pd(l + r, sum);
+    }
+    for (; r < dim; ++r) {
+      double sum = basis[r] * e[0];
+      for (int k = 1; k < d; ++k) sum += basis[k * dim + r] * e[k];
+      l[r] = sum;
+    }
+  }
   // S_ii as the sum of l l^T over the factor's columns (a few 3-vectors):
   // cheaper than a general product of a 3 x k block with its transpose.
   out->contact_covariance.resize(n);
@@ -369,6 +418,23 @@ const FacetTable& Facets() {
   return *table;
 }
 
+// cos and sin of 2 pi j / K, j < K: the table's, or (K out of its range)
+// computed into `own`.
+std::pair<const double*, const double*> FacetAngles(int cone_sides, std::vector<double>* own) {
+  if (cone_sides >= PlanOptions::kMinConeSides && cone_sides <= PlanOptions::kMaxConeSides) {
+    const FacetTable& facets = Facets();
+    return {facets.cos_theta.data() + facets.offset[cone_sides],
+            facets.sin_theta.data() + facets.offset[cone_sides]};
+  }
+  own->resize(2 * std::max(cone_sides, 0));
+  for (int j = 0; j < cone_sides; ++j) {
+    const double theta = 2.0 * std::numbers::pi * j / cone_sides;
+    (*own)[j] = std::cos(theta);
+    (*own)[cone_sides + j] = std::sin(theta);
+  }
+  return {own->data(), own->data() + std::max(cone_sides, 0)};
+}
+
 }  // namespace
 
 MatrixXd ConstraintRows::Dense(int num_contacts) const {
@@ -388,9 +454,62 @@ double SpreadOfForms(double a, double b, double c) {
   return std::sqrt(std::max(0.0, lambda_max));
 }
 
-// BuildConstraintRows; with `normal_sigma` and `tangential_sigma` given and
-// the facets' quadratic forms of S_ii formed (confidence > 0, facets), also
-// the per-contact sigmas from those same forms, and returns true.
+// One contact's pyramid facets a_j = co_j t1 + si_j t2 - k n, j < count,
+// stored from row 0 of the given columns: nominal 0, robust 0 - kappa
+// sqrt(max(0, a_j^T S a_j)), the quadratic from the contact's six forms of
+// S. Two facets per SSE2 instruction, each lane the scalar expression in the
+// same order (so the rows do not depend on the pairing).
+struct FacetForms {
+  Vec3 t1, t2, normal;
+  double k = 0.0;  // mu cos(pi / K)
+  double s11 = 0.0, s22 = 0.0, s12 = 0.0, s1n = 0.0, s2n = 0.0, snn = 0.0;
+};
+
+void FacetRows(const FacetForms& f, const double* co, const double* si, int count,
+               double confidence, double* dx, double* dy, double* dz, double* nominal,
+               double* rhs) {
+  const double two_k = 2.0 * f.k, kk_snn = f.k * f.k * f.snn;
+  const Vec3 kn = f.k * f.normal;
+  const auto row = [&](double c, double s, int j) {
+    const double quadratic = c * c * f.s11 + s * s * f.s22 + 2.0 * c * s * f.s12 -
+                             two_k * (c * f.s1n + s * f.s2n) + kk_snn;
+    dx[j] = c * f.t1(0) + s * f.t2(0) - kn(0);
+    dy[j] = c * f.t1(1) + s * f.t2(1) - kn(1);
+    dz[j] = c * f.t1(2) + s * f.t2(2) - kn(2);
+    nominal[j] = 0.0;
+    rhs[j] = 0.0 - confidence * std::sqrt(std::max(0.0, quadratic));
+  };
+  const __m128d zero = _mm_setzero_pd(), two = _mm_set1_pd(2.0);
+  const __m128d s11 = _mm_set1_pd(f.s11), s22 = _mm_set1_pd(f.s22), s12 = _mm_set1_pd(f.s12);
+  const __m128d s1n = _mm_set1_pd(f.s1n), s2n = _mm_set1_pd(f.s2n);
+  const __m128d twok = _mm_set1_pd(two_k), kksnn = _mm_set1_pd(kk_snn);
+  const __m128d kappa = _mm_set1_pd(confidence);
+  const auto axis = [](__m128d c, __m128d s, double t1, double t2, double kn) {
+    return _mm_sub_pd(_mm_add_pd(_mm_mul_pd(c, _mm_set1_pd(t1)), _mm_mul_pd(s, _mm_set1_pd(t2))),
+                      _mm_set1_pd(kn));
+  };
+  int j = 0;
+  for (; j + 1 < count; j += 2) {
+    const __m128d c = _mm_loadu_pd(co + j), s = _mm_loadu_pd(si + j);
+    __m128d q = _mm_add_pd(_mm_mul_pd(_mm_mul_pd(c, c), s11), _mm_mul_pd(_mm_mul_pd(s, s), s22));
+    q = _mm_add_pd(q, _mm_mul_pd(_mm_mul_pd(_mm_mul_pd(two, c), s), s12));
+    q = _mm_sub_pd(q, _mm_mul_pd(twok, _mm_add_pd(_mm_mul_pd(c, s1n), _mm_mul_pd(s, s2n))));
+    q = _mm_add_pd(q, kksnn);
+    // max(q, 0) is 0 for a NaN q, as std::max(0.0, q).
+    const __m128d support = _mm_sqrt_pd(_mm_max_pd(q, zero));
+    _mm_storeu_pd(rhs + j, _mm_sub_pd(zero, _mm_mul_pd(kappa, support)));
+    _mm_storeu_pd(nominal + j, zero);
+    _mm_storeu_pd(dx + j, axis(c, s, f.t1(0), f.t2(0), kn(0)));
+    _mm_storeu_pd(dy + j, axis(c, s, f.t1(1), f.t2(1), kn(1)));
+    _mm_storeu_pd(dz + j, axis(c, s, f.t1(2), f.t2(2), kn(2)));
+  }
+  if (j < count) row(co[j], si[j], j);
+}
+
+// BuildConstraintRows; with `normal_sigma` given and the facets' quadratic
+// forms of S_ii formed (confidence > 0, facets), also the per-contact sigmas
+// from those same forms (the tangential ones when `tangential_sigma` is
+// given too), and returns true.
 bool BuildRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid, int cone_sides,
                double confidence, bool with_friction_facets, ConstraintRows* out,
                std::vector<double>* normal_sigma, std::vector<double>* tangential_sigma) {
@@ -404,15 +523,13 @@ bool BuildRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid
   rows.rhs.resize(m);
   rows.nominal_rhs.resize(m);
   rows.info.resize(m);
-
-  const FacetTable& facets = Facets();
-  const bool table =
-      cone_sides >= PlanOptions::kMinConeSides && cone_sides <= PlanOptions::kMaxConeSides;
-  const double* cos_table = table ? facets.cos_theta.data() + facets.offset[cone_sides] : nullptr;
-  const double* sin_table = table ? facets.sin_theta.data() + facets.offset[cone_sides] : nullptr;
+  rows.contact_first.resize(n + 1);
+  std::vector<double> own;  // only for a cone_sides outside the table's range
+  const auto [cos_theta, sin_theta] = with_friction_facets
+                                          ? FacetAngles(cone_sides, &own)
+                                          : std::pair<const double*, const double*>();
   const double cos_half = std::cos(std::numbers::pi / cone_sides);
-  // Raw column pointers: the row loop stores through them without Eigen's
-  // per-call bookkeeping.
+  // Raw column pointers: no per-call bookkeeping of Eigen's in the row loop.
   double* const dx = rows.directions.col(0).data();
   double* const dy = rows.directions.col(1).data();
   double* const dz = rows.directions.col(2).data();
@@ -432,9 +549,10 @@ bool BuildRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid
   const bool sigmas = normal_sigma != nullptr && confidence > 0.0 && with_friction_facets;
   if (sigmas) {
     normal_sigma->resize(n);
-    tangential_sigma->resize(n);
+    if (tangential_sigma != nullptr) tangential_sigma->resize(n);
   }
   for (int i = 0; i < n; ++i) {
+    rows.contact_first[i] = r;
     const Contact& c = problem.contacts[i];
     const Vec3& nrm = c.normal;
     const Eigen::Matrix3d s =
@@ -444,21 +562,23 @@ bool BuildRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid
     if (with_friction_facets) {
       // a = cos t1 + sin t2 - k n with k = mu cos(pi/K); a^T S a expands into
       // six quadratic forms of (t1, t2, n) computed once per contact.
-      const auto [t1, t2] = TangentBasis(nrm);
-      const double k = c.friction * cos_half;
-      const Vec3 s1 = s * t1, s2 = s * t2;
-      const double s11 = t1.dot(s1), s22 = t2.dot(s2), s12 = t1.dot(s2);
-      const double s1n = t1.dot(sn), s2n = t2.dot(sn);
-      if (sigmas) (*tangential_sigma)[i] = SpreadOfForms(s11, s12, s22);
-      for (int j = 0; j < cone_sides; ++j) {
-        const double theta = table ? 0.0 : 2.0 * std::numbers::pi * j / cone_sides;
-        const double co = table ? cos_table[j] : std::cos(theta);
-        const double si = table ? sin_table[j] : std::sin(theta);
-        const double quadratic = co * co * s11 + si * si * s22 + 2.0 * co * si * s12 -
-                                 2.0 * k * (co * s1n + si * s2n) + k * k * snn;
-        add(i, co * t1 + si * t2 - k * nrm, 0.0, std::sqrt(std::max(0.0, quadratic)),
-            RowKind::kFrictionFacet, j);
-      }
+      FacetForms forms;
+      std::tie(forms.t1, forms.t2) = TangentBasis(nrm);
+      forms.normal = nrm;
+      forms.k = c.friction * cos_half;
+      const Vec3 s1 = s * forms.t1, s2 = s * forms.t2;
+      forms.s11 = forms.t1.dot(s1);
+      forms.s22 = forms.t2.dot(s2);
+      forms.s12 = forms.t1.dot(s2);
+      forms.s1n = forms.t1.dot(sn);
+      forms.s2n = forms.t2.dot(sn);
+      forms.snn = snn;
+      if (sigmas && tangential_sigma)
+        (*tangential_sigma)[i] = SpreadOfForms(forms.s11, forms.s12, forms.s22);
+      FacetRows(forms, cos_theta, sin_theta, cone_sides, confidence, dx + r, dy + r, dz + r,
+                nominal + r, rhs + r);
+      for (int j = 0; j < cone_sides; ++j) info[r + j] = {i, RowKind::kFrictionFacet, j};
+      r += cone_sides;
     }
     const double normal_support = std::sqrt(std::max(0.0, snn));
     if (sigmas) (*normal_sigma)[i] = normal_support;
@@ -467,6 +587,7 @@ bool BuildRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid
       add(i, nrm, c.max_normal_force, normal_support, RowKind::kMaxNormal, 0);
     }
   }
+  rows.contact_first[n] = r;
   return sigmas;
 }
 
@@ -485,6 +606,58 @@ ConstraintRows BuildConstraintRows(const PlanProblem& problem,
   ConstraintRows rows;
   BuildConstraintRows(problem, ellipsoid, cone_sides, confidence, with_friction_facets, &rows);
   return rows;
+}
+
+namespace {
+
+// Calls visit(r, pair) for the slacks of rows r, r + 1 (pair: both lanes)
+// and visit_one(r, slack) for a block's odd last row, contact by contact.
+// kDotOrder: a_x f_x + (a_y f_y + a_z f_z), else (a_x f_x + a_y f_y) + a_z f_z.
+template <bool kDotOrder, typename Pair, typename One>
+void ForEachSlack(const ConstraintRows& rows, const double* f, Pair visit, One visit_one) {
+  const double* dx = rows.directions.col(0).data();
+  const double* dy = rows.directions.col(1).data();
+  const double* dz = rows.directions.col(2).data();
+  const double* rhs = rows.rhs.data();
+  const int n = static_cast<int>(rows.contact_first.size()) - 1;
+  for (int i = 0; i < n; ++i) {
+    const double fx = f[3 * i], fy = f[3 * i + 1], fz = f[3 * i + 2];
+    const __m128d x = _mm_set1_pd(fx), y = _mm_set1_pd(fy), z = _mm_set1_pd(fz);
+    int r = rows.contact_first[i];
+    const int end = rows.contact_first[i + 1];
+    for (; r + 1 < end; r += 2) {
+      const __m128d ax = _mm_mul_pd(_mm_loadu_pd(dx + r), x);
+      const __m128d ay = _mm_mul_pd(_mm_loadu_pd(dy + r), y);
+      const __m128d az = _mm_mul_pd(_mm_loadu_pd(dz + r), z);
+      const __m128d dot =
+          kDotOrder ? _mm_add_pd(ax, _mm_add_pd(ay, az)) : _mm_add_pd(_mm_add_pd(ax, ay), az);
+      visit(r, _mm_sub_pd(_mm_loadu_pd(rhs + r), dot));
+    }
+    if (r < end) {
+      const double dot =
+          kDotOrder ? dx[r] * fx + (dy[r] * fy + dz[r] * fz) : dx[r] * fx + dy[r] * fy + dz[r] * fz;
+      visit_one(r, rhs[r] - dot);
+    }
+  }
+}
+
+}  // namespace
+
+void RowSlacks(const ConstraintRows& rows, const double* forces, double* slacks) {
+  ForEachSlack<false>(
+      rows, forces, [slacks](int r, __m128d pair) { _mm_storeu_pd(slacks + r, pair); },
+      [slacks](int r, double slack) { slacks[r] = slack; });
+}
+
+double MinRowSlack(const ConstraintRows& rows, const double* forces) {
+  // Lane minima (a NaN slack, which a finite answer cannot have, is not
+  // ordered as std::min would; the least finite value is the same).
+  __m128d lanes = _mm_set1_pd(std::numeric_limits<double>::infinity());
+  double least = std::numeric_limits<double>::infinity();
+  ForEachSlack<true>(
+      rows, forces, [&lanes](int, __m128d pair) { lanes = _mm_min_pd(lanes, pair); },
+      [&least](int, double slack) { least = std::min(least, slack); });
+  return std::min({least, _mm_cvtsd_f64(lanes), _mm_cvtsd_f64(_mm_unpackhi_pd(lanes, lanes))});
 }
 
 void RowsOnPlane(const ConstraintRows& rows, const ForceEquilibrium& eq, MatrixXd* plane_matrix,
@@ -565,16 +738,21 @@ double ExactConeSlack(const Vec3& normal, double mu, double shift, const Vec3& f
   return (mu * normal.dot(force) - shift) - tangential.norm();
 }
 
-void PrepareInPlace(const PlanOptions& options, EquilibriumScratch* scratch, PreparedProblem* p) {
+void PrepareInPlace(const PlanOptions& options, EquilibriumScratch* scratch, PreparedProblem* p,
+                    bool geometric_only) {
   ApplyFrictionUncertainty(options.confidence, &p->problem, &p->nominal_friction);
-  ComputeForceEquilibrium(p->problem, options.rank_tolerance, scratch, &p->equilibrium);
+  // The parameter tightening reads G and the independent rows too.
+  const bool range_rows = !geometric_only || HasModelUncertainty(p->problem);
+  ComputeForceEquilibrium(p->problem, options.rank_tolerance, scratch, &p->equilibrium, range_rows);
   ComputeMeasurementEllipsoid(p->problem, p->equilibrium, &p->ellipsoid);
   // The sigmas come with the rows when those formed the same quadratic forms.
+  // The tangential ones serve the EXACT cones only (not a GEOMETRIC solve).
+  std::vector<double>* tangential = geometric_only ? nullptr : &p->tangential_sigma;
+  if (geometric_only) p->tangential_sigma.clear();
   if (!BuildRows(p->problem, p->ellipsoid, options.cone_sides, options.confidence,
-                 options.cone == ConeModel::kPyramid, &p->rows, &p->normal_sigma,
-                 &p->tangential_sigma)) {
+                 options.cone == ConeModel::kPyramid, &p->rows, &p->normal_sigma, tangential)) {
     NormalForceSigma(p->problem, p->ellipsoid, &p->normal_sigma);
-    TangentialForceSigma(p->problem, p->ellipsoid, &p->tangential_sigma);
+    if (tangential != nullptr) TangentialForceSigma(p->problem, p->ellipsoid, tangential);
   }
   if (options.cone == ConeModel::kExact) {
     ExactConeShift(p->problem, p->normal_sigma, p->tangential_sigma, options.confidence,

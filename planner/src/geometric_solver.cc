@@ -48,17 +48,9 @@ void FillPlaneQp(const PreparedProblem& prepared, DenseQp* qp) {
   qp->in_matrix.resize(0, d);
   qp->in_block_maps = eq.null_basis;
   qp->in_directions = rows.directions;
-  qp->in_block_first.assign(prepared.num_contacts() + 1, m);
+  qp->in_block_first = rows.contact_first;  // contact i's rows are block i
   qp->in_rhs.resize(m);
-  const double* f0 = eq.particular.data();
-  // A contact's rows are consecutive (BuildConstraintRows), and every
-  // contact has at least its minimum-normal-force row.
-  for (int r = m - 1; r >= 0; --r) qp->in_block_first[rows.info[r].contact] = r;
-  for (int r = 0; r < m; ++r) {
-    const int i = rows.info[r].contact;
-    const auto a = rows.directions.row(r);
-    qp->in_rhs(r) = rows.rhs(r) - (a(0) * f0[3 * i] + a(1) * f0[3 * i + 1] + a(2) * f0[3 * i + 2]);
-  }
+  RowSlacks(rows, eq.particular.data(), qp->in_rhs.data());
 }
 
 class GeometricSolver final : public ForceSolver {

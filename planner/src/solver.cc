@@ -21,12 +21,7 @@ namespace {
 // Each row touches one contact's three coordinates.
 double MinMargin(const PreparedProblem& prepared, const PlanOptions& options,
                  const std::vector<Vec3>& forces) {
-  double margin = std::numeric_limits<double>::infinity();
-  const ConstraintRows& rows = prepared.rows;
-  for (int r = 0; r < static_cast<int>(rows.info.size()); ++r) {
-    const int i = rows.info[r].contact;
-    margin = std::min(margin, rows.rhs(r) - rows.directions.row(r).dot(forces[i].transpose()));
-  }
+  double margin = MinRowSlack(prepared.rows, forces.front().data());
   if (options.cone == ConeModel::kExact) {
     for (int i = 0; i < prepared.num_contacts(); ++i) {
       const Contact& c = prepared.problem.contacts[i];
@@ -159,7 +154,8 @@ absl::Status ForceSolver::SolveValidated(const PlanOptions& options, const Solve
                                          std::chrono::steady_clock::time_point start,
                                          PlanningWorkspace* workspace, PlanResult* result) const {
   TF_RETURN_IF_ERROR(CheckSupported(options));
-  PrepareInPlace(options, &workspace->equilibrium_scratch, &workspace->prepared);
+  PrepareInPlace(options, &workspace->equilibrium_scratch, &workspace->prepared,
+                 kind_ == SolverKind::kGeometric);
   SolveAndFinish(options, control, workspace, result);
   result->solve_time_us = MicrosSince(start);
   return absl::OkStatus();

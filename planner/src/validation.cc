@@ -59,6 +59,41 @@ absl::Status CheckContact(int index, Contact& c) {
   return absl::OkStatus();
 }
 
+// Every check of CheckContact but the normal's length, branch-light and
+// without messages: `lo <= v <= limit` is false for NaN, so it is also the
+// finiteness test; a normal is finite when n - n is zero.
+bool ContactWithinLimits(const Contact& c) {
+  const auto in = [](double v, double limit) { return v >= 0.0 && v <= limit; };
+  const Vec3 zero = c.normal - c.normal;
+  const bool normal_finite = zero(0) == 0.0 && zero(1) == 0.0 && zero(2) == 0.0;
+  return (c.position.cwiseAbs().array() <= kMaxLength).all() & normal_finite &
+         in(c.friction, kMaxFriction) & in(c.friction_sigma, kMaxFriction) &
+         in(c.sigma, kMaxForce) & in(c.min_normal_force, kMaxForce) &
+         in(c.max_normal_force, kMaxForce) &
+         !(c.max_normal_force > 0.0 && c.min_normal_force > c.max_normal_force);
+}
+
+// Every check of ValidateProblem on the object, wrench, motion and contacts
+// (the uncertainty's by its own function), with no messages: the common valid
+// request passes here in one pass; any failure is then named by the checks
+// in order.
+bool WithinLimits(const PlanProblem& p, const PlanOptions& options) {
+  const auto bounded = [](const Vec3& v, double limit) {
+    return (v.cwiseAbs().array() <= limit).all();
+  };
+  const ObjectModel& o = p.object;
+  const Motion& m = p.motion;
+  bool ok = o.mass >= 0.0 && o.mass <= kMaxMass;
+  ok &= bounded(o.com, kMaxLength) & bounded(o.gravity, kMaxAcceleration) &
+        bounded(p.external_wrench.force, kMaxForce) & bounded(p.external_wrench.torque, kMaxForce) &
+        bounded(m.linear_acceleration, kMaxAcceleration) &
+        bounded(m.angular_velocity, kMaxAngularVelocity) &
+        bounded(m.angular_acceleration, kMaxAngularAcceleration);
+  ok &= !p.contacts.empty() && static_cast<int>(p.contacts.size()) <= options.max_contacts;
+  for (const Contact& c : p.contacts) ok &= ContactWithinLimits(c);
+  return ok && ValidateParameterUncertainty(o.uncertainty).ok();
+}
+
 }  // namespace
 
 bool IsBounded(double value, double limit) { return std::abs(value) <= limit; }  // false for NaN
@@ -100,10 +135,10 @@ absl::Status CheckTime(absl::string_view field, double t, const double* previous
 bool NormalizeDirection(Vec3* direction) {
   if (!Finite(*direction)) return false;
   const double largest = direction->cwiseAbs().maxCoeff();
-  if (!(largest * (*direction / (largest > 0 ? largest : 1.0)).norm() >= kMinDirectionLength))
-    return false;
-  *direction /= largest;
-  direction->normalize();
+  const Vec3 scaled = *direction / (largest > 0 ? largest : 1.0);
+  const double norm = scaled.norm();  // >= 1 when largest > 0
+  if (!(largest * norm >= kMinDirectionLength)) return false;
+  *direction = scaled / norm;  // as Vec3::normalize() of the scaled vector
   return true;
 }
 
@@ -117,6 +152,12 @@ absl::Status ValidateProblem(const PlanProblem& problem, const PlanOptions& opti
   out.external_wrench = problem.external_wrench;
   out.contacts = problem.contacts;  // element-wise: keeps capacity
   out.motion = problem.motion;
+  if (WithinLimits(out, options)) {
+    bool normals = true;
+    for (Contact& c : out.contacts) normals &= NormalizeDirection(&c.normal);
+    if (normals) return absl::OkStatus();
+    out.contacts = problem.contacts;  // a zero normal: named below
+  }
   TF_RETURN_IF_ERROR(CheckMagnitude("object.mass", out.object.mass, kMaxMass, "kg"));
   if (out.object.mass < 0.0) return Invalid("object.mass", "must be >= 0");
   TF_RETURN_IF_ERROR(CheckMagnitude("object.com", out.object.com, kMaxLength, "m"));

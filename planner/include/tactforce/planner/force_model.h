@@ -27,7 +27,7 @@ using Vector6d = Eigen::Matrix<double, 6, 1>;
 
 // Equilibrium of the contact forces with gravity and the external wrench.
 struct ForceEquilibrium {
-  MatrixXd grasp_matrix;    // G = [I ... I; [p_1]x ... [p_n]x], 6 x 3n
+  MatrixXd grasp_matrix;    // G = [I ... I; [p_1]x ... [p_n]x], 6 x 3n (see range_rows)
   Vector6d wrench;          // b = -(w_g + w_ext), w_g = (m g, c x m g)
   MatrixXd null_basis;      // B: orthonormal basis of null(G), 3n x d
   VectorXd particular;      // f0 = G^+ b (minimum norm; orthogonal to B)
@@ -62,9 +62,13 @@ struct EquilibriumScratch {
 // 3x3 SVD of R_t. Lost rotations (collinear or coincident contacts) move
 // their directions from the range to the null space. independent_rows are
 // then the orthonormal range basis (rank x 3n), independent_rhs = rows f0.
+// In place with `range_rows` false, G and the independent rows and rhs
+// (which only the Ipopt formulation and the parameter tightening read) are
+// left empty.
 ForceEquilibrium ComputeForceEquilibrium(const PlanProblem& problem, double rank_tolerance);
 void ComputeForceEquilibrium(const PlanProblem& problem, double rank_tolerance,
-                             EquilibriumScratch* scratch, ForceEquilibrium* out);
+                             EquilibriumScratch* scratch, ForceEquilibrium* out,
+                             bool range_rows = true);
 
 // Trusted measurement ellipsoid (GeoDEx Def. 5, Prop. 3) in force space:
 // S_f = B E diag(sigma^2) E^T B^T with E = B^T N_I, stored as the factor
@@ -112,6 +116,9 @@ struct ConstraintRows {
   VectorXd rhs;
   VectorXd nominal_rhs;
   std::vector<RowInfo> info;
+  // A contact's rows are consecutive: those of contact i are
+  // [contact_first[i], contact_first[i + 1]) (n + 1 entries, the last m).
+  std::vector<int> contact_first;
   // A (m x 3n, zero outside each row's contact), for backends that take
   // whole rows (the Ipopt formulation) and for checks.
   MatrixXd Dense(int num_contacts) const;
@@ -128,6 +135,14 @@ ConstraintRows BuildConstraintRows(const PlanProblem& problem,
 void BuildConstraintRows(const PlanProblem& problem, const MeasurementEllipsoid& ellipsoid,
                          int cone_sides, double confidence, bool with_friction_facets,
                          ConstraintRows* out);
+
+// The rows' slacks d_r - a_r . f_i at the stacked forces f (3n, N; f_i its
+// row's contact's three entries), a_r . f_i summed (a_x f_x + a_y f_y) + a_z
+// f_z; two rows per SSE2 instruction, each lane the scalar expression.
+void RowSlacks(const ConstraintRows& rows, const double* forces, double* slacks);
+// The least of them, a_r . f_i summed a_x f_x + (a_y f_y + a_z f_z) (as
+// Eigen's 3-vector dot); +inf without rows.
+double MinRowSlack(const ConstraintRows& rows, const double* forces);
 
 // The rows on the FE-plane f = f0 + B x: plane_matrix = A B (m x d),
 // plane_rhs = d - A f0, formed contact by contact (each row of A touches
@@ -184,7 +199,7 @@ struct PreparedProblem {
   MeasurementEllipsoid ellipsoid;
   ConstraintRows rows;                   // PYRAMID: facets + bounds; EXACT: bounds only
   std::vector<double> normal_sigma;      // rho_n,i (N)
-  std::vector<double> tangential_sigma;  // rho_t,i (N)
+  std::vector<double> tangential_sigma;  // rho_t,i (N); empty after a geometric_only prepare
   // EXACT: ExactConeShift() at options.confidence (N), the one tightening of
   // the exact cones that every backend and the reported margin use.
   // PYRAMID: empty (the facets in `rows` carry the tightening).
@@ -199,8 +214,12 @@ struct PreparedProblem {
 
 PreparedProblem Prepare(PlanProblem validated, const PlanOptions& options);
 // In place: `prepared->problem` already holds the validated problem; every
-// other member is recomputed, reusing its storage.
+// other member is recomputed, reusing its storage. `geometric_only`: for the
+// GEOMETRIC backend alone, which does not read G and the independent
+// equilibrium rows (left empty unless the problem carries model uncertainty,
+// HasModelUncertainty, whose tightening reads them) nor the tangential sigmas
+// (left empty: only the EXACT cones use them).
 void PrepareInPlace(const PlanOptions& options, EquilibriumScratch* scratch,
-                    PreparedProblem* prepared);
+                    PreparedProblem* prepared, bool geometric_only = false);
 
 }  // namespace tactforce::planner
