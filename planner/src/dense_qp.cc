@@ -174,13 +174,15 @@ class ActiveSetSolver {
   auto Normal(int k) const { return w_.normals.col(k); }
   // Forms the normal of constraint k and its norm, once per solve.
   void EnsureNormal(int k);
-  // The norms of every structured row's normal, without forming them.
-  void StructuredNorms();
-  // The norms of every dense inequality row.
-  void DenseNorms();
-  // 1 / |a|, the distance bounds and (structured) the unit rows, once norms
-  // are known.
-  void PrepareRowScales();
+  // The norms of every row, and from them 1 / |a|, the distance bounds and
+  // (structured) the unit rows; the first row 0^T x <= b with b < 0 in
+  // impossible_row_.
+  void StructuredRowScales();
+  void DenseRowScales();
+  // The Gram matrix M_b M_b^T of every block, 6 entries each, into `gram`.
+  void BlockGrams(double* gram) const;
+  // Row i's entries of those from its norm.
+  void ScaleRow(int i, double norm);
 
   // The bound of inequality row i while it is inactive (RowScales()).
   double DistanceBound(int i) const {
@@ -251,7 +253,7 @@ class ActiveSetSolver {
   const bool structured_;
   const int m_;
   int iterations_ = 0;
-  int impossible_row_ = -1;  // a row 0^T x <= b with b < 0 (PrepareRowScales), or -1
+  int impossible_row_ = -1;  // a row 0^T x <= b with b < 0 (the row scales), or -1
 };
 
 // Plain loops over contiguous columns: for the few variables of these QPs a
@@ -381,7 +383,7 @@ void ActiveSetSolver<Factors>::EnsureNormal(int k) {
   double* normal = w_.normals.col(k).data();
   if (k < p_) {
     for (int j = 0; j < N(); ++j) normal[j] = qp_.eq_matrix(k, j);
-  } else if (structured_) {  // its norm is already known (StructuredNorms)
+  } else if (structured_) {  // its norm is already known (StructuredRowScales)
     const int row = k - p_;
     const auto& first = qp_.in_block_first;
     const int block =
@@ -394,7 +396,7 @@ void ActiveSetSolver<Factors>::EnsureNormal(int k) {
     }
     w_.has_normal[k] = 1;
     return;
-  } else {  // its norm is already known (DenseNorms)
+  } else {  // its norm is already known (DenseRowScales)
     for (int j = 0; j < N(); ++j) normal[j] = qp_.in_matrix(k - p_, j);
     w_.has_normal[k] = 1;
     return;
@@ -404,17 +406,29 @@ void ActiveSetSolver<Factors>::EnsureNormal(int k) {
 }
 
 template <class Factors>
-void ActiveSetSolver<Factors>::StructuredNorms() {
-  // |M_b^T a|^2 = a^T (M_b M_b^T) a: one 3x3 Gram matrix per block.
-  const int blocks = static_cast<int>(qp_.in_block_maps.rows()) / 3;
-  w_.block_values.resize(6 * blocks);
-  double* gram = w_.block_values.data();
-  std::fill(gram, gram + 6 * blocks, 0.0);
-  for (int j = 0; j < N(); ++j) {
-    const double* column = qp_.in_block_maps.col(j).data();
-    for (int b = 0; b < blocks; ++b) {
-      const double* c = column + 3 * b;
-      double* g = gram + 6 * b;
+void ActiveSetSolver<Factors>::BlockGrams(double* gram) const {
+  // Entries 0..5 of block b: (M M^T)_00, _01, _02, _11, _12, _22, each
+  // summed over the variables in order; two entries per SSE2 instruction.
+  const int values = static_cast<int>(qp_.in_block_maps.rows());
+  for (int b = 0; b < values / 3; ++b) {
+    const double* map = qp_.in_block_maps.data() + 3 * b;
+    double* g = gram + 6 * b;
+#ifdef __SSE2__
+    __m128d g01 = _mm_setzero_pd(), g23 = _mm_setzero_pd(), g45 = _mm_setzero_pd();
+    for (int j = 0; j < N(); ++j) {
+      const double* c = map + j * values;
+      const __m128d c01 = _mm_loadu_pd(c), c12 = _mm_loadu_pd(c + 1);
+      g01 = _mm_add_pd(g01, _mm_mul_pd(_mm_set1_pd(c[0]), c01));
+      g23 = _mm_add_pd(g23, _mm_mul_pd(c01, _mm_shuffle_pd(c12, c12, 1)));
+      g45 = _mm_add_pd(g45, _mm_mul_pd(_mm_set1_pd(c[2]), c12));
+    }
+    _mm_storeu_pd(g, g01);
+    _mm_storeu_pd(g + 2, g23);
+    _mm_storeu_pd(g + 4, g45);
+#else
+    std::fill(g, g + 6, 0.0);
+    for (int j = 0; j < N(); ++j) {
+      const double* c = map + j * values;
       g[0] += c[0] * c[0];
       g[1] += c[0] * c[1];
       g[2] += c[0] * c[2];
@@ -422,63 +436,106 @@ void ActiveSetSolver<Factors>::StructuredNorms() {
       g[4] += c[1] * c[2];
       g[5] += c[2] * c[2];
     }
+#endif
   }
-  const double* __restrict ax = qp_.in_directions.col(0).data();
-  const double* __restrict ay = qp_.in_directions.col(1).data();
-  const double* __restrict az = qp_.in_directions.col(2).data();
-  double* __restrict norms = w_.normal_norms.data() + p_;
-  for (int b = 0; b < blocks; ++b) {
-    const double* g = gram + 6 * b;
-    const double g0 = g[0], g1 = 2.0 * g[1], g2 = 2.0 * g[2], g3 = g[3], g4 = 2.0 * g[4], g5 = g[5];
-    const int end = qp_.in_block_first[b + 1];
-    for (int i = qp_.in_block_first[b]; i < end; ++i) {  // squared norms: vectorised
-      norms[i] = ax[i] * (g0 * ax[i] + g1 * ay[i] + g2 * az[i]) +
-                 ay[i] * (g3 * ay[i] + g4 * az[i]) + g5 * az[i] * az[i];
-    }
-  }
-  for (int i = 0; i < m_; ++i) norms[i] = std::sqrt(std::max(0.0, norms[i]));
 }
 
 template <class Factors>
-void ActiveSetSolver<Factors>::DenseNorms() {
+void ActiveSetSolver<Factors>::ScaleRow(int i, double norm) {
+  // A zero row (0 <= b) gets inverse norm 0: distance 0 and bound -0, so it
+  // is never selected; Run reports it first when b < 0.
+  const double b = qp_.in_rhs(i), tol = settings_.tolerance;
+  const double size = std::max(1.0, std::abs(b));
+  w_.normal_norms(p_ + i) = norm;
+  if (norm > kZeroNorm) {
+    const double inverse = 1.0 / norm;
+    w_.inverse_norms(i) = inverse;
+    w_.distance_bound(i) = -tol * size * inverse;
+  } else {
+    w_.inverse_norms(i) = 0.0;
+    w_.distance_bound(i) = -0.0;
+    if (impossible_row_ < 0 && b < -tol * size) impossible_row_ = p_ + i;
+  }
+  if (!structured_) return;
+  const int stride = static_cast<int>(w_.unit_rows.rows());
+  double* unit = w_.unit_rows.data() + i;
+  const double inverse = w_.inverse_norms(i);
+  for (int c = 0; c < 3; ++c) unit[c * stride] = qp_.in_directions(i, c) * inverse;
+  unit[3 * stride] = b * inverse;
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::StructuredRowScales() {
+  // |M_b^T a|^2 = a^T (M_b M_b^T) a from one 3x3 Gram matrix per block; then
+  // 1 / |a|, the distance bound and the unit row (a / |a|, b / |a|), two
+  // rows per SSE2 instruction, in one pass.
+  const int blocks = static_cast<int>(qp_.in_block_maps.rows()) / 3;
+  if (w_.block_values.size() < 6 * blocks) w_.block_values.resize(6 * blocks);
+  const double* g_all = w_.block_values.data();
+  BlockGrams(w_.block_values.data());
+  const double* __restrict ax = qp_.in_directions.col(0).data();
+  const double* __restrict ay = qp_.in_directions.col(1).data();
+  const double* __restrict az = qp_.in_directions.col(2).data();
+  const double* __restrict rhs = qp_.in_rhs.data();
+  const int stride = static_cast<int>(w_.unit_rows.rows());
+  double* __restrict unit = w_.unit_rows.data();
+  double* __restrict norms = w_.normal_norms.data() + p_;
+  double* __restrict inverses = w_.inverse_norms.data();
+  double* __restrict bounds = w_.distance_bound.data();
+  impossible_row_ = -1;
+  for (int b = 0; b < blocks; ++b) {
+    const double* g = g_all + 6 * b;
+    const double g0 = g[0], g1 = 2.0 * g[1], g2 = 2.0 * g[2], g3 = g[3], g4 = 2.0 * g[4], g5 = g[5];
+    const int end = qp_.in_block_first[b + 1];
+    int i = qp_.in_block_first[b];
+#ifdef __SSE2__
+    const __m128d G0 = _mm_set1_pd(g0), G1 = _mm_set1_pd(g1), G2 = _mm_set1_pd(g2);
+    const __m128d G3 = _mm_set1_pd(g3), G4 = _mm_set1_pd(g4), G5 = _mm_set1_pd(g5);
+    const __m128d one = _mm_set1_pd(1.0), tiny = _mm_set1_pd(kZeroNorm);
+    const __m128d sign = _mm_set1_pd(-0.0), minus_tol = _mm_set1_pd(-settings_.tolerance);
+    for (; i + 1 < end; i += 2) {
+      const __m128d X = _mm_loadu_pd(ax + i), Y = _mm_loadu_pd(ay + i), Z = _mm_loadu_pd(az + i);
+      const __m128d xpart = _mm_mul_pd(
+          X, _mm_add_pd(_mm_add_pd(_mm_mul_pd(G0, X), _mm_mul_pd(G1, Y)), _mm_mul_pd(G2, Z)));
+      const __m128d ypart = _mm_mul_pd(Y, _mm_add_pd(_mm_mul_pd(G3, Y), _mm_mul_pd(G4, Z)));
+      const __m128d squared =
+          _mm_add_pd(_mm_add_pd(xpart, ypart), _mm_mul_pd(_mm_mul_pd(G5, Z), Z));
+      const __m128d norm = _mm_sqrt_pd(_mm_max_pd(squared, _mm_setzero_pd()));
+      if (_mm_movemask_pd(_mm_cmpgt_pd(norm, tiny)) != 3) {  // a zero row: one by one
+        ScaleRow(i, _mm_cvtsd_f64(norm));
+        ScaleRow(i + 1, _mm_cvtsd_f64(_mm_unpackhi_pd(norm, norm)));
+        continue;
+      }
+      const __m128d B = _mm_loadu_pd(rhs + i);
+      const __m128d inverse = _mm_div_pd(one, norm);
+      const __m128d size = _mm_max_pd(_mm_andnot_pd(sign, B), one);
+      _mm_storeu_pd(norms + i, norm);
+      _mm_storeu_pd(inverses + i, inverse);
+      _mm_storeu_pd(bounds + i, _mm_mul_pd(_mm_mul_pd(minus_tol, size), inverse));
+      _mm_storeu_pd(unit + i, _mm_mul_pd(X, inverse));
+      _mm_storeu_pd(unit + stride + i, _mm_mul_pd(Y, inverse));
+      _mm_storeu_pd(unit + 2 * stride + i, _mm_mul_pd(Z, inverse));
+      _mm_storeu_pd(unit + 3 * stride + i, _mm_mul_pd(B, inverse));
+    }
+#endif
+    for (; i < end; ++i) {
+      const double squared = ax[i] * (g0 * ax[i] + g1 * ay[i] + g2 * az[i]) +
+                             ay[i] * (g3 * ay[i] + g4 * az[i]) + g5 * az[i] * az[i];
+      ScaleRow(i, std::sqrt(std::max(0.0, squared)));
+    }
+  }
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::DenseRowScales() {
   double* __restrict norms = w_.normal_norms.data() + p_;
   std::fill(norms, norms + m_, 0.0);
   for (int j = 0; j < N(); ++j) {
     const double* __restrict column = qp_.in_matrix.col(j).data();
     for (int i = 0; i < m_; ++i) norms[i] += column[i] * column[i];
   }
-  for (int i = 0; i < m_; ++i) norms[i] = std::sqrt(norms[i]);
-}
-
-template <class Factors>
-void ActiveSetSolver<Factors>::PrepareRowScales() {
-  // A zero row (0 <= b) gets inverse norm 0: distance 0 and bound -0, so it
-  // is never selected; Run reports it first when b < 0.
-  const double* norms = w_.normal_norms.data() + p_;
-  const double* b = qp_.in_rhs.data();
-  const double tol = settings_.tolerance;
   impossible_row_ = -1;
-  for (int i = 0; i < m_; ++i) {
-    const double size = std::max(1.0, std::abs(b[i]));
-    if (norms[i] > kZeroNorm) {
-      const double inverse = 1.0 / norms[i];
-      w_.inverse_norms(i) = inverse;
-      w_.distance_bound(i) = -tol * size * inverse;
-    } else {
-      w_.inverse_norms(i) = 0.0;
-      w_.distance_bound(i) = -0.0;
-      if (impossible_row_ < 0 && b[i] < -tol * size) impossible_row_ = p_ + i;
-    }
-  }
-  if (!structured_) return;
-  // The structured scan's rows scaled to unit normals: a distance is then
-  // b' - a' . y, 3 products per row and no division.
-  w_.unit_rows.resize(m_, 4);
-  const auto inverse = w_.inverse_norms.array();
-  for (int c = 0; c < 3; ++c) {
-    w_.unit_rows.col(c).array() = qp_.in_directions.col(c).array() * inverse;
-  }
-  w_.unit_rows.col(3).array() = qp_.in_rhs.array() * inverse;
+  for (int i = 0; i < m_; ++i) ScaleRow(i, std::sqrt(norms[i]));
 }
 
 template <class Factors>
@@ -560,8 +617,8 @@ void ActiveSetSolver<Factors>::ScanBlocks(double threshold) {
     }
 #endif
     const int first = qp_.in_block_first[block], end = qp_.in_block_first[block + 1];
-    const double least = UnitRowDistances(unit.data() + first, m_, end - first, y0, y1, y2,
-                                          w_.distance.data() + first);
+    const double least = UnitRowDistances(unit.data() + first, static_cast<int>(unit.rows()),
+                                          end - first, y0, y1, y2, w_.distance.data() + first);
     double block_distance = threshold;
     int block_row = -1;
     SelectInRange(first, end, least, &block_distance, &block_row);
@@ -663,20 +720,22 @@ bool ActiveSetSolver<Factors>::Initialize() {
   w_.active.clear();
   w_.active.reserve(N() + 1);
   w_.pending.clear();
-  w_.normals.resize(N(), p_ + m_);
-  w_.rhs.resize(p_ + m_);
-  w_.rhs.head(p_) = qp_.eq_rhs;
-  w_.rhs.tail(m_) = qp_.in_rhs;
-  w_.normal_norms.resize(p_ + m_);
-  w_.distance.resize(m_);
-  w_.distance_bound.resize(m_);
-  w_.inverse_norms.resize(m_);
-  if (structured_) {
-    StructuredNorms();
-  } else {
-    DenseNorms();
+  // Buffers only grow, so grasps of varying row counts reuse them.
+  if (w_.normals.rows() != N() || w_.normals.cols() < p_ + m_) w_.normals.resize(N(), p_ + m_);
+  if (structured_ && w_.unit_rows.rows() < m_) w_.unit_rows.resize(m_, 4);
+  for (VectorXd* v : {&w_.rhs, &w_.normal_norms}) {
+    if (v->size() < p_ + m_) v->resize(p_ + m_);
   }
-  PrepareRowScales();
+  for (VectorXd* v : {&w_.distance, &w_.distance_bound, &w_.inverse_norms}) {
+    if (v->size() < m_) v->resize(m_);
+  }
+  w_.rhs.head(p_) = qp_.eq_rhs;
+  w_.rhs.segment(p_, m_) = qp_.in_rhs;
+  if (structured_) {
+    StructuredRowScales();
+  } else {
+    DenseRowScales();
+  }
   f_.x.resize(N());
   f_.d.resize(N());
   f_.z.resize(N());
