@@ -253,7 +253,8 @@ class ActiveSetSolver {
   const bool structured_;
   const int m_;
   int iterations_ = 0;
-  int impossible_row_ = -1;  // a row 0^T x <= b with b < 0 (the row scales), or -1
+  int active_equalities_ = 0;  // the leading entries of w_.active
+  int impossible_row_ = -1;    // a row 0^T x <= b with b < 0 (the row scales), or -1
 };
 
 // Plain loops over contiguous columns: for the few variables of these QPs a
@@ -385,9 +386,9 @@ void ActiveSetSolver<Factors>::EnsureNormal(int k) {
     for (int j = 0; j < N(); ++j) normal[j] = qp_.eq_matrix(k, j);
   } else if (structured_) {  // its norm is already known (StructuredRowScales)
     const int row = k - p_;
-    const auto& first = qp_.in_block_first;
-    const int block =
-        static_cast<int>(std::upper_bound(first.begin(), first.end(), row) - first.begin()) - 1;
+    const int* first = qp_.in_block_first.data();
+    int block = 0;  // a few blocks: a linear search
+    while (first[block + 1] <= row) ++block;
     const double a0 = qp_.in_directions(row, 0), a1 = qp_.in_directions(row, 1),
                  a2 = qp_.in_directions(row, 2);
     for (int j = 0; j < N(); ++j) {
@@ -779,6 +780,7 @@ int ActiveSetSolver<Factors>::AddEqualities() {
     if (q > 0) f_.u.head(q) -= t * f_.r.head(q);
     AddToFactorization();
     Activate(k, t);
+    ++active_equalities_;
   }
   return -1;
 }
@@ -788,8 +790,9 @@ int ActiveSetSolver<Factors>::BlockingActive(double* step) const {
   // Along the step x -= t z the multipliers move as u -= t r.
   *step = kInf;
   int drop = -1;
-  for (int i = 0; i < Active(); ++i) {
-    if (w_.active[i] < p_ || f_.r(i) <= settings_.tolerance) continue;
+  // The active equalities come first (never dropped) and are skipped.
+  for (int i = active_equalities_; i < Active(); ++i) {
+    if (f_.r(i) <= settings_.tolerance) continue;
     const double ratio = f_.u(i) / f_.r(i);
     if (ratio < *step) {
       *step = ratio;
