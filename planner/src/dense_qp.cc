@@ -181,8 +181,11 @@ class ActiveSetSolver {
   void DenseRowScales();
   // The Gram matrix M_b M_b^T of every block, 6 entries each, into `gram`.
   void BlockGrams(double* gram) const;
-  // Row i's entries of those from its norm.
-  void ScaleRow(int i, double norm);
+  // Row i's norm and inverse norm (0 for a zero row, which may be
+  // impossible_row_); dense rows: also its distance bound.
+  void NormOfRow(int i, double norm);
+  // The distance bounds and unit rows of all structured rows.
+  void UnitRows();
 
   // The bound of inequality row i while it is inactive (RowScales()).
   double DistanceBound(int i) const {
@@ -442,27 +445,19 @@ void ActiveSetSolver<Factors>::BlockGrams(double* gram) const {
 }
 
 template <class Factors>
-void ActiveSetSolver<Factors>::ScaleRow(int i, double norm) {
+void ActiveSetSolver<Factors>::NormOfRow(int i, double norm) {
   // A zero row (0 <= b) gets inverse norm 0: distance 0 and bound -0, so it
   // is never selected; Run reports it first when b < 0.
   const double b = qp_.in_rhs(i), tol = settings_.tolerance;
   const double size = std::max(1.0, std::abs(b));
   w_.normal_norms(p_ + i) = norm;
   if (norm > kZeroNorm) {
-    const double inverse = 1.0 / norm;
-    w_.inverse_norms(i) = inverse;
-    w_.distance_bound(i) = -tol * size * inverse;
+    w_.inverse_norms(i) = 1.0 / norm;
   } else {
     w_.inverse_norms(i) = 0.0;
-    w_.distance_bound(i) = -0.0;
     if (impossible_row_ < 0 && b < -tol * size) impossible_row_ = p_ + i;
   }
-  if (!structured_) return;
-  const int stride = static_cast<int>(w_.unit_rows.rows());
-  double* unit = w_.unit_rows.data() + i;
-  const double inverse = w_.inverse_norms(i);
-  for (int c = 0; c < 3; ++c) unit[c * stride] = qp_.in_directions(i, c) * inverse;
-  unit[3 * stride] = b * inverse;
+  if (!structured_) w_.distance_bound(i) = -tol * size * w_.inverse_norms(i);
 }
 
 template <class Factors>
@@ -477,13 +472,11 @@ void ActiveSetSolver<Factors>::StructuredRowScales() {
   const double* __restrict ax = qp_.in_directions.col(0).data();
   const double* __restrict ay = qp_.in_directions.col(1).data();
   const double* __restrict az = qp_.in_directions.col(2).data();
-  const double* __restrict rhs = qp_.in_rhs.data();
-  const int stride = static_cast<int>(w_.unit_rows.rows());
-  double* __restrict unit = w_.unit_rows.data();
   double* __restrict norms = w_.normal_norms.data() + p_;
   double* __restrict inverses = w_.inverse_norms.data();
-  double* __restrict bounds = w_.distance_bound.data();
   impossible_row_ = -1;
+  // Two passes, so that each keeps its values in registers: the norms per
+  // block (its Gram matrix), then the scales of all rows from 1 / |a|.
   for (int b = 0; b < blocks; ++b) {
     const double* g = g_all + 6 * b;
     const double g0 = g[0], g1 = 2.0 * g[1], g2 = 2.0 * g[2], g3 = g[3], g4 = 2.0 * g[4], g5 = g[5];
@@ -493,7 +486,6 @@ void ActiveSetSolver<Factors>::StructuredRowScales() {
     const __m128d G0 = _mm_set1_pd(g0), G1 = _mm_set1_pd(g1), G2 = _mm_set1_pd(g2);
     const __m128d G3 = _mm_set1_pd(g3), G4 = _mm_set1_pd(g4), G5 = _mm_set1_pd(g5);
     const __m128d one = _mm_set1_pd(1.0), tiny = _mm_set1_pd(kZeroNorm);
-    const __m128d sign = _mm_set1_pd(-0.0), minus_tol = _mm_set1_pd(-settings_.tolerance);
     for (; i + 1 < end; i += 2) {
       const __m128d X = _mm_loadu_pd(ax + i), Y = _mm_loadu_pd(ay + i), Z = _mm_loadu_pd(az + i);
       const __m128d xpart = _mm_mul_pd(
@@ -502,28 +494,60 @@ void ActiveSetSolver<Factors>::StructuredRowScales() {
       const __m128d squared =
           _mm_add_pd(_mm_add_pd(xpart, ypart), _mm_mul_pd(_mm_mul_pd(G5, Z), Z));
       const __m128d norm = _mm_sqrt_pd(_mm_max_pd(squared, _mm_setzero_pd()));
-      if (_mm_movemask_pd(_mm_cmpgt_pd(norm, tiny)) != 3) {  // a zero row: one by one
-        ScaleRow(i, _mm_cvtsd_f64(norm));
-        ScaleRow(i + 1, _mm_cvtsd_f64(_mm_unpackhi_pd(norm, norm)));
-        continue;
-      }
-      const __m128d B = _mm_loadu_pd(rhs + i);
-      const __m128d inverse = _mm_div_pd(one, norm);
-      const __m128d size = _mm_max_pd(_mm_andnot_pd(sign, B), one);
       _mm_storeu_pd(norms + i, norm);
-      _mm_storeu_pd(inverses + i, inverse);
-      _mm_storeu_pd(bounds + i, _mm_mul_pd(_mm_mul_pd(minus_tol, size), inverse));
-      _mm_storeu_pd(unit + i, _mm_mul_pd(X, inverse));
-      _mm_storeu_pd(unit + stride + i, _mm_mul_pd(Y, inverse));
-      _mm_storeu_pd(unit + 2 * stride + i, _mm_mul_pd(Z, inverse));
-      _mm_storeu_pd(unit + 3 * stride + i, _mm_mul_pd(B, inverse));
+      _mm_storeu_pd(inverses + i, _mm_div_pd(one, norm));
+      if (_mm_movemask_pd(_mm_cmpgt_pd(norm, tiny)) != 3) {  // a zero row
+        NormOfRow(i, norms[i]);
+        NormOfRow(i + 1, norms[i + 1]);
+      }
     }
 #endif
     for (; i < end; ++i) {
       const double squared = ax[i] * (g0 * ax[i] + g1 * ay[i] + g2 * az[i]) +
                              ay[i] * (g3 * ay[i] + g4 * az[i]) + g5 * az[i] * az[i];
-      ScaleRow(i, std::sqrt(std::max(0.0, squared)));
+      NormOfRow(i, std::sqrt(std::max(0.0, squared)));
     }
+  }
+  UnitRows();
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::UnitRows() {
+  // The distance bounds -tolerance max(1, |b|) / |a| and the unit rows
+  // (a / |a|, b / |a|) of all rows, two per SSE2 instruction; zero rows
+  // (inverse norm 0) get bound -0 and zeros.
+  const double* __restrict ax = qp_.in_directions.col(0).data();
+  const double* __restrict ay = qp_.in_directions.col(1).data();
+  const double* __restrict az = qp_.in_directions.col(2).data();
+  const double* __restrict rhs = qp_.in_rhs.data();
+  const double* __restrict inverses = w_.inverse_norms.data();
+  double* __restrict bounds = w_.distance_bound.data();
+  const int stride = static_cast<int>(w_.unit_rows.rows());
+  double* __restrict ux = w_.unit_rows.data();
+  double* __restrict uy = ux + stride;
+  double* __restrict uz = uy + stride;
+  double* __restrict ub = uz + stride;
+  const double minus_tol = -settings_.tolerance;
+  int i = 0;
+#ifdef __SSE2__
+  const __m128d one = _mm_set1_pd(1.0), sign = _mm_set1_pd(-0.0), vtol = _mm_set1_pd(minus_tol);
+  for (; i + 1 < m_; i += 2) {
+    const __m128d inverse = _mm_loadu_pd(inverses + i), B = _mm_loadu_pd(rhs + i);
+    const __m128d size = _mm_max_pd(_mm_andnot_pd(sign, B), one);
+    _mm_storeu_pd(bounds + i, _mm_mul_pd(_mm_mul_pd(vtol, size), inverse));
+    _mm_storeu_pd(ux + i, _mm_mul_pd(_mm_loadu_pd(ax + i), inverse));
+    _mm_storeu_pd(uy + i, _mm_mul_pd(_mm_loadu_pd(ay + i), inverse));
+    _mm_storeu_pd(uz + i, _mm_mul_pd(_mm_loadu_pd(az + i), inverse));
+    _mm_storeu_pd(ub + i, _mm_mul_pd(B, inverse));
+  }
+#endif
+  for (; i < m_; ++i) {
+    const double inverse = inverses[i];
+    bounds[i] = minus_tol * std::max(1.0, std::abs(rhs[i])) * inverse;
+    ux[i] = ax[i] * inverse;
+    uy[i] = ay[i] * inverse;
+    uz[i] = az[i] * inverse;
+    ub[i] = rhs[i] * inverse;
   }
 }
 
@@ -536,7 +560,7 @@ void ActiveSetSolver<Factors>::DenseRowScales() {
     for (int i = 0; i < m_; ++i) norms[i] += column[i] * column[i];
   }
   impossible_row_ = -1;
-  for (int i = 0; i < m_; ++i) ScaleRow(i, std::sqrt(norms[i]));
+  for (int i = 0; i < m_; ++i) NormOfRow(i, std::sqrt(norms[i]));
 }
 
 template <class Factors>
