@@ -260,6 +260,7 @@ class ActiveSetSolver {
   const int m_;
   int iterations_ = 0;
   int active_equalities_ = 0;  // the leading entries of w_.active
+  int pending_count_ = 0;      // the leading entries of w_.pending in use
   int impossible_row_ = -1;    // a row 0^T x <= b with b < 0 (the row scales), or -1
 };
 
@@ -657,11 +658,10 @@ void ActiveSetSolver<Factors>::ScanBlocks(double threshold) {
 template <class Factors>
 void ActiveSetSolver<Factors>::Push(int row) {
   // Kept most violated last (popped first): a few entries, insertion sort.
-  std::vector<int>& pending = w_.pending;
+  int* pending = w_.pending.data();  // sized to the blocks (Initialize)
   const double* distance = w_.distance.data();
-  pending.push_back(row);
-  for (int i = static_cast<int>(pending.size()) - 1;
-       i > 0 && distance[pending[i - 1]] < distance[pending[i]]; --i) {
+  pending[pending_count_] = row;
+  for (int i = pending_count_++; i > 0 && distance[pending[i - 1]] < distance[pending[i]]; --i) {
     std::swap(pending[i - 1], pending[i]);
   }
 }
@@ -690,9 +690,8 @@ int ActiveSetSolver<Factors>::MostViolated() {
     // values): one scan then serves several steps. Taking every row still
     // violated costs more steps (drops) than the scans it saves at 3-4
     // contacts; only the first scan's rows, more still.
-    while (!w_.pending.empty()) {
-      const int row = w_.pending.back();
-      w_.pending.pop_back();
+    while (pending_count_ > 0) {
+      const int row = w_.pending[--pending_count_];
       const int k = p_ + row;
       if (w_.is_active[k]) continue;
       EnsureNormal(k);
@@ -703,9 +702,8 @@ int ActiveSetSolver<Factors>::MostViolated() {
       }
     }
     ScanBlocks(worst_distance);
-    if (w_.pending.empty()) return -1;
-    worst = w_.pending.back();
-    w_.pending.pop_back();
+    if (pending_count_ == 0) return -1;
+    worst = w_.pending[--pending_count_];
   } else {
     ScanRows();
     const double least =
@@ -747,7 +745,10 @@ bool ActiveSetSolver<Factors>::Initialize() {
   w_.has_normal.assign(p_ + m_, 0);
   w_.active.clear();
   w_.active.reserve(N() + 1);
-  w_.pending.clear();
+  pending_count_ = 0;
+  if (structured_ && w_.pending.size() < qp_.in_block_first.size()) {
+    w_.pending.resize(qp_.in_block_first.size());  // at most one row per block
+  }
   // Buffers only grow, so grasps of varying row counts reuse them.
   if (w_.normals.rows() != N() || w_.normals.cols() < p_ + m_) w_.normals.resize(N(), p_ + m_);
   if (structured_ && w_.unit_rows.rows() < m_) w_.unit_rows.resize(m_, 4);
