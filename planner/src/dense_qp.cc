@@ -498,11 +498,17 @@ void ActiveSetSolver<Factors>::StructuredRowScales() {
       const __m128d squared =
           _mm_add_pd(_mm_add_pd(xpart, ypart), _mm_mul_pd(_mm_mul_pd(G5, Z), Z));
       const __m128d norm = _mm_sqrt_pd(_mm_max_pd(squared, _mm_setzero_pd()));
+      const __m128d nonzero = _mm_cmpgt_pd(norm, tiny);
       _mm_storeu_pd(norms + i, norm);
-      _mm_storeu_pd(inverses + i, _mm_div_pd(one, norm));
-      if (_mm_movemask_pd(_mm_cmpgt_pd(norm, tiny)) != 3) {  // a zero row
-        NormOfRow(i, norms[i]);
-        NormOfRow(i + 1, norms[i + 1]);
+      _mm_storeu_pd(inverses + i, _mm_and_pd(nonzero, _mm_div_pd(one, norm)));
+      if (_mm_movemask_pd(nonzero) != 3 && impossible_row_ < 0) {  // a zero row
+        for (int row = i; row < i + 2; ++row) {
+          const double b = qp_.in_rhs(row);
+          if (!(norms[row] > kZeroNorm) && b < -settings_.tolerance * std::max(1.0, std::abs(b))) {
+            impossible_row_ = p_ + row;
+            break;
+          }
+        }
       }
     }
 #endif
@@ -564,7 +570,19 @@ void ActiveSetSolver<Factors>::DenseRowScales() {
     for (int i = 0; i < m_; ++i) norms[i] += column[i] * column[i];
   }
   impossible_row_ = -1;
-  for (int i = 0; i < m_; ++i) NormOfRow(i, std::sqrt(norms[i]));
+  const double* b = qp_.in_rhs.data();
+  const double tol = settings_.tolerance;
+  for (int i = 0; i < m_; ++i) {
+    const double norm = std::sqrt(norms[i]);
+    if (norm > kZeroNorm) {
+      const double inverse = 1.0 / norm;
+      norms[i] = norm;
+      w_.inverse_norms(i) = inverse;
+      w_.distance_bound(i) = -tol * std::max(1.0, std::abs(b[i])) * inverse;
+    } else {
+      NormOfRow(i, norm);
+    }
+  }
 }
 
 template <class Factors>
