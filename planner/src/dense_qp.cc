@@ -78,9 +78,12 @@ void Givens(double a, double b, double* c, double* s, double* h) {
 // caller that fills `in_matrix` keeps stale structure, which is then ignored).
 // distance[r] = b'_r - a'_r . y for `count` unit rows (the 4 columns of
 // `unit`, `stride` apart: a'_x, a'_y, a'_z, b'), and their least value: the
-// innermost loop of the solver, two rows per SSE2 instruction.
-double UnitRowDistances(const double* __restrict unit, int stride, int count, double y0, double y1,
-                        double y2, double* __restrict distance) {
+// innermost loop of the solver, two rows per SSE2 instruction, inlined into
+// the block scan (a call per block cost more than the pair loop saved).
+inline __attribute__((always_inline)) double UnitRowDistances(const double* __restrict unit,
+                                                              int stride, int count, double y0,
+                                                              double y1, double y2,
+                                                              double* __restrict distance) {
   const double* ux = unit;
   const double* uy = unit + stride;
   const double* uz = unit + 2 * stride;
@@ -174,13 +177,18 @@ class ActiveSetSolver {
   auto Normal(int k) const { return w_.normals.col(k); }
   // Forms the normal of constraint k and its norm, once per solve.
   void EnsureNormal(int k);
-  // The norms of every structured row's normal, without forming them.
-  void StructuredNorms();
-  // The norms of every dense inequality row.
-  void DenseNorms();
-  // 1 / |a|, the distance bounds and (structured) the unit rows, once norms
-  // are known.
-  void PrepareRowScales();
+  // The norms of every row, and from them 1 / |a|, the distance bounds and
+  // (structured) the unit rows; the first row 0^T x <= b with b < 0 in
+  // impossible_row_.
+  void StructuredRowScales();
+  void DenseRowScales();
+  // The Gram matrix M_b M_b^T of every block, 6 entries each, into `gram`.
+  void BlockGrams(double* gram) const;
+  // Row i's norm and inverse norm (0 for a zero row, which may be
+  // impossible_row_); dense rows: also its distance bound.
+  void NormOfRow(int i, double norm);
+  // The distance bounds and unit rows of all structured rows.
+  void UnitRows();
 
   // The bound of inequality row i while it is inactive (RowScales()).
   double DistanceBound(int i) const {
@@ -251,7 +259,9 @@ class ActiveSetSolver {
   const bool structured_;
   const int m_;
   int iterations_ = 0;
-  int impossible_row_ = -1;  // a row 0^T x <= b with b < 0 (PrepareRowScales), or -1
+  int active_equalities_ = 0;  // the leading entries of w_.active
+  int pending_count_ = 0;      // the leading entries of w_.pending in use
+  int impossible_row_ = -1;    // a row 0^T x <= b with b < 0 (the row scales), or -1
 };
 
 // Plain loops over contiguous columns: for the few variables of these QPs a
@@ -381,11 +391,11 @@ void ActiveSetSolver<Factors>::EnsureNormal(int k) {
   double* normal = w_.normals.col(k).data();
   if (k < p_) {
     for (int j = 0; j < N(); ++j) normal[j] = qp_.eq_matrix(k, j);
-  } else if (structured_) {  // its norm is already known (StructuredNorms)
+  } else if (structured_) {  // its norm is already known (StructuredRowScales)
     const int row = k - p_;
-    const auto& first = qp_.in_block_first;
-    const int block =
-        static_cast<int>(std::upper_bound(first.begin(), first.end(), row) - first.begin()) - 1;
+    const int* first = qp_.in_block_first.data();
+    int block = 0;  // a few blocks: a linear search
+    while (first[block + 1] <= row) ++block;
     const double a0 = qp_.in_directions(row, 0), a1 = qp_.in_directions(row, 1),
                  a2 = qp_.in_directions(row, 2);
     for (int j = 0; j < N(); ++j) {
@@ -394,7 +404,7 @@ void ActiveSetSolver<Factors>::EnsureNormal(int k) {
     }
     w_.has_normal[k] = 1;
     return;
-  } else {  // its norm is already known (DenseNorms)
+  } else {  // its norm is already known (DenseRowScales)
     for (int j = 0; j < N(); ++j) normal[j] = qp_.in_matrix(k - p_, j);
     w_.has_normal[k] = 1;
     return;
@@ -404,17 +414,29 @@ void ActiveSetSolver<Factors>::EnsureNormal(int k) {
 }
 
 template <class Factors>
-void ActiveSetSolver<Factors>::StructuredNorms() {
-  // |M_b^T a|^2 = a^T (M_b M_b^T) a: one 3x3 Gram matrix per block.
-  const int blocks = static_cast<int>(qp_.in_block_maps.rows()) / 3;
-  w_.block_values.resize(6 * blocks);
-  double* gram = w_.block_values.data();
-  std::fill(gram, gram + 6 * blocks, 0.0);
-  for (int j = 0; j < N(); ++j) {
-    const double* column = qp_.in_block_maps.col(j).data();
-    for (int b = 0; b < blocks; ++b) {
-      const double* c = column + 3 * b;
-      double* g = gram + 6 * b;
+void ActiveSetSolver<Factors>::BlockGrams(double* gram) const {
+  // Entries 0..5 of block b: (M M^T)_00, _01, _02, _11, _12, _22, each
+  // summed over the variables in order; two entries per SSE2 instruction.
+  const int values = static_cast<int>(qp_.in_block_maps.rows());
+  for (int b = 0; b < values / 3; ++b) {
+    const double* map = qp_.in_block_maps.data() + 3 * b;
+    double* g = gram + 6 * b;
+#ifdef __SSE2__
+    __m128d g01 = _mm_setzero_pd(), g23 = _mm_setzero_pd(), g45 = _mm_setzero_pd();
+    for (int j = 0; j < N(); ++j) {
+      const double* c = map + j * values;
+      const __m128d c01 = _mm_loadu_pd(c), c12 = _mm_loadu_pd(c + 1);
+      g01 = _mm_add_pd(g01, _mm_mul_pd(_mm_set1_pd(c[0]), c01));
+      g23 = _mm_add_pd(g23, _mm_mul_pd(c01, _mm_shuffle_pd(c12, c12, 1)));
+      g45 = _mm_add_pd(g45, _mm_mul_pd(_mm_set1_pd(c[2]), c12));
+    }
+    _mm_storeu_pd(g, g01);
+    _mm_storeu_pd(g + 2, g23);
+    _mm_storeu_pd(g + 4, g45);
+#else
+    std::fill(g, g + 6, 0.0);
+    for (int j = 0; j < N(); ++j) {
+      const double* c = map + j * values;
       g[0] += c[0] * c[0];
       g[1] += c[0] * c[1];
       g[2] += c[0] * c[2];
@@ -422,63 +444,145 @@ void ActiveSetSolver<Factors>::StructuredNorms() {
       g[4] += c[1] * c[2];
       g[5] += c[2] * c[2];
     }
+#endif
   }
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::NormOfRow(int i, double norm) {
+  // A zero row (0 <= b) gets inverse norm 0: distance 0 and bound -0, so it
+  // is never selected; Run reports it first when b < 0.
+  const double b = qp_.in_rhs(i), tol = settings_.tolerance;
+  const double size = std::max(1.0, std::abs(b));
+  w_.normal_norms(p_ + i) = norm;
+  if (norm > kZeroNorm) {
+    w_.inverse_norms(i) = 1.0 / norm;
+  } else {
+    w_.inverse_norms(i) = 0.0;
+    if (impossible_row_ < 0 && b < -tol * size) impossible_row_ = p_ + i;
+  }
+  if (!structured_) w_.distance_bound(i) = -tol * size * w_.inverse_norms(i);
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::StructuredRowScales() {
+  // |M_b^T a|^2 = a^T (M_b M_b^T) a from one 3x3 Gram matrix per block; then
+  // 1 / |a|, the distance bound and the unit row (a / |a|, b / |a|), two
+  // rows per SSE2 instruction, in one pass.
+  const int blocks = static_cast<int>(qp_.in_block_maps.rows()) / 3;
+  if (w_.block_values.size() < 6 * blocks) w_.block_values.resize(6 * blocks);
+  const double* g_all = w_.block_values.data();
+  BlockGrams(w_.block_values.data());
   const double* __restrict ax = qp_.in_directions.col(0).data();
   const double* __restrict ay = qp_.in_directions.col(1).data();
   const double* __restrict az = qp_.in_directions.col(2).data();
   double* __restrict norms = w_.normal_norms.data() + p_;
+  double* __restrict inverses = w_.inverse_norms.data();
+  impossible_row_ = -1;
+  // Two passes, so that each keeps its values in registers: the norms per
+  // block (its Gram matrix), then the scales of all rows from 1 / |a|.
   for (int b = 0; b < blocks; ++b) {
-    const double* g = gram + 6 * b;
+    const double* g = g_all + 6 * b;
     const double g0 = g[0], g1 = 2.0 * g[1], g2 = 2.0 * g[2], g3 = g[3], g4 = 2.0 * g[4], g5 = g[5];
     const int end = qp_.in_block_first[b + 1];
-    for (int i = qp_.in_block_first[b]; i < end; ++i) {  // squared norms: vectorised
-      norms[i] = ax[i] * (g0 * ax[i] + g1 * ay[i] + g2 * az[i]) +
-                 ay[i] * (g3 * ay[i] + g4 * az[i]) + g5 * az[i] * az[i];
+    int i = qp_.in_block_first[b];
+#ifdef __SSE2__
+    const __m128d G0 = _mm_set1_pd(g0), G1 = _mm_set1_pd(g1), G2 = _mm_set1_pd(g2);
+    const __m128d G3 = _mm_set1_pd(g3), G4 = _mm_set1_pd(g4), G5 = _mm_set1_pd(g5);
+    const __m128d one = _mm_set1_pd(1.0), tiny = _mm_set1_pd(kZeroNorm);
+    for (; i + 1 < end; i += 2) {
+      const __m128d X = _mm_loadu_pd(ax + i), Y = _mm_loadu_pd(ay + i), Z = _mm_loadu_pd(az + i);
+      const __m128d xpart = _mm_mul_pd(
+          X, _mm_add_pd(_mm_add_pd(_mm_mul_pd(G0, X), _mm_mul_pd(G1, Y)), _mm_mul_pd(G2, Z)));
+      const __m128d ypart = _mm_mul_pd(Y, _mm_add_pd(_mm_mul_pd(G3, Y), _mm_mul_pd(G4, Z)));
+      const __m128d squared =
+          _mm_add_pd(_mm_add_pd(xpart, ypart), _mm_mul_pd(_mm_mul_pd(G5, Z), Z));
+      const __m128d norm = _mm_sqrt_pd(_mm_max_pd(squared, _mm_setzero_pd()));
+      const __m128d nonzero = _mm_cmpgt_pd(norm, tiny);
+      _mm_storeu_pd(norms + i, norm);
+      _mm_storeu_pd(inverses + i, _mm_and_pd(nonzero, _mm_div_pd(one, norm)));
+      if (_mm_movemask_pd(nonzero) != 3 && impossible_row_ < 0) {  // a zero row
+        for (int row = i; row < i + 2; ++row) {
+          const double b = qp_.in_rhs(row);
+          if (!(norms[row] > kZeroNorm) && b < -settings_.tolerance * std::max(1.0, std::abs(b))) {
+            impossible_row_ = p_ + row;
+            break;
+          }
+        }
+      }
+    }
+#endif
+    for (; i < end; ++i) {
+      const double squared = ax[i] * (g0 * ax[i] + g1 * ay[i] + g2 * az[i]) +
+                             ay[i] * (g3 * ay[i] + g4 * az[i]) + g5 * az[i] * az[i];
+      NormOfRow(i, std::sqrt(std::max(0.0, squared)));
     }
   }
-  for (int i = 0; i < m_; ++i) norms[i] = std::sqrt(std::max(0.0, norms[i]));
+  UnitRows();
 }
 
 template <class Factors>
-void ActiveSetSolver<Factors>::DenseNorms() {
+void ActiveSetSolver<Factors>::UnitRows() {
+  // The distance bounds -tolerance max(1, |b|) / |a| and the unit rows
+  // (a / |a|, b / |a|) of all rows, two per SSE2 instruction; zero rows
+  // (inverse norm 0) get bound -0 and zeros.
+  const double* __restrict ax = qp_.in_directions.col(0).data();
+  const double* __restrict ay = qp_.in_directions.col(1).data();
+  const double* __restrict az = qp_.in_directions.col(2).data();
+  const double* __restrict rhs = qp_.in_rhs.data();
+  const double* __restrict inverses = w_.inverse_norms.data();
+  double* __restrict bounds = w_.distance_bound.data();
+  const int stride = static_cast<int>(w_.unit_rows.rows());
+  double* __restrict ux = w_.unit_rows.data();
+  double* __restrict uy = ux + stride;
+  double* __restrict uz = uy + stride;
+  double* __restrict ub = uz + stride;
+  const double minus_tol = -settings_.tolerance;
+  int i = 0;
+#ifdef __SSE2__
+  const __m128d one = _mm_set1_pd(1.0), sign = _mm_set1_pd(-0.0), vtol = _mm_set1_pd(minus_tol);
+  for (; i + 1 < m_; i += 2) {
+    const __m128d inverse = _mm_loadu_pd(inverses + i), B = _mm_loadu_pd(rhs + i);
+    const __m128d size = _mm_max_pd(_mm_andnot_pd(sign, B), one);
+    _mm_storeu_pd(bounds + i, _mm_mul_pd(_mm_mul_pd(vtol, size), inverse));
+    _mm_storeu_pd(ux + i, _mm_mul_pd(_mm_loadu_pd(ax + i), inverse));
+    _mm_storeu_pd(uy + i, _mm_mul_pd(_mm_loadu_pd(ay + i), inverse));
+    _mm_storeu_pd(uz + i, _mm_mul_pd(_mm_loadu_pd(az + i), inverse));
+    _mm_storeu_pd(ub + i, _mm_mul_pd(B, inverse));
+  }
+#endif
+  for (; i < m_; ++i) {
+    const double inverse = inverses[i];
+    bounds[i] = minus_tol * std::max(1.0, std::abs(rhs[i])) * inverse;
+    ux[i] = ax[i] * inverse;
+    uy[i] = ay[i] * inverse;
+    uz[i] = az[i] * inverse;
+    ub[i] = rhs[i] * inverse;
+  }
+}
+
+template <class Factors>
+void ActiveSetSolver<Factors>::DenseRowScales() {
   double* __restrict norms = w_.normal_norms.data() + p_;
   std::fill(norms, norms + m_, 0.0);
   for (int j = 0; j < N(); ++j) {
     const double* __restrict column = qp_.in_matrix.col(j).data();
     for (int i = 0; i < m_; ++i) norms[i] += column[i] * column[i];
   }
-  for (int i = 0; i < m_; ++i) norms[i] = std::sqrt(norms[i]);
-}
-
-template <class Factors>
-void ActiveSetSolver<Factors>::PrepareRowScales() {
-  // A zero row (0 <= b) gets inverse norm 0: distance 0 and bound -0, so it
-  // is never selected; Run reports it first when b < 0.
-  const double* norms = w_.normal_norms.data() + p_;
+  impossible_row_ = -1;
   const double* b = qp_.in_rhs.data();
   const double tol = settings_.tolerance;
-  impossible_row_ = -1;
   for (int i = 0; i < m_; ++i) {
-    const double size = std::max(1.0, std::abs(b[i]));
-    if (norms[i] > kZeroNorm) {
-      const double inverse = 1.0 / norms[i];
+    const double norm = std::sqrt(norms[i]);
+    if (norm > kZeroNorm) {
+      const double inverse = 1.0 / norm;
+      norms[i] = norm;
       w_.inverse_norms(i) = inverse;
-      w_.distance_bound(i) = -tol * size * inverse;
+      w_.distance_bound(i) = -tol * std::max(1.0, std::abs(b[i])) * inverse;
     } else {
-      w_.inverse_norms(i) = 0.0;
-      w_.distance_bound(i) = -0.0;
-      if (impossible_row_ < 0 && b[i] < -tol * size) impossible_row_ = p_ + i;
+      NormOfRow(i, norm);
     }
   }
-  if (!structured_) return;
-  // The structured scan's rows scaled to unit normals: a distance is then
-  // b' - a' . y, 3 products per row and no division.
-  w_.unit_rows.resize(m_, 4);
-  const auto inverse = w_.inverse_norms.array();
-  for (int c = 0; c < 3; ++c) {
-    w_.unit_rows.col(c).array() = qp_.in_directions.col(c).array() * inverse;
-  }
-  w_.unit_rows.col(3).array() = qp_.in_rhs.array() * inverse;
 }
 
 template <class Factors>
@@ -560,8 +664,8 @@ void ActiveSetSolver<Factors>::ScanBlocks(double threshold) {
     }
 #endif
     const int first = qp_.in_block_first[block], end = qp_.in_block_first[block + 1];
-    const double least = UnitRowDistances(unit.data() + first, m_, end - first, y0, y1, y2,
-                                          w_.distance.data() + first);
+    const double least = UnitRowDistances(unit.data() + first, static_cast<int>(unit.rows()),
+                                          end - first, y0, y1, y2, w_.distance.data() + first);
     double block_distance = threshold;
     int block_row = -1;
     SelectInRange(first, end, least, &block_distance, &block_row);
@@ -572,11 +676,10 @@ void ActiveSetSolver<Factors>::ScanBlocks(double threshold) {
 template <class Factors>
 void ActiveSetSolver<Factors>::Push(int row) {
   // Kept most violated last (popped first): a few entries, insertion sort.
-  std::vector<int>& pending = w_.pending;
+  int* pending = w_.pending.data();  // sized to the blocks (Initialize)
   const double* distance = w_.distance.data();
-  pending.push_back(row);
-  for (int i = static_cast<int>(pending.size()) - 1;
-       i > 0 && distance[pending[i - 1]] < distance[pending[i]]; --i) {
+  pending[pending_count_] = row;
+  for (int i = pending_count_++; i > 0 && distance[pending[i - 1]] < distance[pending[i]]; --i) {
     std::swap(pending[i - 1], pending[i]);
   }
 }
@@ -605,9 +708,8 @@ int ActiveSetSolver<Factors>::MostViolated() {
     // values): one scan then serves several steps. Taking every row still
     // violated costs more steps (drops) than the scans it saves at 3-4
     // contacts; only the first scan's rows, more still.
-    while (!w_.pending.empty()) {
-      const int row = w_.pending.back();
-      w_.pending.pop_back();
+    while (pending_count_ > 0) {
+      const int row = w_.pending[--pending_count_];
       const int k = p_ + row;
       if (w_.is_active[k]) continue;
       EnsureNormal(k);
@@ -618,9 +720,8 @@ int ActiveSetSolver<Factors>::MostViolated() {
       }
     }
     ScanBlocks(worst_distance);
-    if (w_.pending.empty()) return -1;
-    worst = w_.pending.back();
-    w_.pending.pop_back();
+    if (pending_count_ == 0) return -1;
+    worst = w_.pending[--pending_count_];
   } else {
     ScanRows();
     const double least =
@@ -662,21 +763,26 @@ bool ActiveSetSolver<Factors>::Initialize() {
   w_.has_normal.assign(p_ + m_, 0);
   w_.active.clear();
   w_.active.reserve(N() + 1);
-  w_.pending.clear();
-  w_.normals.resize(N(), p_ + m_);
-  w_.rhs.resize(p_ + m_);
-  w_.rhs.head(p_) = qp_.eq_rhs;
-  w_.rhs.tail(m_) = qp_.in_rhs;
-  w_.normal_norms.resize(p_ + m_);
-  w_.distance.resize(m_);
-  w_.distance_bound.resize(m_);
-  w_.inverse_norms.resize(m_);
-  if (structured_) {
-    StructuredNorms();
-  } else {
-    DenseNorms();
+  pending_count_ = 0;
+  if (structured_ && w_.pending.size() < qp_.in_block_first.size()) {
+    w_.pending.resize(qp_.in_block_first.size());  // at most one row per block
   }
-  PrepareRowScales();
+  // Buffers only grow, so grasps of varying row counts reuse them.
+  if (w_.normals.rows() != N() || w_.normals.cols() < p_ + m_) w_.normals.resize(N(), p_ + m_);
+  if (structured_ && w_.unit_rows.rows() < m_) w_.unit_rows.resize(m_, 4);
+  for (VectorXd* v : {&w_.rhs, &w_.normal_norms}) {
+    if (v->size() < p_ + m_) v->resize(p_ + m_);
+  }
+  for (VectorXd* v : {&w_.distance, &w_.distance_bound, &w_.inverse_norms}) {
+    if (v->size() < m_) v->resize(m_);
+  }
+  w_.rhs.head(p_) = qp_.eq_rhs;
+  w_.rhs.segment(p_, m_) = qp_.in_rhs;
+  if (structured_) {
+    StructuredRowScales();
+  } else {
+    DenseRowScales();
+  }
   f_.x.resize(N());
   f_.d.resize(N());
   f_.z.resize(N());
@@ -720,6 +826,7 @@ int ActiveSetSolver<Factors>::AddEqualities() {
     if (q > 0) f_.u.head(q) -= t * f_.r.head(q);
     AddToFactorization();
     Activate(k, t);
+    ++active_equalities_;
   }
   return -1;
 }
@@ -729,8 +836,9 @@ int ActiveSetSolver<Factors>::BlockingActive(double* step) const {
   // Along the step x -= t z the multipliers move as u -= t r.
   *step = kInf;
   int drop = -1;
-  for (int i = 0; i < Active(); ++i) {
-    if (w_.active[i] < p_ || f_.r(i) <= settings_.tolerance) continue;
+  // The active equalities come first (never dropped) and are skipped.
+  for (int i = active_equalities_; i < Active(); ++i) {
+    if (f_.r(i) <= settings_.tolerance) continue;
     const double ratio = f_.u(i) / f_.r(i);
     if (ratio < *step) {
       *step = ratio;

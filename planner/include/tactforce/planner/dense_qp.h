@@ -70,7 +70,9 @@ struct DenseQpResult {
 
 // Buffers of the active-set method (n variables, p equalities, m
 // inequalities), reused from solve to solve. One per thread; contents are
-// scratch between solves.
+// scratch between solves. The sizes below are the parts a solve uses: the
+// buffers only grow, so problems whose row count varies below the largest
+// seen reuse them without reallocation.
 struct DenseQpWorkspace {
   Eigen::MatrixXd normals;         // n x (p + m): constraint normals as columns, formed on demand
   Eigen::VectorXd rhs;             // p + m
@@ -86,7 +88,7 @@ struct DenseQpWorkspace {
   Eigen::VectorXd hx;               // n: H x, for the objective
   std::vector<int> active;          // stacked indices, factorisation order
   std::vector<char> is_active;      // p + m
-  std::vector<int> pending;         // violated rows of the last scan not yet tried
+  std::vector<int> pending;         // one per block: violated rows of the last scan not yet tried
   Eigen::LLT<Eigen::MatrixXd> llt;  // H = L L^T (general Hessians only)
 };
 
