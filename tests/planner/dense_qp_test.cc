@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include "support/test_seed.h"
+
 namespace tactforce::planner {
 namespace {
 
@@ -88,7 +90,7 @@ TEST(DenseQp, RandomProblemsSatisfyKkt) {
     const int p = trial % 3 == 0 ? std::min(n - 1, trial % 4) : 0;
     const DenseQp qp = RandomFeasibleQp(rng, n, m, p);
     const DenseQpResult r = SolveDenseQp(qp);
-    SCOPED_TRACE(testing::Message() << "trial " << trial << " n " << n << " m " << m);
+    SCOPED_TRACE(::testing::Message() << "trial " << trial << " n " << n << " m " << m);
     ExpectKkt(qp, r, 1e-8);
   }
 }
@@ -111,6 +113,40 @@ TEST(DenseQp, WarmStartGivesTheSameAnswerInFewerIterations) {
   EXPECT_LE(warm_iterations, cold_iterations);
 }
 
+// An identity-Hessian problem with `blocks` random 3 x n block maps, block
+// sizes drawn by `block_size()` and random directions (no right-hand sides).
+template <class BlockSize>
+DenseQp RandomStructuredQp(std::mt19937& rng, int n, int blocks, BlockSize block_size) {
+  std::normal_distribution<double> normal;
+  DenseQp qp;
+  qp.identity_hessian = true;
+  qp.gradient = VectorXd::NullaryExpr(n, [&] { return 3.0 * normal(rng); });
+  qp.eq_matrix.resize(0, n);
+  qp.in_block_maps = MatrixXd::NullaryExpr(3 * blocks, n, [&] { return normal(rng); });
+  qp.in_block_first = {0};
+  for (int b = 0; b < blocks; ++b) {
+    qp.in_block_first.push_back(qp.in_block_first.back() + block_size());
+  }
+  const int m = qp.in_block_first.back();
+  qp.in_directions = Eigen::MatrixX3d::NullaryExpr(m, 3, [&] { return normal(rng); });
+  return qp;
+}
+
+// The same rows as a dense matrix, M_b^T a_r each.
+DenseQp DenseRowsOf(const DenseQp& structured) {
+  DenseQp dense = structured;
+  const int blocks = static_cast<int>(structured.in_block_first.size()) - 1;
+  dense.in_matrix.resize(structured.in_block_first.back(), structured.gradient.size());
+  for (int b = 0; b < blocks; ++b) {
+    for (int r = structured.in_block_first[b]; r < structured.in_block_first[b + 1]; ++r) {
+      dense.in_matrix.row(r) =
+          structured.in_directions.row(r) * structured.in_block_maps.middleRows(3 * b, 3);
+    }
+  }
+  dense.in_directions.resize(0, 3);
+  return dense;
+}
+
 // The row structure (a_r applied to M_b x) against the same rows as a dense
 // matrix: identical statuses, answers to round-off, the same blocking row.
 // Sizes, blocks and warm starts are drawn from the seed; some problems get an
@@ -123,26 +159,10 @@ TEST(DenseQp, RowStructureAnswersAsTheDenseRows) {
   for (int trial = 0; trial < 300; ++trial) {
     const int n = 1 + trial % 14;  // covers the fixed sizes 1..12 and beyond
     const int blocks = 1 + static_cast<int>(uniform(rng) * 6);
-    DenseQp structured;
-    structured.identity_hessian = true;
-    structured.gradient = VectorXd::NullaryExpr(n, [&] { return 3.0 * normal(rng); });
-    structured.eq_matrix.resize(0, n);
-    structured.in_block_maps = MatrixXd::NullaryExpr(3 * blocks, n, [&] { return normal(rng); });
-    structured.in_block_first = {0};
-    for (int b = 0; b < blocks; ++b) {
-      structured.in_block_first.push_back(structured.in_block_first.back() + 1 +
-                                          static_cast<int>(uniform(rng) * 8));
-    }
+    DenseQp structured =
+        RandomStructuredQp(rng, n, blocks, [&] { return 1 + static_cast<int>(uniform(rng) * 8); });
     const int m = structured.in_block_first.back();
-    structured.in_directions = Eigen::MatrixX3d::NullaryExpr(m, 3, [&] { return normal(rng); });
-    DenseQp dense = structured;
-    dense.in_matrix.resize(m, n);
-    for (int b = 0; b < blocks; ++b) {
-      for (int r = structured.in_block_first[b]; r < structured.in_block_first[b + 1]; ++r) {
-        dense.in_matrix.row(r) =
-            structured.in_directions.row(r) * structured.in_block_maps.middleRows(3 * b, 3);
-      }
-    }
+    DenseQp dense = DenseRowsOf(structured);
     const VectorXd feasible = VectorXd::NullaryExpr(n, [&] { return normal(rng); });
     structured.in_rhs = dense.in_matrix * feasible;
     for (int i = 0; i < m; ++i) structured.in_rhs(i) += uniform(rng);
@@ -155,7 +175,6 @@ TEST(DenseQp, RowStructureAnswersAsTheDenseRows) {
       }
     }
     dense.in_rhs = structured.in_rhs;
-    dense.in_directions.resize(0, 3);
     const DenseQpResult a = SolveDenseQp(structured);
     const DenseQpResult b = SolveDenseQp(dense);
     ASSERT_EQ(a.status, b.status) << trial;
@@ -176,6 +195,47 @@ TEST(DenseQp, RowStructureAnswersAsTheDenseRows) {
     EXPECT_LE((warm.x - a.x).cwiseAbs().maxCoeff(), 1e-9 * std::max(1.0, a.x.norm())) << trial;
   }
   EXPECT_GT(infeasible, 0);
+}
+
+// Structured rows whose normal M_b^T a_r is exactly zero (a_r along a zero
+// row of M_b), at drawn positions among ordinary rows of drawn blocks, against
+// the same rows as a dense matrix: 0^T x <= b with b >= 0 changes nothing,
+// with b < 0 both solves are infeasible and name the first such row.
+TEST(DenseQp, StructuredZeroRowsAreIgnoredOrNamed) {
+  std::mt19937 rng(static_cast<unsigned>(tactforce::testing::GtestSeed()));
+  std::normal_distribution<double> normal;
+  std::uniform_int_distribution<int> count(1, 9);
+  for (int trial = 0; trial < 100; ++trial) {
+    const int n = 3 + trial % 10, blocks = 1 + trial % 4;
+    DenseQp qp = RandomStructuredQp(rng, n, blocks, [&] { return count(rng); });
+    for (int b = 0; b < blocks; ++b) {
+      qp.in_block_maps.row(3 * b + 2).setZero();  // (0, 0, c) has a zero normal
+    }
+    const int m = qp.in_block_first.back();
+    qp.in_rhs = VectorXd::NullaryExpr(m, [&] { return 0.5 + std::abs(normal(rng)); });
+    std::vector<int> zero_rows;
+    for (int r = 0; r < m; ++r) {
+      if (count(rng) > 3) continue;
+      qp.in_directions.row(r) << 0.0, 0.0, normal(rng);
+      zero_rows.push_back(r);
+    }
+    DenseQp dense = DenseRowsOf(qp);
+    const DenseQpResult structured = SolveDenseQp(qp);
+    const DenseQpResult reference = SolveDenseQp(dense);
+    ASSERT_EQ(structured.status, DenseQpStatus::kOptimal) << trial;  // x = 0 is feasible
+    ASSERT_EQ(reference.status, DenseQpStatus::kOptimal) << trial;
+    EXPECT_LE((structured.x - reference.x).cwiseAbs().maxCoeff(),
+              1e-9 * std::max(1.0, reference.x.norm()))
+        << trial;
+    if (zero_rows.empty()) continue;
+    for (DenseQp* problem : {&qp, &dense}) {
+      problem->in_rhs(zero_rows.back()) = -1.0;
+      if (zero_rows.size() > 1) problem->in_rhs(zero_rows.front()) = -2.0;
+      const DenseQpResult named = SolveDenseQp(*problem);
+      EXPECT_EQ(named.status, DenseQpStatus::kInfeasible) << trial;
+      EXPECT_EQ(named.blocking_row, zero_rows.front()) << trial;
+    }
+  }
 }
 
 TEST(DenseQp, DetectsInfeasibilityAndNamesTheRow) {
