@@ -666,15 +666,15 @@ void RowsOnPlane(const ConstraintRows& rows, const ForceEquilibrium& eq, MatrixX
   plane_matrix->resize(m, eq.null_basis.cols());
   *plane_rhs = rows.rhs;
   // A contact's rows are consecutive: one small product per contact.
-  for (int first = 0; first < m;) {
-    const int i = rows.info[first].contact;
-    int count = 1;
-    while (first + count < m && rows.info[first + count].contact == i) ++count;
+  const int n = static_cast<int>(rows.contact_first.size()) - 1;
+  for (int i = 0; i < n; ++i) {
+    const int first = rows.contact_first[i];
+    const int count = rows.contact_first[i + 1] - first;
+    if (count == 0) continue;
     const auto a = rows.directions.block(first, 0, count, 3);
     plane_matrix->middleRows(first, count).noalias() =
         a.lazyProduct(eq.null_basis.middleRows<3>(3 * i));
     plane_rhs->segment(first, count).noalias() -= a * eq.particular.segment<3>(3 * i);
-    first += count;
   }
 }
 

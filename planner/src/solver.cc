@@ -21,6 +21,7 @@ namespace {
 // Each row touches one contact's three coordinates.
 double MinMargin(const PreparedProblem& prepared, const PlanOptions& options,
                  const std::vector<Vec3>& forces) {
+  static_assert(sizeof(Vec3) == 3 * sizeof(double), "the forces are read as 3n stacked doubles");
   double margin = MinRowSlack(prepared.rows, forces.front().data());
   if (options.cone == ConeModel::kExact) {
     for (int i = 0; i < prepared.num_contacts(); ++i) {
