@@ -26,7 +26,7 @@ namespace {
 // runs on the pool through api::DispatchOnPool.
 class FitInertiaReactor final : public AdmittedStream<grpc::ServerReadReactor<grpc::ByteBuffer>> {
  public:
-  FitInertiaReactor(grpc::CallbackServerContext* context, grpc::ByteBuffer* response,
+  FitInertiaReactor(grpc::CallbackServerContext* context, v1::FitInertiaResponse* response,
                     WorkerPool* pool, StreamRegistry* streams, const api::CallLimits& limits,
                     int64_t max_samples)
       : AdmittedStream(context, streams, "FitInertia"),
@@ -39,11 +39,23 @@ class FitInertiaReactor final : public AdmittedStream<grpc::ServerReadReactor<gr
     Start();
   }
 
+  // A message: convert it and read the next. The half-close (or a broken
+  // call: the guard sees it): fit on the pool; the fit's end ends the call.
   void OnReadDone(bool ok) override {
     if (!ReadArrived()) return;
-    if (!ok) return StartFit();  // half-close (or a broken call: the guard sees it)
-    if (absl::Status s = AddMessage(); !s.ok()) return End(s);
-    ReadNext();
+    if (ok) {
+      if (absl::Status s = AddMessage(); !s.ok()) return End(s);
+      return ReadNext();
+    }
+    if (!TakeOver()) return;
+    api::DispatchOnPool<api::InertiaStream, v1::FitInertiaResponse>(
+        stream_, response_, Log(), pool_, guard(), limits_,
+        [](const api::InertiaStream& stream, const api::CallLimits& limits,
+           const api::CallState& state) {
+          return api::FitInertiaSamples(stream.samples(), stream.options(), limits, {}, nullptr,
+                                        state);
+        },
+        [this](const absl::Status& status) { FinishTakenOver(status); });
   }
 
  private:
@@ -64,20 +76,6 @@ class FitInertiaReactor final : public AdmittedStream<grpc::ServerReadReactor<gr
     return added;
   }
 
-  void StartFit() {
-    if (!TakeOver()) return;
-    api::DispatchOnPool<api::InertiaStream, v1::FitInertiaResponse>(
-        stream_, &fit_, Log(), pool_, guard(), limits_,
-        [](const api::InertiaStream& stream, const api::CallLimits& limits,
-           const api::CallState& state) {
-          return api::FitInertiaSamples(stream.samples(), stream.options(), limits, {}, nullptr,
-                                        state);
-        },
-        [this](const absl::Status& status) {
-          FinishTakenOver(status.ok() ? SerializeMessage(fit_, response_) : status);
-        });
-  }
-
   void OnEnd(const absl::Status& status) override { Log().Emit(status); }
   void ReleaseBudgets() override {
     streams()->ReleaseSamples(reserved_samples_.exchange(0));
@@ -92,21 +90,20 @@ class FitInertiaReactor final : public AdmittedStream<grpc::ServerReadReactor<gr
     return log;
   }
 
-  grpc::ByteBuffer* response_;
+  v1::FitInertiaResponse* response_;  // gRPC's; serialized by gRPC at Finish
   WorkerPool* pool_;
   const api::CallLimits limits_;
   std::atomic<int64_t> reserved_samples_{0};  // taken from the registry's budgets
   std::atomic<int64_t> reserved_bytes_{0};
   api::InertiaStream stream_;
   v1::FitInertiaRequest message_;
-  v1::FitInertiaResponse fit_;
   api::CallLog log_;  // clock and peer from the start of the call
 };
 
 }  // namespace
 
 grpc::ServerReadReactor<grpc::ByteBuffer>* EstimatorService::FitInertia(
-    grpc::CallbackServerContext* context, grpc::ByteBuffer* response) {
+    grpc::CallbackServerContext* context, v1::FitInertiaResponse* response) {
   return new FitInertiaReactor(context, response, pool_, streams_, limits_, max_inertia_samples_);
 }
 

@@ -12,9 +12,10 @@
 //   * a reference count: gRPC holds one until OnDone, the reaper one while
 //     it looks at the stream, pooled work one while it runs (reactors are
 //     made with `new` and delete themselves at the last Unref).
-// Messages are read and written raw (grpc::ByteBuffer, ParseMessage and
-// SerializeMessage below): gRPC's typed reader reports a message it cannot
-// parse exactly like the end of the stream.
+// Messages are read raw (grpc::ByteBuffer, ParseMessage below): gRPC's
+// typed reader reports a message it cannot parse exactly like the end of
+// the stream. A bidi stream writes raw too (SerializeMessage); a read
+// reactor's one response is typed (gRPC serializes it at Finish).
 //
 // `Reactor` is grpc::ServerBidiReactor<grpc::ByteBuffer, grpc::ByteBuffer>
 // or grpc::ServerReadReactor<grpc::ByteBuffer>. A derived reactor calls
@@ -47,7 +48,7 @@ absl::Status ParseMessage(grpc::ByteBuffer* buffer, Message* message) {
   return absl::InvalidArgumentError(
       absl::StrCat("cannot be parsed as ", Message::descriptor()->full_name()));
 }
-// A message into a raw buffer (a response, or a bidi stream's next write).
+// A message into a raw buffer (a bidi stream's next write).
 template <class Message>
 absl::Status SerializeMessage(const Message& message, grpc::ByteBuffer* buffer) {
   buffer->Clear();  // gRPC serializes only into an empty buffer

@@ -11,6 +11,9 @@
 #include <string>
 #include <utility>
 
+#include <google/protobuf/descriptor.h>
+#include <grpcpp/grpcpp.h>
+
 #include "tactforce/api/inertia.h"
 #include "tactforce/api/services.h"
 #include "tactforce/server/server_host.h"
@@ -21,11 +24,47 @@
 
 namespace tactforce::server {
 
-// FitInertia is registered raw (its reactor parses each message itself:
-// see estimator_service.cc); the unary RPCs are typed.
+// FitInertia with raw reads and a typed response. Its reads must be raw
+// (gRPC's typed reader reports a message it cannot parse like the end of the
+// stream: admitted_stream.h), its answer need not be: gRPC serializes the
+// FitInertiaResponse the reactor fills. protoc's WithRawCallbackMethod_
+// mixin makes both sides raw, so this one registers the method as protoc's
+// mixins do (Service::MarkMethodRawCallback with gRPC's callback handler,
+// Debian 12's gRPC 1.51), at the method's index in the service descriptor.
+template <class Base>
+class WithRawReadsCallbackMethod_FitInertia : public Base {
+ public:
+  WithRawReadsCallbackMethod_FitInertia() {
+    this->MarkMethodRawCallback(
+        MethodIndex(),
+        new grpc::internal::CallbackClientStreamingHandler<grpc::ByteBuffer,
+                                                           v1::FitInertiaResponse>(
+            [this](grpc::CallbackServerContext* context, v1::FitInertiaResponse* response) {
+              return FitInertia(context, response);
+            }));
+  }
+  // The synchronous method is never registered (the callback one replaces it).
+  grpc::Status FitInertia(grpc::ServerContext*, grpc::ServerReader<v1::FitInertiaRequest>*,
+                          v1::FitInertiaResponse*) final {
+    return grpc::Status(grpc::StatusCode::UNIMPLEMENTED, "FitInertia is served by callback");
+  }
+  virtual grpc::ServerReadReactor<grpc::ByteBuffer>* FitInertia(
+      grpc::CallbackServerContext* context, v1::FitInertiaResponse* response) = 0;
+
+ private:
+  // The index protoc's mixins hard-code (the rpc's place in estimator.proto).
+  static int MethodIndex() {
+    return google::protobuf::DescriptorPool::generated_pool()
+        ->FindMethodByName(std::string(v1::Estimator::service_full_name()) + ".FitInertia")
+        ->index();
+  }
+};
+
+// The unary RPCs are typed; FitInertia's reactor parses each message itself
+// (estimator_service.cc).
 using EstimatorBase = v1::Estimator::WithCallbackMethod_EstimateForces<
     v1::Estimator::WithCallbackMethod_EstimateFriction<
-        v1::Estimator::WithRawCallbackMethod_FitInertia<v1::Estimator::Service>>>;
+        WithRawReadsCallbackMethod_FitInertia<v1::Estimator::Service>>>;
 
 class EstimatorService final : public EstimatorBase, public HostedService {
  public:
@@ -49,8 +88,9 @@ class EstimatorService final : public EstimatorBase, public HostedService {
   grpc::ServerUnaryReactor* EstimateFriction(grpc::CallbackServerContext* context,
                                              const v1::FrictionRequest* request,
                                              v1::FrictionResponse* response) override;
+  using EstimatorBase::FitInertia;
   grpc::ServerReadReactor<grpc::ByteBuffer>* FitInertia(grpc::CallbackServerContext* context,
-                                                        grpc::ByteBuffer* response) override;
+                                                        v1::FitInertiaResponse* response) override;
 
  private:
   WorkerPool* pool_;
